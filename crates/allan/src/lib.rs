@@ -1,0 +1,1 @@
+//! imudrift allan crate (being built).

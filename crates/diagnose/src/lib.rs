@@ -1,0 +1,1 @@
+//! imudrift diagnose crate (being built).

@@ -1,0 +1,1 @@
+//! imudrift montecarlo crate (being built).

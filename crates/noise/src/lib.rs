@@ -1,0 +1,1 @@
+//! imudrift noise crate (being built).

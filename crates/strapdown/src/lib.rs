@@ -1,0 +1,1 @@
+//! imudrift strapdown crate (being built).

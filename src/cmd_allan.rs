@@ -1,0 +1,8 @@
+//! `imudrift allan` (being built).
+
+#[derive(clap::Args)]
+pub struct Args {}
+
+pub fn run(_args: Args) -> anyhow::Result<()> {
+    anyhow::bail!("`imudrift allan` is not built yet")
+}

@@ -1,0 +1,8 @@
+//! `imudrift merge` (being built).
+
+#[derive(clap::Args)]
+pub struct Args {}
+
+pub fn run(_args: Args) -> anyhow::Result<()> {
+    anyhow::bail!("`imudrift merge` is not built yet")
+}

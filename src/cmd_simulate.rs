@@ -1,0 +1,8 @@
+//! `imudrift simulate` (being built).
+
+#[derive(clap::Args)]
+pub struct Args {}
+
+pub fn run(_args: Args) -> anyhow::Result<()> {
+    anyhow::bail!("`imudrift simulate` is not built yet")
+}

@@ -1,0 +1,8 @@
+//! `imudrift spec` (being built).
+
+#[derive(clap::Args)]
+pub struct Args {}
+
+pub fn run(_args: Args) -> anyhow::Result<()> {
+    anyhow::bail!("`imudrift spec` is not built yet")
+}

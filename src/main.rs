@@ -1,0 +1,56 @@
+//! `imudrift`: the command-line front end of the imudrift workspace.
+//!
+//! Thin by design: argument parsing, file I/O, progress bars and plots live here; every
+//! piece of physics and statistics lives in the library crates under `crates/`.
+
+mod cmd_allan;
+mod cmd_diagnose;
+mod cmd_generate;
+mod cmd_merge;
+mod cmd_simulate;
+mod cmd_spec;
+mod output;
+
+use clap::{Parser, Subcommand};
+
+#[derive(Parser)]
+#[command(name = "imudrift", version, about = "Monte Carlo laboratory for inertial-sensor drift")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Monte Carlo drift run of a scenario; drift statistics beside their analytic laws
+    Simulate(cmd_simulate::Args),
+    /// Write a synthetic static IMU log (CSV) from a sensor model
+    Generate(cmd_generate::Args),
+    /// Allan deviations of a log's channels, with confidence intervals and fitted noise terms
+    Allan(cmd_allan::Args),
+    /// Spec-sheet comparison: spec values vs values read back from simulation, drift side by side
+    Spec(cmd_spec::Args),
+    /// Find where model and measurement disagree, name the missing effect, show the gap shrink
+    Diagnose(cmd_diagnose::Args),
+    /// Combine shard outputs of `simulate --shard i/k` into the single-machine result
+    Merge(cmd_merge::Args),
+}
+
+fn main() -> std::process::ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Simulate(a) => cmd_simulate::run(a),
+        Command::Generate(a) => cmd_generate::run(a),
+        Command::Allan(a) => cmd_allan::run(a),
+        Command::Spec(a) => cmd_spec::run(a),
+        Command::Diagnose(a) => cmd_diagnose::run(a),
+        Command::Merge(a) => cmd_merge::run(a),
+    };
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
