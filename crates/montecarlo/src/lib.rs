@@ -1,1 +1,16 @@
-//! imudrift montecarlo crate (being built).
+//! imudrift-montecarlo: the deterministic parallel Monte Carlo runner of the drift laboratory.
+//!
+//! From a sensor model and a scenario (trajectory, duration, rate, runs, seed, checkpoints) it runs
+//! many strapdown dead-reckoning solutions, each with its own random stream, and collects the
+//! navigation error at checkpoints into per-run value vectors ([`stats::RunMatrix`]) from which the
+//! drift statistics are computed in run order: bit-identical for any thread count or shard split.
+//! [`laws`] pairs each channel with the closed-form growth law of its active error terms.
+//!
+//! Units are SI (rad, m, m/s, s). Frames: navigation NED, body forward-right-down; a static level
+//! IMU reads specific force (0, 0, -g).
+
+pub mod runner;
+pub mod stats;
+
+pub use runner::{run_range, BatchResult, RunFailure, RunKernel, Shard};
+pub use stats::{RunMatrix, Summary};

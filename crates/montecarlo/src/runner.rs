@@ -1,0 +1,236 @@
+//! Deterministic parallel runner: runs are computed in parallel in fixed-size blocks, each block
+//! collected in index order and appended to the [`RunMatrix`] in index order (DESIGN.md,
+//! Randomness). Nothing reported is summed across threads, so the result is bit-identical for any
+//! thread count. A failing (or panicking) run is recorded and skipped, never the whole batch.
+
+use crate::stats::RunMatrix;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::ops::Range;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+/// Runs per parallel block. Any value gives the same result; this one keeps both cores busy and
+/// the progress callback frequent.
+pub const BLOCK_RUNS: u64 = 64;
+
+/// One Monte Carlo run: given its index, fill `out[checkpoint * channels + channel]`.
+/// Implementations draw all randomness from streams derived from (seed, run), never shared state.
+pub trait RunKernel: Sync {
+    fn checkpoints(&self) -> usize;
+    fn channels(&self) -> usize;
+    /// Simulate run `run`; an error message names what went wrong (e.g. non-finite state).
+    fn run(&self, run: u64, out: &mut [f64]) -> Result<(), String>;
+}
+
+/// A run that did not finish.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RunFailure {
+    pub run: u64,
+    pub message: String,
+}
+
+/// Output of [`run_range`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct BatchResult {
+    pub matrix: RunMatrix,
+    pub failures: Vec<RunFailure>,
+}
+
+fn run_one<K: RunKernel>(kernel: &K, run: u64, width: usize) -> Result<Vec<f64>, String> {
+    let mut out = vec![f64::NAN; width];
+    match catch_unwind(AssertUnwindSafe(|| kernel.run(run, &mut out))) {
+        Ok(Ok(())) => match out.iter().position(|v| !v.is_finite()) {
+            None => Ok(out),
+            Some(i) => Err(format!(
+                "non-finite value at checkpoint {} channel {}",
+                i / kernel.channels().max(1),
+                i % kernel.channels().max(1)
+            )),
+        },
+        Ok(Err(msg)) => Err(msg),
+        Err(panic) => Err(panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .map_or_else(
+                || "run panicked".to_string(),
+                |m| format!("run panicked: {m}"),
+            )),
+    }
+}
+
+/// Run `runs` (a range of run indices) on the current rayon pool. `progress(done)` is called after
+/// each block with the number of runs finished so far in this range.
+pub fn run_range<K: RunKernel>(
+    kernel: &K,
+    runs: Range<u64>,
+    progress: &(dyn Fn(u64) + Sync),
+) -> BatchResult {
+    let width = kernel.checkpoints() * kernel.channels();
+    let mut matrix = RunMatrix::new(kernel.checkpoints(), kernel.channels());
+    let mut failures = Vec::new();
+    let mut start = runs.start;
+    while start < runs.end {
+        let end = (start + BLOCK_RUNS).min(runs.end);
+        // Ordered collect: element i of the block is run start + i whatever thread computed it.
+        let block: Vec<Result<Vec<f64>, String>> = (start..end)
+            .into_par_iter()
+            .map(|run| run_one(kernel, run, width))
+            .collect();
+        for (run, result) in (start..end).zip(block) {
+            match result {
+                Ok(row) => matrix.push(run, &row),
+                Err(message) => failures.push(RunFailure { run, message }),
+            }
+        }
+        progress(end - runs.start);
+        start = end;
+    }
+    BatchResult { matrix, failures }
+}
+
+/// A deterministic slice `index/count` of the runs (0 <= index < count): contiguous ranges whose
+/// union over all indices is `0..runs` exactly.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Shard {
+    pub index: u64,
+    pub count: u64,
+}
+
+impl Shard {
+    pub const WHOLE: Shard = Shard { index: 0, count: 1 };
+
+    /// Parse "i/k". Errors say what was expected.
+    pub fn parse(text: &str) -> Result<Shard, String> {
+        let expected = "expected `i/k` with integers 0 <= i < k (e.g. `0/4`, as Slurm's SLURM_ARRAY_TASK_ID/array size)";
+        let (i, k) = text
+            .split_once('/')
+            .ok_or_else(|| format!("shard `{text}`: {expected}"))?;
+        let index: u64 = i
+            .trim()
+            .parse()
+            .map_err(|_| format!("shard `{text}`: {expected}"))?;
+        let count: u64 = k
+            .trim()
+            .parse()
+            .map_err(|_| format!("shard `{text}`: {expected}"))?;
+        if count == 0 || index >= count {
+            return Err(format!("shard `{text}`: {expected}"));
+        }
+        Ok(Shard { index, count })
+    }
+
+    /// The run indices of this shard out of `runs`.
+    pub fn runs(&self, runs: u64) -> Range<u64> {
+        let cut = |i: u64| ((i as u128 * runs as u128) / self.count as u128) as u64;
+        cut(self.index)..cut(self.index + 1)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// SplitMix64 (Steele, Lea & Flood 2014) keyed by run: an independent toy stream per run.
+    fn splitmix(state: &mut u64) -> f64 {
+        *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = *state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// A toy kernel with per-run streams: a random walk observed at checkpoints, and run 5 fails.
+    struct Walk;
+    impl RunKernel for Walk {
+        fn checkpoints(&self) -> usize {
+            3
+        }
+        fn channels(&self) -> usize {
+            2
+        }
+        fn run(&self, run: u64, out: &mut [f64]) -> Result<(), String> {
+            if run == 5 {
+                return Err("diverged".into());
+            }
+            if run == 7 {
+                panic!("boom");
+            }
+            let mut rng = run.wrapping_mul(0xD1B5_4A32_D192_ED03);
+            let mut x = 0.0;
+            for cp in 0..3 {
+                for _ in 0..100 {
+                    x += splitmix(&mut rng) - 0.5;
+                }
+                out[cp * 2] = x;
+                out[cp * 2 + 1] = x.abs();
+            }
+            Ok(())
+        }
+    }
+
+    fn with_threads<T: Send>(n: usize, f: impl FnOnce() -> T + Send) -> T {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .unwrap()
+            .install(f)
+    }
+
+    #[test]
+    fn thread_count_and_shards_do_not_change_results() {
+        let one = with_threads(1, || run_range(&Walk, 0..300, &|_| {}));
+        let four = with_threads(4, || run_range(&Walk, 0..300, &|_| {}));
+        assert_eq!(one, four);
+        let parts: Vec<BatchResult> = (0..4)
+            .map(|i| {
+                let shard = Shard { index: i, count: 4 };
+                run_range(&Walk, shard.runs(300), &|_| {})
+            })
+            .collect();
+        let merged = RunMatrix::merge(parts.iter().map(|p| p.matrix.clone()).collect()).unwrap();
+        assert_eq!(merged, one.matrix);
+        let bits = |m: &RunMatrix| -> Vec<u64> {
+            (0..3)
+                .flat_map(|c| (0..2).map(move |h| (c, h)))
+                .flat_map(|(c, h)| {
+                    m.series(c, h)
+                        .iter()
+                        .map(|v| v.to_bits())
+                        .collect::<Vec<_>>()
+                })
+                .collect()
+        };
+        assert_eq!(bits(&merged), bits(&one.matrix));
+    }
+
+    #[test]
+    fn failed_runs_are_reported_not_fatal() {
+        let r = run_range(&Walk, 0..10, &|_| {});
+        assert_eq!(r.matrix.runs(), 8);
+        assert_eq!(r.failures.len(), 2);
+        assert_eq!(r.failures[0].run, 5);
+        assert_eq!(r.failures[0].message, "diverged");
+        assert_eq!(r.failures[1].run, 7);
+        assert!(r.failures[1].message.contains("boom"));
+    }
+
+    #[test]
+    fn shards_partition_runs() {
+        for runs in [0u64, 1, 7, 100, 2001] {
+            for k in 1..9u64 {
+                let mut next = 0;
+                for i in 0..k {
+                    let r = Shard { index: i, count: k }.runs(runs);
+                    assert_eq!(r.start, next);
+                    next = r.end;
+                }
+                assert_eq!(next, runs);
+            }
+        }
+        assert_eq!(Shard::parse("2/4").unwrap(), Shard { index: 2, count: 4 });
+        for bad in ["4/4", "1", "a/2", "0/0", "-1/3"] {
+            assert!(Shard::parse(bad).is_err(), "{bad}");
+        }
+    }
+}

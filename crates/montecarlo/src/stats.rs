@@ -1,0 +1,283 @@
+//! Drift statistics over runs: per checkpoint and channel, the mean, std, rms and quantiles.
+//!
+//! Storage choice (DESIGN.md, Statistics): quantiles are exact, so the per-run value of every
+//! (checkpoint, channel) is kept as one `f64` (8 bytes per run per checkpoint per channel: 10 000
+//! runs x 25 checkpoints x 11 channels = 22 MB). Everything else (strapdown state, noise state) is
+//! per run and dropped when the run ends, so memory grows only by that vector. Statistics are always
+//! computed from the values in run-index order (Welford), so a single machine, any thread count and
+//! any set of merged shards give bit-identical numbers.
+
+use serde::{Deserialize, Serialize};
+
+/// Two-sided 99.9 % standard normal quantile, z_{1 - 0.001/2}.
+pub const Z_999: f64 = 3.290_526_731_491_926;
+
+/// Per-run values, `values[(checkpoint * channels + channel) * runs + run]`, runs in index order.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunMatrix {
+    pub checkpoints: usize,
+    pub channels: usize,
+    /// Run indices stored, ascending (failed runs are absent).
+    pub run_ids: Vec<u64>,
+    /// Column-major per (checkpoint, channel): `series(cp, ch)` is contiguous.
+    values: Vec<Vec<f64>>,
+}
+
+impl RunMatrix {
+    pub fn new(checkpoints: usize, channels: usize) -> RunMatrix {
+        RunMatrix {
+            checkpoints,
+            channels,
+            run_ids: Vec::new(),
+            values: vec![Vec::new(); checkpoints * channels],
+        }
+    }
+
+    /// Append one run; `row[cp * channels + ch]`. Runs must be pushed in ascending index order.
+    pub fn push(&mut self, run: u64, row: &[f64]) {
+        debug_assert_eq!(row.len(), self.checkpoints * self.channels);
+        debug_assert!(self.run_ids.last().map_or(true, |&last| last < run));
+        self.run_ids.push(run);
+        for (series, &v) in self.values.iter_mut().zip(row) {
+            series.push(v);
+        }
+    }
+
+    pub fn runs(&self) -> usize {
+        self.run_ids.len()
+    }
+
+    /// The values of one (checkpoint, channel) over runs, in run-index order.
+    pub fn series(&self, checkpoint: usize, channel: usize) -> &[f64] {
+        &self.values[checkpoint * self.channels + channel]
+    }
+
+    /// Merge matrices holding disjoint run sets (e.g. shards) into one in run-index order.
+    /// Returns `None` if the shapes differ or a run index occurs twice.
+    pub fn merge(parts: Vec<RunMatrix>) -> Option<RunMatrix> {
+        let first = parts.first()?;
+        let (checkpoints, channels) = (first.checkpoints, first.channels);
+        if parts
+            .iter()
+            .any(|p| p.checkpoints != checkpoints || p.channels != channels)
+        {
+            return None;
+        }
+        // (run id, part, position in part), sorted by run id: an ordered k-way merge.
+        let mut order: Vec<(u64, usize, usize)> = parts
+            .iter()
+            .enumerate()
+            .flat_map(|(p, m)| m.run_ids.iter().enumerate().map(move |(i, &r)| (r, p, i)))
+            .collect();
+        order.sort_unstable();
+        if order.windows(2).any(|w| w[0].0 == w[1].0) {
+            return None;
+        }
+        let mut out = RunMatrix::new(checkpoints, channels);
+        out.run_ids = order.iter().map(|o| o.0).collect();
+        for (s, series) in out.values.iter_mut().enumerate() {
+            *series = order
+                .iter()
+                .map(|&(_, p, i)| parts[p].values[s][i])
+                .collect();
+        }
+        Some(out)
+    }
+}
+
+/// Summary of one channel at one checkpoint over all successful runs.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Summary {
+    pub count: u64,
+    pub mean: f64,
+    /// Sample standard deviation (n - 1).
+    pub std: f64,
+    /// Root mean square, sqrt(mean of x^2): includes the mean.
+    pub rms: f64,
+    pub p5: f64,
+    pub p50: f64,
+    pub p95: f64,
+    /// Standard error of the mean of x^2 (for the confidence interval of rms).
+    pub se_mean_sq: f64,
+}
+
+/// Streaming (Welford) count/mean/M2 accumulator, also of x^2 for the rms interval.
+/// Welford's update: B. P. Welford, Technometrics 4(3) 1962; Chan et al. (1979) for `merge`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct Moments {
+    pub count: u64,
+    pub mean: f64,
+    pub m2: f64,
+    pub mean_sq: f64,
+    pub m2_sq: f64,
+}
+
+impl Moments {
+    pub fn push(&mut self, x: f64) {
+        self.count += 1;
+        let n = self.count as f64;
+        let d = x - self.mean;
+        self.mean += d / n;
+        self.m2 += d * (x - self.mean);
+        let s = x * x;
+        let ds = s - self.mean_sq;
+        self.mean_sq += ds / n;
+        self.m2_sq += ds * (s - self.mean_sq);
+    }
+
+    /// Chan, Golub & LeVeque pairwise combination. Exact in real arithmetic; reported numbers
+    /// use `push` in run order instead so that they are bit-identical for any split.
+    pub fn merge(&self, other: &Moments) -> Moments {
+        if self.count == 0 {
+            return *other;
+        }
+        if other.count == 0 {
+            return *self;
+        }
+        let (na, nb) = (self.count as f64, other.count as f64);
+        let n = na + nb;
+        let d = other.mean - self.mean;
+        let ds = other.mean_sq - self.mean_sq;
+        Moments {
+            count: self.count + other.count,
+            mean: self.mean + d * nb / n,
+            m2: self.m2 + other.m2 + d * d * na * nb / n,
+            mean_sq: self.mean_sq + ds * nb / n,
+            m2_sq: self.m2_sq + other.m2_sq + ds * ds * na * nb / n,
+        }
+    }
+
+    pub fn variance(&self) -> f64 {
+        if self.count < 2 {
+            0.0
+        } else {
+            self.m2 / (self.count - 1) as f64
+        }
+    }
+}
+
+/// Quantile by linear interpolation between order statistics (Hyndman & Fan 1996 type 7,
+/// numpy's default) of an ascending slice.
+pub fn quantile_sorted(sorted: &[f64], p: f64) -> f64 {
+    match sorted.len() {
+        0 => f64::NAN,
+        1 => sorted[0],
+        n => {
+            let h = (n - 1) as f64 * p.clamp(0.0, 1.0);
+            let lo = h.floor() as usize;
+            let hi = (lo + 1).min(n - 1);
+            sorted[lo] + (h - lo as f64) * (sorted[hi] - sorted[lo])
+        }
+    }
+}
+
+/// Summarise values given in run-index order.
+pub fn summarise(values: &[f64]) -> Summary {
+    let mut m = Moments::default();
+    for &x in values {
+        m.push(x);
+    }
+    let mut sorted = values.to_vec();
+    sorted.sort_unstable_by(f64::total_cmp);
+    let se_mean_sq = if m.count < 2 {
+        f64::NAN
+    } else {
+        (m.m2_sq / (m.count - 1) as f64 / m.count as f64).sqrt()
+    };
+    Summary {
+        count: m.count,
+        mean: m.mean,
+        std: m.variance().sqrt(),
+        rms: m.mean_sq.max(0.0).sqrt(),
+        p5: quantile_sorted(&sorted, 0.05),
+        p50: quantile_sorted(&sorted, 0.50),
+        p95: quantile_sorted(&sorted, 0.95),
+        se_mean_sq,
+    }
+}
+
+/// Confidence interval of the ratio rms_sim / law_rms at two-sided normal quantile `z`.
+///
+/// The mean of x^2 over n independent runs is asymptotically normal (central limit theorem) with
+/// standard error sd(x^2)/sqrt(n), estimated from the runs themselves, so the interval holds for
+/// non-Gaussian channels (horizontal error) too. `rel_allowance` widens it multiplicatively for a
+/// stated deterministic error of the law itself (discretisation), which matters when the runs
+/// agree exactly (constant bias).
+pub fn ratio_interval(s: &Summary, law_rms: f64, z: f64, rel_allowance: f64) -> (f64, f64) {
+    let ms = s.rms * s.rms;
+    let half = z * s.se_mean_sq;
+    let lo = (ms - half).max(0.0).sqrt() / law_rms;
+    let hi = (ms + half).sqrt() / law_rms;
+    (lo * (1.0 - rel_allowance), hi * (1.0 + rel_allowance))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quantiles_match_numpy_type7() {
+        // numpy.percentile([1, 2, 3, 4, 10], [5, 50, 95]) = [1.2, 3.0, 8.8]
+        let s = [1.0, 2.0, 3.0, 4.0, 10.0];
+        assert!((quantile_sorted(&s, 0.05) - 1.2).abs() < 1e-12);
+        assert_eq!(quantile_sorted(&s, 0.5), 3.0);
+        assert!((quantile_sorted(&s, 0.95) - 8.8).abs() < 1e-12);
+    }
+
+    #[test]
+    fn welford_matches_two_pass_and_chan_merge() {
+        let xs: Vec<f64> = (0..1000)
+            .map(|i| ((i * 7919) % 1013) as f64 * 0.01 - 3.0)
+            .collect();
+        let s = summarise(&xs);
+        let n = xs.len() as f64;
+        let mean = xs.iter().sum::<f64>() / n;
+        let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        let ms = xs.iter().map(|x| x * x).sum::<f64>() / n;
+        // Relative 1e-12: two summation orders of 1000 terms differ by a few ulps.
+        assert!((s.mean - mean).abs() < 1e-12 * mean.abs().max(1.0));
+        assert!((s.std - var.sqrt()).abs() < 1e-12 * var.sqrt());
+        assert!((s.rms - ms.sqrt()).abs() < 1e-12 * ms.sqrt());
+        let (mut a, mut b) = (Moments::default(), Moments::default());
+        xs[..333].iter().for_each(|&x| a.push(x));
+        xs[333..].iter().for_each(|&x| b.push(x));
+        let m = a.merge(&b);
+        assert!((m.mean - mean).abs() < 1e-12 * mean.abs().max(1.0));
+        assert!((m.variance() - var).abs() < 1e-11 * var);
+    }
+
+    #[test]
+    fn merge_orders_runs_and_rejects_duplicates() {
+        let mut a = RunMatrix::new(1, 2);
+        let mut b = RunMatrix::new(1, 2);
+        a.push(0, &[0.0, 10.0]);
+        a.push(2, &[2.0, 12.0]);
+        b.push(1, &[1.0, 11.0]);
+        b.push(3, &[3.0, 13.0]);
+        let m = RunMatrix::merge(vec![b.clone(), a.clone()]).unwrap();
+        assert_eq!(m.run_ids, vec![0, 1, 2, 3]);
+        assert_eq!(m.series(0, 1), &[10.0, 11.0, 12.0, 13.0]);
+        assert!(RunMatrix::merge(vec![a.clone(), a]).is_none());
+    }
+
+    #[test]
+    fn ratio_interval_covers_one_for_gaussian_sample() {
+        // Deterministic pseudo-Gaussian sample (sum of 12 uniforms - 6, an Irwin-Hall
+        // approximation) with sigma 1: the 99.9 % interval of rms/1 must contain 1.
+        let mut state = 0x1234_5678_u64;
+        let mut uniform = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let xs: Vec<f64> = (0..4000)
+            .map(|_| (0..12).map(|_| uniform()).sum::<f64>() - 6.0)
+            .collect();
+        let (lo, hi) = ratio_interval(&summarise(&xs), 1.0, Z_999, 0.0);
+        assert!(lo < 1.0 && 1.0 < hi, "{lo} {hi}");
+        // Width ~ 2 z sqrt(1/(2n)) for Gaussian data.
+        let expected = 2.0 * Z_999 * (0.5 / 4000.0f64).sqrt();
+        assert!(((hi - lo) - expected).abs() < 0.2 * expected);
+    }
+}
