@@ -10,6 +10,7 @@
 //! IMU reads specific force (0, 0, -g).
 
 pub mod runner;
+pub mod scenario;
 pub mod stats;
 
 pub use runner::{run_range, BatchResult, RunFailure, RunKernel, Shard};

@@ -1,0 +1,516 @@
+//! Scenario configuration (`configs/scenarios/*.toml`): which sensor, which trajectory, how long,
+//! how fast, how many runs, which seed, where to look (checkpoints), initial alignment errors and
+//! error-term switches. A raw serde struct (`deny_unknown_fields`) is converted into the validated
+//! [`Scenario`]; every error names the source, the key and what was expected.
+
+use serde::Deserialize;
+use std::path::PathBuf;
+
+/// A configuration error: `source` (file name), `key` (dotted TOML path) and what was expected.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{source_name}: key `{key}`: {message}")]
+pub struct ScenarioError {
+    pub source_name: String,
+    pub key: String,
+    pub message: String,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScenario {
+    name: Option<String>,
+    description: Option<String>,
+    sensor: String,
+    duration_s: f64,
+    rate_hz: f64,
+    runs: u64,
+    seed: u64,
+    scheme: Option<String>,
+    gravity_mps2: Option<f64>,
+    trajectory: Option<RawTrajectory>,
+    checkpoints: Option<RawCheckpoints>,
+    alignment: Option<RawAlignment>,
+    terms: Option<RawTerms>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTrajectory {
+    kind: String,
+    roll_deg: Option<f64>,
+    pitch_deg: Option<f64>,
+    yaw_deg: Option<f64>,
+    rate_deg_s: Option<[f64; 3]>,
+    file: Option<String>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawCheckpoints {
+    times_s: Option<Vec<f64>>,
+    log_count: Option<usize>,
+    first_s: Option<f64>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawAlignment {
+    roll_deg: Option<f64>,
+    pitch_deg: Option<f64>,
+    yaw_deg: Option<f64>,
+    roll_std_deg: Option<f64>,
+    pitch_std_deg: Option<f64>,
+    yaw_std_deg: Option<f64>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTerms {
+    only: Option<Vec<String>>,
+    without: Option<Vec<String>>,
+}
+
+/// Strapdown mechanisation scheme named in the scenario.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SchemeChoice {
+    Woodman,
+    Accurate,
+}
+
+/// The trajectory the IMU follows.
+#[derive(Debug, Clone, PartialEq)]
+pub enum TrajectorySpec {
+    /// Fixed attitude (rad), zero velocity.
+    Static {
+        roll_rad: f64,
+        pitch_rad: f64,
+        yaw_rad: f64,
+    },
+    /// Constant body angular rate (rad/s) from a level, north-facing start, zero velocity.
+    ConstantRate { rate_rad_s: [f64; 3] },
+    /// A motion profile file (path as written, relative to the scenario file).
+    Profile { file: PathBuf },
+}
+
+impl TrajectorySpec {
+    pub fn is_static(&self) -> bool {
+        matches!(self, TrajectorySpec::Static { .. })
+    }
+}
+
+/// Initial alignment error per Euler angle (rad): a fixed offset plus a per-run Gaussian draw.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Alignment {
+    pub fixed_rad: [f64; 3],
+    pub std_rad: [f64; 3],
+}
+
+impl Alignment {
+    pub fn is_zero(&self) -> bool {
+        self.fixed_rad
+            .iter()
+            .chain(&self.std_rad)
+            .all(|&v| v == 0.0)
+    }
+}
+
+/// A validated scenario.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scenario {
+    pub name: String,
+    pub description: String,
+    /// Sensor TOML path as written (relative paths are relative to the scenario file).
+    pub sensor: PathBuf,
+    pub duration_s: f64,
+    pub rate_hz: f64,
+    pub runs: u64,
+    pub seed: u64,
+    pub scheme: SchemeChoice,
+    pub gravity_mps2: f64,
+    pub trajectory: TrajectorySpec,
+    /// Step indices k (t = k dt) at which errors are recorded, ascending, unique, 1 <= k <= steps.
+    pub checkpoint_steps: Vec<u64>,
+    pub alignment: Alignment,
+    /// Term switches (`gyro.white_noise` ...), parsed by the noise crate's filter.
+    pub only: Option<Vec<String>>,
+    pub without: Vec<String>,
+}
+
+/// Standard gravity (m/s^2), the value INTERFACES.md fixes for a static level IMU.
+pub const STANDARD_GRAVITY_MPS2: f64 = 9.80665;
+/// Default number of log-spaced checkpoints.
+pub const DEFAULT_LOG_COUNT: usize = 25;
+/// Default first checkpoint, in samples: early enough to see the accelerometer-dominated start
+/// (Woodman: the first ~0.3 s at 100 Hz), late enough that the law's discretisation error is small.
+pub const DEFAULT_FIRST_STEPS: u64 = 10;
+
+impl Scenario {
+    pub fn dt_s(&self) -> f64 {
+        1.0 / self.rate_hz
+    }
+
+    /// Number of mechanisation steps.
+    pub fn steps(&self) -> u64 {
+        (self.duration_s * self.rate_hz).round() as u64
+    }
+
+    pub fn checkpoint_times_s(&self) -> Vec<f64> {
+        self.checkpoint_steps
+            .iter()
+            .map(|&k| k as f64 * self.dt_s())
+            .collect()
+    }
+
+    /// Parse and validate scenario TOML text; `source_name` (the file name) prefixes every error.
+    pub fn from_toml_str(text: &str, source_name: &str) -> Result<Scenario, ScenarioError> {
+        let err = |key: &str, message: String| ScenarioError {
+            source_name: source_name.to_string(),
+            key: key.to_string(),
+            message,
+        };
+        let raw: RawScenario = toml::from_str(text).map_err(|e| {
+            // toml's message names the line, column and offending key.
+            err("(document)", e.to_string().trim_end().replace('\n', " "))
+        })?;
+        let positive = |key: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(v)
+            } else {
+                Err(err(key, format!("expected a finite number > 0, got {v}")))
+            }
+        };
+        let duration_s = positive("duration_s", raw.duration_s)?;
+        let rate_hz = positive("rate_hz", raw.rate_hz)?;
+        let steps_f = duration_s * rate_hz;
+        let steps = steps_f.round();
+        if steps < 1.0 || (steps_f - steps).abs() > 1e-9 * steps.max(1.0) {
+            return Err(err(
+                "duration_s",
+                format!("expected a whole number of samples at rate_hz = {rate_hz}, got {steps_f} samples"),
+            ));
+        }
+        if steps > 1e12 {
+            return Err(err(
+                "duration_s",
+                format!("{steps_f} samples is more than 1e12"),
+            ));
+        }
+        let steps = steps as u64;
+        if raw.runs == 0 {
+            return Err(err("runs", "expected an integer >= 1".into()));
+        }
+        let scheme = match raw.scheme.as_deref().unwrap_or("accurate") {
+            "woodman" => SchemeChoice::Woodman,
+            "accurate" => SchemeChoice::Accurate,
+            other => {
+                return Err(err(
+                    "scheme",
+                    format!("expected `woodman` or `accurate`, got `{other}`"),
+                ))
+            }
+        };
+        let gravity_mps2 = match raw.gravity_mps2 {
+            Some(g) => positive("gravity_mps2", g)?,
+            None => STANDARD_GRAVITY_MPS2,
+        };
+        let trajectory = match raw.trajectory {
+            None => TrajectorySpec::Static {
+                roll_rad: 0.0,
+                pitch_rad: 0.0,
+                yaw_rad: 0.0,
+            },
+            Some(t) => trajectory_spec(t, &err)?,
+        };
+        let checkpoint_steps = checkpoint_steps(raw.checkpoints, rate_hz, steps, &err)?;
+        let alignment = alignment(raw.alignment.unwrap_or_default(), &err)?;
+        let terms = raw.terms.unwrap_or_default();
+        if raw.sensor.trim().is_empty() {
+            return Err(err("sensor", "expected a path to a sensor TOML".into()));
+        }
+        Ok(Scenario {
+            name: raw.name.unwrap_or_else(|| {
+                source_name
+                    .rsplit('/')
+                    .next()
+                    .unwrap_or(source_name)
+                    .trim_end_matches(".toml")
+                    .to_string()
+            }),
+            description: raw.description.unwrap_or_default(),
+            sensor: PathBuf::from(raw.sensor),
+            duration_s,
+            rate_hz,
+            runs: raw.runs,
+            seed: raw.seed,
+            scheme,
+            gravity_mps2,
+            trajectory,
+            checkpoint_steps,
+            alignment,
+            only: terms.only,
+            without: terms.without.unwrap_or_default(),
+        })
+    }
+}
+
+type ErrFn<'a> = dyn Fn(&str, String) -> ScenarioError + 'a;
+
+fn finite(key: &str, v: f64, err: &ErrFn) -> Result<f64, ScenarioError> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(err(key, format!("expected a finite number, got {v}")))
+    }
+}
+
+fn trajectory_spec(t: RawTrajectory, err: &ErrFn) -> Result<TrajectorySpec, ScenarioError> {
+    let unused = |kind: &str, present: &[(&str, bool)]| -> Result<(), ScenarioError> {
+        match present.iter().find(|(_, p)| *p) {
+            Some((key, _)) => Err(err(
+                &format!("trajectory.{key}"),
+                format!("not used by trajectory kind `{kind}`"),
+            )),
+            None => Ok(()),
+        }
+    };
+    match t.kind.as_str() {
+        "static" => {
+            unused(
+                "static",
+                &[
+                    ("rate_deg_s", t.rate_deg_s.is_some()),
+                    ("file", t.file.is_some()),
+                ],
+            )?;
+            let deg = |key: &str, v: Option<f64>| -> Result<f64, ScenarioError> {
+                Ok(finite(&format!("trajectory.{key}"), v.unwrap_or(0.0), err)?.to_radians())
+            };
+            Ok(TrajectorySpec::Static {
+                roll_rad: deg("roll_deg", t.roll_deg)?,
+                pitch_rad: deg("pitch_deg", t.pitch_deg)?,
+                yaw_rad: deg("yaw_deg", t.yaw_deg)?,
+            })
+        }
+        "constant_rate" => {
+            unused(
+                "constant_rate",
+                &[
+                    ("roll_deg", t.roll_deg.is_some()),
+                    ("pitch_deg", t.pitch_deg.is_some()),
+                    ("yaw_deg", t.yaw_deg.is_some()),
+                    ("file", t.file.is_some()),
+                ],
+            )?;
+            let r = t.rate_deg_s.ok_or_else(|| {
+                err(
+                    "trajectory.rate_deg_s",
+                    "expected [x, y, z] body rates in deg/s".into(),
+                )
+            })?;
+            for v in r {
+                finite("trajectory.rate_deg_s", v, err)?;
+            }
+            Ok(TrajectorySpec::ConstantRate {
+                rate_rad_s: r.map(f64::to_radians),
+            })
+        }
+        "profile" => {
+            unused(
+                "profile",
+                &[
+                    ("roll_deg", t.roll_deg.is_some()),
+                    ("pitch_deg", t.pitch_deg.is_some()),
+                    ("yaw_deg", t.yaw_deg.is_some()),
+                    ("rate_deg_s", t.rate_deg_s.is_some()),
+                ],
+            )?;
+            let file = t
+                .file
+                .ok_or_else(|| err("trajectory.file", "expected a motion-profile path".into()))?;
+            Ok(TrajectorySpec::Profile {
+                file: PathBuf::from(file),
+            })
+        }
+        other => Err(err(
+            "trajectory.kind",
+            format!("expected `static`, `constant_rate` or `profile`, got `{other}`"),
+        )),
+    }
+}
+
+fn checkpoint_steps(
+    raw: Option<RawCheckpoints>,
+    rate_hz: f64,
+    steps: u64,
+    err: &ErrFn,
+) -> Result<Vec<u64>, ScenarioError> {
+    let raw = raw.unwrap_or(RawCheckpoints {
+        times_s: None,
+        log_count: None,
+        first_s: None,
+    });
+    let mut ks: Vec<u64> = match raw.times_s {
+        Some(times) => {
+            if raw.log_count.is_some() || raw.first_s.is_some() {
+                return Err(err(
+                    "checkpoints.times_s",
+                    "give either times_s or log_count/first_s, not both".into(),
+                ));
+            }
+            if times.is_empty() {
+                return Err(err(
+                    "checkpoints.times_s",
+                    "expected at least one time".into(),
+                ));
+            }
+            let mut ks = Vec::with_capacity(times.len());
+            for t in times {
+                let k = (t * rate_hz).round();
+                if !t.is_finite() || k < 1.0 || k > steps as f64 {
+                    return Err(err(
+                        "checkpoints.times_s",
+                        format!("expected times in [1/rate_hz, duration_s], got {t}"),
+                    ));
+                }
+                ks.push(k as u64);
+            }
+            ks
+        }
+        None => {
+            let count = raw.log_count.unwrap_or(DEFAULT_LOG_COUNT);
+            if count == 0 {
+                return Err(err(
+                    "checkpoints.log_count",
+                    "expected an integer >= 1".into(),
+                ));
+            }
+            let first = match raw.first_s {
+                Some(t) => {
+                    let k = (t * rate_hz).round();
+                    if !t.is_finite() || k < 1.0 || k > steps as f64 {
+                        return Err(err(
+                            "checkpoints.first_s",
+                            format!("expected a time in [1/rate_hz, duration_s], got {t}"),
+                        ));
+                    }
+                    k as u64
+                }
+                None => DEFAULT_FIRST_STEPS.min(steps),
+            };
+            log_spaced_steps(first, steps, count)
+        }
+    };
+    ks.sort_unstable();
+    ks.dedup();
+    Ok(ks)
+}
+
+/// `count` step indices log-spaced from `first` to `last` inclusive (rounded, de-duplicated).
+pub fn log_spaced_steps(first: u64, last: u64, count: usize) -> Vec<u64> {
+    if count <= 1 || first >= last {
+        return vec![last];
+    }
+    let (a, b) = ((first as f64).ln(), (last as f64).ln());
+    let mut ks: Vec<u64> = (0..count)
+        .map(|i| (a + (b - a) * i as f64 / (count - 1) as f64).exp().round() as u64)
+        .collect();
+    ks[count - 1] = last;
+    ks.dedup();
+    ks
+}
+
+fn alignment(raw: RawAlignment, err: &ErrFn) -> Result<Alignment, ScenarioError> {
+    let fixed = [
+        ("roll_deg", raw.roll_deg),
+        ("pitch_deg", raw.pitch_deg),
+        ("yaw_deg", raw.yaw_deg),
+    ];
+    let std = [
+        ("roll_std_deg", raw.roll_std_deg),
+        ("pitch_std_deg", raw.pitch_std_deg),
+        ("yaw_std_deg", raw.yaw_std_deg),
+    ];
+    let mut a = Alignment::default();
+    for i in 0..3 {
+        a.fixed_rad[i] = finite(
+            &format!("alignment.{}", fixed[i].0),
+            fixed[i].1.unwrap_or(0.0),
+            err,
+        )?
+        .to_radians();
+        let s = std[i].1.unwrap_or(0.0);
+        if !(s.is_finite() && s >= 0.0) {
+            return Err(err(
+                &format!("alignment.{}", std[i].0),
+                format!("expected a standard deviation >= 0 in degrees, got {s}"),
+            ));
+        }
+        a.std_rad[i] = s.to_radians();
+    }
+    Ok(a)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MIN: &str = "sensor = \"../sensors/mtx.toml\"\nduration_s = 60.0\nrate_hz = 100.0\nruns = 500\nseed = 1\n";
+
+    #[test]
+    fn minimal_scenario_has_defaults() {
+        let s = Scenario::from_toml_str(MIN, "x/mtx-static-60s.toml").unwrap();
+        assert_eq!(s.name, "mtx-static-60s");
+        assert_eq!(s.steps(), 6000);
+        assert_eq!(*s.checkpoint_steps.first().unwrap(), 10);
+        assert_eq!(*s.checkpoint_steps.last().unwrap(), 6000);
+        assert!(s.checkpoint_steps.windows(2).all(|w| w[0] < w[1]));
+        assert!(s.trajectory.is_static());
+        assert_eq!(s.scheme, SchemeChoice::Accurate);
+    }
+
+    #[test]
+    fn errors_name_file_and_key() {
+        let cases = [
+            (MIN.replace("rate_hz = 100.0", "rate_hz = -1.0"), "rate_hz"),
+            (MIN.replace("runs = 500", "runs = 0"), "runs"),
+            (
+                MIN.replace("duration_s = 60.0", "duration_s = 60.005"),
+                "duration_s",
+            ),
+            (format!("{MIN}scheme = \"rk4\"\n"), "scheme"),
+            (
+                format!("{MIN}[trajectory]\nkind = \"spiral\"\n"),
+                "trajectory.kind",
+            ),
+            (
+                format!("{MIN}[trajectory]\nkind = \"static\"\nfile = \"a\"\n"),
+                "trajectory.file",
+            ),
+            (
+                format!("{MIN}[checkpoints]\ntimes_s = [61.0]\n"),
+                "checkpoints.times_s",
+            ),
+            (
+                format!("{MIN}[alignment]\nroll_std_deg = -1.0\n"),
+                "alignment.roll_std_deg",
+            ),
+        ];
+        for (text, key) in cases {
+            let e = Scenario::from_toml_str(&text, "s.toml").unwrap_err();
+            assert_eq!(e.key, key, "{e}");
+            assert!(e.to_string().starts_with("s.toml: key"), "{e}");
+        }
+        let e = Scenario::from_toml_str(&format!("{MIN}colour = 3\n"), "s.toml").unwrap_err();
+        assert!(e.to_string().contains("colour"), "{e}");
+        let e = Scenario::from_toml_str("runs = 3\n", "s.toml").unwrap_err();
+        assert!(e.to_string().contains("sensor"), "{e}");
+    }
+
+    #[test]
+    fn log_spacing_is_inclusive_and_unique() {
+        assert_eq!(log_spaced_steps(10, 1000, 3), vec![10, 100, 1000]);
+        let ks = log_spaced_steps(1, 20, 50);
+        assert_eq!(ks.len(), 20);
+        assert_eq!(log_spaced_steps(5, 5, 10), vec![5]);
+    }
+}
