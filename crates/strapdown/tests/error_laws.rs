@@ -109,10 +109,12 @@ fn constant_accel_bias_gives_quadratic_position_error() {
 
 /// Exact variance coefficient of the horizontal position error of the *discrete* scheme, linearised
 /// (small angles, 1-D): `Var(s_n) = g^2 sigma^2 dt^6 * sum_i c_i^2` for gyro samples `w_i` of std sigma.
-/// The scalar recurrences are the 1-D forms of each scheme: Woodman eqs 41/45/46 (theta_j = theta_{j-1}
-/// + dt w_{j-1}; v_j = v_{j-1} + dt g theta_j; s_j = s_{j-1} + dt v_j) and the trapezoidal scheme
-/// (v_j = v_{j-1} + dt g (theta_{j-1} + theta_j)/2; s_j = s_{j-1} + dt (v_{j-1} + v_j)/2). The response
-/// of s_n to a unit w_i depends only on n - i, so one impulse response gives every c_i.
+/// The scalar recurrences are the 1-D forms of each scheme:
+/// - Woodman eqs 41/45/46: `theta_j = theta_{j-1} + dt w_{j-1}`, `v_j = v_{j-1} + dt g theta_j`,
+///   `s_j = s_{j-1} + dt v_j`;
+/// - trapezoidal: `v_j = v_{j-1} + dt g (theta_{j-1} + theta_j)/2`, `s_j = s_{j-1} + dt (v_{j-1} + v_j)/2`.
+///
+/// The response of `s_n` to a unit `w_i` depends only on `n - i`, so one impulse response gives every `c_i`.
 fn discrete_position_variance_coefficient(scheme: Scheme, n: usize) -> f64 {
     let (mut theta, mut v, mut s) = (0.0_f64, 0.0_f64, 0.0_f64);
     let mut sum = 0.0;
