@@ -1,0 +1,282 @@
+//! Closed forms: the Allan variance of each error term (theory.md §2, IEEE Std 952-1997 Annex C via
+//! Hou 2004) and its growth law when integrated once, twice and through tilt (theory.md §4).
+//!
+//! All arguments and results are SI: rad/s (gyro) or m/s^2 (accel) for the signal, s for times.
+//! `*_avar` functions take the averaging time `tau_s` of a continuous record; `*_avar_sampled`
+//! give the exact Allan variance of the discrete generator (sample interval `dt_s`, `tau_s = m·dt_s`)
+//! where sampling changes it, so tests can compare at any sample rate.
+
+use crate::units::STANDARD_GRAVITY_MPS2;
+use std::f64::consts::{LN_2, PI};
+
+/// sqrt(2 ln2 / pi) = 0.6643: the Allan-deviation plateau of flicker noise per unit IEEE B (Hou 4.38-4.50).
+pub const FLICKER_PLATEAU_PER_B: f64 = 0.664_282_470_267_960_1;
+
+/// Quantisation noise Q: sigma^2 = 3 Q^2 / tau^2 (Hou 4.29). Exact for the sampled generator too,
+/// since a white phase error e_k gives E[(e_{n+2m} - 2e_{n+m} + e_n)^2]/(2 tau^2) = 3 var(e)/tau^2 (NIST SP 1065 eq 11).
+pub fn quantization_avar(q: f64, tau_s: f64) -> f64 {
+    3.0 * q * q / (tau_s * tau_s)
+}
+
+/// White noise (ARW / VRW) of density N: sigma^2 = N^2 / tau (Hou 4.36). Exact for samples N/sqrt(dt)·w_k
+/// averaged m at a time (variance N^2/(m dt)).
+pub fn white_noise_avar(n: f64, tau_s: f64) -> f64 {
+    n * n / tau_s
+}
+
+/// Flicker (bias instability) plateau for IEEE coefficient B: (2 ln2 / pi) B^2 (Hou 4.38-4.50, T >> 1/f0).
+pub fn flicker_plateau_avar(b: f64) -> f64 {
+    2.0 * LN_2 / PI * b * b
+}
+
+/// Rate random walk K: sigma^2 = K^2 tau / 3 (Hou 4.53).
+pub fn rate_random_walk_avar(k: f64, tau_s: f64) -> f64 {
+    k * k * tau_s / 3.0
+}
+
+/// Exact Allan variance of the sampled random walk b_{j+1} = b_j + K sqrt(dt) w_j, averaged m = tau/dt
+/// samples at a time: K^2 dt (2m^2 + 1)/(6m) = K^2 tau/3 + K^2 dt^2/(6 tau).
+/// [derived: the difference of adjacent m-averages weighs the increments triangularly 1..m..1, and
+/// sum of the squared weights is m(2m^2+1)/3.]
+pub fn rate_random_walk_avar_sampled(k: f64, tau_s: f64, dt_s: f64) -> f64 {
+    rate_random_walk_avar(k, tau_s) + k * k * dt_s * dt_s / (6.0 * tau_s)
+}
+
+/// Rate ramp R (Omega = R t): sigma^2 = R^2 tau^2 / 2 (Hou 4.56). Exact for samples too.
+pub fn rate_ramp_avar(r: f64, tau_s: f64) -> f64 {
+    r * r * tau_s * tau_s / 2.0
+}
+
+/// First-order Gauss-Markov of stationary std sigma and correlation time T (Hou 4.60 written with
+/// sigma_b^2 = q_c^2 T / 2, theory.md §2):
+/// sigma^2 = (2 sigma^2 T / tau) [1 - (T / 2 tau)(3 - 4 e^{-tau/T} + e^{-2 tau/T})].
+pub fn gauss_markov_avar(sigma: f64, tc_s: f64, tau_s: f64) -> f64 {
+    let x = tau_s / tc_s;
+    // The bracket cancels badly for x -> 0; there use its series
+    // x^2/3 - x^3/4 + 7x^4/60 - x^5/24 + 31x^6/2520 (sympy, theory.md §6 style check).
+    let bracket = if x < 1e-2 {
+        x * x * (1.0 / 3.0 + x * (-0.25 + x * (7.0 / 60.0 + x * (-1.0 / 24.0 + x * 31.0 / 2520.0))))
+    } else {
+        1.0 - (3.0 - 4.0 * (-x).exp() + (-2.0 * x).exp()) / (2.0 * x)
+    };
+    2.0 * sigma * sigma * tc_s / tau_s * bracket
+}
+
+/// Exact Allan variance of the sampled Gauss-Markov sequence x_{j+1} = phi x_j + sigma sqrt(1-phi^2) w_j
+/// (phi = e^{-dt/T}, stationary), averaged m = tau/dt samples at a time:
+/// (Var(S_m) - Cov(S_m, S'_m)) / m^2 with Var(S_m) = sigma^2 [m + 2 phi (m(1-phi) - (1-phi^m))/(1-phi)^2]
+/// and Cov = sigma^2 phi (1-phi^m)^2/(1-phi)^2 for adjacent sums S, S' of m samples.
+/// [derived from the AR(1) autocovariance sigma^2 phi^|j|; tends to `gauss_markov_avar` as dt -> 0.]
+/// For T >> tau the sum cancels; there the process is the random walk of density K^2 = 2 sigma^2 / T
+/// (theory.md §2, "T << T_c: q_c^2 T/3") with relative error O(tau/T) < 1e-4.
+pub fn gauss_markov_avar_sampled(sigma: f64, tc_s: f64, tau_s: f64, dt_s: f64) -> f64 {
+    let m = (tau_s / dt_s).round().max(1.0);
+    let a = dt_s / tc_s;
+    if m * a < 1e-4 {
+        // Random walk whose per-step variance is the GM innovation variance sigma^2 (1 - phi^2):
+        // var_step (2m^2+1)/(6m) (see rate_random_walk_avar_sampled).
+        let var_step = -sigma * sigma * (-2.0 * a).exp_m1();
+        return var_step * (2.0 * m * m + 1.0) / (6.0 * m);
+    }
+    let phi = (-a).exp();
+    let one_minus_phi = -(-a).exp_m1();
+    let one_minus_phim = -(-a * m).exp_m1();
+    let var_sum =
+        m + 2.0 * phi * (m * one_minus_phi - one_minus_phim) / (one_minus_phi * one_minus_phi);
+    let cov = phi * one_minus_phim * one_minus_phim / (one_minus_phi * one_minus_phi);
+    sigma * sigma * (var_sum - cov) / (m * m)
+}
+
+/// Sinusoid of amplitude A and frequency f0, phase averaged: sigma^2 = A^2 (sin^2(pi f0 tau)/(pi f0 tau))^2 (Hou 4.64).
+pub fn sinusoid_avar(amplitude: f64, f0_hz: f64, tau_s: f64) -> f64 {
+    let x = PI * f0_hz * tau_s;
+    if x == 0.0 {
+        return 0.0;
+    }
+    let s = x.sin();
+    amplitude * amplitude * (s * s / x).powi(2)
+}
+
+/// The sampled sinusoid, phase averaged: the m-sample average of sin is sin(.)·D with
+/// D = sin(pi f0 m dt)/(m sin(pi f0 dt)) instead of sin(x)/x, so sigma^2 = A^2 sin^2(pi f0 tau) D^2.
+/// [derived; tends to `sinusoid_avar` as dt -> 0.]
+pub fn sinusoid_avar_sampled(amplitude: f64, f0_hz: f64, tau_s: f64, dt_s: f64) -> f64 {
+    let m = (tau_s / dt_s).round().max(1.0);
+    let x = PI * f0_hz * m * dt_s;
+    let den = m * (PI * f0_hz * dt_s).sin();
+    if den == 0.0 {
+        return 0.0;
+    }
+    let d = x.sin() / den;
+    amplitude * amplitude * x.sin().powi(2) * d * d
+}
+
+/// Woodman's bias random walk from a bias stability BS over a period T: K = BS / sqrt(T)
+/// (Woodman eq 9, BRW = BS/sqrt(t); AirSim `ImuSimple.hpp` `bias_stability/sqrt(tau)`).
+pub fn woodman_bias_random_walk(stability: f64, period_s: f64) -> f64 {
+    stability / period_s.sqrt()
+}
+
+/// ADEV maximum of a Gauss-Markov process: 0.6174 sigma at tau = 1.8927 T (theory.md §2, numerical maximisation).
+pub const GAUSS_MARKOV_ADEV_PEAK_PER_SIGMA: f64 = 0.6174;
+/// Where that maximum lies, in correlation times.
+pub const GAUSS_MARKOV_ADEV_PEAK_TAU_PER_TC: f64 = 1.8927;
+
+/// How an error reaches the navigation solution (theory.md §4, static level IMU, small angles).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Integration {
+    /// Integrated once: angle from a gyro error, velocity from an accelerometer error.
+    Once,
+    /// Integrated twice: position from an accelerometer error.
+    Twice,
+    /// Through tilt: horizontal position from a gyro error, g·theta integrated twice (× g, three integrals).
+    Tilt,
+}
+
+impl Integration {
+    /// Number of time integrals.
+    pub fn folds(self) -> i32 {
+        match self {
+            Integration::Once => 1,
+            Integration::Twice => 2,
+            Integration::Tilt => 3,
+        }
+    }
+    fn gain(self) -> f64 {
+        if self == Integration::Tilt {
+            STANDARD_GRAVITY_MPS2
+        } else {
+            1.0
+        }
+    }
+}
+
+fn factorial(k: i32) -> f64 {
+    (1..=k).map(f64::from).product()
+}
+
+/// Variance of the k-fold integral of white noise of density N: N^2 t^{2k-1} / ((k-1)!^2 (2k-1))
+/// (theory.md §4 key identity: t, t^3/3, t^5/20, t^7/252).
+pub fn white_kfold_variance(n: f64, t_s: f64, k: i32) -> f64 {
+    n * n * t_s.powi(2 * k - 1) / (factorial(k - 1).powi(2) * f64::from(2 * k - 1))
+}
+
+/// Constant bias b: b t, b t^2/2 (Woodman eq 10), g b t^3/6 (theory.md §4). Deterministic, signed.
+pub fn constant_bias_growth(b: f64, t_s: f64, how: Integration) -> f64 {
+    let k = how.folds();
+    how.gain() * b * t_s.powi(k) / factorial(k)
+}
+
+/// Rate ramp R t: the k-fold integral is R t^{k+1}/(k+1)! (the constant-bias row of theory.md §4
+/// integrated once more). Deterministic, signed.
+pub fn rate_ramp_growth(r: f64, t_s: f64, how: Integration) -> f64 {
+    let k = how.folds() + 1;
+    how.gain() * r * t_s.powi(k) / factorial(k)
+}
+
+/// Standard deviation from white noise N: N sqrt(t) (Woodman eq 5), N sqrt(t^3/3) (eq 18),
+/// g N sqrt(t^5/20) (theory.md §1.3, §4).
+pub fn white_noise_growth_std(n: f64, t_s: f64, how: Integration) -> f64 {
+    how.gain() * white_kfold_variance(n, t_s, how.folds()).sqrt()
+}
+
+/// Standard deviation from a random walk K (RRW or Woodman's bias random walk, zero initial bias):
+/// K sqrt(t^3/3), K sqrt(t^5/20), g K sqrt(t^7/252) (theory.md §4).
+pub fn random_walk_growth_std(k: f64, t_s: f64, how: Integration) -> f64 {
+    how.gain() * white_kfold_variance(k, t_s, how.folds() + 1).sqrt()
+}
+
+/// Standard deviation from a stationary Gauss-Markov bias (sigma, T). Once: exact,
+/// 2 sigma^2 T [t - T(1 - e^{-t/T})]. Twice and through tilt: the t >> T asymptotes 2 sigma^2 T t^3/3 and
+/// g^2 2 sigma^2 T t^5/20 (theory.md §4); `None` while t < 10 T, where they do not hold.
+pub fn gauss_markov_growth_std(sigma: f64, tc_s: f64, t_s: f64, how: Integration) -> Option<f64> {
+    let var = match how {
+        Integration::Once => {
+            let x = t_s / tc_s;
+            // t - T(1 - e^{-x}) = T (x - 1 + e^{-x}); for small x use x^2/2 - x^3/6 + x^4/24.
+            let inner = if x < 1e-3 {
+                x * x * (0.5 - x / 6.0 + x * x / 24.0)
+            } else {
+                x + (-x).exp_m1()
+            };
+            2.0 * sigma * sigma * tc_s * tc_s * inner
+        }
+        _ if t_s < 10.0 * tc_s => return None,
+        _ => white_kfold_variance((2.0 * sigma * sigma * tc_s).sqrt(), t_s, how.folds()),
+    };
+    Some(how.gain() * var.sqrt())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plateau_constant_is_sqrt_2ln2_over_pi() {
+        assert!((FLICKER_PLATEAU_PER_B - (2.0 * LN_2 / PI).sqrt()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn gauss_markov_limits_match_white_and_random_walk() {
+        // theory.md §2: T >> T_c behaves like ARW with Q = q_c T_c; T << T_c like RRW q_c^2 T/3,
+        // with sigma_b^2 = q_c^2 T_c / 2.
+        let (sigma, tc) = (0.3, 10.0);
+        let qc2 = 2.0 * sigma * sigma / tc;
+        let long = gauss_markov_avar(sigma, tc, 1e5);
+        assert!((long / (qc2 * tc * tc / 1e5) - 1.0).abs() < 2e-4);
+        let short = gauss_markov_avar(sigma, tc, 1e-3);
+        assert!((short / (qc2 * 1e-3 / 3.0) - 1.0).abs() < 1e-4);
+        // Both branches of the bracket agree at the switch.
+        let a = gauss_markov_avar(sigma, 1.0, 0.0099999);
+        let b = gauss_markov_avar(sigma, 1.0, 0.0100001);
+        assert!((a / b - 1.0).abs() < 1e-4);
+        // Peak 0.6174 sigma at 1.8927 T (theory.md §2).
+        let peak = gauss_markov_avar(sigma, tc, GAUSS_MARKOV_ADEV_PEAK_TAU_PER_TC * tc).sqrt();
+        assert!((peak / sigma - GAUSS_MARKOV_ADEV_PEAK_PER_SIGMA).abs() < 1e-4);
+    }
+
+    #[test]
+    fn sampled_forms_tend_to_continuous_ones() {
+        let dt = 1e-4;
+        for tau in [0.1, 1.0, 10.0] {
+            let c = gauss_markov_avar(1.0, 2.0, tau);
+            let d = gauss_markov_avar_sampled(1.0, 2.0, tau, dt);
+            assert!((d / c - 1.0).abs() < 1e-3, "tau {tau}: {d} vs {c}");
+            let c = sinusoid_avar(1.0, 0.7, tau);
+            let d = sinusoid_avar_sampled(1.0, 0.7, tau, dt);
+            assert!((d - c).abs() < 1e-3 * c.max(1e-3), "tau {tau}: {d} vs {c}");
+        }
+        // Both branches of the sampled Gauss-Markov agree where they switch (m dt / T = 1e-4).
+        let tc = 1e4;
+        let lo = gauss_markov_avar_sampled(1.0, tc, 0.999e-4 * tc, 1e-3);
+        let hi = gauss_markov_avar_sampled(1.0, tc, 1.001e-4 * tc, 1e-3);
+        assert!((lo / hi - 1.0).abs() < 5e-3, "{lo} {hi}");
+    }
+
+    #[test]
+    fn growth_laws_match_theory_table() {
+        // theory.md §4 and §6: t, t^3/3, t^5/20, t^7/252; constant bias t^3/6 through tilt.
+        let t = 60.0;
+        assert!((white_kfold_variance(1.0, t, 1) - t).abs() < 1e-9);
+        assert!((white_kfold_variance(1.0, t, 2) - t.powi(3) / 3.0).abs() < 1e-6);
+        assert!((white_kfold_variance(1.0, t, 3) - t.powi(5) / 20.0).abs() < 1e-3);
+        assert!((white_kfold_variance(1.0, t, 4) - t.powi(7) / 252.0).abs() < 1.0);
+        // theory.md §6: gyro const bias 0.010 deg/s -> g eps t^3/6 = 61.6 m at 60 s.
+        let eps = 0.010f64.to_radians();
+        assert!((constant_bias_growth(eps, t, Integration::Tilt) - 61.6).abs() < 0.05);
+        // theory.md §6: N = 0.075 deg/sqrt(s), 60 s -> 80.07 m per horizontal axis (with g = 9.81;
+        // 80.04 m with 9.80665); theta 0.01014 rad.
+        let n = 0.075f64.to_radians();
+        assert!(
+            (white_noise_growth_std(n, t, Integration::Tilt) - 80.07 * 9.80665 / 9.81).abs() < 0.01
+        );
+        assert!((white_noise_growth_std(n, t, Integration::Once) - 0.01014).abs() < 1e-5);
+        // theory.md §6: gyro RRW K = 1e-3 -> 1034.0 m at 60 s; accel bias RW 1e-3 -> 6.235 m.
+        assert!((random_walk_growth_std(1e-3, t, Integration::Tilt) - 1034.0).abs() < 0.5);
+        assert!((random_walk_growth_std(1e-3, t, Integration::Twice) - 6.235).abs() < 0.001);
+        // Gauss-Markov once: -> 2 sigma^2 T t for t >> T.
+        let gm = gauss_markov_growth_std(0.1, 1.0, 1e4, Integration::Once).unwrap();
+        assert!((gm / (2.0 * 0.01 * 1.0 * 1e4f64).sqrt() - 1.0).abs() < 1e-4);
+        assert!(gauss_markov_growth_std(0.1, 100.0, 60.0, Integration::Twice).is_none());
+    }
+}

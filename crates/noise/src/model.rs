@@ -1,0 +1,474 @@
+//! Validated sensor models in SI: one `AxisModel` per axis, three per triad, a gyro and an
+//! accelerometer triad per sensor, and the temperature profile driving temperature-dependent bias.
+//!
+//! Signal units: rad/s (gyro) or m/s^2 (accel). Each term's coefficient is stated in the IEEE 952
+//! convention (theory.md §2): Q (signal·s), N (signal·sqrt(s)), B (signal), K (signal/sqrt(s)),
+//! R (signal/s).
+
+use crate::closed_form as cf;
+use crate::effect::{Effect, Sensor, TermFilter};
+
+/// Why a model value is invalid (programmatic construction; configs report through `ConfigError`).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{what}: expected {expected}, found {found}")]
+pub struct ModelError {
+    pub what: &'static str,
+    pub expected: &'static str,
+    pub found: f64,
+}
+
+pub(crate) fn check(what: &'static str, value: f64, positive: bool) -> Result<f64, ModelError> {
+    let ok = value.is_finite() && if positive { value > 0.0 } else { value >= 0.0 };
+    if ok {
+        Ok(value)
+    } else {
+        Err(ModelError {
+            what,
+            expected: if positive {
+                "a finite value > 0"
+            } else {
+                "a finite value >= 0"
+            },
+            found: value,
+        })
+    }
+}
+
+/// Flicker (1/f) bias instability of IEEE coefficient B, generated as a sum of log-spaced
+/// Gauss-Markov processes with correlation times spanning `[tau_min_s, tau_max_s]`
+/// (theory.md §3, kshana `Flicker`: equal variance sigma_0^2 = B^2 ln(rho) / pi each).
+/// The Allan plateau 0.664 B holds for averaging times inside the band.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Flicker {
+    /// IEEE coefficient B (signal units); the Allan plateau is 0.6643 B.
+    pub b: f64,
+    /// Shortest correlation time of the band, s.
+    pub tau_min_s: f64,
+    /// Longest correlation time of the band, s.
+    pub tau_max_s: f64,
+    /// Gauss-Markov components per decade of correlation time (2 gives a ripple of about ±2 %).
+    pub per_decade: u32,
+}
+
+impl Flicker {
+    /// Default band: 0.1 s to 1e5 s covers every averaging time a 12 h log shows (up to ~5000 s).
+    pub const DEFAULT_TAU_MIN_S: f64 = 0.1;
+    pub const DEFAULT_TAU_MAX_S: f64 = 1e5;
+    pub const DEFAULT_PER_DECADE: u32 = 2;
+
+    pub fn new(
+        b: f64,
+        tau_min_s: f64,
+        tau_max_s: f64,
+        per_decade: u32,
+    ) -> Result<Flicker, ModelError> {
+        check("flicker B", b, false)?;
+        check("flicker band start", tau_min_s, true)?;
+        check("flicker band end", tau_max_s, true)?;
+        if tau_max_s <= tau_min_s {
+            return Err(ModelError {
+                what: "flicker band end",
+                expected: "a time longer than the band start",
+                found: tau_max_s,
+            });
+        }
+        if per_decade == 0 || per_decade > 20 {
+            return Err(ModelError {
+                what: "flicker per_decade",
+                expected: "1 to 20 components per decade",
+                found: f64::from(per_decade),
+            });
+        }
+        Ok(Flicker {
+            b,
+            tau_min_s,
+            tau_max_s,
+            per_decade,
+        })
+    }
+
+    /// With the default band.
+    pub fn with_b(b: f64) -> Flicker {
+        Flicker {
+            b,
+            tau_min_s: Self::DEFAULT_TAU_MIN_S,
+            tau_max_s: Self::DEFAULT_TAU_MAX_S,
+            per_decade: Self::DEFAULT_PER_DECADE,
+        }
+    }
+
+    /// The Gauss-Markov components as (correlation time s, stationary std), shortest first.
+    pub fn components(&self) -> Vec<(f64, f64)> {
+        let decades = (self.tau_max_s / self.tau_min_s).log10();
+        let intervals = ((decades * f64::from(self.per_decade)).round() as usize).max(1);
+        let ln_rho = (self.tau_max_s / self.tau_min_s).ln() / intervals as f64;
+        // theory.md §3: for IEEE B, sigma_0^2 = B^2 ln(rho) / pi per component.
+        let sigma0 = self.b * (ln_rho / std::f64::consts::PI).sqrt();
+        (0..=intervals)
+            .map(|i| (self.tau_min_s * (ln_rho * i as f64).exp(), sigma0))
+            .collect()
+    }
+
+    /// Allan variance of the component sum (theory.md §2 Gauss-Markov closed form, summed).
+    pub fn avar(&self, tau_s: f64) -> f64 {
+        self.components()
+            .iter()
+            .map(|&(tc, s)| cf::gauss_markov_avar(s, tc, tau_s))
+            .sum()
+    }
+
+    /// Exact Allan variance of the sampled component sum.
+    pub fn avar_sampled(&self, tau_s: f64, dt_s: f64) -> f64 {
+        self.components()
+            .iter()
+            .map(|&(tc, s)| cf::gauss_markov_avar_sampled(s, tc, tau_s, dt_s))
+            .sum()
+    }
+}
+
+/// Bias instability in one of its two models.
+#[derive(Clone, Debug, PartialEq)]
+pub enum BiasInstability {
+    /// Flicker noise, IEEE 952 (Allan plateau 0.664 B).
+    Flicker(Flicker),
+    /// Woodman's bias random walk (TR-696 §3.2.3, eq 9): the bias changes by `stability` (1 sigma)
+    /// over `period_s`, i.e. a random walk of density K = stability / sqrt(period).
+    RandomWalk { stability: f64, period_s: f64 },
+}
+
+impl BiasInstability {
+    /// Allan variance (theory.md §2: flicker as GM sum; random walk K^2 tau/3).
+    pub fn avar(&self, tau_s: f64) -> f64 {
+        match self {
+            BiasInstability::Flicker(f) => f.avar(tau_s),
+            BiasInstability::RandomWalk {
+                stability,
+                period_s,
+            } => cf::rate_random_walk_avar(
+                cf::woodman_bias_random_walk(*stability, *period_s),
+                tau_s,
+            ),
+        }
+    }
+    pub fn avar_sampled(&self, tau_s: f64, dt_s: f64) -> f64 {
+        match self {
+            BiasInstability::Flicker(f) => f.avar_sampled(tau_s, dt_s),
+            BiasInstability::RandomWalk {
+                stability,
+                period_s,
+            } => cf::rate_random_walk_avar_sampled(
+                cf::woodman_bias_random_walk(*stability, *period_s),
+                tau_s,
+                dt_s,
+            ),
+        }
+    }
+}
+
+/// First-order Gauss-Markov bias: stationary std `sigma`, correlation time `tau_s`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GaussMarkov {
+    pub sigma: f64,
+    pub tau_s: f64,
+}
+
+impl GaussMarkov {
+    pub fn new(sigma: f64, tau_s: f64) -> Result<GaussMarkov, ModelError> {
+        Ok(GaussMarkov {
+            sigma: check("Gauss-Markov sigma", sigma, false)?,
+            tau_s: check("Gauss-Markov correlation time", tau_s, true)?,
+        })
+    }
+}
+
+/// Sinusoidal error `amplitude · sin(2 pi frequency_hz t + phase)`. Without a phase, one is drawn
+/// uniformly per run (the phase average is what the Allan closed form describes).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sinusoid {
+    pub amplitude: f64,
+    pub frequency_hz: f64,
+    pub phase_rad: Option<f64>,
+}
+
+impl Sinusoid {
+    pub fn new(
+        amplitude: f64,
+        frequency_hz: f64,
+        phase_rad: Option<f64>,
+    ) -> Result<Sinusoid, ModelError> {
+        check("sinusoid amplitude", amplitude, false)?;
+        check("sinusoid frequency", frequency_hz, true)?;
+        if let Some(p) = phase_rad {
+            if !p.is_finite() {
+                return Err(ModelError {
+                    what: "sinusoid phase",
+                    expected: "a finite angle",
+                    found: p,
+                });
+            }
+        }
+        Ok(Sinusoid {
+            amplitude,
+            frequency_hz,
+            phase_rad,
+        })
+    }
+}
+
+/// The error model of one axis, SI. `None` means the term is absent.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct AxisModel {
+    /// Quantisation coefficient Q of the integrated output (rad or m/s); the LSB of the integrated
+    /// output is Q·sqrt(12) (Hou §4.3.1: Q = LSB/sqrt(12)).
+    pub quantization: Option<f64>,
+    /// White-noise density N (ARW rad/sqrt(s), VRW m/s/sqrt(s)).
+    pub white_noise: Option<f64>,
+    pub bias_instability: Option<BiasInstability>,
+    /// Rate random walk K (rad/s/sqrt(s), m/s^2/sqrt(s)).
+    pub rate_random_walk: Option<f64>,
+    /// Rate ramp R (rad/s^2, m/s^3).
+    pub rate_ramp: Option<f64>,
+    pub gauss_markov: Option<GaussMarkov>,
+    pub sinusoidal: Option<Sinusoid>,
+    /// Bias per degC away from the reference temperature (rad/s/degC, m/s^2/degC).
+    pub temperature_bias: Option<f64>,
+    /// Constant bias (rad/s, m/s^2).
+    pub constant_bias: Option<f64>,
+    /// Standard deviation of the bias drawn once per run (turn-on to turn-on), rad/s or m/s^2.
+    pub turn_on_bias: Option<f64>,
+    /// Scale-factor error (dimensionless: 300 ppm = 3e-4).
+    pub scale_factor: Option<f64>,
+    /// Misalignment (rad): sensitivity of this axis to the two other axes, in axis order
+    /// (x: [y, z]; y: [x, z]; z: [x, y]).
+    pub misalignment: Option<[f64; 2]>,
+}
+
+impl AxisModel {
+    /// Closed-form Allan variance of the stochastic terms at averaging time `tau_s`
+    /// (theory.md §2: sum of independent terms). Deterministic and per-run terms add nothing,
+    /// except the rate ramp (R^2 tau^2/2) and the sinusoid (phase-averaged, Hou 4.64).
+    pub fn allan_variance(&self, tau_s: f64) -> f64 {
+        self.quantization
+            .map_or(0.0, |q| cf::quantization_avar(q, tau_s))
+            + self
+                .white_noise
+                .map_or(0.0, |n| cf::white_noise_avar(n, tau_s))
+            + self
+                .bias_instability
+                .as_ref()
+                .map_or(0.0, |b| b.avar(tau_s))
+            + self
+                .rate_random_walk
+                .map_or(0.0, |k| cf::rate_random_walk_avar(k, tau_s))
+            + self.rate_ramp.map_or(0.0, |r| cf::rate_ramp_avar(r, tau_s))
+            + self
+                .gauss_markov
+                .map_or(0.0, |g| cf::gauss_markov_avar(g.sigma, g.tau_s, tau_s))
+            + self.sinusoidal.map_or(0.0, |s| {
+                cf::sinusoid_avar(s.amplitude, s.frequency_hz, tau_s)
+            })
+    }
+
+    /// Allan variance of the series the generator produces at sample interval `dt_s`
+    /// (`tau_s` a multiple of `dt_s`), exact where sampling matters.
+    pub fn allan_variance_sampled(&self, tau_s: f64, dt_s: f64) -> f64 {
+        self.quantization
+            .map_or(0.0, |q| cf::quantization_avar(q, tau_s))
+            + self
+                .white_noise
+                .map_or(0.0, |n| cf::white_noise_avar(n, tau_s))
+            + self
+                .bias_instability
+                .as_ref()
+                .map_or(0.0, |b| b.avar_sampled(tau_s, dt_s))
+            + self
+                .rate_random_walk
+                .map_or(0.0, |k| cf::rate_random_walk_avar_sampled(k, tau_s, dt_s))
+            + self.rate_ramp.map_or(0.0, |r| cf::rate_ramp_avar(r, tau_s))
+            + self.gauss_markov.map_or(0.0, |g| {
+                cf::gauss_markov_avar_sampled(g.sigma, g.tau_s, tau_s, dt_s)
+            })
+            + self.sinusoidal.map_or(0.0, |s| {
+                cf::sinusoid_avar_sampled(s.amplitude, s.frequency_hz, tau_s, dt_s)
+            })
+    }
+
+    /// Is the term present?
+    pub fn has(&self, effect: Effect) -> bool {
+        match effect {
+            Effect::Quantization => self.quantization.is_some(),
+            Effect::WhiteNoise => self.white_noise.is_some(),
+            Effect::BiasInstability => self.bias_instability.is_some(),
+            Effect::RateRandomWalk => self.rate_random_walk.is_some(),
+            Effect::RateRamp => self.rate_ramp.is_some(),
+            Effect::GaussMarkov => self.gauss_markov.is_some(),
+            Effect::Sinusoidal => self.sinusoidal.is_some(),
+            Effect::TemperatureBias => self.temperature_bias.is_some(),
+            Effect::ConstantBias => self.constant_bias.is_some(),
+            Effect::TurnOnBias => self.turn_on_bias.is_some(),
+            Effect::ScaleFactor => self.scale_factor.is_some(),
+            Effect::Misalignment => self.misalignment.is_some(),
+        }
+    }
+
+    /// Remove a term.
+    pub fn remove(&mut self, effect: Effect) {
+        match effect {
+            Effect::Quantization => self.quantization = None,
+            Effect::WhiteNoise => self.white_noise = None,
+            Effect::BiasInstability => self.bias_instability = None,
+            Effect::RateRandomWalk => self.rate_random_walk = None,
+            Effect::RateRamp => self.rate_ramp = None,
+            Effect::GaussMarkov => self.gauss_markov = None,
+            Effect::Sinusoidal => self.sinusoidal = None,
+            Effect::TemperatureBias => self.temperature_bias = None,
+            Effect::ConstantBias => self.constant_bias = None,
+            Effect::TurnOnBias => self.turn_on_bias = None,
+            Effect::ScaleFactor => self.scale_factor = None,
+            Effect::Misalignment => self.misalignment = None,
+        }
+    }
+
+    /// The terms present, in `Effect` order.
+    pub fn effects(&self) -> Vec<Effect> {
+        Effect::ALL.into_iter().filter(|&e| self.has(e)).collect()
+    }
+
+    /// Only the stochastic terms with an Allan signature (drops biases, scale factor, misalignment,
+    /// temperature bias): what a static log's Allan deviation can show.
+    pub fn stochastic_only(&self) -> AxisModel {
+        AxisModel {
+            quantization: self.quantization,
+            white_noise: self.white_noise,
+            bias_instability: self.bias_instability.clone(),
+            rate_random_walk: self.rate_random_walk,
+            rate_ramp: self.rate_ramp,
+            gauss_markov: self.gauss_markov,
+            sinusoidal: self.sinusoidal,
+            ..AxisModel::default()
+        }
+    }
+}
+
+/// Three axes of one sensor kind.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TriadModel {
+    /// x, y, z.
+    pub axes: [AxisModel; 3],
+}
+
+/// Axis names in order.
+pub const AXIS_NAMES: [&str; 3] = ["x", "y", "z"];
+
+/// Temperature over time (degC), driving `temperature_bias` and written as the log's `temp` column.
+#[derive(Clone, Debug, PartialEq)]
+pub enum TemperatureProfile {
+    Constant {
+        temp_c: f64,
+    },
+    /// `start_c + rate_c_per_s · t`, held at `end_c` once reached (if given).
+    Ramp {
+        start_c: f64,
+        rate_c_per_s: f64,
+        end_c: Option<f64>,
+    },
+    /// Exponential warm-up `end_c + (start_c - end_c) e^{-t/time_constant_s}`.
+    Warmup {
+        start_c: f64,
+        end_c: f64,
+        time_constant_s: f64,
+    },
+    /// `mean_c + amplitude_c sin(2 pi t / period_s)`.
+    Sinusoid {
+        mean_c: f64,
+        amplitude_c: f64,
+        period_s: f64,
+    },
+}
+
+impl Default for TemperatureProfile {
+    fn default() -> Self {
+        TemperatureProfile::Constant { temp_c: 25.0 }
+    }
+}
+
+impl TemperatureProfile {
+    /// Temperature at time `t_s`, degC.
+    pub fn at(&self, t_s: f64) -> f64 {
+        match *self {
+            TemperatureProfile::Constant { temp_c } => temp_c,
+            TemperatureProfile::Ramp {
+                start_c,
+                rate_c_per_s,
+                end_c,
+            } => {
+                let t = start_c + rate_c_per_s * t_s;
+                match end_c {
+                    Some(e) if rate_c_per_s >= 0.0 => t.min(e),
+                    Some(e) => t.max(e),
+                    None => t,
+                }
+            }
+            TemperatureProfile::Warmup {
+                start_c,
+                end_c,
+                time_constant_s,
+            } => end_c + (start_c - end_c) * (-t_s / time_constant_s).exp(),
+            TemperatureProfile::Sinusoid {
+                mean_c,
+                amplitude_c,
+                period_s,
+            } => mean_c + amplitude_c * (std::f64::consts::TAU * t_s / period_s).sin(),
+        }
+    }
+}
+
+/// A whole sensor: gyro and accelerometer triads plus temperature.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SensorModel {
+    pub name: String,
+    pub description: Option<String>,
+    pub gyro: TriadModel,
+    pub accel: TriadModel,
+    pub temperature: TemperatureProfile,
+    /// Temperature at which `temperature_bias` is zero, degC.
+    pub temperature_reference_c: f64,
+}
+
+impl SensorModel {
+    pub fn triad(&self, sensor: Sensor) -> &TriadModel {
+        match sensor {
+            Sensor::Gyro => &self.gyro,
+            Sensor::Accel => &self.accel,
+        }
+    }
+    pub fn triad_mut(&mut self, sensor: Sensor) -> &mut TriadModel {
+        match sensor {
+            Sensor::Gyro => &mut self.gyro,
+            Sensor::Accel => &mut self.accel,
+        }
+    }
+
+    /// Axis `axis` (0 = x) of `sensor`.
+    pub fn axis(&self, sensor: Sensor, axis: usize) -> &AxisModel {
+        &self.triad(sensor).axes[axis]
+    }
+    pub fn axis_mut(&mut self, sensor: Sensor, axis: usize) -> &mut AxisModel {
+        &mut self.triad_mut(sensor).axes[axis]
+    }
+
+    /// The model with the terms the filter switches off removed (ablation).
+    pub fn filtered(&self, filter: &TermFilter) -> SensorModel {
+        let mut out = self.clone();
+        for sensor in Sensor::ALL {
+            for axis in out.triad_mut(sensor).axes.iter_mut() {
+                for effect in Effect::ALL {
+                    if !filter.allows(sensor, effect) {
+                        axis.remove(effect);
+                    }
+                }
+            }
+        }
+        out
+    }
+}
