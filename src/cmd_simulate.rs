@@ -1,8 +1,591 @@
-//! `imudrift simulate` (being built).
+//! `imudrift simulate SCENARIO.toml`: Monte Carlo drift run; every channel beside its growth law.
+
+use crate::output::{ensure_dir, write_atomic, write_string};
+use anyhow::{bail, Context, Result};
+use montecarlo::channels::Channel;
+use montecarlo::experiment::{Experiment, Overrides};
+use montecarlo::report::DriftReport;
+use montecarlo::runner::{run_range, BatchResult, Shard};
+use montecarlo::scenario::Scenario;
+use montecarlo::shard::{ShardFile, SHARD_FORMAT};
+use noise::SensorModel;
+use serde::Serialize;
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Scenario TOML (configs/scenarios/*.toml)
+    pub scenario: PathBuf,
+    /// Number of Monte Carlo runs (overrides the scenario)
+    #[arg(long)]
+    pub runs: Option<u64>,
+    /// Master seed (overrides the scenario); run i uses its own stream derived from (seed, i)
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Worker threads (default: all cores); results are identical for any value
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Print one JSON document on stdout (human text stays on stderr)
+    #[arg(long)]
+    pub json: bool,
+    /// Write drift.csv, drift.json and drift.svg into DIR (with --shard: the shard file)
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Keep only these error terms, e.g. `gyro.white_noise,accel.white_noise`
+    #[arg(long, value_delimiter = ',')]
+    pub only: Option<Vec<String>>,
+    /// Switch these error terms off, e.g. `gyro.bias_instability`
+    #[arg(long, value_delimiter = ',')]
+    pub without: Vec<String>,
+    /// Run only the deterministic slice i/k of the runs (0 <= i < k) and write a shard file for
+    /// `imudrift merge` into --out DIR
+    #[arg(long, value_name = "I/K")]
+    pub shard: Option<String>,
+    /// Also run each active term alone and the model without it (ablation table)
+    #[arg(long)]
+    pub ablation: bool,
+}
 
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`imudrift simulate` is not built yet")
+/// Scenario and sensor texts as read, with their names (kept verbatim for shard files).
+pub struct Inputs {
+    pub scenario_source: String,
+    pub scenario_toml: String,
+    pub sensor_source: String,
+    pub sensor_toml: String,
+}
+
+/// Read the scenario and its sensor (path relative to the scenario file).
+pub fn read_inputs(scenario_path: &Path) -> Result<(Inputs, Scenario)> {
+    let scenario_source = scenario_path.display().to_string();
+    let scenario_toml = std::fs::read_to_string(scenario_path)
+        .with_context(|| format!("cannot read scenario {scenario_source}"))?;
+    let scenario = Scenario::from_toml_str(&scenario_toml, &scenario_source)?;
+    let sensor_path = match scenario_path.parent() {
+        Some(dir) if scenario.sensor.is_relative() => dir.join(&scenario.sensor),
+        _ => scenario.sensor.clone(),
+    };
+    let sensor_source = sensor_path.display().to_string();
+    let sensor_toml = std::fs::read_to_string(&sensor_path).with_context(|| {
+        format!("{scenario_source}: key `sensor`: cannot read sensor file {sensor_source}")
+    })?;
+    Ok((
+        Inputs {
+            scenario_source,
+            scenario_toml,
+            sensor_source,
+            sensor_toml,
+        },
+        scenario,
+    ))
+}
+
+/// Rebuild the experiment from texts (also used by `merge` on a shard's stored texts).
+pub fn experiment_from(inputs: &Inputs, overrides: &Overrides) -> Result<Experiment> {
+    let scenario = Scenario::from_toml_str(&inputs.scenario_toml, &inputs.scenario_source)?;
+    let model = SensorModel::from_toml_str(&inputs.sensor_toml, &inputs.sensor_source)
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    Experiment::new(scenario, &model, overrides).map_err(|e| anyhow::anyhow!("{e}"))
+}
+
+/// A rayon pool of `threads` workers (default: all cores).
+pub fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
+    let mut b = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = threads {
+        if n == 0 {
+            bail!("--threads: expected an integer >= 1");
+        }
+        b = b.num_threads(n);
+    }
+    b.build().context("cannot start the worker threads")
+}
+
+/// Run `exp` over `runs`, with a progress bar on a terminal.
+pub fn execute(exp: &Experiment, runs: std::ops::Range<u64>, label: &str) -> BatchResult {
+    let kernel = exp.kernel();
+    let total = runs.end - runs.start;
+    let bar = std::io::stderr().is_terminal().then(|| {
+        let b = indicatif::ProgressBar::new(total);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{msg} [{bar:40}] {pos}/{len} runs, {eta} left",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b.set_message(label.to_string());
+        b
+    });
+    let progress = |done: u64| {
+        if let Some(b) = &bar {
+            b.set_position(done);
+        }
+    };
+    let result = run_range(&kernel, runs, &progress);
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    result
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let (inputs, _) = read_inputs(&args.scenario)?;
+    let overrides = Overrides {
+        runs: args.runs,
+        seed: args.seed,
+        only: args.only.clone(),
+        without: args.without.clone(),
+    };
+    let exp = experiment_from(&inputs, &overrides)?;
+    let pool = pool(args.threads)?;
+    if let Some(text) = &args.shard {
+        let shard = Shard::parse(text).map_err(|e| anyhow::anyhow!("--shard: {e}"))?;
+        let Some(dir) = &args.out else {
+            bail!("--shard: expected --out DIR for the shard file");
+        };
+        let result = pool.install(|| execute(&exp, shard.runs(exp.runs), "shard"));
+        let file = ShardFile {
+            format: SHARD_FORMAT.into(),
+            scenario_source: inputs.scenario_source,
+            scenario_toml: inputs.scenario_toml,
+            sensor_source: inputs.sensor_source,
+            sensor_toml: inputs.sensor_toml,
+            runs: args.runs,
+            seed: args.seed,
+            only: args.only,
+            without: args.without,
+            shard,
+            matrix: result.matrix,
+            failures: result.failures,
+        };
+        ensure_dir(dir)?;
+        let path = dir.join(format!("shard-{}-of-{}.json", shard.index, shard.count));
+        write_atomic(&path, |w| Ok(serde_json::to_writer(w, &file)?))?;
+        report_failures(&file.failures);
+        eprintln!(
+            "shard {}/{}: runs {:?} of {}, {} finished; wrote {}",
+            shard.index,
+            shard.count,
+            shard.runs(exp.runs),
+            exp.runs,
+            file.matrix.runs(),
+            path.display()
+        );
+        return Ok(());
+    }
+    let result = pool.install(|| execute(&exp, 0..exp.runs, "simulate"));
+    let report = exp.report(&result.matrix, &result.failures);
+    let ablation = if args.ablation {
+        Some(pool.install(|| ablation(&inputs, &overrides, &exp, &report))?)
+    } else {
+        None
+    };
+    emit(
+        &report,
+        &exp,
+        ablation.as_deref(),
+        args.json,
+        args.out.as_deref(),
+    )
+}
+
+/// One row of the ablation table (Woodman's "selectively removing sensor noise").
+#[derive(Debug, Clone, Serialize)]
+pub struct AblationRow {
+    pub term: String,
+    /// Mean horizontal error at the last checkpoint with only this term.
+    pub only_mean_m: f64,
+    /// Its share of the full model's mean square horizontal error, only_rms^2 / full_rms^2.
+    pub only_share: f64,
+    /// Mean horizontal error at the last checkpoint with every term but this one.
+    pub without_mean_m: f64,
+}
+
+fn last_horizontal(r: &DriftReport) -> (f64, f64) {
+    let c = &r
+        .checkpoints
+        .last()
+        .expect("at least one checkpoint")
+        .channels[Channel::PosHorizontal.name()];
+    (c.mean, c.rms)
+}
+
+fn ablation(
+    inputs: &Inputs,
+    overrides: &Overrides,
+    full: &Experiment,
+    full_report: &DriftReport,
+) -> Result<Vec<AblationRow>> {
+    let (_, full_rms) = last_horizontal(full_report);
+    let mut rows = Vec::new();
+    for term in &full_report.active_terms {
+        if term.starts_with("alignment.") {
+            continue;
+        }
+        let sub = |o: Overrides| -> Result<(f64, f64)> {
+            let e = experiment_from(inputs, &o)?;
+            let r = execute(&e, 0..e.runs, term);
+            Ok(last_horizontal(&e.report(&r.matrix, &r.failures)))
+        };
+        let (only_mean_m, only_rms) = sub(Overrides {
+            only: Some(vec![term.clone()]),
+            ..overrides.clone()
+        })?;
+        let mut without = overrides.without.clone();
+        without.push(term.clone());
+        let (without_mean_m, _) = sub(Overrides {
+            without,
+            ..overrides.clone()
+        })?;
+        rows.push(AblationRow {
+            term: term.clone(),
+            only_mean_m,
+            only_share: (only_rms / full_rms).powi(2),
+            without_mean_m,
+        });
+    }
+    let _ = full;
+    Ok(rows)
+}
+
+fn report_failures(failures: &[montecarlo::RunFailure]) {
+    for f in failures.iter().take(10) {
+        eprintln!("warning: run {} failed: {}", f.run, f.message);
+    }
+    if failures.len() > 10 {
+        eprintln!("warning: {} more runs failed", failures.len() - 10);
+    }
+}
+
+#[derive(Serialize)]
+struct JsonOut<'a> {
+    #[serde(flatten)]
+    report: &'a DriftReport,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    reference: Option<ReferenceOut>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    ablation: Option<&'a [AblationRow]>,
+}
+
+#[derive(Serialize)]
+struct ReferenceOut {
+    channel: String,
+    statistic: String,
+    t_s: f64,
+    value: f64,
+    source: String,
+    simulated: f64,
+}
+
+fn reference_out(report: &DriftReport, exp: &Experiment) -> Option<ReferenceOut> {
+    let r = exp.scenario.reference.as_ref()?;
+    let cp = report
+        .checkpoints
+        .iter()
+        .min_by(|a, b| (a.t_s - r.t_s).abs().total_cmp(&(b.t_s - r.t_s).abs()))?;
+    let c = cp.channels.get(&r.channel)?;
+    let simulated = match r.statistic.as_str() {
+        "mean" => c.mean,
+        "rms" => c.rms,
+        "p50" => c.p50,
+        _ => c.p95,
+    };
+    Some(ReferenceOut {
+        channel: r.channel.clone(),
+        statistic: r.statistic.clone(),
+        t_s: cp.t_s,
+        value: r.value,
+        source: r.source.clone(),
+        simulated,
+    })
+}
+
+/// Print the table on stderr and write --json / --out outputs (shared with `merge`).
+pub fn emit(
+    report: &DriftReport,
+    exp: &Experiment,
+    ablation: Option<&[AblationRow]>,
+    json: bool,
+    out: Option<&Path>,
+) -> Result<()> {
+    let reference = reference_out(report, exp);
+    eprint!("{}", table(report, reference.as_ref(), ablation));
+    report_failures(&report.failed_runs);
+    let doc = JsonOut {
+        report,
+        reference,
+        ablation,
+    };
+    let text = serde_json::to_string_pretty(&doc)? + "\n";
+    if json {
+        let mut stdout = std::io::stdout().lock();
+        stdout.write_all(text.as_bytes())?;
+        stdout.flush()?;
+    }
+    if let Some(dir) = out {
+        ensure_dir(dir)?;
+        write_string(&dir.join("drift.json"), &text)?;
+        write_atomic(&dir.join("drift.csv"), |w| write_csv(w, report))?;
+        write_string(&dir.join("drift.svg"), &svg(report, Channel::PosHorizontal))?;
+        eprintln!("wrote {}/drift.{{json,csv,svg}}", dir.display());
+    }
+    Ok(())
+}
+
+fn opt(x: Option<f64>) -> String {
+    x.map_or_else(String::new, |v| format!("{v:.10e}"))
+}
+
+fn write_csv(w: &mut dyn Write, r: &DriftReport) -> Result<()> {
+    writeln!(
+        w,
+        "# imudrift simulate: scenario {} sensor {} seed {} runs {} (ok {})",
+        r.scenario, r.sensor, r.seed, r.runs, r.runs_ok
+    )?;
+    writeln!(w, "t_s,channel,mean,std,rms,p5,p50,p95,law_mean,law_std,law_rms,ratio,ratio_lo,ratio_hi,law_note")?;
+    for cp in &r.checkpoints {
+        for ch in Channel::ALL {
+            let c = &cp.channels[ch.name()];
+            writeln!(
+                w,
+                "{},{},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{},{},{},{},{},{},\"{}\"",
+                cp.t_s,
+                ch.name(),
+                c.mean,
+                c.std,
+                c.rms,
+                c.p5,
+                c.p50,
+                c.p95,
+                opt(c.law_mean),
+                opt(c.law_std),
+                opt(c.law_rms),
+                opt(c.ratio),
+                opt(c.ratio_lo),
+                opt(c.ratio_hi),
+                c.law_note.as_deref().unwrap_or("").replace('"', "'")
+            )?;
+        }
+    }
+    Ok(())
+}
+
+fn fmt_ratio(c: &montecarlo::report::ChannelReport) -> String {
+    match (c.ratio, c.ratio_lo, c.ratio_hi) {
+        (Some(r), Some(lo), Some(hi)) => {
+            let flag = if lo <= 1.0 && 1.0 <= hi { "" } else { " *" };
+            format!("{r:.3} [{lo:.3}, {hi:.3}]{flag}")
+        }
+        _ => "n/a".into(),
+    }
+}
+
+fn table(
+    r: &DriftReport,
+    reference: Option<&ReferenceOut>,
+    ablation: Option<&[AblationRow]>,
+) -> String {
+    let mut s = String::new();
+    use std::fmt::Write as _;
+    let _ = writeln!(
+        s,
+        "{}: sensor {}, {} runs ({} ok), seed {}, {} Hz, {} s, scheme {}; terms: {}",
+        r.scenario,
+        r.sensor,
+        r.runs,
+        r.runs_ok,
+        r.seed,
+        r.rate_hz,
+        r.duration_s,
+        r.scheme,
+        if r.active_terms.is_empty() {
+            "none".to_string()
+        } else {
+            r.active_terms.join(", ")
+        }
+    );
+    let _ = writeln!(s, "\nhorizontal position error (m) vs time; law = closed form of the active terms, ratio = rms/law rms [99.9 % interval], * = outside");
+    let _ = writeln!(
+        s,
+        "{:>10} {:>11} {:>11} {:>11} {:>11} {:>11} {:>11}  ratio",
+        "t_s", "mean", "p50", "p95", "rms", "law_mean", "law_rms"
+    );
+    let f = |x: Option<f64>| x.map_or("n/a".to_string(), |v| format!("{v:.4e}"));
+    for cp in &r.checkpoints {
+        let c = &cp.channels[Channel::PosHorizontal.name()];
+        let _ = writeln!(
+            s,
+            "{:>10.3} {:>11.4e} {:>11.4e} {:>11.4e} {:>11.4e} {:>11} {:>11}  {}",
+            cp.t_s,
+            c.mean,
+            c.p50,
+            c.p95,
+            c.rms,
+            f(c.law_mean),
+            f(c.law_rms),
+            fmt_ratio(c)
+        );
+    }
+    if let Some(last) = r.checkpoints.last() {
+        let _ = writeln!(s, "\nall channels at t = {} s", last.t_s);
+        let _ = writeln!(
+            s,
+            "{:>20} {:>11} {:>11} {:>11} {:>11} {:>11} {:>11}  ratio / note",
+            "channel", "mean", "std", "rms", "p95", "law_mean", "law_std"
+        );
+        for ch in Channel::ALL {
+            let c = &last.channels[ch.name()];
+            let tail = match &c.law_note {
+                Some(n) if c.ratio.is_none() => n.clone(),
+                _ => fmt_ratio(c),
+            };
+            let _ = writeln!(
+                s,
+                "{:>20} {:>11.4e} {:>11.4e} {:>11.4e} {:>11.4e} {:>11} {:>11}  {}",
+                ch.name(),
+                c.mean,
+                c.std,
+                c.rms,
+                c.p95,
+                f(c.law_mean),
+                f(c.law_std),
+                tail
+            );
+        }
+    }
+    if let Some(rf) = reference {
+        let _ = writeln!(
+            s,
+            "\n{} {} at {} s: simulated {:.2}, published {:.2} ({})",
+            rf.channel, rf.statistic, rf.t_s, rf.simulated, rf.value, rf.source
+        );
+    }
+    if let Some(rows) = ablation {
+        let _ = writeln!(s, "\nablation at the last checkpoint (horizontal position): each term alone, and the model without it");
+        let _ = writeln!(
+            s,
+            "{:>28} {:>14} {:>16} {:>16}",
+            "term", "alone mean m", "alone share ms", "without mean m"
+        );
+        for row in rows {
+            let _ = writeln!(
+                s,
+                "{:>28} {:>14.3} {:>15.1}% {:>16.3}",
+                row.term,
+                row.only_mean_m,
+                100.0 * row.only_share,
+                row.without_mean_m
+            );
+        }
+    }
+    s
+}
+
+/// Log-log plot of one channel: mean, p5-p95 band, law mean and law rms.
+fn svg(r: &DriftReport, ch: Channel) -> String {
+    let pts: Vec<(f64, &montecarlo::report::ChannelReport)> = r
+        .checkpoints
+        .iter()
+        .map(|c| (c.t_s, &c.channels[ch.name()]))
+        .collect();
+    let positive = |v: f64| v.is_finite() && v > 0.0;
+    let ys: Vec<f64> = pts
+        .iter()
+        .flat_map(|(_, c)| {
+            [
+                c.p5,
+                c.p95,
+                c.mean,
+                c.law_rms.unwrap_or(f64::NAN),
+                c.law_mean.unwrap_or(f64::NAN),
+            ]
+        })
+        .filter(|&v| positive(v))
+        .collect();
+    let (w, h, m) = (720.0, 480.0, 70.0);
+    let (x0, x1) = (
+        pts.first().map_or(1.0, |p| p.0).log10(),
+        pts.last().map_or(10.0, |p| p.0).log10(),
+    );
+    let y0 = ys
+        .iter()
+        .cloned()
+        .fold(f64::INFINITY, f64::min)
+        .log10()
+        .floor();
+    let y1 = ys
+        .iter()
+        .cloned()
+        .fold(f64::NEG_INFINITY, f64::max)
+        .log10()
+        .ceil();
+    let (y0, y1) = if y0.is_finite() && y1 > y0 {
+        (y0, y1)
+    } else {
+        (-1.0, 1.0)
+    };
+    let x1 = if x1 > x0 { x1 } else { x0 + 1.0 };
+    let px = |t: f64| m + (t.log10() - x0) / (x1 - x0) * (w - 2.0 * m);
+    let py = |v: f64| h - m - (v.log10() - y0) / (y1 - y0) * (h - 2.0 * m);
+    let line = |sel: &dyn Fn(&montecarlo::report::ChannelReport) -> Option<f64>| -> String {
+        pts.iter()
+            .filter_map(|(t, c)| {
+                sel(c)
+                    .filter(|&v| positive(v))
+                    .map(|v| format!("{:.2},{:.2}", px(*t), py(v)))
+            })
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let band: String = {
+        let upper: Vec<String> = pts
+            .iter()
+            .filter(|(_, c)| positive(c.p95) && positive(c.p5))
+            .map(|(t, c)| format!("{:.2},{:.2}", px(*t), py(c.p95)))
+            .collect();
+        let lower: Vec<String> = pts
+            .iter()
+            .rev()
+            .filter(|(_, c)| positive(c.p95) && positive(c.p5))
+            .map(|(t, c)| format!("{:.2},{:.2}", px(*t), py(c.p5)))
+            .collect();
+        upper.into_iter().chain(lower).collect::<Vec<_>>().join(" ")
+    };
+    let mut s = format!("<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n");
+    s += &format!(
+        "<text x=\"{}\" y=\"20\" text-anchor=\"middle\">{}: {} vs time ({} runs, seed {})</text>\n",
+        w / 2.0,
+        r.scenario,
+        ch.name(),
+        r.runs_ok,
+        r.seed
+    );
+    for d in (x0.floor() as i32)..=(x1.ceil() as i32) {
+        let t = 10f64.powi(d);
+        if t.log10() >= x0 - 1e-9 && t.log10() <= x1 + 1e-9 {
+            s += &format!("<line x1=\"{0:.2}\" y1=\"{1}\" x2=\"{0:.2}\" y2=\"{2}\" stroke=\"#ddd\"/><text x=\"{0:.2}\" y=\"{3}\" text-anchor=\"middle\">1e{d}</text>\n", px(t), m, h - m, h - m + 16.0);
+        }
+    }
+    for d in (y0 as i32)..=(y1 as i32) {
+        let v = 10f64.powi(d);
+        s += &format!("<line x1=\"{m}\" y1=\"{0:.2}\" x2=\"{1}\" y2=\"{0:.2}\" stroke=\"#ddd\"/><text x=\"{2}\" y=\"{0:.2}\" text-anchor=\"end\">1e{d}</text>\n", py(v), w - m, m - 6.0);
+    }
+    s += &format!(
+        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">t (s)</text>\n",
+        w / 2.0,
+        h - 20.0
+    );
+    if !band.is_empty() {
+        s += &format!(
+            "<polygon points=\"{band}\" fill=\"#9ecae1\" fill-opacity=\"0.5\" stroke=\"none\"/>\n"
+        );
+    }
+    s += &format!(
+        "<polyline points=\"{}\" fill=\"none\" stroke=\"#08519c\" stroke-width=\"2\"/>\n",
+        line(&|c| Some(c.mean))
+    );
+    s += &format!("<polyline points=\"{}\" fill=\"none\" stroke=\"#d62728\" stroke-width=\"2\" stroke-dasharray=\"6,4\"/>\n", line(&|c| c.law_mean));
+    s += &format!("<polyline points=\"{}\" fill=\"none\" stroke=\"#ff7f0e\" stroke-width=\"1.5\" stroke-dasharray=\"2,3\"/>\n", line(&|c| c.law_rms));
+    s += &format!("<text x=\"{0}\" y=\"{1}\" fill=\"#08519c\">simulated mean</text><text x=\"{0}\" y=\"{2}\" fill=\"#6baed6\">p5-p95 band</text><text x=\"{0}\" y=\"{3}\" fill=\"#d62728\">law mean</text><text x=\"{0}\" y=\"{4}\" fill=\"#ff7f0e\">law rms</text>\n", m + 10.0, m + 14.0, m + 30.0, m + 46.0, m + 62.0);
+    s += "</svg>\n";
+    s
 }

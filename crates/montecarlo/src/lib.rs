@@ -9,8 +9,14 @@
 //! Units are SI (rad, m, m/s, s). Frames: navigation NED, body forward-right-down; a static level
 //! IMU reads specific force (0, 0, -g).
 
+pub mod channels;
+pub mod drift;
+pub mod experiment;
+pub mod laws;
+pub mod report;
 pub mod runner;
 pub mod scenario;
+pub mod shard;
 pub mod stats;
 
 pub use runner::{run_range, BatchResult, RunFailure, RunKernel, Shard};

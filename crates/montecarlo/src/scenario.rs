@@ -5,6 +5,7 @@
 
 use serde::Deserialize;
 use std::path::PathBuf;
+use strapdown::{AnyTrajectory, TrajectorySpec};
 
 /// A configuration error: `source` (file name), `key` (dotted TOML path) and what was expected.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -27,21 +28,25 @@ struct RawScenario {
     seed: u64,
     scheme: Option<String>,
     gravity_mps2: Option<f64>,
-    trajectory: Option<RawTrajectory>,
+    trajectory: Option<TrajectorySpec>,
     checkpoints: Option<RawCheckpoints>,
     alignment: Option<RawAlignment>,
     terms: Option<RawTerms>,
+    reference: Option<Reference>,
 }
 
-#[derive(Debug, Deserialize)]
+/// A published measurement to print beside the simulation (e.g. Woodman's 152.67 m at 60 s).
+#[derive(Debug, Clone, PartialEq, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
-struct RawTrajectory {
-    kind: String,
-    roll_deg: Option<f64>,
-    pitch_deg: Option<f64>,
-    yaw_deg: Option<f64>,
-    rate_deg_s: Option<[f64; 3]>,
-    file: Option<String>,
+pub struct Reference {
+    /// Channel name (`pos_horizontal_m` ...).
+    pub channel: String,
+    /// Statistic compared: `mean`, `rms`, `p50` or `p95`.
+    pub statistic: String,
+    pub t_s: f64,
+    pub value: f64,
+    /// Where the number comes from.
+    pub source: String,
 }
 
 #[derive(Debug, Deserialize)]
@@ -77,27 +82,6 @@ pub enum SchemeChoice {
     Accurate,
 }
 
-/// The trajectory the IMU follows.
-#[derive(Debug, Clone, PartialEq)]
-pub enum TrajectorySpec {
-    /// Fixed attitude (rad), zero velocity.
-    Static {
-        roll_rad: f64,
-        pitch_rad: f64,
-        yaw_rad: f64,
-    },
-    /// Constant body angular rate (rad/s) from a level, north-facing start, zero velocity.
-    ConstantRate { rate_rad_s: [f64; 3] },
-    /// A motion profile file (path as written, relative to the scenario file).
-    Profile { file: PathBuf },
-}
-
-impl TrajectorySpec {
-    pub fn is_static(&self) -> bool {
-        matches!(self, TrajectorySpec::Static { .. })
-    }
-}
-
 /// Initial alignment error per Euler angle (rad): a fixed offset plus a per-run Gaussian draw.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Alignment {
@@ -127,13 +111,16 @@ pub struct Scenario {
     pub seed: u64,
     pub scheme: SchemeChoice,
     pub gravity_mps2: f64,
-    pub trajectory: TrajectorySpec,
+    /// The trajectory as written (strapdown's spec) and built.
+    pub trajectory_spec: TrajectorySpec,
+    pub trajectory: AnyTrajectory,
     /// Step indices k (t = k dt) at which errors are recorded, ascending, unique, 1 <= k <= steps.
     pub checkpoint_steps: Vec<u64>,
     pub alignment: Alignment,
     /// Term switches (`gyro.white_noise` ...), parsed by the noise crate's filter.
     pub only: Option<Vec<String>>,
     pub without: Vec<String>,
+    pub reference: Option<Reference>,
 }
 
 /// Standard gravity (m/s^2), the value INTERFACES.md fixes for a static level IMU.
@@ -213,17 +200,51 @@ impl Scenario {
             Some(g) => positive("gravity_mps2", g)?,
             None => STANDARD_GRAVITY_MPS2,
         };
-        let trajectory = match raw.trajectory {
-            None => TrajectorySpec::Static {
-                roll_rad: 0.0,
-                pitch_rad: 0.0,
-                yaw_rad: 0.0,
-            },
-            Some(t) => trajectory_spec(t, &err)?,
-        };
-        let checkpoint_steps = checkpoint_steps(raw.checkpoints, rate_hz, steps, &err)?;
+        let trajectory_spec = raw.trajectory.unwrap_or(TrajectorySpec::Static {
+            roll_deg: 0.0,
+            pitch_deg: 0.0,
+            yaw_deg: 0.0,
+        });
+        let trajectory = trajectory_spec.build().map_err(|e| match e {
+            strapdown::TrajectoryError::Invalid { key, expected, got } => err(
+                &format!("trajectory.{key}"),
+                format!("expected {expected}, got {got}"),
+            ),
+            other => err("trajectory", other.to_string()),
+        })?;
+        let mut checkpoint_steps = checkpoint_steps(raw.checkpoints, rate_hz, steps, &err)?;
+        if let Some(r) = &raw.reference {
+            // The reference time is always a checkpoint.
+            let k = ((r.t_s * rate_hz).round() as u64).clamp(1, steps);
+            checkpoint_steps.push(k);
+            checkpoint_steps.sort_unstable();
+            checkpoint_steps.dedup();
+        }
         let alignment = alignment(raw.alignment.unwrap_or_default(), &err)?;
         let terms = raw.terms.unwrap_or_default();
+        if let Some(r) = &raw.reference {
+            if !["mean", "rms", "p50", "p95"].contains(&r.statistic.as_str()) {
+                return Err(err(
+                    "reference.statistic",
+                    format!("expected mean, rms, p50 or p95, got `{}`", r.statistic),
+                ));
+            }
+            if crate::channels::Channel::from_name(&r.channel).is_none() {
+                return Err(err(
+                    "reference.channel",
+                    format!(
+                        "expected a channel name such as pos_horizontal_m, got `{}`",
+                        r.channel
+                    ),
+                ));
+            }
+            if !(r.t_s > 0.0 && r.t_s <= duration_s) {
+                return Err(err(
+                    "reference.t_s",
+                    format!("expected a time in (0, duration_s], got {}", r.t_s),
+                ));
+            }
+        }
         if raw.sensor.trim().is_empty() {
             return Err(err("sensor", "expected a path to a sensor TOML".into()));
         }
@@ -244,11 +265,13 @@ impl Scenario {
             seed: raw.seed,
             scheme,
             gravity_mps2,
+            trajectory_spec,
             trajectory,
             checkpoint_steps,
             alignment,
             only: terms.only,
             without: terms.without.unwrap_or_default(),
+            reference: raw.reference,
         })
     }
 }
@@ -260,81 +283,6 @@ fn finite(key: &str, v: f64, err: &ErrFn) -> Result<f64, ScenarioError> {
         Ok(v)
     } else {
         Err(err(key, format!("expected a finite number, got {v}")))
-    }
-}
-
-fn trajectory_spec(t: RawTrajectory, err: &ErrFn) -> Result<TrajectorySpec, ScenarioError> {
-    let unused = |kind: &str, present: &[(&str, bool)]| -> Result<(), ScenarioError> {
-        match present.iter().find(|(_, p)| *p) {
-            Some((key, _)) => Err(err(
-                &format!("trajectory.{key}"),
-                format!("not used by trajectory kind `{kind}`"),
-            )),
-            None => Ok(()),
-        }
-    };
-    match t.kind.as_str() {
-        "static" => {
-            unused(
-                "static",
-                &[
-                    ("rate_deg_s", t.rate_deg_s.is_some()),
-                    ("file", t.file.is_some()),
-                ],
-            )?;
-            let deg = |key: &str, v: Option<f64>| -> Result<f64, ScenarioError> {
-                Ok(finite(&format!("trajectory.{key}"), v.unwrap_or(0.0), err)?.to_radians())
-            };
-            Ok(TrajectorySpec::Static {
-                roll_rad: deg("roll_deg", t.roll_deg)?,
-                pitch_rad: deg("pitch_deg", t.pitch_deg)?,
-                yaw_rad: deg("yaw_deg", t.yaw_deg)?,
-            })
-        }
-        "constant_rate" => {
-            unused(
-                "constant_rate",
-                &[
-                    ("roll_deg", t.roll_deg.is_some()),
-                    ("pitch_deg", t.pitch_deg.is_some()),
-                    ("yaw_deg", t.yaw_deg.is_some()),
-                    ("file", t.file.is_some()),
-                ],
-            )?;
-            let r = t.rate_deg_s.ok_or_else(|| {
-                err(
-                    "trajectory.rate_deg_s",
-                    "expected [x, y, z] body rates in deg/s".into(),
-                )
-            })?;
-            for v in r {
-                finite("trajectory.rate_deg_s", v, err)?;
-            }
-            Ok(TrajectorySpec::ConstantRate {
-                rate_rad_s: r.map(f64::to_radians),
-            })
-        }
-        "profile" => {
-            unused(
-                "profile",
-                &[
-                    ("roll_deg", t.roll_deg.is_some()),
-                    ("pitch_deg", t.pitch_deg.is_some()),
-                    ("yaw_deg", t.yaw_deg.is_some()),
-                    ("rate_deg_s", t.rate_deg_s.is_some()),
-                ],
-            )?;
-            let file = t
-                .file
-                .ok_or_else(|| err("trajectory.file", "expected a motion-profile path".into()))?;
-            Ok(TrajectorySpec::Profile {
-                file: PathBuf::from(file),
-            })
-        }
-        other => Err(err(
-            "trajectory.kind",
-            format!("expected `static`, `constant_rate` or `profile`, got `{other}`"),
-        )),
     }
 }
 
@@ -464,7 +412,7 @@ mod tests {
         assert_eq!(*s.checkpoint_steps.first().unwrap(), 10);
         assert_eq!(*s.checkpoint_steps.last().unwrap(), 6000);
         assert!(s.checkpoint_steps.windows(2).all(|w| w[0] < w[1]));
-        assert!(s.trajectory.is_static());
+        assert!(strapdown::Trajectory::is_static(&s.trajectory));
         assert_eq!(s.scheme, SchemeChoice::Accurate);
     }
 
@@ -479,12 +427,8 @@ mod tests {
             ),
             (format!("{MIN}scheme = \"rk4\"\n"), "scheme"),
             (
-                format!("{MIN}[trajectory]\nkind = \"spiral\"\n"),
-                "trajectory.kind",
-            ),
-            (
-                format!("{MIN}[trajectory]\nkind = \"static\"\nfile = \"a\"\n"),
-                "trajectory.file",
+                format!("{MIN}[trajectory]\nkind = \"coning\"\nhalf_angle_deg = 1.0\nfrequency_hz = -1.0\n"),
+                "trajectory.frequency_hz",
             ),
             (
                 format!("{MIN}[checkpoints]\ntimes_s = [61.0]\n"),
@@ -500,6 +444,10 @@ mod tests {
             assert_eq!(e.key, key, "{e}");
             assert!(e.to_string().starts_with("s.toml: key"), "{e}");
         }
+        let e =
+            Scenario::from_toml_str(&format!("{MIN}[trajectory]\nkind = \"spiral\"\n"), "s.toml")
+                .unwrap_err();
+        assert!(e.to_string().contains("spiral"), "{e}");
         let e = Scenario::from_toml_str(&format!("{MIN}colour = 3\n"), "s.toml").unwrap_err();
         assert!(e.to_string().contains("colour"), "{e}");
         let e = Scenario::from_toml_str("runs = 3\n", "s.toml").unwrap_err();

@@ -1,0 +1,240 @@
+//! The drift experiment: a sensor model flying a scenario's trajectory through the strapdown
+//! mechanisation, one run per random stream, errors recorded at the checkpoints; and the list of
+//! active terms with the law each one obeys.
+
+use crate::channels::Channel;
+use crate::laws::{Entry, LawContext, Source, Term};
+use crate::runner::RunKernel;
+use crate::scenario::{Alignment, Scenario, SchemeChoice};
+use nalgebra::Vector3;
+use noise::closed_form as cf;
+use noise::{BiasInstability, Effect, ImuErrors, Sensor, SensorModel, TemperatureProfile};
+use rand_distr::{Distribution, StandardNormal};
+use strapdown::{
+    nav_error, AnyTrajectory, Attitude, BodyVector, NavState, Scheme, Strapdown, Trajectory,
+    TrajectorySpec,
+};
+
+/// Key mixed into the seed for the per-run initial-alignment stream, so that it never coincides
+/// with the noise crate's streams `stream_rng(seed, run)` and their sub-streams.
+pub const ALIGNMENT_STREAM_KEY: u64 = 0xA11C_0000_0000_0000;
+
+/// A ready-to-run drift experiment (immutable, shared by all runs).
+#[derive(Debug, Clone)]
+pub struct DriftKernel {
+    pub model: SensorModel,
+    pub trajectory: AnyTrajectory,
+    pub scheme: Scheme,
+    pub dt_s: f64,
+    pub seed: u64,
+    pub gravity_mps2: f64,
+    pub alignment: Alignment,
+    pub checkpoint_steps: Vec<u64>,
+}
+
+impl DriftKernel {
+    /// The kernel of `scenario` with the (already filtered) `model` and `seed`.
+    pub fn new(scenario: &Scenario, model: SensorModel, seed: u64) -> DriftKernel {
+        DriftKernel {
+            model,
+            trajectory: scenario.trajectory.clone(),
+            scheme: match scenario.scheme {
+                SchemeChoice::Woodman => Scheme::Woodman,
+                SchemeChoice::Accurate => Scheme::Accurate,
+            },
+            dt_s: scenario.dt_s(),
+            seed,
+            gravity_mps2: scenario.gravity_mps2,
+            alignment: scenario.alignment,
+            checkpoint_steps: scenario.checkpoint_steps.clone(),
+        }
+    }
+
+    /// The initial estimate of run `run`: the truth at t = 0 with the alignment error added to its
+    /// Euler angles (fixed part plus a Gaussian draw from the run's own alignment stream).
+    fn initial_estimate(&self, run: u64) -> NavState {
+        let truth = self.trajectory.truth(0.0);
+        if self.alignment.is_zero() {
+            return truth;
+        }
+        let mut rng = noise::stream_rng(self.seed ^ ALIGNMENT_STREAM_KEY, run);
+        let (r, p, y) = truth.attitude.euler_rad();
+        let mut d = [0.0; 3];
+        for (i, di) in d.iter_mut().enumerate() {
+            let w: f64 = StandardNormal.sample(&mut rng);
+            *di = self.alignment.fixed_rad[i] + self.alignment.std_rad[i] * w;
+        }
+        NavState {
+            attitude: Attitude::from_euler_rad(r + d[0], p + d[1], y + d[2]),
+            ..truth
+        }
+    }
+}
+
+impl RunKernel for DriftKernel {
+    fn checkpoints(&self) -> usize {
+        self.checkpoint_steps.len()
+    }
+    fn channels(&self) -> usize {
+        Channel::ALL.len()
+    }
+
+    fn run(&self, run: u64, out: &mut [f64]) -> Result<(), String> {
+        let mut errors = ImuErrors::new(&self.model, self.dt_s, self.seed, run);
+        let mut nav = Strapdown::new(self.scheme, self.initial_estimate(run), self.gravity_mps2);
+        // Prime the coning correction with the (ideal) motion before t = 0 (the trajectory holds
+        // its initial rate there), so a constant-rate start is not a spurious step.
+        let (g_prev, _) = self.trajectory.imu_average(-self.dt_s, 0.0);
+        nav.set_previous_gyro(&g_prev, self.dt_s);
+        let width = Channel::ALL.len();
+        let mut k = 0u64;
+        for (cp, &until) in self.checkpoint_steps.iter().enumerate() {
+            while k < until {
+                let (gyro, accel) = self.trajectory.ideal_imu(k, self.dt_s);
+                let (g, a) = errors.corrupt(k, &gyro.0, &accel.0);
+                nav.step(&BodyVector(g), &BodyVector(a), self.dt_s);
+                k += 1;
+            }
+            let truth = self.trajectory.truth(k as f64 * self.dt_s);
+            let e = nav_error(nav.state(), &truth);
+            let values = Channel::values(&e);
+            if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+                return Err(format!(
+                    "run {run}: {} is not finite at t = {} s",
+                    Channel::ALL[i].name(),
+                    k as f64 * self.dt_s
+                ));
+            }
+            out[cp * width..(cp + 1) * width].copy_from_slice(&values);
+        }
+        Ok(())
+    }
+}
+
+/// The active terms of `model` with their law sources, and the conditions of the laws, for a
+/// scenario's trajectory and alignment.
+pub fn law_terms(
+    model: &SensorModel,
+    spec: &TrajectorySpec,
+    alignment: &Alignment,
+    gravity_mps2: f64,
+) -> (Vec<Term>, LawContext) {
+    let g = gravity_mps2;
+    // Static, level, north-facing: the laws of theory.md §4. A constant rate about body z from
+    // level keeps the z gyro error on the yaw channel (rotations about one axis commute): only the
+    // yaw law holds (calibration errors ~ rate x duration, theory.md §1.5 Table 2).
+    let (static_level, yaw_rate, reason) = match *spec {
+        TrajectorySpec::Static {
+            roll_deg,
+            pitch_deg,
+            yaw_deg,
+        } => {
+            let level = roll_deg == 0.0 && pitch_deg == 0.0 && yaw_deg == 0.0;
+            (
+                level,
+                None,
+                "the laws assume a level, north-facing IMU".to_string(),
+            )
+        }
+        TrajectorySpec::ConstantRate {
+            roll_deg: 0.0,
+            pitch_deg: 0.0,
+            yaw_deg: 0.0,
+            rate_deg_s,
+        } if rate_deg_s[0] == 0.0 && rate_deg_s[1] == 0.0 => (
+            false,
+            Some(rate_deg_s[2].to_radians()),
+            "motion".to_string(),
+        ),
+        _ => (false, None, "motion".to_string()),
+    };
+    let mut terms = Vec::new();
+    for sensor in [Sensor::Gyro, Sensor::Accel] {
+        for axis in 0..3 {
+            let m = model.axis(sensor, axis);
+            let entry = match sensor {
+                Sensor::Gyro => Entry::Gyro(axis),
+                Sensor::Accel => Entry::Accel(axis),
+            };
+            // Ideal reading on this axis and the two others (misalignment order), static level.
+            let ideal: Vector3<f64> = match sensor {
+                Sensor::Gyro => Vector3::new(0.0, 0.0, yaw_rate.unwrap_or(0.0)),
+                Sensor::Accel => Vector3::new(0.0, 0.0, -g),
+            };
+            let others = match axis {
+                0 => [ideal.y, ideal.z],
+                1 => [ideal.x, ideal.z],
+                _ => [ideal.x, ideal.y],
+            };
+            for effect in m.effects() {
+                let no_law = |why: &str| Source::NoLaw(why.to_string());
+                let source = match effect {
+                    Effect::Quantization => no_law("quantisation has no growth law in theory.md §4"),
+                    Effect::WhiteNoise => Source::White(m.white_noise.unwrap_or(0.0)),
+                    Effect::BiasInstability => match &m.bias_instability {
+                        Some(BiasInstability::RandomWalk { stability, period_s }) => {
+                            Source::RandomWalk(cf::woodman_bias_random_walk(*stability, *period_s))
+                        }
+                        _ => no_law("flicker bias instability has no closed-form growth law in theory.md §4"),
+                    },
+                    Effect::RateRandomWalk => Source::RandomWalk(m.rate_random_walk.unwrap_or(0.0)),
+                    Effect::RateRamp => Source::Ramp(m.rate_ramp.unwrap_or(0.0)),
+                    Effect::GaussMarkov => match &m.gauss_markov {
+                        Some(gm) => Source::GaussMarkov { sigma: gm.sigma, tc_s: gm.tau_s },
+                        None => continue,
+                    },
+                    Effect::Sinusoidal => no_law("a sinusoidal error has no growth law in theory.md §4"),
+                    Effect::TemperatureBias => {
+                        let c = m.temperature_bias.unwrap_or(0.0);
+                        match model.temperature {
+                            // Table 2: a residual temperature bias integrates like a constant bias.
+                            TemperatureProfile::Constant { temp_c } => {
+                                Source::Bias(c * (temp_c - model.temperature_reference_c))
+                            }
+                            _ => no_law("temperature bias under a varying temperature profile"),
+                        }
+                    }
+                    Effect::ConstantBias => Source::Bias(m.constant_bias.unwrap_or(0.0)),
+                    Effect::TurnOnBias => Source::RandomConstant(m.turn_on_bias.unwrap_or(0.0)),
+                    // Calibration errors act as a bias proportional to the reading (Table 2:
+                    // "drift proportional to rate and duration of motion").
+                    Effect::ScaleFactor => Source::Bias(m.scale_factor.unwrap_or(0.0) * ideal[axis]),
+                    Effect::Misalignment => {
+                        let mis = m.misalignment.unwrap_or([0.0; 2]);
+                        Source::Bias(mis[0] * others[0] + mis[1] * others[1])
+                    }
+                };
+                terms.push(Term {
+                    name: format!("{}.{}", sensor.name(), effect.name()),
+                    entry,
+                    source,
+                });
+            }
+        }
+    }
+    for axis in 0..3 {
+        let (fixed, std) = (alignment.fixed_rad[axis], alignment.std_rad[axis]);
+        let name = ["alignment.roll", "alignment.pitch", "alignment.yaw"][axis];
+        if fixed != 0.0 {
+            terms.push(Term {
+                name: name.into(),
+                entry: Entry::InitialAttitude(axis),
+                source: Source::Bias(fixed),
+            });
+        }
+        if std != 0.0 {
+            terms.push(Term {
+                name: name.into(),
+                entry: Entry::InitialAttitude(axis),
+                source: Source::RandomConstant(std),
+            });
+        }
+    }
+    let ctx = LawContext {
+        static_level,
+        yaw_rate_rad_s: yaw_rate,
+        reason,
+        gravity_mps2,
+    };
+    (terms, ctx)
+}

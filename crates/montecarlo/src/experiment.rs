@@ -1,0 +1,109 @@
+//! One fully specified Monte Carlo experiment: scenario + sensor model + overrides (runs, seed,
+//! term switches). Built identically by `simulate`, by each shard and by `merge`, so that every
+//! path produces the same report from the same per-run values.
+
+use crate::drift::{law_terms, DriftKernel};
+use crate::laws::{LawContext, Term};
+use crate::report::{build_report, DriftReport, ReportMeta};
+use crate::runner::RunFailure;
+use crate::scenario::{Scenario, SchemeChoice};
+use crate::stats::RunMatrix;
+use noise::{SensorModel, TermFilter};
+
+/// Command-line overrides of a scenario.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Overrides {
+    pub runs: Option<u64>,
+    pub seed: Option<u64>,
+    /// `--only`: replaces the scenario's `terms.only`.
+    pub only: Option<Vec<String>>,
+    /// `--without`: added to the scenario's `terms.without`.
+    pub without: Vec<String>,
+}
+
+/// A ready experiment.
+#[derive(Debug, Clone)]
+pub struct Experiment {
+    pub scenario: Scenario,
+    /// The sensor model after the term switches.
+    pub model: SensorModel,
+    pub runs: u64,
+    pub seed: u64,
+    pub only: Option<Vec<String>>,
+    pub without: Vec<String>,
+    pub terms: Vec<Term>,
+    pub law_context: LawContext,
+}
+
+impl Experiment {
+    /// Apply the overrides and term switches. Errors name the offending option and term.
+    pub fn new(
+        scenario: Scenario,
+        model: &SensorModel,
+        overrides: &Overrides,
+    ) -> Result<Experiment, String> {
+        let runs = overrides.runs.unwrap_or(scenario.runs);
+        if runs == 0 {
+            return Err("--runs: expected an integer >= 1".into());
+        }
+        let seed = overrides.seed.unwrap_or(scenario.seed);
+        let only = overrides.only.clone().or_else(|| scenario.only.clone());
+        let mut without = scenario.without.clone();
+        without.extend(overrides.without.iter().cloned());
+        let filter = TermFilter::parse(
+            only.as_ref().map(|v| v.join(",")).as_deref(),
+            (!without.is_empty()).then(|| without.join(",")).as_deref(),
+        )
+        .map_err(|e| e.to_string())?;
+        let model = model.filtered(&filter);
+        let (terms, law_context) = law_terms(
+            &model,
+            &scenario.trajectory_spec,
+            &scenario.alignment,
+            scenario.gravity_mps2,
+        );
+        Ok(Experiment {
+            scenario,
+            model,
+            runs,
+            seed,
+            only,
+            without,
+            terms,
+            law_context,
+        })
+    }
+
+    pub fn kernel(&self) -> DriftKernel {
+        DriftKernel::new(&self.scenario, self.model.clone(), self.seed)
+    }
+
+    pub fn meta(&self) -> ReportMeta {
+        ReportMeta {
+            scenario: self.scenario.name.clone(),
+            sensor: self.model.name.clone(),
+            seed: self.seed,
+            runs: self.runs,
+            rate_hz: self.scenario.rate_hz,
+            duration_s: self.scenario.duration_s,
+            scheme: match self.scenario.scheme {
+                SchemeChoice::Woodman => "woodman".into(),
+                SchemeChoice::Accurate => "accurate".into(),
+            },
+            trajectory: format!("{:?}", self.scenario.trajectory_spec),
+            only: self.only.clone(),
+            without: self.without.clone(),
+            checkpoint_steps: self.scenario.checkpoint_steps.clone(),
+        }
+    }
+
+    pub fn report(&self, matrix: &RunMatrix, failures: &[RunFailure]) -> DriftReport {
+        build_report(
+            &self.meta(),
+            &self.terms,
+            &self.law_context,
+            matrix,
+            failures,
+        )
+    }
+}

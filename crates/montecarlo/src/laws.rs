@@ -1,0 +1,378 @@
+//! Growth laws: the closed-form drift of each channel from its active error terms (theory.md §4:
+//! 1-D, small angle, static level north-facing IMU, zero initial errors unless stated), built from
+//! the noise crate's per-term functions (`noise::closed_form`, which owns the formulas).
+//!
+//! Coupling (static, level, north-facing; body forward-right-down = NED): a gyro error on body
+//! axis x, y, z integrates into roll, pitch, yaw. An attitude error psi (nav-frame rotation vector)
+//! turns the specific force (0, 0, -g) into (0, 0, -g) + psi x (0, 0, -g) = (-g psi_e, g psi_n, 0)
+//! (theory.md §1.2: tilt projects g sin(eps) onto the horizontal), so roll error drives east and
+//! pitch error drives north (negative sign); yaw has no first-order effect on a static IMU. An
+//! accelerometer error on body x, y, z integrates into north, east, down velocity and position.
+//! Independent terms add in variance; deterministic ones add in mean.
+
+use crate::channels::Channel;
+use noise::closed_form::{self as cf, Integration};
+use serde::{Deserialize, Serialize};
+
+/// Above this predicted attitude error (rad, rms) the small-angle laws are not printed
+/// (sin(0.05) differs from 0.05 by 0.04 %, but second-order couplings of a 3-D attitude error
+/// grow with the angle; 0.05 rad keeps them below ~2.5 %, inside a 2000-run interval).
+pub const SMALL_ANGLE_LIMIT_RAD: f64 = 0.05;
+
+/// Where an error enters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Entry {
+    /// Gyro on body axis 0..3 (rad/s quantities).
+    Gyro(usize),
+    /// Accelerometer on body axis 0..3 (m/s^2 quantities).
+    Accel(usize),
+    /// Initial attitude error about axis 0..3 (roll, pitch, yaw; rad quantities).
+    InitialAttitude(usize),
+}
+
+/// The statistical description of one error term on one axis, SI.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum Source {
+    /// Known constant (signed).
+    Bias(f64),
+    /// Constant drawn once per run from N(0, sigma^2) (turn-on bias, random alignment).
+    RandomConstant(f64),
+    /// White noise of density N.
+    White(f64),
+    /// Random walk of density K (rate random walk, Woodman's bias random walk), zero start.
+    RandomWalk(f64),
+    /// Stationary first-order Gauss-Markov (sigma, correlation time s).
+    GaussMarkov { sigma: f64, tc_s: f64 },
+    /// Rate ramp R (signed), error R t.
+    Ramp(f64),
+    /// Active, but no closed-form growth law exists in theory.md §4 (e.g. flicker bias instability,
+    /// quantisation, sinusoid): the report says so.
+    NoLaw(String),
+}
+
+/// One active term: where it enters, what it is, and its DESIGN.md name (`gyro.white_noise`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Term {
+    pub name: String,
+    pub entry: Entry,
+    pub source: Source,
+}
+
+/// Law of one channel at one time: signed mean and standard deviation, or why there is none.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Law {
+    Value { mean: f64, std: f64 },
+    NotApplicable(String),
+}
+
+impl Law {
+    pub fn rms(&self) -> Option<f64> {
+        match self {
+            Law::Value { mean, std } => Some(mean.hypot(*std)),
+            Law::NotApplicable(_) => None,
+        }
+    }
+}
+
+/// Per-channel mean and variance contribution of one term through one integration path.
+/// `folds` = 0 for the quantity itself (initial attitude error), 1, 2 or 3 (through tilt).
+fn moments(source: &Source, t_s: f64, how: Option<Integration>) -> Result<(f64, f64), String> {
+    // A constant error seen without integration (an initial angle) is itself.
+    let constant = |b: f64| how.map_or(b, |h| cf::constant_bias_growth(b, t_s, h));
+    Ok(match source {
+        Source::Bias(b) => (constant(*b), 0.0),
+        Source::RandomConstant(s) => (0.0, constant(*s).powi(2)),
+        Source::Ramp(r) => match how {
+            Some(h) => (cf::rate_ramp_growth(*r, t_s, h), 0.0),
+            None => return Err("a ramp needs an integration".into()),
+        },
+        Source::White(n) => match how {
+            Some(h) => (0.0, cf::white_noise_growth_std(*n, t_s, h).powi(2)),
+            None => return Err("white noise needs an integration".into()),
+        },
+        Source::RandomWalk(k) => match how {
+            Some(h) => (0.0, cf::random_walk_growth_std(*k, t_s, h).powi(2)),
+            None => return Err("a random walk needs an integration".into()),
+        },
+        Source::GaussMarkov { sigma, tc_s } => match how {
+            Some(h) => match cf::gauss_markov_growth_std(*sigma, *tc_s, t_s, h) {
+                Some(s) => (0.0, s * s),
+                None => {
+                    return Err(format!(
+                        "Gauss-Markov law needs t >> T (t = {t_s} s, T = {tc_s} s)"
+                    ))
+                }
+            },
+            None => return Err("Gauss-Markov needs an integration".into()),
+        },
+        Source::NoLaw(why) => return Err(why.clone()),
+    })
+}
+
+/// The single-axis channels an entry drives, each with (channel, integration, sign x gain factor).
+/// The tilt gain g is inside `Integration::Tilt` (standard gravity); `g_scale` rescales it for a
+/// scenario gravity other than standard; for initial attitude the tilt acts as an accelerometer bias
+/// g sin(eps) (theory.md §1.2), integrated once and twice.
+fn paths(entry: Entry, gravity_mps2: f64) -> Vec<(Channel, Option<Integration>, f64)> {
+    use Channel::*;
+    let g_scale = gravity_mps2 / noise::units::STANDARD_GRAVITY_MPS2;
+    // roll error drives east (+g), pitch error drives north (-g); yaw nothing at first order.
+    let tilt = |axis: usize| -> Option<(Channel, Channel, f64)> {
+        match axis {
+            0 => Some((VelEast, PosEast, 1.0)),
+            1 => Some((VelNorth, PosNorth, -1.0)),
+            _ => None,
+        }
+    };
+    let angle = [Roll, Pitch, Yaw];
+    match entry {
+        Entry::Gyro(a) => {
+            let mut v = vec![(angle[a], Some(Integration::Once), 1.0)];
+            if let Some((vel, pos, sign)) = tilt(a) {
+                // velocity through tilt = g x (angle integrated twice); position = Integration::Tilt.
+                v.push((vel, Some(Integration::Twice), sign * gravity_mps2));
+                v.push((pos, Some(Integration::Tilt), sign * g_scale));
+            }
+            v
+        }
+        Entry::Accel(a) => {
+            let (vel, pos) = [(VelNorth, PosNorth), (VelEast, PosEast), (VelDown, PosDown)][a];
+            vec![
+                (vel, Some(Integration::Once), 1.0),
+                (pos, Some(Integration::Twice), 1.0),
+            ]
+        }
+        Entry::InitialAttitude(a) => {
+            let mut v = vec![(angle[a], None, 1.0)];
+            if let Some((vel, pos, sign)) = tilt(a) {
+                v.push((vel, Some(Integration::Once), sign * gravity_mps2));
+                v.push((pos, Some(Integration::Twice), sign * gravity_mps2));
+            }
+            v
+        }
+    }
+}
+
+/// Conditions under which the laws hold, known from the scenario.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LawContext {
+    /// Static, level and north-facing. Otherwise every law is "not applicable", except:
+    pub static_level: bool,
+    /// Rotation at a constant rate about body z from level: the yaw channel keeps the laws of the z
+    /// gyro terms (rotations about one axis commute), the other channels have none.
+    pub yaw_rate_rad_s: Option<f64>,
+    /// Why the scenario is outside the laws, if it is (e.g. "motion").
+    pub reason: String,
+    pub gravity_mps2: f64,
+}
+
+/// The laws of every channel at time `t_s`, in [`Channel::ALL`] order.
+pub fn channel_laws(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
+    if !ctx.static_level {
+        let why = format!("no closed-form law: {}", ctx.reason);
+        let mut laws: Vec<Law> = Channel::ALL
+            .iter()
+            .map(|_| Law::NotApplicable(why.clone()))
+            .collect();
+        if ctx.yaw_rate_rad_s.is_some() {
+            let static_ctx = LawContext {
+                static_level: true,
+                yaw_rate_rad_s: None,
+                ..ctx.clone()
+            };
+            let yaw_terms: Vec<Term> = terms
+                .iter()
+                .filter(|t| matches!(t.entry, Entry::Gyro(2) | Entry::InitialAttitude(2)))
+                .cloned()
+                .collect();
+            let yaw = Channel::Yaw as usize;
+            laws[yaw] = channel_laws(&yaw_terms, &static_ctx, t_s).swap_remove(yaw);
+        }
+        return laws;
+    }
+    let n = Channel::ALL.len();
+    let mut mean = vec![0.0f64; n];
+    let mut var = vec![0.0f64; n];
+    let mut missing: Vec<Option<String>> = vec![None; n];
+    for term in terms {
+        for (ch, how, factor) in paths(term.entry, ctx.gravity_mps2) {
+            let i = ch as usize;
+            match moments(&term.source, t_s, how) {
+                Ok((m, v)) => {
+                    mean[i] += factor * m;
+                    var[i] += factor * factor * v;
+                }
+                Err(why) => {
+                    missing[i].get_or_insert_with(|| format!("{}: {why}", term.name));
+                }
+            }
+        }
+    }
+    // Small-angle check on the predicted attitude error of the three angle channels.
+    let worst_angle = [Channel::Roll, Channel::Pitch, Channel::Yaw]
+        .iter()
+        .map(|&c| mean[c as usize].hypot(var[c as usize].sqrt()))
+        .fold(0.0, f64::max);
+    let large = worst_angle > SMALL_ANGLE_LIMIT_RAD;
+    let single = |i: usize| -> Law {
+        if let Some(why) = &missing[i] {
+            Law::NotApplicable(format!("no closed-form law ({why})"))
+        } else if large {
+            Law::NotApplicable(format!(
+                "small-angle law does not apply: predicted attitude error {worst_angle:.3} rad > {SMALL_ANGLE_LIMIT_RAD} rad"
+            ))
+        } else {
+            Law::Value {
+                mean: mean[i],
+                std: var[i].sqrt(),
+            }
+        }
+    };
+    let mut laws: Vec<Law> = (0..n).map(single).collect();
+    for (h, a, b) in [
+        (Channel::PosHorizontal, Channel::PosNorth, Channel::PosEast),
+        (Channel::VelHorizontal, Channel::VelNorth, Channel::VelEast),
+    ] {
+        laws[h as usize] = horizontal_law(&laws[a as usize], &laws[b as usize]);
+    }
+    laws
+}
+
+/// Law of the horizontal magnitude sqrt(n^2 + e^2) of two independent Gaussian components.
+/// rms^2 = (m_n^2 + s_n^2) + (m_e^2 + s_e^2) always. The mean: deterministic components give the
+/// magnitude itself; zero-mean components give, writing (n, e) = (s_n R cos th, s_e R sin th) with R
+/// Rayleigh (E R = sqrt(pi/2)) and th uniform, E|h| = sqrt(pi/2) (1/2pi) int sqrt(s_n^2 cos^2 + s_e^2 sin^2)
+/// d th, which for s_n = s_e = s is the Rayleigh mean s sqrt(pi/2) (theory.md §4). Mixed cases
+/// report only the rms (std = NaN marks "mean unknown").
+fn horizontal_law(north: &Law, east: &Law) -> Law {
+    let (Law::Value { mean: mn, std: sn }, Law::Value { mean: me, std: se }) = (north, east) else {
+        let why = [north, east]
+            .iter()
+            .find_map(|l| match l {
+                Law::NotApplicable(w) => Some(w.clone()),
+                _ => None,
+            })
+            .unwrap_or_default();
+        return Law::NotApplicable(why);
+    };
+    let rms2 = mn * mn + sn * sn + me * me + se * se;
+    let mean = if *sn == 0.0 && *se == 0.0 {
+        mn.hypot(*me)
+    } else if *mn == 0.0 && *me == 0.0 {
+        horizontal_rayleigh_mean(*sn, *se)
+    } else {
+        return Law::Value {
+            mean: f64::NAN,
+            std: rms2.sqrt(),
+        };
+    };
+    Law::Value {
+        mean,
+        std: (rms2 - mean * mean).max(0.0).sqrt(),
+    }
+}
+
+/// E sqrt(X^2 + Y^2) for independent zero-mean Gaussians with std `sn`, `se` (see
+/// [`horizontal_law`]); the angular average by the midpoint rule over a full period, which is
+/// spectrally accurate for a smooth periodic integrand (4096 points: error far below 1e-12).
+pub fn horizontal_rayleigh_mean(sn: f64, se: f64) -> f64 {
+    const POINTS: usize = 4096;
+    let avg = (0..POINTS)
+        .map(|i| {
+            let th = std::f64::consts::TAU * (i as f64 + 0.5) / POINTS as f64;
+            (sn * sn * th.cos().powi(2) + se * se * th.sin().powi(2)).sqrt()
+        })
+        .sum::<f64>()
+        / POINTS as f64;
+    (std::f64::consts::PI / 2.0).sqrt() * avg
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ctx() -> LawContext {
+        LawContext {
+            static_level: true,
+            yaw_rate_rad_s: None,
+            reason: String::new(),
+            gravity_mps2: 9.80665,
+        }
+    }
+
+    #[test]
+    fn rayleigh_mean_for_equal_axes() {
+        let m = horizontal_rayleigh_mean(2.0, 2.0);
+        assert!((m - 2.0 * (std::f64::consts::PI / 2.0).sqrt()).abs() < 1e-12);
+        // One axis only: E|X| = s sqrt(2/pi).
+        let m = horizontal_rayleigh_mean(3.0, 0.0);
+        assert!((m - 3.0 * (2.0 / std::f64::consts::PI).sqrt()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn woodman_white_noise_mean_matches_theory_note() {
+        // theory.md §1.4: MTx Table-4 ARWs, white noise only, 60 s: analytic Rayleigh mean 102.4 m.
+        let arw = [0.075f64, 0.078, 0.079].map(|d| d.to_radians());
+        let terms: Vec<Term> = (0..3)
+            .map(|a| Term {
+                name: "gyro.white_noise".into(),
+                entry: Entry::Gyro(a),
+                source: Source::White(arw[a]),
+            })
+            .collect();
+        let laws = channel_laws(&terms, &ctx(), 60.0);
+        let Law::Value { mean, .. } = laws[Channel::PosHorizontal as usize] else {
+            panic!()
+        };
+        // The note rounds to 0.1 m.
+        assert!((mean - 102.4).abs() < 0.1, "{mean}");
+    }
+
+    #[test]
+    fn bias_signs_and_no_law_cases() {
+        let b = 1e-4;
+        let terms = vec![Term {
+            name: "gyro.constant_bias".into(),
+            entry: Entry::Gyro(1),
+            source: Source::Bias(b),
+        }];
+        let laws = channel_laws(&terms, &ctx(), 10.0);
+        let Law::Value { mean, std } = laws[Channel::PosNorth as usize] else {
+            panic!()
+        };
+        assert_eq!(std, 0.0);
+        assert!((mean + 9.80665 * b * 1000.0 / 6.0).abs() < 1e-12);
+        let Law::Value { mean, .. } = laws[Channel::Pitch as usize] else {
+            panic!()
+        };
+        assert!((mean - b * 10.0).abs() < 1e-15);
+        // Flicker: no law on pitch, north, horizontal; roll unaffected.
+        let terms = vec![Term {
+            name: "gyro.bias_instability".into(),
+            entry: Entry::Gyro(1),
+            source: Source::NoLaw("flicker".into()),
+        }];
+        let laws = channel_laws(&terms, &ctx(), 10.0);
+        assert!(matches!(
+            laws[Channel::PosHorizontal as usize],
+            Law::NotApplicable(_)
+        ));
+        assert_eq!(
+            laws[Channel::Roll as usize],
+            Law::Value {
+                mean: 0.0,
+                std: 0.0
+            }
+        );
+        // Large angle.
+        let terms = vec![Term {
+            name: "gyro.constant_bias".into(),
+            entry: Entry::Gyro(2),
+            source: Source::Bias(0.01),
+        }];
+        assert!(matches!(
+            channel_laws(&terms, &ctx(), 10.0)[0],
+            Law::NotApplicable(_)
+        ));
+    }
+}

@@ -1,0 +1,182 @@
+//! The drift report: per checkpoint and channel, the simulated statistics beside the law of the
+//! active terms, the ratio simulated/law and its 99.9 % confidence interval (DESIGN.md `simulate`
+//! JSON fields: `seed`, `runs`, `checkpoints[]` with `t_s` and `channels{name: {mean, std, rms, p50,
+//! p95, law_std, ratio}}`; more fields are added, none renamed).
+
+use crate::channels::Channel;
+use crate::laws::{channel_laws, Law, LawContext, Term};
+use crate::runner::RunFailure;
+use crate::stats::{ratio_interval, summarise, RunMatrix, Z_999};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// Stated allowance for the law's own discretisation error, relative, times dt/t: the laws are
+/// continuous-time integrals while the mechanisation sums up to three nested rectangle or trapezoid
+/// rules per step; each nesting shifts the result by at most about one sample (e.g. Woodman's exact
+/// discrete accelerometer sum n(n+1)(2n+1)/6 against n^3/3, eqs 15-17: relative 3/(2n)), so the
+/// relative deviation is below 4 dt/t. Added to the statistical interval, never instead of it.
+pub const DISCRETISATION_ALLOWANCE_STEPS: f64 = 4.0;
+
+/// One channel at one checkpoint.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ChannelReport {
+    pub mean: f64,
+    pub std: f64,
+    pub rms: f64,
+    pub p5: f64,
+    pub p50: f64,
+    pub p95: f64,
+    /// Law: signed mean of the deterministic terms (for horizontal channels: mean magnitude).
+    pub law_mean: Option<f64>,
+    /// Law: standard deviation.
+    pub law_std: Option<f64>,
+    /// Law: rms = sqrt(law_mean^2 + law_std^2) (horizontal: sqrt of the summed component rms^2).
+    pub law_rms: Option<f64>,
+    /// rms / law_rms.
+    pub ratio: Option<f64>,
+    /// 99.9 % interval of `ratio` (statistical, from the runs, widened by the discretisation allowance).
+    pub ratio_lo: Option<f64>,
+    pub ratio_hi: Option<f64>,
+    /// Why there is no law, when there is none.
+    pub law_note: Option<String>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CheckpointReport {
+    pub t_s: f64,
+    pub step: u64,
+    pub channels: BTreeMap<String, ChannelReport>,
+}
+
+/// The whole `simulate` result.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DriftReport {
+    pub scenario: String,
+    pub sensor: String,
+    pub seed: u64,
+    /// Runs requested.
+    pub runs: u64,
+    /// Runs that finished and enter the statistics.
+    pub runs_ok: u64,
+    pub failed_runs: Vec<RunFailure>,
+    pub rate_hz: f64,
+    pub duration_s: f64,
+    pub scheme: String,
+    pub trajectory: String,
+    /// The active error terms after `--only` / `--without` (DESIGN.md names).
+    pub active_terms: Vec<String>,
+    pub only: Option<Vec<String>>,
+    pub without: Vec<String>,
+    /// Confidence level of `ratio_lo` .. `ratio_hi`.
+    pub confidence: f64,
+    pub checkpoints: Vec<CheckpointReport>,
+}
+
+/// Everything a report needs besides the runs.
+#[derive(Debug, Clone)]
+pub struct ReportMeta {
+    pub scenario: String,
+    pub sensor: String,
+    pub seed: u64,
+    pub runs: u64,
+    pub rate_hz: f64,
+    pub duration_s: f64,
+    pub scheme: String,
+    pub trajectory: String,
+    pub only: Option<Vec<String>>,
+    pub without: Vec<String>,
+    pub checkpoint_steps: Vec<u64>,
+}
+
+fn finite(x: f64) -> Option<f64> {
+    x.is_finite().then_some(x)
+}
+
+/// Build the report from the per-run values (run-index order) and the active terms.
+pub fn build_report(
+    meta: &ReportMeta,
+    terms: &[Term],
+    ctx: &LawContext,
+    matrix: &RunMatrix,
+    failures: &[RunFailure],
+) -> DriftReport {
+    let dt_s = 1.0 / meta.rate_hz;
+    let checkpoints = meta
+        .checkpoint_steps
+        .iter()
+        .enumerate()
+        .map(|(cp, &step)| {
+            let t_s = step as f64 * dt_s;
+            let laws = channel_laws(terms, ctx, t_s);
+            let allowance = DISCRETISATION_ALLOWANCE_STEPS / step as f64;
+            let channels = Channel::ALL
+                .iter()
+                .map(|&ch| {
+                    let s = summarise(matrix.series(cp, ch as usize));
+                    let law = &laws[ch as usize];
+                    let mut r = ChannelReport {
+                        mean: s.mean,
+                        std: s.std,
+                        rms: s.rms,
+                        p5: s.p5,
+                        p50: s.p50,
+                        p95: s.p95,
+                        law_mean: None,
+                        law_std: None,
+                        law_rms: None,
+                        ratio: None,
+                        ratio_lo: None,
+                        ratio_hi: None,
+                        law_note: None,
+                    };
+                    match law {
+                        Law::Value { mean, std } => {
+                            let law_rms = law.rms().unwrap_or(f64::NAN);
+                            r.law_mean = finite(*mean);
+                            r.law_std = finite(*std);
+                            r.law_rms = finite(law_rms);
+                            if law_rms > 0.0 && s.count > 1 {
+                                let (lo, hi) = ratio_interval(&s, law_rms, Z_999, allowance);
+                                r.ratio = finite(s.rms / law_rms);
+                                r.ratio_lo = finite(lo);
+                                r.ratio_hi = finite(hi);
+                            } else if law_rms == 0.0 {
+                                r.law_note =
+                                    Some("law is zero: no active term drives this channel".into());
+                            }
+                        }
+                        Law::NotApplicable(why) => r.law_note = Some(why.clone()),
+                    }
+                    (ch.name().to_string(), r)
+                })
+                .collect();
+            CheckpointReport {
+                t_s,
+                step,
+                channels,
+            }
+        })
+        .collect();
+    DriftReport {
+        scenario: meta.scenario.clone(),
+        sensor: meta.sensor.clone(),
+        seed: meta.seed,
+        runs: meta.runs,
+        runs_ok: matrix.runs() as u64,
+        failed_runs: failures.to_vec(),
+        rate_hz: meta.rate_hz,
+        duration_s: meta.duration_s,
+        scheme: meta.scheme.clone(),
+        trajectory: meta.trajectory.clone(),
+        active_terms: terms
+            .iter()
+            .map(|t| t.name.clone())
+            .collect::<std::collections::BTreeSet<_>>()
+            .into_iter()
+            .collect(),
+        only: meta.only.clone(),
+        without: meta.without.clone(),
+        confidence: 0.999,
+        checkpoints,
+    }
+}
