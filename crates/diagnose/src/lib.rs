@@ -1,1 +1,19 @@
-//! imudrift diagnose crate (being built).
+//! imudrift diagnose: where a sensor model and a measured log disagree, which effect is missing, and
+//! what adding it is worth (DESIGN.md, "The diagnose workflow").
+//!
+//! Units: SI throughout (rad/s for gyro channels, m/s^2 for accelerometer channels, s for tau).
+//! Frames: channels are body-frame axes (forward-right-down); the drift consequence linearises a
+//! static, level IMU (nav frame NED).
+
+// Per-tau and per-channel arrays are indexed in parallel; index loops say that more plainly.
+#![allow(clippy::needless_range_loop)]
+
+pub mod candidates;
+pub mod drift;
+pub mod fit;
+pub mod gap;
+pub mod model_terms;
+pub mod simulate;
+pub mod workflow;
+
+pub use workflow::{diagnose, DiagnoseError, Diagnosis, LogInput, Settings};

@@ -1,0 +1,132 @@
+//! The candidate effects of diagnose step 4 and their Allan-variance signatures per unit squared
+//! parameter, from the noise crate's closed forms (theory.md §2; the `_sampled` forms are exact for the
+//! discrete generator at the log's sample interval).
+
+use noise::closed_form as cf;
+use noise::{Effect, Flicker};
+use serde::Serialize;
+
+/// Effects diagnose can name (DESIGN.md list); the temperature bias only when the log has a temperature column.
+pub const CANDIDATES: [Effect; 8] = [
+    Effect::Quantization,
+    Effect::WhiteNoise,
+    Effect::BiasInstability,
+    Effect::RateRandomWalk,
+    Effect::RateRamp,
+    Effect::GaussMarkov,
+    Effect::Sinusoidal,
+    Effect::TemperatureBias,
+];
+
+/// Parameters of a term in diagnose's parameterisation (SI; DESIGN.md JSON names).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub enum TermParams {
+    /// One level: q, n, b, k, r or the temperature coefficient (signed).
+    Level(f64),
+    GaussMarkov {
+        sigma: f64,
+        tau_s: f64,
+    },
+    Sinusoid {
+        amplitude: f64,
+        frequency_hz: f64,
+    },
+}
+
+impl TermParams {
+    /// The squared level the Allan variance is linear in.
+    pub fn c(&self) -> f64 {
+        match *self {
+            TermParams::Level(p) => p * p,
+            TermParams::GaussMarkov { sigma, .. } => sigma * sigma,
+            TermParams::Sinusoid { amplitude, .. } => amplitude * amplitude,
+        }
+    }
+
+    /// The shape parameter, if any (Gauss-Markov time, sinusoid frequency).
+    pub fn shape(&self) -> Option<f64> {
+        match *self {
+            TermParams::Level(_) => None,
+            TermParams::GaussMarkov { tau_s, .. } => Some(tau_s),
+            TermParams::Sinusoid { frequency_hz, .. } => Some(frequency_hz),
+        }
+    }
+
+    /// (name, value) pairs with the DESIGN.md JSON names.
+    pub fn named(&self, effect: Effect) -> Vec<(&'static str, f64)> {
+        match *self {
+            TermParams::Level(p) => vec![(level_name(effect), p)],
+            TermParams::GaussMarkov { sigma, tau_s } => vec![("sigma", sigma), ("tau_s", tau_s)],
+            TermParams::Sinusoid {
+                amplitude,
+                frequency_hz,
+            } => {
+                vec![("amplitude", amplitude), ("frequency_hz", frequency_hz)]
+            }
+        }
+    }
+}
+
+/// JSON name of a one-level term's parameter (DESIGN.md: q, n, b, k, r, coefficient).
+pub fn level_name(effect: Effect) -> &'static str {
+    match effect {
+        Effect::Quantization => "q",
+        Effect::WhiteNoise => "n",
+        Effect::BiasInstability => "b",
+        Effect::RateRandomWalk => "k",
+        Effect::RateRamp => "r",
+        Effect::TemperatureBias => "coefficient",
+        _ => "value",
+    }
+}
+
+/// Number of free parameters of a candidate (for the information criterion).
+pub fn free_parameters(effect: Effect) -> usize {
+    match effect {
+        Effect::GaussMarkov | Effect::Sinusoidal => 2,
+        _ => 1,
+    }
+}
+
+/// Allan variance per unit squared level at tau (for the one-level terms), for sample interval dt.
+/// Bias instability is flicker as the noise crate realises it (a Gauss-Markov sum over a band of
+/// correlation times, plateau 0.664 B inside it), with B = 1 in `flicker`.
+pub fn unit_signature(effect: Effect, tau_s: f64, dt_s: f64, flicker: &Flicker) -> f64 {
+    match effect {
+        Effect::Quantization => cf::quantization_avar(1.0, tau_s),
+        Effect::WhiteNoise => cf::white_noise_avar(1.0, tau_s),
+        Effect::BiasInstability => flicker.avar_sampled(tau_s, dt_s),
+        Effect::RateRandomWalk => cf::rate_random_walk_avar_sampled(1.0, tau_s, dt_s),
+        Effect::RateRamp => cf::rate_ramp_avar(1.0, tau_s),
+        _ => f64::NAN,
+    }
+}
+
+/// Allan variance per unit squared level for a shaped term at shape parameter `shape`.
+pub fn unit_family_signature(effect: Effect, shape: f64, tau_s: f64, dt_s: f64) -> f64 {
+    match effect {
+        Effect::GaussMarkov => cf::gauss_markov_avar_sampled(1.0, shape, tau_s, dt_s),
+        Effect::Sinusoidal => cf::sinusoid_avar_sampled(1.0, shape, tau_s, dt_s),
+        _ => f64::NAN,
+    }
+}
+
+/// Shape grid for a family over the measured tau range.
+/// Gauss-Markov: correlation times whose ADEV peak (at 1.8927 T, theory.md §2) lies between a third of
+/// the shortest and three times the longest tau, 8 per decade. Sinusoid: frequencies from 1/(4 tau_max)
+/// to 1/(2 tau_min) (Nyquist of the shortest average), 200 per decade, because the Allan lobes of a
+/// sinusoid at tau >> 1/f0 move with small changes of f0.
+pub fn shape_grid(effect: Effect, tau_min_s: f64, tau_max_s: f64) -> Vec<f64> {
+    let (lo, hi, per_decade) = match effect {
+        Effect::GaussMarkov => {
+            let p = cf::GAUSS_MARKOV_ADEV_PEAK_TAU_PER_TC;
+            (tau_min_s / (3.0 * p), 3.0 * tau_max_s / p, 8.0)
+        }
+        Effect::Sinusoidal => (1.0 / (4.0 * tau_max_s), 0.5 / tau_min_s, 200.0),
+        _ => return Vec::new(),
+    };
+    let n = ((hi / lo).log10() * per_decade).ceil().max(1.0) as usize;
+    (0..=n)
+        .map(|j| lo * (hi / lo).powf(j as f64 / n as f64))
+        .collect()
+}

@@ -1,0 +1,351 @@
+//! Fitting candidate effects to the gap (DESIGN.md, diagnose step 4).
+//!
+//! Every candidate effect adds (or changes) one independent noise term, so it changes the model's Allan
+//! variance additively (IEEE 952 Annex C, theory.md §2: "summing the terms assumes the processes are
+//! independent"). A candidate is its Allan-variance signature per unit squared parameter, `f(tau)`,
+//! evaluated on the tau grid, optionally as a family over one shape parameter (the Gauss-Markov
+//! correlation time, the sinusoid frequency). The fitted squared parameter `c >= 0` replaces the level
+//! `c0` the model already has for that term (0 when the term is absent), so the predicted variance is
+//! `avar_band + (c - c0) f(tau)` and the prediction in ln adev is
+//! `ln_band + ln((avar_band + (c - c0) f) / avar_band) / 2`.
+//!
+//! The fit minimises chi2 = sum z^2 over all taus (not only inside the disagreeing range: a term that
+//! closes one range but opens another must pay for it), the information criterion is BIC = chi2 + k ln M
+//! (Schwarz 1978) with k free parameters and M taus, and parameter intervals are profile-likelihood 95 %
+//! intervals (chi2 - chi2_min <= 3.84, the chi2_1 0.95 quantile; Wilks 1938), widened by the reduced chi2
+//! when the fit is worse than its error bars (Birge ratio; PDG "Statistics" review, scale factor S).
+
+use serde::Serialize;
+
+/// chi2_1 quantile at 0.95: profile-likelihood 95 % interval threshold.
+pub const CHI2_1_95: f64 = 3.841_458_820_694_124;
+
+/// Smallest ratio (model variance after the change) / (band variance) allowed: a candidate that would take
+/// the variance to zero or below at some tau is clamped there (and pays the misfit).
+const MIN_VARIANCE_RATIO: f64 = 1e-6;
+
+/// What the fit sees of one channel: the measurement and the current model's band, on one tau grid.
+#[derive(Clone, Debug)]
+pub struct FitData<'a> {
+    /// ln adev measured.
+    pub ln_meas: &'a [f64],
+    /// ln adev band centre (current model).
+    pub ln_band: &'a [f64],
+    /// Allan variance band mean (current model).
+    pub avar_band: &'a [f64],
+    /// Standard error of the difference at each tau.
+    pub s: &'a [f64],
+}
+
+impl FitData<'_> {
+    fn m(&self) -> usize {
+        self.ln_meas.len()
+    }
+
+    /// chi2 of the model changed by `dc * f` (dc = c - c0).
+    pub fn chi2(&self, f: &[f64], dc: f64) -> f64 {
+        let mut sum = 0.0;
+        for i in 0..self.m() {
+            let ratio =
+                ((self.avar_band[i] + dc * f[i]) / self.avar_band[i]).max(MIN_VARIANCE_RATIO);
+            let z = (self.ln_meas[i] - self.ln_band[i] - 0.5 * ratio.ln()) / self.s[i];
+            sum += z * z;
+        }
+        sum
+    }
+
+    /// chi2 of the unchanged model.
+    pub fn chi2_base(&self) -> f64 {
+        (0..self.m())
+            .map(|i| ((self.ln_meas[i] - self.ln_band[i]) / self.s[i]).powi(2))
+            .sum()
+    }
+}
+
+/// Best squared parameter c >= 0 for one signature, with its chi2 and profile 95 % interval.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct LinearFit {
+    pub c: f64,
+    pub chi2: f64,
+    pub c_lo: f64,
+    pub c_hi: f64,
+}
+
+/// Range of c worth searching: the levels at which the term alone would explain the measured variance at
+/// one of the taus, widened by a decade on either side.
+fn c_range(data: &FitData, f: &[f64], c0: f64) -> (f64, f64) {
+    let mut lo = f64::INFINITY;
+    let mut hi: f64 = 0.0;
+    for i in 0..data.m() {
+        if f[i] > 0.0 {
+            let c_i = (2.0 * data.ln_meas[i]).exp() / f[i];
+            lo = lo.min(c_i);
+            hi = hi.max(c_i);
+        }
+    }
+    if c0 > 0.0 {
+        lo = lo.min(c0);
+        hi = hi.max(c0);
+    }
+    if !lo.is_finite() || hi <= 0.0 {
+        return (0.0, 0.0);
+    }
+    (lo * 1e-4, hi * 10.0)
+}
+
+/// Minimise chi2(c) over c in {0} and a log grid of [lo, hi], then refine by golden-section search
+/// in ln c between the grid neighbours of the best point.
+pub fn fit_linear(data: &FitData, f: &[f64], c0: f64) -> LinearFit {
+    let chi = |c: f64| data.chi2(f, c - c0);
+    let (lo, hi) = c_range(data, f, c0);
+    let mut best_c = 0.0;
+    let mut best = chi(0.0);
+    if c0 > 0.0 && chi(c0) < best {
+        best = chi(c0);
+        best_c = c0;
+    }
+    if hi > 0.0 {
+        const GRID: usize = 80;
+        let (ln_lo, ln_hi) = (lo.ln(), hi.ln());
+        let step = (ln_hi - ln_lo) / (GRID - 1) as f64;
+        let mut best_j = None;
+        for j in 0..GRID {
+            let c = (ln_lo + step * j as f64).exp();
+            let v = chi(c);
+            if v < best {
+                best = v;
+                best_c = c;
+                best_j = Some(j);
+            }
+        }
+        if let Some(j) = best_j {
+            // Golden section on ln c over [j-1, j+1].
+            let (mut a, mut b) = (
+                ln_lo + step * (j as f64 - 1.0),
+                ln_lo + step * (j as f64 + 1.0),
+            );
+            let g = 0.5 * (5f64.sqrt() - 1.0);
+            let (mut x1, mut x2) = (b - g * (b - a), a + g * (b - a));
+            let (mut f1, mut f2) = (chi(x1.exp()), chi(x2.exp()));
+            for _ in 0..60 {
+                if f1 < f2 {
+                    b = x2;
+                    x2 = x1;
+                    f2 = f1;
+                    x1 = b - g * (b - a);
+                    f1 = chi(x1.exp());
+                } else {
+                    a = x1;
+                    x1 = x2;
+                    f1 = f2;
+                    x2 = a + g * (b - a);
+                    f2 = chi(x2.exp());
+                }
+            }
+            let (x, v) = if f1 < f2 { (x1, f1) } else { (x2, f2) };
+            if v < best {
+                best = v;
+                best_c = x.exp();
+            }
+        }
+    }
+    // The caller widens this by the Birge ratio once the number of free parameters is known.
+    let (c_lo, c_hi) = profile_interval(&chi, best_c, best, CHI2_1_95, hi.max(best_c));
+    LinearFit {
+        c: best_c,
+        chi2: best,
+        c_lo,
+        c_hi,
+    }
+}
+
+/// Profile interval {c >= 0 : chi2(c) <= chi2_min + delta}, by bisection on either side of c_best.
+fn profile_interval(
+    chi: &dyn Fn(f64) -> f64,
+    c_best: f64,
+    chi_min: f64,
+    delta: f64,
+    c_max: f64,
+) -> (f64, f64) {
+    let level = chi_min + delta;
+    // Lower side.
+    let c_lo = if c_best <= 0.0 || chi(0.0) <= level {
+        0.0
+    } else {
+        let (mut a, mut b) = (0.0, c_best); // chi(a) > level >= chi(b)
+        for _ in 0..80 {
+            let mid = 0.5 * (a + b);
+            if chi(mid) > level {
+                a = mid;
+            } else {
+                b = mid;
+            }
+        }
+        b
+    };
+    // Upper side: expand until above the level.
+    let mut top = if c_best > 0.0 {
+        c_best * 2.0
+    } else {
+        c_max.max(f64::MIN_POSITIVE) * 1e-6
+    };
+    let mut expansions = 0;
+    while chi(top) <= level && expansions < 200 {
+        top *= 2.0;
+        expansions += 1;
+    }
+    if chi(top) <= level {
+        return (c_lo, f64::INFINITY);
+    }
+    let (mut a, mut b) = (c_best, top); // chi(a) <= level < chi(b)
+    for _ in 0..80 {
+        let mid = 0.5 * (a + b);
+        if chi(mid) > level {
+            b = mid;
+        } else {
+            a = mid;
+        }
+    }
+    (c_lo, a)
+}
+
+/// Fit of a signature family over one shape parameter (Gauss-Markov time, sinusoid frequency): the
+/// linear fit at each grid value, the best overall, and the profile interval of the shape parameter
+/// (the grid values whose profiled chi2 is within the 95 % threshold of the minimum).
+#[derive(Clone, Debug, Serialize)]
+pub struct FamilyFit {
+    pub shape: f64,
+    pub fit: LinearFit,
+    pub shape_lo: f64,
+    pub shape_hi: f64,
+}
+
+pub fn fit_family(
+    data: &FitData,
+    shapes: &[f64],
+    signatures: &[Vec<f64>],
+    c0_of: &dyn Fn(usize) -> f64,
+) -> Option<FamilyFit> {
+    let fits: Vec<LinearFit> = signatures
+        .iter()
+        .enumerate()
+        .map(|(j, f)| fit_linear(data, f, c0_of(j)))
+        .collect();
+    let (jb, best) = fits
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1.chi2.total_cmp(&b.1.chi2))?;
+    let level = best.chi2 + CHI2_1_95;
+    let inside: Vec<usize> = (0..fits.len()).filter(|&j| fits[j].chi2 <= level).collect();
+    Some(FamilyFit {
+        shape: shapes[jb],
+        fit: *best,
+        shape_lo: shapes[*inside.first().unwrap_or(&jb)],
+        shape_hi: shapes[*inside.last().unwrap_or(&jb)],
+    })
+}
+
+/// Bayesian information criterion: chi2 + k ln M (Schwarz 1978), with chi2 = -2 ln L up to a constant
+/// for Gaussian z-scores.
+pub fn bic(chi2: f64, k: usize, m: usize) -> f64 {
+    chi2 + k as f64 * (m.max(1) as f64).ln()
+}
+
+/// Akaike information criterion: chi2 + 2k (Akaike 1974), reported beside BIC.
+pub fn aic(chi2: f64, k: usize) -> f64 {
+    chi2 + 2.0 * k as f64
+}
+
+/// Widening factor of a profile interval for a fit whose chi2 exceeds its degrees of freedom: the Birge
+/// ratio sqrt(chi2 / (M - k)) when above 1 (PDG review of particle physics, "Statistics", scale factor S).
+pub fn birge_scale(chi2: f64, k: usize, m: usize) -> f64 {
+    let dof = m.saturating_sub(k).max(1) as f64;
+    (chi2 / dof).sqrt().max(1.0)
+}
+
+/// Interval on c for a target threshold delta (used when widening by the Birge ratio).
+pub fn linear_interval(
+    data: &FitData,
+    f: &[f64],
+    c0: f64,
+    fit: &LinearFit,
+    delta: f64,
+) -> (f64, f64) {
+    let chi = |c: f64| data.chi2(f, c - c0);
+    let (_, hi) = c_range(data, f, c0);
+    profile_interval(&chi, fit.c, fit.chi2, delta, hi.max(fit.c))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A noise-free synthetic measurement: white noise in the model, the measurement has white noise plus
+    /// rate random walk of known level. The fit must return the level exactly (no noise, so the tolerance
+    /// is the golden-section convergence, 1e-6 relative).
+    #[test]
+    fn linear_fit_recovers_exact_level_without_noise() {
+        let tau: Vec<f64> = (0..14).map(|j| 0.01 * 2f64.powi(j)).collect();
+        let n2 = 1e-6;
+        let k2 = 3e-8;
+        let avar_band: Vec<f64> = tau.iter().map(|t| n2 / t).collect();
+        let ln_band: Vec<f64> = avar_band.iter().map(|a| 0.5 * a.ln()).collect();
+        let f_rrw: Vec<f64> = tau.iter().map(|t| t / 3.0).collect(); // K^2 T / 3 (theory.md §2, Hou 4.53)
+        let ln_meas: Vec<f64> = tau
+            .iter()
+            .map(|t| 0.5 * (n2 / t + k2 * t / 3.0).ln())
+            .collect();
+        let s = vec![0.01; tau.len()];
+        let data = FitData {
+            ln_meas: &ln_meas,
+            ln_band: &ln_band,
+            avar_band: &avar_band,
+            s: &s,
+        };
+        let fit = fit_linear(&data, &f_rrw, 0.0);
+        assert!((fit.c / k2 - 1.0).abs() < 1e-6, "c {} vs {}", fit.c, k2);
+        assert!(fit.chi2 < 1e-8);
+        assert!(fit.c_lo < fit.c && fit.c < fit.c_hi);
+        // Wrong level of a present term: the model has white noise at n2, the truth at 2 n2.
+        let f_white: Vec<f64> = tau.iter().map(|t| 1.0 / t).collect();
+        let ln_meas2: Vec<f64> = tau.iter().map(|t| 0.5 * (2.0 * n2 / t).ln()).collect();
+        let data2 = FitData {
+            ln_meas: &ln_meas2,
+            ..data
+        };
+        let fit2 = fit_linear(&data2, &f_white, n2);
+        assert!((fit2.c / (2.0 * n2) - 1.0).abs() < 1e-6);
+        // And a level below the model's.
+        let ln_meas3: Vec<f64> = tau.iter().map(|t| 0.5 * (0.5 * n2 / t).ln()).collect();
+        let data3 = FitData {
+            ln_meas: &ln_meas3,
+            ..data
+        };
+        let fit3 = fit_linear(&data3, &f_white, n2);
+        assert!((fit3.c / (0.5 * n2) - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn profile_interval_of_quadratic_chi2_is_analytic() {
+        // One tau, z linear in ln c near the optimum: check the interval brackets c and is finite.
+        let ln_meas = [0.5 * 2f64.ln()];
+        let ln_band = [0.0];
+        let avar_band = [1.0];
+        let s = [0.1];
+        let f = [1.0];
+        let data = FitData {
+            ln_meas: &ln_meas,
+            ln_band: &ln_band,
+            avar_band: &avar_band,
+            s: &s,
+        };
+        let fit = fit_linear(&data, &f, 0.0);
+        assert!((fit.c - 1.0).abs() < 1e-6);
+        // z(c) = (0.5 ln 2 - 0.5 ln(1 + c)) / 0.1; z^2 = 3.84 at ln(1+c) = ln 2 -/+ 2*0.1*1.96.
+        let d = 2.0 * 0.1 * CHI2_1_95.sqrt();
+        let lo = 2.0 * (-d).exp() - 1.0;
+        let hi = 2.0 * d.exp() - 1.0;
+        assert!((fit.c_lo - lo).abs() < 1e-6, "{} vs {}", fit.c_lo, lo);
+        assert!((fit.c_hi - hi).abs() < 1e-6, "{} vs {}", fit.c_hi, hi);
+    }
+}
