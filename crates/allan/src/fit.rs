@@ -201,7 +201,7 @@ fn correlation_inflation(pts: &[&AllanPoint]) -> f64 {
     let (lo, hi) = pts.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), p| {
         (lo.min(p.tau_s), hi.max(p.tau_s))
     });
-    if pts.len() < 2 || !(hi > lo) {
+    if pts.len() < 2 || hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
         return 2.0;
     }
     let per_octave = (pts.len() - 1) as f64 / (hi / lo).log2();
@@ -258,7 +258,7 @@ fn nnls_subsets(g: &[[f64; 5]], y: &[f64], w: &[f64], allowed: [bool; 5]) -> Sol
                         .sqrt()
                 })
                 .collect();
-            if scale.iter().any(|s| !(*s > 0.0)) {
+            if scale.iter().any(|s| s.is_nan() || *s <= 0.0) {
                 continue;
             }
             let mut ata = vec![vec![0.0f64; k]; k];
