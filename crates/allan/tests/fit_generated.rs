@@ -145,9 +145,9 @@ fn calibration_many_seeds() {
             let pts = deviation(&y, DataKind::Rate, 0.01, Estimator::Overlapping, &grid);
             let fit = fit_ieee952_terms(&pts, FitTerms([true, true, true, true, false]));
             let want = [truth.q, truth.n, truth.b, truth.k];
-            for j in 0..4 {
-                match fit.terms()[j] {
-                    Some(t) => zz.push((t.value - want[j]) / t.sigma),
+            for (term, w) in fit.terms().iter().zip(want) {
+                match term {
+                    Some(t) => zz.push((t.value - w) / t.sigma),
                     None => none += 1,
                 }
             }
