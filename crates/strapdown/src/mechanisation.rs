@@ -107,7 +107,8 @@ impl Strapdown {
                 // Exact rotation for the (corrected) constant-rate increment, Woodman eq 41.
                 let c_new = c_old * so3_exp(&phi);
                 // Trapezoidal rule for eq 43: the specific force rotated with C at both ends of the step.
-                let a_nav = 0.5 * (c_old * accel.0 + c_new * accel.0);
+                // (C_k + C_{k+1}) f / 2: one matrix-vector product instead of two.
+                let a_nav = 0.5 * ((c_old + c_new) * accel.0);
                 let v_old = self.state.velocity.0;
                 let v_new = v_old + dt_s * (a_nav + self.gravity_nav);
                 // Trapezoidal rule for eq 44.
