@@ -1,0 +1,133 @@
+//! End-to-end `imudrift simulate` / `merge`: determinism across thread counts and shard splits,
+//! output files, errors naming file and key.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn imudrift(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_imudrift"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("run imudrift")
+}
+
+fn ok(out: Output) -> Output {
+    assert!(
+        out.status.success(),
+        "imudrift failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+const SCENARIO: &str = "configs/scenarios/mtx-static-60s.toml";
+
+#[test]
+fn one_and_four_threads_and_merged_shards_give_identical_json() {
+    let base = [
+        "simulate", SCENARIO, "--runs", "70", "--seed", "11", "--json",
+    ];
+    let one = ok(imudrift(&[&base[..], &["--threads", "1"]].concat())).stdout;
+    let four = ok(imudrift(&[&base[..], &["--threads", "4"]].concat())).stdout;
+    assert!(!one.is_empty());
+    assert_eq!(one, four, "1 and 4 threads differ");
+    let doc: serde_json::Value = serde_json::from_slice(&one).unwrap();
+    assert_eq!(doc["seed"], 11);
+    assert_eq!(doc["runs"], 70);
+    let ch = &doc["checkpoints"][0]["channels"]["pos_horizontal_m"];
+    for key in ["mean", "std", "rms", "p50", "p95", "law_std", "ratio"] {
+        assert!(ch.get(key).is_some(), "missing {key}");
+    }
+
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().to_str().unwrap();
+    let mut shards = Vec::new();
+    for i in 0..4 {
+        let shard = format!("{i}/4");
+        ok(imudrift(&[
+            "simulate",
+            SCENARIO,
+            "--runs",
+            "70",
+            "--seed",
+            "11",
+            "--threads",
+            "2",
+            "--shard",
+            &shard,
+            "--out",
+            d,
+        ]));
+        shards.push(format!("{d}/shard-{i}-of-4.json"));
+    }
+    let mut merge_args = vec!["merge", "--json"];
+    merge_args.extend(shards.iter().map(String::as_str));
+    let merged = ok(imudrift(&merge_args)).stdout;
+    assert_eq!(merged, one, "4 merged shards differ from one run");
+    // A missing shard is an error, not a partial result.
+    let bad = imudrift(&["merge", "--json", &shards[0], &shards[1], &shards[2]]);
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("missing"));
+}
+
+#[test]
+fn out_dir_gets_csv_json_svg() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().to_str().unwrap();
+    ok(imudrift(&[
+        "simulate",
+        SCENARIO,
+        "--runs",
+        "8",
+        "--out",
+        d,
+        "--only",
+        "gyro.white_noise",
+    ]));
+    for f in ["drift.json", "drift.csv", "drift.svg"] {
+        let p = Path::new(d).join(f);
+        let text = std::fs::read_to_string(&p).unwrap();
+        assert!(text.len() > 100, "{f} too short");
+    }
+    let csv = std::fs::read_to_string(Path::new(d).join("drift.csv")).unwrap();
+    assert!(csv.lines().nth(1).unwrap().starts_with("t_s,channel,mean"));
+    let svg = std::fs::read_to_string(Path::new(d).join("drift.svg")).unwrap();
+    assert!(svg.contains("<polygon") && svg.contains("law rms"));
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(Path::new(d).join("drift.json")).unwrap())
+            .unwrap();
+    assert_eq!(doc["active_terms"], serde_json::json!(["gyro.white_noise"]));
+}
+
+#[test]
+fn bad_inputs_name_file_and_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("bad.toml");
+    std::fs::write(
+        &p,
+        "sensor = \"x.toml\"\nduration_s = 1.0\nrate_hz = 0.0\nruns = 3\nseed = 1\n",
+    )
+    .unwrap();
+    let out = imudrift(&["simulate", p.to_str().unwrap()]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("bad.toml") && err.contains("rate_hz"), "{err}");
+    let out = imudrift(&["simulate", SCENARIO, "--only", "gyro.whitenoise"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("whitenoise"));
+    let out = imudrift(&[
+        "simulate",
+        SCENARIO,
+        "--shard",
+        "4/4",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--shard"));
+}
