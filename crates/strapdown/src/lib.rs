@@ -40,14 +40,14 @@ pub use trajectory::{AnyTrajectory, Coning, ConstantRate, Profile, Segment, Stat
 pub const STANDARD_GRAVITY_MPS2: f64 = 9.80665;
 
 impl Strapdown {
-    /// An integrator started on `trajectory`'s truth at `t = 0`, with standard gravity and the coning
-    /// history primed from the interval `[-dt, 0]` so the first step is as accurate as the others.
+    /// An integrator started on `trajectory`'s truth at `t = 0`, with the trajectory's gravity and the
+    /// coning history primed from the interval `[-dt, 0]` so the first step is as accurate as the others.
     pub fn for_trajectory<T: Trajectory + ?Sized>(
         scheme: Scheme,
         trajectory: &T,
         dt_s: f64,
     ) -> Strapdown {
-        let mut s = Strapdown::new(scheme, trajectory.truth(0.0), STANDARD_GRAVITY_MPS2);
+        let mut s = Strapdown::new(scheme, trajectory.truth(0.0), trajectory.gravity_mps2());
         let (gyro_prev, _) = trajectory.imu_average(-dt_s, 0.0);
         s.set_previous_gyro(&gyro_prev, dt_s);
         s

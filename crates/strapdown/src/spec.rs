@@ -24,6 +24,7 @@
 use crate::frames::{Attitude, BodyVector, NavVector};
 use crate::mechanisation::NavState;
 use crate::trajectory::{AnyTrajectory, Coning, ConstantRate, Profile, Segment, Static};
+use crate::STANDARD_GRAVITY_MPS2;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
@@ -254,9 +255,16 @@ impl TrajectorySpec {
         parse_toml(text, source_name)
     }
 
-    /// Validate into a trajectory. Keys in errors are relative to the trajectory table (prefix them with
-    /// [`TrajectoryError::with_key_prefix`]).
+    /// Validate into a trajectory with standard gravity. Keys in errors are relative to the trajectory
+    /// table (prefix them with [`TrajectoryError::with_key_prefix`]).
     pub fn build(&self) -> Result<AnyTrajectory, TrajectoryError> {
+        self.build_with_gravity(STANDARD_GRAVITY_MPS2)
+    }
+
+    /// [`TrajectorySpec::build`] with another gravity magnitude (m/s^2, key `gravity_mps2` if invalid):
+    /// the ideal accelerometer outputs must use the gravity the mechanisation compensates.
+    pub fn build_with_gravity(&self, gravity_mps2: f64) -> Result<AnyTrajectory, TrajectoryError> {
+        let g = positive("gravity_mps2", gravity_mps2)?;
         Ok(match self {
             TrajectorySpec::Static {
                 roll_deg,
@@ -264,6 +272,7 @@ impl TrajectorySpec {
                 yaw_deg,
             } => AnyTrajectory::Static(Static {
                 attitude: attitude("", *roll_deg, *pitch_deg, *yaw_deg)?,
+                gravity_mps2: g,
             }),
             TrajectorySpec::ConstantRate {
                 roll_deg,
@@ -275,6 +284,7 @@ impl TrajectorySpec {
                 rate_body_rad_s: BodyVector(
                     finite3("rate_deg_s", *rate_deg_s)?.map(f64::to_radians),
                 ),
+                gravity_mps2: g,
             }),
             TrajectorySpec::Coning {
                 half_angle_deg,
@@ -292,10 +302,11 @@ impl TrajectorySpec {
                     half_angle_rad: th.to_radians(),
                     frequency_rad_s: std::f64::consts::TAU
                         * positive("frequency_hz", *frequency_hz)?,
+                    gravity_mps2: g,
                 })
             }
             TrajectorySpec::Profile { initial, segments } => {
-                AnyTrajectory::Profile(build_profile(initial, segments)?)
+                AnyTrajectory::Profile(build_profile(initial, segments)?.with_gravity(g))
             }
         })
     }

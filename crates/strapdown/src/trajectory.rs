@@ -31,13 +31,19 @@ pub trait Trajectory: Sync {
     fn is_static(&self) -> bool {
         false
     }
+
+    /// Gravity magnitude the ideal accelerometer outputs are computed with, m/s^2; give the same value
+    /// to [`crate::Strapdown::new`] (as [`crate::Strapdown::for_trajectory`] does).
+    fn gravity_mps2(&self) -> f64 {
+        STANDARD_GRAVITY_MPS2
+    }
 }
 
 /// Specific force in the navigation frame for nav-frame acceleration `a_nav`: `f = a - gamma` with
 /// gravity `gamma = (0, 0, +g)` in NED (Woodman eq 43 read backwards: `dv/dt = C f + gamma`).
 #[inline]
-fn specific_force_nav(a_nav: &Vector3<f64>) -> Vector3<f64> {
-    Vector3::new(a_nav.x, a_nav.y, a_nav.z - STANDARD_GRAVITY_MPS2)
+fn specific_force_nav(a_nav: &Vector3<f64>, gravity_mps2: f64) -> Vector3<f64> {
+    Vector3::new(a_nav.x, a_nav.y, a_nav.z - gravity_mps2)
 }
 
 /// `(1/h) * integral_0^h exp(s [w x]) ds * v`. Integrating Woodman eq 41 term by term,
@@ -59,10 +65,29 @@ fn mean_rotation_times(w: &Vector3<f64>, h: f64, v: &Vector3<f64>) -> Vector3<f6
 }
 
 /// At rest at the origin with a fixed attitude (level or tilted).
-#[derive(Clone, Copy, Debug, PartialEq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Static {
     /// Body-to-navigation attitude.
     pub attitude: Attitude,
+    /// Gravity magnitude, m/s^2.
+    pub gravity_mps2: f64,
+}
+
+impl Static {
+    /// At rest with `attitude`, standard gravity.
+    pub fn new(attitude: Attitude) -> Static {
+        Static {
+            attitude,
+            gravity_mps2: STANDARD_GRAVITY_MPS2,
+        }
+    }
+}
+
+impl Default for Static {
+    /// Level, heading north, standard gravity.
+    fn default() -> Static {
+        Static::new(Attitude::identity())
+    }
 }
 
 impl Trajectory for Static {
@@ -75,13 +100,17 @@ impl Trajectory for Static {
     #[inline]
     fn imu_average(&self, _t0_s: f64, _t1_s: f64) -> (BodyVector, BodyVector) {
         // Level: C^T (0, 0, -g) = (0, 0, -g) exactly, so gravity compensation cancels bit-exactly.
-        let f = self
-            .attitude
-            .to_body(&NavVector(specific_force_nav(&Vector3::zeros())));
+        let f = self.attitude.to_body(&NavVector(specific_force_nav(
+            &Vector3::zeros(),
+            self.gravity_mps2,
+        )));
         (BodyVector::zeros(), f)
     }
     fn is_static(&self) -> bool {
         true
+    }
+    fn gravity_mps2(&self) -> f64 {
+        self.gravity_mps2
     }
 }
 
@@ -93,9 +122,19 @@ pub struct ConstantRate {
     pub initial: Attitude,
     /// Body angular rate, rad/s.
     pub rate_body_rad_s: BodyVector,
+    /// Gravity magnitude, m/s^2.
+    pub gravity_mps2: f64,
 }
 
 impl ConstantRate {
+    /// Constant body rate from `initial`, standard gravity.
+    pub fn new(initial: Attitude, rate_body_rad_s: BodyVector) -> ConstantRate {
+        ConstantRate {
+            initial,
+            rate_body_rad_s,
+            gravity_mps2: STANDARD_GRAVITY_MPS2,
+        }
+    }
     fn attitude_at(&self, t_s: f64) -> Attitude {
         self.initial
             .then_body_rotation(&so3_exp(&(self.rate_body_rad_s.0 * t_s)))
@@ -112,13 +151,19 @@ impl Trajectory for ConstantRate {
     fn imu_average(&self, t0_s: f64, t1_s: f64) -> (BodyVector, BodyVector) {
         let f_body_t0 = self
             .attitude_at(t0_s)
-            .to_body(&NavVector(specific_force_nav(&Vector3::zeros())));
+            .to_body(&NavVector(specific_force_nav(
+                &Vector3::zeros(),
+                self.gravity_mps2,
+            )));
         // C(t)^T f = exp(-(t - t0) X) C(t0)^T f, averaged over the interval.
         let w = -self.rate_body_rad_s.0;
         (
             self.rate_body_rad_s,
             BodyVector(mean_rotation_times(&w, t1_s - t0_s, &f_body_t0.0)),
         )
+    }
+    fn gravity_mps2(&self) -> f64 {
+        self.gravity_mps2
     }
 }
 
@@ -134,9 +179,19 @@ pub struct Coning {
     pub half_angle_rad: f64,
     /// Coning angular frequency `W`, rad/s.
     pub frequency_rad_s: f64,
+    /// Gravity magnitude, m/s^2.
+    pub gravity_mps2: f64,
 }
 
 impl Coning {
+    /// Coning with half-angle `half_angle_rad` at `frequency_rad_s`, standard gravity.
+    pub fn new(half_angle_rad: f64, frequency_rad_s: f64) -> Coning {
+        Coning {
+            half_angle_rad,
+            frequency_rad_s,
+            gravity_mps2: STANDARD_GRAVITY_MPS2,
+        }
+    }
     /// `A(t) = Rz(W t)`.
     fn sweep(&self, t_s: f64) -> Matrix3<f64> {
         let (s, c) = (self.frequency_rad_s * t_s).sin_cos();
@@ -182,8 +237,11 @@ impl Trajectory for Coning {
     fn imu_average(&self, t0_s: f64, t1_s: f64) -> (BodyVector, BodyVector) {
         let (bt_ez, rate_axis) = self.tilted_axes();
         let gyro = self.mean_sweep_times(t0_s, t1_s, &rate_axis) * self.frequency_rad_s;
-        let accel = self.mean_sweep_times(t0_s, t1_s, &bt_ez) * -STANDARD_GRAVITY_MPS2;
+        let accel = self.mean_sweep_times(t0_s, t1_s, &bt_ez) * -self.gravity_mps2;
         (BodyVector(gyro), BodyVector(accel))
+    }
+    fn gravity_mps2(&self) -> f64 {
+        self.gravity_mps2
     }
 }
 
@@ -232,6 +290,7 @@ pub struct Profile {
     segments: Vec<Segment>,
     /// Start time and true state at the start of each segment, plus one entry for the end.
     starts: Vec<(f64, NavState)>,
+    gravity_mps2: f64,
 }
 
 impl Profile {
@@ -247,7 +306,19 @@ impl Profile {
             t0 += seg.duration_s();
             starts.push((t0, state));
         }
-        Profile { segments, starts }
+        Profile {
+            segments,
+            starts,
+            gravity_mps2: STANDARD_GRAVITY_MPS2,
+        }
+    }
+
+    /// The same profile with another gravity magnitude, m/s^2.
+    pub fn with_gravity(self, gravity_mps2: f64) -> Profile {
+        Profile {
+            gravity_mps2,
+            ..self
+        }
     }
 
     /// The segments.
@@ -337,7 +408,7 @@ impl Trajectory for Profile {
             };
             let f_body_a = state
                 .attitude
-                .to_body(&NavVector(specific_force_nav(&a_nav)))
+                .to_body(&NavVector(specific_force_nav(&a_nav, self.gravity_mps2)))
                 .0;
             let w = seg.rate_body();
             gyro += weight * w;
@@ -345,6 +416,9 @@ impl Trajectory for Profile {
             a = b;
         }
         (BodyVector(gyro), BodyVector(force))
+    }
+    fn gravity_mps2(&self) -> f64 {
+        self.gravity_mps2
     }
 }
 
@@ -377,5 +451,13 @@ impl Trajectory for AnyTrajectory {
     }
     fn is_static(&self) -> bool {
         matches!(self, AnyTrajectory::Static(_))
+    }
+    fn gravity_mps2(&self) -> f64 {
+        match self {
+            AnyTrajectory::Static(t) => t.gravity_mps2(),
+            AnyTrajectory::ConstantRate(t) => t.gravity_mps2(),
+            AnyTrajectory::Coning(t) => t.gravity_mps2(),
+            AnyTrajectory::Profile(t) => t.gravity_mps2(),
+        }
     }
 }

@@ -84,10 +84,7 @@ fn assert_order(what: &str, got: f64, expected: f64) {
 fn coning_error_orders() {
     // 1 Hz coning, 0.1 rad half-angle, over 10.3 s: not a whole number of cone periods, so the periodic
     // part of the velocity error does not cancel by accident at the end time.
-    let traj = Coning {
-        half_angle_rad: 0.1,
-        frequency_rad_s: std::f64::consts::TAU,
-    };
+    let traj = Coning::new(0.1, std::f64::consts::TAU);
     let t_end = 10.3;
     let steps = [500, 1000, 2000, 4000];
     let (w, _) = orders(&traj, Scheme::Woodman, t_end, &steps);

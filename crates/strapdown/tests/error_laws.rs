@@ -23,9 +23,7 @@ fn run_static(
     steps: u64,
     mut corrupt: impl FnMut(&mut BodyVector, &mut BodyVector),
 ) -> NavError {
-    let traj = Static {
-        attitude: Attitude::identity(),
-    };
+    let traj = Static::new(Attitude::identity());
     let mut sd = Strapdown::for_trajectory(scheme, &traj, dt_s);
     for k in 0..steps {
         let (mut gyro, mut accel) = traj.ideal_imu(k, dt_s);

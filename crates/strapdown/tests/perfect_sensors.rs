@@ -15,9 +15,7 @@ fn run<T: Trajectory>(traj: &T, scheme: Scheme, dt_s: f64, steps: u64) -> strapd
 
 #[test]
 fn static_level_is_bit_exactly_zero_for_one_hour() {
-    let traj = Static {
-        attitude: Attitude::identity(),
-    };
+    let traj = Static::new(Attitude::identity());
     for scheme in SCHEMES {
         let e = run(&traj, scheme, 0.01, 360_000);
         assert_eq!(e.pos_ned_m, [0.0; 3], "{scheme:?}");
@@ -33,9 +31,7 @@ fn static_tilted_stays_at_rounding_level() {
     // over n steps of dt the position can move at most ~g*1e-16*t^2/2 (t = 600 s: ~2e-10 m).
     const POS_TOL_M: f64 = 1e-9;
     const ATT_TOL_RAD: f64 = 1e-13;
-    let traj = Static {
-        attitude: Attitude::from_euler_rad(0.2, -0.4, 1.0),
-    };
+    let traj = Static::new(Attitude::from_euler_rad(0.2, -0.4, 1.0));
     for scheme in SCHEMES {
         let e = run(&traj, scheme, 0.01, 60_000);
         assert!(
@@ -50,10 +46,10 @@ fn static_tilted_stays_at_rounding_level() {
 fn constant_rate_one_hour_attitude_error_below_1e9_rad() {
     // Issue requirement: attitude error below 1e-9 rad after 1 h of constant-rate rotation.
     const ATT_TOL_RAD: f64 = 1e-9;
-    let traj = ConstantRate {
-        initial: Attitude::from_euler_rad(0.1, 0.2, 0.3),
-        rate_body_rad_s: strapdown::BodyVector::new(0.3, -0.2, 0.5),
-    };
+    let traj = ConstantRate::new(
+        Attitude::from_euler_rad(0.1, 0.2, 0.3),
+        strapdown::BodyVector::new(0.3, -0.2, 0.5),
+    );
     for scheme in SCHEMES {
         let e = run(&traj, scheme, 0.01, 360_000);
         assert!(
@@ -62,4 +58,22 @@ fn constant_rate_one_hour_attitude_error_below_1e9_rad() {
             e.attitude_angle_rad
         );
     }
+}
+
+#[test]
+fn static_level_with_other_gravity_from_spec_is_bit_exactly_zero() {
+    let spec = strapdown::TrajectorySpec::from_toml_str("kind = \"static\"", "perfect_sensors.rs")
+        .unwrap();
+    let traj = spec.build_with_gravity(3.71).unwrap();
+    assert_eq!(traj.gravity_mps2(), 3.71);
+    for scheme in SCHEMES {
+        let e = run(&traj, scheme, 0.01, 60_000);
+        assert_eq!(e.pos_ned_m, [0.0; 3], "{scheme:?}");
+        assert_eq!(e.vel_ned_mps, [0.0; 3], "{scheme:?}");
+    }
+    assert!(spec
+        .build_with_gravity(-1.0)
+        .unwrap_err()
+        .to_string()
+        .contains("gravity_mps2"));
 }

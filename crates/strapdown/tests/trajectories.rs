@@ -35,7 +35,7 @@ fn differentiated<T: Trajectory>(traj: &T, t: f64) -> (Vector3<f64>, Vector3<f64
     let psi = Vector3::from(nav_error(&plus, &minus).attitude_nav_rad);
     let rate_body = mid.attitude.matrix().tr_mul(&psi) / (2.0 * DELTA_S);
     let accel_nav = (plus.velocity.0 - minus.velocity.0) / (2.0 * DELTA_S);
-    let gravity_nav = Vector3::new(0.0, 0.0, STANDARD_GRAVITY_MPS2);
+    let gravity_nav = Vector3::new(0.0, 0.0, traj.gravity_mps2());
     let force_body = mid.attitude.matrix().tr_mul(&(accel_nav - gravity_nav));
     (rate_body, force_body)
 }
@@ -81,9 +81,7 @@ fn check<T: Trajectory>(name: &str, traj: &T, intervals: &[(f64, f64)], breaks: 
 
 #[test]
 fn static_tilted_reads_gravity_in_body_axes() {
-    let traj = Static {
-        attitude: Attitude::from_euler_rad(0.3, -0.2, 1.0),
-    };
+    let traj = Static::new(Attitude::from_euler_rad(0.3, -0.2, 1.0));
     check("static", &traj, &[(0.0, 0.01), (5.0, 6.0)], &[]);
     let (_, accel) = traj.ideal_imu(7, 0.01);
     assert!((accel.0.norm() - STANDARD_GRAVITY_MPS2).abs() < 1e-14);
@@ -91,10 +89,10 @@ fn static_tilted_reads_gravity_in_body_axes() {
 
 #[test]
 fn constant_rate_outputs_match_differentiated_truth() {
-    let traj = ConstantRate {
-        initial: Attitude::from_euler_rad(0.1, 0.4, -0.7),
-        rate_body_rad_s: BodyVector::new(0.3, -0.2, 0.5),
-    };
+    let traj = ConstantRate::new(
+        Attitude::from_euler_rad(0.1, 0.4, -0.7),
+        BodyVector::new(0.3, -0.2, 0.5),
+    );
     // h = 0.01 s uses the series branch of the closed forms, h = 0.5 s the trigonometric one.
     check(
         "constant rate",
@@ -106,9 +104,10 @@ fn constant_rate_outputs_match_differentiated_truth() {
 
 #[test]
 fn coning_outputs_match_differentiated_truth() {
+    // Non-standard gravity (Mars) so a hard-wired g anywhere would show.
     let traj = Coning {
-        half_angle_rad: 0.2,
-        frequency_rad_s: std::f64::consts::TAU * 2.0,
+        gravity_mps2: 3.71,
+        ..Coning::new(0.2, std::f64::consts::TAU * 2.0)
     };
     check(
         "coning",
