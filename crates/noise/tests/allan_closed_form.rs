@@ -1,0 +1,242 @@
+//! Every stochastic term, generated at 10 Hz, 100 Hz and 1 kHz, has the overlapping Allan variance
+//! of its closed form (theory.md §2; exact sampled forms from `noise::closed_form`), within
+//! chi-squared bounds from Greenhall's EDF at a per-comparison false-positive rate of 1e-6
+//! (see `common::ALPHA`).
+
+mod common;
+
+use common::*;
+use noise::closed_form as cf;
+use noise::{AxisModel, BiasInstability, Flicker, GaussMarkov, Sinusoid};
+
+const RATES_HZ: [f64; 3] = [10.0, 100.0, 1000.0];
+/// 2^20 samples per series: 29 h at 10 Hz, 2.9 h at 100 Hz, 17 min at 1 kHz.
+const N: usize = 1 << 20;
+const SEED: u64 = 20_260_521;
+
+fn check(label: &str, axis: &AxisModel, ms: &[usize], alphas: &[i32]) {
+    for (i, &rate) in RATES_HZ.iter().enumerate() {
+        let dt = 1.0 / rate;
+        let data = gyro_x_series(axis, rate, N, SEED, i as u64);
+        assert_avar_matches(
+            &format!("{label} at {rate} Hz"),
+            &data,
+            dt,
+            ms,
+            alphas,
+            |tau| axis.allan_variance_sampled(tau, dt),
+        );
+    }
+}
+
+const MS: [usize; 5] = [1, 10, 100, 1000, 10_000];
+
+#[test]
+fn white_noise_matches_n2_over_tau() {
+    let axis = AxisModel {
+        white_noise: Some(1e-3),
+        ..AxisModel::default()
+    };
+    check("white noise", &axis, &MS, &[0]);
+    // The sampled form is the continuous one (Hou 4.36) exactly.
+    assert_eq!(
+        axis.allan_variance_sampled(0.5, 0.01),
+        cf::white_noise_avar(1e-3, 0.5)
+    );
+}
+
+#[test]
+fn rate_random_walk_matches_k2_tau_over_3() {
+    let axis = AxisModel {
+        rate_random_walk: Some(1e-4),
+        ..AxisModel::default()
+    };
+    check("rate random walk", &axis, &MS, &[-2]);
+}
+
+#[test]
+fn woodman_bias_random_walk_matches_its_k() {
+    // Woodman eq 9: K = BS / sqrt(T); 1e-3 rad/s over 100 s.
+    let axis = AxisModel {
+        bias_instability: Some(BiasInstability::RandomWalk {
+            stability: 1e-3,
+            period_s: 100.0,
+        }),
+        ..AxisModel::default()
+    };
+    check("Woodman bias random walk", &axis, &MS, &[-2]);
+    let k = cf::woodman_bias_random_walk(1e-3, 100.0);
+    assert!((axis.allan_variance(30.0) / cf::rate_random_walk_avar(k, 30.0) - 1.0).abs() < 1e-12);
+}
+
+#[test]
+fn gauss_markov_matches_its_closed_form() {
+    for tc_samples in [3.0, 100.0] {
+        for (i, &rate) in RATES_HZ.iter().enumerate() {
+            let dt = 1.0 / rate;
+            let axis = AxisModel {
+                gauss_markov: Some(GaussMarkov::new(1e-3, tc_samples * dt).unwrap()),
+                ..AxisModel::default()
+            };
+            let data = gyro_x_series(&axis, rate, N, SEED + 1, i as u64);
+            // Between white (tau >> T) and random walk (tau << T): the smaller EDF of the two.
+            assert_avar_matches(
+                &format!("Gauss-Markov T = {tc_samples} dt at {rate} Hz"),
+                &data,
+                dt,
+                &MS,
+                &[0, -2],
+                |tau| axis.allan_variance_sampled(tau, dt),
+            );
+        }
+    }
+}
+
+#[test]
+fn quantization_adds_3q2_over_tau2() {
+    // Quantisation shows only when the integrated signal crosses LSBs at random: dither with white
+    // noise whose per-sample step of the integral, N sqrt(dt), is one LSB (then the rounding error is
+    // uniform and independent to ~exp(-2 pi^2) = 3e-9). The sum 3Q^2/tau^2 + N^2/tau is then exact;
+    // at m = 1 quantisation is 20 % of it, so leaving it out would fail by far more than the bound.
+    let q = 1e-5;
+    for (i, &rate) in RATES_HZ.iter().enumerate() {
+        let dt = 1.0 / rate;
+        let lsb = q * 12f64.sqrt();
+        let axis = AxisModel {
+            quantization: Some(q),
+            white_noise: Some(lsb / dt.sqrt()),
+            ..AxisModel::default()
+        };
+        let data = gyro_x_series(&axis, rate, N, SEED + 2, i as u64);
+        // Every output is a whole number of LSBs of the integral.
+        for &y in data.iter().take(1000) {
+            let steps = y * dt / lsb;
+            assert!((steps - steps.round()).abs() < 1e-6, "{steps}");
+        }
+        assert_avar_matches(
+            &format!("quantisation at {rate} Hz"),
+            &data,
+            dt,
+            &[1, 2, 3, 4, 10],
+            &[2, 0],
+            |tau| axis.allan_variance_sampled(tau, dt),
+        );
+        let without_q = cf::white_noise_avar(lsb / dt.sqrt(), dt);
+        let est = oavar(&data, dt, &[1])[0];
+        assert!(
+            est / without_q > 1.15,
+            "quantisation not visible: {est} vs {without_q}"
+        );
+    }
+}
+
+#[test]
+fn flicker_matches_its_closed_form_and_plateau() {
+    let b = 1e-3;
+    for (i, &rate) in RATES_HZ.iter().enumerate() {
+        let dt = 1.0 / rate;
+        // Band from one sample to the record length.
+        let flicker = Flicker::new(b, dt, N as f64 * dt, 2).unwrap();
+        let axis = AxisModel {
+            bias_instability: Some(BiasInstability::Flicker(flicker.clone())),
+            ..AxisModel::default()
+        };
+        let data = gyro_x_series(&axis, rate, N, SEED + 3, i as u64);
+        let ms = [10, 100, 1000, 10_000];
+        assert_avar_matches(
+            &format!("flicker at {rate} Hz"),
+            &data,
+            dt,
+            &ms,
+            &[-1],
+            |tau| axis.allan_variance_sampled(tau, dt),
+        );
+        // Plateau: inside [10 tau_min, tau_max / 10] the closed form of the component sum is within
+        // the ripple RIPPLE of 0.664 B (IEEE 952, Hou 4.38-4.50; theory.md §3 measured 0.653-0.677),
+        // and the estimate is within the chi-squared bound widened by that ripple.
+        const RIPPLE: f64 = 0.025;
+        let plateau = cf::flicker_plateau_avar(b);
+        let est = oavar(&data, dt, &ms);
+        for (&m, &v) in ms.iter().zip(&est) {
+            let tau = m as f64 * dt;
+            let closed = flicker.avar_sampled(tau, dt);
+            assert!(
+                ((closed / plateau).sqrt() - 1.0).abs() < RIPPLE,
+                "closed-form plateau at {tau} s: {} B",
+                closed.sqrt() / b
+            );
+            let (lo, hi) = ratio_bounds(edf(&[-1], m, N));
+            let r = v / plateau;
+            assert!(
+                r > lo * (1.0 - RIPPLE).powi(2) && r < hi * (1.0 + RIPPLE).powi(2),
+                "flicker plateau at {rate} Hz, tau {tau}: adev {} B, expected {} B",
+                v.sqrt() / b,
+                cf::FLICKER_PLATEAU_PER_B
+            );
+        }
+    }
+}
+
+#[test]
+fn rate_ramp_is_exact() {
+    let r = 1e-6;
+    let axis = AxisModel {
+        rate_ramp: Some(r),
+        ..AxisModel::default()
+    };
+    for &rate in &RATES_HZ {
+        let dt = 1.0 / rate;
+        let data = gyro_x_series(&axis, rate, 100_000, SEED, 0);
+        let est = oavar(&data, dt, &MS);
+        for (&m, &v) in MS.iter().zip(&est) {
+            let tau = m as f64 * dt;
+            // Deterministic: only rounding error, far below 1e-6 relative.
+            assert!(
+                (v / cf::rate_ramp_avar(r, tau) - 1.0).abs() < 1e-6,
+                "ramp at {rate} Hz, tau {tau}"
+            );
+        }
+    }
+}
+
+#[test]
+fn sinusoid_matches_phase_averaged_closed_form() {
+    // A deterministic sinusoid: the overlapping estimator averages over start phases, so over a record
+    // of ~39000 periods it equals the phase average (Hou 4.64, sampled form) up to end effects of order
+    // 1/periods; tolerance 1e-3 A^2 (absolute, as the form has zeros).
+    for &rate in &RATES_HZ {
+        let dt = 1.0 / rate;
+        let f0 = rate / 27.0;
+        let a = 1e-3;
+        let axis = AxisModel {
+            sinusoidal: Some(Sinusoid::new(a, f0, None).unwrap()),
+            ..AxisModel::default()
+        };
+        let data = gyro_x_series(&axis, rate, N, SEED, 0);
+        let ms = [1, 3, 7, 13, 27, 40, 100];
+        let est = oavar(&data, dt, &ms);
+        for (&m, &v) in ms.iter().zip(&est) {
+            let tau = m as f64 * dt;
+            let t = axis.allan_variance_sampled(tau, dt);
+            assert!(
+                (v - t).abs() < 1e-3 * a * a,
+                "sinusoid at {rate} Hz, m {m}: {v:.4e} vs {t:.4e}"
+            );
+        }
+    }
+}
+
+#[test]
+fn sum_of_terms_matches_sum_of_closed_forms() {
+    // Independent terms add (theory.md §2, "Usual sum for fitting").
+    let axis = AxisModel {
+        white_noise: Some(1e-3),
+        bias_instability: Some(BiasInstability::Flicker(
+            Flicker::new(2e-4, 0.01, 1e5, 2).unwrap(),
+        )),
+        rate_random_walk: Some(1e-5),
+        gauss_markov: Some(GaussMarkov::new(3e-4, 5.0).unwrap()),
+        ..AxisModel::default()
+    };
+    check("white + flicker + RRW + GM", &axis, &MS, &[0, -1, -2]);
+}

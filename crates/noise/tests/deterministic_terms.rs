@@ -1,0 +1,169 @@
+//! Deterministic and per-run terms, stream independence, determinism.
+
+mod common;
+
+use common::*;
+use nalgebra::Vector3;
+use noise::{AxisModel, ImuErrors, SensorModel, TemperatureProfile, TriadModel};
+
+#[test]
+fn bias_scale_factor_and_misalignment_act_on_the_ideal_input() {
+    let axis = |i: usize| AxisModel {
+        constant_bias: Some(0.01 * (i as f64 + 1.0)),
+        scale_factor: Some(1e-3 * (i as f64 + 1.0)),
+        misalignment: Some([2e-3, -3e-3]),
+        ..AxisModel::default()
+    };
+    let model = SensorModel {
+        name: "det".into(),
+        gyro: TriadModel {
+            axes: [axis(0), axis(1), axis(2)],
+        },
+        accel: TriadModel {
+            axes: [axis(0), axis(1), axis(2)],
+        },
+        ..SensorModel::default()
+    };
+    let mut e = ImuErrors::new(&model, 0.01, 1, 0);
+    let w = Vector3::new(0.1, -0.2, 0.3);
+    let f = Vector3::new(0.0, 0.0, -9.80665);
+    let (g, a) = e.corrupt(0, &w, &f);
+    // measured_i = (1 + s_i) ideal_i + m_i1 ideal_other1 + m_i2 ideal_other2 + b_i
+    let expect = |v: &Vector3<f64>| {
+        Vector3::new(
+            1.001 * v.x + 2e-3 * v.y - 3e-3 * v.z + 0.01,
+            1.002 * v.y + 2e-3 * v.x - 3e-3 * v.z + 0.02,
+            1.003 * v.z + 2e-3 * v.x - 3e-3 * v.y + 0.03,
+        )
+    };
+    assert!((g - expect(&w)).norm() < 1e-15);
+    assert!((a - expect(&f)).norm() < 1e-14);
+}
+
+#[test]
+fn turn_on_bias_is_drawn_once_per_run() {
+    let sigma = 0.05;
+    let axis = AxisModel {
+        turn_on_bias: Some(sigma),
+        ..AxisModel::default()
+    };
+    let draws: Vec<f64> = (0..4000)
+        .map(|run| {
+            let y = gyro_x_series(&axis, 100.0, 50, 3, run);
+            assert!(
+                y.iter().all(|&v| v == y[0]),
+                "turn-on bias changed within a run"
+            );
+            y[0]
+        })
+        .collect();
+    assert_variance("turn-on bias across runs", &draws, sigma * sigma);
+}
+
+#[test]
+fn temperature_bias_follows_the_profile() {
+    let profiles = [
+        TemperatureProfile::Constant { temp_c: 30.0 },
+        TemperatureProfile::Ramp {
+            start_c: 20.0,
+            rate_c_per_s: 0.5,
+            end_c: Some(30.0),
+        },
+        TemperatureProfile::Warmup {
+            start_c: 20.0,
+            end_c: 40.0,
+            time_constant_s: 10.0,
+        },
+        TemperatureProfile::Sinusoid {
+            mean_c: 25.0,
+            amplitude_c: 3.0,
+            period_s: 7.0,
+        },
+    ];
+    let coefficient = 1e-3;
+    for profile in profiles {
+        let mut model = gyro_x_model(AxisModel {
+            temperature_bias: Some(coefficient),
+            ..AxisModel::default()
+        });
+        model.temperature = profile.clone();
+        model.temperature_reference_c = 25.0;
+        let dt = 0.1;
+        let mut e = ImuErrors::new(&model, dt, 5, 0);
+        for k in 0..400u64 {
+            let t = k as f64 * dt;
+            let (g, _) = e.corrupt(k, &Vector3::zeros(), &Vector3::zeros());
+            let temp = e.temperature_c(k);
+            assert_eq!(temp, profile.at(t));
+            assert!((g.x - coefficient * (temp - 25.0)).abs() < 1e-15);
+        }
+        // Ends where the profile says.
+        let end = profile.at(1e6);
+        match profile {
+            TemperatureProfile::Ramp { .. } => assert_eq!(end, 30.0),
+            TemperatureProfile::Warmup { .. } => assert!((end - 40.0).abs() < 1e-12),
+            _ => {}
+        }
+    }
+}
+
+#[test]
+fn adding_a_term_does_not_reshuffle_the_others() {
+    let white = AxisModel {
+        white_noise: Some(1e-3),
+        ..AxisModel::default()
+    };
+    let base = gyro_x_series(&white, 100.0, 10_000, 9, 4);
+    let with_bias = gyro_x_series(
+        &AxisModel {
+            constant_bias: Some(0.5),
+            ..white.clone()
+        },
+        100.0,
+        10_000,
+        9,
+        4,
+    );
+    for (a, b) in base.iter().zip(&with_bias) {
+        assert!((b - 0.5 - a).abs() < 1e-15);
+    }
+    // A term on another channel leaves this channel's bits alone.
+    let mut model = gyro_x_model(white.clone());
+    model.gyro.axes[1].gauss_markov = Some(noise::GaussMarkov::new(1.0, 1.0).unwrap());
+    model.accel.axes[2].white_noise = Some(1.0);
+    let mut e = ImuErrors::new(&model, 0.01, 9, 4);
+    let mut other = vec![0.0; 10_000];
+    e.channels_mut()[0].fill_static(0, &Vector3::zeros(), &mut other);
+    assert!(base
+        .iter()
+        .zip(&other)
+        .all(|(a, b)| a.to_bits() == b.to_bits()));
+    // Different runs and seeds differ.
+    assert_ne!(base, gyro_x_series(&white, 100.0, 10_000, 9, 5));
+    assert_ne!(base, gyro_x_series(&white, 100.0, 10_000, 10, 4));
+}
+
+#[test]
+fn corrupt_and_channel_fill_give_the_same_bits() {
+    let model = SensorModel::load(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/sensors/mtx.toml"),
+    )
+    .unwrap();
+    let ideal_g = Vector3::zeros();
+    let ideal_a = Vector3::new(0.0, 0.0, -9.80665);
+    let mut a = ImuErrors::new(&model, 0.01, 42, 1);
+    let mut b = a.clone();
+    let mut cols = vec![vec![0.0; 500]; 6];
+    for (c, (ch, col)) in b.channels_mut().iter_mut().zip(cols.iter_mut()).enumerate() {
+        ch.fill_static(0, if c < 3 { &ideal_g } else { &ideal_a }, col);
+    }
+    let rows: Vec<_> = (0..500u64)
+        .map(|k| a.corrupt(k, &ideal_g, &ideal_a))
+        .collect();
+    for (c, col) in cols.iter().enumerate() {
+        for ((g, acc), v) in rows.iter().zip(col) {
+            let got = if c < 3 { g[c] } else { acc[c - 3] };
+            assert_eq!(got.to_bits(), v.to_bits());
+        }
+    }
+}

@@ -1,0 +1,154 @@
+//! Time-domain laws over many runs: Gauss-Markov autocorrelation, random-walk variance growth, and
+//! the growth of each stochastic term integrated once, twice and through tilt (theory.md §4),
+//! each within chi-squared (or normal) bounds at a per-comparison false-positive rate of 1e-6.
+
+mod common;
+
+use common::*;
+use noise::closed_form::{self as cf, Integration};
+use noise::units::STANDARD_GRAVITY_MPS2;
+use noise::{AxisModel, BiasInstability, GaussMarkov};
+
+const SEED: u64 = 77;
+const RUNS: u64 = 4000;
+
+/// Rectangle-rule integrals (Woodman eqs 2, 11): the k-fold integrals of each run's series at the end.
+fn integrals(axis: &AxisModel, rate_hz: f64, n: usize) -> [Vec<f64>; 3] {
+    let dt = 1.0 / rate_hz;
+    let mut out: [Vec<f64>; 3] = Default::default();
+    for run in 0..RUNS {
+        let y = gyro_x_series(axis, rate_hz, n, SEED, run);
+        let (mut i1, mut i2, mut i3) = (0.0, 0.0, 0.0);
+        for v in y {
+            i1 += v * dt;
+            i2 += i1 * dt;
+            i3 += i2 * dt;
+        }
+        out[0].push(i1);
+        out[1].push(i2);
+        out[2].push(i3);
+    }
+    out
+}
+
+fn check_growth(label: &str, axis: &AxisModel, law: impl Fn(f64, Integration) -> f64) {
+    let (rate, n) = (100.0, 1000);
+    let t = n as f64 / rate;
+    let [once, twice, thrice] = integrals(axis, rate, n);
+    assert_variance(
+        &format!("{label} once"),
+        &once,
+        law(t, Integration::Once).powi(2),
+    );
+    assert_variance(
+        &format!("{label} twice"),
+        &twice,
+        law(t, Integration::Twice).powi(2),
+    );
+    let tilt: Vec<f64> = thrice.iter().map(|x| STANDARD_GRAVITY_MPS2 * x).collect();
+    assert_variance(
+        &format!("{label} through tilt"),
+        &tilt,
+        law(t, Integration::Tilt).powi(2),
+    );
+}
+
+#[test]
+fn white_noise_grows_as_sqrt_t_t3_t5() {
+    // Woodman eqs 5 and 18; g N t^{5/2}/sqrt(20) (theory.md §1.3). Discrete sums differ by O(1/n) = 0.15 %.
+    let n = 1e-3;
+    let axis = AxisModel {
+        white_noise: Some(n),
+        ..AxisModel::default()
+    };
+    check_growth("white noise", &axis, |t, how| {
+        cf::white_noise_growth_std(n, t, how)
+    });
+}
+
+#[test]
+fn random_walk_variance_grows_linearly_and_its_integrals_as_t3_t5_t7() {
+    let k = 1e-4;
+    let axis = AxisModel {
+        rate_random_walk: Some(k),
+        ..AxisModel::default()
+    };
+    // The walk itself: Var b_j = K^2 j dt (theory.md §3, b_{j+1} = b_j + K sqrt(dt) w).
+    let rate = 100.0;
+    for j in [10usize, 100, 999] {
+        let at_j: Vec<f64> = (0..RUNS)
+            .map(|run| gyro_x_series(&axis, rate, j + 1, SEED, run)[j])
+            .collect();
+        assert_variance(
+            &format!("random walk at step {j}"),
+            &at_j,
+            k * k * j as f64 / rate,
+        );
+    }
+    check_growth("rate random walk", &axis, |t, how| {
+        cf::random_walk_growth_std(k, t, how)
+    });
+    // Woodman's bias random walk is the same law with K = BS/sqrt(T) (eq 9).
+    let bs = BiasInstability::RandomWalk {
+        stability: 1e-3,
+        period_s: 100.0,
+    };
+    let axis = AxisModel {
+        bias_instability: Some(bs),
+        ..AxisModel::default()
+    };
+    let k = cf::woodman_bias_random_walk(1e-3, 100.0);
+    check_growth("Woodman bias random walk", &axis, |t, how| {
+        cf::random_walk_growth_std(k, t, how)
+    });
+}
+
+#[test]
+fn gauss_markov_autocorrelation_is_phi_to_the_lag() {
+    let (rate, n) = (100.0, 1 << 20);
+    let dt = 1.0 / rate;
+    let tc = 20.0 * dt;
+    let axis = AxisModel {
+        gauss_markov: Some(GaussMarkov::new(2e-3, tc).unwrap()),
+        ..AxisModel::default()
+    };
+    let x = gyro_x_series(&axis, rate, n, SEED, 0);
+    let phi = (-dt / tc).exp();
+    let c0: f64 = x.iter().map(|v| v * v).sum::<f64>() / n as f64;
+    let z = allan::chi2::normal_ppf(1.0 - ALPHA / 2.0);
+    for lag in [1usize, 5, 20, 60] {
+        let c: f64 = x.iter().zip(&x[lag..]).map(|(a, b)| a * b).sum::<f64>() / n as f64;
+        let r = c / c0;
+        let expected = phi.powi(lag as i32);
+        // Bartlett's variance of the lag-j sample autocorrelation of an AR(1) process:
+        // (1/n) [(1 + phi^2)(1 - phi^{2j})/(1 - phi^2) - 2 j phi^{2j}].
+        let p2j = phi.powi(2 * lag as i32);
+        let var = ((1.0 + phi * phi) * (1.0 - p2j) / (1.0 - phi * phi) - 2.0 * lag as f64 * p2j)
+            / n as f64;
+        assert!(
+            (r - expected).abs() < z * var.sqrt(),
+            "lag {lag}: autocorrelation {r:.5} vs phi^lag {expected:.5} (sd {:.5})",
+            var.sqrt()
+        );
+    }
+}
+
+#[test]
+fn gauss_markov_starts_stationary_and_integrates_as_its_law() {
+    let (rate, sigma, tc) = (100.0, 2e-3, 2.0);
+    let axis = AxisModel {
+        gauss_markov: Some(GaussMarkov::new(sigma, tc).unwrap()),
+        ..AxisModel::default()
+    };
+    let first: Vec<f64> = (0..RUNS)
+        .map(|run| gyro_x_series(&axis, rate, 1, SEED, run)[0])
+        .collect();
+    assert_variance("Gauss-Markov at t = 0", &first, sigma * sigma);
+    // Once: exact 2 sigma^2 T [t - T(1 - e^{-t/T})] (theory.md §4); t = 10 s = 5 T; the rectangle
+    // sum of samples differs from the integral by O(dt/T) = 0.5 %.
+    let n = 1000;
+    let [once, _, _] = integrals(&axis, rate, n);
+    let t = n as f64 / rate;
+    let law = cf::gauss_markov_growth_std(sigma, tc, t, Integration::Once).unwrap();
+    assert_variance("Gauss-Markov once", &once, law * law);
+}
