@@ -169,21 +169,33 @@ pub fn law_terms(
             for effect in m.effects() {
                 let no_law = |why: &str| Source::NoLaw(why.to_string());
                 let source = match effect {
-                    Effect::Quantization => no_law("quantisation has no growth law in theory.md §4"),
+                    Effect::Quantization => {
+                        no_law("quantisation has no growth law in theory.md §4")
+                    }
                     Effect::WhiteNoise => Source::White(m.white_noise.unwrap_or(0.0)),
                     Effect::BiasInstability => match &m.bias_instability {
-                        Some(BiasInstability::RandomWalk { stability, period_s }) => {
+                        Some(BiasInstability::RandomWalk {
+                            stability,
+                            period_s,
+                        }) => {
                             Source::RandomWalk(cf::woodman_bias_random_walk(*stability, *period_s))
                         }
-                        _ => no_law("flicker bias instability has no closed-form growth law in theory.md §4"),
+                        // Flicker as realised: a sum of stationary Gauss-Markov components.
+                        Some(BiasInstability::Flicker(f)) => Source::GaussMarkovSum(f.components()),
+                        None => continue,
                     },
                     Effect::RateRandomWalk => Source::RandomWalk(m.rate_random_walk.unwrap_or(0.0)),
                     Effect::RateRamp => Source::Ramp(m.rate_ramp.unwrap_or(0.0)),
                     Effect::GaussMarkov => match &m.gauss_markov {
-                        Some(gm) => Source::GaussMarkov { sigma: gm.sigma, tc_s: gm.tau_s },
+                        Some(gm) => Source::GaussMarkov {
+                            sigma: gm.sigma,
+                            tc_s: gm.tau_s,
+                        },
                         None => continue,
                     },
-                    Effect::Sinusoidal => no_law("a sinusoidal error has no growth law in theory.md §4"),
+                    Effect::Sinusoidal => {
+                        no_law("a sinusoidal error has no growth law in theory.md §4")
+                    }
                     Effect::TemperatureBias => {
                         let c = m.temperature_bias.unwrap_or(0.0);
                         match model.temperature {
@@ -198,7 +210,9 @@ pub fn law_terms(
                     Effect::TurnOnBias => Source::RandomConstant(m.turn_on_bias.unwrap_or(0.0)),
                     // Calibration errors act as a bias proportional to the reading (Table 2:
                     // "drift proportional to rate and duration of motion").
-                    Effect::ScaleFactor => Source::Bias(m.scale_factor.unwrap_or(0.0) * ideal[axis]),
+                    Effect::ScaleFactor => {
+                        Source::Bias(m.scale_factor.unwrap_or(0.0) * ideal[axis])
+                    }
                     Effect::Misalignment => {
                         let mis = m.misalignment.unwrap_or([0.0; 2]);
                         Source::Bias(mis[0] * others[0] + mis[1] * others[1])

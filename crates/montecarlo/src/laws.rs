@@ -43,6 +43,9 @@ pub enum Source {
     RandomWalk(f64),
     /// Stationary first-order Gauss-Markov (sigma, correlation time s).
     GaussMarkov { sigma: f64, tc_s: f64 },
+    /// A sum of independent stationary Gauss-Markov processes, (correlation time s, sigma) each:
+    /// the flicker bias instability as the noise crate realises it (`noise::Flicker::components`).
+    GaussMarkovSum(Vec<(f64, f64)>),
     /// Rate ramp R (signed), error R t.
     Ramp(f64),
     /// Active, but no closed-form growth law exists in theory.md §4 (e.g. flicker bias instability,
@@ -97,18 +100,120 @@ fn moments(source: &Source, t_s: f64, how: Option<Integration>) -> Result<(f64, 
             None => return Err("a random walk needs an integration".into()),
         },
         Source::GaussMarkov { sigma, tc_s } => match how {
-            Some(h) => match cf::gauss_markov_growth_std(*sigma, *tc_s, t_s, h) {
-                Some(s) => (0.0, s * s),
-                None => {
-                    return Err(format!(
-                        "Gauss-Markov law needs t >> T (t = {t_s} s, T = {tc_s} s)"
-                    ))
-                }
-            },
+            Some(h) => (0.0, gauss_markov_variance(*sigma, *tc_s, t_s, h)),
+            None => return Err("Gauss-Markov needs an integration".into()),
+        },
+        Source::GaussMarkovSum(parts) => match how {
+            Some(h) => (
+                0.0,
+                parts
+                    .iter()
+                    .map(|&(tc_s, sigma)| gauss_markov_variance(sigma, tc_s, t_s, h))
+                    .sum(),
+            ),
             None => return Err("Gauss-Markov needs an integration".into()),
         },
         Source::NoLaw(why) => return Err(why.clone()),
     })
+}
+
+/// Variance of the k-fold integral (k = `how.folds()`, times the tilt gain) of a stationary
+/// Gauss-Markov process of std `sigma` and correlation time `tc_s`, at time `t_s`.
+///
+/// Once: the exact closed form 2 sigma^2 T [t - T(1 - e^{-t/T})] of theory.md §4 (via
+/// `noise::closed_form`). Twice and through tilt, where theory.md §4 gives only the t >> T asymptote,
+/// the same definition is evaluated numerically: by Cauchy's formula for repeated integration
+/// I_k(t) = int_0^t w(u) x(u) du with w(u) = (t-u)^{k-1}/(k-1)!, so
+/// Var I_k = int int w(u) w(v) R(u - v) du dv = 2 int_0^t R(s) g(s) ds with the autocovariance
+/// R(s) = sigma^2 e^{-|s|/T} (the Lorentzian PSD of theory.md §2, whose stationary variance is sigma^2)
+/// and g(s) = int_0^{t-s} w(a + s) w(a) da, a polynomial integrated exactly below. Checked in the tests
+/// against the exact once-integrated form and against both asymptotes (t >> T: theory.md §4;
+/// t << T: a random constant, sigma t^k/k!).
+pub fn gauss_markov_variance(sigma: f64, tc_s: f64, t_s: f64, how: Integration) -> f64 {
+    if how == Integration::Once {
+        return cf::gauss_markov_growth_std(sigma, tc_s, t_s, how).map_or(f64::NAN, |s| s * s);
+    }
+    let k = how.folds() as usize;
+    // Through tilt the angle drives g theta (Integration::Tilt's gain, standard gravity).
+    let g0 = noise::units::STANDARD_GRAVITY_MPS2;
+    let gain2 = if how == Integration::Tilt {
+        g0 * g0
+    } else {
+        1.0
+    };
+    let fact = |n: usize| (1..=n).map(|i| i as f64).product::<f64>();
+    let binom = |n: usize, j: usize| fact(n) / (fact(j) * fact(n - j));
+    // g(s) = 1/((k-1)!)^2 sum_j C(k-1, j) s^{k-1-j} L^{j+k}/(j+k), L = t - s.
+    let g = |s: f64| -> f64 {
+        let l = t_s - s;
+        (0..k)
+            .map(|j| {
+                binom(k - 1, j) * s.powi((k - 1 - j) as i32) * l.powi((j + k) as i32)
+                    / (j + k) as f64
+            })
+            .sum::<f64>()
+            / fact(k - 1).powi(2)
+    };
+    // Composite Gauss-Legendre on panels graded with T (0, T/8, T/4, ..., then t), so both the
+    // exponential scale and the polynomial scale are resolved.
+    let (nodes, weights) = gauss_legendre(GL_POINTS);
+    let mut edges = vec![0.0];
+    let mut e = tc_s / 8.0;
+    while e < t_s {
+        edges.push(e);
+        e *= 2.0;
+    }
+    edges.push(t_s);
+    let mut total = 0.0;
+    for w in edges.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let (mid, half) = (0.5 * (a + b), 0.5 * (b - a));
+        total += half
+            * nodes
+                .iter()
+                .zip(&weights)
+                .map(|(&x, &wt)| {
+                    let s = mid + half * x;
+                    wt * (-s / tc_s).exp() * g(s)
+                })
+                .sum::<f64>();
+    }
+    2.0 * sigma * sigma * total * gain2
+}
+
+/// Gauss-Legendre points per panel: exact for polynomials of degree 2 GL_POINTS - 1 = 39.
+const GL_POINTS: usize = 20;
+
+/// Gauss-Legendre nodes and weights on [-1, 1] by Newton iteration on P_n (Golub-Welsch's
+/// classical alternative; Abramowitz & Stegun 25.4.29 for the weights 2/((1-x^2) P_n'(x)^2)).
+pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
+    let mut nodes = vec![0.0; n];
+    let mut weights = vec![0.0; n];
+    for i in 0..n.div_ceil(2) {
+        let mut x = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
+        let mut dp = 1.0;
+        for _ in 0..100 {
+            // Bonnet's recursion for P_n(x) and its derivative.
+            let (mut p0, mut p1) = (1.0, x);
+            for m in 2..=n {
+                let p2 = ((2 * m - 1) as f64 * x * p1 - (m - 1) as f64 * p0) / m as f64;
+                p0 = p1;
+                p1 = p2;
+            }
+            dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
+            let dx = p1 / dp;
+            x -= dx;
+            if dx.abs() < 1e-16 {
+                break;
+            }
+        }
+        nodes[i] = -x;
+        nodes[n - 1 - i] = x;
+        let w = 2.0 / ((1.0 - x * x) * dp * dp);
+        weights[i] = w;
+        weights[n - 1 - i] = w;
+    }
+    (nodes, weights)
 }
 
 /// The single-axis channels an entry drives, each with (channel, integration, sign x gain factor).
@@ -340,6 +445,53 @@ mod tests {
         };
         // The note rounds to 0.1 m.
         assert!((mean - 102.4).abs() < 0.1, "{mean}");
+    }
+
+    #[test]
+    fn gauss_markov_law_matches_exact_form_and_both_asymptotes() {
+        let (sigma, tc) = (0.3, 2.0);
+        let g = 9.80665;
+        // Once: the closed form itself.
+        for &t in &[0.01, 1.0, 5.0, 100.0] {
+            let exact = cf::gauss_markov_growth_std(sigma, tc, t, Integration::Once)
+                .unwrap()
+                .powi(2);
+            assert!(
+                (gauss_markov_variance(sigma, tc, t, Integration::Once) / exact - 1.0).abs()
+                    < 1e-12
+            );
+        }
+        // t >> T: theory.md §4 asymptotes 2 sigma^2 T t^3/3 and g^2 2 sigma^2 T t^5/20; the
+        // relative correction is O(T/t), so at t = 1e5 T agreement to 1e-4 (k = 2, 3 leading terms).
+        let t = 1e5 * tc;
+        let a2 = cf::gauss_markov_growth_std(sigma, tc, t, Integration::Twice)
+            .unwrap()
+            .powi(2);
+        let a3 = cf::gauss_markov_growth_std(sigma, tc, t, Integration::Tilt)
+            .unwrap()
+            .powi(2);
+        assert!((gauss_markov_variance(sigma, tc, t, Integration::Twice) / a2 - 1.0).abs() < 1e-4);
+        assert!((gauss_markov_variance(sigma, tc, t, Integration::Tilt) / a3 - 1.0).abs() < 1e-4);
+        // t << T: a random constant of std sigma: sigma t^2/2 and g sigma t^3/6, to O(t/T).
+        let t = 1e-5 * tc;
+        let c2 = (sigma * t * t / 2.0).powi(2);
+        let c3 = (g * sigma * t.powi(3) / 6.0).powi(2);
+        assert!((gauss_markov_variance(sigma, tc, t, Integration::Twice) / c2 - 1.0).abs() < 1e-4);
+        assert!((gauss_markov_variance(sigma, tc, t, Integration::Tilt) / c3 - 1.0).abs() < 1e-4);
+    }
+
+    #[test]
+    fn gauss_legendre_integrates_polynomials_exactly() {
+        let (x, w) = gauss_legendre(GL_POINTS);
+        for p in 0..(2 * GL_POINTS as i32) {
+            let num: f64 = x.iter().zip(&w).map(|(x, w)| w * x.powi(p)).sum();
+            let exact = if p % 2 == 1 {
+                0.0
+            } else {
+                2.0 / (p + 1) as f64
+            };
+            assert!((num - exact).abs() < 1e-13, "degree {p}: {num} vs {exact}");
+        }
     }
 
     #[test]
