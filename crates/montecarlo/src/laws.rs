@@ -346,6 +346,25 @@ pub fn channel_laws(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
         }
     };
     let mut laws: Vec<Law> = (0..n).map(single).collect();
+    // The vertical channels' law is first order; a tilt eps adds g (1 - cos eps) ~ g eps^2/2 to the
+    // vertical specific force (theory.md §1.2). Bound its effect with the final tilt mean square
+    // (tilt grows with t, so this overestimates) and withhold the law where it exceeds 10 % of it.
+    let tilt_ms: f64 = [Channel::Roll, Channel::Pitch]
+        .iter()
+        .map(|&c| mean[c as usize].powi(2) + var[c as usize])
+        .sum();
+    let second_order = ctx.gravity_mps2 * tilt_ms / 2.0;
+    for (ch, growth) in [(Channel::VelDown, t_s), (Channel::PosDown, t_s * t_s / 2.0)] {
+        let i = ch as usize;
+        if let Some(first) = laws[i].rms() {
+            let bound = second_order * growth;
+            if bound > 0.1 * first {
+                laws[i] = Law::NotApplicable(format!(
+                    "first-order law incomplete: the second-order tilt term g(1-cos eps) (theory.md §1.2) may reach {bound:.3e}, over 10 % of the law {first:.3e}"
+                ));
+            }
+        }
+    }
     for (h, a, b) in [
         (Channel::PosHorizontal, Channel::PosNorth, Channel::PosEast),
         (Channel::VelHorizontal, Channel::VelNorth, Channel::VelEast),
