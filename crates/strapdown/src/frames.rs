@@ -115,8 +115,19 @@ impl Attitude {
 #[inline]
 pub(crate) fn rodrigues_coefficients(s2: f64) -> (f64, f64) {
     if s2 < 1e-2 {
-        let a = 1.0 - s2 / 6.0 * (1.0 - s2 / 20.0 * (1.0 - s2 / 42.0 * (1.0 - s2 / 72.0)));
-        let b = 0.5 * (1.0 - s2 / 12.0 * (1.0 - s2 / 30.0 * (1.0 - s2 / 56.0 * (1.0 - s2 / 90.0))));
+        // Horner form with constant coefficients (multiplications only: a chain of divisions would
+        // dominate the cost of a mechanisation step). sin s/s = sum (-s^2)^n/(2n+1)!,
+        // (1 - cos s)/s^2 = sum (-s^2)^n/(2n+2)!.
+        const A: [f64; 5] = [1.0, -1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362_880.0];
+        const B: [f64; 5] = [
+            0.5,
+            -1.0 / 24.0,
+            1.0 / 720.0,
+            -1.0 / 40_320.0,
+            1.0 / 3_628_800.0,
+        ];
+        let a = A[0] + s2 * (A[1] + s2 * (A[2] + s2 * (A[3] + s2 * A[4])));
+        let b = B[0] + s2 * (B[1] + s2 * (B[2] + s2 * (B[3] + s2 * B[4])));
         (a, b)
     } else {
         // Half-angle forms avoid the cancellation in 1 - cos s: sin s = 2 sin(s/2) cos(s/2),

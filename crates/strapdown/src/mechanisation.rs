@@ -102,7 +102,7 @@ impl Strapdown {
                 // previous sample", `dphim = 1/12*cros(wm_1, wm)`, public copy in
                 // BohemianRhapsodyz/IMMKF-INS base/base1/cnscl.m; the algorithm class is Savage 1998,
                 // JGCD 21(1) 19-28). Its order is measured by tests/order on classical coning.
-                let phi = dtheta + self.previous_dtheta.cross(&dtheta) / 12.0;
+                let phi = dtheta + self.previous_dtheta.cross(&dtheta) * (1.0 / 12.0);
                 self.previous_dtheta = dtheta;
                 // Exact rotation for the (corrected) constant-rate increment, Woodman eq 41.
                 let c_new = c_old * so3_exp(&phi);
