@@ -1,8 +1,393 @@
-//! `imudrift allan` (being built).
+//! `imudrift allan LOG.csv`: Allan deviations of each channel of a log, with confidence
+//! intervals (Greenhall EDF, chi-squared bounds) and the fitted IEEE 952 noise terms.
+//! Prints a table per channel; `--json` prints one JSON document on stdout (tables go to
+//! stderr); `--out DIR` writes allan.csv, allan.json and one SVG plot per channel.
+
+use crate::logio::{self, Log, LogArgs};
+use crate::output;
+use crate::plot::{Band, LogLogPlot, Series, PALETTE};
+use allan::fit::{fit_ieee952, Fit, TERM_NAMES};
+use allan::{AllanPoint, DataKind, EdfMethod, Estimator, Options, TauGrid};
+use anyhow::{anyhow, bail, Context, Result};
+use rayon::prelude::*;
+use serde_json::{json, Map, Value};
+use std::fmt::Write as _;
+use std::path::PathBuf;
 
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Log file: CSV or gzip-compressed CSV with a header row (`#` lines are comments)
+    pub log: PathBuf,
+    #[command(flatten)]
+    pub log_args: LogArgs,
+    /// Estimator: adev (non-overlapping, Woodman eq 19), oadev, mdev, hdev, ohdev, totdev
+    #[arg(long, default_value = "oadev")]
+    pub estimator: String,
+    /// Tau grid: octave, decade, all, N/decade, or a comma list of averaging factors m
+    #[arg(long, default_value = "octave")]
+    pub grid: String,
+    /// Channels to analyse (default: every channel except temp)
+    #[arg(long, value_delimiter = ',')]
+    pub channels: Vec<String>,
+    /// Confidence level of the interval (default one sigma, 0.6827)
+    #[arg(long, default_value_t = allan::ONE_SIGMA_CI)]
+    pub confidence: f64,
+    /// EDF method: greenhall (noise identified per tau), simple (SP 1065 Table 5), none
+    #[arg(long, default_value = "greenhall")]
+    pub edf: String,
+    /// Print one JSON document on stdout (human text on stderr)
+    #[arg(long)]
+    pub json: bool,
+    /// Write allan.csv, allan.json and allan_<channel>.svg into this directory
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Worker threads (default: all cores); results do not depend on it
+    #[arg(long)]
+    pub threads: Option<usize>,
+}
 
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`imudrift allan` is not built yet")
+/// The analysis of one channel.
+pub struct ChannelResult {
+    pub name: String,
+    pub unit: &'static str,
+    pub points: Vec<AllanPoint>,
+    pub fit: Fit,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let est = Estimator::from_name(&args.estimator).ok_or_else(|| {
+        anyhow!(
+            "--estimator {:?}: expected one of adev, oadev, mdev, hdev, ohdev, totdev",
+            args.estimator
+        )
+    })?;
+    let grid = TauGrid::parse(&args.grid).ok_or_else(|| {
+        anyhow!(
+            "--grid {:?}: expected octave, decade, all, N/decade or a comma list of m values",
+            args.grid
+        )
+    })?;
+    let edf = match args.edf.as_str() {
+        "greenhall" => EdfMethod::Greenhall,
+        "simple" => EdfMethod::Simple,
+        "none" => EdfMethod::None,
+        other => bail!("--edf {other:?}: expected greenhall, simple or none"),
+    };
+    if !(args.confidence > 0.0 && args.confidence < 1.0) {
+        bail!(
+            "--confidence {}: expected a level between 0 and 1",
+            args.confidence
+        );
+    }
+    let opts = Options {
+        edf,
+        confidence: args.confidence,
+        ..Options::default()
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.unwrap_or(0))
+        .build()
+        .context("cannot start the worker threads")?;
+    pool.install(|| run_inner(&args, est, &grid, &opts))
+}
+
+fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Result<()> {
+    let log = logio::read_log(&args.log, &args.log_args.options()?)?;
+    let names: Vec<String> = if args.channels.is_empty() {
+        log.order
+            .iter()
+            .filter(|n| n.as_str() != "temp")
+            .cloned()
+            .collect()
+    } else {
+        for c in &args.channels {
+            if !log.channels.contains_key(c) {
+                bail!(
+                    "--channels: {}: no channel {c:?} (channels: {})",
+                    log.source,
+                    log.order.join(", ")
+                );
+            }
+        }
+        args.channels.clone()
+    };
+    let results: Vec<ChannelResult> = names
+        .par_iter()
+        .map(|name| analyse(&log.channels[name], name, log.dt_s(), est, grid, opts))
+        .collect();
+    let table = tables(&log, &results, est);
+    let doc = json_document(&log, &results, est, &args.grid);
+    if args.json {
+        eprint!("{table}");
+        println!("{}", serde_json::to_string_pretty(&doc)?);
+    } else {
+        print!("{table}");
+    }
+    if let Some(dir) = &args.out {
+        output::ensure_dir(dir)?;
+        output::write_string(&dir.join("allan.csv"), &csv(&results))?;
+        output::write_string(
+            &dir.join("allan.json"),
+            &serde_json::to_string_pretty(&doc)?,
+        )?;
+        for r in &results {
+            let file = dir.join(format!("allan_{}.svg", sanitize(&r.name)));
+            output::write_string(&file, &plot(r, est, &log.source).to_svg())?;
+        }
+        eprintln!(
+            "wrote allan.csv, allan.json and {} SVG plot(s) to {}",
+            results.len(),
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+/// Deviation curve (taus in parallel; each tau is computed by one thread, so the result does not
+/// depend on the thread count), intervals and fit of one channel.
+pub fn analyse(
+    data: &[f64],
+    name: &str,
+    dt_s: f64,
+    est: Estimator,
+    grid: &TauGrid,
+    opts: &Options,
+) -> ChannelResult {
+    let series = allan::Series::new(data, DataKind::Rate, dt_s);
+    let ms = series.grid_m(est, grid, opts.stable32_stop);
+    let mut points: Vec<AllanPoint> = ms
+        .par_iter()
+        .filter_map(|&m| series.raw_point(est, m))
+        .collect();
+    if opts.edf != EdfMethod::None {
+        let d = est.difference_order();
+        let alphas: Vec<Option<i32>> = points
+            .par_iter()
+            .map(|p| opts.alpha.or_else(|| series.noise_id(p.m, d)))
+            .collect();
+        series.attach_intervals_with_alphas(est, &mut points, &alphas, opts);
+    }
+    let fit = fit_ieee952(&points);
+    ChannelResult {
+        name: name.to_string(),
+        unit: Log::unit_of(name),
+        points,
+        fit,
+    }
+}
+
+fn tables(log: &Log, results: &[ChannelResult], est: Estimator) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{}: {} samples at {} Hz ({:.1} s), {} with 1-sigma bounds",
+        log.source,
+        log.len(),
+        log.rate_hz,
+        log.len() as f64 / log.rate_hz,
+        est.name()
+    );
+    for r in results {
+        let _ = writeln!(s, "\nchannel {} ({})", r.name, r.unit);
+        let _ = writeln!(
+            s,
+            "{:>12} {:>9} {:>10} {:>3} {:>10} {:>13} {:>13} {:>13}",
+            "tau_s", "m", "terms", "a", "edf", "dev_lo", "dev", "dev_hi"
+        );
+        for p in &r.points {
+            let flag = if est == Estimator::NonOverlapping && !p.woodman_ok() {
+                " <9 bins"
+            } else {
+                ""
+            };
+            let _ = writeln!(
+                s,
+                "{:>12.5e} {:>9} {:>10} {:>3} {:>10.4e} {:>13.6e} {:>13.6e} {:>13.6e}{flag}",
+                p.tau_s, p.m, p.n_terms, p.alpha, p.edf, p.lo, p.dev, p.hi
+            );
+        }
+        let f = &r.fit;
+        let unit = r.unit;
+        let _ = writeln!(
+            s,
+            "IEEE 952 fit (weighted NNLS in ln avar, 1-sigma; reduced chi2 {:.2}, model error {:.1}%):",
+            f.reduced_chi2,
+            100.0 * f.model_error
+        );
+        let units = [
+            format!("{unit}*s"),
+            format!("{unit}*sqrt(s)"),
+            unit.to_string(),
+            format!("{unit}/sqrt(s)"),
+            format!("{unit}/s"),
+        ];
+        let labels = [
+            "Q quantisation",
+            "N white (ARW/VRW)",
+            "B bias instability",
+            "K rate random walk",
+            "R rate ramp",
+        ];
+        for ((t, label), u) in f.terms().iter().zip(labels).zip(&units) {
+            match t {
+                Some(t) => {
+                    let _ = writeln!(s, "  {label:<20} {:.4e} +- {:.2e} {u}", t.value, t.sigma);
+                }
+                None => {
+                    let _ = writeln!(s, "  {label:<20} not present");
+                }
+            }
+        }
+        let rd = &f.readings;
+        let _ = writeln!(
+            s,
+            "readings: ARW (-1/2 line at 1 s) {:.4e} {unit}*sqrt(s); bias instability min {:.4e} {unit} at {:.4e} s (IEEE B = min/0.664 = {:.4e}); RRW (+1/2 line at 3 s) {:.4e} {unit}/sqrt(s)",
+            rd.arw_at_1s, rd.bi_min, rd.bi_min_tau_s, rd.bi_ieee, rd.rrw_at_3s
+        );
+    }
+    s
+}
+
+fn num(v: f64) -> Value {
+    if v.is_finite() {
+        json!(v)
+    } else {
+        Value::Null
+    }
+}
+
+fn json_document(log: &Log, results: &[ChannelResult], est: Estimator, grid: &str) -> Value {
+    let mut channels = Map::new();
+    for r in results {
+        let col = |f: &dyn Fn(&AllanPoint) -> f64| -> Value {
+            Value::Array(r.points.iter().map(|p| num(f(p))).collect())
+        };
+        let mut fit = Map::new();
+        let mut sigma = Map::new();
+        for (name, t) in TERM_NAMES.iter().zip(r.fit.terms()) {
+            fit.insert(name.to_string(), t.map_or(Value::Null, |t| num(t.value)));
+            sigma.insert(name.to_string(), t.map_or(Value::Null, |t| num(t.sigma)));
+        }
+        let rd = &r.fit.readings;
+        channels.insert(
+            r.name.clone(),
+            json!({
+                "unit": r.unit,
+                "tau_s": col(&|p| p.tau_s),
+                "adev": col(&|p| p.dev),
+                "adev_lo": col(&|p| p.lo),
+                "adev_hi": col(&|p| p.hi),
+                "m": r.points.iter().map(|p| p.m).collect::<Vec<_>>(),
+                "n_terms": r.points.iter().map(|p| p.n_terms).collect::<Vec<_>>(),
+                "bins": r.points.iter().map(|p| p.bins).collect::<Vec<_>>(),
+                "alpha": r.points.iter().map(|p| p.alpha).collect::<Vec<_>>(),
+                "edf": col(&|p| p.edf),
+                "fit": fit,
+                "fit_sigma": sigma,
+                "fit_reduced_chi2": num(r.fit.reduced_chi2),
+                "fit_model_error": num(r.fit.model_error),
+                "readings": {
+                    "arw_at_1s": num(rd.arw_at_1s),
+                    "arw_tau_s": num(rd.arw_tau_s),
+                    "bi_min": num(rd.bi_min),
+                    "bi_min_tau_s": num(rd.bi_min_tau_s),
+                    "bi_ieee": num(rd.bi_ieee),
+                    "rrw_at_3s": num(rd.rrw_at_3s),
+                    "rrw_tau_s": num(rd.rrw_tau_s),
+                    "q_at_sqrt3s": num(rd.q_at_sqrt3s),
+                },
+            }),
+        );
+    }
+    json!({
+        "source": log.source,
+        "samples": log.len(),
+        "rate_hz": log.rate_hz,
+        "estimator": est.name(),
+        "grid": grid,
+        "confidence": "one sigma unless --confidence",
+        "channels": channels,
+    })
+}
+
+fn csv(results: &[ChannelResult]) -> String {
+    let mut s = String::from("channel,tau_s,m,n_terms,bins,alpha,edf,adev_lo,adev,adev_hi\n");
+    for r in results {
+        for p in &r.points {
+            let _ = writeln!(
+                s,
+                "{},{:e},{},{},{},{},{:e},{:e},{:e},{:e}",
+                r.name, p.tau_s, p.m, p.n_terms, p.bins, p.alpha, p.edf, p.lo, p.dev, p.hi
+            );
+        }
+    }
+    s
+}
+
+fn plot(r: &ChannelResult, est: Estimator, source: &str) -> LogLogPlot {
+    let x: Vec<f64> = r.points.iter().map(|p| p.tau_s).collect();
+    let mut p = LogLogPlot {
+        title: format!("{} {} of {}", r.name, est.name(), source),
+        x_label: "tau (s)".into(),
+        y_label: format!("{} ({})", est.name(), r.unit),
+        series: vec![Series::new(
+            est.name(),
+            x.clone(),
+            r.points.iter().map(|p| p.dev).collect(),
+            PALETTE[0],
+        )],
+        bands: vec![Band {
+            name: "confidence interval".into(),
+            x: x.clone(),
+            lo: r.points.iter().map(|p| p.lo).collect(),
+            hi: r.points.iter().map(|p| p.hi).collect(),
+            color: PALETTE[0].into(),
+        }],
+    };
+    let fine: Vec<f64> = if x.is_empty() {
+        Vec::new()
+    } else {
+        let (a, b) = (x[0].log10(), x[x.len() - 1].log10());
+        (0..=100)
+            .map(|i| 10f64.powf(a + (b - a) * i as f64 / 100.0))
+            .collect()
+    };
+    p.series.push(Series::dashed(
+        "IEEE 952 fit",
+        fine.clone(),
+        fine.iter().map(|&t| r.fit.model_dev(t)).collect(),
+        "#000000",
+    ));
+    let names = [
+        "Q (tau^-1)",
+        "N (tau^-1/2)",
+        "B (flat)",
+        "K (tau^+1/2)",
+        "R (tau^+1)",
+    ];
+    for (j, name) in names.iter().enumerate() {
+        if r.fit.terms()[j].is_some() {
+            p.series.push(Series::dashed(
+                name,
+                fine.clone(),
+                fine.iter()
+                    .map(|&t| r.fit.term_dev(j, t).unwrap_or(f64::NAN))
+                    .collect(),
+                PALETTE[(j + 1) % PALETTE.len()],
+            ));
+        }
+    }
+    p
+}
+
+fn sanitize(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '_' || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
 }

@@ -9,12 +9,18 @@ mod cmd_generate;
 mod cmd_merge;
 mod cmd_simulate;
 mod cmd_spec;
+mod logio;
 mod output;
+mod plot;
 
 use clap::{Parser, Subcommand};
 
 #[derive(Parser)]
-#[command(name = "imudrift", version, about = "Monte Carlo laboratory for inertial-sensor drift")]
+#[command(
+    name = "imudrift",
+    version,
+    about = "Monte Carlo laboratory for inertial-sensor drift"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

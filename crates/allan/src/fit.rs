@@ -5,9 +5,10 @@
 //! The five coefficients Q^2, N^2, B^2, K^2, R^2 enter linearly and are non-negative, so the
 //! fit is a weighted non-negative least-squares problem. It is solved exactly by trying every
 //! subset of active terms (2^5 = 32 small systems; the NNLS optimum is the best feasible
-//! subset solution). Weights are 1/Var(avar_i) with Var(avar) = 2 avar^2/edf (chi-squared with
-//! edf degrees of freedom, SP 1065 §5.2), evaluated at the model (iteratively reweighted, which
-//! avoids the downward bias of weighting by the noisy measured values).
+//! subset solution), with weights 1/Var(avar_i), Var(avar) = 2 avar^2/edf (chi-squared with
+//! edf degrees of freedom, SP 1065 §5.2). That solution starts a Gauss–Newton refinement of the
+//! same weighted least squares in ln(avar) (Var(ln avar) = 2/edf), keeping the coefficients
+//! non-negative by dropping a term that reaches zero.
 //!
 //! Uncertainties: the covariance (A^T W A)^-1 of the active coefficients, scaled by the reduced
 //! chi-square when it exceeds 1 and by a factor for the correlation of neighbouring taus
@@ -66,8 +67,12 @@ pub struct Fit {
     pub b: Option<Term>,
     pub k: Option<Term>,
     pub r: Option<Term>,
-    /// Weighted residual sum of squares divided by the degrees of freedom.
+    /// Weighted residual sum of squares (in ln avar) divided by the degrees of freedom,
+    /// before any model-error variance was added.
     pub reduced_chi2: f64,
+    /// Relative model-error standard deviation added to every point's ln(avar) so that the
+    /// reduced chi-square is 1 (0 when the model fits within the statistical scatter).
+    pub model_error: f64,
     pub readings: Readings,
 }
 
@@ -141,33 +146,66 @@ pub fn fit_ieee952_terms(points: &[AllanPoint], allowed: FitTerms) -> Fit {
         .collect();
     let g: Vec<[f64; 5]> = pts.iter().map(|p| basis(p.tau_s)).collect();
 
-    // Iteratively reweighted: start from the measured variances, then use the model.
-    let mut expected = y.clone();
+    // Start: linear NNLS with weights from the measured variances; then the maximum-likelihood
+    // refinement in ln(avar), whose variance is 2/edf whatever the level (weighting by the model
+    // in the linear domain would make over-shooting cheap). When the model cannot describe the
+    // curve (reduced chi-square > 1: filters, correlated noise the five terms lack), a relative
+    // model-error variance f^2 is added to every point, chosen so the reduced chi-square is 1
+    // (the "extra variance" of a random-effects fit); otherwise the few points with huge EDF
+    // would dictate the fit.
+    let base: Vec<f64> = edf.iter().map(|d| 2.0 / d).collect();
+    let mut var_ln = base.clone();
     let mut best = Solution::empty();
+    let mut model_error = 0.0f64;
+    let mut raw_reduced_chi2 = f64::NAN;
     for _ in 0..4 {
-        let w: Vec<f64> = expected
+        let w: Vec<f64> = y
             .iter()
-            .zip(&edf)
-            .map(|(e, d)| d / (2.0 * e * e))
+            .zip(&var_ln)
+            .map(|(e, v)| 1.0 / (v * e * e))
             .collect();
-        best = nnls_subsets(&g, &y, &w, allowed.0);
-        expected = g
+        let start = nnls_subsets(&g, &y, &w, allowed.0);
+        best = refine_log(&g, &y, &var_ln, start);
+        let n_active = best.active.iter().filter(|&&a| a).count();
+        let dof = pts.len().saturating_sub(n_active).max(1) as f64;
+        let r2: Vec<f64> = g
             .iter()
             .zip(&y)
             .map(|(gi, yi)| {
                 let m: f64 = gi.iter().zip(&best.coef).map(|(a, c)| a * c).sum();
-                if m > 0.0 {
-                    m
-                } else {
-                    *yi
-                }
+                (yi.ln() - m.max(1e-300).ln()).powi(2)
             })
             .collect();
+        let chi2_at = |f2: f64| r2.iter().zip(&base).map(|(r, v)| r / (v + f2)).sum::<f64>() / dof;
+        if raw_reduced_chi2.is_nan() {
+            raw_reduced_chi2 = chi2_at(0.0);
+        }
+        if chi2_at(0.0) <= 1.0 {
+            break;
+        }
+        let (mut lo, mut hi) = (0.0f64, 1.0f64);
+        while chi2_at(hi) > 1.0 && hi < 1e6 {
+            hi *= 4.0;
+        }
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if chi2_at(mid) > 1.0 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let f2 = 0.5 * (lo + hi);
+        if (f2.sqrt() - model_error).abs() <= 1e-3 * f2.sqrt() {
+            break;
+        }
+        model_error = f2.sqrt();
+        var_ln = base.iter().map(|v| v + f2).collect();
     }
     let n_active = best.active.iter().filter(|&&a| a).count();
     let dof = pts.len().saturating_sub(n_active).max(1);
-    let reduced_chi2 = best.rss / dof as f64;
-    let inflate = reduced_chi2.max(1.0) * correlation_inflation(&pts);
+    let inflate = (best.rss / dof as f64).max(1.0) * correlation_inflation(&pts);
+    let reduced_chi2 = raw_reduced_chi2;
     let mut terms: [Option<Term>; 5] = [None; 5];
     for (j, t) in terms.iter_mut().enumerate() {
         if best.active[j] && best.coef[j] > 0.0 {
@@ -187,6 +225,7 @@ pub fn fit_ieee952_terms(points: &[AllanPoint], allowed: FitTerms) -> Fit {
         k: terms[3],
         r: terms[4],
         reduced_chi2,
+        model_error,
         readings: readings(points),
     }
 }
@@ -223,6 +262,114 @@ impl Solution {
             active: [false; 5],
             rss: f64::INFINITY,
         }
+    }
+}
+
+/// Gauss–Newton on sum_i (ln y_i - ln m_i(c))^2 / var_ln_i over the active coefficients, with
+/// step halving; a coefficient driven to zero leaves the active set.
+fn refine_log(g: &[[f64; 5]], y: &[f64], var_ln: &[f64], start: Solution) -> Solution {
+    let w: Vec<f64> = var_ln.iter().map(|v| 1.0 / v).collect();
+    let model = |c: &[f64; 5], gi: &[f64; 5]| -> f64 { gi.iter().zip(c).map(|(a, b)| a * b).sum() };
+    let cost = |c: &[f64; 5]| -> f64 {
+        g.iter()
+            .zip(y)
+            .zip(&w)
+            .map(|((gi, yi), wi)| {
+                let m = model(c, gi);
+                if m > 0.0 {
+                    wi * (yi.ln() - m.ln()).powi(2)
+                } else {
+                    f64::INFINITY
+                }
+            })
+            .sum()
+    };
+    let mut coef = start.coef;
+    let mut active = start.active;
+    let mut current = cost(&coef);
+    if !current.is_finite() {
+        return start;
+    }
+    let mut cov = [[0.0f64; 5]; 5];
+    for _ in 0..100 {
+        let idx: Vec<usize> = (0..5).filter(|&j| active[j]).collect();
+        let k = idx.len();
+        if k == 0 {
+            break;
+        }
+        // Normal equations in scaled variables u_j = c_j / coef_j (relative steps).
+        let mut jtj = vec![vec![0.0f64; k]; k];
+        let mut jtr = vec![0.0f64; k];
+        for ((gi, yi), wi) in g.iter().zip(y).zip(&w) {
+            let m = model(&coef, gi);
+            let r = yi.ln() - m.ln();
+            let jac: Vec<f64> = idx.iter().map(|&j| gi[j] * coef[j] / m).collect();
+            for a in 0..k {
+                jtr[a] += wi * jac[a] * r;
+                for b in 0..k {
+                    jtj[a][b] += wi * jac[a] * jac[b];
+                }
+            }
+        }
+        let Some(inv) = invert(&jtj) else { break };
+        for a in 0..k {
+            for b in 0..k {
+                cov[idx[a]][idx[b]] = inv[a][b] * coef[idx[a]] * coef[idx[b]];
+            }
+        }
+        let du: Vec<f64> = (0..k)
+            .map(|a| (0..k).map(|b| inv[a][b] * jtr[b]).sum())
+            .collect();
+        let mut step = 1.0;
+        let mut accepted = false;
+        while step > 1e-6 {
+            let mut trial = coef;
+            for (a, &j) in idx.iter().enumerate() {
+                trial[j] = coef[j] * (1.0 + step * du[a]);
+            }
+            if let Some(a) = (0..k).find(|&a| trial[idx[a]] <= 0.0) {
+                // Would cross zero: try the model without that term.
+                let mut dropped = coef;
+                dropped[idx[a]] = 0.0;
+                let cd = cost(&dropped);
+                if cd <= current * (1.0 + 1e-12) {
+                    coef = dropped;
+                    active[idx[a]] = false;
+                    current = cd;
+                    accepted = true;
+                    break;
+                }
+                step *= 0.5;
+                continue;
+            }
+            let ct = cost(&trial);
+            if ct <= current {
+                let converged = current - ct <= 1e-12 * current.max(1e-300);
+                coef = trial;
+                current = ct;
+                accepted = !converged;
+                break;
+            }
+            step *= 0.5;
+        }
+        if !accepted {
+            break;
+        }
+    }
+    for j in 0..5 {
+        if !active[j] {
+            coef[j] = 0.0;
+            cov[j] = [0.0; 5];
+            for row in cov.iter_mut() {
+                row[j] = 0.0;
+            }
+        }
+    }
+    Solution {
+        coef,
+        cov,
+        active,
+        rss: current,
     }
 }
 

@@ -308,19 +308,33 @@ impl<'a> Series<'a> {
             return;
         }
         let d = est.difference_order();
-        let mut last_alpha: Option<i32> = None;
-        // Noise identification per tau; where the record is too short for the lag-1 ACF method
-        // (fewer than 30 averaged points, Riley 2004) the nearest shorter tau's alpha is reused.
-        let mut alphas = Vec::with_capacity(points.len());
-        for p in points.iter() {
-            let alpha = opts.alpha.or_else(|| self.noise_id(p.m, d)).or(last_alpha);
-            last_alpha = alpha.or(last_alpha);
-            alphas.push(alpha);
+        let alphas: Vec<Option<i32>> = points
+            .iter()
+            .map(|p| opts.alpha.or_else(|| self.noise_id(p.m, d)))
+            .collect();
+        self.attach_intervals_with_alphas(est, points, &alphas, opts);
+    }
+
+    /// As [`Series::attach_intervals`] with the noise exponents already identified (callers may
+    /// run [`Series::noise_id`] in parallel). Where the record is too short for the lag-1 ACF
+    /// method (fewer than 30 averaged points, Riley 2004) `None` is given, and the nearest
+    /// shorter tau's alpha is reused (the first identified one for leading gaps).
+    pub fn attach_intervals_with_alphas(
+        &self,
+        est: Estimator,
+        points: &mut [AllanPoint],
+        alphas: &[Option<i32>],
+        opts: &Options,
+    ) {
+        if opts.edf == EdfMethod::None {
+            return;
         }
         let first_known = alphas.iter().flatten().next().copied().unwrap_or(0);
         let n_phase = self.phase.len();
+        let mut last = first_known;
         for (p, alpha) in points.iter_mut().zip(alphas) {
-            let alpha = alpha.unwrap_or(first_known);
+            let alpha = alpha.unwrap_or(last);
+            last = alpha;
             p.alpha = alpha;
             if est == Estimator::Total && opts.totvar_bias_correction {
                 p.dev /= edf::totvar_bias(alpha, p.m, n_phase - 1).sqrt();

@@ -1,0 +1,495 @@
+#![allow(dead_code)] // shared reader: parts are used by diagnose and simulate
+//! IMU log reader shared by `allan`, `diagnose` and `simulate`: CSV or gzip-compressed CSV,
+//! `#` comment lines, a header row, columns found by name, units mapped to SI.
+//!
+//! Canonical columns (DESIGN.md): `t` (s), `gx gy gz` (rad/s), `ax ay az` (m/s^2), `temp` (degC).
+//! `--col gx=gyro_x_dps` maps a file column to a canonical name; `--gyro-unit deg/s` and
+//! `--accel-unit g` convert; `--rate HZ` gives the sample rate when there is no time column.
+//! Other numeric columns are kept under their own names, unconverted.
+//! Errors name the file, the line and the column, and say what was expected.
+
+use anyhow::{anyhow, bail, Context, Result};
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+use std::io::Read;
+use std::path::Path;
+
+/// Standard gravity for `g` units (m/s^2), the CGPM 1901 conventional value.
+pub const STANDARD_GRAVITY_MPS2: f64 = 9.806_65;
+
+/// Canonical gyro channel names.
+pub const GYRO_CHANNELS: [&str; 3] = ["gx", "gy", "gz"];
+/// Canonical accelerometer channel names.
+pub const ACCEL_CHANNELS: [&str; 3] = ["ax", "ay", "az"];
+
+/// A log in SI units.
+#[derive(Clone, Debug)]
+pub struct Log {
+    /// Where it came from (file name), for messages.
+    pub source: String,
+    /// Sample rate, Hz.
+    pub rate_hz: f64,
+    /// Time column, s (if the file had one).
+    pub t_s: Option<Vec<f64>>,
+    /// Channels by name (canonical where mapped), SI units for gyro and accel channels.
+    pub channels: BTreeMap<String, Vec<f64>>,
+    /// Channel names in file order (without `t`).
+    pub order: Vec<String>,
+}
+
+impl Log {
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.channels.values().next().map_or(0, Vec::len)
+    }
+
+    /// Sample interval, s.
+    pub fn dt_s(&self) -> f64 {
+        1.0 / self.rate_hz
+    }
+
+    /// SI unit of a channel, for tables and plots.
+    pub fn unit_of(name: &str) -> &'static str {
+        if GYRO_CHANNELS.contains(&name) {
+            "rad/s"
+        } else if ACCEL_CHANNELS.contains(&name) {
+            "m/s^2"
+        } else if name == "temp" {
+            "degC"
+        } else {
+            "1"
+        }
+    }
+}
+
+/// Gyro units accepted on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, clap::ValueEnum)]
+pub enum GyroUnit {
+    #[value(name = "rad/s")]
+    RadPerS,
+    #[value(name = "deg/s")]
+    DegPerS,
+    #[value(name = "deg/h")]
+    DegPerH,
+}
+
+impl GyroUnit {
+    fn to_si(self) -> f64 {
+        match self {
+            GyroUnit::RadPerS => 1.0,
+            GyroUnit::DegPerS => std::f64::consts::PI / 180.0,
+            GyroUnit::DegPerH => std::f64::consts::PI / 180.0 / 3600.0,
+        }
+    }
+}
+
+/// Accelerometer units accepted on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, clap::ValueEnum)]
+pub enum AccelUnit {
+    #[value(name = "m/s^2")]
+    MPerS2,
+    #[value(name = "g")]
+    G,
+    #[value(name = "mg")]
+    MilliG,
+}
+
+impl AccelUnit {
+    fn to_si(self) -> f64 {
+        match self {
+            AccelUnit::MPerS2 => 1.0,
+            AccelUnit::G => STANDARD_GRAVITY_MPS2,
+            AccelUnit::MilliG => STANDARD_GRAVITY_MPS2 * 1e-3,
+        }
+    }
+}
+
+/// Command-line options of the log reader (flatten into a command's Args).
+#[derive(clap::Args, Clone, Debug)]
+pub struct LogArgs {
+    /// Sample rate in Hz (required when the log has no `t` column; overrides it otherwise)
+    #[arg(long, value_name = "HZ")]
+    pub rate: Option<f64>,
+    /// Unit of the gyro columns
+    #[arg(long, value_enum, default_value = "rad/s", value_name = "UNIT")]
+    pub gyro_unit: GyroUnit,
+    /// Unit of the accelerometer columns
+    #[arg(long, value_enum, default_value = "m/s^2", value_name = "UNIT")]
+    pub accel_unit: AccelUnit,
+    /// Map a file column to a canonical name, e.g. `--col gx=gyro_x_dps` (repeat or comma-separate)
+    #[arg(long = "col", value_name = "NAME=COLUMN", value_delimiter = ',')]
+    pub columns: Vec<String>,
+}
+
+impl LogArgs {
+    /// Validated reader options.
+    pub fn options(&self) -> Result<ReadOptions> {
+        let mut map = Vec::new();
+        for c in &self.columns {
+            let (name, col) = c
+                .split_once('=')
+                .ok_or_else(|| anyhow!("--col {c:?}: expected NAME=COLUMN, e.g. gx=gyro_x_dps"))?;
+            let name = name.trim();
+            if !["t", "gx", "gy", "gz", "ax", "ay", "az", "temp"].contains(&name) {
+                bail!("--col {c:?}: {name:?} is not one of t, gx, gy, gz, ax, ay, az, temp");
+            }
+            map.push((name.to_string(), col.trim().to_string()));
+        }
+        if let Some(r) = self.rate {
+            if !(r.is_finite() && r > 0.0) {
+                bail!("--rate {r}: expected a positive sample rate in Hz");
+            }
+        }
+        Ok(ReadOptions {
+            rate_hz: self.rate,
+            gyro_unit: self.gyro_unit,
+            accel_unit: self.accel_unit,
+            columns: map,
+        })
+    }
+}
+
+/// Reader options.
+#[derive(Clone, Debug)]
+pub struct ReadOptions {
+    pub rate_hz: Option<f64>,
+    pub gyro_unit: GyroUnit,
+    pub accel_unit: AccelUnit,
+    /// (canonical name, file column) pairs.
+    pub columns: Vec<(String, String)>,
+}
+
+impl Default for ReadOptions {
+    fn default() -> Self {
+        ReadOptions {
+            rate_hz: None,
+            gyro_unit: GyroUnit::RadPerS,
+            accel_unit: AccelUnit::MPerS2,
+            columns: Vec::new(),
+        }
+    }
+}
+
+/// Read a CSV or gzip-compressed CSV log file.
+pub fn read_log(path: &Path, opts: &ReadOptions) -> Result<Log> {
+    let raw = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let bytes = if raw.starts_with(&[0x1f, 0x8b]) {
+        let mut out = Vec::with_capacity(raw.len() * 4);
+        flate2::read::MultiGzDecoder::new(&raw[..])
+            .read_to_end(&mut out)
+            .with_context(|| format!("{}: not a valid gzip file", path.display()))?;
+        out
+    } else {
+        raw
+    };
+    parse_log(&bytes, &path.display().to_string(), opts)
+}
+
+/// Parse log text (already decompressed).
+pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> {
+    // Header: the first line that is neither blank nor a comment.
+    let mut pos = 0;
+    let mut line_no = 0usize;
+    let header = loop {
+        if pos >= bytes.len() {
+            bail!("{source}: no header line (expected a CSV header such as `t,gx,gy,gz,ax,ay,az`)");
+        }
+        let end = memchr(b'\n', &bytes[pos..]).map_or(bytes.len(), |i| pos + i);
+        line_no += 1;
+        let line = trim_ascii(&bytes[pos..end]);
+        pos = (end + 1).min(bytes.len());
+        if !line.is_empty() && line[0] != b'#' {
+            break std::str::from_utf8(line)
+                .with_context(|| format!("{source}:{line_no}: header is not UTF-8"))?;
+        }
+    };
+    let header_line = line_no;
+    let names: Vec<String> = header.split(',').map(|s| s.trim().to_string()).collect();
+    // Map file column names to channel names.
+    let mut channel_names = names.clone();
+    for (canon, col) in &opts.columns {
+        let idx = names.iter().position(|n| n == col).ok_or_else(|| {
+            anyhow!("{source}:{header_line}: --col {canon}={col}: no column {col:?} in the header (columns: {})", names.join(", "))
+        })?;
+        channel_names[idx] = canon.clone();
+    }
+    for (i, n) in channel_names.iter().enumerate() {
+        if n.is_empty() {
+            bail!("{source}:{header_line}: column {} has an empty name", i + 1);
+        }
+        if channel_names[..i].contains(n) {
+            bail!("{source}:{header_line}: column name {n:?} appears twice");
+        }
+    }
+    let columns = parse_body(bytes, pos, header_line, names.len(), source, &names)?;
+    let n_rows = columns.first().map_or(0, Vec::len);
+    if n_rows < 2 {
+        bail!("{source}: {n_rows} data rows; at least 2 are needed");
+    }
+    let mut channels = BTreeMap::new();
+    let mut order = Vec::new();
+    let mut t_s = None;
+    for (name, mut data) in channel_names.into_iter().zip(columns) {
+        if name == "t" {
+            t_s = Some(data);
+            continue;
+        }
+        let scale = if GYRO_CHANNELS.contains(&name.as_str()) {
+            opts.gyro_unit.to_si()
+        } else if ACCEL_CHANNELS.contains(&name.as_str()) {
+            opts.accel_unit.to_si()
+        } else {
+            1.0
+        };
+        if scale != 1.0 {
+            data.iter_mut().for_each(|v| *v *= scale);
+        }
+        order.push(name.clone());
+        channels.insert(name, data);
+    }
+    if channels.is_empty() {
+        bail!("{source}:{header_line}: no data columns besides `t`");
+    }
+    let rate_hz = match (opts.rate_hz, &t_s) {
+        (Some(r), _) => r,
+        (None, Some(t)) => {
+            for (k, w) in t.windows(2).enumerate() {
+                if w[1] <= w[0] || !w[1].is_finite() {
+                    let line = line_of_row(bytes, pos, header_line, k + 1);
+                    bail!(
+                        "{source}:{line}: time t = {} does not increase (previous {}); expected strictly increasing times in s",
+                        w[1], w[0]
+                    );
+                }
+            }
+            (n_rows - 1) as f64 / (t[n_rows - 1] - t[0])
+        }
+        (None, None) => bail!(
+            "{source}: no `t` column: give the sample rate with --rate HZ (or map a time column with --col t=NAME)"
+        ),
+    };
+    Ok(Log {
+        source: source.to_string(),
+        rate_hz,
+        t_s,
+        channels,
+        order,
+    })
+}
+
+/// Parse the data rows from `start` in parallel chunks; each chunk ends at a newline.
+fn parse_body(
+    bytes: &[u8],
+    start: usize,
+    header_line: usize,
+    n_cols: usize,
+    source: &str,
+    names: &[String],
+) -> Result<Vec<Vec<f64>>> {
+    let body = &bytes[start.min(bytes.len())..];
+    let n_chunks = (rayon::current_num_threads() * 4).clamp(1, 64);
+    let target = body.len() / n_chunks + 1;
+    let mut bounds = vec![0usize];
+    while *bounds.last().unwrap() < body.len() {
+        let s = *bounds.last().unwrap();
+        let e = (s + target).min(body.len());
+        let e = if e == body.len() {
+            e
+        } else {
+            memchr(b'\n', &body[e..]).map_or(body.len(), |i| e + i + 1)
+        };
+        bounds.push(e);
+    }
+    let results: Vec<(usize, ChunkColumns)> = bounds
+        .par_windows(2)
+        .map(|w| parse_chunk(&body[w[0]..w[1]], n_cols, names))
+        .collect();
+    let mut line_offset = header_line;
+    let mut columns: Vec<Vec<f64>> = vec![Vec::new(); n_cols];
+    let total: usize = results
+        .iter()
+        .map(|(_, r)| r.as_ref().map_or(0, |c| c[0].len()))
+        .sum();
+    columns.iter_mut().for_each(|c| c.reserve_exact(total));
+    for (lines, res) in results {
+        match res {
+            Ok(cols) => {
+                for (dst, src) in columns.iter_mut().zip(cols) {
+                    dst.extend_from_slice(&src);
+                }
+            }
+            Err((local, msg)) => bail!("{source}:{}: {msg}", line_offset + local),
+        }
+        line_offset += lines;
+    }
+    Ok(columns)
+}
+
+/// Columns of one chunk, or (1-based line within the chunk, message).
+type ChunkColumns = std::result::Result<Vec<Vec<f64>>, (usize, String)>;
+
+/// Parse one chunk: (number of lines, columns or error).
+fn parse_chunk(chunk: &[u8], n_cols: usize, names: &[String]) -> (usize, ChunkColumns) {
+    let mut cols: Vec<Vec<f64>> = vec![Vec::with_capacity(chunk.len() / (8 * n_cols) + 1); n_cols];
+    let mut lines = 0usize;
+    let mut err = None;
+    for raw in chunk.split(|&b| b == b'\n') {
+        lines += 1;
+        if err.is_some() {
+            continue;
+        }
+        let line = trim_ascii(raw);
+        if line.is_empty() || line[0] == b'#' {
+            continue;
+        }
+        let mut k = 0;
+        for field in line.split(|&b| b == b',') {
+            if k >= n_cols {
+                k += 1;
+                continue;
+            }
+            match parse_f64(trim_ascii(field)) {
+                Some(v) => cols[k].push(v),
+                None => {
+                    err = Some((
+                        lines,
+                        format!(
+                            "column {:?}: cannot read {:?} as a number",
+                            names[k],
+                            String::from_utf8_lossy(trim_ascii(field))
+                        ),
+                    ));
+                    break;
+                }
+            }
+            k += 1;
+        }
+        if err.is_none() && k != n_cols {
+            err = Some((
+                lines,
+                format!("{k} fields, expected {n_cols} (as in the header)"),
+            ));
+        }
+    }
+    // `split` yields a final empty piece after a trailing newline: not a line of its own.
+    if chunk.last() == Some(&b'\n') {
+        lines -= 1;
+    }
+    match err {
+        Some(e) => (lines, Err(e)),
+        None => (lines, Ok(cols)),
+    }
+}
+
+fn parse_f64(field: &[u8]) -> Option<f64> {
+    // Rust's float parser is correctly rounded (Eisel-Lemire with a slow-path fallback).
+    let s = std::str::from_utf8(field).ok()?;
+    let v: f64 = s.parse().ok()?;
+    v.is_finite().then_some(v)
+}
+
+/// The 1-based file line of data row `row` (0-based), for error messages (slow path).
+fn line_of_row(bytes: &[u8], start: usize, header_line: usize, row: usize) -> usize {
+    let mut seen = 0usize;
+    for (i, raw) in bytes[start..].split(|&b| b == b'\n').enumerate() {
+        let line = trim_ascii(raw);
+        if line.is_empty() || line[0] == b'#' {
+            continue;
+        }
+        if seen == row {
+            return header_line + i + 1;
+        }
+        seen += 1;
+    }
+    header_line
+}
+
+fn trim_ascii(s: &[u8]) -> &[u8] {
+    s.trim_ascii()
+}
+
+fn memchr(needle: u8, hay: &[u8]) -> Option<usize> {
+    hay.iter().position(|&b| b == needle)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn opts() -> ReadOptions {
+        ReadOptions::default()
+    }
+
+    #[test]
+    fn reads_comments_units_and_mapping() {
+        let text = b"# a comment\n# another\ngyro_x_dps,acc_z_g,other\n1.0,-1.0,5\n# mid comment\n2.0,-0.5,6\n\n3.0,0,7\n";
+        let o = ReadOptions {
+            rate_hz: Some(100.0),
+            gyro_unit: GyroUnit::DegPerS,
+            accel_unit: AccelUnit::G,
+            columns: vec![
+                ("gx".into(), "gyro_x_dps".into()),
+                ("az".into(), "acc_z_g".into()),
+            ],
+        };
+        let log = parse_log(text, "x.csv", &o).unwrap();
+        assert_eq!(log.len(), 3);
+        assert_eq!(log.order, vec!["gx", "az", "other"]);
+        assert!((log.channels["gx"][1] - 2.0f64.to_radians()).abs() < 1e-15);
+        assert!((log.channels["az"][0] + STANDARD_GRAVITY_MPS2).abs() < 1e-12);
+        assert_eq!(log.channels["other"], vec![5.0, 6.0, 7.0]);
+        assert_eq!(log.rate_hz, 100.0);
+    }
+
+    #[test]
+    fn rate_from_time_column() {
+        let log = parse_log(b"t,gx\n0.0,1\n0.01,2\n0.02,3\n", "x", &opts()).unwrap();
+        assert!((log.rate_hz - 100.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn errors_name_file_line_and_column() {
+        let e = parse_log(b"# c\nt,gx\n0,1\n0.01,abc\n", "f.csv", &opts()).unwrap_err();
+        let msg = format!("{e:#}");
+        assert!(
+            msg.contains("f.csv:4") && msg.contains("\"gx\"") && msg.contains("abc"),
+            "{msg}"
+        );
+        let e = parse_log(b"t,gx\n0,1\n0.01\n", "f.csv", &opts()).unwrap_err();
+        assert!(
+            format!("{e:#}").contains("f.csv:3: 1 fields, expected 2"),
+            "{e:#}"
+        );
+        let e = parse_log(b"t,gx\n0,1\n0,2\n", "f.csv", &opts()).unwrap_err();
+        assert!(format!("{e:#}").contains("f.csv:3: time"), "{e:#}");
+        let e = parse_log(b"gx\n1\n2\n", "f.csv", &opts()).unwrap_err();
+        assert!(format!("{e:#}").contains("--rate"), "{e:#}");
+    }
+
+    #[test]
+    fn error_line_numbers_across_parallel_chunks() {
+        // Many rows so the body is split into several chunks; the bad row is near the end.
+        let mut s = String::from("# header comment\ngx\n");
+        for i in 0..50_000 {
+            if i == 43_210 {
+                s.push_str("oops\n");
+            } else {
+                s.push_str(&format!("{}\n", i as f64 * 0.5));
+            }
+        }
+        let o = ReadOptions {
+            rate_hz: Some(1.0),
+            ..opts()
+        };
+        let e = parse_log(s.as_bytes(), "big.csv", &o).unwrap_err();
+        // line 1 comment, line 2 header, row i on line i + 3
+        assert!(
+            format!("{e:#}").contains(&format!("big.csv:{}:", 43_210 + 3)),
+            "{e:#}"
+        );
+        let good = s.replace("oops", "1.0");
+        let log = parse_log(good.as_bytes(), "big.csv", &o).unwrap();
+        assert_eq!(log.len(), 50_000);
+        assert_eq!(log.channels["gx"][49_999], 49_999.0 * 0.5);
+    }
+}

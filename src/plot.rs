@@ -1,0 +1,366 @@
+//! A small dependency-free SVG writer for log-log plots: line/marker series, shaded bands
+//! (confidence intervals, Monte Carlo envelopes) and a legend. Used by `allan`, `diagnose`
+//! and `simulate`.
+
+use std::fmt::Write;
+
+/// A line or marker series.
+#[derive(Clone, Debug)]
+pub struct Series {
+    pub name: String,
+    pub x: Vec<f64>,
+    pub y: Vec<f64>,
+    pub color: String,
+    pub dashed: bool,
+    pub markers: bool,
+}
+
+impl Series {
+    /// Solid line with markers.
+    pub fn new(name: &str, x: Vec<f64>, y: Vec<f64>, color: &str) -> Series {
+        Series {
+            name: name.into(),
+            x,
+            y,
+            color: color.into(),
+            dashed: false,
+            markers: true,
+        }
+    }
+
+    /// Dashed line without markers (for model terms).
+    pub fn dashed(name: &str, x: Vec<f64>, y: Vec<f64>, color: &str) -> Series {
+        Series {
+            name: name.into(),
+            x,
+            y,
+            color: color.into(),
+            dashed: true,
+            markers: false,
+        }
+    }
+}
+
+/// A shaded band between `lo` and `hi`.
+#[derive(Clone, Debug)]
+pub struct Band {
+    pub name: String,
+    pub x: Vec<f64>,
+    pub lo: Vec<f64>,
+    pub hi: Vec<f64>,
+    pub color: String,
+}
+
+/// A log-log plot.
+#[derive(Clone, Debug, Default)]
+pub struct LogLogPlot {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    pub series: Vec<Series>,
+    pub bands: Vec<Band>,
+}
+
+/// A palette of distinguishable colours.
+pub const PALETTE: [&str; 8] = [
+    "#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf",
+];
+
+const W: f64 = 820.0;
+const H: f64 = 560.0;
+const LEFT: f64 = 90.0;
+const RIGHT: f64 = 30.0;
+const TOP: f64 = 50.0;
+const BOTTOM: f64 = 70.0;
+
+impl LogLogPlot {
+    /// Render to an SVG document. Non-positive and non-finite values are skipped.
+    pub fn to_svg(&self) -> String {
+        let ok = |v: f64| v.is_finite() && v > 0.0;
+        let mut xs = Vec::new();
+        let mut ys = Vec::new();
+        for s in &self.series {
+            for (&x, &y) in s.x.iter().zip(&s.y) {
+                if ok(x) && ok(y) {
+                    xs.push(x);
+                    ys.push(y);
+                }
+            }
+        }
+        for b in &self.bands {
+            for ((&x, &lo), &hi) in b.x.iter().zip(&b.lo).zip(&b.hi) {
+                if ok(x) && ok(lo) && ok(hi) {
+                    xs.extend([x, x]);
+                    ys.extend([lo, hi]);
+                }
+            }
+        }
+        let range = |v: &[f64]| -> (f64, f64) {
+            let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            if !lo.is_finite() {
+                return (0.0, 1.0);
+            }
+            let (l, h) = (lo.log10().floor(), hi.log10().ceil());
+            if h > l {
+                (l, h)
+            } else {
+                (l, l + 1.0)
+            }
+        };
+        let (x0, x1) = range(&xs);
+        let (y0, y1) = range(&ys);
+        let pw = W - LEFT - RIGHT;
+        let ph = H - TOP - BOTTOM;
+        let px = |x: f64| LEFT + (x.log10() - x0) / (x1 - x0) * pw;
+        let py = |y: f64| TOP + ph - (y.log10() - y0) / (y1 - y0) * ph;
+
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            r#"<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" viewBox="0 0 {W} {H}" font-family="sans-serif" font-size="12">"#
+        );
+        let _ = writeln!(s, r#"<rect width="{W}" height="{H}" fill="white"/>"#);
+        let _ = writeln!(
+            s,
+            r#"<text x="{}" y="28" text-anchor="middle" font-size="16">{}</text>"#,
+            W / 2.0,
+            esc(&self.title)
+        );
+        // Grid: decades (solid) and 2..9 (light).
+        for d in (x0 as i64)..=(x1 as i64) {
+            for k in 1..10 {
+                let v = 10f64.powi(d as i32) * k as f64;
+                if v.log10() > x1 + 1e-9 {
+                    break;
+                }
+                let x = px(v);
+                let (c, w) = if k == 1 {
+                    ("#bbbbbb", 1.0)
+                } else {
+                    ("#eeeeee", 0.7)
+                };
+                let _ = writeln!(
+                    s,
+                    r#"<line x1="{x:.2}" y1="{TOP}" x2="{x:.2}" y2="{:.2}" stroke="{c}" stroke-width="{w}"/>"#,
+                    TOP + ph
+                );
+                if k == 1 {
+                    let _ = writeln!(
+                        s,
+                        r#"<text x="{x:.2}" y="{:.2}" text-anchor="middle">1e{d}</text>"#,
+                        TOP + ph + 18.0
+                    );
+                }
+            }
+        }
+        for d in (y0 as i64)..=(y1 as i64) {
+            for k in 1..10 {
+                let v = 10f64.powi(d as i32) * k as f64;
+                if v.log10() > y1 + 1e-9 {
+                    break;
+                }
+                let y = py(v);
+                let (c, w) = if k == 1 {
+                    ("#bbbbbb", 1.0)
+                } else {
+                    ("#eeeeee", 0.7)
+                };
+                let _ = writeln!(
+                    s,
+                    r#"<line x1="{LEFT}" y1="{y:.2}" x2="{:.2}" y2="{y:.2}" stroke="{c}" stroke-width="{w}"/>"#,
+                    LEFT + pw
+                );
+                if k == 1 {
+                    let _ = writeln!(
+                        s,
+                        r#"<text x="{:.2}" y="{:.2}" text-anchor="end">1e{d}</text>"#,
+                        LEFT - 8.0,
+                        y + 4.0
+                    );
+                }
+            }
+        }
+        let _ = writeln!(
+            s,
+            r#"<rect x="{LEFT}" y="{TOP}" width="{pw}" height="{ph}" fill="none" stroke="black"/>"#
+        );
+        let _ = writeln!(
+            s,
+            r#"<text x="{:.2}" y="{:.2}" text-anchor="middle">{}</text>"#,
+            LEFT + pw / 2.0,
+            H - 20.0,
+            esc(&self.x_label)
+        );
+        let _ = writeln!(
+            s,
+            r#"<text x="20" y="{:.2}" text-anchor="middle" transform="rotate(-90 20 {:.2})">{}</text>"#,
+            TOP + ph / 2.0,
+            TOP + ph / 2.0,
+            esc(&self.y_label)
+        );
+        for b in &self.bands {
+            let pts: Vec<(f64, f64, f64)> =
+                b.x.iter()
+                    .zip(&b.lo)
+                    .zip(&b.hi)
+                    .filter(|((x, lo), hi)| ok(**x) && ok(**lo) && ok(**hi))
+                    .map(|((x, lo), hi)| (*x, *lo, *hi))
+                    .collect();
+            if pts.is_empty() {
+                continue;
+            }
+            let mut d = String::new();
+            for (i, (x, _, hi)) in pts.iter().enumerate() {
+                let _ = write!(
+                    d,
+                    "{}{:.2},{:.2} ",
+                    if i == 0 { "M" } else { "L" },
+                    px(*x),
+                    py(*hi)
+                );
+            }
+            for (x, lo, _) in pts.iter().rev() {
+                let _ = write!(d, "L{:.2},{:.2} ", px(*x), py(*lo));
+            }
+            let _ = writeln!(
+                s,
+                r#"<path d="{d}Z" fill="{}" fill-opacity="0.2" stroke="none"/>"#,
+                b.color
+            );
+        }
+        for ser in &self.series {
+            let pts: Vec<(f64, f64)> = ser
+                .x
+                .iter()
+                .zip(&ser.y)
+                .filter(|(x, y)| ok(**x) && ok(**y))
+                .map(|(x, y)| (px(*x), py(*y)))
+                .collect();
+            if pts.is_empty() {
+                continue;
+            }
+            let mut d = String::new();
+            for (i, (x, y)) in pts.iter().enumerate() {
+                let _ = write!(d, "{}{x:.2},{y:.2} ", if i == 0 { "M" } else { "L" });
+            }
+            let dash = if ser.dashed {
+                r#" stroke-dasharray="6,4""#
+            } else {
+                ""
+            };
+            let _ = writeln!(
+                s,
+                r#"<path d="{d}" fill="none" stroke="{}" stroke-width="1.6"{dash}/>"#,
+                ser.color
+            );
+            if ser.markers {
+                for (x, y) in &pts {
+                    let _ = writeln!(
+                        s,
+                        r#"<circle cx="{x:.2}" cy="{y:.2}" r="2.8" fill="{}"/>"#,
+                        ser.color
+                    );
+                }
+            }
+        }
+        // Legend, top right.
+        let entries = self.bands.len() + self.series.len();
+        if entries > 0 {
+            let lw = 230.0;
+            let lx = LEFT + pw - lw - 8.0;
+            let ly = TOP + 8.0;
+            let _ = writeln!(
+                s,
+                r##"<rect x="{lx:.2}" y="{ly:.2}" width="{lw}" height="{:.2}" fill="white" fill-opacity="0.85" stroke="#999999"/>"##,
+                entries as f64 * 18.0 + 8.0
+            );
+            let mut row = 0.0;
+            for b in &self.bands {
+                let y = ly + 14.0 + row * 18.0;
+                let _ = writeln!(
+                    s,
+                    r#"<rect x="{:.2}" y="{:.2}" width="24" height="10" fill="{}" fill-opacity="0.3"/>"#,
+                    lx + 8.0,
+                    y - 8.0,
+                    b.color
+                );
+                let _ = writeln!(
+                    s,
+                    r#"<text x="{:.2}" y="{:.2}">{}</text>"#,
+                    lx + 40.0,
+                    y + 1.0,
+                    esc(&b.name)
+                );
+                row += 1.0;
+            }
+            for ser in &self.series {
+                let y = ly + 14.0 + row * 18.0;
+                let dash = if ser.dashed {
+                    r#" stroke-dasharray="6,4""#
+                } else {
+                    ""
+                };
+                let _ = writeln!(
+                    s,
+                    r#"<line x1="{:.2}" y1="{:.2}" x2="{:.2}" y2="{:.2}" stroke="{}" stroke-width="2"{dash}/>"#,
+                    lx + 8.0,
+                    y - 3.0,
+                    lx + 32.0,
+                    y - 3.0,
+                    ser.color
+                );
+                let _ = writeln!(
+                    s,
+                    r#"<text x="{:.2}" y="{:.2}">{}</text>"#,
+                    lx + 40.0,
+                    y + 1.0,
+                    esc(&ser.name)
+                );
+                row += 1.0;
+            }
+        }
+        s.push_str("</svg>\n");
+        s
+    }
+}
+
+fn esc(t: &str) -> String {
+    t.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn svg_has_series_band_and_legend() {
+        let p = LogLogPlot {
+            title: "t <1>".into(),
+            x_label: "tau (s)".into(),
+            y_label: "dev".into(),
+            series: vec![Series::new(
+                "oadev",
+                vec![0.1, 1.0, 10.0],
+                vec![1.0, 0.3, 0.1],
+                PALETTE[0],
+            )],
+            bands: vec![Band {
+                name: "1-sigma".into(),
+                x: vec![0.1, 1.0, 10.0],
+                lo: vec![0.9, 0.25, 0.05],
+                hi: vec![1.1, 0.35, 0.2],
+                color: PALETTE[0].into(),
+            }],
+        };
+        let svg = p.to_svg();
+        assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+        assert!(svg.contains("t &lt;1&gt;") && svg.contains("1-sigma") && svg.contains("oadev"));
+        assert_eq!(svg.matches("<circle").count(), 3);
+        assert!(svg.contains(r#"fill-opacity="0.2""#));
+        // x axis spans 1e-1 .. 1e1: tick labels of the decades
+        assert!(svg.contains(">1e-1<") && svg.contains(">1e1<"));
+    }
+}
