@@ -114,19 +114,38 @@ pub fn unit_family_signature(effect: Effect, shape: f64, tau_s: f64, dt_s: f64) 
 /// Shape grid for a family over the measured tau range.
 /// Gauss-Markov: correlation times whose ADEV peak (at 1.8927 T, theory.md §2) lies between a third of
 /// the shortest and three times the longest tau, 8 per decade. Sinusoid: frequencies from 1/(4 tau_max)
-/// to 1/(2 tau_min) (Nyquist of the shortest average), 200 per decade, because the Allan lobes of a
-/// sinusoid at tau >> 1/f0 move with small changes of f0.
-pub fn shape_grid(effect: Effect, tau_min_s: f64, tau_max_s: f64) -> Vec<f64> {
+/// to 1/(4 dt) (at least four samples per period: faster sinusoids alias on an octave grid, where their
+/// Allan lobes are indistinguishable from quantisation; the PSD is the tool for those, Hou 4.64 note),
+/// 200 per decade, because the Allan lobes of a sinusoid at tau >> 1/f0 move with small changes of f0.
+pub fn shape_grid(effect: Effect, tau_min_s: f64, tau_max_s: f64, dt_s: f64) -> Vec<f64> {
     let (lo, hi, per_decade) = match effect {
         Effect::GaussMarkov => {
             let p = cf::GAUSS_MARKOV_ADEV_PEAK_TAU_PER_TC;
             (tau_min_s / (3.0 * p), 3.0 * tau_max_s / p, 8.0)
         }
-        Effect::Sinusoidal => (1.0 / (4.0 * tau_max_s), 0.5 / tau_min_s, 200.0),
+        Effect::Sinusoidal => (
+            1.0 / (4.0 * tau_max_s),
+            0.25 / dt_s.max(tau_min_s / 4.0),
+            200.0,
+        ),
         _ => return Vec::new(),
     };
+    if hi <= lo {
+        return Vec::new();
+    }
     let n = ((hi / lo).log10() * per_decade).ceil().max(1.0) as usize;
     (0..=n)
         .map(|j| lo * (hi / lo).powf(j as f64 / n as f64))
         .collect()
+}
+
+/// Look-elsewhere cost of a shape chosen from `n` grid values, on the chi2 (-2 ln L) scale: the
+/// description length of the choice, 2 ln n (minimum description length, Rissanen 1978). Without it the
+/// best of hundreds of sinusoid frequencies fits noise often enough to name effects on clean logs.
+pub fn shape_search_penalty(n: usize) -> f64 {
+    if n > 1 {
+        2.0 * (n as f64).ln()
+    } else {
+        0.0
+    }
 }

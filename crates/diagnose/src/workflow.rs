@@ -2,7 +2,8 @@
 //! name and fit the missing effect, add it, re-simulate, repeat; then the drift consequence.
 
 use crate::candidates::{
-    free_parameters, shape_grid, unit_family_signature, unit_signature, TermParams, CANDIDATES,
+    free_parameters, shape_grid, shape_search_penalty, unit_family_signature, unit_signature,
+    TermParams, CANDIDATES,
 };
 use crate::drift::{segment_drift, DriftSummary, CHANNELS};
 use crate::fit::{
@@ -103,6 +104,8 @@ pub struct FoundEffect {
     pub cannot_tell_from: Vec<String>,
     /// Round in which it was found (1 = first).
     pub round: usize,
+    /// Later rounds that refitted its level after re-simulation.
+    pub refinements: usize,
 }
 
 /// Why a candidate was weighed: its BIC gain and fitted parameters (every candidate, every round).
@@ -231,7 +234,7 @@ fn trials(
     band: &Band,
     g: &Gap,
     dt_s: f64,
-    temp: Option<(&[f64], f64)>,
+    temp: Option<(&[f64], f64, f64)>,
 ) -> Vec<Trial> {
     let ln_meas: Vec<f64> = measured.adev.iter().map(|a| a.ln()).collect();
     let data = FitData {
@@ -248,58 +251,78 @@ fn trials(
         let current = term_level(model, ch, effect);
         // Signature(s) of this candidate.
         let shaped = matches!(effect, Effect::GaussMarkov | Effect::Sinusoidal);
-        let (fit, params, shape_lo, shape_hi, f): (LinearFit, TermParams, f64, f64, Vec<f64>) =
-            if shaped {
-                // A term the model has keeps its shape (a wrong level); an absent one is searched over shapes.
-                let shapes = match current.and_then(|c| c.shape()) {
-                    Some(s) => vec![s],
-                    None => shape_grid(effect, tau[0], tau[m - 1]),
-                };
-                let sigs: Vec<Vec<f64>> = shapes
-                    .iter()
-                    .map(|&s| {
-                        tau.iter()
-                            .map(|&t| unit_family_signature(effect, s, t, dt_s))
-                            .collect()
-                    })
-                    .collect();
-                let c0 = current.map(|c| c.c()).unwrap_or(0.0);
-                let Some(ff) = fit_family(&data, &shapes, &sigs, &|_| c0) else {
-                    continue;
-                };
-                let j = shapes.iter().position(|&s| s == ff.shape).unwrap_or(0);
-                let p = match effect {
-                    Effect::GaussMarkov => TermParams::GaussMarkov {
-                        sigma: ff.fit.c.sqrt(),
-                        tau_s: ff.shape,
-                    },
-                    _ => TermParams::Sinusoid {
-                        amplitude: ff.fit.c.sqrt(),
-                        frequency_hz: ff.shape,
-                    },
-                };
-                (ff.fit, p, ff.shape_lo, ff.shape_hi, sigs[j].clone())
-            } else if effect == Effect::TemperatureBias {
-                let Some((temp_avar, sign)) = temp else {
-                    continue;
-                };
-                let f: Vec<f64> = temp_avar.to_vec();
-                let fit = fit_linear(&data, &f, 0.0);
-                (fit, TermParams::Level(fit.c.sqrt() * sign), 0.0, 0.0, f)
-            } else {
-                let flicker = flicker_band(model, ch);
-                let f: Vec<f64> = tau
-                    .iter()
-                    .map(|&t| unit_signature(effect, t, dt_s, &flicker))
-                    .collect();
-                let c0 = current.map(|c| c.c()).unwrap_or(0.0);
-                let fit = fit_linear(&data, &f, c0);
-                (fit, TermParams::Level(fit.c.sqrt()), 0.0, 0.0, f)
+        let (fit, params, shape_lo, shape_hi, f, penalty): (
+            LinearFit,
+            TermParams,
+            f64,
+            f64,
+            Vec<f64>,
+            f64,
+        ) = if shaped {
+            // A term the model has keeps its shape (a wrong level); an absent one is searched over shapes.
+            let shapes = match current.and_then(|c| c.shape()) {
+                Some(s) => vec![s],
+                None => shape_grid(effect, tau[0], tau[m - 1], dt_s),
             };
-        let c0 = if effect == Effect::TemperatureBias {
-            0.0
+            let sigs: Vec<Vec<f64>> = shapes
+                .iter()
+                .map(|&s| {
+                    tau.iter()
+                        .map(|&t| unit_family_signature(effect, s, t, dt_s))
+                        .collect()
+                })
+                .collect();
+            let c0 = current.map(|c| c.c()).unwrap_or(0.0);
+            let Some(ff) = fit_family(&data, &shapes, &sigs, &|_| c0) else {
+                continue;
+            };
+            let j = shapes.iter().position(|&s| s == ff.shape).unwrap_or(0);
+            let p = match effect {
+                Effect::GaussMarkov => TermParams::GaussMarkov {
+                    sigma: ff.fit.c.sqrt(),
+                    tau_s: ff.shape,
+                },
+                _ => TermParams::Sinusoid {
+                    amplitude: ff.fit.c.sqrt(),
+                    frequency_hz: ff.shape,
+                },
+            };
+            (
+                ff.fit,
+                p,
+                ff.shape_lo,
+                ff.shape_hi,
+                sigs[j].clone(),
+                shape_search_penalty(shapes.len()),
+            )
+        } else if effect == Effect::TemperatureBias {
+            // The sign comes from the correlation with temperature (the Allan signature is even).
+            let Some((temp_avar, sign, current_k)) = temp else {
+                continue;
+            };
+            let f: Vec<f64> = temp_avar.to_vec();
+            let fit = fit_linear(&data, &f, current_k * current_k);
+            (
+                fit,
+                TermParams::Level(fit.c.sqrt() * sign),
+                0.0,
+                0.0,
+                f,
+                0.0,
+            )
         } else {
-            current.map(|c| c.c()).unwrap_or(0.0)
+            let flicker = flicker_band(model, ch);
+            let f: Vec<f64> = tau
+                .iter()
+                .map(|&t| unit_signature(effect, t, dt_s, &flicker))
+                .collect();
+            let c0 = current.map(|c| c.c()).unwrap_or(0.0);
+            let fit = fit_linear(&data, &f, c0);
+            (fit, TermParams::Level(fit.c.sqrt()), 0.0, 0.0, f, 0.0)
+        };
+        let c0 = match (effect, temp) {
+            (Effect::TemperatureBias, Some((_, _, k))) => k * k,
+            _ => current.map(|c| c.c()).unwrap_or(0.0),
         };
         // 95 % interval widened by the Birge ratio of this fit.
         let scale = birge_scale(fit.chi2, k, m);
@@ -339,7 +362,7 @@ fn trials(
             } else {
                 current
             },
-            bic: bic(fit.chi2, k, m),
+            bic: bic(fit.chi2, k, m) + penalty,
         });
     }
     out
@@ -514,7 +537,8 @@ pub fn diagnose(
                 &band,
                 &g,
                 log.dt_s,
-                temp.as_ref().map(|(v, s)| (v.as_slice(), *s)),
+                temp.as_ref()
+                    .map(|(v, s)| (v.as_slice(), *s, setup.temp_coeff[c])),
             );
             let ln_meas: Vec<f64> = m.curve.adev.iter().map(|a| a.ln()).collect();
             let data = FitData {
@@ -532,10 +556,21 @@ pub fn diagnose(
                     parameters: named_map(t.effect, &t.params),
                 });
             }
-            let Some(best) = ts.iter().min_by(|a, b| a.bic.total_cmp(&b.bic)) else {
+            let Some(mut best) = ts.iter().min_by(|a, b| a.bic.total_cmp(&b.bic)) else {
                 done[c] = true;
                 continue;
             };
+            // Occam: re-levelling an effect already named on this channel is preferred to naming another
+            // one unless the other is better by the ambiguity margin.
+            if let Some(refine) = ts
+                .iter()
+                .filter(|t| effects[c].iter().any(|e| e.effect == t.effect.name()))
+                .min_by(|a, b| a.bic.total_cmp(&b.bic))
+            {
+                if refine.bic - best.bic < settings.ambiguity_delta_bic {
+                    best = refine;
+                }
+            }
             let delta = base_bic - best.bic;
             if delta < settings.min_delta_bic {
                 done[c] = true;
@@ -548,10 +583,14 @@ pub fn diagnose(
                 })
                 .map(|t| t.effect.name().to_string())
                 .collect();
-            let previous = term_level(&sim_model, c, best.effect);
+            let previous = if best.effect == Effect::TemperatureBias {
+                (setup.temp_coeff[c] != 0.0).then_some(TermParams::Level(setup.temp_coeff[c]))
+            } else {
+                term_level(&sim_model, c, best.effect)
+            };
             if best.effect == Effect::TemperatureBias {
                 if let TermParams::Level(k) = best.params {
-                    setup.temp_coeff[c] += k;
+                    setup.temp_coeff[c] = k;
                 }
             } else {
                 set_term(&mut sim_model, c, best.effect, &best.params);
@@ -574,6 +613,7 @@ pub fn diagnose(
                 delta_bic: delta,
                 cannot_tell_from,
                 round,
+                refinements: 0,
             });
             pending.push((c, best.effect, previous, g.rms));
         }
@@ -619,6 +659,7 @@ pub fn diagnose(
                 dirty = true;
             } else {
                 bands[c] = sim.bands[c].clone();
+                merge_refinement(&mut effects[c]);
             }
         }
         last_drift = sim.drift;
@@ -702,8 +743,16 @@ fn restore(
     previous: Option<TermParams>,
 ) {
     if effect == Effect::TemperatureBias {
-        setup.temp_coeff[c] = 0.0;
-        crate::model_terms::clear_term(out_model, c, effect);
+        match previous {
+            Some(TermParams::Level(k)) => {
+                setup.temp_coeff[c] = k;
+                set_term(out_model, c, effect, &TermParams::Level(k));
+            }
+            _ => {
+                setup.temp_coeff[c] = 0.0;
+                crate::model_terms::clear_term(out_model, c, effect);
+            }
+        }
         return;
     }
     for model in [sim_model, out_model] {
@@ -712,6 +761,28 @@ fn restore(
             None => crate::model_terms::clear_term(model, c, effect),
         }
     }
+}
+
+/// A later round that changes the level of an effect already named on the channel refines that finding
+/// rather than naming a second one: the earlier entry takes the new parameters and the new gap after,
+/// and keeps its kind, model parameters and gap before.
+fn merge_refinement(effects: &mut Vec<FoundEffect>) {
+    let Some(last) = effects.last() else { return };
+    let Some(j) = effects[..effects.len() - 1]
+        .iter()
+        .position(|e| e.effect == last.effect)
+    else {
+        return;
+    };
+    let last = effects.pop().expect("non-empty");
+    let first = &mut effects[j];
+    first.parameters = last.parameters;
+    first.parameters_lo = last.parameters_lo;
+    first.parameters_hi = last.parameters_hi;
+    first.gap_after = last.gap_after;
+    first.delta_bic += last.delta_bic;
+    first.cannot_tell_from = last.cannot_tell_from;
+    first.refinements += 1;
 }
 
 fn verdict(g: &Gap, effects: &[FoundEffect]) -> String {

@@ -14,7 +14,7 @@
 use diagnose::candidates::TermParams;
 use diagnose::drift::CHANNELS;
 use diagnose::model_terms::{channel_axis, set_term};
-use diagnose::simulate::{static_log, SimSetup};
+use diagnose::simulate::{adev_at, static_log, SimSetup};
 use diagnose::{diagnose, Diagnosis, LogInput, Settings};
 use noise::{BiasInstability, Effect, Flicker, ImuErrors, SensorModel, TemperatureProfile};
 use rand::{Rng, SeedableRng};
@@ -55,60 +55,86 @@ fn log_uniform(rng: &mut Xoshiro256PlusPlus, lo: f64, hi: f64) -> f64 {
     (rng.gen::<f64>() * (hi / lo).ln()).exp() * lo
 }
 
-/// Draw the hidden effect's parameters for channel `ch` on top of `base`.
+/// Temperature profile of the temperature-bias test: a climatic chamber cycling 25 +- 5 degC with a
+/// 120 s period. (A monotonic warm-up has an Allan signature that a rate random walk can mimic; that
+/// case is the "cannot tell" test below.)
+fn cycling() -> TemperatureProfile {
+    TemperatureProfile::Sinusoid {
+        mean_c: 25.0,
+        amplitude_c: 5.0,
+        period_s: 120.0,
+    }
+}
+
+/// Draw the hidden effect's parameters for channel `ch` on top of `base`. Where a term "crosses the base
+/// at tau_c", its Allan variance equals the base model's there and exceeds it beyond.
 fn draw(effect: Effect, base: &SensorModel, ch: usize, rng: &mut Xoshiro256PlusPlus) -> TermParams {
     let (sensor, axis) = channel_axis(ch);
     let a = base.axis(sensor, axis);
     let n = a.white_noise.unwrap();
     match effect {
-        // Integrated-output LSB such that 3Q^2/dt^2 is 1.5..6 times the white variance at dt:
-        // gyro Q = 7e-7..1.4e-6 rad (LSB 2.5e-6..4.9e-6 rad).
+        // Integrated-output quantisation with LSB = Q sqrt(12) of 0.5..1 times the per-sample noise of
+        // the integral, N sqrt(dt): gyro LSB 5e-6..1e-5 rad (as a rate, 0.03..0.06 deg/s at 100 Hz, the
+        // ADIS16405's 0.05 deg/s), 3Q^2/dt^2 = 6..25 % of the white variance at dt. The closed form
+        // 3Q^2/tau^2 assumes a white phase error; with an LSB several times the per-sample noise the
+        // residual is correlated from sample to sample (measured: the band departs from the closed form),
+        // a different effect, so the range stops at one per-sample noise.
         Effect::Quantization => {
-            TermParams::Level((log_uniform(rng, 1.5, 6.0) * n * n * DT_S / 3.0).sqrt())
+            let lsb = log_uniform(rng, 0.5, 1.0) * n * DT_S.sqrt();
+            TermParams::Level(lsb / 12f64.sqrt())
         }
         // White-noise level off by a factor 0.5..0.75 or 1.33..2.
         Effect::WhiteNoise => {
             let f = log_uniform(rng, 1.33, 2.0);
             TermParams::Level(if rng.gen::<bool>() { n * f } else { n / f })
         }
-        // Flicker whose plateau crosses the white noise at 2..40 s: gyro B = 2.5e-5..1.1e-4 rad/s (5..23 deg/h).
+        // Flicker (base without it) crossing the white noise at 0.5..5 s:
+        // gyro B = 6.7e-5..2.1e-4 rad/s (14..44 deg/h), consumer-MEMS grade.
         Effect::BiasInstability => {
-            let tc = log_uniform(rng, 2.0, 40.0);
+            let tc = log_uniform(rng, 0.5, 5.0);
             TermParams::Level((n * n / tc / noise::closed_form::flicker_plateau_avar(1.0)).sqrt())
         }
-        // K^2 tau/3 crosses the base at tau_c = 8..50 s.
+        // K^2 tau/3 crosses the base at 1..8 s: gyro K = 3e-5..8e-5 rad/s/sqrt(s).
         Effect::RateRandomWalk => {
-            let tc = log_uniform(rng, 8.0, 50.0);
+            let tc = log_uniform(rng, 1.0, 8.0);
             TermParams::Level((3.0 * base_avar(base, ch, tc) / tc).sqrt())
         }
-        // R^2 tau^2/2 crosses the base at 15..80 s.
+        // R^2 tau^2/2 crosses the base at 3..20 s: gyro R = 3e-6..3e-5 rad/s^2.
         Effect::RateRamp => {
-            let tc = log_uniform(rng, 15.0, 80.0);
+            let tc = log_uniform(rng, 3.0, 20.0);
             TermParams::Level((2.0 * base_avar(base, ch, tc)).sqrt() / tc)
         }
-        // Correlation time 0.5..20 s; ADEV peak (0.6174 sigma at 1.89 T) 2..5 times the base ADEV there.
+        // Correlation time 0.3..15 s; ADEV peak (0.6174 sigma at 1.89 T) 3..8 times the base ADEV there.
         Effect::GaussMarkov => {
-            let t = log_uniform(rng, 0.5, 20.0);
+            let t = log_uniform(rng, 0.3, 15.0);
             let peak_tau = noise::closed_form::GAUSS_MARKOV_ADEV_PEAK_TAU_PER_TC * t;
-            let sigma = log_uniform(rng, 2.0, 5.0) * base_avar(base, ch, peak_tau).sqrt()
+            let sigma = log_uniform(rng, 3.0, 8.0) * base_avar(base, ch, peak_tau).sqrt()
                 / noise::closed_form::GAUSS_MARKOV_ADEV_PEAK_PER_SIGMA;
             TermParams::GaussMarkov { sigma, tau_s: t }
         }
-        // Period 0.5..30 s; amplitude such that the first Allan lobe (ADEV 0.72 A near tau = 0.37/f0)
-        // is 2..5 times the base ADEV there.
+        // Period 0.2..20 s; amplitude such that the first Allan lobe (ADEV 0.72 A near tau = 0.37/f0)
+        // is 3..8 times the base ADEV there.
         Effect::Sinusoidal => {
-            let period = log_uniform(rng, 0.5, 30.0);
-            let amp = log_uniform(rng, 2.0, 5.0) * base_avar(base, ch, 0.37 * period).sqrt() / 0.72;
+            let period = log_uniform(rng, 0.2, 20.0);
+            let amp = log_uniform(rng, 3.0, 8.0) * base_avar(base, ch, 0.37 * period).sqrt() / 0.72;
             TermParams::Sinusoid {
                 amplitude: amp,
                 frequency_hz: 1.0 / period,
             }
         }
-        // Coefficient such that a 10 degC warm-up with time constant 200 s moves the bias by 3..10 times
-        // the base ADEV at 100 s (gyro: 1e-5..4e-5 rad/s/degC, typical MEMS 0.002..0.008 deg/s/degC).
+        // Coefficient (random sign) such that the temperature term's Allan deviation peaks at 3..8 times the base
+        // ADEV (gyro: about 2e-6..1e-5 rad/s/degC, 0.0001..0.0006 deg/s/degC).
         Effect::TemperatureBias => {
-            let shift = log_uniform(rng, 3.0, 10.0) * base_avar(base, ch, 100.0).sqrt();
-            TermParams::Level(shift / 10.0 * if rng.gen::<bool>() { 1.0 } else { -1.0 })
+            let profile = cycling();
+            let temp: Vec<f64> = (0..SAMPLES).map(|k| profile.at(k as f64 * DT_S)).collect();
+            let grid: Vec<usize> = (0..15).map(|j| 1usize << j).collect();
+            let ratio = adev_at(&temp, DT_S, &grid)
+                .iter()
+                .zip(&grid)
+                .map(|(t, &m)| t / base_avar(base, ch, m as f64 * DT_S).sqrt())
+                .fold(0.0, f64::max);
+            let k = log_uniform(rng, 3.0, 8.0) / ratio;
+            TermParams::Level(if rng.gen::<bool>() { k } else { -k })
         }
         _ => unreachable!(),
     }
@@ -158,18 +184,15 @@ fn hidden_trial(effect: Effect, trial: u64) -> Trial {
     let mut model = base.clone();
     let temperature = effect == Effect::TemperatureBias;
     if temperature {
-        model.temperature = TemperatureProfile::Warmup {
-            start_c: 20.0,
-            end_c: 30.0,
-            time_constant_s: 200.0,
-        };
+        model.temperature = cycling();
         model.temperature_reference_c = 25.0;
     }
     // One or two channels, chosen at random.
-    let first = rng.gen_range(0..6);
+    let pool = 6;
+    let first = rng.gen_range(0..pool);
     let mut channels = vec![first];
     if rng.gen::<bool>() {
-        let second = (first + rng.gen_range(1..6)) % 6;
+        let second = (first + rng.gen_range(1..pool)) % pool;
         channels.push(second);
     }
     channels.sort_unstable();
@@ -250,6 +273,28 @@ fn check(trial: &Trial) -> Result<(), String> {
                     ));
                 }
             }
+        }
+    }
+    if !problems.is_empty() && std::env::var_os("DIAGNOSE_DUMP").is_some() {
+        for &c in &trial.channels {
+            let r = &trial.result.channels[CHANNELS[c]];
+            let z = |v: &[f64]| {
+                v.iter()
+                    .map(|x| format!("{x:.1}"))
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            };
+            eprintln!(
+                "{}: truth {:?}\n  effects {:?}\n  z0 {}\n  z1 {}",
+                CHANNELS[c],
+                trial.truth,
+                r.effects
+                    .iter()
+                    .map(|e| (&e.effect, &e.parameters, e.gap_before, e.gap_after))
+                    .collect::<Vec<_>>(),
+                z(&r.z_initial),
+                z(&r.z_final)
+            );
         }
     }
     if problems.is_empty() {
