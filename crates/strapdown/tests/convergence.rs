@@ -100,35 +100,7 @@ fn coning_error_orders() {
     assert!(e.attitude_angle_rad < 1e-8, "{e:?}");
 }
 
-const PROFILE: &str = r#"
-[initial]
-yaw_deg = 30.0
-velocity_ned_mps = [1.0, 0.5, 0.0]
-[[segments]]
-kind = "hold"
-duration_s = 1.003
-[[segments]]
-kind = "rotate"
-duration_s = 1.0
-axis = [0.0, 0.0, 1.0]
-rate_deg_s = 90.0
-[[segments]]
-kind = "accelerate"
-duration_s = 3.0
-accel_body_mps2 = [2.0, 0.0, 0.0]
-[[segments]]
-kind = "rotate"
-duration_s = 2.0
-axis = [1.0, 1.0, 0.0]
-rate_deg_s = 20.0
-[[segments]]
-kind = "accelerate"
-duration_s = 2.0
-accel_body_mps2 = [0.0, 1.0, -0.5]
-[[segments]]
-kind = "hold"
-duration_s = 1.0
-"#;
+const PROFILE: &str = include_str!("data/profile.toml");
 
 #[test]
 fn profile_error_orders() {

@@ -123,35 +123,8 @@ fn coning_outputs_match_differentiated_truth() {
     }
 }
 
-const PROFILE: &str = r#"
-[initial]
-yaw_deg = 30.0
-pitch_deg = 5.0
-velocity_ned_mps = [1.0, 0.5, 0.0]
-position_ned_m = [10.0, -5.0, 2.0]
-[[segments]]
-kind = "hold"
-duration_s = 1.003
-[[segments]]
-kind = "rotate"
-duration_s = 1.0
-axis = [0.0, 0.0, 1.0]
-rate_deg_s = 90.0
-[[segments]]
-kind = "accelerate"
-duration_s = 3.0
-accel_body_mps2 = [2.0, 0.0, 0.0]
-[[segments]]
-kind = "rotate"
-duration_s = 2.0
-axis = [1.0, 1.0, 0.0]
-rate_deg_s = 20.0
-[[segments]]
-kind = "accelerate"
-duration_s = 2.0
-accel_body_mps2 = [0.0, 1.0, -0.5]
-"#;
-const PROFILE_BREAKS: [f64; 6] = [0.0, 1.003, 2.003, 5.003, 7.003, 9.003];
+const PROFILE: &str = include_str!("data/profile.toml");
+const PROFILE_BREAKS: [f64; 7] = [0.0, 1.003, 2.003, 5.003, 7.003, 9.003, 10.003];
 
 #[test]
 fn profile_outputs_match_differentiated_truth_inside_and_across_segments() {
@@ -174,6 +147,7 @@ fn profile_outputs_match_differentiated_truth_inside_and_across_segments() {
         (4.995, 5.005),
         (7.0, 7.01),
         (9.0, 9.01),
+        (9.998, 10.008),
         (0.9, 2.1),
     ];
     check("profile across", &traj, &across, &PROFILE_BREAKS);
@@ -199,7 +173,7 @@ fn profile_truth_is_continuous_and_integrates_its_own_velocity() {
     for piece in PROFILE_BREAKS
         .windows(2)
         .map(|w| (w[0], w[1]))
-        .chain([(9.003, 11.0)])
+        .chain([(10.003, 11.0)])
     {
         let (a, b) = piece;
         let v = |t: f64| traj.truth(t).velocity.0;
