@@ -17,6 +17,7 @@ pub mod report;
 pub mod runner;
 pub mod scenario;
 pub mod shard;
+pub mod spec;
 pub mod stats;
 
 pub use runner::{run_range, BatchResult, RunFailure, RunKernel, Shard};

@@ -1,0 +1,213 @@
+//! The spec-sheet comparison: a sensor's spec ARW and bias instability beside the values read back
+//! (Woodman's method, TR-696 §5.1) from a simulated long static log made with the noise crate, and
+//! the drift at chosen times (law and simulation) from a static Monte Carlo run.
+
+use crate::channels::Channel;
+use crate::experiment::{Experiment, Overrides};
+use crate::report::DriftReport;
+use crate::scenario::Scenario;
+use allan::{DataKind, Estimator, Options, TauGrid};
+use nalgebra::Vector3;
+use noise::{ImuErrors, SensorModel};
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// Woodman's readback log: 12 h at 100 Hz (TR-696 §5.1, Table 4; theory.md §1.4).
+pub const READBACK_DURATION_S: f64 = 12.0 * 3600.0;
+pub const READBACK_RATE_HZ: f64 = 100.0;
+/// Confidence level of the readback intervals.
+pub const READBACK_CONFIDENCE: f64 = 0.95;
+/// A spec value is "masked" when, at the tau where it is read, its own term contributes less than
+/// this share of the model's closed-form Allan variance (another term dominates the reading).
+pub const MASKED_SHARE: f64 = 0.5;
+
+/// Gyro spec values and readbacks, each over the x, y, z axes (SI, rad/sqrt(s) and rad/s);
+/// `None` where a value cannot be read back.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct GyroSpec {
+    pub arw_spec: [Option<f64>; 3],
+    pub arw_sim: [Option<f64>; 3],
+    pub arw_sim_lo: [Option<f64>; 3],
+    pub arw_sim_hi: [Option<f64>; 3],
+    /// Bias instability as a spec sheet states it in Woodman's convention: the minimum of the
+    /// model's closed-form Allan deviation.
+    pub bi_spec: [Option<f64>; 3],
+    pub bi_sim: [Option<f64>; 3],
+    pub bi_sim_lo: [Option<f64>; 3],
+    pub bi_sim_hi: [Option<f64>; 3],
+    /// tau (s) of the readback minimum.
+    pub bi_sim_tau_s: [Option<f64>; 3],
+    /// Why a value is missing or doubtful.
+    pub notes: Vec<String>,
+}
+
+/// Drift at one time: heading and horizontal position, law and simulation.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DriftRow {
+    pub t_s: f64,
+    pub heading_rms_sim_rad: f64,
+    pub heading_rms_law_rad: Option<f64>,
+    pub horizontal_mean_sim_m: f64,
+    pub horizontal_mean_law_m: Option<f64>,
+    pub horizontal_rms_sim_m: f64,
+    pub horizontal_rms_law_m: Option<f64>,
+    pub horizontal_p95_sim_m: f64,
+    /// Why a law is missing.
+    pub law_note: Option<String>,
+}
+
+/// One sensor's comparison.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SensorSpec {
+    pub name: String,
+    pub gyro: GyroSpec,
+    pub drift: Vec<DriftRow>,
+    pub drift_runs: u64,
+}
+
+/// Generate the static gyro log of `model` (12 h, 100 Hz unless given) and read its ARW and bias
+/// instability back per axis. Axes are generated and analysed in parallel; each axis draws from its
+/// own streams, so the result does not depend on the thread count.
+pub fn gyro_readback(model: &SensorModel, seed: u64, duration_s: f64, rate_hz: f64) -> GyroSpec {
+    let dt_s = 1.0 / rate_hz;
+    let n = (duration_s * rate_hz).round() as usize;
+    let mut errors = ImuErrors::new(model, dt_s, seed, 0);
+    let still_gyro = Vector3::zeros();
+    let opts = Options {
+        confidence: READBACK_CONFIDENCE,
+        ..Options::default()
+    };
+    let channels = errors.channels_mut();
+    let per_axis: Vec<_> = channels[..3]
+        .par_iter_mut()
+        .enumerate()
+        .map(|(axis, ch)| {
+            let mut data = vec![0.0; n];
+            ch.fill_static(0, &still_gyro, &mut data);
+            let points = allan::deviation_with(
+                &data,
+                DataKind::Rate,
+                dt_s,
+                Estimator::Overlapping,
+                &TauGrid::PerDecade(10),
+                &opts,
+            );
+            (axis, points)
+        })
+        .collect();
+    let mut g = GyroSpec::default();
+    for (axis, points) in per_axis {
+        let m = model.axis(noise::Sensor::Gyro, axis);
+        let name = ["x", "y", "z"][axis];
+        let readings = allan::fit::readings(&points);
+        let at = |tau: f64| points.iter().find(|p| p.tau_s == tau);
+        // Spec values from the model.
+        g.arw_spec[axis] = m.white_noise;
+        let closed = |tau: f64| m.allan_variance(tau);
+        if m.bias_instability.is_some() {
+            // Woodman's reading of a spec sheet: the minimum of the closed-form Allan deviation
+            // over the taus of the log's curve.
+            g.bi_spec[axis] = points
+                .iter()
+                .map(|p| closed(p.tau_s).sqrt())
+                .min_by(f64::total_cmp);
+        }
+        // ARW: the slope -1/2 line touching the curve, read at 1 s (Woodman §5.1).
+        if let (Some(nv), Some(p)) = (m.white_noise, at(readings.arw_tau_s)) {
+            let share = nv * nv / p.tau_s / closed(p.tau_s);
+            if share >= MASKED_SHARE {
+                let s = p.tau_s.sqrt();
+                g.arw_sim[axis] = Some(readings.arw_at_1s);
+                g.arw_sim_lo[axis] = Some(p.lo * s);
+                g.arw_sim_hi[axis] = Some(p.hi * s);
+            } else {
+                g.notes.push(format!(
+                    "gyro {name}: ARW cannot be read back: at tau = {:.3} s white noise is only {:.0} % of the Allan variance",
+                    p.tau_s,
+                    100.0 * share
+                ));
+            }
+        }
+        // Bias instability: the minimum of the curve (Woodman §5.1).
+        if m.bias_instability.is_some() {
+            let last_tau = points.last().map_or(f64::NAN, |p| p.tau_s);
+            match at(readings.bi_min_tau_s) {
+                Some(p) if p.tau_s < last_tau => {
+                    let plateau = m
+                        .bias_instability
+                        .as_ref()
+                        .map_or(0.0, |b| b.avar(p.tau_s));
+                    let share = plateau / closed(p.tau_s);
+                    g.bi_sim[axis] = Some(readings.bi_min);
+                    g.bi_sim_lo[axis] = Some(p.lo);
+                    g.bi_sim_hi[axis] = Some(p.hi);
+                    g.bi_sim_tau_s[axis] = Some(p.tau_s);
+                    if share < MASKED_SHARE {
+                        g.notes.push(format!(
+                            "gyro {name}: the minimum at tau = {:.0} s is only {:.0} % bias instability (other terms mask it)",
+                            p.tau_s,
+                            100.0 * share
+                        ));
+                    }
+                }
+                _ => g.notes.push(format!(
+                    "gyro {name}: bias instability cannot be read back: the Allan deviation still falls at the longest tau of the {:.0} h log (masked by white noise)",
+                    READBACK_DURATION_S.min(n as f64 * dt_s) / 3600.0
+                )),
+            }
+        }
+    }
+    g
+}
+
+/// A static, level drift scenario for the comparison (checkpoints at `times_s`).
+pub fn drift_scenario(times_s: &[f64], rate_hz: f64, runs: u64, seed: u64) -> Scenario {
+    let duration = times_s.iter().cloned().fold(0.0, f64::max);
+    let times = times_s
+        .iter()
+        .map(|t| t.to_string())
+        .collect::<Vec<_>>()
+        .join(", ");
+    let text = format!(
+        "sensor = \"(given)\"\nduration_s = {duration}\nrate_hz = {rate_hz}\nruns = {runs}\nseed = {seed}\n[checkpoints]\ntimes_s = [{times}]\n"
+    );
+    Scenario::from_toml_str(&text, "spec drift scenario").expect("valid generated scenario")
+}
+
+/// Drift rows from a static Monte Carlo report.
+pub fn drift_rows(report: &DriftReport) -> Vec<DriftRow> {
+    report
+        .checkpoints
+        .iter()
+        .map(|cp| {
+            let yaw = &cp.channels[Channel::Yaw.name()];
+            let h = &cp.channels[Channel::PosHorizontal.name()];
+            DriftRow {
+                t_s: cp.t_s,
+                heading_rms_sim_rad: yaw.rms,
+                heading_rms_law_rad: yaw.law_rms,
+                horizontal_mean_sim_m: h.mean,
+                horizontal_mean_law_m: h.law_mean,
+                horizontal_rms_sim_m: h.rms,
+                horizontal_rms_law_m: h.law_rms,
+                horizontal_p95_sim_m: h.p95,
+                law_note: h.law_note.clone().or_else(|| yaw.law_note.clone()),
+            }
+        })
+        .collect()
+}
+
+/// Experiment for the drift part of the comparison.
+pub fn drift_experiment(
+    model: &SensorModel,
+    times_s: &[f64],
+    rate_hz: f64,
+    runs: u64,
+    seed: u64,
+) -> Result<Experiment, String> {
+    Experiment::new(
+        drift_scenario(times_s, rate_hz, runs, seed),
+        model,
+        &Overrides::default(),
+    )
+}
