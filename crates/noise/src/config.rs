@@ -21,8 +21,8 @@
 //! - `{ value, convention = "ieee" }`: value is the IEEE coefficient B (Allan plateau 0.664 B);
 //! - `{ value, convention = "allan_minimum" }`: value is the minimum of the axis' Allan deviation, as
 //!   Woodman (TR-696 §5.1) and many spec sheets report it; B is solved so that the closed-form Allan
-//!   deviation of the whole axis model (white noise, random walks ... included) has that minimum inside
-//!   the flicker band;
+//!   deviation of the whole axis model (white noise, random walks ... included) has that minimum over
+//!   the flicker band's plateau, averaging times [30 tau_min, tau_max / 30] (3 s .. 3333 s by default);
 //! - `{ model = "random_walk", stability, period }`: Woodman's bias random walk (eq 9).
 //!
 //! Flicker options: `band = ["0.1 s", "1e5 s"]` (correlation times), `per_decade = 2`.
@@ -697,7 +697,7 @@ fn convert_bias_instability(
                     ctx.invalid(
                         &sub("value"),
                         format!(
-                            "an Allan minimum above what the other terms of the axis already give ({floor:.4e} {} inside the flicker band)",
+                            "an Allan minimum above what the other terms of the axis already give ({floor:.4e} {} over the flicker band's plateau; widen `band`)",
                             Quantity::Signal(sig).si_unit()
                         ),
                         format!("\"{value_text}\""),
@@ -728,10 +728,12 @@ fn convert_bias_instability(
     }
 }
 
-/// Log-spaced averaging times inside the flicker band's plateau, [2 tau_min, tau_max / 10].
+/// Log-spaced averaging times inside the flicker band's plateau, [30 tau_min, tau_max / 30], where the
+/// component sum is within 0.1 % of 0.664 B (2 per decade); nearer the band edges it falls off
+/// (0.55 B at 2 tau_min), which would make a curve without a rising term take its minimum there.
 fn plateau_taus(f: &Flicker) -> Vec<f64> {
-    let lo = 2.0 * f.tau_min_s;
-    let hi = (f.tau_max_s / 10.0).max(lo);
+    let lo = 30.0 * f.tau_min_s;
+    let hi = (f.tau_max_s / 30.0).max(lo);
     let n = ((hi / lo).log10() * 40.0).ceil().max(1.0) as usize;
     (0..=n)
         .map(|i| lo * (hi / lo).powf(i as f64 / n as f64))
