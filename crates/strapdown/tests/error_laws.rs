@@ -35,6 +35,7 @@ fn run_static(
 
 fn assert_within(what: &str, got: f64, law: f64, tol: f64) {
     let ratio = got / law;
+    eprintln!("{what}: simulated {got:.6e}, law {law:.6e}, ratio {ratio:.5}");
     assert!(
         (ratio - 1.0).abs() < tol,
         "{what}: simulated {got:.6e}, law {law:.6e}, ratio {ratio:.5}"
