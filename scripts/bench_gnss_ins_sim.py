@@ -1,0 +1,112 @@
+#!/usr/bin/env python3
+"""Throughput of imudrift against gnss-ins-sim (Aceinna, the Python simulator) on one scenario:
+Woodman's MTx experiment, static and level, 100 Hz, 60 s, free (strapdown) integration, many runs.
+
+gnss-ins-sim is not vendored: pass the path of a checkout (e.g. `git clone
+https://github.com/Aceinna/gnss-ins-sim`, or the snapshot 966ff27 named in peers.md). This script only
+drives it through its public API (imu_model.IMU, ins_sim.Sim, demo_algorithms.free_integration).
+
+Both simulators run on one core (gnss-ins-sim is single-threaded Python/numpy; imudrift with
+--threads 1) one after the other in the same session; throughput = runs x samples / wall time.
+
+MTx error model given to gnss-ins-sim (its closest terms; it has no flicker noise or rate random walk,
+peers.md §2.1): gyro ARW from Woodman Table 4 (0.075, 0.078, 0.079 deg/sqrt(s) = 4.5, 4.68, 4.74
+deg/sqrt(h)), bias drift as a first-order Gauss-Markov with Table 4's bias instability (36, 32.4,
+43.2 deg/h) and correlation times at the Allan minimum (620, 530, 270 s); accelerometer VRW
+0.004 m/s^2/sqrt(Hz) = 0.24 m/s/sqrt(h) (MTx manual). imudrift runs configs/scenarios/mtx-static-60s.toml
+(configs/sensors/mtx.toml: white noise, flicker bias instability as 13 Gauss-Markov components per
+axis, rate random walk; accelerometer white noise), i.e. more noise processes per sample.
+
+Usage: python3 scripts/bench_gnss_ins_sim.py --gnss-ins-sim /tmp/gis [--runs 20] [--imudrift-runs 2000]
+"""
+import argparse
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+FS_HZ = 100.0
+DURATION_S = 60.0
+
+
+def bench_gnss_ins_sim(path, runs):
+    sys.path.insert(0, path)
+    import numpy as np
+    from gnss_ins_sim.sim import imu_model, ins_sim
+    from demo_algorithms import free_integration
+
+    d2r = math.pi / 180.0
+    imu_err = {
+        'gyro_b': np.zeros(3),
+        'gyro_arw': np.array([0.075, 0.078, 0.079]) * 60.0,          # deg/sqrt(h)
+        'gyro_b_stability': np.array([0.010, 0.009, 0.012]) * 3600.0,  # deg/h
+        'gyro_b_corr': np.array([620.0, 530.0, 270.0]),                # s
+        'accel_b': np.zeros(3),
+        'accel_vrw': np.array([0.24, 0.24, 0.24]),                     # m/s/sqrt(h)
+        'accel_b_stability': np.zeros(3),
+        'accel_b_corr': np.array([float('inf')] * 3),
+    }
+    imu = imu_model.IMU(accuracy=imu_err, axis=6, gps=False)
+    with tempfile.TemporaryDirectory() as tmp:
+        motion = os.path.join(tmp, 'static60.csv')
+        with open(motion, 'w') as f:
+            f.write('ini lat (deg),ini lon (deg),ini alt (m),ini vx_body (m/s),ini vy_body (m/s),'
+                    'ini vz_body (m/s),ini yaw (deg),ini pitch (deg),ini roll (deg)\n')
+            f.write('0,0,0,0,0,0,0,0,0\n')
+            f.write('command type,yaw (deg),pitch (deg),roll (deg),vx_body (m/s),vy_body (m/s),'
+                    'vz_body (m/s),command duration (s),GPS visibility\n')
+            f.write('1,0,0,0,0,0,0,%g,0\n' % DURATION_S)
+        ini = np.array([0.0, 0.0, 0.0, 0, 0, 0, 0, 0, 0]) * d2r
+        algo = free_integration.FreeIntegration(ini)
+        # ref_frame=1: virtual inertial frame (no Earth rotation), as imudrift's flat non-rotating Earth.
+        sim = ins_sim.Sim([FS_HZ, 0.0, 0.0], motion, ref_frame=1, imu=imu, mode=None, env=None,
+                          algorithm=algo)
+        t0 = time.perf_counter()
+        sim.run(runs)
+        wall = time.perf_counter() - t0
+        # Sanity check that the runs integrated noisy data: mean horizontal error at the end.
+        ref = sim.get_data(['ref_pos'])[0]
+        pos = sim.get_data(['pos'])[0]
+        # Algorithm outputs are keyed by '<algorithm index>_<run index>' (or by run index).
+        ends = [v[-1, :2] for _, v in sorted(pos.items(), key=lambda kv: str(kv[0]))]
+        horiz = [float(np.hypot(*(e - ref[-1, :2]))) for e in ends]
+    samples = int(round(FS_HZ * DURATION_S)) + 1
+    return {'runs': runs, 'wall_s': wall, 'steps': runs * samples,
+            'steps_per_s': runs * samples / wall, 'runs_per_s': runs / wall,
+            'mean_horizontal_60s_m': sum(horiz) / len(horiz)}
+
+
+def bench_imudrift(binary, scenario, runs, threads):
+    t0 = time.perf_counter()
+    out = subprocess.run([binary, 'simulate', scenario, '--runs', str(runs), '--threads', str(threads),
+                          '--json'], check=True, capture_output=True)
+    wall = time.perf_counter() - t0
+    doc = json.loads(out.stdout)
+    samples = int(round(doc['rate_hz'] * doc['duration_s']))
+    return {'runs': runs, 'threads': threads, 'wall_s': wall, 'steps': runs * samples,
+            'steps_per_s': runs * samples / wall, 'runs_per_s': runs / wall,
+            'mean_horizontal_60s_m': doc['checkpoints'][-1]['channels']['pos_horizontal_m']['mean']}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument('--gnss-ins-sim', required=True, help='path of a gnss-ins-sim checkout')
+    ap.add_argument('--runs', type=int, default=20, help='gnss-ins-sim runs')
+    ap.add_argument('--imudrift', default='target/release/imudrift')
+    ap.add_argument('--scenario', default='configs/scenarios/mtx-static-60s.toml')
+    ap.add_argument('--imudrift-runs', type=int, default=2000)
+    args = ap.parse_args()
+    here = os.getcwd()
+    os.chdir(args.gnss_ins_sim)
+    g = bench_gnss_ins_sim(os.path.abspath(args.gnss_ins_sim), args.runs)
+    os.chdir(here)
+    i = bench_imudrift(args.imudrift, args.scenario, args.imudrift_runs, 1)
+    print(json.dumps({'gnss_ins_sim': g, 'imudrift': i,
+                      'ratio_steps_per_s_one_core': i['steps_per_s'] / g['steps_per_s']}, indent=2))
+
+
+if __name__ == '__main__':
+    main()
