@@ -1,8 +1,410 @@
-//! `imudrift diagnose` (being built).
+//! `imudrift diagnose LOG.csv --model SENSOR.toml`: where the model and the measurement disagree,
+//! which effect is missing, the corrected model, and the gap before and after (DESIGN.md, "The
+//! diagnose workflow").
+
+use crate::logio::{self, LogArgs};
+use crate::output::{ensure_dir, write_string};
+use crate::plot::{Band, LogLogPlot, Series};
+use anyhow::{anyhow, bail, Context, Result};
+use diagnose::drift::CHANNELS;
+use diagnose::workflow::{ChannelReport, DriftRow, FoundEffect};
+use diagnose::{diagnose, Diagnosis, LogInput, Settings};
+use noise::SensorModel;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Measured static log: CSV or gzip-compressed CSV with a header (`#` lines are comments);
+    /// columns gx gy gz (rad/s), ax ay az (m/s^2), optional temp (degC) and t (s)
+    pub log: PathBuf,
+    /// Sensor model TOML to check against the log
+    #[arg(long, value_name = "SENSOR.toml")]
+    pub model: PathBuf,
+    #[command(flatten)]
+    pub log_args: LogArgs,
+    /// Master seed of the simulated logs (written into the outputs)
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Simulated logs per model band
+    #[arg(long, default_value_t = 16)]
+    pub seeds: usize,
+    /// Add-and-resimulate rounds at most
+    #[arg(long, default_value_t = 4)]
+    pub rounds: usize,
+    /// Drift horizons in seconds (comma list)
+    #[arg(long, value_delimiter = ',', default_value = "60,3600")]
+    pub horizons: Vec<f64>,
+    /// BIC improvement an effect needs to be named (10: "very strong" evidence, Kass & Raftery 1995)
+    #[arg(long, default_value_t = 10.0)]
+    pub min_delta_bic: f64,
+    /// Print one JSON document on stdout (human text on stderr)
+    #[arg(long)]
+    pub json: bool,
+    /// Write report.md, diagnose.json, the corrected sensor TOML and SVG plots into this directory
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Worker threads (default: all cores); results do not depend on it
+    #[arg(long)]
+    pub threads: Option<usize>,
+}
 
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`imudrift diagnose` is not built yet")
+pub fn run(args: Args) -> Result<()> {
+    if args.seeds < 2 {
+        bail!(
+            "--seeds {}: at least 2 simulated logs are needed for a band",
+            args.seeds
+        );
+    }
+    if let Some(h) = args.horizons.iter().find(|h| !(h.is_finite() && **h > 0.0)) {
+        bail!("--horizons: {h} is not a positive duration in seconds");
+    }
+    if !args.min_delta_bic.is_finite() || args.min_delta_bic < 0.0 {
+        bail!(
+            "--min-delta-bic {}: expected a number >= 0",
+            args.min_delta_bic
+        );
+    }
+    let mut pool = rayon::ThreadPoolBuilder::new();
+    if let Some(t) = args.threads {
+        if t == 0 {
+            bail!("--threads 0: expected at least 1");
+        }
+        pool = pool.num_threads(t);
+    }
+    let pool = pool.build().context("cannot start the worker threads")?;
+    pool.install(|| run_inner(&args))
+}
+
+fn run_inner(args: &Args) -> Result<()> {
+    let model = SensorModel::load(&args.model)?;
+    let log = logio::read_log(&args.log, &args.log_args.options()?)?;
+    let channels: [Option<&[f64]>; 6] =
+        std::array::from_fn(|c| log.channels.get(CHANNELS[c]).map(Vec::as_slice));
+    if channels.iter().all(Option::is_none) {
+        bail!(
+            "{}: no gyro or accelerometer channel (expected columns gx gy gz ax ay az, or map them with --col gx=NAME; columns: {})",
+            log.source,
+            log.order.join(", ")
+        );
+    }
+    let input = LogInput {
+        dt_s: log.dt_s(),
+        channels,
+        temperature_c: log.channels.get("temp").map(Vec::as_slice),
+    };
+    let settings = Settings {
+        seed: args.seed,
+        seeds: args.seeds,
+        max_rounds: args.rounds,
+        horizons_s: args.horizons.clone(),
+        min_delta_bic: args.min_delta_bic,
+        ..Settings::default()
+    };
+    let started = std::time::Instant::now();
+    let result = diagnose(&input, &model, &settings)
+        .with_context(|| format!("diagnosing {} against {}", log.source, args.model.display()))?;
+    let elapsed_s = started.elapsed().as_secs_f64();
+    let corrected = corrected_model(&result, &model);
+    eprint!(
+        "{}",
+        text_report(&result, &log.source, &args.model, elapsed_s)
+    );
+    let doc = json_document(&result, &log.source, &args.model, &corrected)?;
+    if args.json {
+        println!("{doc}");
+    }
+    if let Some(dir) = &args.out {
+        ensure_dir(dir)?;
+        let toml_name = format!("{}-diagnosed.toml", file_stem(&args.model));
+        write_string(&dir.join(&toml_name), &corrected)?;
+        write_string(&dir.join("diagnose.json"), &doc)?;
+        for (name, report) in &result.channels {
+            write_string(
+                &dir.join(format!("diagnose_{name}.svg")),
+                &plot(name, report),
+            )?;
+        }
+        write_string(
+            &dir.join("report.md"),
+            &markdown_report(&result, &log.source, &args.model, &toml_name),
+        )?;
+        eprintln!(
+            "wrote {} (report.md, diagnose.json, {toml_name}, diagnose_<channel>.svg)",
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+fn file_stem(path: &Path) -> String {
+    path.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "sensor".into())
+}
+
+/// The corrected model as TOML, with a header saying where it came from.
+fn corrected_model(result: &Diagnosis, model: &SensorModel) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "# Written by `imudrift diagnose` (seed {}, {} simulated logs per band) from {:?}.",
+        result.seed, result.seeds, model.name
+    );
+    for (name, report) in &result.channels {
+        for e in &report.effects {
+            let _ = writeln!(out, "# {name}: {} {} {}", e.kind, e.effect, params_text(e));
+        }
+    }
+    out.push_str(&result.model_final.to_toml_string());
+    out
+}
+
+/// `n = 1.2e-4 [1.1e-4, 1.3e-4]` for every parameter.
+fn params_text(e: &FoundEffect) -> String {
+    e.parameters
+        .iter()
+        .map(|(k, v)| {
+            format!(
+                "{k} = {v:.4e} [{:.3e}, {:.3e}]",
+                e.parameters_lo.get(k).copied().unwrap_or(f64::NAN),
+                e.parameters_hi.get(k).copied().unwrap_or(f64::NAN)
+            )
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn drift_line(d: &DriftRow) -> String {
+    let cell = |s: &diagnose::drift::DriftSummary| {
+        if s.segments == 0 {
+            "            -            ".to_string()
+        } else {
+            format!(
+                "{:9.4} deg {:9.3} m",
+                s.heading_rms_rad.to_degrees(),
+                s.horizontal_rms_m
+            )
+        }
+    };
+    format!(
+        "{:>8.0} s  {}  {}  {}  (segments: {} measured)",
+        d.horizon_s,
+        cell(&d.measured),
+        cell(&d.model_initial),
+        cell(&d.model_final),
+        d.measured.segments
+    )
+}
+
+fn text_report(result: &Diagnosis, log: &str, model: &Path, elapsed_s: f64) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "diagnose {log} against {} ({} samples at {:.6} s; {} simulated logs per band, seed {}, {} round(s), {:.1} s)",
+        model.display(),
+        result.samples,
+        result.dt_s,
+        result.seeds,
+        result.seed,
+        result.rounds,
+        elapsed_s
+    );
+    let _ = writeln!(
+        s,
+        "{:<4} {:>10} {:>10}  effects",
+        "ch", "gap before", "gap after"
+    );
+    for (name, r) in &result.channels {
+        let _ = writeln!(
+            s,
+            "{name:<4} {:>10.2} {:>10.2}  {}",
+            r.gap_initial, r.gap_final, r.verdict
+        );
+        for e in &r.effects {
+            let _ = writeln!(
+                s,
+                "       {} {} ({}): {}; gap {:.2} -> {:.2}, dBIC {:.0}{}",
+                e.kind,
+                e.effect,
+                model_text(e),
+                params_text(e),
+                e.gap_before,
+                e.gap_after,
+                e.delta_bic,
+                if e.cannot_tell_from.is_empty() {
+                    String::new()
+                } else {
+                    format!("; cannot tell it from {}", e.cannot_tell_from.join(", "))
+                }
+            );
+        }
+    }
+    let _ = writeln!(
+        s,
+        "drift (RMS over segments; bias removed by the log mean): heading, horizontal position"
+    );
+    let _ = writeln!(
+        s,
+        "{:>10}  {:^25}  {:^25}  {:^25}",
+        "horizon", "measured", "model before", "model after"
+    );
+    for d in &result.drift {
+        let _ = writeln!(s, "{}", drift_line(d));
+    }
+    s
+}
+
+fn model_text(e: &FoundEffect) -> String {
+    match &e.model_parameters {
+        Some(p) => format!(
+            "model had {}",
+            p.iter()
+                .map(|(k, v)| format!("{k} = {v:.4e}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+        None => "not in the model".into(),
+    }
+}
+
+fn json_document(result: &Diagnosis, log: &str, model: &Path, corrected: &str) -> Result<String> {
+    let mut v = serde_json::to_value(result).context("cannot serialise the diagnosis")?;
+    let obj = v
+        .as_object_mut()
+        .ok_or_else(|| anyhow!("diagnosis is not a JSON object"))?;
+    obj.insert("log".into(), log.into());
+    obj.insert("model".into(), model.display().to_string().into());
+    obj.insert("corrected_model_toml".into(), corrected.into());
+    serde_json::to_string_pretty(&v).context("cannot serialise the diagnosis")
+}
+
+fn markdown_report(result: &Diagnosis, log: &str, model: &Path, toml_name: &str) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "# imudrift diagnose\n");
+    let _ = writeln!(
+        s,
+        "Log `{log}` ({} samples, dt = {} s) against model `{}`; {} simulated logs per band, seed {}, {} round(s). Corrected model: `{toml_name}`.\n",
+        result.samples,
+        result.dt_s,
+        model.display(),
+        result.seeds,
+        result.seed,
+        result.rounds
+    );
+    let _ = writeln!(s, "Gap = RMS over tau of z = (ln adev_measured - ln adev_model) / s, s from the EDF of each point.\n");
+    let _ = writeln!(
+        s,
+        "| channel | gap before | gap after | effects | verdict |\n|---|---|---|---|---|"
+    );
+    for (name, r) in &result.channels {
+        let effects: Vec<String> = r
+            .effects
+            .iter()
+            .map(|e| {
+                format!(
+                    "{} {} ({}): {}",
+                    e.kind,
+                    e.effect,
+                    model_text(e),
+                    params_text(e)
+                )
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            "| {name} | {:.2} | {:.2} | {} | {} |",
+            r.gap_initial,
+            r.gap_final,
+            if effects.is_empty() {
+                "-".into()
+            } else {
+                effects.join("<br>")
+            },
+            r.verdict
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\n## Drift (RMS over segments, bias removed by the log mean)\n"
+    );
+    let _ = writeln!(s, "| horizon | measured heading | model before | model after | measured horizontal | model before | model after |\n|---|---|---|---|---|---|---|");
+    for d in &result.drift {
+        let f = |v: f64, scale: f64| {
+            if v.is_finite() {
+                format!("{:.4}", v * scale)
+            } else {
+                "-".into()
+            }
+        };
+        let deg = 180.0 / std::f64::consts::PI;
+        let _ = writeln!(
+            s,
+            "| {} s | {} deg | {} deg | {} deg | {} m | {} m | {} m |",
+            d.horizon_s,
+            f(d.measured.heading_rms_rad, deg),
+            f(d.model_initial.heading_rms_rad, deg),
+            f(d.model_final.heading_rms_rad, deg),
+            f(d.measured.horizontal_rms_m, 1.0),
+            f(d.model_initial.horizontal_rms_m, 1.0),
+            f(d.model_final.horizontal_rms_m, 1.0),
+        );
+    }
+    let _ = writeln!(s, "\n## Plots\n");
+    for name in result.channels.keys() {
+        let _ = writeln!(s, "![{name}](diagnose_{name}.svg)");
+    }
+    s
+}
+
+fn plot(name: &str, r: &ChannelReport) -> String {
+    let c = &r.curves;
+    let unit = logio::Log::unit_of(name);
+    LogLogPlot {
+        title: format!(
+            "{name}: measured vs model band (gap {:.2} -> {:.2})",
+            r.gap_initial, r.gap_final
+        ),
+        x_label: "tau (s)".into(),
+        y_label: format!("Allan deviation ({unit})"),
+        series: vec![
+            Series::new("measured", c.tau_s.clone(), c.adev.clone(), "#000000"),
+            Series::dashed(
+                "model before",
+                c.tau_s.clone(),
+                c.band_initial.centre.clone(),
+                "#d62728",
+            ),
+            Series::dashed(
+                "model after",
+                c.tau_s.clone(),
+                c.band_final.centre.clone(),
+                "#1f77b4",
+            ),
+        ],
+        bands: vec![
+            Band {
+                name: "measured 1-sigma".into(),
+                x: c.tau_s.clone(),
+                lo: c.adev_lo.clone(),
+                hi: c.adev_hi.clone(),
+                color: "#7f7f7f".into(),
+            },
+            Band {
+                name: "model before, 95 % of seeds".into(),
+                x: c.tau_s.clone(),
+                lo: c.band_initial.lo.clone(),
+                hi: c.band_initial.hi.clone(),
+                color: "#d62728".into(),
+            },
+            Band {
+                name: "model after, 95 % of seeds".into(),
+                x: c.tau_s.clone(),
+                lo: c.band_final.lo.clone(),
+                hi: c.band_final.hi.clone(),
+                color: "#1f77b4".into(),
+            },
+        ],
+    }
+    .to_svg()
 }
