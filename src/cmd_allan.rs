@@ -44,6 +44,9 @@ pub struct Args {
     /// Worker threads (default: all cores); results do not depend on it
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Print the time spent in each stage on stderr
+    #[arg(long)]
+    pub timing: bool,
 }
 
 /// The analysis of one channel.
@@ -92,7 +95,17 @@ pub fn run(args: Args) -> Result<()> {
 }
 
 fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Result<()> {
+    let clock = std::time::Instant::now();
+    let stage = |what: &str| {
+        if args.timing {
+            eprintln!(
+                "timing: {what} done at {:.1} ms",
+                clock.elapsed().as_secs_f64() * 1e3
+            );
+        }
+    };
     let log = logio::read_log(&args.log, &args.log_args.options()?)?;
+    stage("read + parse");
     let names: Vec<String> = if args.channels.is_empty() {
         log.order
             .iter()
@@ -115,6 +128,7 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
         .par_iter()
         .map(|name| analyse(&log.channels[name], name, log.dt_s(), est, grid, opts))
         .collect();
+    stage("deviations, intervals, fit");
     let table = tables(&log, &results, est);
     let doc = json_document(&log, &results, est, &args.grid);
     if args.json {
