@@ -70,13 +70,17 @@ fn plan(args: &Args) -> Result<Plan> {
             args.rate
         );
     }
-    let duration_s = parse_quantity(&args.duration, Quantity::Time).map_err(|e| {
-        anyhow::anyhow!(
-            "--duration: expected seconds or a time such as \"12 h\" ({e}), found \"{}\"",
-            args.duration
-        )
-    })?;
-    if duration_s <= 0.0 {
+    // A bare number is seconds; otherwise a time with its unit.
+    let duration_s = match args.duration.trim().parse::<f64>() {
+        Ok(v) => v,
+        Err(_) => parse_quantity(&args.duration, Quantity::Time).map_err(|e| {
+            anyhow::anyhow!(
+                "--duration: expected seconds or a time such as \"12 h\" ({e}), found \"{}\"",
+                args.duration
+            )
+        })?,
+    };
+    if !(duration_s.is_finite() && duration_s > 0.0) {
         bail!(
             "--duration: expected a time > 0, found \"{}\"",
             args.duration
