@@ -8,6 +8,19 @@ use nalgebra::{Matrix3, Rotation3, Vector3};
 use std::ops::{Add, Sub};
 
 /// A vector resolved in the navigation frame (north, east, down). Units are those of the quantity.
+///
+/// Frames cannot be mixed:
+/// ```compile_fail
+/// use strapdown::{BodyVector, NavVector};
+/// let sum = NavVector::new(1.0, 0.0, 0.0) + BodyVector::new(0.0, 1.0, 0.0);
+/// ```
+/// while the same-frame sum and the conversion through an attitude do compile:
+/// ```
+/// use strapdown::{Attitude, BodyVector, NavVector};
+/// let body = BodyVector::new(0.0, 1.0, 0.0);
+/// let sum = NavVector::new(1.0, 0.0, 0.0) + Attitude::identity().to_nav(&body);
+/// assert_eq!(sum, NavVector::new(1.0, 1.0, 0.0));
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct NavVector(pub Vector3<f64>);
 
