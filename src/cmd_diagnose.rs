@@ -30,7 +30,7 @@ pub struct Args {
     #[arg(long, default_value_t = 16)]
     pub seeds: usize,
     /// Add-and-resimulate rounds at most
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 6)]
     pub rounds: usize,
     /// Drift horizons in seconds (comma list)
     #[arg(long, value_delimiter = ',', default_value = "60,3600")]

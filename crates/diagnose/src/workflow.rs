@@ -43,6 +43,8 @@ pub struct Settings {
     /// Candidates whose BIC is within this of the best are reported as indistinguishable from it
     /// (below 6 the evidence for the best is not "strong", Kass & Raftery 1995).
     pub ambiguity_delta_bic: f64,
+    /// Effects a channel may take in one round before the model is re-simulated.
+    pub effects_per_round: usize,
 }
 
 impl Default for Settings {
@@ -50,10 +52,11 @@ impl Default for Settings {
         Settings {
             seed: 1,
             seeds: 16,
-            max_rounds: 4,
+            max_rounds: 6,
             horizons_s: vec![60.0, 3600.0],
             min_delta_bic: 10.0,
             ambiguity_delta_bic: 6.0,
+            effects_per_round: 3,
         }
     }
 }
@@ -95,8 +98,11 @@ pub struct FoundEffect {
     pub kind: String,
     /// The model's own parameters when `kind` is "wrong_level".
     pub model_parameters: Option<BTreeMap<String, f64>>,
-    /// Channel gap (RMS z) with the model before and after adding the effect (both simulated).
+    /// Channel gap (RMS z) with the model before and after the round that added the effect (both
+    /// simulated; effects found in the same round share them), and as the closed forms predicted it
+    /// right after adding this effect.
     pub gap_before: f64,
+    pub gap_predicted: f64,
     pub gap_after: f64,
     /// BIC improvement over the unchanged model.
     pub delta_bic: f64,
@@ -207,6 +213,8 @@ struct Trial {
     hi: TermParams,
     model: Option<TermParams>,
     bic: f64,
+    /// (c - c0) f(tau): the change of the band's Allan variance.
+    delta_avar: Vec<f64>,
 }
 
 fn sqrt_params(p: TermParams, c: f64) -> TermParams {
@@ -363,6 +371,7 @@ fn trials(
                 current
             },
             bic: bic(fit.chi2, k, m) + penalty,
+            delta_avar: f.iter().map(|v| (fit.c - c0) * v).collect(),
         });
     }
     out
@@ -508,9 +517,13 @@ pub fn diagnose(
     let mut done: [bool; 6] = std::array::from_fn(|c| !active[c]);
     let mut rounds = 0;
 
-    // Steps 3-5: name, add, re-simulate, until nothing significant remains.
+    // Steps 3-5: name, add, re-simulate, until nothing significant remains. Within a round a channel
+    // takes up to `effects_per_round` effects by forward selection on the closed-form prediction (so a
+    // short-tau disagreement with huge z does not hold back a long-tau one for many rounds); the round's
+    // re-simulation then checks them together.
     for round in 1..=settings.max_rounds {
-        let mut pending: Vec<(usize, Effect, Option<TermParams>, f64)> = Vec::new();
+        // (channel, [(effect, previous level)], gap at the start of the round)
+        let mut pending: Vec<(usize, Vec<(Effect, Option<TermParams>)>, f64)> = Vec::new();
         for c in 0..6 {
             if done[c] {
                 continue;
@@ -530,92 +543,107 @@ pub fn diagnose(
                     temp_sign[c],
                 )
             });
-            let ts = trials(
-                &sim_model,
-                c,
-                &m.curve,
-                &band,
-                &g,
-                log.dt_s,
-                temp.as_ref()
-                    .map(|(v, s)| (v.as_slice(), *s, setup.temp_coeff[c])),
-            );
             let ln_meas: Vec<f64> = m.curve.adev.iter().map(|a| a.ln()).collect();
-            let data = FitData {
-                ln_meas: &ln_meas,
-                ln_band: &band.ln_mean,
-                avar_band: &band.avar_mean,
-                s: &g.s,
-            };
-            let base_bic = bic(data.chi2_base(), 0, ln_meas.len());
-            for t in &ts {
-                records[c].push(CandidateRecord {
-                    round,
-                    effect: t.effect.name().to_string(),
-                    delta_bic: base_bic - t.bic,
-                    parameters: named_map(t.effect, &t.params),
-                });
-            }
-            let Some(mut best) = ts.iter().min_by(|a, b| a.bic.total_cmp(&b.bic)) else {
-                done[c] = true;
-                continue;
-            };
-            // Occam: re-levelling an effect already named on this channel is preferred to naming another
-            // one unless the other is better by the ambiguity margin.
-            if let Some(refine) = ts
-                .iter()
-                .filter(|t| effects[c].iter().any(|e| e.effect == t.effect.name()))
-                .min_by(|a, b| a.bic.total_cmp(&b.bic))
-            {
-                if refine.bic - best.bic < settings.ambiguity_delta_bic {
-                    best = refine;
+            let mut predicted = band.clone();
+            let mut g_pred = g.clone();
+            let mut changes: Vec<(Effect, Option<TermParams>)> = Vec::new();
+            for _step in 0..settings.effects_per_round {
+                if g_pred.disagreements.is_empty() {
+                    break;
                 }
-            }
-            let delta = base_bic - best.bic;
-            if delta < settings.min_delta_bic {
-                done[c] = true;
-                continue;
-            }
-            let cannot_tell_from: Vec<String> = ts
-                .iter()
-                .filter(|t| {
-                    t.effect != best.effect && t.bic - best.bic < settings.ambiguity_delta_bic
-                })
-                .map(|t| t.effect.name().to_string())
-                .collect();
-            let previous = if best.effect == Effect::TemperatureBias {
-                (setup.temp_coeff[c] != 0.0).then_some(TermParams::Level(setup.temp_coeff[c]))
-            } else {
-                term_level(&sim_model, c, best.effect)
-            };
-            if best.effect == Effect::TemperatureBias {
-                if let TermParams::Level(k) = best.params {
-                    setup.temp_coeff[c] = k;
+                let ts = trials(
+                    &sim_model,
+                    c,
+                    &m.curve,
+                    &predicted,
+                    &g_pred,
+                    log.dt_s,
+                    temp.as_ref()
+                        .map(|(v, s)| (v.as_slice(), *s, setup.temp_coeff[c])),
+                );
+                let data = FitData {
+                    ln_meas: &ln_meas,
+                    ln_band: &predicted.ln_mean,
+                    avar_band: &predicted.avar_mean,
+                    s: &g_pred.s,
+                };
+                let base_bic = bic(data.chi2_base(), 0, ln_meas.len());
+                for t in &ts {
+                    records[c].push(CandidateRecord {
+                        round,
+                        effect: t.effect.name().to_string(),
+                        delta_bic: base_bic - t.bic,
+                        parameters: named_map(t.effect, &t.params),
+                    });
                 }
-            } else {
-                set_term(&mut sim_model, c, best.effect, &best.params);
-            }
-            set_term(&mut out_model, c, best.effect, &best.params);
-            effects[c].push(FoundEffect {
-                effect: best.effect.name().to_string(),
-                parameters: named_map(best.effect, &best.params),
-                parameters_lo: named_map(best.effect, &best.lo),
-                parameters_hi: named_map(best.effect, &best.hi),
-                kind: if best.model.is_some() {
-                    "wrong_level"
+                let Some(mut best) = ts.iter().min_by(|a, b| a.bic.total_cmp(&b.bic)) else {
+                    break;
+                };
+                // Occam: re-levelling an effect already named on this channel is preferred to naming
+                // another one unless the other is better by the ambiguity margin.
+                if let Some(refine) = ts
+                    .iter()
+                    .filter(|t| effects[c].iter().any(|e| e.effect == t.effect.name()))
+                    .min_by(|a, b| a.bic.total_cmp(&b.bic))
+                {
+                    if refine.bic - best.bic < settings.ambiguity_delta_bic {
+                        best = refine;
+                    }
+                }
+                let delta = base_bic - best.bic;
+                if delta < settings.min_delta_bic {
+                    break;
+                }
+                let cannot_tell_from: Vec<String> = ts
+                    .iter()
+                    .filter(|t| {
+                        t.effect != best.effect && t.bic - best.bic < settings.ambiguity_delta_bic
+                    })
+                    .map(|t| t.effect.name().to_string())
+                    .collect();
+                let previous = if best.effect == Effect::TemperatureBias {
+                    (setup.temp_coeff[c] != 0.0).then_some(TermParams::Level(setup.temp_coeff[c]))
                 } else {
-                    "missing"
+                    term_level(&sim_model, c, best.effect)
+                };
+                if best.effect == Effect::TemperatureBias {
+                    if let TermParams::Level(k) = best.params {
+                        setup.temp_coeff[c] = k;
+                    }
+                } else {
+                    set_term(&mut sim_model, c, best.effect, &best.params);
                 }
-                .to_string(),
-                model_parameters: best.model.map(|p| named_map(best.effect, &p)),
-                gap_before: g.rms,
-                gap_after: f64::NAN,
-                delta_bic: delta,
-                cannot_tell_from,
-                round,
-                refinements: 0,
-            });
-            pending.push((c, best.effect, previous, g.rms));
+                set_term(&mut out_model, c, best.effect, &best.params);
+                // The closed-form prediction of the band with this change, for the next step.
+                predicted = shifted_band(&predicted, &best.delta_avar);
+                g_pred = gap(&m.curve, &predicted);
+                effects[c].push(FoundEffect {
+                    effect: best.effect.name().to_string(),
+                    parameters: named_map(best.effect, &best.params),
+                    parameters_lo: named_map(best.effect, &best.lo),
+                    parameters_hi: named_map(best.effect, &best.hi),
+                    kind: if best.model.is_some() {
+                        "wrong_level"
+                    } else {
+                        "missing"
+                    }
+                    .to_string(),
+                    model_parameters: best.model.map(|p| named_map(best.effect, &p)),
+                    gap_before: g.rms,
+                    gap_predicted: g_pred.rms,
+                    gap_after: f64::NAN,
+                    delta_bic: delta,
+                    cannot_tell_from,
+                    round,
+                    refinements: 0,
+                });
+                changes.push((best.effect, previous));
+            }
+            if changes.is_empty() {
+                done[c] = true;
+            } else {
+                pending.push((c, changes, g.rms));
+            }
         }
         if pending.is_empty() {
             break;
@@ -623,7 +651,7 @@ pub fn diagnose(
         rounds = round;
         let sim = simulate(&sim_model, &setup, settings.seed, settings.seeds)?;
         dirty = false;
-        for (c, effect, previous, gap_before) in pending {
+        for (c, changes, gap_before) in pending {
             let new_bands = {
                 let mut b = bands.clone();
                 b[c] = sim.bands[c].clone();
@@ -632,34 +660,38 @@ pub fn diagnose(
             let after = gap_of(c, &new_bands)
                 .map(|(_, g)| g.rms)
                 .unwrap_or(f64::NAN);
-            let found = effects[c].last_mut().expect("just pushed");
-            found.gap_after = after;
+            let first_new = effects[c].len() - changes.len();
+            for found in &mut effects[c][first_new..] {
+                found.gap_after = after;
+            }
             if after.is_nan() || after >= gap_before {
-                // The re-simulated model is no closer: undo the change and stop on this channel.
-                found.kind = format!(
-                    "{} (rejected: gap did not shrink on re-simulation)",
-                    found.kind
-                );
-                let rejected = effects[c].pop().expect("just pushed");
-                records[c].push(CandidateRecord {
-                    round,
-                    effect: format!("{} rejected", rejected.effect),
-                    delta_bic: rejected.delta_bic,
-                    parameters: rejected.parameters,
-                });
-                restore(
-                    &mut sim_model,
-                    &mut out_model,
-                    &mut setup,
-                    c,
-                    effect,
-                    previous,
-                );
+                // The re-simulated model is no closer: undo this round's changes and stop here.
+                for rejected in effects[c].drain(first_new..) {
+                    records[c].push(CandidateRecord {
+                        round,
+                        effect: format!(
+                            "{} rejected: gap did not shrink on re-simulation",
+                            rejected.effect
+                        ),
+                        delta_bic: rejected.delta_bic,
+                        parameters: rejected.parameters,
+                    });
+                }
+                for (effect, previous) in changes.into_iter().rev() {
+                    restore(
+                        &mut sim_model,
+                        &mut out_model,
+                        &mut setup,
+                        c,
+                        effect,
+                        previous,
+                    );
+                }
                 done[c] = true;
                 dirty = true;
             } else {
                 bands[c] = sim.bands[c].clone();
-                merge_refinement(&mut effects[c]);
+                merge_refinements(&mut effects[c], first_new);
             }
         }
         last_drift = sim.drift;
@@ -765,24 +797,43 @@ fn restore(
 
 /// A later round that changes the level of an effect already named on the channel refines that finding
 /// rather than naming a second one: the earlier entry takes the new parameters and the new gap after,
-/// and keeps its kind, model parameters and gap before.
-fn merge_refinement(effects: &mut Vec<FoundEffect>) {
-    let Some(last) = effects.last() else { return };
-    let Some(j) = effects[..effects.len() - 1]
-        .iter()
-        .position(|e| e.effect == last.effect)
-    else {
-        return;
-    };
-    let last = effects.pop().expect("non-empty");
-    let first = &mut effects[j];
-    first.parameters = last.parameters;
-    first.parameters_lo = last.parameters_lo;
-    first.parameters_hi = last.parameters_hi;
-    first.gap_after = last.gap_after;
-    first.delta_bic += last.delta_bic;
-    first.cannot_tell_from = last.cannot_tell_from;
-    first.refinements += 1;
+/// and keeps its kind, model parameters and gap before. `first_new` is where this round's entries start.
+fn merge_refinements(effects: &mut Vec<FoundEffect>, first_new: usize) {
+    let mut i = first_new;
+    while i < effects.len() {
+        match effects[..first_new]
+            .iter()
+            .position(|e| e.effect == effects[i].effect)
+        {
+            Some(j) => {
+                let last = effects.remove(i);
+                let first = &mut effects[j];
+                first.parameters = last.parameters;
+                first.parameters_lo = last.parameters_lo;
+                first.parameters_hi = last.parameters_hi;
+                first.gap_predicted = last.gap_predicted;
+                first.gap_after = last.gap_after;
+                first.delta_bic += last.delta_bic;
+                first.cannot_tell_from = last.cannot_tell_from;
+                first.refinements += 1;
+            }
+            None => i += 1,
+        }
+    }
+}
+
+/// The band with `delta_avar` added to its mean Allan variance, ln adev moved accordingly (the spread is
+/// kept: it is re-estimated when the changed model is simulated).
+fn shifted_band(band: &Band, delta_avar: &[f64]) -> Band {
+    let mut out = band.clone();
+    for i in 0..out.avar_mean.len() {
+        let ratio = ((band.avar_mean[i] + delta_avar[i]) / band.avar_mean[i]).max(1e-6);
+        out.avar_mean[i] = band.avar_mean[i] * ratio;
+        out.ln_mean[i] = band.ln_mean[i] + 0.5 * ratio.ln();
+        out.adev_lo[i] = band.adev_lo[i] * ratio.sqrt();
+        out.adev_hi[i] = band.adev_hi[i] * ratio.sqrt();
+    }
+    out
 }
 
 fn verdict(g: &Gap, effects: &[FoundEffect]) -> String {
