@@ -3,7 +3,8 @@
 //! Input convention (both schemes): step `k -> k+1` consumes the gyro sample `w_k` (rad/s) and the
 //! accelerometer sample `f_k` (m/s^2) of an *integrating* IMU, i.e. the body-frame increments over
 //! `[t_k, t_k + dt]` divided by `dt` (`dtheta_k = w_k dt`, `dv_k = f_k dt`). For a constant rate this is
-//! the rate itself; [`crate::Trajectory::ideal_imu`] produces exactly these averages.
+//! the rate itself; [`crate::Trajectory::ideal_imu`] produces exactly these averages. The sample that
+//! covers `[t_k, t_{k+1}]` is delivered at `t_{k+1}`, so it is Woodman's `a_b(t + dt)` of eq 45.
 
 use crate::frames::{so3_exp, Attitude, BodyVector, NavVector};
 use nalgebra::{Matrix3, Vector3};

@@ -364,6 +364,19 @@ mod tests {
     }
 
     #[test]
+    fn spec_round_trips_through_toml() {
+        let text = include_str!("../tests/data/profile.toml");
+        let spec =
+            TrajectorySpec::from_toml_str(&format!("kind = \"profile\"\n{text}"), "t").unwrap();
+        let written = toml::to_string(&spec).unwrap();
+        assert_eq!(
+            TrajectorySpec::from_toml_str(&written, "written").unwrap(),
+            spec,
+            "{written}"
+        );
+    }
+
+    #[test]
     fn errors_name_the_key() {
         let e = TrajectorySpec::from_toml_str(
             "kind = \"coning\"\nhalf_angle_deg = 5\nfreq = 1",
