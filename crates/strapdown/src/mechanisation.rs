@@ -126,8 +126,10 @@ impl Strapdown {
     }
 }
 
-/// One step of the symmetric orthonormalisation `C <- C - C (C^T C - I) / 2` (first-order Newton step
-/// towards the nearest orthonormal matrix; Savage 1998 part 1 discusses the same normalisation).
+/// First-order symmetric orthonormalisation `C <- C - C (C^T C - I) / 2`: the first term of the nearest
+/// orthonormal matrix `C (C^T C)^(-1/2) = C (I + D)^(-1/2)`, `D = C^T C - I` (I. Bar-Itzhack, "Strapdown
+/// matrix orthogonalization: the dual iterative algorithm", IEEE TAES 1976; the same series is spelled
+/// out in M. Jah's public `orthodcm.m`). With `|D| ~ 1e-14` the neglected `3/8 D^2` is below rounding.
 /// Exact identity stays exact identity.
 #[inline]
 fn renormalise(c: &Matrix3<f64>) -> Matrix3<f64> {
