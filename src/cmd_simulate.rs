@@ -42,9 +42,13 @@ pub struct Args {
     /// `imudrift merge` into --out DIR
     #[arg(long, value_name = "I/K")]
     pub shard: Option<String>,
-    /// Also run each active term alone and the model without it (ablation table)
+    /// Also run each active term alone and the model without it (ablation table); on by default
+    /// when the scenario says `ablation = true`
     #[arg(long)]
     pub ablation: bool,
+    /// No ablation table even if the scenario asks for one
+    #[arg(long, conflicts_with = "ablation")]
+    pub no_ablation: bool,
 }
 
 /// Scenario and sensor texts as read, with their names (kept verbatim for shard files).
@@ -174,7 +178,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     let result = pool.install(|| execute(&exp, 0..exp.runs, "simulate"));
     let report = exp.report(&result.matrix, &result.failures);
-    let ablation = if args.ablation {
+    let ablation = if args.ablation || (exp.scenario.ablation && !args.no_ablation) {
         Some(pool.install(|| ablation(&inputs, &overrides, &exp, &report))?)
     } else {
         None

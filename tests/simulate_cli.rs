@@ -30,12 +30,25 @@ const SCENARIO: &str = "configs/scenarios/mtx-static-60s.toml";
 #[test]
 fn one_and_four_threads_and_merged_shards_give_identical_json() {
     let base = [
-        "simulate", SCENARIO, "--runs", "70", "--seed", "11", "--json",
+        "simulate",
+        SCENARIO,
+        "--runs",
+        "70",
+        "--seed",
+        "11",
+        "--json",
+        "--no-ablation",
     ];
     let one = ok(imudrift(&[&base[..], &["--threads", "1"]].concat())).stdout;
     let four = ok(imudrift(&[&base[..], &["--threads", "4"]].concat())).stdout;
     assert!(!one.is_empty());
-    assert_eq!(one, four, "1 and 4 threads differ");
+    let text = |b: &[u8]| String::from_utf8_lossy(b).into_owned();
+    assert!(
+        one == four,
+        "1 and 4 threads differ:\n{}\n{}",
+        text(&one),
+        text(&four)
+    );
     let doc: serde_json::Value = serde_json::from_slice(&one).unwrap();
     assert_eq!(doc["seed"], 11);
     assert_eq!(doc["runs"], 70);
@@ -68,11 +81,35 @@ fn one_and_four_threads_and_merged_shards_give_identical_json() {
     let mut merge_args = vec!["merge", "--json"];
     merge_args.extend(shards.iter().map(String::as_str));
     let merged = ok(imudrift(&merge_args)).stdout;
-    assert_eq!(merged, one, "4 merged shards differ from one run");
+    assert!(
+        merged == one,
+        "4 merged shards differ from one run:\n{}\n{}",
+        text(&merged),
+        text(&one)
+    );
     // A missing shard is an error, not a partial result.
     let bad = imudrift(&["merge", "--json", &shards[0], &shards[1], &shards[2]]);
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("missing"));
+}
+
+#[test]
+fn woodman_experiment_prints_reference_and_ablation() {
+    let out = ok(imudrift(&["simulate", SCENARIO, "--runs", "40", "--json"]));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("published 152.67"), "{err}");
+    assert!(
+        err.contains("ablation") && err.contains("gyro.white_noise"),
+        "{err}"
+    );
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(doc["reference"]["value"], 152.67);
+    let rows = doc["ablation"].as_array().unwrap();
+    assert_eq!(rows.len(), doc["active_terms"].as_array().unwrap().len());
+    // Shares of independent terms add up to the whole mean square (to Monte Carlo noise: the
+    // terms use their own streams, so the sum is within a few standard errors of 1 at 40 runs).
+    let total: f64 = rows.iter().map(|r| r["only_share"].as_f64().unwrap()).sum();
+    assert!((total - 1.0).abs() < 0.5, "{total}");
 }
 
 #[test]

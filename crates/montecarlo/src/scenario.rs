@@ -33,6 +33,7 @@ struct RawScenario {
     alignment: Option<RawAlignment>,
     terms: Option<RawTerms>,
     reference: Option<Reference>,
+    ablation: Option<bool>,
 }
 
 /// A published measurement to print beside the simulation (e.g. Woodman's 152.67 m at 60 s).
@@ -121,6 +122,8 @@ pub struct Scenario {
     pub only: Option<Vec<String>>,
     pub without: Vec<String>,
     pub reference: Option<Reference>,
+    /// Print the ablation table (each term alone and the model without it) by default.
+    pub ablation: bool,
 }
 
 /// Standard gravity (m/s^2), the value INTERFACES.md fixes for a static level IMU.
@@ -272,6 +275,7 @@ impl Scenario {
             only: terms.only,
             without: terms.without.unwrap_or_default(),
             reference: raw.reference,
+            ablation: raw.ablation.unwrap_or(false),
         })
     }
 }
