@@ -169,15 +169,25 @@ pub fn analyse(
 ) -> ChannelResult {
     let series = allan::Series::new(data, DataKind::Rate, dt_s);
     let ms = series.grid_m(est, grid, opts.stable32_stop);
-    let mut points: Vec<AllanPoint> = ms
-        .par_iter()
-        .filter_map(|&m| series.raw_point(est, m))
-        .collect();
+    // The deviations (one blocked pass) and the per-tau noise identification are independent:
+    // run them side by side. Every number is computed by one thread in a fixed order, so the
+    // result does not depend on the thread count.
+    let identify = opts.edf != EdfMethod::None && opts.alpha.is_none();
+    let d = est.difference_order();
+    let (mut points, alphas) = rayon::join(
+        || series.raw_points(est, &ms),
+        || -> Vec<(usize, Option<i32>)> {
+            if identify {
+                ms.par_iter().map(|&m| (m, series.noise_id(m, d))).collect()
+            } else {
+                ms.iter().map(|&m| (m, opts.alpha)).collect()
+            }
+        },
+    );
     if opts.edf != EdfMethod::None {
-        let d = est.difference_order();
         let alphas: Vec<Option<i32>> = points
-            .par_iter()
-            .map(|p| opts.alpha.or_else(|| series.noise_id(p.m, d)))
+            .iter()
+            .map(|p| alphas.iter().find(|(m, _)| *m == p.m).and_then(|(_, a)| *a))
             .collect();
         series.attach_intervals_with_alphas(est, &mut points, &alphas, opts);
     }

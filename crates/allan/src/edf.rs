@@ -301,15 +301,25 @@ pub fn autocorr_noise_id(data: &[f64], m: usize, kind: DataKind, d_max: u32) -> 
             detrend(&x, 2)
         }
         DataKind::Rate => {
-            let blocks = data.len() / m.max(1);
+            let m = m.max(1);
+            let blocks = data.len() / m;
             if blocks < 30 {
                 return None;
             }
-            let y: Vec<f64> = data[..blocks * m]
-                .chunks_exact(m)
-                .map(|c| c.iter().sum::<f64>() / m as f64)
-                .collect();
-            detrend(&y, 1)
+            // Averages over blocks of m (allantools averages the frequency data by af); m = 1
+            // uses the data in place. Then a linear detrend and the lag-1 ACF of the detrended
+            // series and its differences, each a single pass without allocation.
+            let averaged: Vec<f64>;
+            let y: &[f64] = if m == 1 {
+                &data[..blocks]
+            } else {
+                averaged = data[..blocks * m]
+                    .chunks_exact(m)
+                    .map(|c| c.iter().sum::<f64>() / m as f64)
+                    .collect();
+                &averaged
+            };
+            return rate_noise_id(y, d_max);
         }
     };
     let phase_add = if kind == DataKind::Phase { 2 } else { 0 };
@@ -326,6 +336,65 @@ pub fn autocorr_noise_id(data: &[f64], m: usize, kind: DataKind, d_max: u32) -> 
         if x.len() < 2 {
             return None;
         }
+    }
+}
+
+/// The lag-1 ACF loop of `autocorr_noise_id` for frequency data: linear detrend, then the ACF
+/// of the detrended series and of its first, second, ... differences, each computed in one
+/// pass from the data (no intermediate arrays).
+fn rate_noise_id(y: &[f64], d_max: u32) -> Option<i32> {
+    let n = y.len();
+    // Least-squares line in the centred index t_k = k - c: a = mean, b = sum(t y) / sum(t^2),
+    // sum(t^2) = n (n^2 - 1) / 12.
+    let c = (n as f64 - 1.0) / 2.0;
+    let (mut sy, mut sty) = (0.0f64, 0.0f64);
+    for (k, &v) in y.iter().enumerate() {
+        sy += v;
+        sty += (k as f64 - c) * v;
+    }
+    let nf = n as f64;
+    let a = sy / nf;
+    let b = sty / (nf * (nf * nf - 1.0) / 12.0);
+    let e = |k: usize| y[k] - a - b * (k as f64 - c);
+    let mut d = 0u32;
+    loop {
+        let len = n.checked_sub(d as usize)?;
+        if len < 2 {
+            return None;
+        }
+        // z_k = d-th difference of e at k (binomial coefficients with alternating signs).
+        let z = |k: usize| -> f64 {
+            match d {
+                0 => e(k),
+                1 => e(k + 1) - e(k),
+                2 => e(k + 2) - 2.0 * e(k + 1) + e(k),
+                _ => e(k + 3) - 3.0 * e(k + 2) + 3.0 * e(k + 1) - e(k),
+            }
+        };
+        // One pass: S1 = sum z, S2 = sum z^2, P = sum z_k z_{k+1}; then the ACF about the mean
+        // mu: sum (z_k - mu)(z_{k+1} - mu) = P - mu (S1 - z_last) - mu (S1 - z_0) + (len-1) mu^2.
+        let (mut s1, mut s2, mut p) = (0.0f64, 0.0f64, 0.0f64);
+        let mut prev = z(0);
+        let first = prev;
+        s1 += prev;
+        s2 += prev * prev;
+        for k in 1..len {
+            let cur = z(k);
+            s1 += cur;
+            s2 += cur * cur;
+            p += prev * cur;
+            prev = cur;
+        }
+        let lf = len as f64;
+        let mu = s1 / lf;
+        let num = p - mu * (s1 - prev) - mu * (s1 - first) + (lf - 1.0) * mu * mu;
+        let den = s2 - lf * mu * mu;
+        let r1 = num / den;
+        let rho = r1 / (1.0 + r1);
+        if rho < 0.25 || d >= d_max {
+            return Some(-(2.0 * rho).round_ties_even() as i32 - 2 * d as i32);
+        }
+        d += 1;
     }
 }
 
@@ -398,6 +467,59 @@ fn solve_small(mut a: [[f64; 3]; 3], mut b: [f64; 3], k: usize) -> [f64; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// allantools' allocation-based procedure, for comparison.
+    fn reference_rate_id(y: &[f64], d_max: u32) -> i32 {
+        let mut x = detrend(y, 1);
+        let mut d = 0;
+        loop {
+            let r1 = lag1_acf(&x);
+            let rho = r1 / (1.0 + r1);
+            if rho < 0.25 || d >= d_max {
+                return -(2.0 * rho).round_ties_even() as i32 - 2 * d as i32;
+            }
+            x = x.windows(2).map(|w| w[1] - w[0]).collect();
+            d += 1;
+        }
+    }
+
+    #[test]
+    fn single_pass_noise_id_matches_reference() {
+        // White, random-walk and doubly integrated sequences with a trend: every noise class.
+        let mut s = 12345u64;
+        let mut u = || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let white: Vec<f64> = (0..5000).map(|k| u() + 1e-4 * k as f64).collect();
+        let mut acc = 0.0;
+        let walk: Vec<f64> = white
+            .iter()
+            .map(|w| {
+                acc += w;
+                acc
+            })
+            .collect();
+        let mut acc2 = 0.0;
+        let walk2: Vec<f64> = walk
+            .iter()
+            .map(|w| {
+                acc2 += w;
+                acc2
+            })
+            .collect();
+        let diffs: Vec<f64> = white.windows(2).map(|w| w[1] - w[0]).collect();
+        for y in [&white, &walk, &walk2, &diffs] {
+            for d_max in [2, 3] {
+                assert_eq!(rate_noise_id(y, d_max), Some(reference_rate_id(y, d_max)));
+            }
+        }
+        assert_eq!(rate_noise_id(&white, 2), Some(0));
+        assert_eq!(rate_noise_id(&walk, 2), Some(-2));
+        assert_eq!(rate_noise_id(&diffs, 2), Some(2));
+    }
 
     #[test]
     fn greenhall_matches_allantools() {

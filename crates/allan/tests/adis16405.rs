@@ -20,7 +20,9 @@ fn read_gz_text(path: &std::path::Path) -> String {
 
 #[test]
 fn adis16405_run1_matches_published_curve() {
-    let Some(dir) = testdata::data_dir() else { return };
+    let Some(dir) = testdata::data_dir() else {
+        return;
+    };
     let dir = dir.join("adis16405_imudata");
     let text = read_gz_text(&dir.join("adis16405_imu1.csv.gz"));
     let mut lines = text.lines().filter(|l| !l.starts_with('#'));
@@ -44,7 +46,10 @@ fn adis16405_run1_matches_published_curve() {
         };
         header.iter().position(|h| *h == name).unwrap()
     };
-    let opts = Options { edf: EdfMethod::None, ..Options::default() };
+    let opts = Options {
+        edf: EdfMethod::None,
+        ..Options::default()
+    };
     let ms: Vec<usize> = (1..=18).map(|j| 1usize << j).collect();
     let curves: Vec<Vec<f64>> = cols
         .iter()
@@ -79,7 +84,11 @@ fn adis16405_run1_matches_published_curve() {
         let got = curves[axis_col(f[i_axis])][j];
         let e = (got / want - 1.0).abs();
         worst = worst.max(e);
-        assert!(e < REL_TOL, "{} m={m}: {got} vs {want} ({e:.2e})", f[i_axis]);
+        assert!(
+            e < REL_TOL,
+            "{} m={m}: {got} vs {want} ({e:.2e})",
+            f[i_axis]
+        );
         compared += 1;
     }
     assert_eq!(compared, 6 * 18);

@@ -400,3 +400,25 @@ fn nbs14() {
     }
     assert_eq!(compared, 7 * 3 + 7 * 2 * 2);
 }
+
+#[test]
+fn noise_id_matches_stable32_alpha() {
+    // allantools test_ocxo.py::test_noise_id: the lag-1 ACF noise type (from frequency data)
+    // equals Stable32's alpha column of the OCXO MDEV table wherever N/AF > 20.
+    let Some(dir) = testdata::data_dir() else {
+        return;
+    };
+    let dir = dir.join("allantools/ocxo");
+    let y: Vec<f64> = read_column(&dir.join("ocxo_frequency.txt"))
+        .iter()
+        .map(|f| (f - 1.0e7) / 1.0e7)
+        .collect();
+    let series = allan::Series::new(&y, DataKind::Rate, 1.0);
+    let table = read_table(&dir.join("mdev_octave.txt"));
+    let mut checked = 0;
+    for row in table.rows.iter().filter(|r| y.len() / r.af > 20) {
+        assert_eq!(series.noise_id(row.af, 2), Some(row.alpha), "AF {}", row.af);
+        checked += 1;
+    }
+    assert!(checked >= 10, "{checked}");
+}
