@@ -28,7 +28,9 @@ pub enum Scheme {
     Woodman,
     /// Exact rotation for constant rate over each step with a one-plus-previous-sample coning correction,
     /// trapezoidal velocity (specific force rotated with the mean of `C_k` and `C_{k+1}`) and trapezoidal
-    /// position. Second order in velocity and position; fourth order in attitude under coning.
+    /// position. Second order in velocity and position. Attitude under coning: fourth order for small
+    /// cone angles (measured 3.99 at 0.1 rad); at larger angles or finer steps a term of higher degree in
+    /// the cone angle takes over and the measured order tends to 3 (3.08 at 0.6 rad, dt = 0.6 ms).
     #[default]
     Accurate,
 }
