@@ -1,1 +1,55 @@
-fn main() {}
+//! Sample generation: ns per 6-axis sample of the full MTx model (configs/sensors/mtx.toml:
+//! white noise, flicker bias instability as 13 Gauss-Markov components and rate random walk on each
+//! gyro, white noise on each accelerometer), through `ImuErrors::corrupt` and channel by channel
+//! (`ChannelErrors::fill_static`, what `imudrift generate` runs in parallel).
+
+use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
+use nalgebra::Vector3;
+use noise::{ImuErrors, SensorModel};
+use std::hint::black_box;
+
+const SAMPLES: u64 = 100_000;
+
+fn mtx() -> SensorModel {
+    SensorModel::load(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/sensors/mtx.toml"),
+    )
+    .expect("mtx.toml")
+}
+
+fn bench(c: &mut Criterion) {
+    let model = mtx();
+    let ideal_g = Vector3::zeros();
+    let ideal_a = Vector3::new(0.0, 0.0, -9.80665);
+    let mut group = c.benchmark_group("generate_mtx");
+    group.throughput(Throughput::Elements(SAMPLES));
+    group.sample_size(20);
+    group.bench_function("corrupt_6axis", |b| {
+        b.iter_batched(
+            || ImuErrors::new(&model, 0.01, 1, 0),
+            |mut e| {
+                for k in 0..SAMPLES {
+                    black_box(e.corrupt(k, &ideal_g, &ideal_a));
+                }
+            },
+            BatchSize::LargeInput,
+        )
+    });
+    group.bench_function("fill_static_6_channels", |b| {
+        let mut out = vec![0.0; SAMPLES as usize];
+        b.iter_batched(
+            || ImuErrors::new(&model, 0.01, 1, 0),
+            |mut e| {
+                for (c, ch) in e.channels_mut().iter_mut().enumerate() {
+                    ch.fill_static(0, if c < 3 { &ideal_g } else { &ideal_a }, &mut out);
+                    black_box(&out);
+                }
+            },
+            BatchSize::LargeInput,
+        )
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

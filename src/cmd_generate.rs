@@ -117,9 +117,24 @@ pub fn run(args: Args) -> Result<()> {
         bar
     });
     let started = std::time::Instant::now();
-    output::write_atomic(&args.output, |w| {
-        write_log(w, &plan, &args, &pool, progress.as_ref())
-    })?;
+    // A device or FIFO (/dev/null, /dev/stdout) is written directly: renaming a temporary file over it
+    // would replace the device. Everything else is written atomically.
+    let special = std::fs::metadata(&args.output).is_ok_and(|m| !m.is_file() && !m.is_dir());
+    if special {
+        let file = std::fs::OpenOptions::new()
+            .write(true)
+            .open(&args.output)
+            .with_context(|| format!("cannot open {}", args.output.display()))?;
+        let mut w = std::io::BufWriter::with_capacity(1 << 20, file);
+        write_log(&mut w, &plan, &args, &pool, progress.as_ref())
+            .with_context(|| format!("while writing {}", args.output.display()))?;
+        w.flush()
+            .with_context(|| format!("cannot write {}", args.output.display()))?;
+    } else {
+        output::write_atomic(&args.output, |w| {
+            write_log(w, &plan, &args, &pool, progress.as_ref())
+        })?;
+    }
     if let Some(bar) = progress {
         bar.finish_and_clear();
     }
@@ -184,41 +199,54 @@ fn write_log(
     let mut errors = ImuErrors::new(&plan.model, dt_s, args.seed, args.run);
     let ideal_gyro = Vector3::zeros();
     let ideal_accel = Vector3::new(0.0, 0.0, -STANDARD_GRAVITY_MPS2);
-    let mut block: Vec<Vec<f64>> = vec![vec![0.0; BLOCK_SAMPLES]; 6];
-    let mut k0 = 0u64;
-    while k0 < plan.samples {
-        let n = (plan.samples - k0).min(BLOCK_SAMPLES as u64) as usize;
-        pool.install(|| {
-            errors
-                .channels_mut()
-                .par_iter_mut()
-                .zip(block.par_iter_mut())
-                .enumerate()
-                .for_each(|(c, (channel, out))| {
-                    let ideal = if c < 3 { &ideal_gyro } else { &ideal_accel };
-                    channel.fill_static(k0, ideal, &mut out[..n]);
-                })
+    // A producer thread generates and formats block after block (both in parallel on the pool) while
+    // this thread writes the previous one; at most two formatted blocks wait in the channel.
+    let (tx, rx) = std::sync::mpsc::sync_channel::<(u64, Vec<Vec<u8>>)>(2);
+    std::thread::scope(|scope| {
+        scope.spawn(move || {
+            let mut block: Vec<Vec<f64>> = vec![vec![0.0; BLOCK_SAMPLES]; 6];
+            let mut k0 = 0u64;
+            while k0 < plan.samples {
+                let n = (plan.samples - k0).min(BLOCK_SAMPLES as u64) as usize;
+                pool.install(|| {
+                    errors
+                        .channels_mut()
+                        .par_iter_mut()
+                        .zip(block.par_iter_mut())
+                        .enumerate()
+                        .for_each(|(c, (channel, out))| {
+                            let ideal = if c < 3 { &ideal_gyro } else { &ideal_accel };
+                            channel.fill_static(k0, ideal, &mut out[..n]);
+                        })
+                });
+                let texts: Vec<Vec<u8>> = pool.install(|| {
+                    (0..n)
+                        .step_by(FORMAT_ROWS)
+                        .collect::<Vec<_>>()
+                        .into_par_iter()
+                        .map(|start| {
+                            let end = (start + FORMAT_ROWS).min(n);
+                            format_rows(&block, &errors, k0, start..end, plan.rate_hz)
+                        })
+                        .collect()
+                });
+                k0 += n as u64;
+                // The writer hung up (a write failed): stop generating.
+                if tx.send((k0, texts)).is_err() {
+                    return;
+                }
+            }
         });
-        let texts: Vec<Vec<u8>> = pool.install(|| {
-            (0..n)
-                .step_by(FORMAT_ROWS)
-                .collect::<Vec<_>>()
-                .into_par_iter()
-                .map(|start| {
-                    let end = (start + FORMAT_ROWS).min(n);
-                    format_rows(&block, &errors, k0, start..end, plan.rate_hz)
-                })
-                .collect()
-        });
-        for t in texts {
-            w.write_all(&t)?;
+        for (k_done, texts) in rx {
+            for t in texts {
+                w.write_all(&t)?;
+            }
+            if let Some(bar) = progress {
+                bar.set_position(k_done);
+            }
         }
-        k0 += n as u64;
-        if let Some(bar) = progress {
-            bar.set_position(k0);
-        }
-    }
-    Ok(())
+        Ok(())
+    })
 }
 
 /// CSV rows for block rows `range`; floats in shortest round-trip form (ryu).
@@ -231,6 +259,9 @@ fn format_rows(
 ) -> Vec<u8> {
     let mut text = Vec::with_capacity(range.len() * 200);
     let mut buf = ryu::Buffer::new();
+    // The temperature is often constant or slow: format it only when it changes.
+    let mut temp_bits = None;
+    let mut temp_text = Vec::new();
     for i in range {
         let k = k0 + i as u64;
         // t = k / rate from the integer index (DESIGN.md: never t += dt).
@@ -239,9 +270,15 @@ fn format_rows(
             text.push(b',');
             text.extend_from_slice(buf.format(channel[i]).as_bytes());
         }
-        text.push(b',');
-        text.extend_from_slice(buf.format(errors.temperature_c(k)).as_bytes());
-        text.push(b'\n');
+        let temp = errors.temperature_c(k);
+        if temp_bits != Some(temp.to_bits()) {
+            temp_bits = Some(temp.to_bits());
+            temp_text.clear();
+            temp_text.push(b',');
+            temp_text.extend_from_slice(buf.format(temp).as_bytes());
+            temp_text.push(b'\n');
+        }
+        text.extend_from_slice(&temp_text);
     }
     text
 }

@@ -304,3 +304,33 @@ fn bad_input_names_the_place_and_leaves_no_file() {
         .collect();
     assert!(left.is_empty(), "left behind: {left:?}");
 }
+
+/// A FIFO (like /dev/null or /dev/stdout) is written into, not replaced by a regular file.
+#[cfg(unix)]
+#[test]
+fn special_files_are_written_not_replaced() {
+    use std::os::unix::fs::FileTypeExt;
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("pipe");
+    let made = Command::new("mkfifo").arg(&fifo).status();
+    if !made.is_ok_and(|s| s.success()) {
+        eprintln!("mkfifo not available: skipped");
+        return;
+    }
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || std::fs::read(fifo).unwrap().len())
+    };
+    ok(generate(&[
+        path_str(&mtx()),
+        "--duration",
+        "10",
+        "--rate",
+        "100",
+        "-o",
+        path_str(&fifo),
+    ]));
+    let bytes = reader.join().unwrap();
+    assert!(bytes > 100_000, "{bytes} bytes through the FIFO");
+    assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
+}
