@@ -35,6 +35,24 @@ pub enum Scheme {
     Accurate,
 }
 
+impl Scheme {
+    /// Both schemes, reference first.
+    pub const ALL: [Scheme; 2] = [Scheme::Woodman, Scheme::Accurate];
+
+    /// The name used in configs and outputs: `woodman` or `accurate`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Scheme::Woodman => "woodman",
+            Scheme::Accurate => "accurate",
+        }
+    }
+
+    /// The scheme of a [`Scheme::name`]; `None` for any other string.
+    pub fn from_name(name: &str) -> Option<Scheme> {
+        Scheme::ALL.into_iter().find(|s| s.name() == name)
+    }
+}
+
 /// How often the direction cosine matrix is re-orthonormalised (steps). Rounding makes `C^T C` drift
 /// from `I` by ~1e-16 per step; renormalising every 256 steps keeps it at that level for negligible cost.
 const RENORMALISE_EVERY: u32 = 256;
@@ -143,6 +161,15 @@ fn renormalise(c: &Matrix3<f64>) -> Matrix3<f64> {
 mod tests {
     use super::*;
     use nalgebra::Rotation3;
+
+    #[test]
+    fn scheme_names_round_trip() {
+        for s in Scheme::ALL {
+            assert_eq!(Scheme::from_name(s.name()), Some(s));
+        }
+        assert_eq!(Scheme::from_name("euler"), None);
+        assert_eq!(Scheme::default(), Scheme::Accurate);
+    }
 
     /// Woodman's eqs 41, 42, 45, 46 written out independently (nalgebra's exponential for eq 41) agree
     /// with the Woodman scheme to rounding over a few steps of varied inputs.
