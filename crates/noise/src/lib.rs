@@ -50,6 +50,13 @@ pub fn stream_rng(seed: u64, stream: u64) -> ImuRng {
     ImuRng::seed_from_u64(stream_key(seed, stream))
 }
 
+/// A per-run stream for draws outside the sensor model (e.g. initial alignment errors), `index` chosen
+/// by the caller. Disjoint from every term stream of `ImuErrors` by construction: term streams use
+/// indices below 2^11 under the run's key, these use 2^32 + index.
+pub fn extra_rng(seed: u64, run: u64, index: u32) -> ImuRng {
+    stream_rng(stream_key(seed, run), (1u64 << 32) | u64::from(index))
+}
+
 /// The sub-stream of one term of one channel of one run.
 pub(crate) fn term_rng(seed: u64, run: u64, channel: u64, effect: Effect) -> ImuRng {
     stream_rng(
