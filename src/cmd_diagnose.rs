@@ -7,9 +7,10 @@ use crate::output::{ensure_dir, write_string};
 use crate::plot::{Band, LogLogPlot, Series};
 use anyhow::{anyhow, bail, Context, Result};
 use diagnose::drift::CHANNELS;
-use diagnose::workflow::{ChannelReport, DriftRow, FoundEffect};
+use diagnose::workflow::{ChannelReport, DriftRow, FoundEffect, HeldOutGap};
 use diagnose::{diagnose, Diagnosis, LogInput, Settings};
 use noise::SensorModel;
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -38,6 +39,13 @@ pub struct Args {
     /// BIC improvement an effect needs to be named (10: "very strong" evidence, Kass & Raftery 1995)
     #[arg(long, default_value_t = 10.0)]
     pub min_delta_bic: f64,
+    /// Leave out taus below this (s), e.g. where the sensor's anti-alias filter shapes the curve
+    #[arg(long, default_value_t = 0.0, value_name = "S")]
+    pub tau_min: f64,
+    /// Held-out logs (same rate, length and columns) to check the corrected model on: their gap with
+    /// the original and with the corrected model (repeat or comma-separate)
+    #[arg(long, value_delimiter = ',', value_name = "LOG")]
+    pub check: Vec<PathBuf>,
     /// Print one JSON document on stdout (human text on stderr)
     #[arg(long)]
     pub json: bool,
@@ -58,6 +66,12 @@ pub fn run(args: Args) -> Result<()> {
     }
     if let Some(h) = args.horizons.iter().find(|h| !(h.is_finite() && **h > 0.0)) {
         bail!("--horizons: {h} is not a positive duration in seconds");
+    }
+    if !args.tau_min.is_finite() || args.tau_min < 0.0 {
+        bail!(
+            "--tau-min {}: expected a duration >= 0 in seconds",
+            args.tau_min
+        );
     }
     if !args.min_delta_bic.is_finite() || args.min_delta_bic < 0.0 {
         bail!(
@@ -99,6 +113,7 @@ fn run_inner(args: &Args) -> Result<()> {
         max_rounds: args.rounds,
         horizons_s: args.horizons.clone(),
         min_delta_bic: args.min_delta_bic,
+        tau_min_s: args.tau_min,
         ..Settings::default()
     };
     let started = std::time::Instant::now();
@@ -110,7 +125,23 @@ fn run_inner(args: &Args) -> Result<()> {
         "{}",
         text_report(&result, &log.source, &args.model, elapsed_s)
     );
-    let doc = json_document(&result, &log.source, &args.model, &corrected)?;
+    let mut checks = Vec::new();
+    for path in &args.check {
+        let held = logio::read_log(path, &args.log_args.options()?)?;
+        let input = LogInput {
+            dt_s: held.dt_s(),
+            channels: std::array::from_fn(|c| held.channels.get(CHANNELS[c]).map(Vec::as_slice)),
+            temperature_c: held.channels.get("temp").map(Vec::as_slice),
+        };
+        let gaps = result
+            .check(&input)
+            .with_context(|| format!("checking {}", held.source))?;
+        checks.push((held.source.clone(), gaps));
+    }
+    if !checks.is_empty() {
+        eprint!("{}", checks_text(&checks));
+    }
+    let doc = json_document(&result, &log.source, &args.model, &corrected, &checks)?;
     if args.json {
         println!("{doc}");
     }
@@ -268,11 +299,37 @@ fn model_text(e: &FoundEffect) -> String {
     }
 }
 
-fn json_document(result: &Diagnosis, log: &str, model: &Path, corrected: &str) -> Result<String> {
+type Checks = Vec<(String, BTreeMap<String, HeldOutGap>)>;
+
+fn checks_text(checks: &Checks) -> String {
+    let mut s =
+        String::from("held-out logs: gap with the original model -> with the corrected model\n");
+    for (log, gaps) in checks {
+        let cells: Vec<String> = gaps
+            .iter()
+            .map(|(ch, g)| format!("{ch} {:.2} -> {:.2}", g.gap_model, g.gap_corrected))
+            .collect();
+        let _ = writeln!(s, "  {log}: {}", cells.join(", "));
+    }
+    s
+}
+
+fn json_document(
+    result: &Diagnosis,
+    log: &str,
+    model: &Path,
+    corrected: &str,
+    checks: &Checks,
+) -> Result<String> {
     let mut v = serde_json::to_value(result).context("cannot serialise the diagnosis")?;
     let obj = v
         .as_object_mut()
         .ok_or_else(|| anyhow!("diagnosis is not a JSON object"))?;
+    let checks: Vec<serde_json::Value> = checks
+        .iter()
+        .map(|(log, gaps)| serde_json::json!({ "log": log, "channels": gaps }))
+        .collect();
+    obj.insert("checks".into(), checks.into());
     obj.insert("log".into(), log.into());
     obj.insert("model".into(), model.display().to_string().into());
     obj.insert("corrected_model_toml".into(), corrected.into());

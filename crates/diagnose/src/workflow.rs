@@ -45,6 +45,9 @@ pub struct Settings {
     pub ambiguity_delta_bic: f64,
     /// Effects a channel may take in one round before the model is re-simulated.
     pub effects_per_round: usize,
+    /// Taus below this are left out (e.g. where a sensor's internal anti-alias filter shapes the curve,
+    /// an effect outside the candidate set), s.
+    pub tau_min_s: f64,
 }
 
 impl Default for Settings {
@@ -57,6 +60,7 @@ impl Default for Settings {
             min_delta_bic: 10.0,
             ambiguity_delta_bic: 6.0,
             effects_per_round: 3,
+            tau_min_s: 0.0,
         }
     }
 }
@@ -81,6 +85,15 @@ pub enum DiagnoseError {
     BadInterval(f64),
     #[error("the temperature column has {got} samples, the log {expected}")]
     TemperatureLength { got: usize, expected: usize },
+    #[error("no Allan point at or above --tau-min {tau_min_s} s")]
+    NoTaus { tau_min_s: f64 },
+    #[error("a log checked against the diagnosis must have its rate and length: got {samples} samples at {dt_s} s, expected {expected_samples} at {expected_dt_s} s")]
+    CheckShape {
+        samples: usize,
+        dt_s: f64,
+        expected_samples: usize,
+        expected_dt_s: f64,
+    },
     #[error(transparent)]
     Simulation(#[from] SimError),
 }
@@ -178,9 +191,19 @@ pub struct Diagnosis {
     pub samples: usize,
     pub channels: BTreeMap<String, ChannelReport>,
     pub drift: Vec<DriftRow>,
+    /// Shortest tau analysed, s.
+    pub tau_min_s: f64,
     /// The corrected model (written as TOML by the CLI).
     #[serde(skip)]
     pub model_final: SensorModel,
+    /// Averaging factors of the tau grid and the bands of the original and corrected models (for
+    /// checking held-out logs).
+    #[serde(skip)]
+    pub grid_m: Vec<usize>,
+    #[serde(skip)]
+    pub bands_initial: [Option<Band>; 6],
+    #[serde(skip)]
+    pub bands_final: [Option<Band>; 6],
 }
 
 /// One channel's measurement on the common grid: indices into the grid it has valid points at.
@@ -189,6 +212,142 @@ struct Measured {
     curve: Curve,
     lo: Vec<f64>,
     hi: Vec<f64>,
+}
+
+/// Measured Allan deviations of every channel in the log on the octave grid, and the grid's averaging
+/// factors. Points without a positive deviation and EDF, or below `tau_min_s`, are left out.
+fn measure(log: &LogInput, tau_min_s: f64) -> (Vec<usize>, [Option<Measured>; 6]) {
+    let mut grid_m: Vec<usize> = Vec::new();
+    let mut points: [Vec<allan::AllanPoint>; 6] = Default::default();
+    for c in 0..6 {
+        if let Some(s) = log.channels[c] {
+            points[c] = allan::deviation(
+                s,
+                DataKind::Rate,
+                log.dt_s,
+                Estimator::Overlapping,
+                &TauGrid::Octave,
+            );
+            if grid_m.is_empty() {
+                grid_m = points[c].iter().map(|p| p.m).collect();
+            }
+        }
+    }
+    let measured = std::array::from_fn(|c| {
+        log.channels[c]?;
+        let mut idx = Vec::new();
+        let (mut tau, mut adev, mut edf, mut lo, mut hi) = (vec![], vec![], vec![], vec![], vec![]);
+        for p in &points[c] {
+            let Some(i) = grid_m.iter().position(|&m| m == p.m) else {
+                continue;
+            };
+            let valid = p.dev > 0.0 && p.dev.is_finite() && p.edf > 0.0 && p.edf.is_finite();
+            if valid && p.tau_s >= tau_min_s {
+                idx.push(i);
+                tau.push(p.tau_s);
+                adev.push(p.dev);
+                edf.push(p.edf);
+                lo.push(p.lo);
+                hi.push(p.hi);
+            }
+        }
+        Some(Measured {
+            idx,
+            curve: Curve {
+                tau_s: tau,
+                adev,
+                edf,
+            },
+            lo,
+            hi,
+        })
+    });
+    (grid_m, measured)
+}
+
+/// Gap of a held-out log against the model before and after diagnosis.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct HeldOutGap {
+    pub gap_model: f64,
+    pub gap_corrected: f64,
+}
+
+impl Diagnosis {
+    /// The gap of another log of the same rate and length (data the diagnosis did not see) against the
+    /// original model's band and the corrected model's band, per channel.
+    pub fn check(&self, log: &LogInput) -> Result<BTreeMap<String, HeldOutGap>, DiagnoseError> {
+        let samples = validate(log)?;
+        if samples != self.samples || (log.dt_s - self.dt_s).abs() > 1e-12 * self.dt_s {
+            return Err(DiagnoseError::CheckShape {
+                samples,
+                dt_s: log.dt_s,
+                expected_samples: self.samples,
+                expected_dt_s: self.dt_s,
+            });
+        }
+        let (grid_m, measured) = measure(log, self.tau_min_s);
+        let mut out = BTreeMap::new();
+        for c in 0..6 {
+            let (Some(m), Some(b0), Some(b1)) = (
+                measured[c].as_ref(),
+                self.bands_initial[c].as_ref(),
+                self.bands_final[c].as_ref(),
+            ) else {
+                continue;
+            };
+            if grid_m != self.grid_m {
+                return Err(DiagnoseError::CheckShape {
+                    samples,
+                    dt_s: log.dt_s,
+                    expected_samples: self.samples,
+                    expected_dt_s: self.dt_s,
+                });
+            }
+            out.insert(
+                CHANNELS[c].to_string(),
+                HeldOutGap {
+                    gap_model: gap(&m.curve, &restrict(b0, &m.idx)).rms,
+                    gap_corrected: gap(&m.curve, &restrict(b1, &m.idx)).rms,
+                },
+            );
+        }
+        Ok(out)
+    }
+}
+
+/// Check the log's shape; returns the number of samples.
+fn validate(log: &LogInput) -> Result<usize, DiagnoseError> {
+    if !(log.dt_s > 0.0 && log.dt_s.is_finite()) {
+        return Err(DiagnoseError::BadInterval(log.dt_s));
+    }
+    let first = (0..6)
+        .find(|&c| log.channels[c].is_some())
+        .ok_or(DiagnoseError::NoChannels)?;
+    let samples = log.channels[first].map(|c| c.len()).unwrap_or(0);
+    for c in 0..6 {
+        if let Some(s) = log.channels[c] {
+            if s.len() != samples {
+                return Err(DiagnoseError::Length {
+                    channel: CHANNELS[c],
+                    got: s.len(),
+                    first: CHANNELS[first],
+                    expected: samples,
+                });
+            }
+        }
+    }
+    if samples < 64 {
+        return Err(DiagnoseError::TooShort { samples });
+    }
+    if let Some(t) = log.temperature_c {
+        if t.len() != samples {
+            return Err(DiagnoseError::TemperatureLength {
+                got: t.len(),
+                expected: samples,
+            });
+        }
+    }
+    Ok(samples)
 }
 
 /// Restrict a band to a channel's valid grid indices.
@@ -390,83 +549,16 @@ pub fn diagnose(
     model: &SensorModel,
     settings: &Settings,
 ) -> Result<Diagnosis, DiagnoseError> {
-    if !(log.dt_s > 0.0 && log.dt_s.is_finite()) {
-        return Err(DiagnoseError::BadInterval(log.dt_s));
-    }
-    let first = (0..6)
-        .find(|&c| log.channels[c].is_some())
-        .ok_or(DiagnoseError::NoChannels)?;
-    let samples = log.channels[first].map(|c| c.len()).unwrap_or(0);
-    for c in 0..6 {
-        if let Some(s) = log.channels[c] {
-            if s.len() != samples {
-                return Err(DiagnoseError::Length {
-                    channel: CHANNELS[c],
-                    got: s.len(),
-                    first: CHANNELS[first],
-                    expected: samples,
-                });
-            }
-        }
-    }
-    if samples < 64 {
-        return Err(DiagnoseError::TooShort { samples });
-    }
-    if let Some(t) = log.temperature_c {
-        if t.len() != samples {
-            return Err(DiagnoseError::TemperatureLength {
-                got: t.len(),
-                expected: samples,
-            });
-        }
-    }
+    let samples = validate(log)?;
     let active: [bool; 6] = std::array::from_fn(|c| log.channels[c].is_some());
 
     // Step 1: measured Allan deviations with EDF (Greenhall, noise type by lag-1 ACF) on the octave grid.
-    let mut grid_m: Vec<usize> = Vec::new();
-    let mut points: [Vec<allan::AllanPoint>; 6] = Default::default();
-    for c in 0..6 {
-        if let Some(s) = log.channels[c] {
-            points[c] = allan::deviation(
-                s,
-                DataKind::Rate,
-                log.dt_s,
-                Estimator::Overlapping,
-                &TauGrid::Octave,
-            );
-            if grid_m.is_empty() {
-                grid_m = points[c].iter().map(|p| p.m).collect();
-            }
-        }
+    let (grid_m, measured) = measure(log, settings.tau_min_s);
+    if measured.iter().flatten().all(|m| m.idx.is_empty()) {
+        return Err(DiagnoseError::NoTaus {
+            tau_min_s: settings.tau_min_s,
+        });
     }
-    let measured: [Option<Measured>; 6] = std::array::from_fn(|c| {
-        log.channels[c]?;
-        let mut idx = Vec::new();
-        let (mut tau, mut adev, mut edf, mut lo, mut hi) = (vec![], vec![], vec![], vec![], vec![]);
-        for p in &points[c] {
-            let Some(i) = grid_m.iter().position(|&m| m == p.m) else {
-                continue;
-            };
-            if p.dev > 0.0 && p.dev.is_finite() && p.edf > 0.0 && p.edf.is_finite() {
-                idx.push(i);
-                tau.push(p.tau_s);
-                adev.push(p.dev);
-                edf.push(p.edf);
-                lo.push(p.lo);
-                hi.push(p.hi);
-            }
-        }
-        Some(Measured {
-            idx,
-            curve: Curve {
-                tau_s: tau,
-                adev,
-                edf,
-            },
-            lo,
-            hi,
-        })
-    });
 
     // Temperature signature per grid point and the sign of each channel's correlation with temperature.
     let temp_avar: Option<Vec<f64>> = log.temperature_c.map(|t| {
@@ -762,7 +854,11 @@ pub fn diagnose(
         samples,
         channels,
         drift,
+        tau_min_s: settings.tau_min_s,
         model_final: out_model,
+        grid_m,
+        bands_initial: sim0.bands,
+        bands_final: bands,
     })
 }
 
@@ -797,11 +893,12 @@ fn restore(
 
 /// A later round that changes the level of an effect already named on the channel refines that finding
 /// rather than naming a second one: the earlier entry takes the new parameters and the new gap after,
-/// and keeps its kind, model parameters and gap before. `first_new` is where this round's entries start.
+/// and keeps its kind, model parameters and gap before (the same holds for a second change of one
+/// effect within a round). `first_new` is where this round's entries start.
 fn merge_refinements(effects: &mut Vec<FoundEffect>, first_new: usize) {
     let mut i = first_new;
     while i < effects.len() {
-        match effects[..first_new]
+        match effects[..i]
             .iter()
             .position(|e| e.effect == effects[i].effect)
         {
