@@ -364,6 +364,9 @@ fn restrict(band: &Band, idx: &[usize]) -> Band {
     }
 }
 
+/// A channel changed in this round: (channel, [(effect, previous level)], gap at the round's start).
+type Pending = (usize, Vec<(Effect, Option<TermParams>)>, f64);
+
 /// A fitted candidate before selection.
 struct Trial {
     effect: Effect,
@@ -614,8 +617,7 @@ pub fn diagnose(
     // short-tau disagreement with huge z does not hold back a long-tau one for many rounds); the round's
     // re-simulation then checks them together.
     for round in 1..=settings.max_rounds {
-        // (channel, [(effect, previous level)], gap at the start of the round)
-        let mut pending: Vec<(usize, Vec<(Effect, Option<TermParams>)>, f64)> = Vec::new();
+        let mut pending: Vec<Pending> = Vec::new();
         for c in 0..6 {
             if done[c] {
                 continue;
