@@ -328,64 +328,65 @@ fn parse_body(
 /// Columns of one chunk, or (1-based line within the chunk, message).
 type ChunkColumns = std::result::Result<Vec<Vec<f64>>, (usize, String)>;
 
-/// Parse one chunk: (number of lines, columns or error).
+/// Parse one chunk: (number of lines, columns or error). Lines are found with SIMD `memchr`;
+/// the chunk is UTF-8-validated once, so fields are parsed as `&str` slices of it.
 fn parse_chunk(chunk: &[u8], n_cols: usize, names: &[String]) -> (usize, ChunkColumns) {
+    let lines_in = |b: &[u8]| {
+        memchr::memchr_iter(b'\n', b).count() + usize::from(!b.ends_with(b"\n") && !b.is_empty())
+    };
+    let text = match std::str::from_utf8(chunk) {
+        Ok(t) => t,
+        Err(e) => {
+            let line = memchr::memchr_iter(b'\n', &chunk[..e.valid_up_to()]).count() + 1;
+            return (
+                lines_in(chunk),
+                Err((line, "not valid UTF-8 text".to_string())),
+            );
+        }
+    };
     let mut cols: Vec<Vec<f64>> = vec![Vec::with_capacity(chunk.len() / (8 * n_cols) + 1); n_cols];
     let mut lines = 0usize;
-    let mut err = None;
-    for raw in chunk.split(|&b| b == b'\n') {
+    let mut begin = 0usize;
+    let bytes = text.as_bytes();
+    let ends = memchr::memchr_iter(b'\n', bytes)
+        .chain((!bytes.ends_with(b"\n") && !bytes.is_empty()).then_some(bytes.len()));
+    for end in ends {
         lines += 1;
-        if err.is_some() {
-            continue;
-        }
-        let line = trim_ascii(raw);
-        if line.is_empty() || line[0] == b'#' {
+        let line = text[begin..end].trim_ascii();
+        begin = end + 1;
+        if line.is_empty() || line.starts_with('#') {
             continue;
         }
         let mut k = 0;
-        for field in line.split(|&b| b == b',') {
-            if k >= n_cols {
-                k += 1;
-                continue;
-            }
-            match parse_f64(trim_ascii(field)) {
-                Some(v) => cols[k].push(v),
-                None => {
-                    err = Some((
-                        lines,
-                        format!(
-                            "column {:?}: cannot read {:?} as a number",
-                            names[k],
-                            String::from_utf8_lossy(trim_ascii(field))
-                        ),
-                    ));
-                    break;
+        let mut rest = line;
+        loop {
+            let (field, more) = match memchr::memchr(b',', rest.as_bytes()) {
+                Some(i) => (&rest[..i], Some(&rest[i + 1..])),
+                None => (rest, None),
+            };
+            if k < n_cols {
+                let field = field.trim_ascii();
+                match field.parse::<f64>() {
+                    Ok(v) if v.is_finite() => cols[k].push(v),
+                    _ => {
+                        let msg =
+                            format!("column {:?}: cannot read {field:?} as a number", names[k]);
+                        return (lines_in(chunk), Err((lines, msg)));
+                    }
                 }
             }
             k += 1;
+            match more {
+                Some(r) => rest = r,
+                None => break,
+            }
         }
-        if err.is_none() && k != n_cols {
-            err = Some((
-                lines,
-                format!("{k} fields, expected {n_cols} (as in the header)"),
-            ));
+        if k != n_cols {
+            let msg = format!("{k} fields, expected {n_cols} (as in the header)");
+            return (lines_in(chunk), Err((lines, msg)));
         }
     }
-    // `split` yields a final empty piece after a trailing newline: not a line of its own.
-    if chunk.last() == Some(&b'\n') {
-        lines -= 1;
-    }
-    match err {
-        Some(e) => (lines, Err(e)),
-        None => (lines, Ok(cols)),
-    }
-}
-
-fn parse_f64(field: &[u8]) -> Option<f64> {
-    // Rust's float parser is correctly rounded (Eisel-Lemire with a slow-path fallback).
-    let s = std::str::from_utf8(field).ok()?;
-    let v: f64 = s.parse().ok()?;
-    v.is_finite().then_some(v)
+    (lines, Ok(cols))
 }
 
 /// The 1-based file line of data row `row` (0-based), for error messages (slow path).
@@ -409,7 +410,7 @@ fn trim_ascii(s: &[u8]) -> &[u8] {
 }
 
 fn memchr(needle: u8, hay: &[u8]) -> Option<usize> {
-    hay.iter().position(|&b| b == needle)
+    memchr::memchr(needle, hay)
 }
 
 #[cfg(test)]

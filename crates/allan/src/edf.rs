@@ -340,62 +340,77 @@ pub fn autocorr_noise_id(data: &[f64], m: usize, kind: DataKind, d_max: u32) -> 
 }
 
 /// The lag-1 ACF loop of `autocorr_noise_id` for frequency data: linear detrend, then the ACF
-/// of the detrended series and of its first, second, ... differences, each computed in one
-/// pass from the data (no intermediate arrays).
-fn rate_noise_id(y: &[f64], d_max: u32) -> Option<i32> {
-    let n = y.len();
+/// of the detrended series and of its first, second, ... differences. `y(k)` gives the k-th of
+/// `n` (averaged) values. Two passes over the data in all: one for the line, one that
+/// accumulates the ACF sums of every difference order at once.
+pub fn rate_noise_id_fn(n: usize, y: impl Fn(usize) -> f64, d_max: u32) -> Option<i32> {
+    let d_max = d_max.min(3) as usize;
+    if n < d_max + 2 {
+        return None;
+    }
     // Least-squares line in the centred index t_k = k - c: a = mean, b = sum(t y) / sum(t^2),
     // sum(t^2) = n (n^2 - 1) / 12.
     let c = (n as f64 - 1.0) / 2.0;
     let (mut sy, mut sty) = (0.0f64, 0.0f64);
-    for (k, &v) in y.iter().enumerate() {
+    for k in 0..n {
+        let v = y(k);
         sy += v;
         sty += (k as f64 - c) * v;
     }
     let nf = n as f64;
     let a = sy / nf;
     let b = sty / (nf * (nf * nf - 1.0) / 12.0);
-    let e = |k: usize| y[k] - a - b * (k as f64 - c);
-    let mut d = 0u32;
-    loop {
-        let len = n.checked_sub(d as usize)?;
-        if len < 2 {
-            return None;
-        }
-        // z_k = d-th difference of e at k (binomial coefficients with alternating signs).
-        let z = |k: usize| -> f64 {
-            match d {
-                0 => e(k),
-                1 => e(k + 1) - e(k),
-                2 => e(k + 2) - 2.0 * e(k + 1) + e(k),
-                _ => e(k + 3) - 3.0 * e(k + 2) + 3.0 * e(k + 1) - e(k),
+    let e = |k: usize| y(k) - a - b * (k as f64 - c);
+    // For difference order d, z^d_k over k < n - d; per order: S1, S2, P = sum z_k z_{k+1},
+    // the first and the last value.
+    let mut s1 = [0.0f64; 4];
+    let mut s2 = [0.0f64; 4];
+    let mut p = [0.0f64; 4];
+    let mut first = [0.0f64; 4];
+    let mut prev = [0.0f64; 4];
+    // Sliding window of the last d_max + 1 detrended values: w[0] = e(k), w[1] = e(k-1), ...
+    let mut w = [0.0f64; 4];
+    for k in 0..n {
+        w = [e(k), w[0], w[1], w[2]];
+        for d in 0..=d_max {
+            if k < d {
+                continue;
             }
-        };
-        // One pass: S1 = sum z, S2 = sum z^2, P = sum z_k z_{k+1}; then the ACF about the mean
-        // mu: sum (z_k - mu)(z_{k+1} - mu) = P - mu (S1 - z_last) - mu (S1 - z_0) + (len-1) mu^2.
-        let (mut s1, mut s2, mut p) = (0.0f64, 0.0f64, 0.0f64);
-        let mut prev = z(0);
-        let first = prev;
-        s1 += prev;
-        s2 += prev * prev;
-        for k in 1..len {
-            let cur = z(k);
-            s1 += cur;
-            s2 += cur * cur;
-            p += prev * cur;
-            prev = cur;
+            // d-th backward difference ending at k = z^d_{k-d}
+            let z = match d {
+                0 => w[0],
+                1 => w[0] - w[1],
+                2 => w[0] - 2.0 * w[1] + w[2],
+                _ => w[0] - 3.0 * w[1] + 3.0 * w[2] - w[3],
+            };
+            s1[d] += z;
+            s2[d] += z * z;
+            if k == d {
+                first[d] = z;
+            } else {
+                p[d] += prev[d] * z;
+            }
+            prev[d] = z;
         }
-        let lf = len as f64;
-        let mu = s1 / lf;
-        let num = p - mu * (s1 - prev) - mu * (s1 - first) + (lf - 1.0) * mu * mu;
-        let den = s2 - lf * mu * mu;
+    }
+    for d in 0..=d_max {
+        // ACF about the mean mu: sum (z_k - mu)(z_{k+1} - mu)
+        //   = P - mu (S1 - z_last) - mu (S1 - z_0) + (len - 1) mu^2.
+        let lf = (n - d) as f64;
+        let mu = s1[d] / lf;
+        let num = p[d] - mu * (s1[d] - prev[d]) - mu * (s1[d] - first[d]) + (lf - 1.0) * mu * mu;
+        let den = s2[d] - lf * mu * mu;
         let r1 = num / den;
         let rho = r1 / (1.0 + r1);
         if rho < 0.25 || d >= d_max {
             return Some(-(2.0 * rho).round_ties_even() as i32 - 2 * d as i32);
         }
-        d += 1;
     }
+    None
+}
+
+fn rate_noise_id(y: &[f64], d_max: u32) -> Option<i32> {
+    rate_noise_id_fn(y.len(), |k| y[k], d_max)
 }
 
 /// Riley 2004 eq (2): lag-1 autocorrelation about the mean.

@@ -389,7 +389,18 @@ impl<'a> Series<'a> {
     /// on the data as given (rate or phase); `None` when too few points.
     pub fn noise_id(&self, m: usize, d_max: u32) -> Option<i32> {
         match (self.rate, self.source_phase) {
-            (Some(y), _) => edf::autocorr_noise_id(y, m, DataKind::Rate, d_max),
+            (Some(y), _) => {
+                // The block averages of the rate are phase differences at stride m
+                // (x_{(j+1)m} - x_{jm} = tau0 * sum of the block, mean removed): no pass over
+                // the m samples of each block. Scale and offset do not change the ACF.
+                let m = m.max(1);
+                let blocks = y.len() / m;
+                if blocks < 30 {
+                    return None;
+                }
+                let x = &self.phase;
+                edf::rate_noise_id_fn(blocks, |j| x[(j + 1) * m] - x[j * m], d_max)
+            }
             (None, Some(x)) => edf::autocorr_noise_id(x, m, DataKind::Phase, d_max),
             _ => None,
         }
