@@ -16,7 +16,7 @@ pub mod closed_form;
 mod config;
 mod effect;
 mod model;
-mod process;
+pub mod process;
 pub mod units;
 
 pub use config::ConfigError;

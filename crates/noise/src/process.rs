@@ -1,5 +1,6 @@
 //! The per-run error state: exact discretisation of every term at the sample interval
 //! (theory.md §3), one random sub-stream per (channel, term) so adding a term does not reshuffle others.
+//! The discrete processes take their RNG as an argument; `ChannelErrors` pairs each with its sub-stream.
 
 use crate::effect::{Effect, Sensor};
 use crate::model::{BiasInstability, SensorModel, TemperatureProfile};
@@ -11,68 +12,88 @@ use rand_distr::StandardNormal;
 /// Channel order of `ImuErrors` and of generated logs.
 pub const CHANNEL_NAMES: [&str; 6] = ["gx", "gy", "gz", "ax", "ay", "az"];
 
-fn normal(rng: &mut ImuRng) -> f64 {
+#[inline]
+fn normal<R: Rng + ?Sized>(rng: &mut R) -> f64 {
     rng.sample(StandardNormal)
 }
 
-/// A bank of independent first-order Gauss-Markov processes summed (one process, or flicker's band).
-/// Exact discretisation (theory.md §3, Maybeck 4-114): x_{k+1} = phi x_k + sigma sqrt(1 - phi^2) w_k,
-/// phi = e^{-dt/T}; started from the stationary distribution.
+/// White noise of density N sampled every dt: n_k = (N / sqrt(dt)) w_k (theory.md §3; Kalibr
+/// sigma_d = sigma / sqrt(dt); Woodman sigma = N / sqrt(dt)).
+#[derive(Clone, Copy, Debug)]
+pub struct WhiteNoise {
+    sd: f64,
+}
+
+impl WhiteNoise {
+    pub fn new(n: f64, dt_s: f64) -> WhiteNoise {
+        WhiteNoise {
+            sd: n / dt_s.sqrt(),
+        }
+    }
+    #[inline]
+    pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> f64 {
+        self.sd * normal(rng)
+    }
+}
+
+/// A bank of independent first-order Gauss-Markov processes, summed (one process, or flicker's band).
+/// Exact discretisation (theory.md §3, rotors_simulator / Maybeck 4-114):
+/// x_{k+1} = phi x_k + sigma sqrt(1 - phi^2) w_k, phi = e^{-dt/T}; started from the stationary distribution.
 #[derive(Clone, Debug)]
-struct GaussMarkovBank {
+pub struct GaussMarkovBank {
     phi: Vec<f64>,
     drive: Vec<f64>,
     state: Vec<f64>,
-    rng: ImuRng,
 }
 
 impl GaussMarkovBank {
-    fn new(components: &[(f64, f64)], dt_s: f64, mut rng: ImuRng) -> Self {
-        let phi: Vec<f64> = components
-            .iter()
-            .map(|&(tc, _)| (-dt_s / tc).exp())
-            .collect();
-        // sigma sqrt(1 - phi^2) = sigma sqrt(-expm1(-2 dt/T)), accurate for T >> dt.
-        let drive = components
-            .iter()
-            .map(|&(tc, s)| s * (-(-2.0 * dt_s / tc).exp_m1()).sqrt())
-            .collect();
-        let state = components
-            .iter()
-            .map(|&(_, s)| s * normal(&mut rng))
-            .collect();
+    /// `components`: (correlation time s, stationary std); the initial state is drawn from `rng`.
+    pub fn new<R: Rng + ?Sized>(components: &[(f64, f64)], dt_s: f64, rng: &mut R) -> Self {
         GaussMarkovBank {
-            phi,
-            drive,
-            state,
-            rng,
+            phi: components
+                .iter()
+                .map(|&(tc, _)| (-dt_s / tc).exp())
+                .collect(),
+            // sigma sqrt(1 - phi^2) = sigma sqrt(-expm1(-2 dt/T)), accurate for T >> dt.
+            drive: components
+                .iter()
+                .map(|&(tc, s)| s * (-(-2.0 * dt_s / tc).exp_m1()).sqrt())
+                .collect(),
+            state: components.iter().map(|&(_, s)| s * normal(rng)).collect(),
         }
     }
 
+    /// The current value (sum of the components), then advance one step.
     #[inline]
-    fn next(&mut self) -> f64 {
+    pub fn next<R: Rng + ?Sized>(&mut self, rng: &mut R) -> f64 {
         let mut sum = 0.0;
         for ((x, &phi), &d) in self.state.iter_mut().zip(&self.phi).zip(&self.drive) {
             sum += *x;
-            *x = phi * *x + d * normal(&mut self.rng);
+            *x = phi * *x + d * normal(rng);
         }
         sum
     }
 }
 
 /// Random walk b_{k+1} = b_k + K sqrt(dt) w_k from b_0 = 0 (theory.md §3, Kalibr: sigma_bd = sigma_b sqrt(dt)).
-#[derive(Clone, Debug)]
-struct RandomWalk {
+#[derive(Clone, Copy, Debug)]
+pub struct RandomWalk {
     step: f64,
     state: f64,
-    rng: ImuRng,
 }
 
 impl RandomWalk {
+    pub fn new(k: f64, dt_s: f64) -> RandomWalk {
+        RandomWalk {
+            step: k * dt_s.sqrt(),
+            state: 0.0,
+        }
+    }
+    /// The current value, then advance one step.
     #[inline]
-    fn next(&mut self) -> f64 {
+    pub fn next<R: Rng + ?Sized>(&mut self, rng: &mut R) -> f64 {
         let b = self.state;
-        self.state += self.step * normal(&mut self.rng);
+        self.state += self.step * normal(rng);
         b
     }
 }
@@ -80,15 +101,23 @@ impl RandomWalk {
 /// Quantisation of the integrated output (DESIGN.md: so its Allan signature is the tau^-1 slope):
 /// the output released in a sample is a whole number of LSBs of the integral, LSB = Q sqrt(12)
 /// (Hou §4.3.1, Q = LSB/sqrt(12)). `residual` is the integral not yet released.
-#[derive(Clone, Debug)]
-struct Quantizer {
+#[derive(Clone, Copy, Debug)]
+pub struct Quantizer {
     lsb: f64,
     residual: f64,
 }
 
 impl Quantizer {
+    /// The quantiser's phase on the LSB grid is drawn from `rng`, so no run starts on a step.
+    pub fn new<R: Rng + ?Sized>(q: f64, rng: &mut R) -> Quantizer {
+        let lsb = q * 12f64.sqrt();
+        Quantizer {
+            lsb,
+            residual: lsb * (rng.gen::<f64>() - 0.5),
+        }
+    }
     #[inline]
-    fn apply(&mut self, value: f64, dt_s: f64) -> f64 {
+    pub fn apply(&mut self, value: f64, dt_s: f64) -> f64 {
         self.residual += value * dt_s;
         let n = (self.residual / self.lsb).round();
         self.residual -= n * self.lsb;
@@ -104,12 +133,12 @@ pub struct ChannelErrors {
     row: [f64; 3],
     /// Constant bias plus this run's turn-on bias draw.
     bias: f64,
-    white: Option<(f64, ImuRng)>,
-    flicker: Option<GaussMarkovBank>,
-    bias_random_walk: Option<RandomWalk>,
-    rate_random_walk: Option<RandomWalk>,
+    white: Option<(WhiteNoise, ImuRng)>,
+    flicker: Option<(GaussMarkovBank, ImuRng)>,
+    bias_random_walk: Option<(RandomWalk, ImuRng)>,
+    rate_random_walk: Option<(RandomWalk, ImuRng)>,
     ramp: f64,
-    gauss_markov: Option<GaussMarkovBank>,
+    gauss_markov: Option<(GaussMarkovBank, ImuRng)>,
     /// amplitude, angular frequency (rad/s), phase (rad)
     sinusoid: Option<(f64, f64, f64)>,
     /// coefficient per degC, profile, reference degC
@@ -138,26 +167,25 @@ impl ChannelErrors {
         let turn_on = axis
             .turn_on_bias
             .map_or(0.0, |s| s * normal(&mut rng(Effect::TurnOnBias)));
+        // Each process with its own sub-stream; initial states come from that stream first.
+        let bank = |components: &[(f64, f64)], effect: Effect| {
+            let mut r = rng(effect);
+            (GaussMarkovBank::new(components, dt_s, &mut r), r)
+        };
         let (flicker, bias_random_walk) = match &axis.bias_instability {
-            Some(BiasInstability::Flicker(f)) => (
-                Some(GaussMarkovBank::new(
-                    &f.components(),
-                    dt_s,
-                    rng(Effect::BiasInstability),
-                )),
-                None,
-            ),
+            Some(BiasInstability::Flicker(f)) => {
+                (Some(bank(&f.components(), Effect::BiasInstability)), None)
+            }
+            // Woodman eq 9 / AirSim: K = BS / sqrt(T_BS), so BS·sqrt(dt/T_BS) per step.
             Some(BiasInstability::RandomWalk {
                 stability,
                 period_s,
             }) => (
                 None,
-                Some(RandomWalk {
-                    // Woodman eq 9 / AirSim: BS·sqrt(dt/T_BS) per step.
-                    step: stability * (dt_s / period_s).sqrt(),
-                    state: 0.0,
-                    rng: rng(Effect::BiasInstability),
-                }),
+                Some((
+                    RandomWalk::new(stability / period_s.sqrt(), dt_s),
+                    rng(Effect::BiasInstability),
+                )),
             ),
             None => (None, None),
         };
@@ -165,21 +193,18 @@ impl ChannelErrors {
             dt_s,
             row,
             bias: axis.constant_bias.unwrap_or(0.0) + turn_on,
-            // theory.md §3: n_k = (N / sqrt(dt)) w_k.
             white: axis
                 .white_noise
-                .map(|n| (n / dt_s.sqrt(), rng(Effect::WhiteNoise))),
+                .map(|n| (WhiteNoise::new(n, dt_s), rng(Effect::WhiteNoise))),
             flicker,
             bias_random_walk,
-            rate_random_walk: axis.rate_random_walk.map(|k| RandomWalk {
-                step: k * dt_s.sqrt(),
-                state: 0.0,
-                rng: rng(Effect::RateRandomWalk),
-            }),
+            rate_random_walk: axis
+                .rate_random_walk
+                .map(|k| (RandomWalk::new(k, dt_s), rng(Effect::RateRandomWalk))),
             ramp: axis.rate_ramp.unwrap_or(0.0),
-            gauss_markov: axis.gauss_markov.map(|g| {
-                GaussMarkovBank::new(&[(g.tau_s, g.sigma)], dt_s, rng(Effect::GaussMarkov))
-            }),
+            gauss_markov: axis
+                .gauss_markov
+                .map(|g| bank(&[(g.tau_s, g.sigma)], Effect::GaussMarkov)),
             sinusoid: axis.sinusoidal.map(|s| {
                 let phase = s.phase_rad.unwrap_or_else(|| {
                     rng(Effect::Sinusoidal).gen_range(0.0..std::f64::consts::TAU)
@@ -189,12 +214,9 @@ impl ChannelErrors {
             temperature: axis
                 .temperature_bias
                 .map(|c| (c, model.temperature.clone(), model.temperature_reference_c)),
-            quantizer: axis.quantization.map(|q| {
-                let lsb = q * 12f64.sqrt();
-                // The quantiser's phase on the LSB grid is drawn per run so no run starts on a step.
-                let residual = lsb * (rng(Effect::Quantization).gen::<f64>() - 0.5);
-                Quantizer { lsb, residual }
-            }),
+            quantizer: axis
+                .quantization
+                .map(|q| Quantizer::new(q, &mut rng(Effect::Quantization))),
         }
     }
 
@@ -205,21 +227,21 @@ impl ChannelErrors {
         let t_s = k as f64 * self.dt_s;
         let mut v =
             self.row[0] * ideal.x + self.row[1] * ideal.y + self.row[2] * ideal.z + self.bias;
-        if let Some((sd, rng)) = &mut self.white {
-            v += *sd * normal(rng);
+        if let Some((w, rng)) = &mut self.white {
+            v += w.sample(rng);
         }
-        if let Some(f) = &mut self.flicker {
-            v += f.next();
+        if let Some((f, rng)) = &mut self.flicker {
+            v += f.next(rng);
         }
-        if let Some(w) = &mut self.bias_random_walk {
-            v += w.next();
+        if let Some((w, rng)) = &mut self.bias_random_walk {
+            v += w.next(rng);
         }
-        if let Some(w) = &mut self.rate_random_walk {
-            v += w.next();
+        if let Some((w, rng)) = &mut self.rate_random_walk {
+            v += w.next(rng);
         }
         v += self.ramp * t_s;
-        if let Some(g) = &mut self.gauss_markov {
-            v += g.next();
+        if let Some((g, rng)) = &mut self.gauss_markov {
+            v += g.next(rng);
         }
         if let Some((a, omega, phase)) = self.sinusoid {
             v += a * (omega * t_s + phase).sin();
