@@ -36,8 +36,8 @@ pub fn rate_random_walk_avar(k: f64, tau_s: f64) -> f64 {
 
 /// Exact Allan variance of the sampled random walk b_{j+1} = b_j + K sqrt(dt) w_j, averaged m = tau/dt
 /// samples at a time: K^2 dt (2m^2 + 1)/(6m) = K^2 tau/3 + K^2 dt^2/(6 tau).
-/// [derived: the difference of adjacent m-averages weighs the increments triangularly 1..m..1, and
-/// sum of the squared weights is m(2m^2+1)/3.]
+/// (Derived: the difference of adjacent m-averages weighs the increments triangularly 1..m..1, and
+/// sum of the squared weights is m(2m^2+1)/3.)
 pub fn rate_random_walk_avar_sampled(k: f64, tau_s: f64, dt_s: f64) -> f64 {
     rate_random_walk_avar(k, tau_s) + k * k * dt_s * dt_s / (6.0 * tau_s)
 }
@@ -66,7 +66,7 @@ pub fn gauss_markov_avar(sigma: f64, tc_s: f64, tau_s: f64) -> f64 {
 /// (phi = e^{-dt/T}, stationary), averaged m = tau/dt samples at a time:
 /// (Var(S_m) - Cov(S_m, S'_m)) / m^2 with Var(S_m) = sigma^2 [m + 2 phi (m(1-phi) - (1-phi^m))/(1-phi)^2]
 /// and Cov = sigma^2 phi (1-phi^m)^2/(1-phi)^2 for adjacent sums S, S' of m samples.
-/// [derived from the AR(1) autocovariance sigma^2 phi^|j|; tends to `gauss_markov_avar` as dt -> 0.]
+/// (Derived from the AR(1) autocovariance sigma^2 phi^|j|; tends to `gauss_markov_avar` as dt goes to 0.)
 /// For T >> tau the sum cancels; there the process is the random walk of density K^2 = 2 sigma^2 / T
 /// (theory.md §2, "T << T_c: q_c^2 T/3") with relative error O(tau/T) < 1e-4.
 pub fn gauss_markov_avar_sampled(sigma: f64, tc_s: f64, tau_s: f64, dt_s: f64) -> f64 {
@@ -99,7 +99,7 @@ pub fn sinusoid_avar(amplitude: f64, f0_hz: f64, tau_s: f64) -> f64 {
 
 /// The sampled sinusoid, phase averaged: the m-sample average of sin is sin(.)·D with
 /// D = sin(pi f0 m dt)/(m sin(pi f0 dt)) instead of sin(x)/x, so sigma^2 = A^2 sin^2(pi f0 tau) D^2.
-/// [derived; tends to `sinusoid_avar` as dt -> 0.]
+/// (Derived; tends to `sinusoid_avar` as dt goes to 0.)
 pub fn sinusoid_avar_sampled(amplitude: f64, f0_hz: f64, tau_s: f64, dt_s: f64) -> f64 {
     let m = (tau_s / dt_s).round().max(1.0);
     let x = PI * f0_hz * m * dt_s;

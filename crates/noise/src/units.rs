@@ -241,6 +241,10 @@ pub fn parse_quantity(text: &str, quantity: Quantity) -> Result<f64, UnitError> 
     let text = text.trim();
     let split = number_prefix_len(text);
     if split == 0 {
+        let lower = text.trim_start_matches(['+', '-']).to_ascii_lowercase();
+        if lower.starts_with("nan") || lower.starts_with("inf") {
+            return Err(UnitError::NotFinite);
+        }
         return Err(UnitError::NoNumber);
     }
     let value: f64 = text[..split].parse().map_err(|_| UnitError::NoNumber)?;
@@ -573,6 +577,12 @@ mod tests {
             Err(UnitError::BadUnit(_))
         ));
         assert!(parse_quantity("1e400 deg/s", Quantity::Signal(AngularRate)).is_err());
+        for bad in ["NaN deg/s", "-inf deg/s", "inf"] {
+            assert_eq!(
+                parse_quantity(bad, Quantity::Signal(AngularRate)),
+                Err(UnitError::NotFinite)
+            );
+        }
     }
 
     #[test]
