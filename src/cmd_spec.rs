@@ -197,7 +197,7 @@ fn table(doc: &SpecDoc) -> String {
     let _ = writeln!(
         s,
         "{:<22} {:>4} {:>11} {:>11} {:>21} {:>11} {:>11} {:>21}",
-        "", "", "deg/sqrt(s)", "deg/sqrt(s)", "", "deg/h", "deg/h", ""
+        "", "", "deg/sqrt(h)", "deg/sqrt(h)", "", "deg/h", "deg/h", ""
     );
     for sen in &doc.sensors {
         let g = &sen.gyro;
@@ -207,9 +207,14 @@ fn table(doc: &SpecDoc) -> String {
                 "{:<22} {:>4} {:>11} {:>11} {:>21} {:>11} {:>11} {:>21}",
                 sen.name,
                 ["x", "y", "z"][a],
-                f(g.arw_spec[a], deg),
-                f(g.arw_sim[a], deg),
-                format!("[{}, {}]", f(g.arw_sim_lo[a], deg), f(g.arw_sim_hi[a], deg)),
+                // deg/sqrt(h) = 60 deg/sqrt(s) (theory.md §2 unit conversions).
+                f(g.arw_spec[a], deg * 60.0),
+                f(g.arw_sim[a], deg * 60.0),
+                format!(
+                    "[{}, {}]",
+                    f(g.arw_sim_lo[a], deg * 60.0),
+                    f(g.arw_sim_hi[a], deg * 60.0)
+                ),
                 f(g.bi_spec[a], deg * 3600.0),
                 f(g.bi_sim[a], deg * 3600.0),
                 format!(
