@@ -207,6 +207,43 @@ pub fn gauss_markov_growth_std(sigma: f64, tc_s: f64, t_s: f64, how: Integration
     Some(how.gain() * var.sqrt())
 }
 
+/// Exact variance of the k-fold integral (k = 1, 2, 3) of a stationary Gauss-Markov process of std
+/// sigma and correlation time T at time t, with x = t/T: sigma^2 T^{2k} V_k(x),
+/// V_1 = 2(x - 1 + e^{-x}) (theory.md §4),
+/// V_2 = 2x^3/3 - x^2 + 2 - 2(1 + x) e^{-x},
+/// V_3 = x^5/10 - x^4/4 + x^3/3 - 2 + (2 + 2x + x^2) e^{-x}.
+/// (Derived with sympy from Var I_k = int int w(u) w(v) sigma^2 e^{-|u-v|/T} du dv, w(u) = (t-u)^{k-1}/(k-1)!.
+/// For t >> T they tend to theory.md §4's asymptotes 2 sigma^2 T t^{2k-1}/((k-1)!^2 (2k-1)), for t << T to a
+/// random constant's (sigma t^k/k!)^2.) Below x = 0.5 the series V_k = 2 sum_{n>=2k} (-1)^n C(n-1, k-1) x^n/n!
+/// avoids the cancellation. `None` for k outside 1..=3.
+pub fn gauss_markov_kfold_variance(sigma: f64, tc_s: f64, t_s: f64, k: i32) -> Option<f64> {
+    if !(1..=3).contains(&k) {
+        return None;
+    }
+    let x = t_s / tc_s;
+    let v = if x < 0.5 {
+        // Terms shrink by x/n per step: 25 terms leave < 1e-30 relative.
+        let binom = |n: i32, j: i32| factorial(n) / (factorial(j) * factorial(n - j));
+        (2 * k..2 * k + 25)
+            .map(|n| {
+                let sign = if n % 2 == 0 { 1.0 } else { -1.0 };
+                2.0 * sign * binom(n - 1, k - 1) * x.powi(n) / factorial(n)
+            })
+            .sum()
+    } else {
+        let e = (-x).exp();
+        match k {
+            1 => 2.0 * (x - 1.0 + e),
+            2 => 2.0 * x.powi(3) / 3.0 - x * x + 2.0 - 2.0 * (1.0 + x) * e,
+            _ => {
+                x.powi(5) / 10.0 - x.powi(4) / 4.0 + x.powi(3) / 3.0 - 2.0
+                    + (2.0 + 2.0 * x + x * x) * e
+            }
+        }
+    };
+    Some(sigma * sigma * tc_s.powi(2 * k) * v)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -278,5 +315,42 @@ mod tests {
         let gm = gauss_markov_growth_std(0.1, 1.0, 1e4, Integration::Once).unwrap();
         assert!((gm / (2.0 * 0.01 * 1.0 * 1e4f64).sqrt() - 1.0).abs() < 1e-4);
         assert!(gauss_markov_growth_std(0.1, 100.0, 60.0, Integration::Twice).is_none());
+    }
+
+    #[test]
+    fn exact_gauss_markov_integrals_meet_both_limits() {
+        let (sigma, tc) = (0.2, 3.0);
+        for k in 1..=3 {
+            // t >> T: theory.md §4 asymptote 2 sigma^2 T * white k-fold (relative error O(T/t)).
+            let t = 1e4 * tc;
+            let exact = gauss_markov_kfold_variance(sigma, tc, t, k).unwrap();
+            let asym = white_kfold_variance((2.0 * sigma * sigma * tc).sqrt(), t, k);
+            assert!(
+                (exact / asym - 1.0).abs() < 1e-3,
+                "k {k}: {exact} vs {asym}"
+            );
+            // t << T: a random constant sigma, integrated k times: (sigma t^k / k!)^2.
+            let t = 1e-4 * tc;
+            let exact = gauss_markov_kfold_variance(sigma, tc, t, k).unwrap();
+            let constant = (sigma * t.powi(k) / factorial(k)).powi(2);
+            assert!(
+                (exact / constant - 1.0).abs() < 1e-3,
+                "k {k}: {exact} vs {constant}"
+            );
+            // Series and closed form agree where they switch.
+            let below = gauss_markov_kfold_variance(sigma, tc, 0.4999999 * tc, k).unwrap();
+            let above = gauss_markov_kfold_variance(sigma, tc, 0.5000001 * tc, k).unwrap();
+            assert!(
+                (below / above - 1.0).abs() < 1e-5,
+                "k {k}: {below} vs {above}"
+            );
+        }
+        // k = 1 is theory.md §4's exact form.
+        let once = gauss_markov_growth_std(sigma, tc, 7.0, Integration::Once).unwrap();
+        assert!(
+            (gauss_markov_kfold_variance(sigma, tc, 7.0, 1).unwrap() / (once * once) - 1.0).abs()
+                < 1e-12
+        );
+        assert!(gauss_markov_kfold_variance(sigma, tc, 7.0, 4).is_none());
     }
 }

@@ -117,6 +117,15 @@ impl Flicker {
             .sum()
     }
 
+    /// Variance of the k-fold integral (k = 1..=3) of the component sum at time `t_s`: the sum of the
+    /// components' exact Gauss-Markov forms (`closed_form::gauss_markov_kfold_variance`).
+    pub fn integrated_variance(&self, t_s: f64, k: i32) -> Option<f64> {
+        self.components()
+            .iter()
+            .map(|&(tc, s)| cf::gauss_markov_kfold_variance(s, tc, t_s, k))
+            .sum()
+    }
+
     /// Exact Allan variance of the sampled component sum.
     pub fn avar_sampled(&self, tau_s: f64, dt_s: f64) -> f64 {
         self.components()

@@ -7,7 +7,7 @@ mod common;
 use common::*;
 use noise::closed_form::{self as cf, Integration};
 use noise::units::STANDARD_GRAVITY_MPS2;
-use noise::{AxisModel, BiasInstability, GaussMarkov};
+use noise::{AxisModel, BiasInstability, Flicker, GaussMarkov};
 
 const SEED: u64 = 77;
 const RUNS: u64 = 4000;
@@ -147,8 +147,30 @@ fn gauss_markov_starts_stationary_and_integrates_as_its_law() {
     // Once: exact 2 sigma^2 T [t - T(1 - e^{-t/T})] (theory.md §4); t = 10 s = 5 T; the rectangle
     // sum of samples differs from the integral by O(dt/T) = 0.5 %.
     let n = 1000;
-    let [once, _, _] = integrals(&axis, rate, n);
+    let [once, twice, thrice] = integrals(&axis, rate, n);
     let t = n as f64 / rate;
     let law = cf::gauss_markov_growth_std(sigma, tc, t, Integration::Once).unwrap();
     assert_variance("Gauss-Markov once", &once, law * law);
+    // Twice and thrice: the exact forms (derived, closed_form::gauss_markov_kfold_variance).
+    let exact = |k| cf::gauss_markov_kfold_variance(sigma, tc, t, k).unwrap();
+    assert_variance("Gauss-Markov twice", &twice, exact(2));
+    assert_variance("Gauss-Markov thrice", &thrice, exact(3));
+}
+
+#[test]
+fn flicker_integrals_follow_the_component_sum() {
+    // Band 1 s .. 1e4 s at 100 Hz: the sampled components differ from continuous ones by O(dt/T) <= 1 %
+    // on the shortest, which carries little of the integrated variance over 10 s.
+    let flicker = Flicker::new(1e-3, 1.0, 1e4, 2).unwrap();
+    let axis = AxisModel {
+        bias_instability: Some(BiasInstability::Flicker(flicker.clone())),
+        ..AxisModel::default()
+    };
+    let (rate, n) = (100.0, 1000);
+    let t = n as f64 / rate;
+    let [once, twice, thrice] = integrals(&axis, rate, n);
+    for (k, data) in [(1, &once), (2, &twice), (3, &thrice)] {
+        let law = flicker.integrated_variance(t, k).unwrap();
+        assert_variance(&format!("flicker {k}-fold"), data, law);
+    }
 }
