@@ -362,37 +362,15 @@ pub fn rate_noise_id_fn(n: usize, y: impl Fn(usize) -> f64, d_max: u32) -> Optio
     let b = sty / (nf * (nf * nf - 1.0) / 12.0);
     let e = |k: usize| y(k) - a - b * (k as f64 - c);
     // For difference order d, z^d_k over k < n - d; per order: S1, S2, P = sum z_k z_{k+1},
-    // the first and the last value.
-    let mut s1 = [0.0f64; 4];
-    let mut s2 = [0.0f64; 4];
-    let mut p = [0.0f64; 4];
-    let mut first = [0.0f64; 4];
-    let mut prev = [0.0f64; 4];
-    // Sliding window of the last d_max + 1 detrended values: w[0] = e(k), w[1] = e(k-1), ...
-    let mut w = [0.0f64; 4];
-    for k in 0..n {
-        w = [e(k), w[0], w[1], w[2]];
-        for d in 0..=d_max {
-            if k < d {
-                continue;
-            }
-            // d-th backward difference ending at k = z^d_{k-d}
-            let z = match d {
-                0 => w[0],
-                1 => w[0] - w[1],
-                2 => w[0] - 2.0 * w[1] + w[2],
-                _ => w[0] - 3.0 * w[1] + 3.0 * w[2] - w[3],
-            };
-            s1[d] += z;
-            s2[d] += z * z;
-            if k == d {
-                first[d] = z;
-            } else {
-                p[d] += prev[d] * z;
-            }
-            prev[d] = z;
-        }
-    }
+    // the first and the last value. The loop is written once per d_max (const generic) so the
+    // orders are computed in straight-line code.
+    let sums = match d_max {
+        0 => acf_sums::<1>(n, e),
+        1 => acf_sums::<2>(n, e),
+        2 => acf_sums::<3>(n, e),
+        _ => acf_sums::<4>(n, e),
+    };
+    let (s1, s2, p, first, prev) = sums;
     for d in 0..=d_max {
         // ACF about the mean mu: sum (z_k - mu)(z_{k+1} - mu)
         //   = P - mu (S1 - z_last) - mu (S1 - z_0) + (len - 1) mu^2.
@@ -407,6 +385,54 @@ pub fn rate_noise_id_fn(n: usize, y: impl Fn(usize) -> f64, d_max: u32) -> Optio
         }
     }
     None
+}
+
+type AcfSums = ([f64; 4], [f64; 4], [f64; 4], [f64; 4], [f64; 4]);
+
+/// (S1, S2, P, first, last) of the difference sequences of orders 0..D-1 of e(0..n).
+fn acf_sums<const D: usize>(n: usize, e: impl Fn(usize) -> f64) -> AcfSums {
+    let mut s1 = [0.0f64; 4];
+    let mut s2 = [0.0f64; 4];
+    let mut p = [0.0f64; 4];
+    let mut first = [0.0f64; 4];
+    let mut prev = [0.0f64; 4];
+    // Sliding window of the last values: w[0] = e(k), w[1] = e(k-1), ...
+    let mut w = [0.0f64; 4];
+    let diff = |w: &[f64; 4], d: usize| -> f64 {
+        // d-th backward difference ending at k (= forward difference at k - d)
+        match d {
+            0 => w[0],
+            1 => w[0] - w[1],
+            2 => w[0] - 2.0 * w[1] + w[2],
+            _ => w[0] - 3.0 * w[1] + 3.0 * w[2] - w[3],
+        }
+    };
+    // Prologue: the first D samples start the sequences of increasing order.
+    for k in 0..D.min(n) {
+        w = [e(k), w[0], w[1], w[2]];
+        for d in 0..=k {
+            let z = diff(&w, d);
+            s1[d] += z;
+            s2[d] += z * z;
+            if k == d {
+                first[d] = z;
+            } else {
+                p[d] += prev[d] * z;
+            }
+            prev[d] = z;
+        }
+    }
+    for k in D..n {
+        w = [e(k), w[0], w[1], w[2]];
+        for d in 0..D {
+            let z = diff(&w, d);
+            s1[d] += z;
+            s2[d] += z * z;
+            p[d] += prev[d] * z;
+            prev[d] = z;
+        }
+    }
+    (s1, s2, p, first, prev)
 }
 
 fn rate_noise_id(y: &[f64], d_max: u32) -> Option<i32> {

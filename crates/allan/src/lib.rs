@@ -14,8 +14,8 @@
 //! - total deviation, SP 1065 eq (25) (doubly reflected phase).
 //!
 //! Rate samples y_k (one per `tau0_s`) are turned into phase x_0 = 0, x_n = tau0 * sum_{k<n} (y_k - mean)
-//! (theory.md §2.1; the mean removal is allantools' `frequency2phase`), summed with Neumaier's
-//! compensated summation so the phase carries no accumulated rounding error.
+//! (theory.md §2.1; the mean removal is allantools' `frequency2phase`), summed with compensated
+//! (TwoSum) summation so the phase carries no accumulated rounding error.
 //!
 //! The per-tau cost is O(N): the overlapping estimators are single passes over the phase array,
 //! the modified estimator uses allantools' running-sum recursion.
@@ -409,22 +409,29 @@ impl<'a> Series<'a> {
 
 /// Phase (integrated rate) with x_0 = 0 and x_n = tau0 * sum_{k<n} (y_k - mean(y)),
 /// theory.md §2.1 and allantools `frequency2phase` (mean removed before the sum to keep the
-/// phase small). The mean and the running sum use Neumaier's compensated summation
-/// (Neumaier 1974), so x_n is the correctly rounded partial sum to within a few ulps.
+/// phase small). The running sum is compensated (Knuth's TwoSum error term carried along,
+/// as in Neumaier 1974), so x_n is the partial sum to within a few ulps.
 pub fn rate_to_phase(rate: &[f64], tau0_s: f64) -> Vec<f64> {
-    let mean = compensated_sum(rate.iter().copied()) / rate.len().max(1) as f64;
+    // The mean only keeps the phase small: any rounding in it adds a linear phase trend, which
+    // every estimator's differences cancel. An 8-lane plain sum is accurate enough and fast.
+    let mut lanes = [0.0f64; 8];
+    let chunks = rate.chunks_exact(8);
+    let tail: f64 = chunks.remainder().iter().sum();
+    for c in chunks {
+        for (l, v) in lanes.iter_mut().zip(c) {
+            *l += v;
+        }
+    }
+    let mean = (pairwise_lanes(&lanes) + tail) / rate.len().max(1) as f64;
     let mut phase = Vec::with_capacity(rate.len() + 1);
     phase.push(0.0);
     let (mut sum, mut comp) = (0.0f64, 0.0f64);
     for &y in rate {
         let v = y - mean;
         let t = sum + v;
-        // Neumaier: recover the low-order part lost in t = sum + v.
-        if sum.abs() >= v.abs() {
-            comp += (sum - t) + v;
-        } else {
-            comp += (v - t) + sum;
-        }
+        // Knuth's TwoSum (branch-free): the exact rounding error of t = sum + v.
+        let bv = t - sum;
+        comp += (sum - (t - bv)) + (v - bv);
         sum = t;
         phase.push((sum + comp) * tau0_s);
     }
