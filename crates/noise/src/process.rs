@@ -144,6 +144,8 @@ pub struct ChannelErrors {
     /// coefficient per degC, profile, reference degC
     temperature: Option<(f64, TemperatureProfile, f64)>,
     quantizer: Option<Quantizer>,
+    /// The k the next call must bring (the states advance one step per call).
+    next_k: u64,
 }
 
 impl ChannelErrors {
@@ -217,6 +219,7 @@ impl ChannelErrors {
             quantizer: axis
                 .quantization
                 .map(|q| Quantizer::new(q, &mut rng(Effect::Quantization))),
+            next_k: 0,
         }
     }
 
@@ -224,6 +227,8 @@ impl ChannelErrors {
     /// k = 0, 1, 2, ... in order: the stochastic states advance one step per call.
     #[inline]
     pub fn sample(&mut self, k: u64, ideal: &Vector3<f64>) -> f64 {
+        debug_assert_eq!(k, self.next_k, "samples must be drawn in order");
+        self.next_k = k + 1;
         let t_s = k as f64 * self.dt_s;
         let mut v =
             self.row[0] * ideal.x + self.row[1] * ideal.y + self.row[2] * ideal.z + self.bias;
