@@ -179,7 +179,7 @@ pub fn run(args: Args) -> Result<()> {
     let result = pool.install(|| execute(&exp, 0..exp.runs, "simulate"));
     let report = exp.report(&result.matrix, &result.failures);
     let ablation = if args.ablation || (exp.scenario.ablation && !args.no_ablation) {
-        Some(pool.install(|| ablation(&inputs, &overrides, &exp, &report))?)
+        Some(pool.install(|| ablation(&inputs, &overrides, &report))?)
     } else {
         None
     };
@@ -216,7 +216,6 @@ fn last_horizontal(r: &DriftReport) -> (f64, f64) {
 fn ablation(
     inputs: &Inputs,
     overrides: &Overrides,
-    full: &Experiment,
     full_report: &DriftReport,
 ) -> Result<Vec<AblationRow>> {
     let (_, full_rms) = last_horizontal(full_report);
@@ -247,7 +246,6 @@ fn ablation(
             without_mean_m,
         });
     }
-    let _ = full;
     Ok(rows)
 }
 

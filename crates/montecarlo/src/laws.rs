@@ -409,7 +409,7 @@ fn horizontal_law(north: &Law, east: &Law) -> Law {
 }
 
 /// E sqrt(X^2 + Y^2) for independent zero-mean Gaussians with std `sn`, `se` (see
-/// [`horizontal_law`]); the angular average by the midpoint rule over a full period, which is
+/// `horizontal_law`); the angular average by the midpoint rule over a full period, which is
 /// spectrally accurate for a smooth periodic integrand (4096 points: error far below 1e-12; second
 /// order, ~1e-7, in the degenerate case of one zero std).
 pub fn horizontal_rayleigh_mean(sn: f64, se: f64) -> f64 {

@@ -2,11 +2,12 @@
 //! at every checkpoint and for every channel that has a law, the 99.9 % interval of
 //! simulated rms / law rms (from the runs, plus the stated discretisation allowance) must contain 1.
 //!
-//! False-positive rate: each interval is 99.9 % two-sided; the channels of one run set are
-//! strongly correlated across checkpoints (the same paths observed later), so the effective number
-//! of independent checks per term is a few, and with ~25 terms the family-wise false-positive rate
-//! is of the order of 10 %... per fresh seed. The seeds are fixed, so the suite is deterministic;
-//! it was not tuned: seed = 1 for every case.
+//! False-positive rate: each interval is 99.9 % two-sided (per-check rate 1e-3). The ~1000 checks
+//! here are far from independent (one term's angle, velocity, position and horizontal channels are
+//! functions of the same paths, and later checkpoints contain the earlier ones); counting one
+//! independent check per term, axis and decade of time (~150) bounds the family-wise rate by ~15 %
+//! for a fresh seed. The seeds are fixed (seed = 1 everywhere, not tuned), so the suite is
+//! deterministic; a failure after a code change is a real change of the simulated statistics.
 
 use imudrift_montecarlo::channels::Channel;
 use imudrift_montecarlo::experiment::{Experiment, Overrides};
