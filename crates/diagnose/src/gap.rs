@@ -3,7 +3,8 @@
 //! At each tau, z = (ln adev_meas - ln adev_model) / s. `ln adev_model` is the mean of ln adev over
 //! the simulated seeds (so the small-EDF bias of ln adev, E[ln chi2_v / v] < 0, is the same on both
 //! sides and cancels); s combines the sampling error of the measured point, from its equivalent
-//! degrees of freedom, with the error of the band centre (seed spread / sqrt(seeds)).
+//! degrees of freedom (or the band's seed spread where that is larger), with the error of the band
+//! centre (seed spread / sqrt(seeds)).
 
 use serde::Serialize;
 
@@ -138,14 +139,18 @@ pub struct Gap {
     pub disagreements: Vec<Disagreement>,
 }
 
-/// Standard error of the difference at each tau: measured point (EDF) and band centre (seed spread).
+/// Standard error of the difference at each tau: measured point and band centre (seed spread /
+/// sqrt(seeds)). The measured point's error is the larger of the EDF-based value and the seed spread of
+/// the simulated band (the model's own sampling spread at that tau): the EDF rests on a noise-type
+/// identification (lag-1 ACF, Riley 2004) that needs about 30 averages and can fail at the longest taus,
+/// where a misidentified type overstates the EDF several-fold and would raise false alarms.
 pub fn standard_errors(measured: &Curve, band: &Band) -> Vec<f64> {
     measured
         .edf
         .iter()
         .zip(&band.ln_sd)
         .map(|(&edf, &sd)| {
-            let s_meas = ln_adev_se(edf);
+            let s_meas = ln_adev_se(edf).max(sd);
             (s_meas * s_meas + sd * sd / band.seeds.max(1) as f64).sqrt()
         })
         .collect()
