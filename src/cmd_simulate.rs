@@ -1,6 +1,7 @@
 //! `imudrift simulate SCENARIO.toml`: Monte Carlo drift run; every channel beside its growth law.
 
 use crate::output::{ensure_dir, write_atomic, write_string};
+use crate::plot::{Band, LogLogPlot, Series, PALETTE};
 use anyhow::{bail, Context, Result};
 use montecarlo::channels::Channel;
 use montecarlo::experiment::{Experiment, Overrides};
@@ -482,112 +483,50 @@ fn table(
     s
 }
 
-/// Log-log plot of one channel: mean, p5-p95 band, law mean and law rms.
+/// Log-log plot of one channel (shared writer, src/plot.rs): simulated mean and rms, the p5-p95
+/// band, and the law's mean and rms.
 fn svg(r: &DriftReport, ch: Channel) -> String {
-    let pts: Vec<(f64, &montecarlo::report::ChannelReport)> = r
-        .checkpoints
-        .iter()
-        .map(|c| (c.t_s, &c.channels[ch.name()]))
-        .collect();
-    let positive = |v: f64| v.is_finite() && v > 0.0;
-    let ys: Vec<f64> = pts
-        .iter()
-        .flat_map(|(_, c)| {
-            [
-                c.p5,
-                c.p95,
-                c.mean,
-                c.law_rms.unwrap_or(f64::NAN),
-                c.law_mean.unwrap_or(f64::NAN),
-            ]
-        })
-        .filter(|&v| positive(v))
-        .collect();
-    let (w, h, m) = (720.0, 480.0, 70.0);
-    let (x0, x1) = (
-        pts.first().map_or(1.0, |p| p.0).log10(),
-        pts.last().map_or(10.0, |p| p.0).log10(),
-    );
-    let y0 = ys
-        .iter()
-        .cloned()
-        .fold(f64::INFINITY, f64::min)
-        .log10()
-        .floor();
-    let y1 = ys
-        .iter()
-        .cloned()
-        .fold(f64::NEG_INFINITY, f64::max)
-        .log10()
-        .ceil();
-    let (y0, y1) = if y0.is_finite() && y1 > y0 {
-        (y0, y1)
-    } else {
-        (-1.0, 1.0)
-    };
-    let x1 = if x1 > x0 { x1 } else { x0 + 1.0 };
-    let px = |t: f64| m + (t.log10() - x0) / (x1 - x0) * (w - 2.0 * m);
-    let py = |v: f64| h - m - (v.log10() - y0) / (y1 - y0) * (h - 2.0 * m);
-    let line = |sel: &dyn Fn(&montecarlo::report::ChannelReport) -> Option<f64>| -> String {
-        pts.iter()
-            .filter_map(|(t, c)| {
-                sel(c)
-                    .filter(|&v| positive(v))
-                    .map(|v| format!("{:.2},{:.2}", px(*t), py(v)))
-            })
-            .collect::<Vec<_>>()
-            .join(" ")
-    };
-    let band: String = {
-        let upper: Vec<String> = pts
+    let t: Vec<f64> = r.checkpoints.iter().map(|c| c.t_s).collect();
+    let col = |f: &dyn Fn(&montecarlo::report::ChannelReport) -> f64| -> Vec<f64> {
+        r.checkpoints
             .iter()
-            .filter(|(_, c)| positive(c.p95) && positive(c.p5))
-            .map(|(t, c)| format!("{:.2},{:.2}", px(*t), py(c.p95)))
-            .collect();
-        let lower: Vec<String> = pts
-            .iter()
-            .rev()
-            .filter(|(_, c)| positive(c.p95) && positive(c.p5))
-            .map(|(t, c)| format!("{:.2},{:.2}", px(*t), py(c.p5)))
-            .collect();
-        upper.into_iter().chain(lower).collect::<Vec<_>>().join(" ")
+            .map(|c| f(&c.channels[ch.name()]))
+            .collect()
     };
-    let mut s = format!("<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n");
-    s += &format!(
-        "<text x=\"{}\" y=\"20\" text-anchor=\"middle\">{}: {} vs time ({} runs, seed {})</text>\n",
-        w / 2.0,
-        r.scenario,
-        ch.name(),
-        r.runs_ok,
-        r.seed
-    );
-    for d in (x0.floor() as i32)..=(x1.ceil() as i32) {
-        let t = 10f64.powi(d);
-        if t.log10() >= x0 - 1e-9 && t.log10() <= x1 + 1e-9 {
-            s += &format!("<line x1=\"{0:.2}\" y1=\"{1}\" x2=\"{0:.2}\" y2=\"{2}\" stroke=\"#ddd\"/><text x=\"{0:.2}\" y=\"{3}\" text-anchor=\"middle\">1e{d}</text>\n", px(t), m, h - m, h - m + 16.0);
-        }
-    }
-    for d in (y0 as i32)..=(y1 as i32) {
-        let v = 10f64.powi(d);
-        s += &format!("<line x1=\"{m}\" y1=\"{0:.2}\" x2=\"{1}\" y2=\"{0:.2}\" stroke=\"#ddd\"/><text x=\"{2}\" y=\"{0:.2}\" text-anchor=\"end\">1e{d}</text>\n", py(v), w - m, m - 6.0);
-    }
-    s += &format!(
-        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">t (s)</text>\n",
-        w / 2.0,
-        h - 20.0
-    );
-    if !band.is_empty() {
-        s += &format!(
-            "<polygon points=\"{band}\" fill=\"#9ecae1\" fill-opacity=\"0.5\" stroke=\"none\"/>\n"
-        );
-    }
-    s += &format!(
-        "<polyline points=\"{}\" fill=\"none\" stroke=\"#08519c\" stroke-width=\"2\"/>\n",
-        line(&|c| Some(c.mean))
-    );
-    s += &format!("<polyline points=\"{}\" fill=\"none\" stroke=\"#d62728\" stroke-width=\"2\" stroke-dasharray=\"6,4\"/>\n", line(&|c| c.law_mean));
-    s += &format!("<polyline points=\"{}\" fill=\"none\" stroke=\"#ff7f0e\" stroke-width=\"1.5\" stroke-dasharray=\"2,3\"/>\n", line(&|c| c.law_rms));
-    s += &format!("<text x=\"{0}\" y=\"{1}\" fill=\"#08519c\">simulated mean</text><text x=\"{0}\" y=\"{2}\" fill=\"#6baed6\">p5-p95 band</text><text x=\"{0}\" y=\"{3}\" fill=\"#d62728\">law mean</text><text x=\"{0}\" y=\"{4}\" fill=\"#ff7f0e\">law rms</text>\n", m + 10.0, m + 14.0, m + 30.0, m + 46.0, m + 62.0);
-    s += "</svg>\n";
-    s
+    let nan = f64::NAN;
+    let plot = LogLogPlot {
+        title: format!(
+            "{}: {} vs time ({} runs, seed {})",
+            r.scenario,
+            ch.name(),
+            r.runs_ok,
+            r.seed
+        ),
+        x_label: "t (s)".into(),
+        y_label: ch.name().into(),
+        series: vec![
+            Series::new("simulated mean", t.clone(), col(&|c| c.mean), PALETTE[0]),
+            Series::new("simulated rms", t.clone(), col(&|c| c.rms), PALETTE[2]),
+            Series::dashed(
+                "law mean",
+                t.clone(),
+                col(&|c| c.law_mean.unwrap_or(nan)),
+                PALETTE[1],
+            ),
+            Series::dashed(
+                "law rms",
+                t.clone(),
+                col(&|c| c.law_rms.unwrap_or(nan)),
+                PALETTE[4],
+            ),
+        ],
+        bands: vec![Band {
+            name: "p5-p95".into(),
+            x: t.clone(),
+            lo: col(&|c| c.p5),
+            hi: col(&|c| c.p95),
+            color: PALETTE[0].into(),
+        }],
+    };
+    plot.to_svg()
 }

@@ -134,7 +134,7 @@ fn out_dir_gets_csv_json_svg() {
     let csv = std::fs::read_to_string(Path::new(d).join("drift.csv")).unwrap();
     assert!(csv.lines().nth(1).unwrap().starts_with("t_s,channel,mean"));
     let svg = std::fs::read_to_string(Path::new(d).join("drift.svg")).unwrap();
-    assert!(svg.contains("<polygon") && svg.contains("law rms"));
+    assert!(svg.contains("<svg") && svg.contains("law rms") && svg.contains("p5-p95"));
     let doc: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(Path::new(d).join("drift.json")).unwrap())
             .unwrap();
