@@ -25,7 +25,7 @@ use crate::AllanPoint;
 use serde::{Deserialize, Serialize};
 
 /// sqrt(2 ln 2 / pi): the flicker plateau in units of B (theory.md §2, IEEE 952).
-pub const BI_PLATEAU_FACTOR: f64 = 0.664_282_262_018_657_6;
+pub const BI_PLATEAU_FACTOR: f64 = 0.664_282_470_267_960_1;
 
 /// Names of the five terms, in the DESIGN.md spelling of their parameters.
 pub const TERM_NAMES: [&str; 5] = ["q", "n", "b", "k", "r"];
@@ -541,6 +541,12 @@ mod tests {
             bins: 1000,
             alpha: 0,
         }
+    }
+
+    #[test]
+    fn plateau_factor_is_sqrt_2ln2_over_pi() {
+        let exact = (2.0 * std::f64::consts::LN_2 / std::f64::consts::PI).sqrt();
+        assert!((BI_PLATEAU_FACTOR - exact).abs() < 1e-16);
     }
 
     #[test]

@@ -1,10 +1,10 @@
 //! The IEEE 952 fit recovers the parameters of generated logs within its stated uncertainty.
 //!
-//! Test-only generators from theory.md §3 (exact discretisation at the sample interval dt):
-//! white rate noise N/sqrt(dt) w_k; rate random walk b_{k+1} = b_k + K sqrt(dt) w_k; rate ramp
-//! R t_k; flicker (bias instability B) as a sum of Gauss–Markov processes with log-spaced
-//! correlation times and variance B^2 ln(rho)/pi each (theory.md §3, "Flicker via a sum of
-//! Gauss–Markov"); quantisation by rounding the integrated angle to the LSB Delta, Q = Delta/sqrt 12.
+//! Generators: the noise crate's discrete processes (theory.md §3, exact at the sample interval
+//! dt): white rate noise N/sqrt(dt) w_k; rate random walk b_{k+1} = b_k + K sqrt(dt) w_k; flicker
+//! (bias instability B) as a bank of Gauss–Markov processes with log-spaced correlation times and
+//! variance B^2 ln(rho)/pi each; quantisation of the integrated output to the LSB Q sqrt(12);
+//! plus a rate ramp R t_k.
 //!
 //! Tolerance: each recovered parameter must lie within 3.5 of its stated standard errors of the
 //! truth (two-sided normal false-positive rate 4.7e-4 per parameter, about 3e-3 per test run
@@ -14,11 +14,18 @@
 
 use allan::fit::{fit_ieee952_terms, FitTerms};
 use allan::{deviation, DataKind, Estimator, TauGrid};
+use noise::process::{GaussMarkovBank, Quantizer, RandomWalk, WhiteNoise};
 use rand::SeedableRng;
-use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
 const SIGMAS: f64 = 3.5;
+const TRUTH_QNBK: Truth = Truth {
+    q: 8.660_254_037_844_386e-6,
+    n: 3e-4,
+    b: 1e-4,
+    k: 6e-6,
+    r: 0.0,
+};
 const GOLDEN: f64 = 0.618_033_988_749_894_9;
 
 struct Truth {
@@ -31,44 +38,34 @@ struct Truth {
 
 fn generate(t: &Truth, dt: f64, len: usize, seed: u64) -> Vec<f64> {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
-    let mut w = || -> f64 { StandardNormal.sample(&mut rng) };
-    // Flicker band 0.05 s .. 5e4 s, two Gauss-Markov processes per decade.
+    // Flicker band 0.05 s .. 5e4 s, two Gauss-Markov processes per decade, each with variance
+    // B^2 ln(rho) / pi (theory.md §3).
     let rho: f64 = 10f64.sqrt();
-    let taus: Vec<f64> = (0..13).map(|i| 0.05 * rho.powi(i)).collect();
-    let var_each = t.b * t.b * rho.ln() / std::f64::consts::PI;
-    let phis: Vec<f64> = taus.iter().map(|tc| (-dt / tc).exp()).collect();
-    let mut gm: Vec<f64> = (0..taus.len()).map(|_| var_each.sqrt() * w()).collect();
-    let mut rw = 0.0;
-    let mut angle = 0.0;
-    let mut last_q = 0.0;
+    let sd_each = (t.b * t.b * rho.ln() / std::f64::consts::PI).sqrt();
+    let components: Vec<(f64, f64)> = (0..13).map(|i| (0.05 * rho.powi(i), sd_each)).collect();
+    let mut flicker = GaussMarkovBank::new(&components, dt, &mut rng);
+    let white = WhiteNoise::new(t.n, dt);
+    let mut walk = RandomWalk::new(t.k, dt);
+    let mut quantizer = (t.q > 0.0).then(|| Quantizer::new(t.q, &mut rng));
     let lsb = t.q * 12f64.sqrt();
-    let mut out = Vec::with_capacity(len);
-    for k in 0..len {
-        // The rounding error is white (the condition for the 3 Q^2/tau^2 law) only if the angle
-        // moves about an LSB or more per sample between roundings: the white noise does that when
-        // LSB ~ N sqrt(dt); a constant rate of (7 + golden ratio) LSB per sample breaks any
-        // periodicity (the Allan variance ignores the constant).
-        let sweep = if lsb > 0.0 {
-            (7.0 + GOLDEN) * lsb / dt
-        } else {
-            0.0
-        };
-        let mut rate = sweep + t.n / dt.sqrt() * w() + rw + t.r * (k as f64 * dt);
-        for (g, phi) in gm.iter_mut().zip(&phis) {
-            rate += *g;
-            *g = phi * *g + (var_each * (1.0 - phi * phi)).sqrt() * w();
-        }
-        rw += t.k * dt.sqrt() * w();
-        if lsb > 0.0 {
-            angle += rate * dt;
-            let q = (angle / lsb).round() * lsb;
-            out.push((q - last_q) / dt);
-            last_q = q;
-        } else {
-            out.push(rate);
-        }
-    }
-    out
+    // The rounding error is white (the condition for the 3 Q^2/tau^2 law) only if the integral
+    // moves about an LSB or more per sample between roundings: the white noise does that when
+    // LSB ~ N sqrt(dt); a constant rate of (7 + golden ratio) LSB per sample breaks any
+    // periodicity (the Allan variance ignores the constant).
+    let sweep = (7.0 + GOLDEN) * lsb / dt;
+    (0..len)
+        .map(|k| {
+            let rate = sweep
+                + white.sample(&mut rng)
+                + walk.next(&mut rng)
+                + flicker.next(&mut rng)
+                + t.r * (k as f64 * dt);
+            match quantizer.as_mut() {
+                Some(q) => q.apply(rate, dt),
+                None => rate,
+            }
+        })
+        .collect()
 }
 
 fn check(truth: &Truth, allowed: [bool; 5], dt: f64, len: usize, seed: u64) {
@@ -104,14 +101,10 @@ fn check(truth: &Truth, allowed: [bool; 5], dt: f64, len: usize, seed: u64) {
 
 #[test]
 fn recovers_q_n_b_k() {
-    // LSB = N sqrt(dt) = 1e-4 rad: Q = 1e-4/sqrt(12).
-    let truth = Truth {
-        q: 2.886_751_345_948_129e-5,
-        n: 1e-3,
-        b: 1e-4,
-        k: 3e-6,
-        r: 0.0,
-    };
+    // Each term dominates a range of the octave curve (100 Hz, 2^21 samples, tau 0.01..5243 s):
+    // white up to ~20 s, flicker 20..370 s, random walk above; LSB = N sqrt(dt) = 3e-5 rad, so
+    // Q = 3e-5/sqrt(12) adds 25 % to the variance at tau = dt.
+    let truth = TRUTH_QNBK;
     check(&truth, [true, true, true, true, false], 0.01, 1 << 21, 1);
 }
 
@@ -130,13 +123,7 @@ fn recovers_n_and_ramp() {
 #[test]
 #[ignore]
 fn calibration_many_seeds() {
-    let truth = Truth {
-        q: 2.886_751_345_948_129e-5,
-        n: 1e-3,
-        b: 1e-4,
-        k: 3e-6,
-        r: 0.0,
-    };
+    let truth = TRUTH_QNBK;
     for grid in [TauGrid::Octave, TauGrid::PerDecade(5)] {
         let mut zz = Vec::new();
         let mut none = 0;
