@@ -203,6 +203,8 @@ pub struct AblationRow {
     pub only_share: f64,
     /// Mean horizontal error at the last checkpoint with every term but this one.
     pub without_mean_m: f64,
+    /// Horizontal rms with only this term, at every checkpoint.
+    pub only_rms_m: Vec<f64>,
 }
 
 fn last_horizontal(r: &DriftReport) -> (f64, f64) {
@@ -225,29 +227,54 @@ fn ablation(
         if term.starts_with("alignment.") {
             continue;
         }
-        let sub = |o: Overrides| -> Result<(f64, f64)> {
+        let sub = |o: Overrides| -> Result<DriftReport> {
             let e = experiment_from(inputs, &o)?;
             let r = execute(&e, 0..e.runs, term);
-            Ok(last_horizontal(&e.report(&r.matrix, &r.failures)))
+            Ok(e.report(&r.matrix, &r.failures))
         };
-        let (only_mean_m, only_rms) = sub(Overrides {
+        let only = sub(Overrides {
             only: Some(vec![term.clone()]),
             ..overrides.clone()
         })?;
+        let (only_mean_m, only_rms) = last_horizontal(&only);
         let mut without = overrides.without.clone();
         without.push(term.clone());
-        let (without_mean_m, _) = sub(Overrides {
+        let (without_mean_m, _) = last_horizontal(&sub(Overrides {
             without,
             ..overrides.clone()
-        })?;
+        })?);
         rows.push(AblationRow {
             term: term.clone(),
             only_mean_m,
             only_share: (only_rms / full_rms).powi(2),
             without_mean_m,
+            only_rms_m: only
+                .checkpoints
+                .iter()
+                .map(|c| c.channels[Channel::PosHorizontal.name()].rms)
+                .collect(),
         });
     }
     Ok(rows)
+}
+
+/// The term with the largest horizontal mean square alone, per checkpoint, merged into time spans:
+/// (term, first t_s, last t_s). Woodman: accelerometer noise dominates only the first ~0.3 s.
+fn dominant_spans(report: &DriftReport, rows: &[AblationRow]) -> Vec<(String, f64, f64)> {
+    let mut spans: Vec<(String, f64, f64)> = Vec::new();
+    for (i, cp) in report.checkpoints.iter().enumerate() {
+        let Some(best) = rows
+            .iter()
+            .max_by(|a, b| a.only_rms_m[i].total_cmp(&b.only_rms_m[i]))
+        else {
+            continue;
+        };
+        match spans.last_mut() {
+            Some(last) if last.0 == best.term => last.2 = cp.t_s,
+            _ => spans.push((best.term.clone(), cp.t_s, cp.t_s)),
+        }
+    }
+    spans
 }
 
 fn report_failures(failures: &[montecarlo::RunFailure]) {
@@ -463,6 +490,14 @@ fn table(
         );
     }
     if let Some(rows) = ablation {
+        let spans = dominant_spans(r, rows);
+        let _ = writeln!(
+            s,
+            "\nlargest contributor to the horizontal error (term alone, mean square) vs time:"
+        );
+        for (term, from, to) in spans {
+            let _ = writeln!(s, "  {from:>9.3} s .. {to:>9.3} s  {term}");
+        }
         let _ = writeln!(s, "\nablation at the last checkpoint (horizontal position): each term alone, and the model without it");
         let _ = writeln!(
             s,
