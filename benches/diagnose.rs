@@ -1,0 +1,64 @@
+//! Diagnose benchmarks: the model band (16 simulated 6-channel static logs and their overlapping Allan
+//! deviations) and the whole workflow on a 6-channel log with a hidden rate random walk on gx, both for
+//! the ADIS16405 datasheet model (configs/sensors/adis16405.toml: white noise, 13-component flicker on the
+//! gyros) at 100 Hz, 2^16 samples. The whole command on a 1 M-sample log is timed in the README.
+
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use diagnose::simulate::{simulate, static_log, SimSetup};
+use diagnose::{diagnose, LogInput, Settings};
+use noise::SensorModel;
+use std::hint::black_box;
+
+const SAMPLES: usize = 1 << 16;
+const DT_S: f64 = 0.01;
+
+fn adis() -> SensorModel {
+    SensorModel::load(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/sensors/adis16405.toml"),
+    )
+    .expect("adis16405.toml")
+}
+
+fn setup(grid_m: Vec<usize>) -> SimSetup<'static> {
+    SimSetup {
+        dt_s: DT_S,
+        samples: SAMPLES,
+        grid_m,
+        active: [true; 6],
+        horizons_s: vec![60.0],
+        temperature_c: None,
+        temp_coeff: [0.0; 6],
+    }
+}
+
+fn bench(c: &mut Criterion) {
+    let model = adis();
+    let mut truth = model.clone();
+    truth.gyro.axes[0].rate_random_walk = Some(5e-4); // crosses the white noise (N = 8.7e-4) at 3N^2/K^2 = 9 s
+    let log = static_log(&truth, &setup(vec![]), 99, 0);
+    let grid: Vec<usize> = (0..15).map(|j| 1usize << j).collect();
+    let mut group = c.benchmark_group("diagnose_adis_2^16");
+    group.sample_size(10);
+    group.throughput(Throughput::Elements((SAMPLES * 6 * 16) as u64));
+    group.bench_function("band_16_seeds_6_channels", |b| {
+        let s = setup(grid.clone());
+        b.iter(|| black_box(simulate(&model, &s, 1, 16).expect("simulates")))
+    });
+    group.throughput(Throughput::Elements((SAMPLES * 6) as u64));
+    group.bench_function("whole_workflow_hidden_rrw", |b| {
+        let input = LogInput {
+            dt_s: DT_S,
+            channels: std::array::from_fn(|c| Some(log[c].as_slice())),
+            temperature_c: None,
+        };
+        let settings = Settings {
+            horizons_s: vec![60.0],
+            ..Settings::default()
+        };
+        b.iter(|| black_box(diagnose(&input, &model, &settings).expect("diagnoses")))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
