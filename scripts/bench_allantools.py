@@ -49,6 +49,10 @@ def main():
     ap.add_argument("--csv", default=None, help="existing one-column CSV (header gx) to use")
     ap.add_argument("--samples", type=int, default=4_320_000)
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--format", choices=["full", "adis"], default="full",
+                    help="full: rad/s with 17 significant digits (exact doubles); adis: deg/s "
+                         "quantised to the ADIS16405's 0.05 deg/s LSB and printed as the real "
+                         "ADIS logs are (%%.10g, e.g. -0.35)")
     args = ap.parse_args()
 
     rate = 100.0
@@ -56,9 +60,12 @@ def main():
     path = args.csv or os.path.join(tmpdir, "channel.csv")
     if args.csv is None:
         y = make_channel(args.samples, rate, 20261121)
+        if args.format == "adis":
+            # 20x the white noise so the 0.05 deg/s LSB is below the noise (as on the ADIS)
+            y = np.round(np.degrees(20.0 * y) / 0.05) * 0.05
         with open(path, "w") as f:
-            f.write("# benchmark channel, 100 Hz, rad/s\ngx\n")
-            np.savetxt(f, y, fmt="%.17g")
+            f.write("# benchmark channel, 100 Hz\ngx\n")
+            np.savetxt(f, y, fmt="%.17g" if args.format == "full" else "%.10g")
     t0 = time.perf_counter()
     y = np.loadtxt(path, comments="#", skiprows=2 if args.csv is None else 1)
     t_load = time.perf_counter() - t0
