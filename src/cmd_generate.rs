@@ -94,6 +94,18 @@ fn plan(args: &Args) -> Result<Plan> {
             args.rate
         );
     }
+    // An --only list that keeps none of the model's terms leaves an ideal IMU: allowed, but say so.
+    if let Some(only) = filter.only_terms() {
+        if !only
+            .iter()
+            .any(|&(sensor, effect)| model.has(sensor, effect))
+        {
+            eprintln!(
+                "note: {} has none of the --only terms; the log is an ideal IMU",
+                args.sensor.display()
+            );
+        }
+    }
     Ok(Plan {
         model: model.filtered(&filter),
         filter,

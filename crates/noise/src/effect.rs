@@ -152,6 +152,11 @@ impl TermFilter {
             && !self.without.contains(&(sensor, effect))
     }
 
+    /// The terms `--only` keeps (`None`: no `--only` list), in order.
+    pub fn only_terms(&self) -> Option<Vec<(Sensor, Effect)>> {
+        self.only.as_ref().map(|set| set.iter().copied().collect())
+    }
+
     /// True when nothing is filtered.
     pub fn is_all(&self) -> bool {
         self.only.is_none() && self.without.is_empty()

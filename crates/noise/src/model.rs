@@ -466,6 +466,11 @@ impl SensorModel {
         &mut self.triad_mut(sensor).axes[axis]
     }
 
+    /// Does any axis of `sensor` have `effect`?
+    pub fn has(&self, sensor: Sensor, effect: Effect) -> bool {
+        self.triad(sensor).axes.iter().any(|a| a.has(effect))
+    }
+
     /// The model with the terms the filter switches off removed (ablation).
     pub fn filtered(&self, filter: &TermFilter) -> SensorModel {
         let mut out = self.clone();
