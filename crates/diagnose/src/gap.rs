@@ -6,6 +6,7 @@
 //! degrees of freedom (or the band's seed spread where that is larger), with the error of the band
 //! centre (seed spread / sqrt(seeds)).
 
+use montecarlo::stats::quantile_sorted;
 use serde::Serialize;
 
 /// |z| above which a tau is in disagreement (DESIGN.md: "contiguous tau ranges with |z| > 3").
@@ -77,17 +78,6 @@ impl Band {
     pub fn centre(&self) -> Vec<f64> {
         self.ln_mean.iter().map(|l| l.exp()).collect()
     }
-}
-
-/// Linear-interpolated quantile of sorted data (Hyndman & Fan type 7, the numpy default).
-fn quantile_sorted(sorted: &[f64], p: f64) -> f64 {
-    if sorted.is_empty() {
-        return f64::NAN;
-    }
-    let h = p * (sorted.len() - 1) as f64;
-    let lo = h.floor() as usize;
-    let hi = (lo + 1).min(sorted.len() - 1);
-    sorted[lo] + (h - lo as f64) * (sorted[hi] - sorted[lo])
 }
 
 /// Trigamma function psi'(x), x > 0: recurrence psi'(x) = psi'(x+1) + 1/x^2 up to x >= 10, then the
