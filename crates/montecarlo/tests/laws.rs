@@ -96,7 +96,7 @@ fn gyro_terms_alone_follow_their_laws() {
         VelHorizontal,
     ];
     // Magnitudes keep the attitude error below ~0.01 rad at 20 s (small-angle laws).
-    let cases: [(&str, &str); 8] = [
+    let cases: [(&str, &str); 9] = [
         ("white_noise", "[gyro.all]\nwhite_noise = \"0.002 deg/sqrt(s)\"\n"),
         ("rate_random_walk", "[gyro.all]\nrate_random_walk = \"0.0005 deg/s/sqrt(s)\"\n"),
         ("bias_instability (Woodman random walk)", "[gyro.all]\nbias_instability = { model = \"random_walk\", stability = \"0.001 deg/s\", period = \"4 s\" }\n"),
@@ -106,12 +106,16 @@ fn gyro_terms_alone_follow_their_laws() {
         ("constant_bias x", "[gyro.x]\nconstant_bias = \"0.01 deg/s\"\n"),
         ("constant_bias y", "[gyro.y]\nconstant_bias = \"-0.02 deg/s\"\n"),
         ("constant_bias z", "[gyro.z]\nconstant_bias = \"0.05 deg/s\"\n"),
+        ("rate_ramp y", "[gyro.y]\nrate_ramp = \"0.0005 deg/s^2\"\n"),
         ("temperature_bias", "[temperature]\nprofile = \"constant\"\nvalue = \"35 degC\"\nreference = \"25 degC\"\n[gyro.y]\ntemperature_bias = \"0.001 deg/s/degC\"\n"),
     ];
     for (name, toml) in cases {
         let r = simulate(toml, CHECKS, 20.0, 50.0, RUNS);
         // Single-axis deterministic cases leave the other channels at exactly zero (no law to check).
-        let n = if name.starts_with("constant") || name.starts_with("temperature") {
+        let n = if name.starts_with("constant")
+            || name.starts_with("temperature")
+            || name.starts_with("rate_ramp")
+        {
             check(name, &r, &[])
         } else {
             check(name, &r, &tilt)
@@ -133,16 +137,21 @@ fn accel_terms_alone_follow_their_laws() {
         VelDown,
         VelHorizontal,
     ];
-    let cases: [(&str, &str); 5] = [
+    let cases: [(&str, &str); 7] = [
         ("white_noise", "[accel.all]\nwhite_noise = \"0.004 m/s^2/sqrt(Hz)\"\n"),
         ("rate_random_walk", "[accel.all]\nrate_random_walk = \"0.001 m/s^2/sqrt(s)\"\n"),
         ("turn_on_bias", "[accel.all]\nturn_on_bias = \"0.01 m/s^2\"\n"),
         ("constant_bias", "[accel.x]\nconstant_bias = \"0.01 m/s^2\"\n[accel.y]\nconstant_bias = \"-0.02 m/s^2\"\n[accel.z]\nconstant_bias = \"0.03 m/s^2\"\n"),
         ("scale_factor (static: -g s on z)", "[accel.all]\nscale_factor = \"1000 ppm\"\n"),
+        ("rate_ramp", "[accel.all]\nrate_ramp = \"0.0001 m/s^3\"\n"),
+        // x senses z with 1 mrad, y senses z with -2 mrad: biases -g 1e-3 and +2 g 1e-3.
+        ("misalignment (static: m g from z)", "[accel.x]\nmisalignment = [\"0.5 mrad\", \"1 mrad\"]\n[accel.y]\nmisalignment = [\"0.3 mrad\", \"-2 mrad\"]\n"),
     ];
     for (name, toml) in cases {
         let expect: &[Channel] = if name.starts_with("scale") {
             &[PosDown, VelDown]
+        } else if name.starts_with("misalignment") {
+            &[PosNorth, PosEast, PosHorizontal, VelNorth, VelEast]
         } else {
             &all
         };
@@ -153,17 +162,29 @@ fn accel_terms_alone_follow_their_laws() {
 #[test]
 fn gauss_markov_and_alignment_follow_their_laws() {
     use Channel::*;
-    // Gauss-Markov: exact law for angle/velocity, t >> T asymptote for position (T = 0.05 s,
-    // first checkpoint 2 s = 40 T).
-    let gm = "[gyro.all]\ngauss_markov = { sigma = \"0.05 deg/s\", time_constant = \"0.05 s\" }\n[accel.all]\ngauss_markov = { sigma = \"0.05 m/s^2\", time_constant = \"0.05 s\" }\n";
+    // Gauss-Markov (T = 2 s, so the checkpoints span t = T/4 .. 10 T, where neither asymptote
+    // holds) and flicker bias instability (the noise crate's sum of Gauss-Markov components).
+    let gm = "[gyro.all]\ngauss_markov = { sigma = \"0.01 deg/s\", time_constant = \"2 s\" }\n[accel.all]\ngauss_markov = { sigma = \"0.05 m/s^2\", time_constant = \"2 s\" }\n";
     let r = simulate(
         gm,
-        "[checkpoints]\nlog_count = 5\nfirst_s = 2.0\n",
+        "[checkpoints]\nlog_count = 6\nfirst_s = 0.5\n",
         20.0,
-        100.0,
+        50.0,
         RUNS,
     );
-    check("gauss_markov", &r, &[Roll, Yaw, PosDown, VelDown]);
+    check(
+        "gauss_markov",
+        &r,
+        &[Roll, Yaw, PosNorth, PosEast, PosHorizontal, VelNorth],
+    );
+    let flicker =
+        "[gyro.all]\nbias_instability = { value = \"0.005 deg/s\", convention = \"ieee\" }\n";
+    let r = simulate(flicker, CHECKS, 20.0, 50.0, RUNS);
+    check(
+        "bias_instability (flicker)",
+        &r,
+        &[Roll, Pitch, Yaw, PosNorth, PosEast, PosHorizontal],
+    );
     // Initial alignment: fixed plus random tilt (g eps t^2/2 through tilt, theory.md §1.2).
     let r = simulate(
         "",
