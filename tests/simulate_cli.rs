@@ -113,6 +113,32 @@ fn woodman_experiment_prints_reference_and_ablation() {
 }
 
 #[test]
+fn moving_profile_says_no_law_instead_of_a_number() {
+    let out = ok(imudrift(&[
+        "simulate",
+        "configs/scenarios/mtx-turns-60s.toml",
+        "--runs",
+        "6",
+        "--json",
+    ]));
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let last = doc["checkpoints"]
+        .as_array()
+        .unwrap()
+        .last()
+        .unwrap()
+        .clone();
+    for ch in ["pos_horizontal_m", "yaw_rad", "pos_north_m"] {
+        let c = &last["channels"][ch];
+        assert!(c["ratio"].is_null() && c["law_std"].is_null(), "{ch}: {c}");
+        assert!(
+            c["law_note"].as_str().unwrap().contains("motion"),
+            "{ch}: {c}"
+        );
+    }
+}
+
+#[test]
 fn out_dir_gets_csv_json_svg() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path().to_str().unwrap();
