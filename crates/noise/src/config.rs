@@ -44,9 +44,11 @@ pub enum ConfigError {
     #[error("{file}: {message}")]
     Parse { file: String, message: String },
     /// A value that parses but is not acceptable.
-    #[error("{file}: key `{key}`: expected {expected}, found {found}")]
+    #[error("{file}{at}: key `{key}`: expected {expected}, found {found}", at = line.map(|l| format!(":{l}")).unwrap_or_default())]
     Invalid {
         file: String,
+        /// 1-based line of the value, when the value exists.
+        line: Option<usize>,
         key: String,
         expected: String,
         found: String,
@@ -63,19 +65,22 @@ struct RawSensor {
     accel: Option<RawTriad>,
 }
 
+/// A config value with its place in the file.
+type Text = toml::Spanned<String>;
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawTemperature {
-    profile: String,
-    reference: Option<String>,
-    value: Option<String>,
-    start: Option<String>,
-    end: Option<String>,
-    rate: Option<String>,
-    time_constant: Option<String>,
-    mean: Option<String>,
-    amplitude: Option<String>,
-    period: Option<String>,
+    profile: Text,
+    reference: Option<Text>,
+    value: Option<Text>,
+    start: Option<Text>,
+    end: Option<Text>,
+    rate: Option<Text>,
+    time_constant: Option<Text>,
+    mean: Option<Text>,
+    amplitude: Option<Text>,
+    period: Option<Text>,
 }
 
 #[derive(Deserialize, Default)]
@@ -90,86 +95,109 @@ struct RawTriad {
 #[derive(Deserialize, Default, Clone)]
 #[serde(deny_unknown_fields)]
 struct RawAxis {
-    quantization: Option<String>,
-    white_noise: Option<String>,
+    quantization: Option<Text>,
+    white_noise: Option<Text>,
     bias_instability: Option<RawBiasInstability>,
-    rate_random_walk: Option<String>,
-    rate_ramp: Option<String>,
+    rate_random_walk: Option<Text>,
+    rate_ramp: Option<Text>,
     gauss_markov: Option<RawGaussMarkov>,
     sinusoidal: Option<RawSinusoid>,
-    temperature_bias: Option<String>,
-    constant_bias: Option<String>,
-    turn_on_bias: Option<String>,
-    scale_factor: Option<String>,
-    misalignment: Option<Vec<String>>,
+    temperature_bias: Option<Text>,
+    constant_bias: Option<Text>,
+    turn_on_bias: Option<Text>,
+    scale_factor: Option<Text>,
+    misalignment: Option<Vec<Text>>,
 }
 
 #[derive(Deserialize, Clone)]
 #[serde(deny_unknown_fields)]
 struct RawBiasInstability {
-    model: Option<String>,
-    value: Option<String>,
-    convention: Option<String>,
-    band: Option<Vec<String>>,
+    model: Option<Text>,
+    value: Option<Text>,
+    convention: Option<Text>,
+    band: Option<Vec<Text>>,
     per_decade: Option<i64>,
-    stability: Option<String>,
-    period: Option<String>,
+    stability: Option<Text>,
+    period: Option<Text>,
 }
 
 #[derive(Deserialize, Clone)]
 #[serde(deny_unknown_fields)]
 struct RawGaussMarkov {
-    sigma: String,
-    time_constant: String,
+    sigma: Text,
+    time_constant: Text,
 }
 
 #[derive(Deserialize, Clone)]
 #[serde(deny_unknown_fields)]
 struct RawSinusoid {
-    amplitude: String,
-    frequency: String,
-    phase: Option<String>,
+    amplitude: Text,
+    frequency: Text,
+    phase: Option<Text>,
 }
 
 /// Conversion context: file name for errors.
 struct Ctx<'a> {
     file: &'a str,
+    source: &'a str,
 }
 
 impl Ctx<'_> {
-    fn invalid(
+    /// An error about `key`, at the line of `at` when the value exists.
+    fn invalid_at(
         &self,
         key: &str,
+        at: Option<&Text>,
         expected: impl Into<String>,
         found: impl Into<String>,
     ) -> ConfigError {
+        let line = at.map(|t| {
+            let start = t.span().start.min(self.source.len());
+            1 + self.source.as_bytes()[..start]
+                .iter()
+                .filter(|&&b| b == b'\n')
+                .count()
+        });
         ConfigError::Invalid {
             file: self.file.to_string(),
+            line,
             key: key.to_string(),
             expected: expected.into(),
             found: found.into(),
         }
     }
 
+    fn invalid(
+        &self,
+        key: &str,
+        expected: impl Into<String>,
+        found: impl Into<String>,
+    ) -> ConfigError {
+        self.invalid_at(key, None, expected, found)
+    }
+
     /// Parse a value with units; `nonneg` rejects negative values.
-    fn value(&self, key: &str, text: &str, q: Quantity, nonneg: bool) -> Result<f64, ConfigError> {
-        let v = parse_quantity(text, q).map_err(|e| {
-            self.invalid(
+    fn value(&self, key: &str, text: &Text, q: Quantity, nonneg: bool) -> Result<f64, ConfigError> {
+        let quoted = format!("\"{}\"", text.get_ref());
+        let v = parse_quantity(text.get_ref(), q).map_err(|e| {
+            self.invalid_at(
                 key,
+                Some(text),
                 format!("a value in {} such as {} ({e})", q.si_unit(), q.example()),
-                format!("\"{text}\""),
+                quoted.clone(),
             )
         })?;
         if nonneg && v < 0.0 {
-            return Err(self.invalid(key, "a value >= 0", format!("\"{text}\"")));
+            return Err(self.invalid_at(key, Some(text), "a value >= 0", quoted));
         }
         Ok(v)
     }
 
-    fn positive(&self, key: &str, text: &str, q: Quantity) -> Result<f64, ConfigError> {
+    fn positive(&self, key: &str, text: &Text, q: Quantity) -> Result<f64, ConfigError> {
         let v = self.value(key, text, q, true)?;
         if v == 0.0 {
-            return Err(self.invalid(key, "a value > 0", format!("\"{text}\"")));
+            let quoted = format!("\"{}\"", text.get_ref());
+            return Err(self.invalid_at(key, Some(text), "a value > 0", quoted));
         }
         Ok(v)
     }
@@ -182,7 +210,10 @@ impl SensorModel {
             file: source_name.to_string(),
             message: e.to_string().trim_end().to_string(),
         })?;
-        let ctx = Ctx { file: source_name };
+        let ctx = Ctx {
+            file: source_name,
+            source: text,
+        };
         let (temperature, reference) = convert_temperature(&ctx, raw.temperature.as_ref())?;
         let gyro = convert_triad(&ctx, Sensor::Gyro, raw.gyro.unwrap_or_default())?;
         let accel = convert_triad(&ctx, Sensor::Accel, raw.accel.unwrap_or_default())?;
@@ -384,7 +415,7 @@ fn convert_temperature(
         return Ok((TemperatureProfile::default(), 25.0));
     };
     let t = Quantity::Temperature;
-    let fields: [(&str, &Option<String>); 9] = [
+    let fields: [(&str, &Option<Text>); 9] = [
         ("value", &raw.value),
         ("start", &raw.start),
         ("end", &raw.end),
@@ -395,7 +426,8 @@ fn convert_temperature(
         ("period", &raw.period),
         ("reference", &raw.reference),
     ];
-    let (uses, profile_keys): (&[&str], &str) = match raw.profile.as_str() {
+    let profile = raw.profile.get_ref().as_str();
+    let (uses, profile_keys): (&[&str], &str) = match profile {
         "constant" => (&["value"], "value"),
         "ramp" => (&["start", "rate", "end"], "start, rate and optionally end"),
         "warmup" => (
@@ -404,8 +436,9 @@ fn convert_temperature(
         ),
         "sinusoid" => (&["mean", "amplitude", "period"], "mean, amplitude, period"),
         other => {
-            return Err(ctx.invalid(
+            return Err(ctx.invalid_at(
                 "temperature.profile",
+                Some(&raw.profile),
                 "one of \"constant\", \"ramp\", \"warmup\", \"sinusoid\"",
                 format!("\"{other}\""),
             ))
@@ -413,25 +446,34 @@ fn convert_temperature(
     };
     for (name, v) in fields {
         if v.is_some() && name != "reference" && !uses.contains(&name) {
-            return Err(ctx.invalid(
+            return Err(ctx.invalid_at(
                 &format!("temperature.{name}"),
-                format!("only {profile_keys} for profile \"{}\"", raw.profile),
+                v.as_ref(),
+                format!("only {profile_keys} for profile \"{profile}\""),
                 "an extra key",
             ));
         }
     }
-    let get = |name: &str, v: &Option<String>, q: Quantity| -> Result<f64, ConfigError> {
+    let need = |name: &str, v: &'_ Option<Text>| -> Result<(String, Text), ConfigError> {
         let key = format!("temperature.{name}");
-        let text = v.as_ref().ok_or_else(|| {
+        let text = v.clone().ok_or_else(|| {
             ctx.invalid(
                 &key,
-                format!("{profile_keys} for profile \"{}\"", raw.profile),
+                format!("{profile_keys} for profile \"{profile}\""),
                 "nothing",
             )
         })?;
-        ctx.value(&key, text, q, false)
+        Ok((key, text))
     };
-    let profile = match raw.profile.as_str() {
+    let get = |name: &str, v: &Option<Text>, q: Quantity| -> Result<f64, ConfigError> {
+        let (key, text) = need(name, v)?;
+        ctx.value(&key, &text, q, false)
+    };
+    let get_positive = |name: &str, v: &Option<Text>, q: Quantity| -> Result<f64, ConfigError> {
+        let (key, text) = need(name, v)?;
+        ctx.positive(&key, &text, q)
+    };
+    let profile = match profile {
         "constant" => TemperatureProfile::Constant {
             temp_c: get("value", &raw.value, t)?,
         },
@@ -447,27 +489,12 @@ fn convert_temperature(
         "warmup" => TemperatureProfile::Warmup {
             start_c: get("start", &raw.start, t)?,
             end_c: get("end", &raw.end, t)?,
-            time_constant_s: {
-                let text = raw.time_constant.as_deref().unwrap_or("");
-                if raw.time_constant.is_none() {
-                    get("time_constant", &raw.time_constant, Quantity::Time)?;
-                }
-                ctx.positive("temperature.time_constant", text, Quantity::Time)?
-            },
+            time_constant_s: get_positive("time_constant", &raw.time_constant, Quantity::Time)?,
         },
         _ => TemperatureProfile::Sinusoid {
             mean_c: get("mean", &raw.mean, t)?,
             amplitude_c: get("amplitude", &raw.amplitude, t)?,
-            period_s: {
-                if raw.period.is_none() {
-                    get("period", &raw.period, Quantity::Time)?;
-                }
-                ctx.positive(
-                    "temperature.period",
-                    raw.period.as_deref().unwrap_or(""),
-                    Quantity::Time,
-                )?
-            },
+            period_s: get_positive("period", &raw.period, Quantity::Time)?,
         },
     };
     let reference = match &raw.reference {
@@ -511,7 +538,7 @@ fn convert_axis(
             }
         };
     }
-    let scalar = |p: Option<(&String, String)>, q: Quantity, nonneg: bool| {
+    let scalar = |p: Option<(&Text, String)>, q: Quantity, nonneg: bool| {
         p.map(|(v, key)| ctx.value(&key, v, q, nonneg)).transpose()
     };
     let mut m = AxisModel {
@@ -565,8 +592,9 @@ fn convert_axis(
     }
     if let Some((list, key)) = pick!(misalignment) {
         if list.len() != 2 {
-            return Err(ctx.invalid(
+            return Err(ctx.invalid_at(
                 &key,
+                list.first(),
                 "two angles: the sensitivity to the other two axes in x, y, z order",
                 format!("{} values", list.len()),
             ));
@@ -591,24 +619,36 @@ fn convert_bias_instability(
     others: &AxisModel,
 ) -> Result<BiasInstability, ConfigError> {
     let sub = |name: &str| format!("{key}.{name}");
-    let model = raw.model.as_deref().unwrap_or("flicker");
+    let model = raw
+        .model
+        .as_ref()
+        .map_or("flicker", |m| m.get_ref().as_str());
     match model {
         "random_walk" => {
-            for (name, present) in [
-                ("value", raw.value.is_some()),
-                ("convention", raw.convention.is_some()),
-                ("band", raw.band.is_some()),
-                ("per_decade", raw.per_decade.is_some()),
+            for (name, present, at) in [
+                ("value", raw.value.is_some(), raw.value.as_ref()),
+                (
+                    "convention",
+                    raw.convention.is_some(),
+                    raw.convention.as_ref(),
+                ),
+                (
+                    "band",
+                    raw.band.is_some(),
+                    raw.band.as_ref().and_then(|b| b.first()),
+                ),
+                ("per_decade", raw.per_decade.is_some(), None),
             ] {
                 if present {
-                    return Err(ctx.invalid(
+                    return Err(ctx.invalid_at(
                         &sub(name),
+                        at,
                         "only `stability` and `period` for model \"random_walk\"",
                         "an extra key",
                     ));
                 }
             }
-            let need = |name: &str, v: &Option<String>| {
+            let need = |name: &str, v: &Option<Text>| {
                 v.clone().ok_or_else(|| {
                     ctx.invalid(
                         &sub(name),
@@ -634,13 +674,11 @@ fn convert_bias_instability(
             })
         }
         "flicker" => {
-            for (name, present) in [
-                ("stability", raw.stability.is_some()),
-                ("period", raw.period.is_some()),
-            ] {
-                if present {
-                    return Err(ctx.invalid(
+            for (name, at) in [("stability", &raw.stability), ("period", &raw.period)] {
+                if let Some(at) = at {
+                    return Err(ctx.invalid_at(
                         &sub(name),
+                        Some(at),
                         "no `stability`/`period` for a flicker bias instability (use model = \"random_walk\" for Woodman's bias random walk)",
                         "an extra key",
                     ));
@@ -661,15 +699,17 @@ fn convert_bias_instability(
                         ctx.positive(&format!("{}[0]", sub("band")), &b[0], Quantity::Time)?,
                         ctx.positive(&format!("{}[1]", sub("band")), &b[1], Quantity::Time)?,
                     ),
-                    Some(b) => return Err(ctx.invalid(
+                    Some(b) => return Err(ctx.invalid_at(
                         &sub("band"),
+                        b.first(),
                         "two correlation times [shortest, longest], e.g. [\"0.1 s\", \"1e5 s\"]",
                         format!("{} values", b.len()),
                     )),
                 };
             if tau_max_s <= tau_min_s {
-                return Err(ctx.invalid(
+                return Err(ctx.invalid_at(
                     &sub("band"),
+                    raw.band.as_ref().and_then(|b| b.first()),
                     "the longest time after the shortest",
                     format!("{tau_min_s} s .. {tau_max_s} s"),
                 ));
@@ -691,21 +731,23 @@ fn convert_bias_instability(
                 tau_max_s,
                 per_decade,
             };
-            let b = match raw.convention.as_deref() {
+            let b = match raw.convention.as_ref().map(|c| c.get_ref().as_str()) {
                 Some("ieee") => value,
                 Some("allan_minimum") => solve_b_for_minimum(value, others, &flicker).map_err(|floor| {
-                    ctx.invalid(
+                    ctx.invalid_at(
                         &sub("value"),
+                        Some(value_text),
                         format!(
-                            "an Allan minimum above what the other terms of the axis already give ({floor:.4e} {} over the flicker band's plateau; widen `band`)",
-                            Quantity::Signal(sig).si_unit()
+                            "an Allan minimum above what the other terms of the axis already give ({} over the flicker band's plateau; widen `band`)",
+                            in_units_of(floor, value_text.get_ref(), Quantity::Signal(sig))
                         ),
-                        format!("\"{value_text}\""),
+                        format!("\"{}\"", value_text.get_ref()),
                     )
                 })?,
                 Some(other) => {
-                    return Err(ctx.invalid(
+                    return Err(ctx.invalid_at(
                         &sub("convention"),
+                        raw.convention.as_ref(),
                         "\"ieee\" (value is B, Allan plateau 0.664 B) or \"allan_minimum\" (value is the Allan-deviation minimum, as Woodman reports it)",
                         format!("\"{other}\""),
                     ))
@@ -725,6 +767,18 @@ fn convert_bias_instability(
             "\"flicker\" (default) or \"random_walk\" (Woodman's bias random walk)",
             format!("\"{other}\""),
         )),
+    }
+}
+
+/// `value` (SI) written in the unit of `like` (a config value such as "0.01 deg/h"), for messages.
+fn in_units_of(value: f64, like: &str, q: Quantity) -> String {
+    let unit = like
+        .trim()
+        .trim_start_matches(|c: char| c.is_ascii_digit() || "+-.eE".contains(c))
+        .trim();
+    match parse_quantity(&format!("1 {unit}"), q) {
+        Ok(factor) if !unit.is_empty() => format!("{:.4} {unit}", value / factor),
+        _ => format!("{value:.4e} {}", q.si_unit()),
     }
 }
 
@@ -875,6 +929,7 @@ sinusoidal = { amplitude = "1 mg", frequency = "2 Hz" }
             "{e}"
         );
         let e = err("name = \"b\"\n[gyro.x]\nwhite_noise = \"1 deg/h\"\n");
+        assert!(e.starts_with("bad.toml:3: key `gyro.x.white_noise`"), "{e}");
         assert!(
             e.contains("bad.toml")
                 && e.contains("gyro.x.white_noise")
