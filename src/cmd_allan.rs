@@ -351,7 +351,14 @@ fn csv(results: &[ChannelResult]) -> String {
 fn plot(r: &ChannelResult, est: Estimator, source: &str) -> LogLogPlot {
     let x: Vec<f64> = r.points.iter().map(|p| p.tau_s).collect();
     let mut p = LogLogPlot {
-        title: format!("{} {} of {}", r.name, est.name(), source),
+        title: format!(
+            "{} {} of {}",
+            r.name,
+            est.name(),
+            std::path::Path::new(source)
+                .file_name()
+                .map_or(source.into(), |f| f.to_string_lossy())
+        ),
         x_label: "tau (s)".into(),
         y_label: format!("{} ({})", est.name(), r.unit),
         series: vec![Series::new(
