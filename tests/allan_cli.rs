@@ -1,0 +1,213 @@
+//! End-to-end tests of `imudrift allan`: reading CSV and gzip CSV, units, column mapping,
+//! outputs (table, JSON fields of DESIGN.md, CSV, SVG), errors with line numbers, and the
+//! command on the real ADIS16405 log against allantools' curve.
+
+use std::io::Write;
+use std::path::Path;
+use std::process::Command;
+
+fn imudrift() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_imudrift"))
+}
+
+/// A static gyro log in deg/s with a time column: white noise of known level (SplitMix64 +
+/// Box-Muller, deterministic).
+fn write_log(path: &Path, n: usize, gz: bool) {
+    let mut s = 7u64;
+    let mut u = || {
+        s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = s;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut text = String::from("# test log\n# gyro in deg/s\ntime_s,wx,temp\n");
+    for k in 0..n {
+        let g = (-2.0 * u().max(1e-300).ln()).sqrt() * (2.0 * std::f64::consts::PI * u()).cos();
+        text.push_str(&format!("{},{},{}\n", k as f64 * 0.01, 0.5 * g, 25.0));
+    }
+    let file = std::fs::File::create(path).unwrap();
+    if gz {
+        let mut e = flate2::write::GzEncoder::new(file, flate2::Compression::fast());
+        e.write_all(text.as_bytes()).unwrap();
+        e.finish().unwrap();
+    } else {
+        std::io::BufWriter::new(file)
+            .write_all(text.as_bytes())
+            .unwrap();
+    }
+}
+
+#[test]
+fn json_csv_svg_outputs_and_units() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("log.csv.gz");
+    write_log(&log, 200_000, true);
+    let out = dir.path().join("out");
+    let o = imudrift()
+        .args([
+            "allan",
+            log.to_str().unwrap(),
+            "--gyro-unit",
+            "deg/s",
+            "--col",
+            "t=time_s,gx=wx",
+        ])
+        .args(["--json", "--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let doc: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!((doc["rate_hz"].as_f64().unwrap() - 100.0).abs() < 1e-6);
+    let gx = &doc["channels"]["gx"];
+    // temp is not analysed by default
+    assert!(doc["channels"].get("temp").is_none());
+    let col = |k: &str| -> Vec<f64> {
+        gx[k]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect()
+    };
+    let (tau, adev, lo, hi) = (col("tau_s"), col("adev"), col("adev_lo"), col("adev_hi"));
+    assert_eq!(tau.len(), adev.len());
+    assert!(tau.len() >= 10);
+    for i in 0..tau.len() {
+        assert!(lo[i] < adev[i] && adev[i] < hi[i]);
+    }
+    // White noise of 0.5 deg/s per sample at 100 Hz: N = 0.5 deg/s * sqrt(0.01 s), in rad.
+    // The fitted N must agree within 3 of its stated standard errors (plus 1 % for the
+    // generator's finite sample, far below the fit's own uncertainty here).
+    let n_true = 0.5f64.to_radians() * 0.1;
+    let n = gx["fit"]["n"].as_f64().unwrap();
+    let n_sigma = gx["fit_sigma"]["n"].as_f64().unwrap();
+    assert!(
+        (n - n_true).abs() < 3.0 * n_sigma + 0.01 * n_true,
+        "{n} +- {n_sigma} vs {n_true}"
+    );
+    for f in ["allan.csv", "allan.json", "allan_gx.svg"] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    let csv = std::fs::read_to_string(out.join("allan.csv")).unwrap();
+    assert!(csv.starts_with("channel,tau_s,m,n_terms,bins,alpha,edf,adev_lo,adev,adev_hi"));
+    assert_eq!(csv.lines().count(), 1 + tau.len());
+    let svg = std::fs::read_to_string(out.join("allan_gx.svg")).unwrap();
+    assert!(svg.contains("confidence interval") && svg.contains("IEEE 952 fit"));
+}
+
+#[test]
+fn bad_row_is_reported_by_line_and_no_output_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("bad.csv");
+    std::fs::write(&log, "# c\ngx,gy\n1,2\n3,4\n5,x7\n").unwrap();
+    let out = dir.path().join("out");
+    let o = imudrift()
+        .args([
+            "allan",
+            log.to_str().unwrap(),
+            "--rate",
+            "10",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("bad.csv:5") && err.contains("\"gy\"") && err.contains("x7"),
+        "{err}"
+    );
+    assert!(!out.join("allan.json").exists());
+}
+
+#[test]
+fn thread_count_does_not_change_results() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("log.csv");
+    write_log(&log, 100_000, false);
+    let run = |threads: &str| {
+        let o = imudrift()
+            .args([
+                "allan",
+                log.to_str().unwrap(),
+                "--col",
+                "t=time_s,gx=wx",
+                "--json",
+            ])
+            .args(["--threads", threads, "--grid", "5/decade"])
+            .output()
+            .unwrap();
+        assert!(o.status.success());
+        o.stdout
+    };
+    assert_eq!(run("1"), run("2"));
+}
+
+#[test]
+fn adis16405_log_through_the_command() {
+    // The real log, read by the command (gz, # comments, columns mapped, deg/s and g), against
+    // allantools 2024.06 oadev on the same data (expected_allantools_oadev_imu1.csv), converted
+    // to SI. Tolerance 1e-9 relative: both are double-precision evaluations of SP 1065 eq (11).
+    let Some(data) = allan::testdata::data_dir() else {
+        return;
+    };
+    let dir = data.join("adis16405_imudata");
+    let o = imudrift()
+        .args([
+            "allan",
+            dir.join("adis16405_imu1.csv.gz").to_str().unwrap(),
+            "--rate",
+            "100",
+        ])
+        .args([
+            "--gyro-unit",
+            "deg/s",
+            "--accel-unit",
+            "g",
+            "--json",
+            "--edf",
+            "none",
+        ])
+        .args([
+            "--col",
+            "gx=gyro_x_dps,gy=gyro_y_dps,gz=gyro_z_dps,ax=acc_x_g,ay=acc_y_g,az=acc_z_g",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let doc: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let reference =
+        std::fs::read_to_string(dir.join("expected_allantools_oadev_imu1.csv")).unwrap();
+    let mut rows = reference.lines().filter(|l| !l.starts_with('#'));
+    let head: Vec<&str> = rows.next().unwrap().split(',').collect();
+    let idx = |n: &str| head.iter().position(|h| *h == n).unwrap();
+    let mut compared = 0;
+    for row in rows {
+        let f: Vec<&str> = row.split(',').collect();
+        let (name, scale) = match f[idx("column")] {
+            "gyro_x_dps" => ("gx", 1f64.to_radians()),
+            "gyro_y_dps" => ("gy", 1f64.to_radians()),
+            "gyro_z_dps" => ("gz", 1f64.to_radians()),
+            "acc_x_g" => ("ax", 9.806_65),
+            "acc_y_g" => ("ay", 9.806_65),
+            "acc_z_g" => ("az", 9.806_65),
+            other => panic!("{other}"),
+        };
+        let m: u64 = f[idx("m")].parse().unwrap();
+        let want: f64 = f[idx("oadev")].parse::<f64>().unwrap() * scale;
+        let ch = &doc["channels"][name];
+        let ms = ch["m"].as_array().unwrap();
+        if let Some(i) = ms.iter().position(|v| v.as_u64() == Some(m)) {
+            let got = ch["adev"][i].as_f64().unwrap();
+            assert!(
+                (got / want - 1.0).abs() < 1e-9,
+                "{name} m={m}: {got} vs {want}"
+            );
+            compared += 1;
+        }
+    }
+    // octave grid up to N/4 (Stable32 stop ratio): m = 1 .. 2^17 on 6 channels
+    assert_eq!(compared, 6 * 18);
+}
