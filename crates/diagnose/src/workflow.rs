@@ -407,6 +407,7 @@ fn trials(
     g: &Gap,
     dt_s: f64,
     temp: Option<(&[f64], f64, f64)>,
+    ramp_slope: f64,
 ) -> Vec<Trial> {
     let ln_meas: Vec<f64> = measured.adev.iter().map(|a| a.ln()).collect();
     let data = FitData {
@@ -490,7 +491,21 @@ fn trials(
                 .collect();
             let c0 = current.map(|c| c.c()).unwrap_or(0.0);
             let fit = fit_linear(&data, &f, c0);
-            (fit, TermParams::Level(fit.c.sqrt()), 0.0, 0.0, f, 0.0)
+            if effect == Effect::RateRamp {
+                // A ramp is deterministic: its level is the least-squares slope of the log (the ML
+                // estimate of a ramp in white noise), not a free Allan parameter. A long-tau rise that is
+                // really a random walk then fits as a ramp only if the log does drift that way, which the
+                // last two or three Allan points (a handful of EDF) cannot tell.
+                let c = ramp_slope * ramp_slope;
+                let ramp = LinearFit {
+                    c,
+                    chi2: data.chi2(&f, c - c0),
+                    ..fit
+                };
+                (ramp, TermParams::Level(ramp_slope), 0.0, 0.0, f, 0.0)
+            } else {
+                (fit, TermParams::Level(fit.c.sqrt()), 0.0, 0.0, f, 0.0)
+            }
         };
         let c0 = match (effect, temp) {
             (Effect::TemperatureBias, Some((_, _, k))) => k * k,
@@ -498,7 +513,13 @@ fn trials(
         };
         // 95 % interval widened by the Birge ratio of this fit.
         let scale = birge_scale(fit.chi2, k, m);
-        let (c_lo, c_hi) = linear_interval(&data, &f, c0, &fit, CHI2_1_95 * scale * scale);
+        // (For the ramp: the profile interval of the Allan fit alone, around its own optimum.)
+        let allan_fit = if effect == Effect::RateRamp {
+            fit_linear(&data, &f, c0)
+        } else {
+            fit
+        };
+        let (c_lo, c_hi) = linear_interval(&data, &f, c0, &allan_fit, CHI2_1_95 * scale * scale);
         let mut lo = sqrt_params(params, c_lo);
         let mut hi = sqrt_params(params, c_hi);
         if let (TermParams::Level(l), TermParams::Level(h)) = (lo, hi) {
@@ -585,6 +606,10 @@ pub fn diagnose(
         _ => 1.0,
     });
 
+    // Least-squares slope of each channel against time (the rate-ramp level, see `trials`).
+    let ramp_slope: [f64; 6] =
+        std::array::from_fn(|c| log.channels[c].map_or(0.0, |x| slope(x, log.dt_s)));
+
     // Step 2: the model's band.
     let mut setup = SimSetup {
         dt_s: log.dt_s,
@@ -656,6 +681,7 @@ pub fn diagnose(
                     log.dt_s,
                     temp.as_ref()
                         .map(|(v, s)| (v.as_slice(), *s, setup.temp_coeff[c])),
+                    ramp_slope[c],
                 );
                 let data = FitData {
                     ln_meas: &ln_meas,
@@ -964,6 +990,24 @@ fn verdict(g: &Gap, effects: &[FoundEffect]) -> String {
             "{named}; still disagreeing at {} and no candidate improves BIC enough to explain it",
             ranges.join(", ")
         )
+    }
+}
+
+/// Ordinary least-squares slope of x_k against t_k = k dt: sum (t - t_mean)(x - x_mean) / sum (t - t_mean)^2.
+fn slope(x: &[f64], dt_s: f64) -> f64 {
+    let n = x.len() as f64;
+    let t_mean = (n - 1.0) / 2.0 * dt_s;
+    let x_mean = mean(x);
+    let (mut sxy, mut sxx) = (0.0, 0.0);
+    for (k, &v) in x.iter().enumerate() {
+        let dt = k as f64 * dt_s - t_mean;
+        sxy += dt * (v - x_mean);
+        sxx += dt * dt;
+    }
+    if sxx > 0.0 {
+        sxy / sxx
+    } else {
+        0.0
     }
 }
 
