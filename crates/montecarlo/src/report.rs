@@ -37,6 +37,12 @@ pub struct ChannelReport {
     /// 99.9 % interval of `ratio` (statistical, from the runs, widened by the discretisation allowance).
     pub ratio_lo: Option<f64>,
     pub ratio_hi: Option<f64>,
+    /// mean / law_mean where the law has a non-zero mean (deterministic terms; the horizontal
+    /// magnitudes' Rayleigh-type mean), with its 99.9 % interval: standard error std/sqrt(n) from the
+    /// runs (central limit theorem), widened by the same discretisation allowance.
+    pub mean_ratio: Option<f64>,
+    pub mean_ratio_lo: Option<f64>,
+    pub mean_ratio_hi: Option<f64>,
     /// Why there is no law, when there is none.
     pub law_note: Option<String>,
 }
@@ -127,6 +133,9 @@ pub fn build_report(
                         ratio: None,
                         ratio_lo: None,
                         ratio_hi: None,
+                        mean_ratio: None,
+                        mean_ratio_lo: None,
+                        mean_ratio_hi: None,
                         law_note: None,
                     };
                     match law {
@@ -146,6 +155,15 @@ pub fn build_report(
                             }
                         }
                         Law::NotApplicable(why) => r.law_note = Some(why.clone()),
+                    }
+                    if let (Some(m), true) = (r.law_mean, s.count > 1) {
+                        if m != 0.0 {
+                            let half = Z_999 * s.std / (s.count as f64).sqrt() / m.abs();
+                            let ratio = s.mean / m;
+                            r.mean_ratio = finite(ratio);
+                            r.mean_ratio_lo = finite((ratio - half) * (1.0 - allowance));
+                            r.mean_ratio_hi = finite((ratio + half) * (1.0 + allowance));
+                        }
                     }
                     (ch.name().to_string(), r)
                 })

@@ -59,6 +59,17 @@ fn check(name: &str, report: &DriftReport, expect_channels: &[Channel]) -> usize
                     ));
                 }
             }
+            // Signed means of deterministic terms and horizontal mean magnitudes.
+            if let (Some(r), Some(lo), Some(hi)) = (c.mean_ratio, c.mean_ratio_lo, c.mean_ratio_hi)
+            {
+                checked += 1;
+                if !(lo <= 1.0 && 1.0 <= hi) {
+                    bad.push(format!(
+                        "t={} {ch}: mean ratio {r:.4} [{lo:.4}, {hi:.4}]",
+                        cp.t_s
+                    ));
+                }
+            }
         }
     }
     for ch in expect_channels {
