@@ -105,6 +105,23 @@ pub fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
     b.build().context("cannot start the worker threads")
 }
 
+/// Memory for the per-run values above which `simulate` asks for shards instead (8 GiB).
+const MAX_VALUE_BYTES: u64 = 8 << 30;
+
+/// Refuse a run range whose per-run values (8 bytes per run, checkpoint and channel) would not fit.
+pub fn check_memory(exp: &Experiment, runs: u64) -> Result<()> {
+    let per_run = (exp.scenario.checkpoint_steps.len() * Channel::ALL.len() * 8) as u64;
+    let bytes = runs.saturating_mul(per_run);
+    if bytes > MAX_VALUE_BYTES {
+        bail!(
+            "--runs: {runs} runs x {} checkpoints keep {:.1} GiB of per-run values (limit 8 GiB); split them with --shard i/k and `imudrift merge`, or use fewer checkpoints",
+            exp.scenario.checkpoint_steps.len(),
+            bytes as f64 / (1u64 << 30) as f64
+        );
+    }
+    Ok(())
+}
+
 /// Run `exp` over `runs`, with a progress bar on a terminal.
 pub fn execute(exp: &Experiment, runs: std::ops::Range<u64>, label: &str) -> BatchResult {
     let kernel = exp.kernel();
@@ -147,7 +164,9 @@ pub fn run(args: Args) -> Result<()> {
         let Some(dir) = &args.out else {
             bail!("--shard: expected --out DIR for the shard file");
         };
-        let result = pool.install(|| execute(&exp, shard.runs(exp.runs), "shard"));
+        let range = shard.runs(exp.runs);
+        check_memory(&exp, range.end - range.start)?;
+        let result = pool.install(|| execute(&exp, range, "shard"));
         let file = ShardFile {
             format: SHARD_FORMAT.into(),
             scenario_source: inputs.scenario_source,
@@ -177,6 +196,7 @@ pub fn run(args: Args) -> Result<()> {
         );
         return Ok(());
     }
+    check_memory(&exp, exp.runs)?;
     let result = pool.install(|| execute(&exp, 0..exp.runs, "simulate"));
     let report = exp.report(&result.matrix, &result.failures);
     let ablation = if args.ablation || (exp.scenario.ablation && !args.no_ablation) {

@@ -180,6 +180,9 @@ fn bad_inputs_name_file_and_key() {
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("bad.toml") && err.contains("rate_hz"), "{err}");
+    let out = imudrift(&["simulate", SCENARIO, "--runs", "100000000000"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--shard"));
     let out = imudrift(&["simulate", SCENARIO, "--only", "gyro.whitenoise"]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("whitenoise"));
