@@ -2,7 +2,7 @@
 //! 12 h, 100 Hz static log (Woodman's Allan method), and drift at 1 min, 10 min and 1 h (heading and
 //! horizontal position, law and simulation) side by side for all sensors given.
 
-use crate::cmd_simulate::{execute, pool};
+use crate::cmd_simulate::{check_memory, execute, pool};
 use crate::output::{ensure_dir, write_atomic, write_string};
 use anyhow::{Context, Result};
 use montecarlo::spec::{
@@ -91,6 +91,7 @@ pub fn run(args: Args) -> Result<()> {
             .install(|| gyro_readback(&model, args.seed, args.readback_duration, READBACK_RATE_HZ));
         let exp = drift_experiment(&model, &args.times, args.rate, args.runs, args.seed)
             .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+        check_memory(&exp, exp.runs)?;
         let batch = pool.install(|| execute(&exp, 0..exp.runs, &model.name));
         let report = exp.report(&batch.matrix, &batch.failures);
         for f in &batch.failures {
