@@ -174,7 +174,15 @@ fn check_table(
             } else {
                 CI_REL_TOL
             };
-            tally.worst_ci = tally.worst_ci.max(el.max(eh));
+            if ci_tol == CI_REL_TOL {
+                tally.worst_ci = tally.worst_ci.max(el.max(eh));
+            } else {
+                eprintln!(
+                    "{name} AF {}: known exception, CI rel err {:.2e}",
+                    row.af,
+                    el.max(eh)
+                );
+            }
             if el.max(eh) > ci_tol {
                 tally.failures.push(format!(
                     "{name} AF {} alpha {}: CI [{lo:.5e}, {hi:.5e}] vs [{:.5e}, {:.5e}]",
