@@ -376,6 +376,7 @@ fn no_hidden_effect_names_nothing() {
             named.push(format!("seed {seed}: {found:?}"));
         }
     }
+    eprintln!("clean logs with an effect named: {} of 20", named.len());
     assert!(
         named.len() <= 1,
         "effects named on clean logs:\n{}",
