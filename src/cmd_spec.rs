@@ -81,6 +81,9 @@ pub fn run(args: Args) -> Result<()> {
         let model = SensorModel::load(path)
             .map_err(|e| anyhow::anyhow!("{e}"))?
             .filtered(&filter);
+        let exp = drift_experiment(&model, &args.times, args.rate, args.runs, args.seed)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+        check_memory(&exp, exp.runs)?;
         eprintln!(
             "{}: reading back a {:.0} h, {} Hz static log ...",
             model.name,
@@ -89,9 +92,6 @@ pub fn run(args: Args) -> Result<()> {
         );
         let gyro = pool
             .install(|| gyro_readback(&model, args.seed, args.readback_duration, READBACK_RATE_HZ));
-        let exp = drift_experiment(&model, &args.times, args.rate, args.runs, args.seed)
-            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-        check_memory(&exp, exp.runs)?;
         let batch = pool.install(|| execute(&exp, 0..exp.runs, &model.name));
         let report = exp.report(&batch.matrix, &batch.failures);
         for f in &batch.failures {
