@@ -2,16 +2,15 @@
 //! drift over segments of a log, computed the same way for the measured log and for logs simulated
 //! from the model, so the three are directly comparable.
 //!
-//! Linearised static, level strapdown error model (body FRD = nav NED at zero heading):
-//! - the constant bias is calibrated out by the log's own mean, as a static calibration would
-//!   (Woodman §3.2.1 gyro, §4.2 accelerometer; theory.md §1.5, §1.6);
-//! - attitude error is the rectangle-rule integral of the gyro error (Woodman eqs 2, 36-37);
-//! - a tilt error eps projects g sin(eps) ~ g eps of gravity onto the horizontal (Woodman §6.2.3,
-//!   theory.md §1.2): with specific force (0, 0, -g) in NED, the rotation error delta gives
-//!   delta x f = (-g delta_y, g delta_x, 0);
-//! - velocity and position follow Woodman's rectangle rule, eqs (45)-(46): v += dt a, s += dt v.
+//! Each segment is dead-reckoned from rest by the project's strapdown mechanisation (the default
+//! `Accurate` scheme; Woodman eqs 41-46 and better, crate `strapdown`), starting level at the origin,
+//! after the static calibration a user would do: each channel's mean over the whole log is taken as its
+//! bias and removed, the accelerometers are then referred to the ideal specific force (0, 0, -g) of a
+//! level IMU (Woodman §3.2.1 gyro, §4.2 accelerometer; theory.md §1.5, §1.6). The errors are the
+//! navigation solution minus the static truth (`strapdown::nav_error`).
 
 use serde::Serialize;
+use strapdown::{nav_error, BodyVector, NavState, Scheme, Strapdown};
 
 /// Standard gravity, m/s^2 (DESIGN.md / INTERFACES.md convention).
 pub const G_MPS2: f64 = 9.80665;
@@ -68,10 +67,10 @@ fn mean(x: &[f64]) -> f64 {
     }
 }
 
-/// Segment drifts of a static log. `channels` are gx gy gz (rad/s) and ax ay (m/s^2); a missing
-/// channel (None) contributes no error. Segments are consecutive, non-overlapping, of
+/// Segment drifts of a static log. `channels` are gx gy gz (rad/s) and ax ay az (m/s^2); a missing
+/// channel (None) reads its ideal value. Segments are consecutive, non-overlapping, of
 /// `round(horizon_s / dt_s)` samples each; a horizon longer than the log gives no segment.
-pub fn segment_drift(channels: &[Option<&[f64]>; 5], dt_s: f64, horizon_s: f64) -> SegmentDrift {
+pub fn segment_drift(channels: &[Option<&[f64]>; 6], dt_s: f64, horizon_s: f64) -> SegmentDrift {
     let n = channels
         .iter()
         .flatten()
@@ -86,27 +85,26 @@ pub fn segment_drift(channels: &[Option<&[f64]>; 5], dt_s: f64, horizon_s: f64) 
     if len == 0 || n < len {
         return out;
     }
-    let bias: Vec<f64> = channels
+    // Calibrated sample = sample - log mean + ideal value (0 for the gyros, (0, 0, -g) for the accelerometers).
+    let ideal = [0.0, 0.0, 0.0, 0.0, 0.0, -G_MPS2];
+    let offset: Vec<f64> = channels
         .iter()
-        .map(|c| c.map(|c| mean(&c[..n])).unwrap_or(0.0))
+        .zip(ideal)
+        .map(|(c, i)| c.map_or(0.0, |c| mean(&c[..n])) - i)
         .collect();
-    let value = |ch: usize, k: usize| channels[ch].map(|c| c[k] - bias[ch]).unwrap_or(0.0);
+    let value = |ch: usize, k: usize| channels[ch].map_or(ideal[ch], |c| c[k] - offset[ch]);
+    let truth = NavState::default();
     for seg in 0..n / len {
-        let (mut th_x, mut th_y, mut th_z) = (0.0, 0.0, 0.0);
-        let (mut v_n, mut v_e, mut p_n, mut p_e) = (0.0, 0.0, 0.0, 0.0);
-        for k in seg * len..(seg + 1) * len {
-            th_x += value(0, k) * dt_s;
-            th_y += value(1, k) * dt_s;
-            th_z += value(2, k) * dt_s;
-            let a_n = value(3, k) - G_MPS2 * th_y;
-            let a_e = value(4, k) + G_MPS2 * th_x;
-            v_n += a_n * dt_s;
-            v_e += a_e * dt_s;
-            p_n += v_n * dt_s;
-            p_e += v_e * dt_s;
+        let mut nav = Strapdown::new(Scheme::Accurate, truth, G_MPS2);
+        let k0 = seg * len;
+        for k in k0..k0 + len {
+            let gyro = BodyVector::new(value(0, k), value(1, k), value(2, k));
+            let accel = BodyVector::new(value(3, k), value(4, k), value(5, k));
+            nav.step(&gyro, &accel, dt_s);
         }
-        out.heading_rad.push(th_z);
-        out.horizontal_m.push(p_n.hypot(p_e));
+        let e = nav_error(nav.state(), &truth);
+        out.heading_rad.push(e.yaw_rad);
+        out.horizontal_m.push(e.pos_horizontal_m());
     }
     out
 }
@@ -127,17 +125,34 @@ mod tests {
         let eps = 1e-3;
         let n = 20_000;
         let gy: Vec<f64> = (0..n).map(|k| if k < n / 2 { eps } else { -eps }).collect();
-        let d = segment_drift(&[None, Some(&gy), None, None, None], dt, 10.0);
+        let d = segment_drift(&[None, Some(&gy), None, None, None, None], dt, 10.0);
         assert_eq!(d.horizontal_m.len(), 2);
         let t: f64 = 10.0;
         let law = G_MPS2 * eps * t.powi(3) / 6.0;
-        // Rectangle rule with updated values: dt^3 sum_j j(j+1)(j+2)/2 / n^3 = (1/6)(1 + 3/n + 2/n^2),
-        // relative excess 3 dt / t to first order; allow 4 dt / t.
+        // The law is first order in the tilt (here 0.01 rad: sin differs by 2e-5 relative) and
+        // continuous-time; the trapezoidal mechanisation's discretisation error is O(dt / t).
         let tol = 4.0 * dt / t;
         for &p in &d.horizontal_m {
             assert!((p / law - 1.0).abs() < tol, "{p} vs {law}");
         }
-        assert_eq!(d.heading_rad, vec![0.0, 0.0]);
+        assert!(
+            d.heading_rad.iter().all(|h| h.abs() < 1e-12),
+            "{:?}",
+            d.heading_rad
+        );
+    }
+
+    #[test]
+    fn constant_z_gyro_error_gives_linear_heading() {
+        // Woodman §3.2.1: theta(t) = eps t. The rotation is exact per step, so only rounding remains.
+        let dt = 0.01;
+        let eps = 2e-3;
+        let n = 4000;
+        let gz: Vec<f64> = (0..n).map(|k| if k < n / 2 { eps } else { -eps }).collect();
+        let d = segment_drift(&[None, None, Some(&gz), None, None, None], dt, 20.0);
+        assert!((d.heading_rad[0] - eps * 20.0).abs() < 1e-12, "{:?}", d.heading_rad);
+        assert!((d.heading_rad[1] + eps * 20.0).abs() < 1e-12, "{:?}", d.heading_rad);
+        assert!(d.horizontal_m.iter().all(|p| p.abs() < 1e-9));
     }
 
     #[test]
@@ -147,12 +162,12 @@ mod tests {
         let eps = 0.02;
         let n = 2000;
         let ax: Vec<f64> = (0..n).map(|k| if k < n / 2 { eps } else { -eps }).collect();
-        let d = segment_drift(&[None, None, None, Some(&ax), None], dt, 10.0);
+        let d = segment_drift(&[None, None, None, Some(&ax), None, None], dt, 10.0);
         let law = eps * 100.0 / 2.0;
         for &p in &d.horizontal_m {
             assert!((p / law - 1.0).abs() < 2.0 * dt / 10.0, "{p} vs {law}");
         }
-        let none = segment_drift(&[None, None, None, Some(&ax), None], dt, 3600.0);
+        let none = segment_drift(&[None, None, None, Some(&ax), None, None], dt, 3600.0);
         assert!(none.horizontal_m.is_empty());
         assert!(none.summary().horizontal_rms_m.is_nan());
     }

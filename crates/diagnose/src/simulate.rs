@@ -132,7 +132,7 @@ impl RunKernel for Kernel<'_> {
                 out[i * 6 + ch] = a;
             }
         }
-        let chans: [Option<&[f64]>; 5] =
+        let chans: [Option<&[f64]>; 6] =
             std::array::from_fn(|c| self.setup.active[c].then_some(log[c].as_slice()));
         let mut row = m;
         for (h, &horizon) in self.setup.horizons_s.iter().enumerate() {

@@ -823,7 +823,7 @@ pub fn diagnose(
     }
 
     // Step 6: drift consequence, measured log segments vs model before vs model after.
-    let gyro_accel: [Option<&[f64]>; 5] = std::array::from_fn(|c| log.channels[c]);
+    let gyro_accel: [Option<&[f64]>; 6] = log.channels;
     let drift = settings
         .horizons_s
         .iter()
