@@ -54,7 +54,9 @@ pub struct ChannelResult {
     pub name: String,
     pub unit: &'static str,
     pub points: Vec<AllanPoint>,
-    pub fit: Fit,
+    /// The IEEE 952 fit: only for Allan-variance estimators (adev, oadev, totdev), whose
+    /// per-term closed forms the model uses.
+    pub fit: Option<Fit>,
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -130,7 +132,7 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
         .collect();
     stage("deviations, intervals, fit");
     let table = tables(&log, &results, est);
-    let doc = json_document(&log, &results, est, &args.grid);
+    let doc = json_document(&log, &results, est, &args.grid, opts.confidence);
     if args.json {
         eprint!("{table}");
         println!("{}", serde_json::to_string_pretty(&doc)?);
@@ -191,7 +193,11 @@ pub fn analyse(
             .collect();
         series.attach_intervals_with_alphas(est, &mut points, &alphas, opts);
     }
-    let fit = fit_ieee952(&points);
+    let allan_variance = matches!(
+        est,
+        Estimator::NonOverlapping | Estimator::Overlapping | Estimator::Total
+    );
+    let fit = allan_variance.then(|| fit_ieee952(&points));
     ChannelResult {
         name: name.to_string(),
         unit: Log::unit_of(name),
@@ -230,7 +236,14 @@ fn tables(log: &Log, results: &[ChannelResult], est: Estimator) -> String {
                 p.tau_s, p.m, p.n_terms, p.alpha, p.edf, p.lo, p.dev, p.hi
             );
         }
-        let f = &r.fit;
+        let Some(f) = &r.fit else {
+            let _ = writeln!(
+                s,
+                "IEEE 952 fit: not done for {} (the model's closed forms are those of the Allan variance)",
+                est.name()
+            );
+            continue;
+        };
         let unit = r.unit;
         let _ = writeln!(
             s,
@@ -280,7 +293,13 @@ fn num(v: f64) -> Value {
     }
 }
 
-fn json_document(log: &Log, results: &[ChannelResult], est: Estimator, grid: &str) -> Value {
+fn json_document(
+    log: &Log,
+    results: &[ChannelResult],
+    est: Estimator,
+    grid: &str,
+    confidence: f64,
+) -> Value {
     let mut channels = Map::new();
     for r in results {
         let col = |f: &dyn Fn(&AllanPoint) -> f64| -> Value {
@@ -288,11 +307,24 @@ fn json_document(log: &Log, results: &[ChannelResult], est: Estimator, grid: &st
         };
         let mut fit = Map::new();
         let mut sigma = Map::new();
-        for (name, t) in TERM_NAMES.iter().zip(r.fit.terms()) {
+        let terms = r.fit.as_ref().map_or([None; 5], Fit::terms);
+        for (name, t) in TERM_NAMES.iter().zip(terms) {
             fit.insert(name.to_string(), t.map_or(Value::Null, |t| num(t.value)));
             sigma.insert(name.to_string(), t.map_or(Value::Null, |t| num(t.sigma)));
         }
-        let rd = &r.fit.readings;
+        let readings = r.fit.as_ref().map_or(Value::Null, |f| {
+            let rd = &f.readings;
+            json!({
+                "arw_at_1s": num(rd.arw_at_1s),
+                "arw_tau_s": num(rd.arw_tau_s),
+                "bi_min": num(rd.bi_min),
+                "bi_min_tau_s": num(rd.bi_min_tau_s),
+                "bi_ieee": num(rd.bi_ieee),
+                "rrw_at_3s": num(rd.rrw_at_3s),
+                "rrw_tau_s": num(rd.rrw_tau_s),
+                "q_at_sqrt3s": num(rd.q_at_sqrt3s),
+            })
+        });
         channels.insert(
             r.name.clone(),
             json!({
@@ -308,18 +340,9 @@ fn json_document(log: &Log, results: &[ChannelResult], est: Estimator, grid: &st
                 "edf": col(&|p| p.edf),
                 "fit": fit,
                 "fit_sigma": sigma,
-                "fit_reduced_chi2": num(r.fit.reduced_chi2),
-                "fit_model_error": num(r.fit.model_error),
-                "readings": {
-                    "arw_at_1s": num(rd.arw_at_1s),
-                    "arw_tau_s": num(rd.arw_tau_s),
-                    "bi_min": num(rd.bi_min),
-                    "bi_min_tau_s": num(rd.bi_min_tau_s),
-                    "bi_ieee": num(rd.bi_ieee),
-                    "rrw_at_3s": num(rd.rrw_at_3s),
-                    "rrw_tau_s": num(rd.rrw_tau_s),
-                    "q_at_sqrt3s": num(rd.q_at_sqrt3s),
-                },
+                "fit_reduced_chi2": r.fit.as_ref().map_or(Value::Null, |f| num(f.reduced_chi2)),
+                "fit_model_error": r.fit.as_ref().map_or(Value::Null, |f| num(f.model_error)),
+                "readings": readings,
             }),
         );
     }
@@ -329,7 +352,7 @@ fn json_document(log: &Log, results: &[ChannelResult], est: Estimator, grid: &st
         "rate_hz": log.rate_hz,
         "estimator": est.name(),
         "grid": grid,
-        "confidence": "one sigma unless --confidence",
+        "confidence": confidence,
         "channels": channels,
     })
 }
@@ -383,10 +406,11 @@ fn plot(r: &ChannelResult, est: Estimator, source: &str) -> LogLogPlot {
             .map(|i| 10f64.powf(a + (b - a) * i as f64 / 100.0))
             .collect()
     };
+    let Some(fit) = &r.fit else { return p };
     p.series.push(Series::dashed(
         "IEEE 952 fit",
         fine.clone(),
-        fine.iter().map(|&t| r.fit.model_dev(t)).collect(),
+        fine.iter().map(|&t| fit.model_dev(t)).collect(),
         "#000000",
     ));
     let names = [
@@ -397,12 +421,12 @@ fn plot(r: &ChannelResult, est: Estimator, source: &str) -> LogLogPlot {
         "R (tau^+1)",
     ];
     for (j, name) in names.iter().enumerate() {
-        if r.fit.terms()[j].is_some() {
+        if fit.terms()[j].is_some() {
             p.series.push(Series::dashed(
                 name,
                 fine.clone(),
                 fine.iter()
-                    .map(|&t| r.fit.term_dev(j, t).unwrap_or(f64::NAN))
+                    .map(|&t| fit.term_dev(j, t).unwrap_or(f64::NAN))
                     .collect(),
                 PALETTE[(j + 1) % PALETTE.len()],
             ));
