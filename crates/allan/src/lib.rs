@@ -867,6 +867,48 @@ mod tests {
     }
 
     #[test]
+    fn hadamard_ignores_a_rate_ramp_allan_does_not() {
+        // A rate ramp integrates to a quadratic phase, which every third difference removes
+        // exactly (SP 1065 §5.2.8): HDEV of white + ramp equals HDEV of white alone up to
+        // rounding (1e-9: the ramp's phase is ~1e4 times the noise's), while OADEV grows.
+        let white = series(20_000, 21);
+        let ramp: Vec<f64> = white
+            .iter()
+            .enumerate()
+            .map(|(k, w)| w + 1e-3 * k as f64)
+            .collect();
+        for est in [Estimator::Hadamard, Estimator::OverlappingHadamard] {
+            let a = deviation(&white, DataKind::Rate, 1.0, est, &TauGrid::Octave);
+            let b = deviation(&ramp, DataKind::Rate, 1.0, est, &TauGrid::Octave);
+            for (p, q) in a.iter().zip(&b) {
+                assert!(((p.dev - q.dev) / p.dev).abs() < 1e-9, "{est:?} m={}", p.m);
+            }
+        }
+        let a = deviation(
+            &white,
+            DataKind::Rate,
+            1.0,
+            Estimator::Overlapping,
+            &TauGrid::Octave,
+        );
+        let b = deviation(
+            &ramp,
+            DataKind::Rate,
+            1.0,
+            Estimator::Overlapping,
+            &TauGrid::Octave,
+        );
+        let last = a.len() - 1;
+        // R^2 tau^2 / 2 dominates at long tau (theory.md §2): 1e-3 * tau / sqrt 2.
+        let want = 1e-3 * a[last].tau_s / 2f64.sqrt();
+        assert!(
+            (b[last].dev / want - 1.0).abs() < 0.05,
+            "{} vs {want}",
+            b[last].dev
+        );
+    }
+
+    #[test]
     fn woodman_bins_rule() {
         let y = series(1000, 5);
         let p = deviation(
