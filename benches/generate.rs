@@ -1,5 +1,6 @@
 //! Sample generation: ns per 6-axis sample of the full MTx model (configs/sensors/mtx.toml:
-//! white noise, flicker bias instability as 13 Gauss-Markov components and rate random walk on each
+//! white noise, flicker bias instability as 7 Gauss-Markov components (0.1 s .. 1e5 s, one per decade)
+//! and rate random walk on each
 //! gyro, white noise on each accelerometer), through `ImuErrors::corrupt` and channel by channel
 //! (`ChannelErrors::fill_static`, what `imudrift generate` runs in parallel).
 

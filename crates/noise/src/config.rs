@@ -25,7 +25,7 @@
 //!   the flicker band's plateau, averaging times [30 tau_min, tau_max / 30] (3 s .. 3333 s by default);
 //! - `{ model = "random_walk", stability, period }`: Woodman's bias random walk (eq 9).
 //!
-//! Flicker options: `band = ["0.1 s", "1e5 s"]` (correlation times), `per_decade = 2`.
+//! Flicker options: `band = ["0.1 s", "1e5 s"]` (correlation times), `per_decade = 1`.
 
 use crate::closed_form as cf;
 use crate::effect::Sensor;
@@ -783,7 +783,7 @@ fn in_units_of(value: f64, like: &str, q: Quantity) -> String {
 }
 
 /// Log-spaced averaging times inside the flicker band's plateau, [30 tau_min, tau_max / 30], where the
-/// component sum is within 0.1 % of 0.664 B (2 per decade); nearer the band edges it falls off
+/// component sum is within 1.3 % of 0.664 B (`Flicker::per_decade`); nearer the band edges it falls off
 /// (0.55 B at 2 tau_min), which would make a curve without a rising term take its minimum there.
 fn plateau_taus(f: &Flicker) -> Vec<f64> {
     let lo = 30.0 * f.tau_min_s;

@@ -46,15 +46,19 @@ pub struct Flicker {
     pub tau_min_s: f64,
     /// Longest correlation time of the band, s.
     pub tau_max_s: f64,
-    /// Gauss-Markov components per decade of correlation time (2 gives a ripple of about ±2 %).
+    /// Gauss-Markov components per decade of correlation time. Over averaging times
+    /// [30 tau_min, tau_max / 30] the closed-form Allan deviation of the sum stays within
+    /// 0.987 .. 1.010 of 0.664 B with 1 per decade and 0.987 .. 1.000 with 2 (checked numerically).
     pub per_decade: u32,
 }
 
 impl Flicker {
-    /// Default band: 0.1 s to 1e5 s covers every averaging time a 12 h log shows (up to ~5000 s).
+    /// Default band: 0.1 s to 1e5 s, a plateau over 3 s .. 3333 s, covering the averaging times where a
+    /// 12 h log of a MEMS sensor shows its bias instability.
     pub const DEFAULT_TAU_MIN_S: f64 = 0.1;
     pub const DEFAULT_TAU_MAX_S: f64 = 1e5;
-    pub const DEFAULT_PER_DECADE: u32 = 2;
+    /// One per decade: as flat as two within the plateau (see `per_decade`), at half the cost per sample.
+    pub const DEFAULT_PER_DECADE: u32 = 1;
 
     pub fn new(
         b: f64,

@@ -133,16 +133,17 @@ fn quantization_adds_3q2_over_tau2() {
 #[test]
 fn flicker_matches_its_closed_form_and_plateau() {
     let b = 1e-3;
-    for (i, &rate) in RATES_HZ.iter().enumerate() {
+    for (i, (&rate, per_decade)) in RATES_HZ.iter().zip([1, 2, 1]).enumerate() {
         let dt = 1.0 / rate;
         // Band from one sample to the record length.
-        let flicker = Flicker::new(b, dt, N as f64 * dt, 2).unwrap();
+        let flicker = Flicker::new(b, dt, N as f64 * dt, per_decade).unwrap();
         let axis = AxisModel {
             bias_instability: Some(BiasInstability::Flicker(flicker.clone())),
             ..AxisModel::default()
         };
         let data = gyro_x_series(&axis, rate, N, SEED + 3, i as u64);
-        let ms = [10, 100, 1000, 10_000];
+        // The plateau: averaging times in [30 tau_min, tau_max / 30].
+        let ms = [30, 300, 3000, 30_000];
         assert_avar_matches(
             &format!("flicker at {rate} Hz"),
             &data,
@@ -151,10 +152,10 @@ fn flicker_matches_its_closed_form_and_plateau() {
             &[-1],
             |tau| axis.allan_variance_sampled(tau, dt),
         );
-        // Plateau: inside [10 tau_min, tau_max / 10] the closed form of the component sum is within
-        // the ripple RIPPLE of 0.664 B (IEEE 952, Hou 4.38-4.50; theory.md §3 measured 0.653-0.677),
-        // and the estimate is within the chi-squared bound widened by that ripple.
-        const RIPPLE: f64 = 0.025;
+        // Plateau: there the closed form of the component sum is within RIPPLE of 0.664 B (IEEE 952,
+        // Hou 4.38-4.50; 0.987 .. 1.010 computed for 1 or 2 components per decade, theory.md §3 measured
+        // 0.653-0.677 by simulation), and the estimate within the chi-squared bound widened by it.
+        const RIPPLE: f64 = 0.015;
         let plateau = cf::flicker_plateau_avar(b);
         let est = oavar(&data, dt, &ms);
         for (&m, &v) in ms.iter().zip(&est) {
