@@ -150,8 +150,16 @@ mod tests {
         let n = 4000;
         let gz: Vec<f64> = (0..n).map(|k| if k < n / 2 { eps } else { -eps }).collect();
         let d = segment_drift(&[None, None, Some(&gz), None, None, None], dt, 20.0);
-        assert!((d.heading_rad[0] - eps * 20.0).abs() < 1e-12, "{:?}", d.heading_rad);
-        assert!((d.heading_rad[1] + eps * 20.0).abs() < 1e-12, "{:?}", d.heading_rad);
+        assert!(
+            (d.heading_rad[0] - eps * 20.0).abs() < 1e-12,
+            "{:?}",
+            d.heading_rad
+        );
+        assert!(
+            (d.heading_rad[1] + eps * 20.0).abs() < 1e-12,
+            "{:?}",
+            d.heading_rad
+        );
         assert!(d.horizontal_m.iter().all(|p| p.abs() < 1e-9));
     }
 

@@ -210,14 +210,31 @@ fn profile_interval(
 }
 
 /// Fit of a signature family over one shape parameter (Gauss-Markov time, sinusoid frequency): the
-/// linear fit at each grid value, the best overall, and the profile interval of the shape parameter
-/// (the grid values whose profiled chi2 is within the 95 % threshold of the minimum).
+/// linear fit at each grid value and the best overall.
 #[derive(Clone, Debug, Serialize)]
 pub struct FamilyFit {
     pub shape: f64,
     pub fit: LinearFit,
-    pub shape_lo: f64,
-    pub shape_hi: f64,
+    /// The shape grid and the profiled chi2 (minimised over the level) at each grid value.
+    pub shapes: Vec<f64>,
+    pub chi2_by_shape: Vec<f64>,
+}
+
+impl FamilyFit {
+    /// Profile interval of the shape parameter: the grid values whose profiled chi2 is within `delta` of
+    /// the minimum, widened to the neighbouring grid values outside (the true bound lies between them).
+    pub fn shape_interval(&self, delta: f64) -> (f64, f64) {
+        let level = self.fit.chi2 + delta;
+        let inside: Vec<usize> = (0..self.shapes.len())
+            .filter(|&j| self.chi2_by_shape[j] <= level)
+            .collect();
+        let (Some(&first), Some(&last)) = (inside.first(), inside.last()) else {
+            return (self.shape, self.shape);
+        };
+        let lo = self.shapes[first.saturating_sub(1)];
+        let hi = self.shapes[(last + 1).min(self.shapes.len() - 1)];
+        (lo, hi)
+    }
 }
 
 pub fn fit_family(
@@ -235,13 +252,11 @@ pub fn fit_family(
         .iter()
         .enumerate()
         .min_by(|a, b| a.1.chi2.total_cmp(&b.1.chi2))?;
-    let level = best.chi2 + CHI2_1_95;
-    let inside: Vec<usize> = (0..fits.len()).filter(|&j| fits[j].chi2 <= level).collect();
     Some(FamilyFit {
         shape: shapes[jb],
         fit: *best,
-        shape_lo: shapes[*inside.first().unwrap_or(&jb)],
-        shape_hi: shapes[*inside.last().unwrap_or(&jb)],
+        shapes: shapes.to_vec(),
+        chi2_by_shape: fits.iter().map(|f| f.chi2).collect(),
     })
 }
 

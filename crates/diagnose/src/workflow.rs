@@ -460,11 +460,14 @@ fn trials(
                     frequency_hz: ff.shape,
                 },
             };
+            // Shape interval at the 95 % threshold widened by this fit's Birge ratio.
+            let scale = birge_scale(ff.fit.chi2, k, m);
+            let (shape_lo, shape_hi) = ff.shape_interval(CHI2_1_95 * scale * scale);
             (
                 ff.fit,
                 p,
-                ff.shape_lo,
-                ff.shape_hi,
+                shape_lo,
+                shape_hi,
                 sigs[j].clone(),
                 shape_search_penalty(shapes.len()),
             )
