@@ -300,41 +300,81 @@ fn parse_body(
         };
         bounds.push(e);
     }
-    let results: Vec<(usize, ChunkColumns)> = bounds
+    // Lines per chunk (an upper bound on its rows): the columns are allocated once and every
+    // chunk parses straight into its own disjoint part of them, in parallel.
+    let line_counts: Vec<usize> = bounds
         .par_windows(2)
-        .map(|w| parse_chunk(&body[w[0]..w[1]], n_cols, names))
+        .map(|w| lines_in(&body[w[0]..w[1]]))
         .collect();
+    let total: usize = line_counts.iter().sum();
+    let mut columns: Vec<Vec<f64>> = (0..n_cols).map(|_| vec![0.0f64; total]).collect();
+    let mut parts: Vec<Vec<&mut [f64]>> = (0..line_counts.len()).map(|_| Vec::new()).collect();
+    for col in columns.iter_mut() {
+        let mut rest: &mut [f64] = col;
+        for (part, &cnt) in parts.iter_mut().zip(&line_counts) {
+            let (head, tail) = rest.split_at_mut(cnt);
+            part.push(head);
+            rest = tail;
+        }
+    }
+    let results: Vec<(usize, ChunkRows)> = bounds
+        .par_windows(2)
+        .zip(parts.par_iter_mut())
+        .map(|(w, part)| parse_chunk_into(&body[w[0]..w[1]], part, names))
+        .collect();
+    // Errors in file order; then close the gaps left by comment and blank lines.
     let mut line_offset = header_line;
-    let mut columns: Vec<Vec<f64>> = vec![Vec::new(); n_cols];
-    let total: usize = results
-        .iter()
-        .map(|(_, r)| r.as_ref().map_or(0, |c| c[0].len()))
-        .sum();
-    columns.iter_mut().for_each(|c| c.reserve_exact(total));
-    for (lines, res) in results {
-        match res {
-            Ok(cols) => {
-                for (dst, src) in columns.iter_mut().zip(cols) {
-                    dst.extend_from_slice(&src);
-                }
-            }
-            Err((local, msg)) => bail!("{source}:{}: {msg}", line_offset + local),
+    for (lines, res) in &results {
+        if let Err((local, msg)) = res {
+            bail!("{source}:{}: {msg}", line_offset + local);
         }
         line_offset += lines;
+    }
+    for col in columns.iter_mut() {
+        let (mut src, mut dst) = (0usize, 0usize);
+        for ((_, res), &cnt) in results.iter().zip(&line_counts) {
+            let rows = *res.as_ref().unwrap_or(&0);
+            if src != dst {
+                col.copy_within(src..src + rows, dst);
+            }
+            src += cnt;
+            dst += rows;
+        }
+        col.truncate(dst);
     }
     Ok(columns)
 }
 
-/// Columns of one chunk, or (1-based line within the chunk, message).
-type ChunkColumns = std::result::Result<Vec<Vec<f64>>, (usize, String)>;
+/// Rows parsed in one chunk, or (1-based line within the chunk, message).
+type ChunkRows = std::result::Result<usize, (usize, String)>;
 
-/// Parse one chunk: (number of lines, columns or error), in one scan over the bytes: numbers
-/// are read as they are met ([`fast_f64`]), anything unusual goes through the standard parser.
-fn parse_chunk(chunk: &[u8], n_cols: usize, names: &[String]) -> (usize, ChunkColumns) {
-    let lines_in = |b: &[u8]| {
-        memchr::memchr_iter(b'\n', b).count() + usize::from(!b.ends_with(b"\n") && !b.is_empty())
-    };
-    let mut cols: Vec<Vec<f64>> = vec![Vec::with_capacity(chunk.len() / (4 * n_cols) + 1); n_cols];
+/// Number of lines of a chunk (a last line without newline counts).
+fn lines_in(b: &[u8]) -> usize {
+    memchr::memchr_iter(b'\n', b).count() + usize::from(!b.ends_with(b"\n") && !b.is_empty())
+}
+
+/// Test helper: parse a chunk into fresh columns.
+#[cfg(test)]
+fn parse_chunk(chunk: &[u8], n_cols: usize, names: &[String]) -> (usize, Result<Vec<Vec<f64>>>) {
+    let cap = lines_in(chunk);
+    let mut cols: Vec<Vec<f64>> = (0..n_cols).map(|_| vec![0.0; cap]).collect();
+    let mut out: Vec<&mut [f64]> = cols.iter_mut().map(|c| c.as_mut_slice()).collect();
+    let (lines, res) = parse_chunk_into(chunk, &mut out, names);
+    match res {
+        Ok(rows) => {
+            cols.iter_mut().for_each(|c| c.truncate(rows));
+            (lines, Ok(cols))
+        }
+        Err((l, m)) => (lines, Err(anyhow!("line {l}: {m}"))),
+    }
+}
+
+/// Parse one chunk into `out` (one slice per column, at least as long as the chunk has lines):
+/// (number of lines, rows written or error), in one scan over the bytes: numbers are read as
+/// they are met ([`fast_f64`]), anything unusual goes through the standard parser.
+fn parse_chunk_into(chunk: &[u8], out: &mut [&mut [f64]], names: &[String]) -> (usize, ChunkRows) {
+    let n_cols = out.len();
+    let mut row = 0usize;
     let n = chunk.len();
     let mut i = 0usize;
     let mut lines = 0usize;
@@ -387,7 +427,7 @@ fn parse_chunk(chunk: &[u8], n_cols: usize, names: &[String]) -> (usize, ChunkCo
             };
             if k < n_cols {
                 match value {
-                    Some(v) if v.is_finite() => cols[k].push(v),
+                    Some(v) if v.is_finite() => out[k][row] = v,
                     _ => {
                         let end = chunk[i..]
                             .iter()
@@ -416,8 +456,9 @@ fn parse_chunk(chunk: &[u8], n_cols: usize, names: &[String]) -> (usize, ChunkCo
             let msg = format!("{k} fields, expected {n_cols} (as in the header)");
             return (lines_in(chunk), Err((lines, msg)));
         }
+        row += 1;
     }
-    (lines, Ok(cols))
+    (lines, Ok(row))
 }
 
 /// Powers of ten exactly representable in f64 (10^0 .. 10^22).
