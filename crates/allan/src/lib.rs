@@ -909,6 +909,31 @@ mod tests {
     }
 
     #[test]
+    fn short_or_degenerate_inputs_do_not_panic() {
+        let grids = [
+            TauGrid::Octave,
+            TauGrid::Decade,
+            TauGrid::All,
+            TauGrid::PerDecade(3),
+        ];
+        for n in 0..40 {
+            let y = series(n, n as u64);
+            let constant = vec![1.0; n];
+            for data in [&y, &constant] {
+                for est in Estimator::ALL {
+                    for g in &grids {
+                        for kind in [DataKind::Rate, DataKind::Phase] {
+                            let p = deviation(data, kind, 0.01, est, g);
+                            assert!(p.iter().all(|q| q.n_terms >= 2));
+                            let _ = fit::fit_ieee952(&p);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
     fn woodman_bins_rule() {
         let y = series(1000, 5);
         let p = deviation(
