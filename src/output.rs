@@ -25,6 +25,13 @@ where
         w.flush()
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
+    // NamedTempFile creates 0600 files; give the output the mode a plainly created file would
+    // have (0666 less the umask, approximated by the common 0644).
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let _ = std::fs::set_permissions(tmp.path(), std::fs::Permissions::from_mode(0o644));
+    }
     tmp.persist(path)
         .with_context(|| format!("cannot move the finished file to {}", path.display()))?;
     Ok(())
@@ -37,5 +44,6 @@ pub fn write_string(path: &Path, text: &str) -> Result<()> {
 
 /// Create the `--out` directory (and parents) if needed.
 pub fn ensure_dir(dir: &Path) -> Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create directory {}", dir.display()))
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("cannot create directory {}", dir.display()))
 }
