@@ -383,3 +383,52 @@ fn no_hidden_effect_names_nothing() {
         named.join("\n")
     );
 }
+
+/// "Cannot tell A from B": a temperature bias driven by a linear temperature ramp is a rate ramp of
+/// slope coefficient x (degC/s) in every respect the log shows (Allan signature R^2 tau^2/2, Hou 4.56, and
+/// the same least-squares slope), so diagnose must name one of the two and say it cannot tell it from the
+/// other, and still close the gap.
+#[test]
+fn temperature_ramp_cannot_be_told_from_rate_ramp() {
+    let base = base_model(true);
+    let mut model = base.clone();
+    // 20 degC over the 655 s log; gyro y coefficient 5e-5 rad/s/degC (0.003 deg/s/degC): the bias moves by
+    // 1e-3 rad/s, a ramp R = 1.5e-6 rad/s^2 crossing the base model near 15 s.
+    model.temperature = TemperatureProfile::Ramp {
+        start_c: 15.0,
+        rate_c_per_s: 20.0 / 655.36,
+        end_c: None,
+    };
+    model.temperature_reference_c = 25.0;
+    set_term(
+        &mut model,
+        1,
+        Effect::TemperatureBias,
+        &TermParams::Level(5e-5),
+    );
+    let d = run(&model, &base, 31, true);
+    let gy = &d.channels["gy"];
+    assert_eq!(gy.effects.len(), 1, "{:?}", gy.effects);
+    let e = &gy.effects[0];
+    let (named, other) = match e.effect.as_str() {
+        "temperature_bias" => ("temperature_bias", "rate_ramp"),
+        "rate_ramp" => ("rate_ramp", "temperature_bias"),
+        x => panic!("named {x}, expected temperature_bias or rate_ramp"),
+    };
+    assert!(
+        e.cannot_tell_from.iter().any(|c| c == other),
+        "{named} named without saying it cannot be told from {other}: {:?}",
+        e.cannot_tell_from
+    );
+    assert!(
+        gy.gap_final <= 1.5 && gy.gap_final <= gy.gap_initial / 3.0,
+        "gap {} -> {}",
+        gy.gap_initial,
+        gy.gap_final
+    );
+    for (ch, r) in &d.channels {
+        if ch != "gy" {
+            assert!(r.effects.is_empty(), "{ch}: {:?}", r.effects);
+        }
+    }
+}
