@@ -6,7 +6,7 @@ use crate::drift::{law_terms, DriftKernel};
 use crate::laws::{LawContext, Term};
 use crate::report::{build_report, DriftReport, ReportMeta};
 use crate::runner::RunFailure;
-use crate::scenario::{Scenario, SchemeChoice};
+use crate::scenario::Scenario;
 use crate::stats::RunMatrix;
 use noise::{SensorModel, TermFilter};
 
@@ -86,10 +86,7 @@ impl Experiment {
             runs: self.runs,
             rate_hz: self.scenario.rate_hz,
             duration_s: self.scenario.duration_s,
-            scheme: match self.scenario.scheme {
-                SchemeChoice::Woodman => "woodman".into(),
-                SchemeChoice::Accurate => "accurate".into(),
-            },
+            scheme: self.scenario.scheme.name().into(),
             trajectory: format!("{:?}", self.scenario.trajectory_spec),
             only: self.only.clone(),
             without: self.without.clone(),

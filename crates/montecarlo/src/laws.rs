@@ -117,103 +117,18 @@ fn moments(source: &Source, t_s: f64, how: Option<Integration>) -> Result<(f64, 
     })
 }
 
-/// Variance of the k-fold integral (k = `how.folds()`, times the tilt gain) of a stationary
-/// Gauss-Markov process of std `sigma` and correlation time `tc_s`, at time `t_s`.
-///
-/// Once: the exact closed form 2 sigma^2 T [t - T(1 - e^{-t/T})] of theory.md §4 (via
-/// `noise::closed_form`). Twice and through tilt, where theory.md §4 gives only the t >> T asymptote,
-/// the same definition is evaluated numerically: by Cauchy's formula for repeated integration
-/// I_k(t) = int_0^t w(u) x(u) du with w(u) = (t-u)^{k-1}/(k-1)!, so
-/// Var I_k = int int w(u) w(v) R(u - v) du dv = 2 int_0^t R(s) g(s) ds with the autocovariance
-/// R(s) = sigma^2 e^{-|s|/T} (the Lorentzian PSD of theory.md §2, whose stationary variance is sigma^2)
-/// and g(s) = int_0^{t-s} w(a + s) w(a) da, a polynomial integrated exactly below. Checked in the tests
-/// against the exact once-integrated form and against both asymptotes (t >> T: theory.md §4;
-/// t << T: a random constant, sigma t^k/k!).
+/// Variance of the k-fold integral (k = `how.folds()`, times the tilt gain g^2 through tilt) of a
+/// stationary Gauss-Markov process of std `sigma` and correlation time `tc_s`, at time `t_s`: the
+/// noise crate's exact closed forms (`noise::closed_form::gauss_markov_kfold_variance`, which holds
+/// for every t, where theory.md §4 gives the once-integrated form and the t >> T asymptotes).
 pub fn gauss_markov_variance(sigma: f64, tc_s: f64, t_s: f64, how: Integration) -> f64 {
-    if how == Integration::Once {
-        return cf::gauss_markov_growth_std(sigma, tc_s, t_s, how).map_or(f64::NAN, |s| s * s);
-    }
-    let k = how.folds() as usize;
-    // Through tilt the angle drives g theta (Integration::Tilt's gain, standard gravity).
     let g0 = noise::units::STANDARD_GRAVITY_MPS2;
     let gain2 = if how == Integration::Tilt {
         g0 * g0
     } else {
         1.0
     };
-    let fact = |n: usize| (1..=n).map(|i| i as f64).product::<f64>();
-    let binom = |n: usize, j: usize| fact(n) / (fact(j) * fact(n - j));
-    // g(s) = 1/((k-1)!)^2 sum_j C(k-1, j) s^{k-1-j} L^{j+k}/(j+k), L = t - s.
-    let g = |s: f64| -> f64 {
-        let l = t_s - s;
-        (0..k)
-            .map(|j| {
-                binom(k - 1, j) * s.powi((k - 1 - j) as i32) * l.powi((j + k) as i32)
-                    / (j + k) as f64
-            })
-            .sum::<f64>()
-            / fact(k - 1).powi(2)
-    };
-    // Composite Gauss-Legendre on panels graded with T (0, T/8, T/4, ..., then t), so both the
-    // exponential scale and the polynomial scale are resolved.
-    let (nodes, weights) = gauss_legendre(GL_POINTS);
-    let mut edges = vec![0.0];
-    let mut e = tc_s / 8.0;
-    while e < t_s {
-        edges.push(e);
-        e *= 2.0;
-    }
-    edges.push(t_s);
-    let mut total = 0.0;
-    for w in edges.windows(2) {
-        let (a, b) = (w[0], w[1]);
-        let (mid, half) = (0.5 * (a + b), 0.5 * (b - a));
-        total += half
-            * nodes
-                .iter()
-                .zip(&weights)
-                .map(|(&x, &wt)| {
-                    let s = mid + half * x;
-                    wt * (-s / tc_s).exp() * g(s)
-                })
-                .sum::<f64>();
-    }
-    2.0 * sigma * sigma * total * gain2
-}
-
-/// Gauss-Legendre points per panel: exact for polynomials of degree 2 GL_POINTS - 1 = 39.
-const GL_POINTS: usize = 20;
-
-/// Gauss-Legendre nodes and weights on [-1, 1] by Newton iteration on P_n (Golub-Welsch's
-/// classical alternative; Abramowitz & Stegun 25.4.29 for the weights 2/((1-x^2) P_n'(x)^2)).
-pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
-    let mut nodes = vec![0.0; n];
-    let mut weights = vec![0.0; n];
-    for i in 0..n.div_ceil(2) {
-        let mut x = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-        let mut dp = 1.0;
-        for _ in 0..100 {
-            // Bonnet's recursion for P_n(x) and its derivative.
-            let (mut p0, mut p1) = (1.0, x);
-            for m in 2..=n {
-                let p2 = ((2 * m - 1) as f64 * x * p1 - (m - 1) as f64 * p0) / m as f64;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
-            let dx = p1 / dp;
-            x -= dx;
-            if dx.abs() < 1e-16 {
-                break;
-            }
-        }
-        nodes[i] = -x;
-        nodes[n - 1 - i] = x;
-        let w = 2.0 / ((1.0 - x * x) * dp * dp);
-        weights[i] = w;
-        weights[n - 1 - i] = w;
-    }
-    (nodes, weights)
+    cf::gauss_markov_kfold_variance(sigma, tc_s, t_s, how.folds()).map_or(f64::NAN, |v| v * gain2)
 }
 
 /// The single-axis channels an entry drives, each with (channel, integration, sign x gain factor).
@@ -464,6 +379,113 @@ mod tests {
         };
         // The note rounds to 0.1 m.
         assert!((mean - 102.4).abs() < 0.1, "{mean}");
+    }
+
+    /// Independent numerical check of the closed forms: by Cauchy's formula for repeated
+    /// integration I_k(t) = int_0^t w(u) x(u) du with w(u) = (t-u)^{k-1}/(k-1)!, so
+    /// Var I_k = 2 int_0^t R(s) g(s) ds with R(s) = sigma^2 e^{-|s|/T} and g(s) = int_0^{t-s} w(a+s) w(a) da
+    /// (a polynomial, integrated exactly); the outer integral by composite Gauss-Legendre on panels
+    /// graded with T.
+    fn quadrature_variance(sigma: f64, tc_s: f64, t_s: f64, how: Integration) -> f64 {
+        let k = how.folds() as usize;
+        // Through tilt the angle drives g theta (Integration::Tilt's gain, standard gravity).
+        let g0 = noise::units::STANDARD_GRAVITY_MPS2;
+        let gain2 = if how == Integration::Tilt {
+            g0 * g0
+        } else {
+            1.0
+        };
+        let fact = |n: usize| (1..=n).map(|i| i as f64).product::<f64>();
+        let binom = |n: usize, j: usize| fact(n) / (fact(j) * fact(n - j));
+        // g(s) = 1/((k-1)!)^2 sum_j C(k-1, j) s^{k-1-j} L^{j+k}/(j+k), L = t - s.
+        let g = |s: f64| -> f64 {
+            let l = t_s - s;
+            (0..k)
+                .map(|j| {
+                    binom(k - 1, j) * s.powi((k - 1 - j) as i32) * l.powi((j + k) as i32)
+                        / (j + k) as f64
+                })
+                .sum::<f64>()
+                / fact(k - 1).powi(2)
+        };
+        // Composite Gauss-Legendre on panels graded with T (0, T/8, T/4, ..., then t), so both the
+        // exponential scale and the polynomial scale are resolved.
+        let (nodes, weights) = gauss_legendre(GL_POINTS);
+        let mut edges = vec![0.0];
+        let mut e = tc_s / 8.0;
+        while e < t_s {
+            edges.push(e);
+            e *= 2.0;
+        }
+        edges.push(t_s);
+        let mut total = 0.0;
+        for w in edges.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            let (mid, half) = (0.5 * (a + b), 0.5 * (b - a));
+            total += half
+                * nodes
+                    .iter()
+                    .zip(&weights)
+                    .map(|(&x, &wt)| {
+                        let s = mid + half * x;
+                        wt * (-s / tc_s).exp() * g(s)
+                    })
+                    .sum::<f64>();
+        }
+        2.0 * sigma * sigma * total * gain2
+    }
+
+    /// Gauss-Legendre points per panel: exact for polynomials of degree 2 GL_POINTS - 1 = 39.
+    const GL_POINTS: usize = 20;
+
+    /// Gauss-Legendre nodes and weights on [-1, 1] by Newton iteration on P_n (Golub-Welsch's
+    /// classical alternative; Abramowitz & Stegun 25.4.29 for the weights 2/((1-x^2) P_n'(x)^2)).
+    fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
+        let mut nodes = vec![0.0; n];
+        let mut weights = vec![0.0; n];
+        for i in 0..n.div_ceil(2) {
+            let mut x = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
+            let mut dp = 1.0;
+            for _ in 0..100 {
+                // Bonnet's recursion for P_n(x) and its derivative.
+                let (mut p0, mut p1) = (1.0, x);
+                for m in 2..=n {
+                    let p2 = ((2 * m - 1) as f64 * x * p1 - (m - 1) as f64 * p0) / m as f64;
+                    p0 = p1;
+                    p1 = p2;
+                }
+                dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
+                let dx = p1 / dp;
+                x -= dx;
+                if dx.abs() < 1e-16 {
+                    break;
+                }
+            }
+            nodes[i] = -x;
+            nodes[n - 1 - i] = x;
+            let w = 2.0 / ((1.0 - x * x) * dp * dp);
+            weights[i] = w;
+            weights[n - 1 - i] = w;
+        }
+        (nodes, weights)
+    }
+
+    #[test]
+    fn gauss_markov_closed_forms_match_quadrature() {
+        for &(sigma, tc) in &[(0.3, 2.0), (1e-4, 600.0)] {
+            for &t in &[0.01, 0.7, 2.0, 9.0, 60.0, 3600.0] {
+                for how in [Integration::Once, Integration::Twice, Integration::Tilt] {
+                    let a = gauss_markov_variance(sigma, tc, t, how);
+                    let b = quadrature_variance(sigma, tc, t, how);
+                    // Relative 1e-9: quadrature error far below, rounding of the closed forms'
+                    // cancellation (series below t/T = 0.5) of that order.
+                    assert!(
+                        (a / b - 1.0).abs() < 1e-9,
+                        "{how:?} t={t} T={tc}: {a} vs {b}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

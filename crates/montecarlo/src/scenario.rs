@@ -5,7 +5,7 @@
 
 use serde::Deserialize;
 use std::path::PathBuf;
-use strapdown::{AnyTrajectory, TrajectorySpec};
+use strapdown::{AnyTrajectory, Scheme, TrajectorySpec};
 
 /// A configuration error: `source` (file name), `key` (dotted TOML path) and what was expected.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -76,13 +76,6 @@ struct RawTerms {
     without: Option<Vec<String>>,
 }
 
-/// Strapdown mechanisation scheme named in the scenario.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SchemeChoice {
-    Woodman,
-    Accurate,
-}
-
 /// Initial alignment error per Euler angle (rad): a fixed offset plus a per-run Gaussian draw.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Alignment {
@@ -110,7 +103,8 @@ pub struct Scenario {
     pub rate_hz: f64,
     pub runs: u64,
     pub seed: u64,
-    pub scheme: SchemeChoice,
+    /// Strapdown mechanisation scheme (`woodman` or `accurate`, strapdown's names).
+    pub scheme: Scheme,
     pub gravity_mps2: f64,
     /// The trajectory as written (strapdown's spec) and built.
     pub trajectory_spec: TrajectorySpec,
@@ -189,16 +183,16 @@ impl Scenario {
         if raw.runs == 0 {
             return Err(err("runs", "expected an integer >= 1".into()));
         }
-        let scheme = match raw.scheme.as_deref().unwrap_or("accurate") {
-            "woodman" => SchemeChoice::Woodman,
-            "accurate" => SchemeChoice::Accurate,
-            other => {
-                return Err(err(
-                    "scheme",
-                    format!("expected `woodman` or `accurate`, got `{other}`"),
-                ))
-            }
-        };
+        let scheme_name = raw.scheme.as_deref().unwrap_or(Scheme::Accurate.name());
+        let scheme = Scheme::from_name(scheme_name).ok_or_else(|| {
+            err(
+                "scheme",
+                format!(
+                    "expected one of {}, got `{scheme_name}`",
+                    Scheme::ALL.map(|s| format!("`{}`", s.name())).join(", ")
+                ),
+            )
+        })?;
         let gravity_mps2 = match raw.gravity_mps2 {
             Some(g) => positive("gravity_mps2", g)?,
             None => STANDARD_GRAVITY_MPS2,
@@ -208,13 +202,20 @@ impl Scenario {
             pitch_deg: 0.0,
             yaw_deg: 0.0,
         });
-        let trajectory = trajectory_spec.build().map_err(|e| match e {
-            strapdown::TrajectoryError::Invalid { key, expected, got } => err(
-                &format!("trajectory.{key}"),
-                format!("expected {expected}, got {got}"),
-            ),
-            other => err("trajectory", other.to_string()),
-        })?;
+        // Ideal accelerometer outputs with the scenario's gravity, so a static IMU stays still.
+        let trajectory = trajectory_spec
+            .build_with_gravity(gravity_mps2)
+            .map_err(|e| match e {
+                strapdown::TrajectoryError::Invalid { key, expected, got } => err(
+                    &if key == "gravity_mps2" {
+                        key
+                    } else {
+                        format!("trajectory.{key}")
+                    },
+                    format!("expected {expected}, got {got}"),
+                ),
+                other => err("trajectory", other.to_string()),
+            })?;
         let mut checkpoint_steps = checkpoint_steps(raw.checkpoints, rate_hz, steps, &err)?;
         if let Some(r) = &raw.reference {
             // The reference time is always a checkpoint.
@@ -417,7 +418,7 @@ mod tests {
         assert_eq!(*s.checkpoint_steps.last().unwrap(), 6000);
         assert!(s.checkpoint_steps.windows(2).all(|w| w[0] < w[1]));
         assert!(strapdown::Trajectory::is_static(&s.trajectory));
-        assert_eq!(s.scheme, SchemeChoice::Accurate);
+        assert_eq!(s.scheme, Scheme::Accurate);
     }
 
     #[test]
