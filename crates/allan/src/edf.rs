@@ -15,7 +15,8 @@
 use crate::{DataKind, EdfMethod, Estimator};
 
 /// The EDF of estimator `est` at averaging factor `m` for noise `alpha`, with `n_phase` phase
-/// points and `n_terms` terms in the sum.
+/// points (`n_terms`, the number of terms in the sum, is accepted for estimators whose EDF
+/// would need it; none of the present formulas does).
 pub fn edf_for(
     est: Estimator,
     method: EdfMethod,

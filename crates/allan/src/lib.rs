@@ -17,8 +17,12 @@
 //! (theory.md §2.1; the mean removal is allantools' `frequency2phase`), summed with compensated
 //! (TwoSum) summation so the phase carries no accumulated rounding error.
 //!
-//! The per-tau cost is O(N): the overlapping estimators are single passes over the phase array,
-//! the modified estimator uses allantools' running-sum recursion.
+//! The per-tau cost is O(N) with no allocation besides the phase array: the overlapping
+//! estimators share one cache-blocked pass for every tau up to m = 2^16 (then one pass per
+//! tau), the modified estimator uses allantools' running-sum recursion, and the noise
+//! identification works on phase differences (block averages) in two fused passes.
+//! Intervals: `edf` (Greenhall, SP 1065 Tables 5 and 7, lag-1 ACF noise identification) and
+//! `chi2` (SP 1065 eq 45); the IEEE 952 term fit and spec-sheet readings: `fit`.
 
 pub mod chi2;
 pub mod edf;
