@@ -24,6 +24,17 @@ pub const CHI2_1_95: f64 = 3.841_458_820_694_124;
 /// the variance to zero or below at some tau is clamped there (and pays the misfit).
 const MIN_VARIANCE_RATIO: f64 = 1e-6;
 
+/// ln adev of a band whose mean Allan variance `avar_band` (ln adev centre `ln_band`) changes by `delta`.
+/// A band with no variance at all (a channel the model has no term for) takes the change as its variance.
+pub fn predicted_ln_adev(ln_band: f64, avar_band: f64, delta: f64) -> f64 {
+    if avar_band > 0.0 {
+        let ratio = ((avar_band + delta) / avar_band).max(MIN_VARIANCE_RATIO);
+        ln_band + 0.5 * ratio.ln()
+    } else {
+        0.5 * delta.max(f64::MIN_POSITIVE).ln()
+    }
+}
+
 /// What the fit sees of one channel: the measurement and the current model's band, on one tau grid.
 #[derive(Clone, Debug)]
 pub struct FitData<'a> {
@@ -46,9 +57,8 @@ impl FitData<'_> {
     pub fn chi2(&self, f: &[f64], dc: f64) -> f64 {
         let mut sum = 0.0;
         for i in 0..self.m() {
-            let ratio =
-                ((self.avar_band[i] + dc * f[i]) / self.avar_band[i]).max(MIN_VARIANCE_RATIO);
-            let z = (self.ln_meas[i] - self.ln_band[i] - 0.5 * ratio.ln()) / self.s[i];
+            let ln_pred = predicted_ln_adev(self.ln_band[i], self.avar_band[i], dc * f[i]);
+            let z = (self.ln_meas[i] - ln_pred) / self.s[i];
             sum += z * z;
         }
         sum

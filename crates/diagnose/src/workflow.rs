@@ -7,7 +7,8 @@ use crate::candidates::{
 };
 use crate::drift::{segment_drift, DriftSummary, CHANNELS};
 use crate::fit::{
-    bic, birge_scale, fit_family, fit_linear, linear_interval, FitData, LinearFit, CHI2_1_95,
+    bic, birge_scale, fit_family, fit_linear, linear_interval, predicted_ln_adev, FitData,
+    LinearFit, CHI2_1_95,
 };
 use crate::gap::{gap, Band, Curve, Disagreement, Gap};
 use crate::model_terms::{flicker_band, set_term, term_level};
@@ -957,11 +958,15 @@ fn merge_refinements(effects: &mut Vec<FoundEffect>, first_new: usize) {
 fn shifted_band(band: &Band, delta_avar: &[f64]) -> Band {
     let mut out = band.clone();
     for i in 0..out.avar_mean.len() {
-        let ratio = ((band.avar_mean[i] + delta_avar[i]) / band.avar_mean[i]).max(1e-6);
-        out.avar_mean[i] = band.avar_mean[i] * ratio;
-        out.ln_mean[i] = band.ln_mean[i] + 0.5 * ratio.ln();
-        out.adev_lo[i] = band.adev_lo[i] * ratio.sqrt();
-        out.adev_hi[i] = band.adev_hi[i] * ratio.sqrt();
+        let ln = predicted_ln_adev(band.ln_mean[i], band.avar_mean[i], delta_avar[i]);
+        let factor = (ln - band.ln_mean[i]).exp();
+        out.ln_mean[i] = ln;
+        out.avar_mean[i] = (2.0 * ln)
+            .exp()
+            .max(band.avar_mean[i] + delta_avar[i])
+            .max(0.0);
+        out.adev_lo[i] = band.adev_lo[i] * factor;
+        out.adev_hi[i] = band.adev_hi[i] * factor;
     }
     out
 }
