@@ -309,10 +309,10 @@ fn ocxo() {
         check_table(&mut t, &f, &y, DataKind::Rate, 1.0, DEV_REL_TOL, false);
     }
     finish(t, "OCXO all-tau");
-    // The *_octave tables were computed by Stable32 from a file normalised to 1.0 (its header:
-    // "Average = 1.000000e+00"), whose phase accumulates rounding: they differ from every
-    // double-precision computation (allantools' too) by up to 2e-3 in the deviation, which is
-    // why the allantools suite compares them at 2e-3. The bounds are therefore compared
+    // The *_octave tables differ from every double-precision computation (allantools' too) by
+    // up to 2e-3 in the deviation, by an amount that varies with tau; their header shows that
+    // Stable32 ran on a file normalised to 1.0 ("Average = 1.000000e+00"), the likely cause. The
+    // allantools suite compares them at 2e-3 for that reason. The bounds are therefore compared
     // relative to the deviation (lo/dev and hi/dev), which tests the EDF and chi-squared parts.
     const OCTAVE_DEV_REL_TOL: f64 = 2e-3;
     let mut t = Tally::default();
