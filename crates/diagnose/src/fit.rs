@@ -351,6 +351,13 @@ mod tests {
     }
 
     #[test]
+    fn prediction_on_an_empty_band_is_the_added_term() {
+        // Band with variance 4 (adev 2): adding 5 gives adev 3. Empty band: adding 9 gives adev 3.
+        assert!((predicted_ln_adev(2f64.ln(), 4.0, 5.0) - 3f64.ln()).abs() < 1e-15);
+        assert!((predicted_ln_adev(f64::MIN_POSITIVE.ln(), 0.0, 9.0) - 3f64.ln()).abs() < 1e-15);
+    }
+
+    #[test]
     fn profile_interval_of_quadratic_chi2_is_analytic() {
         // One tau, z linear in ln c near the optimum: check the interval brackets c and is finite.
         let ln_meas = [0.5 * 2f64.ln()];
