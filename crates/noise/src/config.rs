@@ -477,15 +477,31 @@ fn convert_temperature(
         "constant" => TemperatureProfile::Constant {
             temp_c: get("value", &raw.value, t)?,
         },
-        "ramp" => TemperatureProfile::Ramp {
-            start_c: get("start", &raw.start, t)?,
-            rate_c_per_s: get("rate", &raw.rate, Quantity::TemperatureRate)?,
-            end_c: raw
-                .end
-                .as_ref()
-                .map(|_| get("end", &raw.end, t))
-                .transpose()?,
-        },
+        "ramp" => {
+            let start_c = get("start", &raw.start, t)?;
+            let rate_c_per_s = get("rate", &raw.rate, Quantity::TemperatureRate)?;
+            let end_c = match &raw.end {
+                None => None,
+                Some(text) => {
+                    let end = ctx.value("temperature.end", text, t, false)?;
+                    // The ramp must be able to reach its end.
+                    if (end - start_c) * rate_c_per_s < 0.0 {
+                        return Err(ctx.invalid_at(
+                            "temperature.end",
+                            Some(text),
+                            "an end temperature the ramp reaches (above start for a rising ramp, below for a falling one)",
+                            format!("\"{}\"", text.get_ref()),
+                        ));
+                    }
+                    Some(end)
+                }
+            };
+            TemperatureProfile::Ramp {
+                start_c,
+                rate_c_per_s,
+                end_c,
+            }
+        }
         "warmup" => TemperatureProfile::Warmup {
             start_c: get("start", &raw.start, t)?,
             end_c: get("end", &raw.end, t)?,
@@ -964,6 +980,8 @@ sinusoidal = { amplitude = "1 mg", frequency = "2 Hz" }
         assert!(e.contains("temperature.end"), "{e}");
         let e = err("name = \"b\"\n[temperature]\nprofile = \"constant\"\nvalue = \"20 degC\"\nrate = \"1 degC/s\"\n");
         assert!(e.contains("temperature.rate"), "{e}");
+        let e = err("name = \"b\"\n[temperature]\nprofile = \"ramp\"\nstart = \"30 degC\"\nrate = \"0.1 degC/s\"\nend = \"20 degC\"\n");
+        assert!(e.starts_with("bad.toml:6: key `temperature.end`"), "{e}");
         let e = err("name = \"b\"\n[gyro.x]\nmisalignment = [\"1 mrad\"]\n");
         assert!(e.contains("gyro.x.misalignment"), "{e}");
         let e = err("name = \"b\"\n[gyro.x]\nwhite_noise = 0.1\n");
