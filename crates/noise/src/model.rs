@@ -37,7 +37,7 @@ pub(crate) fn check(what: &'static str, value: f64, positive: bool) -> Result<f6
 /// Flicker (1/f) bias instability of IEEE coefficient B, generated as a sum of log-spaced
 /// Gauss-Markov processes with correlation times spanning `[tau_min_s, tau_max_s]`
 /// (theory.md §3, kshana `Flicker`: equal variance sigma_0^2 = B^2 ln(rho) / pi each).
-/// The Allan plateau 0.664 B holds for averaging times inside the band.
+/// The Allan plateau 0.664 B holds for averaging times in [30 tau_min, tau_max / 30] (see `per_decade`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Flicker {
     /// IEEE coefficient B (signal units); the Allan plateau is 0.6643 B.
@@ -488,5 +488,28 @@ impl SensorModel {
             }
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn flicker_plateau_ripple_is_as_documented() {
+        // `Flicker::per_decade` documents 0.987 .. 1.010 (1 per decade) and 0.987 .. 1.000 (2) of
+        // 0.664 B over [30 tau_min, tau_max / 30]; checked on 400 taus of the default band.
+        for (per_decade, lo, hi) in [(1, 0.987, 1.010), (2, 0.987, 1.000)] {
+            let f = Flicker::new(1.0, 0.1, 1e5, per_decade).unwrap();
+            let (a, b) = (30.0 * f.tau_min_s, f.tau_max_s / 30.0);
+            for i in 0..=400 {
+                let tau = a * (b / a).powf(i as f64 / 400.0);
+                let r = f.avar(tau).sqrt() / cf::FLICKER_PLATEAU_PER_B;
+                assert!(
+                    r > lo - 1e-3 && r < hi + 1e-3,
+                    "{per_decade}/decade, tau {tau}: {r}"
+                );
+            }
+        }
     }
 }
