@@ -108,7 +108,9 @@ pub fn gyro_readback(model: &SensorModel, seed: u64, duration_s: f64, rate_hz: f
         let at = |tau: f64| points.iter().find(|p| p.tau_s == tau);
         // Spec values from the model.
         g.arw_spec[axis] = m.white_noise;
-        let closed = |tau: f64| m.allan_variance(tau);
+        // The exact Allan variance of the sampled model (noise crate), not the continuous one: at tau
+        // near dt they differ (e.g. the flicker band edge).
+        let closed = |tau: f64| m.allan_variance_sampled(tau, dt_s);
         // The plateau window of a flicker bias instability: the averaging times where its Allan
         // deviation is flat (the noise crate's `allan_minimum` convention solves B over it); outside,
         // the finite band of Gauss-Markov components bends the curve (a model artifact).
@@ -170,8 +172,13 @@ pub fn gyro_readback(model: &SensorModel, seed: u64, duration_s: f64, rate_hz: f
             at(readings.bi_min_tau_s),
             points.last(),
         ) {
-            let still_falling = closed(last.tau_s * 1.5) < closed(last.tau_s);
-            let share = bi.avar(p.tau_s) / closed(p.tau_s);
+            // White noise hides the floor: the curve still falls at the longest usable tau and
+            // white noise is most of it there.
+            let white_share =
+                m.white_noise.map_or(0.0, |nv| nv * nv / last.tau_s) / closed(last.tau_s);
+            let still_falling =
+                closed(last.tau_s * 1.5) < closed(last.tau_s) && white_share >= MASKED_SHARE;
+            let share = bi.avar_sampled(p.tau_s, dt_s) / closed(p.tau_s);
             if still_falling && p.tau_s >= last.tau_s {
                 g.notes.push(format!(
                     "gyro {name}: bias instability cannot be read back: the model's Allan deviation still falls at the longest usable tau ({:.0} s, 9 bins) of a {:.0} h log; white noise masks the floor",
@@ -190,9 +197,15 @@ pub fn gyro_readback(model: &SensorModel, seed: u64, duration_s: f64, rate_hz: f
                         100.0 * share
                     ));
                 }
+                if p.tau_s >= last.tau_s {
+                    g.notes.push(format!(
+                        "gyro {name}: the minimum is at the longest usable tau ({:.0} s, 9 bins): the floor may lie beyond this log, so the reading is an upper bound",
+                        p.tau_s
+                    ));
+                }
                 if !in_window(p.tau_s) {
                     g.notes.push(format!(
-                        "gyro {name}: the minimum lies at tau = {:.3} s, outside the flicker plateau [{:.0} s, {:.0} s] where the model's band edge bends the curve",
+                        "gyro {name}: the minimum lies at tau = {:.3} s, outside the flicker plateau [{:.3} s, {:.0} s] where the model's band edge bends the curve",
                         p.tau_s, window.0, window.1
                     ));
                 }
