@@ -7,7 +7,7 @@ use crate::candidates::{
 };
 use crate::drift::{segment_drift, DriftSummary, CHANNELS};
 use crate::fit::{
-    bic, birge_scale, fit_family, fit_linear, linear_interval, predicted_ln_adev, FitData,
+    aic, bic, birge_scale, fit_family, fit_linear, linear_interval, predicted_ln_adev, FitData,
     LinearFit, CHI2_1_95,
 };
 use crate::gap::{gap, Band, Curve, Disagreement, Gap};
@@ -135,7 +135,10 @@ pub struct FoundEffect {
 pub struct CandidateRecord {
     pub round: usize,
     pub effect: String,
+    /// BIC (the selection criterion) and AIC improvement over the model without it (both with the
+    /// shape-search cost); `delta_aic` is NaN on the record of a rejected round.
     pub delta_bic: f64,
+    pub delta_aic: f64,
     pub parameters: BTreeMap<String, f64>,
 }
 
@@ -378,6 +381,7 @@ struct Trial {
     hi: TermParams,
     model: Option<TermParams>,
     bic: f64,
+    aic: f64,
     /// (c - c0) f(tau): the change of the band's Allan variance.
     delta_avar: Vec<f64>,
 }
@@ -560,6 +564,7 @@ fn trials(
                 current
             },
             bic: bic(fit.chi2, k, m) + penalty,
+            aic: aic(fit.chi2, k) + penalty,
             delta_avar: f.iter().map(|v| (fit.c - c0) * v).collect(),
         });
     }
@@ -699,6 +704,7 @@ pub fn diagnose(
                         round,
                         effect: t.effect.name().to_string(),
                         delta_bic: base_bic - t.bic,
+                        delta_aic: data.chi2_base() - t.aic,
                         parameters: named_map(t.effect, &t.params),
                     });
                 }
@@ -800,6 +806,7 @@ pub fn diagnose(
                             rejected.effect
                         ),
                         delta_bic: rejected.delta_bic,
+                        delta_aic: f64::NAN,
                         parameters: rejected.parameters,
                     });
                 }
