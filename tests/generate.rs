@@ -334,3 +334,62 @@ fn special_files_are_written_not_replaced() {
     assert!(bytes > 100_000, "{bytes} bytes through the FIFO");
     assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
 }
+
+#[test]
+fn temperature_column_and_bias_follow_the_profile() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("warm.toml");
+    std::fs::write(
+        &cfg,
+        "name = \"warm\"\n[temperature]\nprofile = \"warmup\"\nstart = \"20 degC\"\nend = \"40 degC\"\ntime_constant = \"5 s\"\nreference = \"25 degC\"\n[gyro.z]\ntemperature_bias = \"0.01 rad/s/degC\"\n",
+    )
+    .unwrap();
+    let p = dir.path().join("log.csv");
+    ok(generate(&[
+        path_str(&cfg),
+        "--duration",
+        "30",
+        "--rate",
+        "10",
+        "-o",
+        path_str(&p),
+    ]));
+    let (_, rows) = read_csv(&p);
+    for row in &rows {
+        let t = row[0];
+        let temp = 40.0 + (20.0 - 40.0) * (-t / 5.0).exp();
+        assert!(
+            (row[7] - temp).abs() < 1e-12,
+            "t {t}: temp {} vs {temp}",
+            row[7]
+        );
+        assert!(
+            (row[3] - 0.01 * (temp - 25.0)).abs() < 1e-12,
+            "t {t}: gz {}",
+            row[3]
+        );
+        assert_eq!(row[1], 0.0);
+    }
+}
+
+#[test]
+fn runs_differ_and_repeat() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |name: &str, run: &str| {
+        let p = dir.path().join(name);
+        ok(generate(&[
+            path_str(&mtx()),
+            "--duration",
+            "5",
+            "--rate",
+            "100",
+            "-o",
+            path_str(&p),
+            "--run",
+            run,
+        ]));
+        read_csv(&p).1
+    };
+    assert_eq!(run("a.csv", "3"), run("b.csv", "3"));
+    assert_ne!(run("c.csv", "3"), run("d.csv", "4"));
+}
