@@ -263,6 +263,13 @@ fn check(trial: &Trial) -> Result<(), String> {
                         found.parameters_hi[key].abs(),
                     );
                     let (lo, hi) = (lo.min(hi), lo.max(hi));
+                    eprintln!(
+                        "{} {name} {key}: {value:.4e} truth {truth:.4e} ({:+.1} %), 95 % [{lo:.3e}, {hi:.3e}], gap {:.2} -> {:.2}",
+                        trial.effect.name(),
+                        100.0 * (value / truth - 1.0),
+                        report.gap_initial,
+                        report.gap_final
+                    );
                     if !parameter_ok(truth, value, lo, hi) {
                         problems.push(format!("{name}: {key} = {value:.4e}, truth {truth:.4e}, 95 % [{lo:.4e}, {hi:.4e}]"));
                     }
