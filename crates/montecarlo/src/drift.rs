@@ -208,6 +208,20 @@ pub fn law_terms(
                             TemperatureProfile::Constant { temp_c } => {
                                 Source::Bias(c * (temp_c - model.temperature_reference_c))
                             }
+                            // A steady temperature ramp: a bias plus a rate ramp (the k-fold
+                            // integrals of c (T0 - Tref) and of c r t, theory.md §4 bias row).
+                            TemperatureProfile::Ramp {
+                                start_c,
+                                rate_c_per_s,
+                                end_c: None,
+                            } => {
+                                terms.push(Term {
+                                    name: format!("{}.{}", sensor.name(), effect.name()),
+                                    entry,
+                                    source: Source::Ramp(c * rate_c_per_s),
+                                });
+                                Source::Bias(c * (start_c - model.temperature_reference_c))
+                            }
                             _ => no_law("temperature bias under a varying temperature profile"),
                         }
                     }

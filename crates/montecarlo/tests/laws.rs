@@ -107,7 +107,7 @@ fn gyro_terms_alone_follow_their_laws() {
         VelHorizontal,
     ];
     // Magnitudes keep the attitude error below ~0.01 rad at 20 s (small-angle laws).
-    let cases: [(&str, &str); 9] = [
+    let cases: [(&str, &str); 10] = [
         ("white_noise", "[gyro.all]\nwhite_noise = \"0.002 deg/sqrt(s)\"\n"),
         ("rate_random_walk", "[gyro.all]\nrate_random_walk = \"0.0005 deg/s/sqrt(s)\"\n"),
         ("bias_instability (Woodman random walk)", "[gyro.all]\nbias_instability = { model = \"random_walk\", stability = \"0.001 deg/s\", period = \"4 s\" }\n"),
@@ -117,6 +117,7 @@ fn gyro_terms_alone_follow_their_laws() {
         ("constant_bias x", "[gyro.x]\nconstant_bias = \"0.01 deg/s\"\n"),
         ("constant_bias y", "[gyro.y]\nconstant_bias = \"-0.02 deg/s\"\n"),
         ("constant_bias z", "[gyro.z]\nconstant_bias = \"0.05 deg/s\"\n"),
+        ("temperature_bias (ramp)", "[temperature]\nprofile = \"ramp\"\nstart = \"20 degC\"\nrate = \"0.05 degC/s\"\nreference = \"25 degC\"\n[gyro.x]\ntemperature_bias = \"0.001 deg/s/degC\"\n"),
         ("rate_ramp y", "[gyro.y]\nrate_ramp = \"0.0005 deg/s^2\"\n"),
         ("temperature_bias", "[temperature]\nprofile = \"constant\"\nvalue = \"35 degC\"\nreference = \"25 degC\"\n[gyro.y]\ntemperature_bias = \"0.001 deg/s/degC\"\n"),
     ];
