@@ -6,6 +6,13 @@
 //! drift statistics are computed in run order: bit-identical for any thread count or shard split.
 //! [`laws`] pairs each channel with the closed-form growth law of its active error terms.
 //!
+//! Modules: [`scenario`] (the scenario TOML, validated), [`experiment`] (scenario + sensor +
+//! overrides), [`drift`] (the per-run kernel and the active terms), [`runner`] (parallel blocks,
+//! ordered merge, shards, failed runs), [`stats`] (run matrix, Welford moments, exact quantiles,
+//! ratio intervals), [`laws`], [`report`] (the `simulate` JSON), [`shard`] (shard files for
+//! `merge`), [`spec`] (spec-sheet readback and drift table), [`channels`] (the DESIGN.md names).
+//! The only parallelism is rayon inside [`runner::run_range`] and [`spec::gyro_readback`]; no I/O.
+//!
 //! Units are SI (rad, m, m/s, s). Frames: navigation NED, body forward-right-down; a static level
 //! IMU reads specific force (0, 0, -g).
 
