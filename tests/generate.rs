@@ -36,6 +36,22 @@ fn path_str(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// `imudrift generate configs/sensors/mtx.toml --duration SECONDS --rate 100 -o OUT EXTRA...`, which must succeed.
+fn mtx_100hz(out: &Path, seconds: &str, extra: &[&str]) -> Output {
+    let cfg = mtx();
+    let mut args = vec![
+        path_str(&cfg),
+        "--duration",
+        seconds,
+        "--rate",
+        "100",
+        "-o",
+        path_str(out),
+    ];
+    args.extend_from_slice(extra);
+    ok(generate(&args))
+}
+
 /// 70 000 samples: more than two generation blocks.
 const SECONDS: &str = "700";
 
@@ -44,19 +60,7 @@ fn same_seed_same_bytes_for_any_thread_count() {
     let dir = tempfile::tempdir().unwrap();
     let run = |name: &str, seed: &str, threads: &str| {
         let p = dir.path().join(name);
-        ok(generate(&[
-            path_str(&mtx()),
-            "--duration",
-            SECONDS,
-            "--rate",
-            "100",
-            "-o",
-            path_str(&p),
-            "--seed",
-            seed,
-            "--threads",
-            threads,
-        ]));
+        mtx_100hz(&p, SECONDS, &["--seed", seed, "--threads", threads]);
         std::fs::read(p).unwrap()
     };
     let a = run("a.csv", "5", "1");
@@ -82,18 +86,7 @@ fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
 fn csv_holds_the_library_values_exactly() {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("log.csv");
-    let out = ok(generate(&[
-        path_str(&mtx()),
-        "--duration",
-        SECONDS,
-        "--rate",
-        "100",
-        "-o",
-        path_str(&p),
-        "--seed",
-        "11",
-        "--json",
-    ]));
+    let out = mtx_100hz(&p, SECONDS, &["--seed", "11", "--json"]);
     let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(doc["seed"], 11);
     assert_eq!(doc["samples"], 70_000);
@@ -131,17 +124,7 @@ fn csv_holds_the_library_values_exactly() {
 fn only_and_without_switch_terms() {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("only.csv");
-    ok(generate(&[
-        path_str(&mtx()),
-        "--duration",
-        "10",
-        "--rate",
-        "100",
-        "-o",
-        path_str(&p),
-        "--only",
-        "gyro.white_noise",
-    ]));
+    mtx_100hz(&p, "10", &["--only", "gyro.white_noise"]);
     let (_, rows) = read_csv(&p);
     for row in &rows {
         assert_eq!(&row[4..7], &[0.0, 0.0, -9.80665]);
@@ -156,17 +139,7 @@ fn only_and_without_switch_terms() {
     }
 
     let p = dir.path().join("without.csv");
-    ok(generate(&[
-        path_str(&mtx()),
-        "--duration",
-        "10",
-        "--rate",
-        "100",
-        "-o",
-        path_str(&p),
-        "--without",
-        "gyro,accel.white_noise",
-    ]));
+    mtx_100hz(&p, "10", &["--without", "gyro,accel.white_noise"]);
     let (_, rows) = read_csv(&p);
     for row in &rows {
         assert_eq!(&row[1..7], &[0.0, 0.0, 0.0, 0.0, 0.0, -9.80665]);
@@ -321,15 +294,7 @@ fn special_files_are_written_not_replaced() {
         let fifo = fifo.clone();
         std::thread::spawn(move || std::fs::read(fifo).unwrap().len())
     };
-    ok(generate(&[
-        path_str(&mtx()),
-        "--duration",
-        "10",
-        "--rate",
-        "100",
-        "-o",
-        path_str(&fifo),
-    ]));
+    mtx_100hz(&fifo, "10", &[]);
     let bytes = reader.join().unwrap();
     assert!(bytes > 100_000, "{bytes} bytes through the FIFO");
     assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
@@ -377,17 +342,7 @@ fn runs_differ_and_repeat() {
     let dir = tempfile::tempdir().unwrap();
     let run = |name: &str, run: &str| {
         let p = dir.path().join(name);
-        ok(generate(&[
-            path_str(&mtx()),
-            "--duration",
-            "5",
-            "--rate",
-            "100",
-            "-o",
-            path_str(&p),
-            "--run",
-            run,
-        ]));
+        mtx_100hz(&p, "5", &["--run", run]);
         read_csv(&p).1
     };
     assert_eq!(run("a.csv", "3"), run("b.csv", "3"));

@@ -115,9 +115,18 @@ impl Flicker {
 
     /// Allan variance of the component sum (theory.md §2 Gauss-Markov closed form, summed).
     pub fn avar(&self, tau_s: f64) -> f64 {
+        self.avar_at(tau_s, None)
+    }
+
+    /// Exact Allan variance of the sampled component sum.
+    pub fn avar_sampled(&self, tau_s: f64, dt_s: f64) -> f64 {
+        self.avar_at(tau_s, Some(dt_s))
+    }
+
+    fn avar_at(&self, tau_s: f64, dt_s: Option<f64>) -> f64 {
         self.components()
             .iter()
-            .map(|&(tc, s)| cf::gauss_markov_avar(s, tc, tau_s))
+            .map(|&(tc, s)| gauss_markov_avar(s, tc, tau_s, dt_s))
             .sum()
     }
 
@@ -127,14 +136,6 @@ impl Flicker {
         self.components()
             .iter()
             .map(|&(tc, s)| cf::gauss_markov_kfold_variance(s, tc, t_s, k))
-            .sum()
-    }
-
-    /// Exact Allan variance of the sampled component sum.
-    pub fn avar_sampled(&self, tau_s: f64, dt_s: f64) -> f64 {
-        self.components()
-            .iter()
-            .map(|&(tc, s)| cf::gauss_markov_avar_sampled(s, tc, tau_s, dt_s))
             .sum()
     }
 }
@@ -152,29 +153,42 @@ pub enum BiasInstability {
 impl BiasInstability {
     /// Allan variance (theory.md §2: flicker as GM sum; random walk K^2 tau/3).
     pub fn avar(&self, tau_s: f64) -> f64 {
-        match self {
-            BiasInstability::Flicker(f) => f.avar(tau_s),
-            BiasInstability::RandomWalk {
-                stability,
-                period_s,
-            } => cf::rate_random_walk_avar(
-                cf::woodman_bias_random_walk(*stability, *period_s),
-                tau_s,
-            ),
-        }
+        self.avar_at(tau_s, None)
     }
+
+    /// Exact Allan variance of the sampled process.
     pub fn avar_sampled(&self, tau_s: f64, dt_s: f64) -> f64 {
+        self.avar_at(tau_s, Some(dt_s))
+    }
+
+    fn avar_at(&self, tau_s: f64, dt_s: Option<f64>) -> f64 {
         match self {
-            BiasInstability::Flicker(f) => f.avar_sampled(tau_s, dt_s),
+            BiasInstability::Flicker(f) => f.avar_at(tau_s, dt_s),
             BiasInstability::RandomWalk {
                 stability,
                 period_s,
-            } => cf::rate_random_walk_avar_sampled(
+            } => random_walk_avar(
                 cf::woodman_bias_random_walk(*stability, *period_s),
                 tau_s,
                 dt_s,
             ),
         }
+    }
+}
+
+/// Random walk K: continuous (Hou 4.53) or sampled form.
+fn random_walk_avar(k: f64, tau_s: f64, dt_s: Option<f64>) -> f64 {
+    match dt_s {
+        None => cf::rate_random_walk_avar(k, tau_s),
+        Some(dt) => cf::rate_random_walk_avar_sampled(k, tau_s, dt),
+    }
+}
+
+/// Gauss-Markov: continuous (Hou 4.60) or sampled form.
+fn gauss_markov_avar(sigma: f64, tc_s: f64, tau_s: f64, dt_s: Option<f64>) -> f64 {
+    match dt_s {
+        None => cf::gauss_markov_avar(sigma, tc_s, tau_s),
+        Some(dt) => cf::gauss_markov_avar_sampled(sigma, tc_s, tau_s, dt),
     }
 }
 
@@ -261,49 +275,34 @@ impl AxisModel {
     /// (theory.md §2: sum of independent terms). Deterministic and per-run terms add nothing,
     /// except the rate ramp (R^2 tau^2/2) and the sinusoid (phase-averaged, Hou 4.64).
     pub fn allan_variance(&self, tau_s: f64) -> f64 {
-        self.quantization
-            .map_or(0.0, |q| cf::quantization_avar(q, tau_s))
-            + self
-                .white_noise
-                .map_or(0.0, |n| cf::white_noise_avar(n, tau_s))
-            + self
-                .bias_instability
-                .as_ref()
-                .map_or(0.0, |b| b.avar(tau_s))
-            + self
-                .rate_random_walk
-                .map_or(0.0, |k| cf::rate_random_walk_avar(k, tau_s))
-            + self.rate_ramp.map_or(0.0, |r| cf::rate_ramp_avar(r, tau_s))
-            + self
-                .gauss_markov
-                .map_or(0.0, |g| cf::gauss_markov_avar(g.sigma, g.tau_s, tau_s))
-            + self.sinusoidal.map_or(0.0, |s| {
-                cf::sinusoid_avar(s.amplitude, s.frequency_hz, tau_s)
-            })
+        self.avar_at(tau_s, None)
     }
 
     /// Allan variance of the series the generator produces at sample interval `dt_s`
     /// (`tau_s` a multiple of `dt_s`), exact where sampling matters.
     pub fn allan_variance_sampled(&self, tau_s: f64, dt_s: f64) -> f64 {
-        self.quantization
-            .map_or(0.0, |q| cf::quantization_avar(q, tau_s))
-            + self
-                .white_noise
-                .map_or(0.0, |n| cf::white_noise_avar(n, tau_s))
-            + self
-                .bias_instability
+        self.avar_at(tau_s, Some(dt_s))
+    }
+
+    /// Continuous forms (`dt_s` None) or exact sampled ones.
+    fn avar_at(&self, tau_s: f64, dt_s: Option<f64>) -> f64 {
+        let terms = [
+            self.quantization.map(|q| cf::quantization_avar(q, tau_s)),
+            self.white_noise.map(|n| cf::white_noise_avar(n, tau_s)),
+            self.bias_instability
                 .as_ref()
-                .map_or(0.0, |b| b.avar_sampled(tau_s, dt_s))
-            + self
-                .rate_random_walk
-                .map_or(0.0, |k| cf::rate_random_walk_avar_sampled(k, tau_s, dt_s))
-            + self.rate_ramp.map_or(0.0, |r| cf::rate_ramp_avar(r, tau_s))
-            + self.gauss_markov.map_or(0.0, |g| {
-                cf::gauss_markov_avar_sampled(g.sigma, g.tau_s, tau_s, dt_s)
-            })
-            + self.sinusoidal.map_or(0.0, |s| {
-                cf::sinusoid_avar_sampled(s.amplitude, s.frequency_hz, tau_s, dt_s)
-            })
+                .map(|b| b.avar_at(tau_s, dt_s)),
+            self.rate_random_walk
+                .map(|k| random_walk_avar(k, tau_s, dt_s)),
+            self.rate_ramp.map(|r| cf::rate_ramp_avar(r, tau_s)),
+            self.gauss_markov
+                .map(|g| gauss_markov_avar(g.sigma, g.tau_s, tau_s, dt_s)),
+            self.sinusoidal.map(|w| match dt_s {
+                None => cf::sinusoid_avar(w.amplitude, w.frequency_hz, tau_s),
+                Some(dt) => cf::sinusoid_avar_sampled(w.amplitude, w.frequency_hz, tau_s, dt),
+            }),
+        ];
+        terms.into_iter().flatten().sum()
     }
 
     /// Is the term present?
