@@ -8,10 +8,11 @@ use crate::plot::{Band, LogLogPlot, Series};
 use anyhow::{anyhow, bail, Context, Result};
 use diagnose::drift::CHANNELS;
 use diagnose::workflow::{ChannelReport, DriftRow, FoundEffect, HeldOutGap};
-use diagnose::{diagnose, Diagnosis, LogInput, Settings};
+use diagnose::{diagnose_with_progress, Diagnosis, LogInput, Settings};
 use noise::SensorModel;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
@@ -118,7 +119,22 @@ fn run_inner(args: &Args) -> Result<()> {
         ..Settings::default()
     };
     let started = std::time::Instant::now();
-    let result = diagnose(&input, &model, &settings)
+    // A spinner on stderr when it is a terminal (CLI convention); silent otherwise.
+    let spinner = std::io::stderr().is_terminal().then(|| {
+        let bar = indicatif::ProgressBar::new_spinner();
+        bar.enable_steady_tick(std::time::Duration::from_millis(200));
+        bar
+    });
+    let progress = |what: &str| {
+        if let Some(bar) = &spinner {
+            bar.set_message(what.to_string());
+        }
+    };
+    let result = diagnose_with_progress(&input, &model, &settings, &progress);
+    if let Some(bar) = &spinner {
+        bar.finish_and_clear();
+    }
+    let result = result
         .with_context(|| format!("diagnosing {} against {}", log.source, args.model.display()))?;
     let elapsed_s = started.elapsed().as_secs_f64();
     let corrected = corrected_model(&result, &model);

@@ -16,4 +16,6 @@ pub mod model_terms;
 pub mod simulate;
 pub mod workflow;
 
-pub use workflow::{diagnose, DiagnoseError, Diagnosis, LogInput, Settings};
+pub use workflow::{
+    diagnose, diagnose_with_progress, DiagnoseError, Diagnosis, LogInput, Settings,
+};

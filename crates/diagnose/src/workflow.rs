@@ -584,7 +584,18 @@ pub fn diagnose(
     model: &SensorModel,
     settings: &Settings,
 ) -> Result<Diagnosis, DiagnoseError> {
+    diagnose_with_progress(log, model, settings, &|_| {})
+}
+
+/// [`diagnose`], telling `progress` what it is doing before each long step (for a progress display).
+pub fn diagnose_with_progress(
+    log: &LogInput,
+    model: &SensorModel,
+    settings: &Settings,
+    progress: &dyn Fn(&str),
+) -> Result<Diagnosis, DiagnoseError> {
     let samples = validate(log)?;
+    progress("measuring the log's Allan deviations");
     let active: [bool; 6] = std::array::from_fn(|c| log.channels[c].is_some());
 
     // Step 1: measured Allan deviations with EDF (Greenhall, noise type by lag-1 ACF) on the octave grid.
@@ -631,6 +642,7 @@ pub fn diagnose(
     };
     let mut sim_model = model.clone();
     let mut out_model = model.clone();
+    progress("simulating the model's band");
     let sim0: SimResult = simulate(&sim_model, &setup, settings.seed, settings.seeds)?;
     let mut bands: [Option<Band>; 6] = sim0.bands.clone();
     let mut last_drift = sim0.drift.clone();
@@ -781,6 +793,7 @@ pub fn diagnose(
             break;
         }
         rounds = round;
+        progress(&format!("round {round}: re-simulating the corrected model"));
         let sim = simulate(&sim_model, &setup, settings.seed, settings.seeds)?;
         dirty = false;
         for (c, changes, gap_before) in pending {
