@@ -113,6 +113,30 @@ fn woodman_experiment_prints_reference_and_ablation() {
 }
 
 #[test]
+fn every_shipped_scenario_runs() {
+    let dir = root().join("configs/scenarios");
+    let mut n = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().and_then(|e| e.to_str()) == Some("toml") {
+            let p = path.to_str().unwrap();
+            let out = ok(imudrift(&[
+                "simulate",
+                p,
+                "--runs",
+                "2",
+                "--no-ablation",
+                "--json",
+            ]));
+            let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+            assert_eq!(doc["runs_ok"], 2, "{p}");
+            n += 1;
+        }
+    }
+    assert!(n >= 4, "only {n} scenarios");
+}
+
+#[test]
 fn moving_profile_says_no_law_instead_of_a_number() {
     let out = ok(imudrift(&[
         "simulate",
