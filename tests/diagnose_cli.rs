@@ -194,4 +194,25 @@ fn diagnose_errors_name_the_problem() {
         .output()
         .unwrap();
     assert!(String::from_utf8_lossy(&out.stderr).contains("--seeds 1"));
+    // A held-out log of another length cannot be checked against the bands: the error says why.
+    let full = write_log(dir.path());
+    let text = std::fs::read_to_string(&full).unwrap();
+    let short: String = text.lines().take(1000).map(|l| format!("{l}\n")).collect();
+    let short_path = dir.path().join("short.csv");
+    std::fs::write(&short_path, short).unwrap();
+    let out = imudrift()
+        .args(["diagnose"])
+        .arg(&full)
+        .arg("--model")
+        .arg(&model)
+        .args(["--seeds", "4", "--horizons", "60", "--check"])
+        .arg(&short_path)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("short.csv") && err.contains("rate and length"),
+        "{err}"
+    );
 }
