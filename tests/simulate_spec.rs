@@ -55,3 +55,36 @@ fn mtx_spec_reproduces_woodman_table_4() {
             && d["horizontal_mean_sim_m"].as_f64().is_some()
     );
 }
+
+#[test]
+fn spec_is_identical_for_any_thread_count() {
+    let run = |threads: &str| {
+        let out = Command::new(env!("CARGO_BIN_EXE_imudrift"))
+            .args([
+                "spec",
+                "configs/sensors/gg5300.toml",
+                "--runs",
+                "6",
+                "--times",
+                "10,60",
+                "--readback-duration",
+                "3600",
+                "--threads",
+                threads,
+                "--json",
+            ])
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        out.stdout
+    };
+    assert!(
+        run("1") == run("3"),
+        "spec output depends on the thread count"
+    );
+}
