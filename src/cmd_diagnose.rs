@@ -204,6 +204,17 @@ fn corrected_model(result: &Diagnosis, model: &SensorModel) -> String {
             let _ = writeln!(out, "# {name}: {} {} {}", e.kind, e.effect, params_text(e));
         }
     }
+    let temperature_found = result
+        .channels
+        .values()
+        .any(|r| r.effects.iter().any(|e| e.effect == "temperature_bias"));
+    if temperature_found {
+        let _ = writeln!(
+            out,
+            "# temperature_bias was fitted against the log's measured temperature column; simulations of this\n\
+             # model apply it to the [temperature] profile below, so set that profile to the conditions of interest."
+        );
+    }
     out.push_str(&result.model_final.to_toml_string());
     out
 }
