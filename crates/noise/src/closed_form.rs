@@ -207,6 +207,45 @@ pub fn gauss_markov_growth_std(sigma: f64, tc_s: f64, t_s: f64, how: Integration
     Some(how.gain() * var.sqrt())
 }
 
+/// Sinusoid A sin(2 pi f t + phi) with its phase uniform (drawn per run): the variance over the phase of
+/// its integral, w = 2 pi f: once (A/w)^2 (1 - cos wt); twice (A/w)^2 [t^2/2 - t sin(wt)/w + (1 - cos wt)/w^2];
+/// thrice (A/w)^2 [t^4/8 + t^2 cos(wt)/(2 w^2) - t sin(wt)/w^3 + (1 - cos wt)/w^4]. The mean is zero.
+/// (Derived with sympy by integrating the sinusoid and averaging the square over the phase; not in theory.md.)
+pub fn sinusoid_growth_std(amplitude: f64, f0_hz: f64, t_s: f64, how: Integration) -> f64 {
+    let w = std::f64::consts::TAU * f0_hz;
+    let (c, sn) = ((w * t_s).cos(), (w * t_s).sin());
+    // 1 - cos(wt) without cancellation for small wt.
+    let one_minus_cos = 2.0 * (0.5 * w * t_s).sin().powi(2);
+    let bracket = match how {
+        Integration::Once => one_minus_cos,
+        Integration::Twice => t_s * t_s / 2.0 - t_s * sn / w + one_minus_cos / (w * w),
+        Integration::Tilt => {
+            t_s.powi(4) / 8.0 + t_s * t_s * c / (2.0 * w * w) - t_s * sn / w.powi(3)
+                + one_minus_cos / w.powi(4)
+        }
+    };
+    how.gain() * amplitude / w * bracket.max(0.0).sqrt()
+}
+
+/// Quantisation of the integrated output (LSB = Q sqrt(12)), integrated by the rectangle rule over
+/// n = t/dt samples, assuming the rounding residuals are independent and uniform (dithered by noise of an
+/// LSB or more per sample, as in the Allan closed form): the once-integrated error is r_0 - r_n, variance
+/// 2 Q^2; twice dt (n r_0 - sum r_j), variance Q^2 t (t + dt); thrice
+/// dt^2 (r_0 n(n+1)/2 - sum (n - j + 1) r_j), variance dt^4 Q^2 [n^2 (n+1)^2 / 4 + n(n+1)(2n+1)/6].
+/// (Derived for the generator's quantiser, which carries the residual r from sample to sample.)
+pub fn quantization_growth_std(q: f64, t_s: f64, dt_s: f64, how: Integration) -> f64 {
+    let n = (t_s / dt_s).round();
+    let var = match how {
+        Integration::Once => 2.0 * q * q,
+        Integration::Twice => q * q * t_s * (t_s + dt_s),
+        Integration::Tilt => {
+            let tri = n * (n + 1.0) / 2.0;
+            dt_s.powi(4) * q * q * (tri * tri + n * (n + 1.0) * (2.0 * n + 1.0) / 6.0)
+        }
+    };
+    how.gain() * var.sqrt()
+}
+
 /// Exact variance of the k-fold integral (k = 1, 2, 3) of a stationary Gauss-Markov process of std
 /// sigma and correlation time T at time t, with x = t/T: sigma^2 T^{2k} V_k(x),
 /// V_1 = 2(x - 1 + e^{-x}) (theory.md §4),
