@@ -6,18 +6,12 @@
 
 use std::process::Command;
 
-#[test]
-fn mtx_spec_reproduces_woodman_table_4() {
+/// Run `imudrift spec ARGS... --json` in the workspace root; stdout on success.
+fn spec_json(args: &[&str]) -> Vec<u8> {
     let out = Command::new(env!("CARGO_BIN_EXE_imudrift"))
-        .args([
-            "spec",
-            "configs/sensors/mtx.toml",
-            "--runs",
-            "20",
-            "--times",
-            "60",
-            "--json",
-        ])
+        .arg("spec")
+        .args(args)
+        .arg("--json")
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .output()
         .unwrap();
@@ -26,7 +20,13 @@ fn mtx_spec_reproduces_woodman_table_4() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    out.stdout
+}
+
+#[test]
+fn mtx_spec_reproduces_woodman_table_4() {
+    let stdout = spec_json(&["configs/sensors/mtx.toml", "--runs", "20", "--times", "60"]);
+    let doc: serde_json::Value = serde_json::from_slice(&stdout).unwrap();
     let g = &doc["sensors"][0]["gyro"];
     // Table 4: ARW deg/sqrt(s) and bias instability (Allan minimum) deg/s, axes x, y, z.
     let arw = [0.075, 0.078, 0.079];
@@ -59,29 +59,17 @@ fn mtx_spec_reproduces_woodman_table_4() {
 #[test]
 fn spec_is_identical_for_any_thread_count() {
     let run = |threads: &str| {
-        let out = Command::new(env!("CARGO_BIN_EXE_imudrift"))
-            .args([
-                "spec",
-                "configs/sensors/gg5300.toml",
-                "--runs",
-                "6",
-                "--times",
-                "10,60",
-                "--readback-duration",
-                "3600",
-                "--threads",
-                threads,
-                "--json",
-            ])
-            .current_dir(env!("CARGO_MANIFEST_DIR"))
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        out.stdout
+        spec_json(&[
+            "configs/sensors/gg5300.toml",
+            "--runs",
+            "6",
+            "--times",
+            "10,60",
+            "--readback-duration",
+            "3600",
+            "--threads",
+            threads,
+        ])
     };
     assert!(
         run("1") == run("3"),
