@@ -149,12 +149,15 @@ fn accel_terms_alone_follow_their_laws() {
         VelDown,
         VelHorizontal,
     ];
-    let cases: [(&str, &str); 7] = [
+    let cases: [(&str, &str); 10] = [
         ("white_noise", "[accel.all]\nwhite_noise = \"0.004 m/s^2/sqrt(Hz)\"\n"),
         ("rate_random_walk", "[accel.all]\nrate_random_walk = \"0.001 m/s^2/sqrt(s)\"\n"),
         ("turn_on_bias", "[accel.all]\nturn_on_bias = \"0.01 m/s^2\"\n"),
         ("constant_bias", "[accel.x]\nconstant_bias = \"0.01 m/s^2\"\n[accel.y]\nconstant_bias = \"-0.02 m/s^2\"\n[accel.z]\nconstant_bias = \"0.03 m/s^2\"\n"),
         ("scale_factor (static: -g s on z)", "[accel.all]\nscale_factor = \"1000 ppm\"\n"),
+        ("bias_instability (Woodman random walk)", "[accel.all]\nbias_instability = { model = \"random_walk\", stability = \"0.002 m/s^2\", period = \"4 s\" }\n"),
+        ("bias_instability (flicker)", "[accel.all]\nbias_instability = { value = \"0.001 m/s^2\", convention = \"ieee\" }\n"),
+        ("temperature_bias", "[temperature]\nprofile = \"constant\"\nvalue = \"30 degC\"\nreference = \"25 degC\"\n[accel.all]\ntemperature_bias = \"0.002 m/s^2/degC\"\n"),
         ("rate_ramp", "[accel.all]\nrate_ramp = \"0.0001 m/s^3\"\n"),
         // x senses z with 1 mrad, y senses z with -2 mrad: biases -g 1e-3 and +2 g 1e-3.
         ("misalignment (static: m g from z)", "[accel.x]\nmisalignment = [\"0.5 mrad\", \"1 mrad\"]\n[accel.y]\nmisalignment = [\"0.3 mrad\", \"-2 mrad\"]\n"),
