@@ -39,6 +39,15 @@ pub fn term_level(model: &SensorModel, ch: usize, effect: Effect) -> Option<Term
     }
 }
 
+/// Does channel `ch` model its bias instability as Woodman's random walk (TR-696 eq 9)?
+pub fn has_random_walk_bias_instability(model: &SensorModel, ch: usize) -> bool {
+    let (sensor, axis) = channel_axis(ch);
+    matches!(
+        model.axis(sensor, axis).bias_instability,
+        Some(BiasInstability::RandomWalk { .. })
+    )
+}
+
 /// The flicker band the model uses on channel `ch` (its own, or the noise crate's default).
 pub fn flicker_band(model: &SensorModel, ch: usize) -> Flicker {
     let (sensor, axis) = channel_axis(ch);

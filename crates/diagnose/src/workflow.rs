@@ -11,7 +11,7 @@ use crate::fit::{
     LinearFit, CHI2_1_95,
 };
 use crate::gap::{gap, Band, Curve, Disagreement, Gap};
-use crate::model_terms::{flicker_band, set_term, term_level};
+use crate::model_terms::{flicker_band, has_random_walk_bias_instability, set_term, term_level};
 use crate::simulate::{adev_at, simulate, SimError, SimResult, SimSetup};
 use allan::{DataKind, Estimator, TauGrid};
 use noise::{Effect, SensorModel};
@@ -425,6 +425,11 @@ fn trials(
     let tau = &measured.tau_s;
     let mut out = Vec::new();
     for effect in CANDIDATES {
+        // A Woodman random-walk bias instability occupies the axis's one bias-instability slot; a flicker
+        // candidate would replace it, so it is not offered (its level shows as a rate random walk).
+        if effect == Effect::BiasInstability && has_random_walk_bias_instability(model, ch) {
+            continue;
+        }
         let k = free_parameters(effect);
         let current = term_level(model, ch, effect);
         // Signature(s) of this candidate.
