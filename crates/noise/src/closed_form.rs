@@ -246,6 +246,22 @@ pub fn quantization_growth_std(q: f64, t_s: f64, dt_s: f64, how: Integration) ->
     how.gain() * var.sqrt()
 }
 
+/// Temperature bias: coefficient c (per degC) times the integral of the temperature excursion from
+/// the reference (`TemperatureProfile::excursion_integral`); deterministic, signed. Woodman §3.2.4:
+/// a residual temperature bias integrates into orientation error.
+pub fn temperature_bias_growth(
+    coefficient: f64,
+    profile: &crate::TemperatureProfile,
+    reference_c: f64,
+    t_s: f64,
+    how: Integration,
+) -> f64 {
+    let integral = profile
+        .excursion_integral(reference_c, t_s, how.folds())
+        .expect("folds are 1..=3");
+    how.gain() * coefficient * integral
+}
+
 /// Exact variance of the k-fold integral (k = 1, 2, 3) of a stationary Gauss-Markov process of std
 /// sigma and correlation time T at time t, with x = t/T: sigma^2 T^{2k} V_k(x),
 /// V_1 = 2(x - 1 + e^{-x}) (theory.md §4),
