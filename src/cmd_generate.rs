@@ -129,24 +129,10 @@ pub fn run(args: Args) -> Result<()> {
         bar
     });
     let started = std::time::Instant::now();
-    // A device or FIFO (/dev/null, /dev/stdout) is written directly: renaming a temporary file over it
-    // would replace the device. Everything else is written atomically.
-    let special = std::fs::metadata(&args.output).is_ok_and(|m| !m.is_file() && !m.is_dir());
-    if special {
-        let file = std::fs::OpenOptions::new()
-            .write(true)
-            .open(&args.output)
-            .with_context(|| format!("cannot open {}", args.output.display()))?;
-        let mut w = std::io::BufWriter::with_capacity(1 << 20, file);
-        write_log(&mut w, &plan, &args, &pool, progress.as_ref())
-            .with_context(|| format!("while writing {}", args.output.display()))?;
-        w.flush()
-            .with_context(|| format!("cannot write {}", args.output.display()))?;
-    } else {
-        output::write_atomic(&args.output, |w| {
-            write_log(w, &plan, &args, &pool, progress.as_ref())
-        })?;
-    }
+    // Atomic for files; devices and FIFOs (/dev/null) are written directly (output.rs).
+    output::write_atomic(&args.output, |w| {
+        write_log(w, &plan, &args, &pool, progress.as_ref())
+    })?;
     if let Some(bar) = progress {
         bar.finish_and_clear();
     }
