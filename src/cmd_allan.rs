@@ -7,7 +7,7 @@ use crate::logio::{self, Log, LogArgs};
 use crate::output;
 use crate::plot::{Band, LogLogPlot, Series, PALETTE};
 use allan::fit::{fit_ieee952, Fit, TERM_NAMES};
-use allan::{AllanPoint, DataKind, EdfMethod, Estimator, Options, TauGrid};
+use allan::{AllanPoint, EdfMethod, Estimator, Options, TauGrid};
 use anyhow::{anyhow, bail, Context, Result};
 use rayon::prelude::*;
 use serde_json::{json, Map, Value};
@@ -126,19 +126,30 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
         }
         args.channels.clone()
     };
-    let results: Vec<ChannelResult> = names
-        .par_iter()
-        .map(|name| analyse(&log.channels[name], name, log.dt_s(), est, grid, opts))
+    // The channels are analysed by value: each one's phase is computed in its own buffer.
+    let samples = log.len();
+    let mut log = log;
+    let mut work: Vec<(String, Vec<f64>)> = Vec::new();
+    for name in names {
+        if let Some(data) = log.channels.remove(&name) {
+            work.push((name, data));
+        }
+    }
+    let dt_s = log.dt_s();
+    let results: Vec<ChannelResult> = work
+        .into_par_iter()
+        .map(|(name, data)| analyse(data, &name, dt_s, est, grid, opts, &stage))
         .collect();
-    stage("deviations, intervals, fit");
-    let table = tables(&log, &results, est);
-    let doc = json_document(&log, &results, est, &args.grid, opts.confidence);
+    stage("all channels");
+    let table = tables(&log, samples, &results, est);
+    let doc = json_document(&log, samples, &results, est, &args.grid, opts.confidence);
     if args.json {
         eprint!("{table}");
         println!("{}", serde_json::to_string_pretty(&doc)?);
     } else {
         print!("{table}");
     }
+    stage("printed");
     if let Some(dir) = &args.out {
         output::ensure_dir(dir)?;
         output::write_string(&dir.join("allan.csv"), &csv(&results))?;
@@ -150,6 +161,7 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
             let file = dir.join(format!("allan_{}.svg", sanitize(&r.name)));
             output::write_string(&file, &plot(r, est, &log.source).to_svg())?;
         }
+        stage("files written");
         eprintln!(
             "wrote allan.csv, allan.json and {} SVG plot(s) to {}",
             results.len(),
@@ -162,14 +174,16 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
 /// Deviation curve (taus in parallel; each tau is computed by one thread, so the result does not
 /// depend on the thread count), intervals and fit of one channel.
 pub fn analyse(
-    data: &[f64],
+    data: Vec<f64>,
     name: &str,
     dt_s: f64,
     est: Estimator,
     grid: &TauGrid,
     opts: &Options,
+    stage: &(dyn Fn(&str) + Sync),
 ) -> ChannelResult {
-    let series = allan::Series::new(data, DataKind::Rate, dt_s);
+    let series = allan::Series::from_rate(data, dt_s);
+    stage(&format!("{name}: phase"));
     let ms = series.grid_m(est, grid, opts.stable32_stop);
     // The deviations (one blocked pass) and the per-tau noise identification are independent:
     // run them side by side. Every number is computed by one thread in a fixed order, so the
@@ -177,10 +191,16 @@ pub fn analyse(
     let identify = opts.edf != EdfMethod::None && opts.alpha.is_none();
     let d = est.difference_order();
     let (mut points, alphas) = rayon::join(
-        || series.raw_points(est, &ms),
+        || {
+            let r = series.raw_points(est, &ms);
+            stage(&format!("{name}: deviations"));
+            r
+        },
         || -> Vec<(usize, Option<i32>)> {
             if identify {
-                ms.par_iter().map(|&m| (m, series.noise_id(m, d))).collect()
+                let r = ms.par_iter().map(|&m| (m, series.noise_id(m, d))).collect();
+                stage(&format!("{name}: noise identification"));
+                r
             } else {
                 ms.iter().map(|&m| (m, opts.alpha)).collect()
             }
@@ -197,7 +217,9 @@ pub fn analyse(
         est,
         Estimator::NonOverlapping | Estimator::Overlapping | Estimator::Total
     );
+    stage(&format!("{name}: intervals"));
     let fit = allan_variance.then(|| fit_ieee952(&points));
+    stage(&format!("{name}: fit"));
     ChannelResult {
         name: name.to_string(),
         unit: Log::unit_of(name),
@@ -206,15 +228,15 @@ pub fn analyse(
     }
 }
 
-fn tables(log: &Log, results: &[ChannelResult], est: Estimator) -> String {
+fn tables(log: &Log, samples: usize, results: &[ChannelResult], est: Estimator) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
         "{}: {} samples at {} Hz ({:.1} s), {} with 1-sigma bounds",
         log.source,
-        log.len(),
+        samples,
         log.rate_hz,
-        log.len() as f64 / log.rate_hz,
+        samples as f64 / log.rate_hz,
         est.name()
     );
     for r in results {
@@ -295,6 +317,7 @@ fn num(v: f64) -> Value {
 
 fn json_document(
     log: &Log,
+    samples: usize,
     results: &[ChannelResult],
     est: Estimator,
     grid: &str,
@@ -348,7 +371,7 @@ fn json_document(
     }
     json!({
         "source": log.source,
-        "samples": log.len(),
+        "samples": samples,
         "rate_hz": log.rate_hz,
         "estimator": est.name(),
         "grid": grid,

@@ -381,6 +381,11 @@ fn parse_chunk_into(chunk: &[u8], out: &mut [&mut [f64]], names: &[String]) -> (
     let is_blank = |b: u8| b == b' ' || b == b'\t' || b == b'\r';
     while i < n {
         lines += 1;
+        if let Some(next) = fast_line(chunk, i, out, row) {
+            i = next;
+            row += 1;
+            continue;
+        }
         // Leading blanks; comment or empty line.
         while i < n && is_blank(chunk[i]) {
             i += 1;
@@ -467,54 +472,50 @@ const POW10: [f64; 23] = [
     1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
 ];
 
-/// Fast path for decimal numbers `[+-]digits[.digits][(e|E)[+-]digits]` whose significand has at
-/// most 19 digits and is below 2^53, with a net power of ten within +-22: then the value is
-/// w * 10^e or w / 10^-e with both operands exact, so the one IEEE operation rounds it correctly
-/// (Clinger 1990, the fast path of every correct parser). Returns (value, bytes used), or `None`
-/// to send the field to the standard parser (same result).
-#[inline]
+/// Fast path for decimal numbers `[+-]digits[.digits][(e|E)[+-]digits]` with at most 19 digits
+/// in all (leading zeros included, so the integer significand w cannot overflow), w below 2^53
+/// and a net power of ten within +-22: then the value is w * 10^e or w / 10^-e with both
+/// operands exact, so the one IEEE operation rounds it correctly (Clinger 1990, the fast path
+/// of every correct parser). Returns (value, bytes used), or `None` to send the field to the
+/// standard parser (same result).
+#[inline(always)]
 fn fast_f64(s: &[u8]) -> Option<(f64, usize)> {
-    let n = s.len();
     let mut i = 0;
-    let neg = match s.first() {
-        Some(b'-') => {
-            i += 1;
-            true
-        }
-        Some(b'+') => {
-            i += 1;
-            false
-        }
-        _ => false,
-    };
+    let first = *s.first()?;
+    let neg = first == b'-';
+    if neg || first == b'+' {
+        i = 1;
+    }
     let mut w: u64 = 0;
-    let mut digits = 0u32;
-    let mut any = false;
-    while i < n && s[i].is_ascii_digit() {
-        if digits > 0 || s[i] != b'0' {
-            digits += 1;
+    let int_start = i;
+    while let Some(&c) = s.get(i) {
+        let d = c.wrapping_sub(b'0');
+        if d > 9 {
+            break;
         }
-        w = w.wrapping_mul(10).wrapping_add((s[i] - b'0') as u64);
-        any = true;
+        w = w.wrapping_mul(10).wrapping_add(u64::from(d));
         i += 1;
     }
+    let mut digits = i - int_start;
     let mut exp10: i32 = 0;
-    if i < n && s[i] == b'.' {
+    if s.get(i) == Some(&b'.') {
         i += 1;
-        while i < n && s[i].is_ascii_digit() {
-            if digits > 0 || s[i] != b'0' {
-                digits += 1;
+        let frac_start = i;
+        while let Some(&c) = s.get(i) {
+            let d = c.wrapping_sub(b'0');
+            if d > 9 {
+                break;
             }
-            w = w.wrapping_mul(10).wrapping_add((s[i] - b'0') as u64);
-            exp10 -= 1;
-            any = true;
+            w = w.wrapping_mul(10).wrapping_add(u64::from(d));
             i += 1;
         }
+        digits += i - frac_start;
+        exp10 = -((i - frac_start) as i32);
     }
-    if !any || digits > 19 {
+    if digits == 0 || digits > 19 {
         return None;
     }
-    if i < n && (s[i] == b'e' || s[i] == b'E') {
+    if let Some(b'e' | b'E') = s.get(i) {
         i += 1;
         let eneg = match s.get(i) {
             Some(b'-') => {
@@ -528,23 +529,22 @@ fn fast_f64(s: &[u8]) -> Option<(f64, usize)> {
             _ => false,
         };
         let mut e: i32 = 0;
-        let mut edigits = 0;
-        while i < n && s[i].is_ascii_digit() {
-            e = e.saturating_mul(10).saturating_add((s[i] - b'0') as i32);
-            edigits += 1;
+        let e_start = i;
+        while let Some(&c) = s.get(i) {
+            let d = c.wrapping_sub(b'0');
+            if d > 9 {
+                break;
+            }
+            e = e.saturating_mul(10).saturating_add(i32::from(d));
             i += 1;
         }
-        if edigits == 0 {
+        if i == e_start {
             return None;
         }
         exp10 = exp10.saturating_add(if eneg { -e } else { e });
     }
-    if !(-22..=22).contains(&exp10) {
-        return None;
-    }
-    // Longer significands: the standard parser's Eisel-Lemire path is faster than exact
-    // 128-bit division (measured: 35 vs 78 ns per 17-digit number).
-    if w >= 1u64 << 53 {
+    // Longer significands go to the standard parser (Eisel-Lemire).
+    if !(-22..=22).contains(&exp10) || w >= 1u64 << 53 {
         return None;
     }
     // Clinger: both operands exact, one correctly rounded operation.
@@ -555,6 +555,88 @@ fn fast_f64(s: &[u8]) -> Option<(f64, usize)> {
         v / POW10[(-exp10) as usize]
     };
     Some((if neg { -v } else { v }, i))
+}
+
+/// Branch-light parse of the short numbers IMU logs are made of: `[-]digits[.digits]` with at
+/// most 7 digits in all, the field ending within the 8 bytes after the sign (at `,`, `\n` or
+/// `\r`). The digits are gathered into one 64-bit word and converted with three multiplies
+/// (the SWAR "eight digits" step of simdjson and fast_float, Lemire 2021, "Number parsing at a
+/// gigabyte per second", Software: Practice and Experience 51(8)); the value is then
+/// w / 10^f with w < 10^7 and f <= 6, both exact, so the one division rounds correctly
+/// (Clinger 1990), the same value as the standard parser. `None` sends the field to
+/// [`fast_f64`]. The sign, the length and the position of the point are selected without
+/// branches: random signs and lengths would otherwise cost a mispredicted branch each.
+#[inline(always)]
+fn swar_f64(s: &[u8]) -> Option<(f64, usize)> {
+    let neg = *s.first()? == b'-';
+    let start = usize::from(neg);
+    let bytes: [u8; 8] = s.get(start..start + 8)?.try_into().ok()?;
+    // Digit values in the bytes ('0'..'9' -> 0..9); a byte is not a digit when its value
+    // (with the high bit cleared, so the add cannot carry into the next byte) is >= 10.
+    let v = u64::from_le_bytes(bytes) ^ 0x3030_3030_3030_3030;
+    let high = 0x8080_8080_8080_8080u64;
+    let nondigit = (((v & 0x7f7f_7f7f_7f7f_7f7f) + 0x7676_7676_7676_7676) | v) & high;
+    let p1 = (nondigit.trailing_zeros() / 8) as usize; // integer digits (8: none found)
+    let rest = nondigit & nondigit.wrapping_sub(1); // the non-digits after the first
+    let p2 = (rest.trailing_zeros() / 8) as usize;
+    let dot = p1 < 8 && bytes[p1] == b'.';
+    let end = if dot { p2 } else { p1 }; // the terminator's position
+    if end >= 8 || !matches!(bytes[end], b',' | b'\n' | b'\r') {
+        return None;
+    }
+    let frac = end - p1 - usize::from(dot);
+    let digits = p1 + frac;
+    if digits == 0 {
+        return None;
+    }
+    // Integer digits, then the fraction digits after the point, right-aligned in 8 bytes
+    // (leading zero digits), most significant digit first (lowest address).
+    let int = v & ((1u64 << (8 * p1)) - 1);
+    let frac_digits = (v >> (8 * (p1 + usize::from(dot)))) & ((1u64 << (8 * frac)) - 1);
+    let mut w = (int | (frac_digits << (8 * p1))) << (8 * (8 - digits));
+    w = w.wrapping_mul(10).wrapping_add(w >> 8);
+    let mask = 0x0000_00ff_0000_00ffu64;
+    let mul1 = 100 + (1_000_000u64 << 32);
+    let mul2 = 1 + (10_000u64 << 32);
+    let w = ((w & mask)
+        .wrapping_mul(mul1)
+        .wrapping_add(((w >> 16) & mask).wrapping_mul(mul2))
+        >> 32) as u32;
+    let value = f64::from(w) / POW10[frac];
+    let value = f64::from_bits(value.to_bits() | (u64::from(neg) << 63));
+    Some((value, start + end))
+}
+
+/// A number in the common formats, exactly as the standard parser reads it: [`swar_f64`], else
+/// [`fast_f64`]; `None` for the standard parser.
+#[inline(always)]
+fn number(s: &[u8]) -> Option<(f64, usize)> {
+    swar_f64(s).or_else(|| fast_f64(s))
+}
+
+/// The common line: exactly `out.len()` plain numbers separated by single commas, ending at
+/// `\n`, `\r\n` or the end of the chunk. Writes row `row` and returns the index after the
+/// line, or `None` (the caller then reads the line with the general path, which rewrites the
+/// row or reports the error).
+#[inline(always)]
+fn fast_line(chunk: &[u8], mut i: usize, out: &mut [&mut [f64]], row: usize) -> Option<usize> {
+    let n_cols = out.len();
+    if n_cols == 0 {
+        return None;
+    }
+    for (k, col) in out.iter_mut().enumerate() {
+        let (v, used) = number(chunk.get(i..)?)?;
+        i += used;
+        match chunk.get(i) {
+            Some(b',') if k + 1 < n_cols => i += 1,
+            Some(b'\n') if k + 1 == n_cols => i += 1,
+            Some(b'\r') if k + 1 == n_cols && chunk.get(i + 1) == Some(&b'\n') => i += 2,
+            None if k + 1 == n_cols => {}
+            _ => return None,
+        }
+        col[row] = v;
+    }
+    Some(i)
 }
 
 /// The 1-based file line of data row `row` (0-based), for error messages (slow path).
@@ -652,6 +734,20 @@ mod tests {
             "1",
             "-1.5",
             "0.05",
+            "-.5",
+            ".",
+            "-",
+            "-.",
+            "1234567",
+            "12345678",
+            "-9999999",
+            "999999.9",
+            ".0000001",
+            "0.000001",
+            "-1.",
+            "12.5e1",
+            "1-2",
+            "1.2.3",
             "-0.35",
             "1e3",
             "1.5E-3",
@@ -679,16 +775,36 @@ mod tests {
             let small = (next() % 2_000_001) as f64 / 1000.0 - 1000.0;
             texts.push(format!("{v:e}"));
             texts.push(format!("{small}"));
+            texts.push(format!("{:.2}", small / 10.0));
+            texts.push(format!("{}", (next() % 4001) as f64 * 0.05 - 100.0));
             texts.push(format!("{:.6}", small / 7.0));
             texts.push(format!("{:.17e}", small / 3.0));
         }
+        let mut swar_read = 0usize;
         for t in &texts {
             let want: Option<f64> = t.parse().ok();
-            if let Some((got, used)) = fast_f64(t.as_bytes()) {
-                assert_eq!(used, t.len(), "{t}");
-                assert_eq!(Some(got.to_bits()), want.map(f64::to_bits), "{t}");
+            // A fast path reads a valid number whole and exactly, or declines, or reads a
+            // prefix of an invalid field (the caller then finds no terminator).
+            let check = |got: Option<(f64, usize)>| {
+                if let Some((got, used)) = got {
+                    if used == t.len() {
+                        assert_eq!(Some(got.to_bits()), want.map(f64::to_bits), "{t}");
+                    } else {
+                        assert!(want.is_none(), "{t}: read {used} bytes");
+                    }
+                }
+            };
+            check(fast_f64(t.as_bytes()));
+            // the word-at-a-time path needs a terminator and 8 bytes after the sign
+            for end in [",", "\n", "\r\n"] {
+                check(number(format!("{t}{end}xxxxxxxx").as_bytes()));
+                let got = swar_f64(format!("{t}{end}xxxxxxxx").as_bytes());
+                swar_read += usize::from(got.is_some());
+                check(got);
             }
         }
+        // the short formats (most of the "{small}" and "{:.2}" texts) went the SWAR way
+        assert!(swar_read > 3 * 20_000, "{swar_read}");
         // and through the chunk parser (fast or slow path per field)
         let body: String = texts
             .iter()

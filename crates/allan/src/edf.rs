@@ -351,13 +351,25 @@ pub fn rate_noise_id_fn(n: usize, y: impl Fn(usize) -> f64, d_max: u32) -> Optio
     }
     // Least-squares line in the centred index t_k = k - c: a = mean, b = sum(t y) / sum(t^2),
     // sum(t^2) = n (n^2 - 1) / 12.
+    // Four lanes (k mod 4): independent addition chains, added in a fixed order.
     let c = (n as f64 - 1.0) / 2.0;
-    let (mut sy, mut sty) = (0.0f64, 0.0f64);
-    for k in 0..n {
-        let v = y(k);
-        sy += v;
-        sty += (k as f64 - c) * v;
+    let (mut syl, mut styl) = ([0.0f64; 4], [0.0f64; 4]);
+    let groups = n / 4;
+    for g in 0..groups {
+        for l in 0..4 {
+            let k = 4 * g + l;
+            let v = y(k);
+            syl[l] += v;
+            styl[l] += (k as f64 - c) * v;
+        }
     }
+    for k in 4 * groups..n {
+        let v = y(k);
+        syl[0] += v;
+        styl[0] += (k as f64 - c) * v;
+    }
+    let sy = (syl[0] + syl[1]) + (syl[2] + syl[3]);
+    let sty = (styl[0] + styl[1]) + (styl[2] + styl[3]);
     let nf = n as f64;
     let a = sy / nf;
     let b = sty / (nf * (nf * nf - 1.0) / 12.0);
@@ -423,7 +435,43 @@ fn acf_sums<const D: usize>(n: usize, e: impl Fn(usize) -> f64) -> AcfSums {
             prev[d] = z;
         }
     }
-    for k in D..n {
+    // Main loop in groups of four samples, one accumulator lane per position in the group
+    // (independent addition chains instead of one latency-bound chain per sum), lanes added in
+    // a fixed order at the end.
+    let mut l1 = [[0.0f64; 4]; D];
+    let mut l2 = [[0.0f64; 4]; D];
+    let mut lp = [[0.0f64; 4]; D];
+    let mut k = D;
+    while k + 4 <= n {
+        // ev[3 + j] = e(k + j), ev[2] = e(k - 1), ... (the window w holds the last four)
+        let ev = [w[2], w[1], w[0], e(k), e(k + 1), e(k + 2), e(k + 3)];
+        for d in 0..D {
+            let mut zp = prev[d];
+            for l in 0..4 {
+                let j = 3 + l;
+                let z = match d {
+                    0 => ev[j],
+                    1 => ev[j] - ev[j - 1],
+                    2 => ev[j] - 2.0 * ev[j - 1] + ev[j - 2],
+                    _ => ev[j] - 3.0 * ev[j - 1] + 3.0 * ev[j - 2] - ev[j - 3],
+                };
+                l1[d][l] += z;
+                l2[d][l] += z * z;
+                lp[d][l] += zp * z;
+                zp = z;
+            }
+            prev[d] = zp;
+        }
+        w = [ev[6], ev[5], ev[4], ev[3]];
+        k += 4;
+    }
+    for d in 0..D {
+        let sum = |a: &[f64; 4]| (a[0] + a[1]) + (a[2] + a[3]);
+        s1[d] += sum(&l1[d]);
+        s2[d] += sum(&l2[d]);
+        p[d] += sum(&lp[d]);
+    }
+    for k in k..n {
         w = [e(k), w[0], w[1], w[2]];
         for d in 0..D {
             let z = diff(&w, d);

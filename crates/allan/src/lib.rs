@@ -217,11 +217,12 @@ pub fn deviation_with(
     points
 }
 
-/// A time series prepared once for many deviations: the phase array (and, for rate input,
+/// A time series prepared once for many deviations: the phase array (and, for phase input,
 /// the original samples for noise identification).
 pub struct Series<'a> {
     phase: Vec<f64>,
-    rate: Option<&'a [f64]>,
+    /// Number of rate samples, for rate input.
+    rate_len: Option<usize>,
     source_phase: Option<&'a [f64]>,
     tau0_s: f64,
 }
@@ -232,16 +233,28 @@ impl<'a> Series<'a> {
         match kind {
             DataKind::Rate => Series {
                 phase: rate_to_phase(data, tau0_s),
-                rate: Some(data),
+                rate_len: Some(data.len()),
                 source_phase: None,
                 tau0_s,
             },
             DataKind::Phase => Series {
                 phase: data.to_vec(),
-                rate: None,
+                rate_len: None,
                 source_phase: Some(data),
                 tau0_s,
             },
+        }
+    }
+
+    /// Prepare rate samples given by value: the phase is computed in their buffer (no second
+    /// array of the record's size). Same result as [`Series::new`] with [`DataKind::Rate`].
+    pub fn from_rate(data: Vec<f64>, tau0_s: f64) -> Series<'static> {
+        let rate_len = data.len();
+        Series {
+            phase: rate_to_phase_in_place(data, tau0_s),
+            rate_len: Some(rate_len),
+            source_phase: None,
+            tau0_s,
         }
     }
 
@@ -392,13 +405,13 @@ impl<'a> Series<'a> {
     /// Lag-1 autocorrelation noise identification at averaging factor m (Riley 2004),
     /// on the data as given (rate or phase); `None` when too few points.
     pub fn noise_id(&self, m: usize, d_max: u32) -> Option<i32> {
-        match (self.rate, self.source_phase) {
-            (Some(y), _) => {
+        match (self.rate_len, self.source_phase) {
+            (Some(rate_len), _) => {
                 // The block averages of the rate are phase differences at stride m
                 // (x_{(j+1)m} - x_{jm} = tau0 * sum of the block, mean removed): no pass over
                 // the m samples of each block. Scale and offset do not change the ACF.
                 let m = m.max(1);
-                let blocks = y.len() / m;
+                let blocks = rate_len / m;
                 if blocks < 30 {
                     return None;
                 }
@@ -416,30 +429,86 @@ impl<'a> Series<'a> {
 /// phase small). The running sum is compensated (Knuth's TwoSum error term carried along,
 /// as in Neumaier 1974), so x_n is the partial sum to within a few ulps.
 pub fn rate_to_phase(rate: &[f64], tau0_s: f64) -> Vec<f64> {
+    let mut buf = Vec::with_capacity(rate.len() + 1);
+    buf.extend_from_slice(rate);
+    rate_to_phase_in_place(buf, tau0_s)
+}
+
+/// Samples per block of the phase conversion. Fixed, not per thread: the result does not
+/// depend on the thread count.
+const PHASE_BLOCK: usize = 1 << 16;
+
+/// [`rate_to_phase`] in the rate's own buffer (x_k overwrites y_k, x_n is appended), in
+/// parallel over fixed blocks: the mean from per-block 8-lane sums added in block order; each
+/// block's compensated sum (8 lanes of TwoSum, then the lanes in order); the running
+/// (sum, error) at every block start from those, in block order; then every block runs the
+/// compensated recursion from its start.
+pub fn rate_to_phase_in_place(mut buf: Vec<f64>, tau0_s: f64) -> Vec<f64> {
+    use rayon::prelude::*;
+    let n = buf.len();
     // The mean only keeps the phase small: any rounding in it adds a linear phase trend, which
-    // every estimator's differences cancel. An 8-lane plain sum is accurate enough and fast.
-    let mut lanes = [0.0f64; 8];
-    let chunks = rate.chunks_exact(8);
-    let tail: f64 = chunks.remainder().iter().sum();
-    for c in chunks {
-        for (l, v) in lanes.iter_mut().zip(c) {
-            *l += v;
-        }
-    }
-    let mean = (pairwise_lanes(&lanes) + tail) / rate.len().max(1) as f64;
-    let mut phase = Vec::with_capacity(rate.len() + 1);
-    phase.push(0.0);
+    // every estimator's differences cancel. Plain 8-lane sums are accurate enough and fast.
+    let block_sums: Vec<f64> = buf
+        .par_chunks(PHASE_BLOCK)
+        .map(|b| {
+            let mut lanes = [0.0f64; 8];
+            let chunks = b.chunks_exact(8);
+            let tail: f64 = chunks.remainder().iter().sum();
+            for c in chunks {
+                for (l, v) in lanes.iter_mut().zip(c) {
+                    *l += v;
+                }
+            }
+            pairwise_lanes(&lanes) + tail
+        })
+        .collect();
+    let mean = block_sums.iter().sum::<f64>() / n.max(1) as f64;
+    // Compensated sum of (y - mean) of every block: (sum, error).
+    let block_totals: Vec<(f64, f64)> = buf
+        .par_chunks(PHASE_BLOCK)
+        .map(|b| {
+            let (mut s, mut c) = ([0.0f64; 8], [0.0f64; 8]);
+            let chunks = b.chunks_exact(8);
+            let tail = chunks.remainder();
+            for ch in chunks {
+                for l in 0..8 {
+                    two_sum_acc(&mut s[l], &mut c[l], ch[l] - mean);
+                }
+            }
+            let (mut sum, mut comp) = (0.0f64, c.iter().sum::<f64>());
+            for v in s.into_iter().chain(tail.iter().map(|y| y - mean)) {
+                two_sum_acc(&mut sum, &mut comp, v);
+            }
+            (sum, comp)
+        })
+        .collect();
+    let mut starts = Vec::with_capacity(block_totals.len());
     let (mut sum, mut comp) = (0.0f64, 0.0f64);
-    for &y in rate {
-        let v = y - mean;
-        let t = sum + v;
-        // Knuth's TwoSum (branch-free): the exact rounding error of t = sum + v.
-        let bv = t - sum;
-        comp += (sum - (t - bv)) + (v - bv);
-        sum = t;
-        phase.push((sum + comp) * tau0_s);
+    for &(s, c) in &block_totals {
+        starts.push((sum, comp));
+        two_sum_acc(&mut sum, &mut comp, s);
+        comp += c;
     }
-    phase
+    buf.par_chunks_mut(PHASE_BLOCK)
+        .zip(starts.par_iter())
+        .for_each(|(b, &(mut sum, mut comp))| {
+            for v in b.iter_mut() {
+                let y = *v - mean;
+                *v = (sum + comp) * tau0_s;
+                two_sum_acc(&mut sum, &mut comp, y);
+            }
+        });
+    buf.push((sum + comp) * tau0_s);
+    buf
+}
+
+/// sum += v with the exact rounding error added to comp (Knuth's TwoSum, branch-free).
+#[inline(always)]
+fn two_sum_acc(sum: &mut f64, comp: &mut f64, v: f64) {
+    let t = *sum + v;
+    let bv = t - *sum;
+    *comp += (*sum - (t - bv)) + (v - bv);
+    *sum = t;
 }
 
 /// Neumaier compensated sum.
