@@ -172,17 +172,112 @@ impl Default for ReadOptions {
 
 /// Read a CSV or gzip-compressed CSV log file.
 pub fn read_log(path: &Path, opts: &ReadOptions) -> Result<Log> {
-    let raw = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let bytes = if raw.starts_with(&[0x1f, 0x8b]) {
+    let source = path.display().to_string();
+    let raw = FileBytes::open(path).with_context(|| format!("cannot read {source}"))?;
+    if raw.starts_with(&[0x1f, 0x8b]) {
         let mut out = Vec::with_capacity(raw.len() * 4);
         flate2::read::MultiGzDecoder::new(&raw[..])
             .read_to_end(&mut out)
-            .with_context(|| format!("{}: not a valid gzip file", path.display()))?;
-        out
+            .with_context(|| format!("{source}: not a valid gzip file"))?;
+        parse_log(&out, &source, opts)
     } else {
-        raw
-    };
-    parse_log(&bytes, &path.display().to_string(), opts)
+        parse_log(&raw, &source, opts)
+    }
+}
+
+/// A file's bytes: mapped read-only from the page cache on Linux (no copy into a fresh buffer:
+/// for a 22 MB log that copy and the zeroing of its pages cost more than parsing half of it),
+/// else read into memory.
+enum FileBytes {
+    #[cfg(target_os = "linux")]
+    Mapped {
+        ptr: *mut libc::c_void,
+        len: usize,
+    },
+    Read(Vec<u8>),
+}
+
+impl FileBytes {
+    fn open(path: &Path) -> std::io::Result<FileBytes> {
+        let file = std::fs::File::open(path)?;
+        let meta = file.metadata()?;
+        #[cfg(target_os = "linux")]
+        if meta.is_file() && meta.len() >= 1 << 20 {
+            use std::os::fd::AsRawFd;
+            let len = meta.len() as usize;
+            // SAFETY: a private read-only mapping of a regular file we hold open; the slice
+            // handed out covers exactly `len` mapped bytes and lives as long as the mapping.
+            // (If another process truncates the file while it is read, access past the new
+            // end raises SIGBUS: the same hazard every mmap-based reader accepts.)
+            let ptr = unsafe {
+                libc::mmap(
+                    std::ptr::null_mut(),
+                    len,
+                    libc::PROT_READ,
+                    libc::MAP_PRIVATE | libc::MAP_POPULATE,
+                    file.as_raw_fd(),
+                    0,
+                )
+            };
+            if ptr != libc::MAP_FAILED {
+                return Ok(FileBytes::Mapped { ptr, len });
+            }
+        }
+        let mut buf = Vec::with_capacity(meta.len() as usize + 1);
+        (&file).read_to_end(&mut buf)?;
+        Ok(FileBytes::Read(buf))
+    }
+}
+
+impl std::ops::Deref for FileBytes {
+    type Target = [u8];
+    fn deref(&self) -> &[u8] {
+        match self {
+            #[cfg(target_os = "linux")]
+            // SAFETY: see `open`: `len` readable bytes at `ptr` until `drop`.
+            FileBytes::Mapped { ptr, len } => unsafe {
+                std::slice::from_raw_parts(*ptr as *const u8, *len)
+            },
+            FileBytes::Read(v) => v,
+        }
+    }
+}
+
+impl Drop for FileBytes {
+    fn drop(&mut self) {
+        #[cfg(target_os = "linux")]
+        if let FileBytes::Mapped { ptr, len } = self {
+            // SAFETY: the mapping made in `open`, unmapped once.
+            unsafe {
+                libc::munmap(*ptr, *len);
+            }
+        }
+    }
+}
+
+/// Ask Linux for transparent huge pages on a large buffer not yet written to (a hint: fewer
+/// page faults, and cheaper ones, when it is first filled; measured 13 ms of kernel time per
+/// 35 MB column with 4 KiB pages). Does nothing elsewhere, for small buffers, or if refused.
+fn advise_huge_pages<T>(buf: &[T]) {
+    #[cfg(target_os = "linux")]
+    {
+        const HUGE: usize = 2 << 20;
+        let start = buf.as_ptr() as usize;
+        let end = start + std::mem::size_of_val(buf);
+        let first = (start + HUGE - 1) & !(HUGE - 1);
+        if end >= first + HUGE {
+            // SAFETY: the range lies inside `buf`'s allocation (whole 2 MiB units from the
+            // first aligned address); MADV_HUGEPAGE changes no contents, only how the pages
+            // are backed.
+            unsafe {
+                libc::madvise(
+                    first as *mut libc::c_void,
+                    (end - first) & !(HUGE - 1),
+                    libc::MADV_HUGEPAGE,
+                );
+            }
+        }
+    }
 }
 
 /// Parse log text (already decompressed).
@@ -307,7 +402,16 @@ fn parse_body(
         .map(|w| lines_in(&body[w[0]..w[1]]))
         .collect();
     let total: usize = line_counts.iter().sum();
-    let mut columns: Vec<Vec<f64>> = (0..n_cols).map(|_| vec![0.0f64; total]).collect();
+    // One spare element: the allan command turns a column into its phase (one value longer)
+    // in place.
+    let mut columns: Vec<Vec<f64>> = (0..n_cols)
+        .map(|_| {
+            let mut c = vec![0.0f64; total + 1];
+            advise_huge_pages(&c);
+            c.truncate(total);
+            c
+        })
+        .collect();
     let mut parts: Vec<Vec<&mut [f64]>> = (0..line_counts.len()).map(|_| Vec::new()).collect();
     for col in columns.iter_mut() {
         let mut rest: &mut [f64] = col;
@@ -844,5 +948,28 @@ mod tests {
         let log = parse_log(good.as_bytes(), "big.csv", &o).unwrap();
         assert_eq!(log.len(), 50_000);
         assert_eq!(log.channels["gx"][49_999], 49_999.0 * 0.5);
+    }
+
+    #[test]
+    fn large_file_is_mapped_and_reads_as_parsed() {
+        // Over 1 MiB: read_log maps the file instead of reading it; same log either way.
+        let mut s = String::from("t,gx\n");
+        for i in 0..120_000 {
+            s.push_str(&format!(
+                "{},{}\n",
+                i as f64 * 0.01,
+                (i % 97) as f64 * -0.05
+            ));
+        }
+        assert!(s.len() > 1 << 20);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("big.csv");
+        std::fs::write(&path, &s).unwrap();
+        let read = read_log(&path, &opts()).unwrap();
+        let parsed = parse_log(s.as_bytes(), "big.csv", &opts()).unwrap();
+        assert_eq!(read.len(), 120_000);
+        assert_eq!(read.channels, parsed.channels);
+        assert_eq!(read.t_s, parsed.t_s);
+        assert_eq!(read.channels["gx"][96], 96.0 * -0.05);
     }
 }
