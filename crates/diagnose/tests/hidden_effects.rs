@@ -283,6 +283,7 @@ fn check(trial: &Trial) -> Result<(), String> {
             }
         }
     }
+    // DIAGNOSE_DUMP=1: on a failure, also print the found effects and the z-scores before and after.
     if !problems.is_empty() && std::env::var_os("DIAGNOSE_DUMP").is_some() {
         for &c in &trial.channels {
             let r = &trial.result.channels[CHANNELS[c]];
