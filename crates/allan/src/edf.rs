@@ -344,6 +344,7 @@ pub fn autocorr_noise_id(data: &[f64], m: usize, kind: DataKind, d_max: u32) -> 
 /// of the detrended series and of its first, second, ... differences. `y(k)` gives the k-th of
 /// `n` (averaged) values. Two passes over the data in all: one for the line, one that
 /// accumulates the ACF sums of every difference order at once.
+#[inline(always)]
 pub fn rate_noise_id_fn(n: usize, y: impl Fn(usize) -> f64, d_max: u32) -> Option<i32> {
     let d_max = d_max.min(3) as usize;
     if n < d_max + 2 {
@@ -403,6 +404,7 @@ pub fn rate_noise_id_fn(n: usize, y: impl Fn(usize) -> f64, d_max: u32) -> Optio
 type AcfSums = ([f64; 4], [f64; 4], [f64; 4], [f64; 4], [f64; 4]);
 
 /// (S1, S2, P, first, last) of the difference sequences of orders 0..D-1 of e(0..n).
+#[inline(always)]
 fn acf_sums<const D: usize>(n: usize, e: impl Fn(usize) -> f64) -> AcfSums {
     let mut s1 = [0.0f64; 4];
     let mut s2 = [0.0f64; 4];
