@@ -376,16 +376,13 @@ pub fn rate_noise_id_fn(n: usize, y: impl Fn(usize) -> f64, d_max: u32) -> Optio
     let b = sty / (nf * (nf * nf - 1.0) / 12.0);
     let e = |k: usize| y(k) - a - b * (k as f64 - c);
     // For difference order d, z^d_k over k < n - d; per order: S1, S2, P = sum z_k z_{k+1},
-    // the first and the last value. The loop is written once per d_max (const generic) so the
-    // orders are computed in straight-line code.
-    let sums = match d_max {
-        0 => acf_sums::<1>(n, e),
-        1 => acf_sums::<2>(n, e),
-        2 => acf_sums::<3>(n, e),
-        _ => acf_sums::<4>(n, e),
-    };
-    let (s1, s2, p, first, prev) = sums;
-    for d in 0..=d_max {
+    // the first and the last value. The loop is written once per number of orders (const
+    // generic) so the orders are computed in straight-line code. Order 0 alone first: most
+    // taus of an IMU log are white-noise dominated (rho < 0.25 at d = 0) and stop there; the
+    // higher orders are summed (with order 0 again) only when needed. Each order's sums are
+    // accumulated by the same code whatever the number of orders, so the result is the same.
+    let rho_of = |sums: &AcfSums, d: usize| -> f64 {
+        let (s1, s2, p, first, prev) = sums;
         // ACF about the mean mu: sum (z_k - mu)(z_{k+1} - mu)
         //   = P - mu (S1 - z_last) - mu (S1 - z_0) + (len - 1) mu^2.
         let lf = (n - d) as f64;
@@ -393,9 +390,22 @@ pub fn rate_noise_id_fn(n: usize, y: impl Fn(usize) -> f64, d_max: u32) -> Optio
         let num = p[d] - mu * (s1[d] - prev[d]) - mu * (s1[d] - first[d]) + (lf - 1.0) * mu * mu;
         let den = s2[d] - lf * mu * mu;
         let r1 = num / den;
-        let rho = r1 / (1.0 + r1);
+        r1 / (1.0 + r1)
+    };
+    let alpha = |rho: f64, d: usize| Some(-(2.0 * rho).round_ties_even() as i32 - 2 * d as i32);
+    let rho = rho_of(&acf_sums::<1>(n, e), 0);
+    if rho < 0.25 || d_max == 0 {
+        return alpha(rho, 0);
+    }
+    let sums = match d_max {
+        1 => acf_sums::<2>(n, e),
+        2 => acf_sums::<3>(n, e),
+        _ => acf_sums::<4>(n, e),
+    };
+    for d in 1..=d_max {
+        let rho = rho_of(&sums, d);
         if rho < 0.25 || d >= d_max {
-            return Some(-(2.0 * rho).round_ties_even() as i32 - 2 * d as i32);
+            return alpha(rho, d);
         }
     }
     None
