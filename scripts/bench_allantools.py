@@ -9,7 +9,9 @@ one column `gx` (no time column), then times in one session:
   2. the whole command `imudrift allan LOG.csv --rate 100 --grid <same m list> --json`
      (reading and parsing the CSV, phase, deviations, noise identification, EDF, confidence
      intervals, fit, JSON), wall clock of the process,
-and compares the deviations. Best of --repeat runs each.
+and compares the deviations. The runs are interleaved (allantools, command, command with
+--edf none, repeated) so both see the same load; best of --repeat runs each, and the
+median of the per-pair ratios.
 
 Usage: python3 scripts/bench_allantools.py [--bin target/release/imudrift] [--csv PATH] [--repeat 5]
 """
@@ -76,18 +78,16 @@ def main():
     print(f"channel: {n} samples, CSV {size_mb:.1f} MB at {path}")
     print(f"taus: {len(ms)} octave averaging factors m = 1 .. {ms[-1]}")
 
-    t_at = []
+    # Interleaved: one allantools run, then one run of the command, then one with --edf none,
+    # repeated, so both sides see the same machine load (the machine is shared); best of each.
+    grid = ",".join(str(m) for m in ms)
+    cmd = [args.bin, "allan", path, "--rate", "100", "--grid", grid, "--json"]
+    t_at, t_us, t_us_noci = [], [], []
+    out = None
     for _ in range(args.repeat):
         t0 = time.perf_counter()
         at_taus, at_dev, _, at_n = allantools.oadev(y, rate=rate, data_type="freq", taus=taus)
         t_at.append(time.perf_counter() - t0)
-
-    grid = ",".join(str(m) for m in ms)
-    cmd = [args.bin, "allan", path, "--rate", "100", "--grid", grid, "--json"]
-    t_us = []
-    t_us_noci = []
-    out = None
-    for _ in range(args.repeat):
         t0 = time.perf_counter()
         proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, check=True)
         t_us.append(time.perf_counter() - t0)
@@ -114,6 +114,10 @@ def main():
     print(f"speed ratio (numpy.loadtxt + oadev) / imudrift whole command: "
           f"{(t_load + best_at)/best_us:.1f}x")
     print(f"compared {len(diffs)} taus: max relative difference {max(diffs):.2e}")
+    ratios = sorted(a / b for a, b in zip(t_at, t_us))
+    print(f"per-pair ratios (same moment): median {ratios[len(ratios) // 2]:.2f}x, "
+          f"best {ratios[-1]:.2f}x, worst {ratios[0]:.2f}x")
+    print(f"load average during the runs: {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
     if args.csv is None:
         os.remove(path)
         os.rmdir(tmpdir)

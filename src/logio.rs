@@ -186,7 +186,8 @@ pub fn read_log(path: &Path, opts: &ReadOptions) -> Result<Log> {
 }
 
 /// A file's bytes: mapped read-only from the page cache on Linux (no copy into a fresh buffer:
-/// for a 22 MB log that copy and the zeroing of its pages cost more than parsing half of it),
+/// for a 22 MB log that copy and the zeroing of its pages cost more than parsing half of it;
+/// pages are faulted in by the parsing threads, in parallel),
 /// else read into memory.
 enum FileBytes {
     #[cfg(target_os = "linux")]
@@ -214,7 +215,7 @@ impl FileBytes {
                     std::ptr::null_mut(),
                     len,
                     libc::PROT_READ,
-                    libc::MAP_PRIVATE | libc::MAP_POPULATE,
+                    libc::MAP_PRIVATE,
                     file.as_raw_fd(),
                     0,
                 )
