@@ -577,12 +577,13 @@ const POW10: [f64; 23] = [
     1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
 ];
 
-/// Fast path for decimal numbers `[+-]digits[.digits][(e|E)[+-]digits]` with at most 19 digits
+/// Decimal numbers `[+-]digits[.digits][(e|E)[+-]digits]` in one scan. With at most 19 digits
 /// in all (leading zeros included, so the integer significand w cannot overflow), w below 2^53
-/// and a net power of ten within +-22: then the value is w * 10^e or w / 10^-e with both
-/// operands exact, so the one IEEE operation rounds it correctly (Clinger 1990, the fast path
-/// of every correct parser). Returns (value, bytes used), or `None` to send the field to the
-/// standard parser (same result).
+/// and a net power of ten within +-22, the value is w * 10^e or w / 10^-e with both operands
+/// exact, so the one IEEE operation rounds it correctly (Clinger 1990, the fast path of every
+/// correct parser); otherwise the scanned text goes straight to the standard parser (e.g. the
+/// 17 significant digits of a double printed exactly). Returns (value, bytes used), or `None`
+/// when there is no number (no digits): same values as the standard parser.
 #[inline(always)]
 fn fast_f64(s: &[u8]) -> Option<(f64, usize)> {
     let mut i = 0;
@@ -617,7 +618,7 @@ fn fast_f64(s: &[u8]) -> Option<(f64, usize)> {
         digits += i - frac_start;
         exp10 = -((i - frac_start) as i32);
     }
-    if digits == 0 || digits > 19 {
+    if digits == 0 {
         return None;
     }
     if let Some(b'e' | b'E') = s.get(i) {
@@ -648,9 +649,11 @@ fn fast_f64(s: &[u8]) -> Option<(f64, usize)> {
         }
         exp10 = exp10.saturating_add(if eneg { -e } else { e });
     }
-    // Longer significands go to the standard parser (Eisel-Lemire).
-    if !(-22..=22).contains(&exp10) || w >= 1u64 << 53 {
-        return None;
+    // Longer significands (more than 19 digits: w may have wrapped) or larger exponents: the
+    // standard parser (Eisel-Lemire) on the text just scanned, which is a valid decimal.
+    if digits > 19 || !(-22..=22).contains(&exp10) || w >= 1u64 << 53 {
+        let text = std::str::from_utf8(&s[..i]).ok()?;
+        return Some((text.parse().ok()?, i));
     }
     // Clinger: both operands exact, one correctly rounded operation.
     let v = w as f64;
@@ -731,6 +734,9 @@ fn fast_line(chunk: &[u8], mut i: usize, out: &mut [&mut [f64]], row: usize) -> 
     }
     for (k, col) in out.iter_mut().enumerate() {
         let (v, used) = number(chunk.get(i..)?)?;
+        if !v.is_finite() {
+            return None; // the general path reports it
+        }
         i += used;
         match chunk.get(i) {
             Some(b',') if k + 1 < n_cols => i += 1,
