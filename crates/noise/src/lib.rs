@@ -18,6 +18,7 @@ mod effect;
 mod model;
 pub mod process;
 pub mod units;
+mod ziggurat;
 
 pub use config::ConfigError;
 pub use effect::{Effect, FilterError, Sensor, TermFilter};
