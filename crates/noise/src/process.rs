@@ -87,6 +87,11 @@ pub struct GaussMarkovBank {
     state: Vec<f64>,
     /// Components advanced every `every` samples and held in between.
     held: Vec<HeldComponent>,
+    /// Sum of the held components' states (changes only when one of them is updated).
+    held_sum: f64,
+    /// Samples between the last and the next update of any held component, and samples left until it.
+    event_span: u32,
+    until_event: u32,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -133,6 +138,9 @@ impl GaussMarkovBank {
             drive: Vec::new(),
             state: Vec::new(),
             held: Vec::new(),
+            held_sum: 0.0,
+            event_span: u32::MAX,
+            until_event: u32::MAX,
         };
         for &(tc, s) in components {
             let x0 = s * normal(rng);
@@ -155,38 +163,76 @@ impl GaussMarkovBank {
                 });
             }
         }
+        bank.sync_held(0);
         bank
+    }
+
+    /// Count down `span` samples on every held component (the next event: one of them reaches 0),
+    /// update the ones that are due (in component order, each with one value of `draw`), and
+    /// recompute the held sum and the next event.
+    #[inline]
+    fn sync_held(&mut self, span: u32) {
+        self.sync_held_with(span, || {
+            unreachable!("no held component is due at construction")
+        });
+    }
+
+    #[inline]
+    fn sync_held_with(&mut self, span: u32, mut draw: impl FnMut() -> f64) {
+        let mut sum = 0.0;
+        let mut next = u32::MAX;
+        for h in &mut self.held {
+            h.left -= span;
+            if h.left == 0 {
+                h.left = h.every;
+                h.state = h.phi * h.state + h.drive * draw();
+            }
+            sum += h.state;
+            next = next.min(h.left);
+        }
+        self.held_sum = sum;
+        self.event_span = next;
+        self.until_event = next;
+    }
+
+    /// One sample: the current value (every-sample components in order, then the held sum), then
+    /// advance, with the sample's draws from `draw` in order: the every-sample components, then the
+    /// held ones that are due, each in component order.
+    #[inline(always)]
+    fn step(&mut self, mut draw: impl FnMut() -> f64) -> f64 {
+        let mut sum = 0.0;
+        for ((x, &phi), &d) in self.state.iter_mut().zip(&self.phi).zip(&self.drive) {
+            sum += *x;
+            *x = phi * *x + d * draw();
+        }
+        sum += self.held_sum;
+        if !self.held.is_empty() {
+            self.until_event -= 1;
+            if self.until_event == 0 {
+                self.sync_held_with(self.event_span, draw);
+            }
+        }
+        sum
     }
 
     /// The current value (sum of the components), then advance one step. Draw order within a step:
     /// the every-sample components, then the held ones that are due, each in component order.
     #[inline]
     pub fn next<R: Rng + ?Sized>(&mut self, rng: &mut R) -> f64 {
-        let mut sum = 0.0;
-        for ((x, &phi), &d) in self.state.iter_mut().zip(&self.phi).zip(&self.drive) {
-            sum += *x;
-            *x = phi * *x + d * normal(rng);
-        }
-        for h in &mut self.held {
-            sum += h.state;
-            h.left -= 1;
-            if h.left == 0 {
-                h.left = h.every;
-                h.state = h.phi * h.state + h.drive * normal(rng);
-            }
-        }
-        sum
+        self.step(|| normal(rng))
     }
 
     /// Add the next `out.len()` values to `out`: the values of as many `next` calls, from the same
     /// draws in the same order (the block's draws are made first, then consumed in that order).
     fn add_block(&mut self, rng: &mut ImuRng, out: &mut [f64], scratch: &mut Vec<f64>) {
         let n = out.len();
+        // Held updates within the block: component h is next due in left - (span - until) samples.
+        let elapsed = self.event_span - self.until_event;
         let held_draws: usize = self
             .held
             .iter()
             .map(|h| {
-                let (left, every) = (h.left as usize, h.every as usize);
+                let (left, every) = ((h.left - elapsed) as usize, h.every as usize);
                 if n >= left {
                     1 + (n - left) / every
                 } else {
@@ -197,22 +243,10 @@ impl GaussMarkovBank {
         let w = draws(rng, scratch, n * self.state.len() + held_draws);
         let mut j = 0;
         for v in out.iter_mut() {
-            let mut sum = 0.0;
-            for ((x, &phi), &d) in self.state.iter_mut().zip(&self.phi).zip(&self.drive) {
-                sum += *x;
-                *x = phi * *x + d * w[j];
+            *v += self.step(|| {
                 j += 1;
-            }
-            for h in &mut self.held {
-                sum += h.state;
-                h.left -= 1;
-                if h.left == 0 {
-                    h.left = h.every;
-                    h.state = h.phi * h.state + h.drive * w[j];
-                    j += 1;
-                }
-            }
-            *v += sum;
+                w[j - 1]
+            });
         }
         debug_assert_eq!(j, w.len());
     }
@@ -275,6 +309,9 @@ impl Quantizer {
         n * self.lsb / dt_s
     }
 }
+
+/// Samples per sub-block of `ChannelErrors::fill_static` (any value gives the same values).
+const FILL_CHUNK: usize = 512;
 
 /// The error generator of one output channel (one axis of one triad) for one run.
 #[derive(Clone, Debug)]
@@ -393,7 +430,10 @@ impl ChannelErrors {
     /// bit for bit, as `sample` called for each k in turn (one implementation serves both); a block
     /// is faster: each term runs over the whole block in one loop.
     pub fn fill_static(&mut self, k0: u64, ideal: &Vector3<f64>, out: &mut [f64]) {
-        self.fill_with(k0, out, |_| ideal);
+        // Sub-blocks keep the draws of one sub-block (`scratch`) in L1.
+        for (c, chunk) in out.chunks_mut(FILL_CHUNK).enumerate() {
+            self.fill_with(k0 + (c * FILL_CHUNK) as u64, chunk, |_| ideal);
+        }
     }
 
     /// Samples `k0 .. k0 + out.len()`, sample `k0 + i` with ideal input `ideal(i)`. Each term adds
