@@ -592,21 +592,8 @@ fn fast_f64(s: &[u8]) -> Option<(f64, usize)> {
     if neg || first == b'+' {
         i = 1;
     }
-    let mut w: u64 = 0;
-    let int_start = i;
-    while let Some(&c) = s.get(i) {
-        let d = c.wrapping_sub(b'0');
-        if d > 9 {
-            break;
-        }
-        w = w.wrapping_mul(10).wrapping_add(u64::from(d));
-        i += 1;
-    }
-    let mut digits = i - int_start;
-    let mut exp10: i32 = 0;
-    if s.get(i) == Some(&b'.') {
-        i += 1;
-        let frac_start = i;
+    // The digits from s[i..] appended to w: (index after them, w).
+    let scan = |mut i: usize, mut w: u64| {
         while let Some(&c) = s.get(i) {
             let d = c.wrapping_sub(b'0');
             if d > 9 {
@@ -615,6 +602,16 @@ fn fast_f64(s: &[u8]) -> Option<(f64, usize)> {
             w = w.wrapping_mul(10).wrapping_add(u64::from(d));
             i += 1;
         }
+        (i, w)
+    };
+    let int_start = i;
+    let (after, mut w) = scan(i, 0);
+    i = after;
+    let mut digits = i - int_start;
+    let mut exp10: i32 = 0;
+    if s.get(i) == Some(&b'.') {
+        let frac_start = i + 1;
+        (i, w) = scan(frac_start, w);
         digits += i - frac_start;
         exp10 = -((i - frac_start) as i32);
     }
