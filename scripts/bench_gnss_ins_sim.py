@@ -14,8 +14,9 @@ peers.md §2.1): gyro ARW from Woodman Table 4 (0.075, 0.078, 0.079 deg/sqrt(s) 
 deg/sqrt(h)), bias drift as a first-order Gauss-Markov with Table 4's bias instability (36, 32.4,
 43.2 deg/h) and correlation times at the Allan minimum (620, 530, 270 s); accelerometer VRW
 0.004 m/s^2/sqrt(Hz) = 0.24 m/s/sqrt(h) (MTx manual). imudrift runs configs/scenarios/mtx-static-60s.toml
-(configs/sensors/mtx.toml: white noise, flicker bias instability as 13 Gauss-Markov components per
-axis, rate random walk; accelerometer white noise), i.e. more noise processes per sample.
+(configs/sensors/mtx.toml: white noise, flicker bias instability as 7 Gauss-Markov components per
+axis, 0.1 s .. 1e5 s, the four slowest advanced every 10 .. 10 000 samples; rate random walk;
+accelerometer white noise), i.e. more noise processes per sample.
 
 imudrift is measured twice: with the full MTx model, and with exactly gnss-ins-sim's terms
 (white noise + one Gauss-Markov bias per gyro axis + accelerometer white noise; the script writes that
