@@ -18,8 +18,8 @@ fn normal<R: Rng + ?Sized>(rng: &mut R) -> f64 {
 }
 
 /// `out.len()` standard normals from `rng`, in order: the same values as that many `normal` calls.
-/// One loop with one call site, so the ziggurat is inlined into it (a block's draws cost about half
-/// as much as the same draws made one at a time between other work).
+/// One tight loop with the ziggurat inlined (perf: about 2.0 ns per draw with Xoshiro256++ on the
+/// 2-core CI machine, against 2.6 ns for rand_distr's out-of-line sampler).
 #[inline(never)]
 fn fill_normals(rng: &mut ImuRng, out: &mut [f64]) {
     for w in out {
@@ -75,8 +75,10 @@ impl WhiteNoise {
 /// variance has, averaged over the grid's phase (which the overlapping estimator does), exactly the
 /// same Allan variance K^2 dt (2n^2 + 1)/(6n) at every tau = n dt as one updated every sample, so
 /// the hold changes that component's Allan variance only at relative order M/T <= 1e-3
-/// (computed exactly in `tests/held_gauss_markov.rs`: at most 5.0e-4 relative, about M/(2T), at every tau), and its
-/// k-fold integrals at relative order (M/T)(M/t). It saves the draws of the slow components:
+/// (computed exactly in `tests/held_gauss_markov.rs`: at most 5.0e-4 relative, about M/(2T), at
+/// every tau); its k-fold integrals change at most at relative order M/T (the held value lags the
+/// process by less than M; not computed exactly, the montecarlo crate's law tests cover flicker
+/// alone). It saves the draws of the slow components:
 /// the default flicker band 0.1 s .. 1e5 s at 100 Hz needs 3.1 instead of 7 normals per sample.
 /// The draws remain a pure function of the sample index, so results do not depend on scheduling.
 #[derive(Clone, Debug)]
