@@ -368,8 +368,10 @@ impl<'a> Series<'a> {
             return;
         }
         let d = est.difference_order();
+        // One tau per task, each identified by one thread: the same for any thread count.
+        use rayon::prelude::*;
         let alphas: Vec<Option<i32>> = points
-            .iter()
+            .par_iter()
             .map(|p| opts.alpha.or_else(|| self.noise_id(p.m, d)))
             .collect();
         self.attach_intervals_with_alphas(est, points, &alphas, opts);
