@@ -149,12 +149,13 @@ impl RunKernel for DriftKernel {
 }
 
 /// The active terms of `model` with their law sources, and the conditions of the laws, for a
-/// scenario's trajectory and alignment.
+/// scenario's trajectory and alignment, sampled every `dt_s` (the sinusoid's law depends on it).
 pub fn law_terms(
     model: &SensorModel,
     spec: &TrajectorySpec,
     alignment: &Alignment,
     gravity_mps2: f64,
+    dt_s: f64,
 ) -> (Vec<Term>, LawContext) {
     let g = gravity_mps2;
     // Static, level, north-facing: the laws of theory.md §4. A constant rate about body z from
@@ -206,9 +207,11 @@ pub fn law_terms(
             for effect in m.effects() {
                 let no_law = |why: &str| Source::NoLaw(why.to_string());
                 let source = match effect {
-                    Effect::Quantization => {
-                        no_law("quantisation has no growth law in theory.md §4")
-                    }
+                    // The error of the quantised integrated output is bounded by the LSB and
+                    // depends on the dither the other terms provide; theory.md §4 has no closed form.
+                    Effect::Quantization => no_law(
+                        "quantisation: the error of the quantised integrated output is bounded by the LSB and depends on the dither from the other terms; no closed form in theory.md §4",
+                    ),
                     Effect::WhiteNoise => Source::White(m.white_noise.unwrap_or(0.0)),
                     Effect::BiasInstability => match &m.bias_instability {
                         Some(BiasInstability::RandomWalk {
@@ -230,9 +233,15 @@ pub fn law_terms(
                         },
                         None => continue,
                     },
-                    Effect::Sinusoidal => {
-                        no_law("a sinusoidal error has no growth law in theory.md §4")
-                    }
+                    Effect::Sinusoidal => match m.sinusoidal {
+                        Some(w) => Source::Sinusoid {
+                            amplitude: w.amplitude,
+                            freq_hz: w.frequency_hz,
+                            phase: w.phase_rad,
+                            sample_interval_s: dt_s,
+                        },
+                        None => continue,
+                    },
                     Effect::TemperatureBias => {
                         let c = m.temperature_bias.unwrap_or(0.0);
                         match model.temperature {

@@ -61,6 +61,7 @@ impl Experiment {
             &scenario.trajectory_spec,
             &scenario.alignment,
             scenario.gravity_mps2,
+            scenario.dt_s(),
         );
         Ok(Experiment {
             scenario,

@@ -48,8 +48,21 @@ pub enum Source {
     GaussMarkovSum(Vec<(f64, f64)>),
     /// Rate ramp R (signed), error R t.
     Ramp(f64),
-    /// Active, but no closed-form growth law exists in theory.md §4 (e.g. flicker bias instability,
-    /// quantisation, sinusoid): the report says so.
+    /// Sinusoid `amplitude · sin(2 pi freq_hz t + phase)`, point-sampled at t_k = k dt by the noise
+    /// crate (`sample_interval_s` = dt; each sample held over its interval, a delay of dt/2);
+    /// the phase uniform on [0, 2 pi) per run when `None` (`noise::closed_form::sinusoid_growth`:
+    /// mean 0 and variance A^2 (a_k^2 + b_k^2)/2; fixed phase: the deterministic k-fold integral;
+    /// `sinusoid_growth_sampled` for the sampling). With a random phase the integrals are not
+    /// Gaussian (arcsine distributed), so horizontal magnitudes they feed get an rms law but no
+    /// mean (see `horizontal_law`).
+    Sinusoid {
+        amplitude: f64,
+        freq_hz: f64,
+        phase: Option<f64>,
+        sample_interval_s: f64,
+    },
+    /// Active, but no closed-form growth law exists in theory.md §4 (e.g. quantisation): the
+    /// report says so.
     NoLaw(String),
 }
 
@@ -113,8 +126,30 @@ fn moments(source: &Source, t_s: f64, how: Option<Integration>) -> Result<(f64, 
             ),
             None => return Err("Gauss-Markov needs an integration".into()),
         },
+        Source::Sinusoid {
+            amplitude,
+            freq_hz,
+            phase,
+            sample_interval_s,
+        } => match how {
+            Some(h) => cf::sinusoid_growth_sampled(
+                *amplitude,
+                *freq_hz,
+                *phase,
+                t_s,
+                *sample_interval_s,
+                h,
+            ),
+            None => return Err("a sinusoid needs an integration".into()),
+        },
         Source::NoLaw(why) => return Err(why.clone()),
     })
+}
+
+/// Whether a term's contribution is random and not Gaussian (a sinusoid of random phase), so the
+/// Rayleigh mean of a horizontal magnitude does not hold for it.
+fn non_gaussian(source: &Source) -> bool {
+    matches!(source, Source::Sinusoid { phase: None, .. })
 }
 
 /// Variance of the k-fold integral (k = `how.folds()`, times the tilt gain g^2 through tilt) of a
@@ -216,6 +251,7 @@ pub fn channel_laws(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
     let mut mean = vec![0.0f64; n];
     let mut var = vec![0.0f64; n];
     let mut missing: Vec<Option<String>> = vec![None; n];
+    let mut not_gaussian = vec![false; n];
     for term in terms {
         for (ch, how, factor) in paths(term.entry, ctx.gravity_mps2) {
             let i = ch as usize;
@@ -223,6 +259,7 @@ pub fn channel_laws(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
                 Ok((m, v)) => {
                     mean[i] += factor * m;
                     var[i] += factor * factor * v;
+                    not_gaussian[i] |= v > 0.0 && non_gaussian(&term.source);
                 }
                 Err(why) => {
                     missing[i].get_or_insert_with(|| format!("{}: {why}", term.name));
@@ -284,7 +321,8 @@ pub fn channel_laws(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
         (Channel::PosHorizontal, Channel::PosNorth, Channel::PosEast),
         (Channel::VelHorizontal, Channel::VelNorth, Channel::VelEast),
     ] {
-        laws[h as usize] = horizontal_law(&laws[a as usize], &laws[b as usize]);
+        let gaussian = !not_gaussian[a as usize] && !not_gaussian[b as usize];
+        laws[h as usize] = horizontal_law(&laws[a as usize], &laws[b as usize], gaussian);
     }
     laws
 }
@@ -293,9 +331,10 @@ pub fn channel_laws(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
 /// rms^2 = (m_n^2 + s_n^2) + (m_e^2 + s_e^2) always. The mean: deterministic components give the
 /// magnitude itself; zero-mean components give, writing (n, e) = (s_n R cos th, s_e R sin th) with R
 /// Rayleigh (E R = sqrt(pi/2)) and th uniform, E|h| = sqrt(pi/2) (1/2pi) int sqrt(s_n^2 cos^2 + s_e^2 sin^2)
-/// d th, which for s_n = s_e = s is the Rayleigh mean s sqrt(pi/2) (theory.md §4). Mixed cases
-/// report only the rms (std = NaN marks "mean unknown").
-fn horizontal_law(north: &Law, east: &Law) -> Law {
+/// d th, which for s_n = s_e = s is the Rayleigh mean s sqrt(pi/2) (theory.md §4). Mixed cases,
+/// and random components that are not Gaussian (`gaussian = false`: a random-phase sinusoid),
+/// report only the rms (mean = NaN marks "mean unknown").
+fn horizontal_law(north: &Law, east: &Law, gaussian: bool) -> Law {
     let (Law::Value { mean: mn, std: sn }, Law::Value { mean: me, std: se }) = (north, east) else {
         let why = [north, east]
             .iter()
@@ -309,7 +348,7 @@ fn horizontal_law(north: &Law, east: &Law) -> Law {
     let rms2 = mn * mn + sn * sn + me * me + se * se;
     let mean = if *sn == 0.0 && *se == 0.0 {
         mn.hypot(*me)
-    } else if *mn == 0.0 && *me == 0.0 {
+    } else if *mn == 0.0 && *me == 0.0 && gaussian {
         horizontal_rayleigh_mean(*sn, *se)
     } else {
         return Law::Value {

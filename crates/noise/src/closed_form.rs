@@ -227,6 +227,102 @@ pub fn sinusoid_growth_std(amplitude: f64, f0_hz: f64, t_s: f64, how: Integratio
     how.gain() * amplitude / w * bracket.max(0.0).sqrt()
 }
 
+/// u - sin u, with its Taylor series below |u| = 0.5 (where the difference cancels):
+/// u^3/3! - u^5/5! + u^7/7! - ... (terms to u^17 leave < 1e-22 relative there).
+fn u_minus_sin(u: f64) -> f64 {
+    if u.abs() >= 0.5 {
+        return u - u.sin();
+    }
+    let (mut term, mut sum) = (u * u * u / 6.0, 0.0);
+    for n in (3..19).step_by(2) {
+        sum += term;
+        term *= -u * u / (((n + 1) * (n + 2)) as f64);
+    }
+    sum
+}
+
+/// u^2/2 - (1 - cos u), with its Taylor series below |u| = 0.5: u^4/4! - u^6/6! + u^8/8! - ...
+fn half_u2_minus_one_minus_cos(u: f64) -> f64 {
+    if u.abs() >= 0.5 {
+        return u * u / 2.0 - 2.0 * (0.5 * u).sin().powi(2);
+    }
+    let (mut term, mut sum) = (u.powi(4) / 24.0, 0.0);
+    for n in (4..20).step_by(2) {
+        sum += term;
+        term *= -u * u / (((n + 1) * (n + 2)) as f64);
+    }
+    sum
+}
+
+/// Coefficients (a_k, b_k) of the k-fold integral from 0 of sin(w s + phi), w = 2 pi f0, written
+/// I_k(t) = a_k cos(phi) + b_k sin(phi), for k = 1, 2, 3 (`None` otherwise):
+///   I1(t) = cos phi (1 - cos wt)/w + sin phi (sin wt)/w
+///   I2(t) = cos phi (t/w - sin wt/w^2) + sin phi (1 - cos wt)/w^2
+///   I3(t) = cos phi (t^2/(2w) + (cos wt - 1)/w^3) + sin phi (t/w^2 - sin wt/w^3)
+/// Checked by differentiation (and I_k(0) = 0 for each):
+///   d/dt I1 = cos phi sin wt + sin phi cos wt = sin(wt + phi);
+///   d/dt I2 = cos phi (1 - cos wt)/w + sin phi sin wt/w = I1;
+///   d/dt I3 = cos phi (t/w - sin wt/w^2) + sin phi (1 - cos wt)/w^2 = I2.
+/// ([derived] k-fold integral of a sinusoid; theory.md §2 gives its Allan form, Hou 4.64.)
+/// The cancelling differences use series for small wt (`u_minus_sin`, `half_u2_minus_one_minus_cos`).
+pub fn sinusoid_kfold_coefficients(f0_hz: f64, t_s: f64, k: i32) -> Option<(f64, f64)> {
+    let w = std::f64::consts::TAU * f0_hz;
+    let u = w * t_s;
+    let one_minus_cos = 2.0 * (0.5 * u).sin().powi(2);
+    match k {
+        1 => Some((one_minus_cos / w, u.sin() / w)),
+        2 => Some((u_minus_sin(u) / (w * w), one_minus_cos / (w * w))),
+        3 => Some((
+            half_u2_minus_one_minus_cos(u) / w.powi(3),
+            u_minus_sin(u) / w.powi(3),
+        )),
+        _ => None,
+    }
+}
+
+/// Mean and variance of the integrated sinusoid `amplitude · sin(2 pi f0 t + phase)` (integrated
+/// once, twice, or through tilt, times g) at time t, with (a_k, b_k) from
+/// `sinusoid_kfold_coefficients`. Fixed phase: mean A (a_k cos phi + b_k sin phi), variance 0.
+/// Phase uniform on [0, 2 pi) (drawn per run, `phase_rad = None`): mean 0, variance
+/// A^2 (a_k^2 + b_k^2)/2 (E cos^2 = E sin^2 = 1/2, E cos sin = 0).
+/// ([derived] k-fold integral of a sinusoid; theory.md §2 gives its Allan form, Hou 4.64.)
+pub fn sinusoid_growth(
+    amplitude: f64,
+    f0_hz: f64,
+    phase_rad: Option<f64>,
+    t_s: f64,
+    how: Integration,
+) -> (f64, f64) {
+    let (a, b) = sinusoid_kfold_coefficients(f0_hz, t_s, how.folds()).expect("folds are 1..=3");
+    let gain = how.gain() * amplitude;
+    match phase_rad {
+        Some(phi) => (gain * (a * phi.cos() + b * phi.sin()), 0.0),
+        None => (0.0, gain * gain * (a * a + b * b) / 2.0),
+    }
+}
+
+/// `sinusoid_growth` for the generator's samples: the noise crate point-samples the sinusoid at
+/// t_k = k dt and the mechanisation holds each sample over its interval (rectangle rule). For the
+/// once-integrated error at t = n dt that is exactly the continuous integral delayed by dt/2 with
+/// a gain: dt sum_{j<n} sin(w j dt + phi) = (x / sin x) I1(t; phi - x), x = pi f0 dt, by the
+/// geometric series dt / (e^{i w dt} - 1) = e^{-i x} (x / sin x) / (i w). The same delay and gain
+/// are applied to every fold (nested sums add O(dt/t) relative, the mechanisation's own
+/// discretisation). A random phase is unchanged by the delay; its variance takes the gain squared.
+/// `dt_s = 0` gives the continuous law.
+/// ([derived] k-fold integral of a sampled sinusoid; theory.md §2 gives its Allan form, Hou 4.64.)
+pub fn sinusoid_growth_sampled(
+    amplitude: f64,
+    f0_hz: f64,
+    phase_rad: Option<f64>,
+    t_s: f64,
+    dt_s: f64,
+    how: Integration,
+) -> (f64, f64) {
+    let x = PI * f0_hz * dt_s;
+    let gain = if x == 0.0 { 1.0 } else { x / x.sin() };
+    sinusoid_growth(amplitude * gain, f0_hz, phase_rad.map(|p| p - x), t_s, how)
+}
+
 /// Quantisation of the integrated output (LSB = Q sqrt(12)), integrated by the rectangle rule over
 /// n = t/dt samples, assuming the rounding residuals are independent and uniform (dithered by noise of an
 /// LSB or more per sample, as in the Allan closed form): the once-integrated error is r_0 - r_n, variance
@@ -302,6 +398,7 @@ pub fn gauss_markov_kfold_variance(sigma: f64, tc_s: f64, t_s: f64, k: i32) -> O
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::TAU;
 
     #[test]
     fn plateau_constant_is_sqrt_2ln2_over_pi() {
@@ -370,6 +467,94 @@ mod tests {
         let gm = gauss_markov_growth_std(0.1, 1.0, 1e4, Integration::Once).unwrap();
         assert!((gm / (2.0 * 0.01 * 1.0 * 1e4f64).sqrt() - 1.0).abs() < 1e-4);
         assert!(gauss_markov_growth_std(0.1, 100.0, 60.0, Integration::Twice).is_none());
+    }
+
+    #[test]
+    fn sinusoid_kfold_integrals_differentiate_back_and_average_over_phase() {
+        let (f, phi) = (0.37, 0.9);
+        let i = |k: i32, t: f64| {
+            if k == 0 {
+                return (TAU * f * t + phi).sin();
+            }
+            let (a, b) = sinusoid_kfold_coefficients(f, t, k).unwrap();
+            a * phi.cos() + b * phi.sin()
+        };
+        for k in 1..=3 {
+            assert_eq!(i(k, 0.0), 0.0);
+            for &t in &[0.01, 0.3, 1.3, 2.7, 11.0] {
+                // Central difference: truncation h^2/6 |d^3 I/dt^3| <= 1e-8 w^2 / 6 ~ 1e-8 and
+                // rounding ~1e-16 |I| / h ~ 1e-11, both below the tolerance 1e-7 max(1, |I|).
+                let h = 1e-4;
+                let d = (i(k, t + h) - i(k, t - h)) / (2.0 * h);
+                let want = i(k - 1, t);
+                let err = (d - want).abs();
+                assert!(
+                    err < 1e-7 * want.abs().max(1.0),
+                    "k {k} t {t}: {d} vs {want}"
+                );
+            }
+        }
+        // Series and direct forms agree where they switch (u = w t = 0.5).
+        let t = 0.5 / (TAU * f);
+        for k in 2..=3 {
+            let (a0, b0) = sinusoid_kfold_coefficients(f, t * (1.0 - 1e-9), k).unwrap();
+            let (a1, b1) = sinusoid_kfold_coefficients(f, t * (1.0 + 1e-9), k).unwrap();
+            assert!((a0 / a1 - 1.0).abs() < 1e-7 && (b0 / b1 - 1.0).abs() < 1e-7);
+        }
+        assert!(sinusoid_kfold_coefficients(f, 1.0, 4).is_none());
+        // Small t: I_k -> sin(phi) t^k/k! (the sinusoid is its starting value).
+        let t = 1e-6;
+        for (k, how) in [(1, Integration::Once), (2, Integration::Twice)] {
+            let (m, v) = sinusoid_growth(2.0, f, Some(phi), t, how);
+            assert_eq!(v, 0.0);
+            let expect = 2.0 * phi.sin() * t.powi(k) / factorial(k);
+            assert!((m / expect - 1.0).abs() < 1e-5, "k {k}: {m} vs {expect}");
+        }
+        // Uniform phase: the variance is the phase average of the square (midpoint rule over a
+        // full period, exact for a trigonometric polynomial of degree 2), and matches the
+        // closed forms of `sinusoid_growth_std`.
+        for how in [Integration::Once, Integration::Twice, Integration::Tilt] {
+            for &t in &[0.7, 4.2, 20.0] {
+                let (m, v) = sinusoid_growth(1.5, f, None, t, how);
+                assert_eq!(m, 0.0);
+                let n = 64;
+                let avg = (0..n)
+                    .map(|j| {
+                        let p = TAU * (j as f64 + 0.5) / n as f64;
+                        sinusoid_growth(1.5, f, Some(p), t, how).0.powi(2)
+                    })
+                    .sum::<f64>()
+                    / n as f64;
+                assert!((v / avg - 1.0).abs() < 1e-12, "{how:?} t {t}: {v} vs {avg}");
+                let s = sinusoid_growth_std(1.5, f, t, how);
+                assert!((v / (s * s) - 1.0).abs() < 1e-9, "{how:?} t {t}");
+            }
+        }
+    }
+
+    #[test]
+    fn sampled_sinusoid_law_is_the_rectangle_sum() {
+        // Once-integrated: exact (to rounding) against the rectangle sum of point samples.
+        let (a, f, phi, dt) = (0.7, 0.13, 1.1, 0.02);
+        for n in [1usize, 7, 50, 333, 1000] {
+            let t = n as f64 * dt;
+            let sum: f64 = (0..n)
+                .map(|j| a * (TAU * f * j as f64 * dt + phi).sin() * dt)
+                .sum();
+            let (m, v) = sinusoid_growth_sampled(a, f, Some(phi), t, dt, Integration::Once);
+            assert_eq!(v, 0.0);
+            assert!((m - sum).abs() < 1e-12 * a * t, "n {n}: {m} vs {sum}");
+        }
+        // Continuous limit, and the random phase takes only the gain (x / sin x)^2.
+        let c = sinusoid_growth(a, f, Some(phi), 3.0, Integration::Tilt);
+        assert_eq!(
+            sinusoid_growth_sampled(a, f, Some(phi), 3.0, 0.0, Integration::Tilt),
+            c
+        );
+        let x = PI * f * dt;
+        let (_, v0) = sinusoid_growth(a, f, None, 3.0, Integration::Twice);
+        let (_, v1) = sinusoid_growth_sampled(a, f, None, 3.0, dt, Integration::Twice);
+        assert!((v1 / v0 - (x / x.sin()).powi(2)).abs() < 1e-14);
     }
 
     #[test]
