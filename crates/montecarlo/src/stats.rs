@@ -36,7 +36,7 @@ impl RunMatrix {
     /// Append one run; `row[cp * channels + ch]`. Runs must be pushed in ascending index order.
     pub fn push(&mut self, run: u64, row: &[f64]) {
         debug_assert_eq!(row.len(), self.checkpoints * self.channels);
-        debug_assert!(self.run_ids.last().map_or(true, |&last| last < run));
+        debug_assert!(self.run_ids.last().is_none_or(|&last| last < run));
         self.run_ids.push(run);
         for (series, &v) in self.values.iter_mut().zip(row) {
             series.push(v);

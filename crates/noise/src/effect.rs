@@ -148,7 +148,7 @@ impl TermFilter {
     pub fn allows(&self, sensor: Sensor, effect: Effect) -> bool {
         self.only
             .as_ref()
-            .map_or(true, |set| set.contains(&(sensor, effect)))
+            .is_none_or(|set| set.contains(&(sensor, effect)))
             && !self.without.contains(&(sensor, effect))
     }
 
