@@ -34,6 +34,8 @@ pub struct DriftKernel {
     pub gravity_mps2: f64,
     pub alignment: Alignment,
     pub checkpoint_steps: Vec<u64>,
+    /// The scenario's `terms.bias_calibrated_at_start` (`ImuErrors::with_calibrated_start`).
+    pub bias_calibrated_at_start: bool,
 }
 
 impl DriftKernel {
@@ -48,6 +50,7 @@ impl DriftKernel {
             gravity_mps2: scenario.gravity_mps2,
             alignment: scenario.alignment,
             checkpoint_steps: scenario.checkpoint_steps.clone(),
+            bias_calibrated_at_start: scenario.bias_calibrated_at_start,
         }
     }
 
@@ -82,6 +85,9 @@ impl RunKernel for DriftKernel {
 
     fn run(&self, run: u64, out: &mut [f64]) -> Result<(), String> {
         let mut errors = ImuErrors::new(&self.model, self.dt_s, self.seed, run);
+        if self.bias_calibrated_at_start {
+            errors = errors.with_calibrated_start();
+        }
         let mut nav = Strapdown::new(self.scheme, self.initial_estimate(run), self.gravity_mps2);
         // Prime the coning correction with the (ideal) motion before t = 0 (the trajectory holds
         // its initial rate there), so a constant-rate start is not a spurious step.
@@ -311,6 +317,26 @@ pub fn law_terms(
         gravity_mps2,
     };
     (terms, ctx)
+}
+
+/// The law sources of `terms` when the bias is calibrated at turn-on (`ImuErrors::with_calibrated_start`):
+/// every stationary Gauss-Markov process (the Gauss-Markov term and the flicker components) becomes
+/// the same process referenced to its value at t = 0; all other sources are unchanged (random walks
+/// already start at zero).
+pub fn calibrated_at_start(terms: Vec<Term>) -> Vec<Term> {
+    terms
+        .into_iter()
+        .map(|t| Term {
+            source: match t.source {
+                Source::GaussMarkov { sigma, tc_s } => {
+                    Source::GaussMarkovSumFromStart(vec![(tc_s, sigma)])
+                }
+                Source::GaussMarkovSum(parts) => Source::GaussMarkovSumFromStart(parts),
+                other => other,
+            },
+            ..t
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -2,7 +2,7 @@
 //! term switches). Built identically by `simulate`, by each shard and by `merge`, so that every
 //! path produces the same report from the same per-run values.
 
-use crate::drift::{law_terms, DriftKernel};
+use crate::drift::{calibrated_at_start, law_terms, DriftKernel};
 use crate::laws::{LawContext, Term};
 use crate::report::{build_report, DriftReport, ReportMeta};
 use crate::runner::RunFailure;
@@ -63,6 +63,11 @@ impl Experiment {
             scenario.gravity_mps2,
             scenario.dt_s(),
         );
+        let terms = if scenario.bias_calibrated_at_start {
+            calibrated_at_start(terms)
+        } else {
+            terms
+        };
         Ok(Experiment {
             scenario,
             model,

@@ -46,6 +46,10 @@ pub enum Source {
     /// A sum of independent stationary Gauss-Markov processes, (correlation time s, sigma) each:
     /// the flicker bias instability as the noise crate realises it (`noise::Flicker::components`).
     GaussMarkovSum(Vec<(f64, f64)>),
+    /// The same sum with each component referenced to its value at t = 0, x(t) = b(t) - b(0): the
+    /// bias as seen after a perfect turn-on calibration (scenario `terms.bias_calibrated_at_start`;
+    /// `gauss_markov_from_start_variance`). A single Gauss-Markov term is a sum of one.
+    GaussMarkovSumFromStart(Vec<(f64, f64)>),
     /// Rate ramp R (signed), error R t.
     Ramp(f64),
     /// Sinusoid `amplitude · sin(2 pi freq_hz t + phase)`, point-sampled at t_k = k dt by the noise
@@ -116,14 +120,21 @@ fn moments(source: &Source, t_s: f64, how: Option<Integration>) -> Result<(f64, 
             Some(h) => (0.0, gauss_markov_variance(*sigma, *tc_s, t_s, h)),
             None => return Err("Gauss-Markov needs an integration".into()),
         },
-        Source::GaussMarkovSum(parts) => match how {
-            Some(h) => (
-                0.0,
-                parts
-                    .iter()
-                    .map(|&(tc_s, sigma)| gauss_markov_variance(sigma, tc_s, t_s, h))
-                    .sum(),
-            ),
+        Source::GaussMarkovSum(parts) | Source::GaussMarkovSumFromStart(parts) => match how {
+            Some(h) => {
+                let law = if matches!(source, Source::GaussMarkovSum(_)) {
+                    gauss_markov_variance
+                } else {
+                    gauss_markov_from_start_variance
+                };
+                (
+                    0.0,
+                    parts
+                        .iter()
+                        .map(|&(tc_s, sigma)| law(sigma, tc_s, t_s, h))
+                        .sum(),
+                )
+            }
             None => return Err("Gauss-Markov needs an integration".into()),
         },
         Source::Sinusoid {
@@ -152,18 +163,73 @@ fn non_gaussian(source: &Source) -> bool {
     matches!(source, Source::Sinusoid { phase: None, .. })
 }
 
+/// The variance gain of an integration path: g^2 (standard gravity) through tilt, else 1.
+fn tilt_gain2(how: Integration) -> f64 {
+    let g0 = noise::units::STANDARD_GRAVITY_MPS2;
+    if how == Integration::Tilt {
+        g0 * g0
+    } else {
+        1.0
+    }
+}
+
 /// Variance of the k-fold integral (k = `how.folds()`, times the tilt gain g^2 through tilt) of a
 /// stationary Gauss-Markov process of std `sigma` and correlation time `tc_s`, at time `t_s`: the
 /// noise crate's exact closed forms (`noise::closed_form::gauss_markov_kfold_variance`, which holds
 /// for every t, where theory.md §4 gives the once-integrated form and the t >> T asymptotes).
 pub fn gauss_markov_variance(sigma: f64, tc_s: f64, t_s: f64, how: Integration) -> f64 {
-    let g0 = noise::units::STANDARD_GRAVITY_MPS2;
-    let gain2 = if how == Integration::Tilt {
-        g0 * g0
-    } else {
-        1.0
-    };
+    let gain2 = tilt_gain2(how);
     cf::gauss_markov_kfold_variance(sigma, tc_s, t_s, how.folds()).map_or(f64::NAN, |v| v * gain2)
+}
+
+/// Variance of the k-fold integral (k = `how.folds()`, times g^2 through tilt) at time `t_s` of a
+/// stationary Gauss-Markov process b (std `sigma`, correlation time `tc_s`) referenced to its value
+/// at t = 0, x(t) = b(t) - b(0) (the bias perfectly calibrated at turn-on).
+///
+/// [derived] x has covariance sigma^2 (e^{-|t-s|/T} - e^{-t/T} - e^{-s/T} + 1). With
+/// I_k[x](t) = I_k[b](t) - b(0) t^k/k!:
+///   Var I_k[x] = Var I_k[b] - 2 (t^k/k!) Cov(I_k[b](t), b(0)) + sigma^2 (t^k/k!)^2,
+/// where Var I_k[b] is the exact stationary form (`noise::closed_form::gauss_markov_kfold_variance`)
+/// and Cov(I_k[b](t), b(0)) = sigma^2 J_k(t), J_k the k-fold integral of e^{-s/T} from 0:
+///   J_k = T^k (-1)^k (e^{-x} - sum_{j<k} (-x)^j/j!),  x = t/T,
+/// i.e. J_1 = T (1 - e^{-x}), J_2 = T^2 (x - 1 + e^{-x}), J_3 = T^3 (x^2/2 - x + 1 - e^{-x}).
+/// Writing a = x^k/k!, Var I_k[x] = sigma^2 T^{2k} (v_k - 2 a j_k + a^2) with v_k, j_k the
+/// normalised forms. Below x = 0.5 the three terms cancel (each ~a^2, the sum ~x^{2k+1}), so the
+/// series is used: from v_k = sum_{n>=2k} 2 (-1)^n C(n-1, k-1) x^n/n! and
+/// a j_k = sum_{m>=2k} (-1)^m x^m / ((m-k)! k!), whose x^{2k} terms cancel a^2,
+///   v_k - 2 a j_k + a^2 = sum_{m>=2k+1} (-1)^m [2 C(m-1, k-1)/m! - 2/((m-k)! k!)] x^m.
+/// Its leading term (k = 1: 2x^3/3) is the random walk of density K^2 = 2 sigma^2/T
+/// (K^2 t^3/3), as b(t) - b(0) ~ b'(0) t for t << T. Checked against 2-D quadrature of the
+/// covariance and against that random-walk limit in the tests.
+pub fn gauss_markov_from_start_variance(sigma: f64, tc_s: f64, t_s: f64, how: Integration) -> f64 {
+    let gain2 = tilt_gain2(how);
+    let k = how.folds();
+    let x = t_s / tc_s;
+    let fact = |n: i32| (1..=n).map(f64::from).product::<f64>();
+    let v = if x < 0.5 {
+        let binom = |n: i32, j: i32| fact(n) / (fact(j) * fact(n - j));
+        // Terms shrink by ~x/m per step: 25 terms leave < 1e-30 relative.
+        (2 * k + 1..2 * k + 26)
+            .map(|m| {
+                let sign = if m % 2 == 0 { 1.0 } else { -1.0 };
+                let c = 2.0 * binom(m - 1, k - 1) / fact(m) - 2.0 / (fact(m - k) * fact(k));
+                sign * c * x.powi(m)
+            })
+            .sum::<f64>()
+    } else {
+        let e = (-x).exp();
+        let j = match k {
+            1 => 1.0 - e,
+            2 => x - 1.0 + e,
+            _ => x * x / 2.0 - x + 1.0 - e,
+        };
+        let Some(vk) = cf::gauss_markov_kfold_variance(1.0, 1.0, x, k) else {
+            return f64::NAN;
+        };
+        let a = x.powi(k) / fact(k);
+        vk - 2.0 * a * j + a * a
+    };
+    sigma * sigma * tc_s.powi(2 * k) * v * gain2
 }
 
 /// The single-axis channels an entry drives, each with (channel, integration, sign x gain factor).
@@ -450,13 +516,7 @@ mod tests {
         // Composite Gauss-Legendre on panels graded with T (0, T/8, T/4, ..., then t), so both the
         // exponential scale and the polynomial scale are resolved.
         let (nodes, weights) = gauss_legendre(GL_POINTS);
-        let mut edges = vec![0.0];
-        let mut e = tc_s / 8.0;
-        while e < t_s {
-            edges.push(e);
-            e *= 2.0;
-        }
-        edges.push(t_s);
+        let edges = graded_edges(tc_s, t_s);
         let mut total = 0.0;
         for w in edges.windows(2) {
             let (a, b) = (w[0], w[1]);
@@ -472,6 +532,18 @@ mod tests {
                     .sum::<f64>();
         }
         2.0 * sigma * sigma * total * gain2
+    }
+
+    /// Quadrature panel edges 0, T/8, T/4, T/2, ... (doubling), then t.
+    fn graded_edges(tc_s: f64, t_s: f64) -> Vec<f64> {
+        let mut edges = vec![0.0];
+        let mut e = tc_s / 8.0;
+        while e < t_s {
+            edges.push(e);
+            e *= 2.0;
+        }
+        edges.push(t_s);
+        edges
     }
 
     /// Gauss-Legendre points per panel: exact for polynomials of degree 2 GL_POINTS - 1 = 39.
@@ -507,6 +579,81 @@ mod tests {
             weights[n - 1 - i] = w;
         }
         (nodes, weights)
+    }
+
+    /// Independent 2-D quadrature of the referenced process's variance:
+    /// Var I_k[x](t) = 2 int_0^t int_0^s w(s) w(u) C(s, u) du ds (u < s, by symmetry), with
+    /// w(u) = (t-u)^{k-1}/(k-1)! and C(s, u) = sigma^2 (e^{-(s-u)/T} - e^{-s/T} - e^{-u/T} + 1)
+    /// = sigma^2 (1 - e^{-u/T}) (1 + e^{-(s-u)/T}) (factored, so nothing cancels for s, u << T);
+    /// composite Gauss-Legendre on panels graded with T in both variables.
+    fn quadrature_from_start_variance(sigma: f64, tc_s: f64, t_s: f64, how: Integration) -> f64 {
+        let k = how.folds();
+        let gain2 = tilt_gain2(how);
+        let fact = (1..k).map(f64::from).product::<f64>();
+        let w = |u: f64| (t_s - u).powi(k - 1) / fact;
+        let (nodes, weights) = gauss_legendre(GL_POINTS);
+        let edges = graded_edges(tc_s, t_s);
+        // int_0^upper f(u) du over the graded panels clipped to [0, upper].
+        let integrate = |upper: f64, f: &dyn Fn(f64) -> f64| -> f64 {
+            let mut total = 0.0;
+            for p in edges.windows(2) {
+                let (a, b) = (p[0], p[1].min(upper));
+                if b <= a {
+                    break;
+                }
+                let (mid, half) = (0.5 * (a + b), 0.5 * (b - a));
+                total += half
+                    * nodes
+                        .iter()
+                        .zip(&weights)
+                        .map(|(&x, &wt)| wt * f(mid + half * x))
+                        .sum::<f64>();
+            }
+            total
+        };
+        // The e^{-(s-u)/T} part varies on the scale T near u = s: integrate it in v = s - u, so
+        // the graded panels resolve it.
+        let c0 = |u: f64| -(-u / tc_s).exp_m1();
+        let outer = integrate(t_s, &|s: f64| {
+            w(s) * (integrate(s, &|u: f64| w(u) * c0(u))
+                + integrate(s, &|v: f64| w(s - v) * c0(s - v) * (-v / tc_s).exp()))
+        });
+        2.0 * sigma * sigma * outer * gain2
+    }
+
+    #[test]
+    fn gauss_markov_from_start_matches_quadrature_and_random_walk_limit() {
+        for &(sigma, tc) in &[(0.3, 2.0), (1e-4, 600.0), (2e-5, 1e5)] {
+            for &t in &[
+                0.01,
+                0.7,
+                0.99 * tc / 2.0,
+                1.01 * tc / 2.0,
+                2.0,
+                9.0,
+                60.0,
+                3600.0,
+            ] {
+                for how in [Integration::Once, Integration::Twice, Integration::Tilt] {
+                    let a = gauss_markov_from_start_variance(sigma, tc, t, how);
+                    let b = quadrature_from_start_variance(sigma, tc, t, how);
+                    // Relative 1e-8: the quadrature is far more accurate; the closed form
+                    // loses at most ~4 digits to cancellation just above the switch x = 0.5.
+                    assert!(
+                        (a / b - 1.0).abs() < 1e-8,
+                        "{how:?} t={t} T={tc}: {a} vs {b}"
+                    );
+                }
+            }
+            // t << T: b(t) - b(0) is a random walk of density K^2 = 2 sigma^2/T, to O(t/T).
+            let t = 1e-5 * tc;
+            let k = (2.0 * sigma * sigma / tc).sqrt();
+            for how in [Integration::Once, Integration::Twice, Integration::Tilt] {
+                let rw = cf::random_walk_growth_std(k, t, how).powi(2);
+                let a = gauss_markov_from_start_variance(sigma, tc, t, how);
+                assert!((a / rw - 1.0).abs() < 1e-4, "{how:?}: {a} vs {rw}");
+            }
+        }
     }
 
     #[test]

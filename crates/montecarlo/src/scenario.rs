@@ -74,6 +74,7 @@ struct RawAlignment {
 struct RawTerms {
     only: Option<Vec<String>>,
     without: Option<Vec<String>>,
+    bias_calibrated_at_start: Option<bool>,
 }
 
 /// Initial alignment error per Euler angle (rad): a fixed offset plus a per-run Gaussian draw.
@@ -115,6 +116,10 @@ pub struct Scenario {
     /// Term switches (`gyro.white_noise` ...), parsed by the noise crate's filter.
     pub only: Option<Vec<String>>,
     pub without: Vec<String>,
+    /// `terms.bias_calibrated_at_start`: the slowly varying bias processes (flicker bias
+    /// instability, Gauss-Markov) are referenced to their value at t = 0, b(t) - b(0), as for a
+    /// user who estimates the bias at turn-on and subtracts it (Woodman TR-696 §3.2.1).
+    pub bias_calibrated_at_start: bool,
     pub reference: Option<Reference>,
     /// Print the ablation table (each term alone and the model without it) by default.
     pub ablation: bool,
@@ -275,6 +280,7 @@ impl Scenario {
             alignment,
             only: terms.only,
             without: terms.without.unwrap_or_default(),
+            bias_calibrated_at_start: terms.bias_calibrated_at_start.unwrap_or(false),
             reference: raw.reference,
             ablation: raw.ablation.unwrap_or(false),
         })

@@ -167,12 +167,16 @@ fn accel_terms_alone_follow_their_laws() {
     }
 }
 
+/// Gauss-Markov on every axis (T = 2 s, so the checkpoints from 0.5 s to 20 s span t = T/4 .. 10 T,
+/// where neither asymptote holds).
+const GAUSS_MARKOV: &str = "[gyro.all]\ngauss_markov = { sigma = \"0.01 deg/s\", time_constant = \"2 s\" }\n[accel.all]\ngauss_markov = { sigma = \"0.05 m/s^2\", time_constant = \"2 s\" }\n";
+
 #[test]
 fn gauss_markov_and_alignment_follow_their_laws() {
     use Channel::*;
     // Gauss-Markov (T = 2 s, so the checkpoints span t = T/4 .. 10 T, where neither asymptote
     // holds) and flicker bias instability (the noise crate's sum of Gauss-Markov components).
-    let gm = "[gyro.all]\ngauss_markov = { sigma = \"0.01 deg/s\", time_constant = \"2 s\" }\n[accel.all]\ngauss_markov = { sigma = \"0.05 m/s^2\", time_constant = \"2 s\" }\n";
+    let gm = GAUSS_MARKOV;
     let r = simulate(
         gm,
         "[checkpoints]\nlog_count = 6\nfirst_s = 0.5\n",
@@ -295,4 +299,38 @@ fn sinusoid_alone_follows_its_law() {
             );
         }
     }
+}
+
+#[test]
+fn bias_calibrated_at_start_follows_its_law() {
+    use Channel::*;
+    // `terms.bias_calibrated_at_start`: each Gauss-Markov process referenced to its value at
+    // t = 0 (`laws::gauss_markov_from_start_variance`). The same magnitudes as the uncalibrated
+    // cases above; T = 2 s puts the checkpoints (0.5 .. 20 s) on both sides of T, where the
+    // covariance with b(0) matters (with the covariance term dropped from the law, all 78 GM
+    // checks fail).
+    let calibrated = "[terms]\nbias_calibrated_at_start = true\n";
+    let gm = GAUSS_MARKOV;
+    let r = simulate(
+        gm,
+        &format!("{calibrated}[checkpoints]\nlog_count = 6\nfirst_s = 0.5\n"),
+        20.0,
+        50.0,
+        RUNS,
+    );
+    check(
+        "gauss_markov (calibrated at start)",
+        &r,
+        &[Roll, Yaw, PosNorth, PosEast, PosHorizontal, VelNorth],
+    );
+    // Flicker: the default band's components (0.1 s .. 1e5 s), the slow ones nearly random walks
+    // once referenced.
+    let flicker =
+        "[gyro.all]\nbias_instability = { value = \"0.005 deg/s\", convention = \"ieee\" }\n[accel.all]\nbias_instability = { value = \"0.001 m/s^2\", convention = \"ieee\" }\n";
+    let r = simulate(flicker, &format!("{calibrated}{CHECKS}"), 20.0, 50.0, RUNS);
+    check(
+        "bias_instability (flicker, calibrated at start)",
+        &r,
+        &[Roll, Pitch, Yaw, PosNorth, PosEast, PosHorizontal, VelNorth],
+    );
 }

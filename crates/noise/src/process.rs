@@ -94,6 +94,9 @@ pub struct GaussMarkovBank {
     /// Samples between the last and the next update of any held component, and samples left until it.
     event_span: u32,
     until_event: u32,
+    /// Subtracted from every value: 0 by default (bit-identical output), the value at t = 0 after
+    /// [`GaussMarkovBank::reference_to_start`].
+    offset: f64,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -143,6 +146,7 @@ impl GaussMarkovBank {
             held_sum: 0.0,
             event_span: u32::MAX,
             until_event: u32::MAX,
+            offset: 0.0,
         };
         for &(tc, s) in components {
             let x0 = s * normal(rng);
@@ -208,6 +212,8 @@ impl GaussMarkovBank {
             *x = phi * *x + d * draw();
         }
         sum += self.held_sum;
+        // x - 0.0 == x bit for bit: the default (offset 0) output is unchanged.
+        sum -= self.offset;
         if !self.held.is_empty() {
             self.until_event -= 1;
             if self.until_event == 0 {
@@ -215,6 +221,20 @@ impl GaussMarkovBank {
             }
         }
         sum
+    }
+
+    /// Reference the process to its value at t = 0: from now on every value is b(t) - b(0), as seen
+    /// by a user who estimates the bias perfectly at turn-on and subtracts it (Woodman TR-696
+    /// §3.2.1). Call before the first sample (it takes the current value as b(0)); the draws do
+    /// not change.
+    pub fn reference_to_start(&mut self) {
+        // The value `step` returns next, summed in the same order, so the first value is exactly 0.
+        let mut sum = 0.0;
+        for &x in &self.state {
+            sum += x;
+        }
+        sum += self.held_sum;
+        self.offset = sum;
     }
 
     /// The current value (sum of the components), then advance one step. Draw order within a step:
@@ -419,6 +439,19 @@ impl ChannelErrors {
         }
     }
 
+    /// Reference the slowly varying bias processes (flicker bias instability components and the
+    /// Gauss-Markov term) to their values at t = 0 (see [`GaussMarkovBank::reference_to_start`]);
+    /// random walks already start at 0, white noise and the other terms are unchanged.
+    /// Call before the first sample.
+    pub fn calibrate_start(&mut self) {
+        for (bank, _) in [&mut self.flicker, &mut self.gauss_markov]
+            .into_iter()
+            .flatten()
+        {
+            bank.reference_to_start();
+        }
+    }
+
     /// The measured value of sample `k` (t = k·dt) given the ideal triad input. Calls must come with
     /// k = 0, 1, 2, ... in order: the stochastic states advance one step per call.
     #[inline]
@@ -519,6 +552,17 @@ impl ImuErrors {
             temperature: model.temperature.clone(),
             dt_s,
         }
+    }
+
+    /// The same run with the bias perfectly calibrated at turn-on: every channel's flicker and
+    /// Gauss-Markov bias processes are referenced to their value at t = 0, so the error they add is
+    /// b(t) - b(0) (`ChannelErrors::calibrate_start`). The draws are those of `new`; only the
+    /// offsets differ. Call before the first sample.
+    pub fn with_calibrated_start(mut self) -> ImuErrors {
+        self.channels
+            .iter_mut()
+            .for_each(ChannelErrors::calibrate_start);
+        self
     }
 
     /// Corrupt the ideal sample k (t = k·dt): (measured gyro rad/s, measured accel m/s^2), body frame.
