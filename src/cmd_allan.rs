@@ -38,7 +38,7 @@ pub struct Args {
     /// Print one JSON document on stdout (human text on stderr)
     #[arg(long)]
     pub json: bool,
-    /// Write allan.csv, allan.json and allan_<channel>.svg into this directory
+    /// Write allan.csv, allan.json and `allan_<channel>.svg` into this directory
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Worker threads (default: all cores); results do not depend on it

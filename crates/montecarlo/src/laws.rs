@@ -186,7 +186,10 @@ pub fn gauss_markov_variance(sigma: f64, tc_s: f64, t_s: f64, how: Integration) 
 /// stationary Gauss-Markov process b (std `sigma`, correlation time `tc_s`) referenced to its value
 /// at t = 0, x(t) = b(t) - b(0) (the bias perfectly calibrated at turn-on).
 ///
-/// [derived] x has covariance sigma^2 (e^{-|t-s|/T} - e^{-t/T} - e^{-s/T} + 1). With
+/// \[derived\] (formulas below in plain text):
+///
+/// ```text
+/// x has covariance sigma^2 (e^{-|t-s|/T} - e^{-t/T} - e^{-s/T} + 1). With
 /// I_k[x](t) = I_k[b](t) - b(0) t^k/k!:
 ///   Var I_k[x] = Var I_k[b] - 2 (t^k/k!) Cov(I_k[b](t), b(0)) + sigma^2 (t^k/k!)^2,
 /// where Var I_k[b] is the exact stationary form (`noise::closed_form::gauss_markov_kfold_variance`)
@@ -198,6 +201,7 @@ pub fn gauss_markov_variance(sigma: f64, tc_s: f64, t_s: f64, how: Integration) 
 /// series is used: from v_k = sum_{n>=2k} 2 (-1)^n C(n-1, k-1) x^n/n! and
 /// a j_k = sum_{m>=2k} (-1)^m x^m / ((m-k)! k!), whose x^{2k} terms cancel a^2,
 ///   v_k - 2 a j_k + a^2 = sum_{m>=2k+1} (-1)^m [2 C(m-1, k-1)/m! - 2/((m-k)! k!)] x^m.
+/// ```
 /// Its leading term (k = 1: 2x^3/3) is the random walk of density K^2 = 2 sigma^2/T
 /// (K^2 t^3/3), as b(t) - b(0) ~ b'(0) t for t << T. Checked against 2-D quadrature of the
 /// covariance and against that random-walk limit in the tests.

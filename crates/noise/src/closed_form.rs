@@ -263,7 +263,7 @@ fn half_u2_minus_one_minus_cos(u: f64) -> f64 {
 ///   d/dt I1 = cos phi sin wt + sin phi cos wt = sin(wt + phi);
 ///   d/dt I2 = cos phi (1 - cos wt)/w + sin phi sin wt/w = I1;
 ///   d/dt I3 = cos phi (t/w - sin wt/w^2) + sin phi (1 - cos wt)/w^2 = I2.
-/// ([derived] k-fold integral of a sinusoid; theory.md §2 gives its Allan form, Hou 4.64.)
+/// (\[derived\] k-fold integral of a sinusoid; theory.md §2 gives its Allan form, Hou 4.64.)
 /// The cancelling differences use series for small wt (`u_minus_sin`, `half_u2_minus_one_minus_cos`).
 pub fn sinusoid_kfold_coefficients(f0_hz: f64, t_s: f64, k: i32) -> Option<(f64, f64)> {
     let w = std::f64::consts::TAU * f0_hz;
@@ -285,7 +285,7 @@ pub fn sinusoid_kfold_coefficients(f0_hz: f64, t_s: f64, k: i32) -> Option<(f64,
 /// `sinusoid_kfold_coefficients`. Fixed phase: mean A (a_k cos phi + b_k sin phi), variance 0.
 /// Phase uniform on [0, 2 pi) (drawn per run, `phase_rad = None`): mean 0, variance
 /// A^2 (a_k^2 + b_k^2)/2 (E cos^2 = E sin^2 = 1/2, E cos sin = 0).
-/// ([derived] k-fold integral of a sinusoid; theory.md §2 gives its Allan form, Hou 4.64.)
+/// (\[derived\] k-fold integral of a sinusoid; theory.md §2 gives its Allan form, Hou 4.64.)
 pub fn sinusoid_growth(
     amplitude: f64,
     f0_hz: f64,
@@ -309,7 +309,7 @@ pub fn sinusoid_growth(
 /// are applied to every fold (nested sums add O(dt/t) relative, the mechanisation's own
 /// discretisation). A random phase is unchanged by the delay; its variance takes the gain squared.
 /// `dt_s = 0` gives the continuous law.
-/// ([derived] k-fold integral of a sampled sinusoid; theory.md §2 gives its Allan form, Hou 4.64.)
+/// (\[derived\] k-fold integral of a sampled sinusoid; theory.md §2 gives its Allan form, Hou 4.64.)
 pub fn sinusoid_growth_sampled(
     amplitude: f64,
     f0_hz: f64,
