@@ -36,6 +36,8 @@ pub struct DriftKernel {
     pub checkpoint_steps: Vec<u64>,
     /// The scenario's `terms.bias_calibrated_at_start` (`ImuErrors::with_calibrated_start`).
     pub bias_calibrated_at_start: bool,
+    /// The scenario's `terms.bias_calibration_window_s` (`ImuErrors::with_calibration_window`).
+    pub bias_calibration_window_s: Option<f64>,
 }
 
 impl DriftKernel {
@@ -51,6 +53,7 @@ impl DriftKernel {
             alignment: scenario.alignment,
             checkpoint_steps: scenario.checkpoint_steps.clone(),
             bias_calibrated_at_start: scenario.bias_calibrated_at_start,
+            bias_calibration_window_s: scenario.bias_calibration_window_s,
         }
     }
 
@@ -85,7 +88,9 @@ impl RunKernel for DriftKernel {
 
     fn run(&self, run: u64, out: &mut [f64]) -> Result<(), String> {
         let mut errors = ImuErrors::new(&self.model, self.dt_s, self.seed, run);
-        if self.bias_calibrated_at_start {
+        if let Some(w) = self.bias_calibration_window_s {
+            errors = errors.with_calibration_window(w, self.seed, run);
+        } else if self.bias_calibrated_at_start {
             errors = errors.with_calibrated_start();
         }
         let mut nav = Strapdown::new(self.scheme, self.initial_estimate(run), self.gravity_mps2);
@@ -323,15 +328,20 @@ pub fn law_terms(
 /// every stationary Gauss-Markov process (the Gauss-Markov term and the flicker components) becomes
 /// the same process referenced to its value at t = 0; all other sources are unchanged (random walks
 /// already start at zero).
-pub fn calibrated_at_start(terms: Vec<Term>) -> Vec<Term> {
+///
+/// With a calibration window of `window_s` seconds (`ImuErrors::with_calibration_window`), each
+/// becomes the process referenced to its mean over the window instead.
+pub fn calibrated_at_start(terms: Vec<Term>, window_s: Option<f64>) -> Vec<Term> {
+    let referenced = |parts: Vec<(f64, f64)>| match window_s {
+        Some(window_s) => Source::GaussMarkovSumFromWindow { parts, window_s },
+        None => Source::GaussMarkovSumFromStart(parts),
+    };
     terms
         .into_iter()
         .map(|t| Term {
             source: match t.source {
-                Source::GaussMarkov { sigma, tc_s } => {
-                    Source::GaussMarkovSumFromStart(vec![(tc_s, sigma)])
-                }
-                Source::GaussMarkovSum(parts) => Source::GaussMarkovSumFromStart(parts),
+                Source::GaussMarkov { sigma, tc_s } => referenced(vec![(tc_s, sigma)]),
+                Source::GaussMarkovSum(parts) => referenced(parts),
                 other => other,
             },
             ..t

@@ -64,7 +64,7 @@ impl Experiment {
             scenario.dt_s(),
         );
         let terms = if scenario.bias_calibrated_at_start {
-            calibrated_at_start(terms)
+            calibrated_at_start(terms, scenario.bias_calibration_window_s)
         } else {
             terms
         };

@@ -50,6 +50,13 @@ pub enum Source {
     /// bias as seen after a perfect turn-on calibration (scenario `terms.bias_calibrated_at_start`;
     /// `gauss_markov_from_start_variance`). A single Gauss-Markov term is a sum of one.
     GaussMarkovSumFromStart(Vec<(f64, f64)>),
+    /// The same sum with each component referenced to its mean over a calibration window of
+    /// `window_s` seconds before t = 0, x(t) = b(t) - m (scenario `terms.bias_calibration_window_s`;
+    /// `gauss_markov_from_window_variance`).
+    GaussMarkovSumFromWindow {
+        parts: Vec<(f64, f64)>,
+        window_s: f64,
+    },
     /// Rate ramp R (signed), error R t.
     Ramp(f64),
     /// Sinusoid `amplitude · sin(2 pi freq_hz t + phase)`, point-sampled at t_k = k dt by the noise
@@ -137,6 +144,18 @@ fn moments(source: &Source, t_s: f64, how: Option<Integration>) -> Result<(f64, 
             }
             None => return Err("Gauss-Markov needs an integration".into()),
         },
+        Source::GaussMarkovSumFromWindow { parts, window_s } => match how {
+            Some(h) => (
+                0.0,
+                parts
+                    .iter()
+                    .map(|&(tc_s, sigma)| {
+                        gauss_markov_from_window_variance(sigma, tc_s, *window_s, t_s, h)
+                    })
+                    .sum(),
+            ),
+            None => return Err("Gauss-Markov needs an integration".into()),
+        },
         Source::Sinusoid {
             amplitude,
             freq_hz,
@@ -206,11 +225,19 @@ pub fn gauss_markov_variance(sigma: f64, tc_s: f64, t_s: f64, how: Integration) 
 /// (K^2 t^3/3), as b(t) - b(0) ~ b'(0) t for t << T. Checked against 2-D quadrature of the
 /// covariance and against that random-walk limit in the tests.
 pub fn gauss_markov_from_start_variance(sigma: f64, tc_s: f64, t_s: f64, how: Integration) -> f64 {
-    let gain2 = tilt_gain2(how);
     let k = how.folds();
-    let x = t_s / tc_s;
-    let fact = |n: i32| (1..=n).map(f64::from).product::<f64>();
-    let v = if x < 0.5 {
+    sigma * sigma * tc_s.powi(2 * k) * from_start_normalised(t_s / tc_s, k) * tilt_gain2(how)
+}
+
+/// n! as f64.
+fn factorial(n: i32) -> f64 {
+    (1..=n).map(f64::from).product::<f64>()
+}
+
+/// v_k - 2 a j_k + a^2 of `gauss_markov_from_start_variance` at x = t/T (sigma = T = 1, no gain).
+fn from_start_normalised(x: f64, k: i32) -> f64 {
+    let fact = factorial;
+    if x < 0.5 {
         let binom = |n: i32, j: i32| fact(n) / (fact(j) * fact(n - j));
         // Terms shrink by ~x/m per step: 25 terms leave < 1e-30 relative.
         (2 * k + 1..2 * k + 26)
@@ -221,19 +248,82 @@ pub fn gauss_markov_from_start_variance(sigma: f64, tc_s: f64, t_s: f64, how: In
             })
             .sum::<f64>()
     } else {
-        let e = (-x).exp();
-        let j = match k {
-            1 => 1.0 - e,
-            2 => x - 1.0 + e,
-            _ => x * x / 2.0 - x + 1.0 - e,
-        };
         let Some(vk) = cf::gauss_markov_kfold_variance(1.0, 1.0, x, k) else {
             return f64::NAN;
         };
         let a = x.powi(k) / fact(k);
-        vk - 2.0 * a * j + a * a
+        vk - 2.0 * a * kfold_exp_integral(x, k) + a * a
+    }
+}
+
+/// j_k(x), the k-fold integral from 0 of e^{-s} at x (k = 1, 2, 3; J_k = T^k j_k(t/T)):
+/// j_1 = 1 - e^{-x}, j_2 = x - 1 + e^{-x}, j_3 = x^2/2 - x + 1 - e^{-x}.
+fn kfold_exp_integral(x: f64, k: i32) -> f64 {
+    let e = (-x).exp();
+    match k {
+        1 => 1.0 - e,
+        2 => x - 1.0 + e,
+        _ => x * x / 2.0 - x + 1.0 - e,
+    }
+}
+
+/// Variance of the k-fold integral (k = `how.folds()`, times g^2 through tilt) at time `t_s` of a
+/// stationary Gauss-Markov process b (std `sigma`, correlation time `tc_s`) referenced to its mean
+/// over a calibration window before t = 0, x(t) = b(t) - m, m = (1/W) int_{-W}^0 b(s) ds
+/// (`window_s` = W; the noise crate's `ImuErrors::with_calibration_window`).
+///
+/// ```text
+/// [derived] For s >= 0, Cov(b(s), m) = sigma^2 e^{-s/T} rho, rho = (T/W)(1 - e^{-W/T}), so
+/// Cov(I_k[b](t), m) = rho sigma^2 J_k(t) and, with a = t^k/k! and Var(m) = sigma^2 vm
+/// (noise::closed_form::gauss_markov_window_mean_moments),
+///   Var I_k[x] = Var I_k[b] - 2 a rho sigma^2 J_k + a^2 sigma^2 vm
+///              = sigma^2 T^{2k} (v_k - 2 a rho j_k + a^2 vm)                          (direct)
+///              = sigma^2 T^{2k} (S + a^2 (1 - 2 rho + vm) + 2 a (1 - rho)(j_k - a))    (split)
+/// with S = v_k - 2 a j_k + a^2 the from-start form (gauss_markov_from_start_variance): the split
+/// is b - m = (b - b(0)) + (b(0) - m), Var(b(0) - m) = sigma^2 (1 - 2 rho + vm) and
+/// Cov(I_k[b - b(0)], b(0) - m) = sigma^2 T^k (1 - rho)(j_k - a). W -> 0 gives rho, vm -> 1:
+/// the from-start law.
+/// ```
+/// Numerics: the direct form cancels when W << T (it is the from-start sum plus small terms);
+/// the split cancels when W >> T and t >> T (its last term is ~ -2 a^2). So the split is used
+/// for x = t/T < 0.5 (there j_k - a = sum_{m>k} (-1)^{m-k} x^m/m!, a series, and the terms are
+/// ~a^2 (1 - 2 rho + vm) > 0 with a relative correction O(x)) and for W/T < 1 (there
+/// vm > 0.73 bounds the result below by ~a^2 vm / 2), the direct form otherwise (there
+/// 1 - 2 rho + vm > 0.47 and rho < 0.64, nothing cancels). Checked against 2-D quadrature.
+pub fn gauss_markov_from_window_variance(
+    sigma: f64,
+    tc_s: f64,
+    window_s: f64,
+    t_s: f64,
+    how: Integration,
+) -> f64 {
+    let k = how.folds();
+    let x = t_s / tc_s;
+    let (rho, vm, cond) = cf::gauss_markov_window_mean_moments(tc_s, window_s);
+    let a = x.powi(k) / factorial(k);
+    let v = if x < 0.5 || window_s < tc_s {
+        let j_minus_a = if x < 0.5 {
+            // Terms shrink by ~x/m per step: 25 terms leave < 1e-30 relative.
+            (k + 1..k + 26)
+                .map(|m| {
+                    let sign = if (m - k) % 2 == 0 { 1.0 } else { -1.0 };
+                    sign * x.powi(m) / factorial(m)
+                })
+                .sum::<f64>()
+        } else {
+            kfold_exp_integral(x, k) - a
+        };
+        // 1 - 2 rho + vm = (1 - rho)^2 + Var(m | b0)/sigma^2, both terms >= 0 and the second
+        // from its series for W << T, so nothing cancels.
+        let g = (1.0 - rho) * (1.0 - rho) + cond;
+        from_start_normalised(x, k) + a * a * g + 2.0 * a * (1.0 - rho) * j_minus_a
+    } else {
+        let Some(vk) = cf::gauss_markov_kfold_variance(1.0, 1.0, x, k) else {
+            return f64::NAN;
+        };
+        vk - 2.0 * a * rho * kfold_exp_integral(x, k) + a * a * vm
     };
-    sigma * sigma * tc_s.powi(2 * k) * v * gain2
+    sigma * sigma * tc_s.powi(2 * k) * v * tilt_gain2(how)
 }
 
 /// The single-axis channels an entry drives, each with (channel, integration, sign x gain factor).
@@ -623,6 +713,88 @@ mod tests {
                 + integrate(s, &|v: f64| w(s - v) * c0(s - v) * (-v / tc_s).exp()))
         });
         2.0 * sigma * sigma * outer * gain2
+    }
+
+    /// int_0^upper f over panels graded with T (0, T/8, T/4, ..., upper), Gauss-Legendre on each.
+    fn graded_integral(tc_s: f64, upper: f64, f: impl Fn(f64) -> f64) -> f64 {
+        let (nodes, weights) = gauss_legendre(GL_POINTS);
+        graded_edges(tc_s, upper)
+            .windows(2)
+            .map(|p| {
+                let (mid, half) = (0.5 * (p[0] + p[1]), 0.5 * (p[1] - p[0]));
+                half * nodes
+                    .iter()
+                    .zip(&weights)
+                    .map(|(&x, &wt)| wt * f(mid + half * x))
+                    .sum::<f64>()
+            })
+            .sum()
+    }
+
+    /// Independent quadrature of the window-referenced variance. x = b - m has covariance
+    /// C_x(s, u) = C_start(s, u) + sigma^2 [(1 - rho)(e^{-s/T} + e^{-u/T}) + vm - 1] with
+    /// C_start that of b - b(0) (`quadrature_from_start_variance`, 2-D), rho = Cov(m, b(0))/sigma^2
+    /// and vm = Var(m)/sigma^2 themselves by quadrature over the window
+    /// (rho = (1/W) int_0^W e^{-v/T} dv, vm = (2/W^2) int_0^W (W - v) e^{-v/T} dv), so with
+    /// w(u) = (t-u)^{k-1}/(k-1)!, int_0^t w = a = t^k/k!:
+    ///   Var I_k[x] = Var I_k[b - b(0)] + sigma^2 [2 (1 - rho) a int_0^t w(s) e^{-s/T} ds + (vm - 1) a^2].
+    fn quadrature_from_window_variance(
+        sigma: f64,
+        tc_s: f64,
+        window_s: f64,
+        t_s: f64,
+        how: Integration,
+    ) -> f64 {
+        let k = how.folds();
+        let fact = (1..k).map(f64::from).product::<f64>();
+        let a = t_s.powi(k) / (fact * f64::from(k));
+        let rho = graded_integral(tc_s, window_s, |v| (-v / tc_s).exp()) / window_s;
+        let vm = 2.0 * graded_integral(tc_s, window_s, |v| (window_s - v) * (-v / tc_s).exp())
+            / (window_s * window_s);
+        let jw = graded_integral(tc_s, t_s, |u| {
+            (t_s - u).powi(k - 1) / fact * (-u / tc_s).exp()
+        });
+        quadrature_from_start_variance(sigma, tc_s, t_s, how)
+            + sigma * sigma * (2.0 * (1.0 - rho) * a * jw + (vm - 1.0) * a * a) * tilt_gain2(how)
+    }
+
+    #[test]
+    fn gauss_markov_from_window_matches_quadrature_and_its_limits() {
+        for &(sigma, tc) in &[(0.3, 2.0), (1e-4, 600.0), (2e-5, 1e5), (1e-3, 0.1)] {
+            for &w in &[0.5, 10.0, 60.0] {
+                for &t in &[
+                    0.01,
+                    0.7,
+                    0.99 * tc / 2.0,
+                    1.01 * tc / 2.0,
+                    9.0,
+                    60.0,
+                    3600.0,
+                ] {
+                    for how in [Integration::Once, Integration::Twice, Integration::Tilt] {
+                        let a = gauss_markov_from_window_variance(sigma, tc, w, t, how);
+                        let b = quadrature_from_window_variance(sigma, tc, w, t, how);
+                        // Relative 1e-7: the closed form loses at most ~4 digits (above x = 0.5
+                        // as the from-start form), the quadrature ~3 where its parts cancel
+                        // (t, W >> T, the parts ~a^2, the sum ~a^2 T/W).
+                        assert!(
+                            (a / b - 1.0).abs() < 1e-7,
+                            "{how:?} t={t} T={tc} W={w}: {a} vs {b}"
+                        );
+                    }
+                }
+            }
+            // W -> 0: the from-start law; W >> T, t: the uncalibrated law plus Var(m) a^2, m ~ 0.
+            for how in [Integration::Once, Integration::Twice, Integration::Tilt] {
+                let t = 0.3 * tc;
+                let a = gauss_markov_from_window_variance(sigma, tc, 1e-9 * tc, t, how);
+                let b = gauss_markov_from_start_variance(sigma, tc, t, how);
+                assert!((a / b - 1.0).abs() < 1e-6, "{how:?} T={tc}: {a} vs {b}");
+                let a = gauss_markov_from_window_variance(sigma, tc, 1e9 * tc, t, how);
+                let b = gauss_markov_variance(sigma, tc, t, how);
+                assert!((a / b - 1.0).abs() < 1e-6, "{how:?} T={tc}: {a} vs {b}");
+            }
+        }
     }
 
     #[test]

@@ -75,6 +75,7 @@ struct RawTerms {
     only: Option<Vec<String>>,
     without: Option<Vec<String>>,
     bias_calibrated_at_start: Option<bool>,
+    bias_calibration_window_s: Option<f64>,
 }
 
 /// Initial alignment error per Euler angle (rad): a fixed offset plus a per-run Gaussian draw.
@@ -120,6 +121,11 @@ pub struct Scenario {
     /// instability, Gauss-Markov) are referenced to their value at t = 0, b(t) - b(0), as for a
     /// user who estimates the bias at turn-on and subtracts it (Woodman TR-696 §3.2.1).
     pub bias_calibrated_at_start: bool,
+    /// `terms.bias_calibration_window_s` = W: the bias estimate is the mean of each slowly varying
+    /// bias process over [-W, 0] (the static output averaged for W seconds before the run), so
+    /// the error is b(t) - m (`noise::ImuErrors::with_calibration_window`). Implies
+    /// `bias_calibrated_at_start` (which is then true); None: the instantaneous b(0).
+    pub bias_calibration_window_s: Option<f64>,
     pub reference: Option<Reference>,
     /// Print the ablation table (each term alone and the model without it) by default.
     pub ablation: bool,
@@ -254,6 +260,22 @@ impl Scenario {
                 ));
             }
         }
+        if let Some(w) = terms.bias_calibration_window_s {
+            if !(w.is_finite() && w > 0.0) {
+                return Err(err(
+                    "terms.bias_calibration_window_s",
+                    format!("expected a calibration window > 0 s, got {w}"),
+                ));
+            }
+            if terms.bias_calibrated_at_start == Some(false) {
+                return Err(err(
+                    "terms.bias_calibration_window_s",
+                    "a calibration window needs the bias calibrated at start: set \
+                     terms.bias_calibrated_at_start = true or leave it out"
+                        .into(),
+                ));
+            }
+        }
         if raw.sensor.trim().is_empty() {
             return Err(err("sensor", "expected a path to a sensor TOML".into()));
         }
@@ -280,7 +302,9 @@ impl Scenario {
             alignment,
             only: terms.only,
             without: terms.without.unwrap_or_default(),
-            bias_calibrated_at_start: terms.bias_calibrated_at_start.unwrap_or(false),
+            bias_calibrated_at_start: terms.bias_calibrated_at_start.unwrap_or(false)
+                || terms.bias_calibration_window_s.is_some(),
+            bias_calibration_window_s: terms.bias_calibration_window_s,
             reference: raw.reference,
             ablation: raw.ablation.unwrap_or(false),
         })
@@ -449,7 +473,21 @@ mod tests {
                 format!("{MIN}[alignment]\nroll_std_deg = -1.0\n"),
                 "alignment.roll_std_deg",
             ),
+            (
+                format!("{MIN}[terms]\nbias_calibration_window_s = 0.0\n"),
+                "terms.bias_calibration_window_s",
+            ),
+            (
+                format!("{MIN}[terms]\nbias_calibrated_at_start = false\nbias_calibration_window_s = 10.0\n"),
+                "terms.bias_calibration_window_s",
+            ),
         ];
+        let s = Scenario::from_toml_str(
+            &format!("{MIN}[terms]\nbias_calibration_window_s = 10.0\n"),
+            "s.toml",
+        )
+        .unwrap();
+        assert!(s.bias_calibrated_at_start && s.bias_calibration_window_s == Some(10.0));
         for (text, key) in cases {
             let e = Scenario::from_toml_str(&text, "s.toml").unwrap_err();
             assert_eq!(e.key, key, "{e}");

@@ -334,3 +334,40 @@ fn bias_calibrated_at_start_follows_its_law() {
         &[Roll, Pitch, Yaw, PosNorth, PosEast, PosHorizontal, VelNorth],
     );
 }
+
+#[test]
+fn bias_calibration_window_follows_its_law() {
+    use Channel::*;
+    // `terms.bias_calibration_window_s`: each Gauss-Markov process referenced to its mean over a
+    // window before t = 0 (`laws::gauss_markov_from_window_variance`). GM with T = 2 s and a 3 s
+    // window (W ~ T, so the window mean is neither b(0) nor 0 and its covariance with b(t)
+    // matters: with the covariance term -2 a rho sigma^2 J_k dropped from the law, the GM checks
+    // fail); flicker with a 10 s window (its fast components averaged out, the slow ones ~b(0)).
+    let gm = GAUSS_MARKOV;
+    let r = simulate(
+        gm,
+        "[terms]\nbias_calibration_window_s = 3.0\n[checkpoints]\nlog_count = 6\nfirst_s = 0.5\n",
+        20.0,
+        50.0,
+        RUNS,
+    );
+    check(
+        "gauss_markov (3 s calibration window)",
+        &r,
+        &[Roll, Yaw, PosNorth, PosEast, PosHorizontal, VelNorth],
+    );
+    let flicker =
+        "[gyro.all]\nbias_instability = { value = \"0.005 deg/s\", convention = \"ieee\" }\n[accel.all]\nbias_instability = { value = \"0.001 m/s^2\", convention = \"ieee\" }\n";
+    let r = simulate(
+        flicker,
+        &format!("[terms]\nbias_calibration_window_s = 10.0\n{CHECKS}"),
+        20.0,
+        50.0,
+        RUNS,
+    );
+    check(
+        "bias_instability (flicker, 10 s calibration window)",
+        &r,
+        &[Roll, Pitch, Yaw, PosNorth, PosEast, PosHorizontal, VelNorth],
+    );
+}

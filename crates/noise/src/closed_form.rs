@@ -395,6 +395,46 @@ pub fn gauss_markov_kfold_variance(sigma: f64, tc_s: f64, t_s: f64, k: i32) -> O
     Some(sigma * sigma * tc_s.powi(2 * k) * v)
 }
 
+/// Moments of the mean m = (1/W) int_{-W}^0 b(s) ds of a stationary Gauss-Markov process b (std
+/// sigma, correlation time `tc_s`) over a calibration window of length `window_s` before t = 0,
+/// normalised by sigma^2: (rho, Var(m)/sigma^2, Var(m | b(0))/sigma^2), rho = Cov(m, b(0))/sigma^2.
+///
+/// ```text
+/// [derived] from Cov(b(s), b(u)) = sigma^2 e^{-|s-u|/T} (theory.md §3), with u = W/T:
+///   rho            = (1 - e^{-u}) / u
+///   Var(m)/sigma^2 = (2/u) (1 - rho)
+///   Var(m|b0)/sigma^2 = Var(m)/sigma^2 - rho^2 = (2u - 3 + 4 e^{-u} - e^{-2u}) / u^2
+///                  = sum_{n>=3} (-1)^n (4 - 2^n) u^(n-2) / n!   (series used below u = 0.5,
+///                    where the closed form cancels; leading term 2u/3)
+/// ```
+/// E[m | b(0)] = rho b(0). The W -> 0 limit is m = b(0): (1, 1, 0).
+pub fn gauss_markov_window_mean_moments(tc_s: f64, window_s: f64) -> (f64, f64, f64) {
+    let u = window_s / tc_s;
+    if u < 0.5 {
+        // Terms shrink by ~u/n per step: 25 terms leave < 1e-30 relative.
+        let mut fact = 1.0;
+        let (mut rho, mut vm, mut cond) = (0.0, 0.0, 0.0);
+        for n in 1..=27 {
+            fact *= f64::from(n);
+            let sign = if n % 2 == 0 { 1.0 } else { -1.0 };
+            // rho = sum_{n>=1} (-u)^(n-1)/n!, Var(m)/sigma^2 = 2 sum_{n>=2} (-1)^n u^(n-2)/n!.
+            rho += (-u).powi(n - 1) / fact;
+            if n >= 2 {
+                vm += 2.0 * sign * u.powi(n - 2) / fact;
+            }
+            if n >= 3 {
+                cond += sign * (4.0 - 2f64.powi(n)) * u.powi(n - 2) / fact;
+            }
+        }
+        (rho, vm, cond)
+    } else {
+        let rho = -(-u).exp_m1() / u;
+        let vm = 2.0 / u * (1.0 - rho);
+        let cond = (2.0 * u - 3.0 + 4.0 * (-u).exp() - (-2.0 * u).exp()) / (u * u);
+        (rho, vm, cond)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -59,6 +59,16 @@ pub fn extra_rng(seed: u64, run: u64, index: u32) -> ImuRng {
     stream_rng(stream_key(seed, run), (1u64 << 32) | u64::from(index))
 }
 
+/// The calibration-window stream of one term of one channel of one run
+/// (`ImuErrors::with_calibration_window`): the term stream's index plus 2^33, so disjoint from the
+/// term streams (below 2^11) and from `extra_rng` (2^32 + u32).
+pub(crate) fn calibration_rng(seed: u64, run: u64, channel: u64, effect: Effect) -> ImuRng {
+    stream_rng(
+        stream_key(seed, run),
+        (1u64 << 33) | (channel << 8) | effect.stream_index(),
+    )
+}
+
 /// The sub-stream of one term of one channel of one run.
 pub(crate) fn term_rng(seed: u64, run: u64, channel: u64, effect: Effect) -> ImuRng {
     stream_rng(

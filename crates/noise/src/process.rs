@@ -4,7 +4,7 @@
 
 use crate::effect::{Effect, Sensor};
 use crate::model::{BiasInstability, SensorModel, TemperatureProfile};
-use crate::{term_rng, ImuRng};
+use crate::{calibration_rng, term_rng, ImuRng};
 use nalgebra::Vector3;
 use rand::Rng;
 
@@ -97,6 +97,9 @@ pub struct GaussMarkovBank {
     /// Subtracted from every value: 0 by default (bit-identical output), the value at t = 0 after
     /// [`GaussMarkovBank::reference_to_start`].
     offset: f64,
+    /// (correlation time s, stationary std, initial state) of each component, in component order:
+    /// what [`GaussMarkovBank::reference_to_window_mean`] conditions on.
+    start: Vec<(f64, f64, f64)>,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -147,9 +150,11 @@ impl GaussMarkovBank {
             event_span: u32::MAX,
             until_event: u32::MAX,
             offset: 0.0,
+            start: Vec::with_capacity(components.len()),
         };
         for &(tc, s) in components {
             let x0 = s * normal(rng);
+            bank.start.push((tc, s, x0));
             let every = hold(tc);
             let step = f64::from(every) * dt_s;
             let phi = (-step / tc).exp();
@@ -235,6 +240,24 @@ impl GaussMarkovBank {
         }
         sum += self.held_sum;
         self.offset = sum;
+    }
+
+    /// Reference the process to its mean over a calibration window of length `window_s` before
+    /// t = 0: from now on every value is b(t) - m, m = (1/W) int_{-W}^0 b(s) ds, as seen by a user
+    /// who averages the static output for W seconds before the run and subtracts that estimate.
+    /// Each component's window mean is drawn exactly given its value at t = 0 (the window is not
+    /// simulated): m_i | b_i(0) ~ N(rho b_i(0), sigma_i^2 c), with (rho, c) from
+    /// [`crate::closed_form::gauss_markov_window_mean_moments`] (the conditional Gaussian, \[derived\]
+    /// there). One standard normal per component from `rng`, in component order: pass a stream
+    /// other than the process's own, so the process's draws (and so b(t)) are unchanged.
+    /// Call before the first sample.
+    pub fn reference_to_window_mean<R: Rng + ?Sized>(&mut self, window_s: f64, rng: &mut R) {
+        let mut m = 0.0;
+        for &(tc, s, x0) in &self.start {
+            let (rho, _, cond) = crate::closed_form::gauss_markov_window_mean_moments(tc, window_s);
+            m += rho * x0 + s * cond.max(0.0).sqrt() * normal(rng);
+        }
+        self.offset = m;
     }
 
     /// The current value (sum of the components), then advance one step. Draw order within a step:
@@ -452,6 +475,23 @@ impl ChannelErrors {
         }
     }
 
+    /// Reference the slowly varying bias processes (flicker components and the Gauss-Markov term)
+    /// to their means over a calibration window of `window_s` seconds before t = 0
+    /// ([`GaussMarkovBank::reference_to_window_mean`]); each process's window draws come from its
+    /// own calibration stream (`calibration_rng`), so its own stream is untouched.
+    /// Call before the first sample.
+    fn calibrate_window(&mut self, window_s: f64, seed: u64, run: u64, channel: usize) {
+        for (bank, effect) in [
+            (&mut self.flicker, Effect::BiasInstability),
+            (&mut self.gauss_markov, Effect::GaussMarkov),
+        ] {
+            if let Some((bank, _)) = bank {
+                let mut r = calibration_rng(seed, run, channel as u64, effect);
+                bank.reference_to_window_mean(window_s, &mut r);
+            }
+        }
+    }
+
     /// The measured value of sample `k` (t = k·dt) given the ideal triad input. Calls must come with
     /// k = 0, 1, 2, ... in order: the stochastic states advance one step per call.
     #[inline]
@@ -562,6 +602,23 @@ impl ImuErrors {
         self.channels
             .iter_mut()
             .for_each(ChannelErrors::calibrate_start);
+        self
+    }
+
+    /// The same run (`seed`, `run` must be those given to `new`) with the bias calibrated by
+    /// averaging the static output over a window of `window_s` seconds (finite, > 0) before t = 0:
+    /// every channel's flicker and Gauss-Markov bias processes are referenced to their window
+    /// mean m, so the error they add is b(t) - m ([`GaussMarkovBank::reference_to_window_mean`]).
+    /// The draws of `new` are unchanged; the window means come from separate calibration streams.
+    /// Call before the first sample.
+    pub fn with_calibration_window(mut self, window_s: f64, seed: u64, run: u64) -> ImuErrors {
+        assert!(
+            window_s.is_finite() && window_s > 0.0,
+            "calibration window must be > 0 s, got {window_s}"
+        );
+        for (c, ch) in self.channels.iter_mut().enumerate() {
+            ch.calibrate_window(window_s, seed, run, c);
+        }
         self
     }
 

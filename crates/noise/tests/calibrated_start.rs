@@ -1,8 +1,21 @@
 //! `ImuErrors::with_calibrated_start`: the flicker and Gauss-Markov bias processes referenced to
-//! their value at t = 0 (b(t) - b(0)), the same draws, every other term unchanged.
+//! their value at t = 0 (b(t) - b(0)), the same draws, every other term unchanged; and
+//! `ImuErrors::with_calibration_window` (referenced to the mean over a window before t = 0): the
+//! window-mean moments against quadrature, a constant offset, the same draws.
 
 use nalgebra::Vector3;
+use noise::closed_form::gauss_markov_window_mean_moments;
 use noise::{AxisModel, BiasInstability, Flicker, GaussMarkov, ImuErrors, SensorModel, TriadModel};
+
+/// No calibration.
+fn raw_run(e: ImuErrors) -> ImuErrors {
+    e
+}
+
+/// Calibrated over a 10 s window (seed and run as in `series`).
+fn window_10s(e: ImuErrors) -> ImuErrors {
+    e.with_calibration_window(10.0, 7, 3)
+}
 
 fn model(axis: AxisModel) -> SensorModel {
     SensorModel {
@@ -17,13 +30,9 @@ fn model(axis: AxisModel) -> SensorModel {
     }
 }
 
-fn series(model: &SensorModel, calibrated: bool, n: usize) -> Vec<[f64; 6]> {
-    let e = ImuErrors::new(model, 0.01, 7, 3);
-    let mut e = if calibrated {
-        e.with_calibrated_start()
-    } else {
-        e
-    };
+/// The corrupted static series of run 3 of seed 7 at 100 Hz, after `prep` (a calibration or none).
+fn series(model: &SensorModel, prep: fn(ImuErrors) -> ImuErrors, n: usize) -> Vec<[f64; 6]> {
+    let mut e = prep(ImuErrors::new(model, 0.01, 7, 3));
     let zero = Vector3::zeros();
     (0..n as u64)
         .map(|k| {
@@ -43,8 +52,8 @@ fn slow_bias_processes_start_at_zero_and_keep_their_increments() {
         ..AxisModel::default()
     };
     let n = 3000;
-    let raw = series(&model(slow.clone()), false, n);
-    let cal = series(&model(slow), true, n);
+    let raw = series(&model(slow.clone()), raw_run, n);
+    let cal = series(&model(slow), ImuErrors::with_calibrated_start, n);
     // b(0) - b(0) is exactly 0 (the offset is summed in the generator's own order).
     assert_eq!(cal[0], [0.0; 6]);
     for c in 0..6 {
@@ -75,5 +84,100 @@ fn other_terms_are_bit_identical() {
         ..AxisModel::default()
     };
     let m = model(fast);
-    assert_eq!(series(&m, false, 500), series(&m, true, 500));
+    assert_eq!(
+        series(&m, raw_run, 500),
+        series(&m, ImuErrors::with_calibrated_start, 500)
+    );
+}
+
+/// Composite Simpson rule of `f` over [0, w] with `n` (even) panels.
+fn simpson(f: impl Fn(f64) -> f64, w: f64, n: usize) -> f64 {
+    let h = w / n as f64;
+    let mut s = f(0.0) + f(w);
+    for i in 1..n {
+        s += f(i as f64 * h) * if i % 2 == 1 { 4.0 } else { 2.0 };
+    }
+    s * h / 3.0
+}
+
+#[test]
+fn window_mean_moments_match_quadrature() {
+    // With m = (1/W) int_{-W}^0 b and Cov(b(s), b(u)) = e^{-|s-u|/T} (sigma = 1, theory.md §3):
+    //   Cov(m, b(0)) = (1/W) int_0^W e^{-v/T} dv,
+    //   Var(m) = (2/W^2) int_0^W (W - v) e^{-v/T} dv  (the double integral folded onto v = |s - u|).
+    for &(tc, w) in &[
+        (1e5, 10.0),
+        (1e5, 60.0),
+        (600.0, 10.0),
+        (2.0, 1.0),
+        (2.0, 0.98),
+        (2.0, 1.02),
+        (1.0, 10.0),
+        (0.1, 60.0),
+        (10.0, 3.0),
+    ] {
+        let (rho, vm, cond) = gauss_markov_window_mean_moments(tc, w);
+        // Step W/n = 3e-4 s at most: Simpson's error ~ (h/T)^4 < 1e-13 even for T = 0.1 s.
+        let n = 200_000;
+        let cov = simpson(|v| (-v / tc).exp(), w, n) / w;
+        let var = 2.0 * simpson(|v| (w - v) * (-v / tc).exp(), w, n) / (w * w);
+        assert!(
+            (rho / cov - 1.0).abs() < 1e-10,
+            "T={tc} W={w}: rho {rho} vs {cov}"
+        );
+        assert!(
+            (vm / var - 1.0).abs() < 1e-10,
+            "T={tc} W={w}: Var(m) {vm} vs {var}"
+        );
+        // The conditional variance, where it does not cancel (u >= 0.01), from the quadrature;
+        // below that only through its leading term 2u/3 (the series' own first term).
+        let u = w / tc;
+        let c_q = var - cov * cov;
+        if u >= 0.01 {
+            assert!(
+                (cond / c_q - 1.0).abs() < 1e-7,
+                "T={tc} W={w}: {cond} vs {c_q}"
+            );
+        } else {
+            assert!(
+                (cond / (2.0 * u / 3.0) - 1.0).abs() < u,
+                "T={tc} W={w}: {cond}"
+            );
+        }
+        assert!(cond > 0.0 && cond < vm);
+    }
+    // Continuity across the series switch at u = 0.5.
+    let (a, b) = (
+        gauss_markov_window_mean_moments(1.0, 0.5 - 1e-12),
+        gauss_markov_window_mean_moments(1.0, 0.5 + 1e-12),
+    );
+    assert!((a.0 / b.0 - 1.0).abs() < 1e-10 && (a.1 / b.1 - 1.0).abs() < 1e-10);
+    assert!((a.2 / b.2 - 1.0).abs() < 1e-10, "{a:?} {b:?}");
+}
+
+#[test]
+fn window_calibration_subtracts_a_constant_and_keeps_the_draws() {
+    let slow = AxisModel {
+        white_noise: Some(1e-3),
+        bias_instability: Some(BiasInstability::Flicker(Flicker::with_b(1e-3))),
+        gauss_markov: Some(GaussMarkov::new(2e-3, 5.0).unwrap()),
+        ..AxisModel::default()
+    };
+    let m = model(slow);
+    let n = 2000;
+    let raw = series(&m, raw_run, n);
+    let cal = series(&m, window_10s, n);
+    for c in 0..6 {
+        // The offset b(0) - m is not zero (a draw), and the same at every sample (to rounding).
+        let off = raw[0][c] - cal[0][c];
+        assert!(off != 0.0);
+        for k in 0..n {
+            assert!(
+                ((raw[k][c] - cal[k][c]) - off).abs() <= 1e-16,
+                "channel {c} sample {k}"
+            );
+        }
+    }
+    // Deterministic: the same seed and run give the same window draws.
+    assert_eq!(cal, series(&m, window_10s, n));
 }
