@@ -7,9 +7,8 @@ use noise::{ImuErrors, SensorModel, TermFilter};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+mod common;
+use common::{ok, root};
 
 fn mtx() -> PathBuf {
     root().join("configs/sensors/mtx.toml")
@@ -21,15 +20,6 @@ fn generate(args: &[&str]) -> Output {
         .args(args)
         .output()
         .expect("run imudrift")
-}
-
-fn ok(out: Output) -> Output {
-    assert!(
-        out.status.success(),
-        "imudrift failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
 }
 
 fn path_str(p: &Path) -> &str {

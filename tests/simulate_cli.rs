@@ -1,12 +1,11 @@
 //! End-to-end `imudrift simulate` / `merge`: determinism across thread counts and shard splits,
 //! output files, errors naming file and key.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+mod common;
+use common::{ok, root};
 
 fn imudrift(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_imudrift"))
@@ -14,15 +13,6 @@ fn imudrift(args: &[&str]) -> Output {
         .current_dir(root())
         .output()
         .expect("run imudrift")
-}
-
-fn ok(out: Output) -> Output {
-    assert!(
-        out.status.success(),
-        "imudrift failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
 }
 
 const SCENARIO: &str = "configs/scenarios/mtx-static-60s.toml";

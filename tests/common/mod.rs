@@ -1,0 +1,19 @@
+//! Helpers shared by the end-to-end tests of the `imudrift` binary.
+
+use std::path::PathBuf;
+use std::process::Output;
+
+/// The workspace root (where `configs/` lives).
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Assert the command succeeded, showing its stderr if not.
+pub fn ok(out: Output) -> Output {
+    assert!(
+        out.status.success(),
+        "imudrift failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
