@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# Byte-identity check of the user-visible outputs across a refactor.
+#
+#   scripts/golden.sh capture DIR   run the commands below with the release binary, store every output in DIR
+#   scripts/golden.sh check DIR     run them again into a temporary directory and compare byte for byte with DIR
+#
+# Covers: `simulate` of every shipped scenario (--json and --out), `allan` on ADIS16405 run 1
+# (--json and --out), `spec` of every shipped sensor (--json), `generate` (a short log), and
+# `diagnose` on ADIS16405 run 1 (--json and --out). The real logs are read from $IMUDRIFT_DATA
+# (default: the `shared/data` directory beside the repository).
+# Human text on stderr is not compared (it holds progress and timings).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+mode=${1:?usage: golden.sh capture|check DIR}
+ref=${2:?usage: golden.sh capture|check DIR}
+data=${IMUDRIFT_DATA:-$(cd .. && pwd)/shared/data}
+cargo build --release --quiet
+bin=$PWD/target/release/imudrift
+if [ "$mode" = capture ]; then out=$ref; mkdir -p "$out"; else out=$(mktemp -d); trap 'rm -rf "$out"' EXIT; fi
+run() { # name, then the command's arguments
+  local name=$1; shift
+  mkdir -p "$out/$name"
+  "$bin" "$@" --json --out "$out/$name/files" >"$out/$name/stdout.json" 2>/dev/null
+}
+for s in configs/scenarios/*.toml; do
+  n=$(basename "$s" .toml)
+  run "simulate-$n" simulate "$s" --threads 2
+done
+adis=$data/adis16405_imudata
+cols=gx=gyro_x_dps,gy=gyro_y_dps,gz=gyro_z_dps,ax=acc_x_g,ay=acc_y_g,az=acc_z_g
+run allan-adis1 allan "$adis/adis16405_imu1.csv.gz" --rate 100 --gyro-unit deg/s --accel-unit g --col "$cols"
+mkdir -p "$out/spec"
+"$bin" spec configs/sensors/*.toml --json >"$out/spec/stdout.json" 2>/dev/null
+mkdir -p "$out/generate"
+"$bin" generate configs/sensors/mtx.toml --duration 20 --rate 100 --seed 7 -o "$out/generate/mtx.csv" 2>/dev/null
+run diagnose-adis1 diagnose "$adis/adis16405_imu1.csv.gz" --model configs/sensors/adis16405.toml \
+  --rate 100 --gyro-unit deg/s --accel-unit g --col "$cols" --horizons 60,3600
+if [ "$mode" = check ]; then
+  if diff -r "$ref" "$out" >/dev/null; then
+    echo "golden: every output byte-identical to $ref"
+  else
+    diff -rq "$ref" "$out" || true
+    echo "golden: outputs differ from $ref" >&2
+    exit 1
+  fi
+else
+  echo "golden: captured into $ref"
+fi
