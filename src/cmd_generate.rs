@@ -7,9 +7,10 @@
 //! when complete (src/output.rs).
 
 use crate::output;
+use crate::cli::{check_rate_hz, parse_duration_s};
 use anyhow::{bail, Context, Result};
 use nalgebra::Vector3;
-use noise::units::{parse_quantity, Quantity, STANDARD_GRAVITY_MPS2};
+use noise::units::STANDARD_GRAVITY_MPS2;
 use noise::{ImuErrors, SensorModel, TermFilter, CHANNEL_NAMES};
 use rayon::prelude::*;
 use std::io::{IsTerminal, Write};
@@ -64,28 +65,8 @@ struct Plan {
 fn plan(args: &Args) -> Result<Plan> {
     let model = SensorModel::load(&args.sensor)?;
     let filter = TermFilter::parse(args.only.as_deref(), args.without.as_deref())?;
-    if !(args.rate.is_finite() && args.rate > 0.0) {
-        bail!(
-            "--rate: expected a sample rate in Hz > 0, found {}",
-            args.rate
-        );
-    }
-    // A bare number is seconds; otherwise a time with its unit.
-    let duration_s = match args.duration.trim().parse::<f64>() {
-        Ok(v) => v,
-        Err(_) => parse_quantity(&args.duration, Quantity::Time).map_err(|e| {
-            anyhow::anyhow!(
-                "--duration: expected seconds or a time such as \"12 h\" ({e}), found \"{}\"",
-                args.duration
-            )
-        })?,
-    };
-    if !(duration_s.is_finite() && duration_s > 0.0) {
-        bail!(
-            "--duration: expected a time > 0, found \"{}\"",
-            args.duration
-        );
-    }
+    check_rate_hz("--rate", args.rate)?;
+    let duration_s = parse_duration_s("--duration", &args.duration)?;
     let samples = (duration_s * args.rate).round();
     if !(1.0..=1e12).contains(&samples) {
         bail!(

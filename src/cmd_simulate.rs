@@ -1,5 +1,6 @@
 //! `imudrift simulate SCENARIO.toml`: Monte Carlo drift run; every channel beside its growth law.
 
+use crate::fmt;
 use crate::output::{ensure_dir, write_atomic, write_string};
 use crate::plot::{Band, LogLogPlot, Series, PALETTE};
 use anyhow::{bail, Context, Result};
@@ -16,8 +17,16 @@ use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Scenario TOML (configs/scenarios/*.toml)
+    /// Scenario TOML (configs/scenarios/*.toml), or a sensor TOML (configs/sensors/*.toml): a sensor
+    /// alone is simulated lying still and level (the default static scenario: --duration 60 s,
+    /// --rate 100 Hz, --runs 500, --seed 1)
     pub scenario: PathBuf,
+    /// Length of each run: seconds, or a time with its unit ("90 s", "5 min", "1 h"); overrides the scenario
+    #[arg(long)]
+    pub duration: Option<String>,
+    /// Sample rate in Hz; overrides the scenario
+    #[arg(long)]
+    pub rate: Option<f64>,
     /// Number of Monte Carlo runs (overrides the scenario)
     #[arg(long)]
     pub runs: Option<u64>,
@@ -60,13 +69,87 @@ pub struct Inputs {
     pub sensor_toml: String,
 }
 
-/// Read the scenario and its sensor (path relative to the scenario file).
-pub fn read_inputs(scenario_path: &Path) -> Result<(Inputs, Scenario)> {
-    let scenario_source = scenario_path.display().to_string();
-    let scenario_toml = std::fs::read_to_string(scenario_path)
-        .with_context(|| format!("cannot read scenario {scenario_source}"))?;
+/// Scenario keys set from the command line (`--duration`, `--rate`).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ScenarioEdits {
+    pub duration_s: Option<f64>,
+    pub rate_hz: Option<f64>,
+}
+
+impl ScenarioEdits {
+    pub fn from_flags(duration: Option<&str>, rate_hz: Option<f64>) -> Result<Self> {
+        Ok(ScenarioEdits {
+            duration_s: duration
+                .map(|d| crate::cli::parse_duration_s("--duration", d))
+                .transpose()?,
+            rate_hz: rate_hz
+                .map(|r| crate::cli::check_rate_hz("--rate", r))
+                .transpose()?,
+        })
+    }
+}
+
+/// Whether a TOML text is a sensor model rather than a scenario: it has `[gyro]` or `[accel]`
+/// tables and no `sensor` key.
+fn is_sensor_toml(text: &str) -> bool {
+    text.parse::<toml::Table>().is_ok_and(|t| {
+        !t.contains_key("sensor") && (t.contains_key("gyro") || t.contains_key("accel"))
+    })
+}
+
+/// The default static scenario for a sensor file (every other key takes its documented default).
+fn default_scenario_toml(sensor_file: &str, stem: &str) -> String {
+    format!(
+        "# The default static scenario of `imudrift simulate SENSOR.toml`: the sensor lying still and level.\n\
+         name = {name:?}\n\
+         description = {desc:?}\n\
+         sensor = {sensor_file:?}\n",
+        name = format!("{stem}-static"),
+        desc = format!("{stem}: default static scenario (still and level)"),
+    )
+}
+
+/// Apply `--duration` / `--rate` to a scenario text (the edited text is what a shard stores).
+fn edit_scenario_toml(text: &str, source: &str, edits: &ScenarioEdits) -> Result<String> {
+    if edits.duration_s.is_none() && edits.rate_hz.is_none() {
+        return Ok(text.to_string());
+    }
+    let mut table: toml::Table = text
+        .parse()
+        .with_context(|| format!("cannot read scenario {source} as TOML"))?;
+    if let Some(d) = edits.duration_s {
+        table.insert("duration_s".into(), toml::Value::Float(d));
+    }
+    if let Some(r) = edits.rate_hz {
+        table.insert("rate_hz".into(), toml::Value::Float(r));
+    }
+    Ok(toml::to_string(&table)?)
+}
+
+/// Read the scenario and its sensor (path relative to the scenario file). A sensor TOML given in
+/// place of a scenario gets the default static scenario.
+pub fn read_inputs(path: &Path, edits: &ScenarioEdits) -> Result<(Inputs, Scenario)> {
+    let given = path.display().to_string();
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {given}"))?;
+    let (scenario_source, scenario_toml) = if is_sensor_toml(&text) {
+        let file = path
+            .file_name()
+            .map(|f| f.to_string_lossy().into_owned())
+            .unwrap_or_else(|| given.clone());
+        let stem = path
+            .file_stem()
+            .map(|f| f.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "sensor".into());
+        (
+            format!("default static scenario for {given}"),
+            default_scenario_toml(&file, &stem),
+        )
+    } else {
+        (given, text)
+    };
+    let scenario_toml = edit_scenario_toml(&scenario_toml, &scenario_source, edits)?;
     let scenario = Scenario::from_toml_str(&scenario_toml, &scenario_source)?;
-    let sensor_path = match scenario_path.parent() {
+    let sensor_path = match path.parent() {
         Some(dir) if scenario.sensor.is_relative() => dir.join(&scenario.sensor),
         _ => scenario.sensor.clone(),
     };
@@ -150,7 +233,8 @@ pub fn execute(exp: &Experiment, runs: std::ops::Range<u64>, label: &str) -> Bat
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let (inputs, _) = read_inputs(&args.scenario)?;
+    let edits = ScenarioEdits::from_flags(args.duration.as_deref(), args.rate)?;
+    let (inputs, _) = read_inputs(&args.scenario, &edits)?;
     let overrides = Overrides {
         runs: args.runs,
         seed: args.seed,
@@ -324,6 +408,8 @@ struct ReferenceOut {
     value: f64,
     source: String,
     simulated: f64,
+    #[serde(skip)]
+    note: Option<String>,
 }
 
 fn reference_out(report: &DriftReport, exp: &Experiment) -> Option<ReferenceOut> {
@@ -346,6 +432,7 @@ fn reference_out(report: &DriftReport, exp: &Experiment) -> Option<ReferenceOut>
         value: r.value,
         source: r.source.clone(),
         simulated,
+        note: r.note.clone(),
     })
 }
 
@@ -453,34 +540,34 @@ fn table(
             r.active_terms.join(", ")
         }
     );
-    let _ = writeln!(s, "\nhorizontal position error (m) vs time; law = closed form of the active terms, ratio = rms/law rms [99.9 % interval], * = outside");
+    let _ = writeln!(s, "\nhorizontal position error vs time; law = closed form of the active terms, ratio = rms/law rms [99.9 % interval], * = outside");
     let _ = writeln!(
         s,
-        "{:>10} {:>11} {:>11} {:>11} {:>11} {:>11} {:>11}  ratio",
-        "t_s", "mean", "p50", "p95", "rms", "law_mean", "law_rms"
+        "{:>10} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}  ratio",
+        "t", "mean", "p50", "p95", "rms", "law mean", "law rms"
     );
-    let f = |x: Option<f64>| x.map_or("n/a".to_string(), |v| format!("{v:.4e}"));
+    let h = Channel::PosHorizontal.name();
     for cp in &r.checkpoints {
-        let c = &cp.channels[Channel::PosHorizontal.name()];
+        let c = &cp.channels[h];
         let _ = writeln!(
             s,
-            "{:>10.3} {:>11.4e} {:>11.4e} {:>11.4e} {:>11.4e} {:>11} {:>11}  {}",
-            cp.t_s,
-            c.mean,
-            c.p50,
-            c.p95,
-            c.rms,
-            f(c.law_mean),
-            f(c.law_rms),
+            "{:>10} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}  {}",
+            fmt::time(cp.t_s),
+            fmt::channel_value(h, c.mean),
+            fmt::channel_value(h, c.p50),
+            fmt::channel_value(h, c.p95),
+            fmt::channel_value(h, c.rms),
+            fmt::channel_opt(h, c.law_mean),
+            fmt::channel_opt(h, c.law_rms),
             fmt_ratio(c)
         );
     }
     if let Some(last) = r.checkpoints.last() {
-        let _ = writeln!(s, "\nall channels at t = {} s", last.t_s);
+        let _ = writeln!(s, "\nall channels at t = {} (angles in deg)", fmt::time(last.t_s));
         let _ = writeln!(
             s,
-            "{:>20} {:>11} {:>11} {:>11} {:>11} {:>11} {:>11}  ratio / note",
-            "channel", "mean", "std", "rms", "p95", "law_mean", "law_std"
+            "{:>20} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}  ratio / note",
+            "channel", "mean", "std", "rms", "p95", "law mean", "law std"
         );
         for ch in Channel::ALL {
             let c = &last.channels[ch.name()];
@@ -488,16 +575,17 @@ fn table(
                 Some(n) if c.ratio.is_none() => n.clone(),
                 _ => fmt_ratio(c),
             };
+            let v = |x: f64| fmt::channel_value(ch.name(), x);
             let _ = writeln!(
                 s,
-                "{:>20} {:>11.4e} {:>11.4e} {:>11.4e} {:>11.4e} {:>11} {:>11}  {}",
+                "{:>20} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}  {}",
                 ch.name(),
-                c.mean,
-                c.std,
-                c.rms,
-                c.p95,
-                f(c.law_mean),
-                f(c.law_std),
+                v(c.mean),
+                v(c.std),
+                v(c.rms),
+                v(c.p95),
+                fmt::channel_opt(ch.name(), c.law_mean),
+                fmt::channel_opt(ch.name(), c.law_std),
                 tail
             );
         }
@@ -505,9 +593,18 @@ fn table(
     if let Some(rf) = reference {
         let _ = writeln!(
             s,
-            "\n{} {} at {} s: simulated {:.2}, published {:.2} ({})",
-            rf.channel, rf.statistic, rf.t_s, rf.simulated, rf.value, rf.source
+            "\n{} {} at {}: simulated {}, published {} ({:+.0} %; {})",
+            rf.channel,
+            rf.statistic,
+            fmt::time(rf.t_s),
+            fmt::channel_value(&rf.channel, rf.simulated),
+            fmt::channel_value(&rf.channel, rf.value),
+            100.0 * (rf.simulated / rf.value - 1.0),
+            rf.source
         );
+        if let Some(note) = &rf.note {
+            let _ = writeln!(s, "  {note}");
+        }
     }
     if let Some(rows) = ablation {
         let spans = dominant_spans(r, rows);

@@ -3,12 +3,14 @@
 //! Thin by design: argument parsing, file I/O, progress bars and plots live here; every
 //! piece of physics and statistics lives in the library crates under `crates/`.
 
+mod cli;
 mod cmd_allan;
 mod cmd_diagnose;
 mod cmd_generate;
 mod cmd_merge;
 mod cmd_simulate;
 mod cmd_spec;
+mod fmt;
 mod logio;
 mod output;
 mod plot;

@@ -22,10 +22,10 @@ struct RawScenario {
     name: Option<String>,
     description: Option<String>,
     sensor: String,
-    duration_s: f64,
-    rate_hz: f64,
-    runs: u64,
-    seed: u64,
+    duration_s: Option<f64>,
+    rate_hz: Option<f64>,
+    runs: Option<u64>,
+    seed: Option<u64>,
     scheme: Option<String>,
     gravity_mps2: Option<f64>,
     trajectory: Option<TrajectorySpec>,
@@ -48,6 +48,9 @@ pub struct Reference {
     pub value: f64,
     /// Where the number comes from.
     pub source: String,
+    /// What a reader should know when comparing (printed under the comparison, not in the JSON).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -133,6 +136,14 @@ pub struct Scenario {
 
 /// Standard gravity (m/s^2), the value INTERFACES.md fixes for a static level IMU.
 pub const STANDARD_GRAVITY_MPS2: f64 = 9.80665;
+/// Default duration when a scenario leaves `duration_s` out (s): Woodman's 60 s runs.
+pub const DEFAULT_DURATION_S: f64 = 60.0;
+/// Default sample rate when a scenario leaves `rate_hz` out (Hz).
+pub const DEFAULT_RATE_HZ: f64 = 100.0;
+/// Default number of Monte Carlo runs when a scenario leaves `runs` out (Woodman measured 500).
+pub const DEFAULT_RUNS: u64 = 500;
+/// Default master seed when a scenario leaves `seed` out.
+pub const DEFAULT_SEED: u64 = 1;
 /// Default number of log-spaced checkpoints.
 pub const DEFAULT_LOG_COUNT: usize = 25;
 /// Default first checkpoint, in samples: early enough to see the accelerometer-dominated start
@@ -164,6 +175,16 @@ impl Scenario {
             message,
         };
         let raw: RawScenario = toml::from_str(text).map_err(|e| {
+            let message = e.message();
+            if message.contains("missing field `sensor`") {
+                return err(
+                    "sensor",
+                    "missing: a scenario names its sensor, e.g. `sensor = \"../sensors/mtx.toml\"` \
+                     (relative to the scenario file); every other key has a default \
+                     (a sensor TOML can also be simulated directly: `imudrift simulate SENSOR.toml`)"
+                        .into(),
+                );
+            }
             // toml's message names the line, column and offending key.
             err("(document)", e.to_string().trim_end().replace('\n', " "))
         })?;
@@ -174,8 +195,10 @@ impl Scenario {
                 Err(err(key, format!("expected a finite number > 0, got {v}")))
             }
         };
-        let duration_s = positive("duration_s", raw.duration_s)?;
-        let rate_hz = positive("rate_hz", raw.rate_hz)?;
+        let duration_s = positive("duration_s", raw.duration_s.unwrap_or(DEFAULT_DURATION_S))?;
+        let rate_hz = positive("rate_hz", raw.rate_hz.unwrap_or(DEFAULT_RATE_HZ))?;
+        let runs = raw.runs.unwrap_or(DEFAULT_RUNS);
+        let seed = raw.seed.unwrap_or(DEFAULT_SEED);
         let steps_f = duration_s * rate_hz;
         let steps = steps_f.round();
         if steps < 1.0 || (steps_f - steps).abs() > 1e-9 * steps.max(1.0) {
@@ -191,7 +214,7 @@ impl Scenario {
             ));
         }
         let steps = steps as u64;
-        if raw.runs == 0 {
+        if runs == 0 {
             return Err(err("runs", "expected an integer >= 1".into()));
         }
         let scheme_name = raw.scheme.as_deref().unwrap_or(Scheme::Accurate.name());
@@ -292,8 +315,8 @@ impl Scenario {
             sensor: PathBuf::from(raw.sensor),
             duration_s,
             rate_hz,
-            runs: raw.runs,
-            seed: raw.seed,
+            runs,
+            seed,
             scheme,
             gravity_mps2,
             trajectory_spec,

@@ -1,0 +1,29 @@
+//! Pieces of command-line handling that several commands share.
+
+use anyhow::{bail, Result};
+use noise::units::{parse_quantity, Quantity};
+
+/// A time given on the command line: a bare number is seconds, otherwise a value with its unit
+/// (`"60"`, `"90 s"`, `"5 min"`, `"12 h"`). `flag` names the option in the error.
+pub fn parse_duration_s(flag: &str, text: &str) -> Result<f64> {
+    let duration_s = match text.trim().parse::<f64>() {
+        Ok(v) => v,
+        Err(_) => parse_quantity(text, Quantity::Time).map_err(|e| {
+            anyhow::anyhow!(
+                "{flag}: expected seconds or a time such as \"12 h\" ({e}), found \"{text}\""
+            )
+        })?,
+    };
+    if !(duration_s.is_finite() && duration_s > 0.0) {
+        bail!("{flag}: expected a time > 0, found \"{text}\"");
+    }
+    Ok(duration_s)
+}
+
+/// A sample rate given on the command line, Hz, finite and > 0.
+pub fn check_rate_hz(flag: &str, rate_hz: f64) -> Result<f64> {
+    if !(rate_hz.is_finite() && rate_hz > 0.0) {
+        bail!("{flag}: expected a sample rate in Hz > 0, found {rate_hz}");
+    }
+    Ok(rate_hz)
+}
