@@ -6,8 +6,8 @@
 //! are generated in parallel and the bytes do not depend on the thread count. The file appears only
 //! when complete (src/output.rs).
 
-use crate::output;
 use crate::cli::{check_rate_hz, parse_duration_s};
+use crate::output;
 use anyhow::{bail, Context, Result};
 use nalgebra::Vector3;
 use noise::units::STANDARD_GRAVITY_MPS2;

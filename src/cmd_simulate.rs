@@ -563,7 +563,11 @@ fn table(
         );
     }
     if let Some(last) = r.checkpoints.last() {
-        let _ = writeln!(s, "\nall channels at t = {} (angles in deg)", fmt::time(last.t_s));
+        let _ = writeln!(
+            s,
+            "\nall channels at t = {} (angles in deg)",
+            fmt::time(last.t_s)
+        );
         let _ = writeln!(
             s,
             "{:>20} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}  ratio / note",

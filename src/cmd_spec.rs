@@ -1,42 +1,63 @@
-//! `imudrift spec SENSOR.toml...`: spec-sheet values beside the values read back from a simulated
-//! 12 h, 100 Hz static log (Woodman's Allan method), and drift at 1 min, 10 min and 1 h (heading and
-//! horizontal position, law and simulation) side by side for all sensors given.
+//! `imudrift spec SENSOR.toml...`: spec-sheet comparison of several sensors side by side: drift
+//! at chosen times (heading and horizontal position, law and simulation), requirements answered
+//! directly (`--require "pos_horizontal_m < 10 m @ 300 s"`: pass or fail with the margin), and on
+//! request (`--readback`) the spec ARW and bias instability beside the values read back from a
+//! simulated 12 h, 100 Hz static log (Woodman's Allan method).
 
 use crate::cmd_simulate::{check_memory, execute, pool};
+use crate::fmt;
 use crate::output::{ensure_dir, write_atomic, write_string};
 use anyhow::{Context, Result};
+use montecarlo::channels::Channel;
+use montecarlo::requirement::{evaluate, Requirement, RequirementResult, Verdict};
 use montecarlo::spec::{
-    drift_experiment, drift_rows, gyro_readback, SensorSpec, READBACK_CONFIDENCE,
+    drift_experiment, drift_rows, gyro_readback, gyro_spec_values, SensorSpec, READBACK_CONFIDENCE,
     READBACK_DURATION_S, READBACK_RATE_HZ,
 };
-use noise::{SensorModel, TermFilter};
+use noise::{Effect, Sensor, SensorModel, TermFilter};
 use serde::Serialize;
 use std::io::Write;
 use std::path::PathBuf;
+
+/// Drift times when neither --times nor --require gives any, s.
+const DEFAULT_TIMES_S: [f64; 3] = [60.0, 600.0, 3600.0];
+/// Monte Carlo runs per sensor: enough for the table (200), more when a requirement's p95 must be
+/// placed against a threshold (500 runs: the p95's 95 % interval spans about ranks 465-485).
+const DEFAULT_RUNS: u64 = 200;
+const DEFAULT_RUNS_REQUIRE: u64 = 500;
 
 #[derive(clap::Args)]
 pub struct Args {
     /// Sensor TOMLs (configs/sensors/*.toml)
     #[arg(required = true)]
     pub sensors: Vec<PathBuf>,
-    /// Monte Carlo runs for the drift table
-    #[arg(long, default_value_t = 200)]
-    pub runs: u64,
+    /// A requirement to answer per sensor, e.g. "pos_horizontal_m < 10 m @ 300 s" or
+    /// "p50 yaw_rad < 2 deg @ 10 min" (statistic of |error|: p50, p68, p95 (default), p99, rms,
+    /// mean); repeat for several
+    #[arg(long, value_name = "REQ")]
+    pub require: Vec<String>,
+    /// Also read the ARW and bias instability back from a simulated static log (12 h at 100 Hz
+    /// unless --readback-duration says otherwise) and set them beside the spec values
+    #[arg(long)]
+    pub readback: bool,
+    /// Monte Carlo runs per sensor for the drift table [default: 200; 500 with --require]
+    #[arg(long)]
+    pub runs: Option<u64>,
     /// Master seed (readback log and drift runs)
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Worker threads (default: all cores); results are identical for any value
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Drift times, s
-    #[arg(long, value_delimiter = ',', default_values_t = [60.0, 600.0, 3600.0])]
-    pub times: Vec<f64>,
+    /// Drift times, s [default: 60,600,3600, or only the requirements' times with --require]
+    #[arg(long, value_delimiter = ',')]
+    pub times: Option<Vec<f64>>,
     /// Sample rate of the drift runs, Hz
     #[arg(long, default_value_t = 100.0)]
     pub rate: f64,
-    /// Length of the simulated readback log, s (Woodman: 12 h)
-    #[arg(long, default_value_t = READBACK_DURATION_S)]
-    pub readback_duration: f64,
+    /// Length of the simulated readback log, s (Woodman: 12 h); implies --readback
+    #[arg(long)]
+    pub readback_duration: Option<f64>,
     /// Keep only these error terms
     #[arg(long, value_delimiter = ',')]
     pub only: Option<Vec<String>>,
@@ -54,20 +75,93 @@ pub struct Args {
 #[derive(Serialize)]
 struct SpecDoc {
     seed: u64,
-    readback_duration_s: f64,
+    /// `null` when no readback was asked for.
+    readback_duration_s: Option<f64>,
     readback_rate_hz: f64,
     readback_confidence: f64,
     drift_rate_hz: f64,
-    sensors: Vec<SensorSpec>,
+    sensors: Vec<SensorOut>,
+}
+
+/// One sensor's comparison with what the CLI adds: notes on what the model lacks, requirements.
+#[derive(Serialize)]
+struct SensorOut {
+    #[serde(flatten)]
+    spec: SensorSpec,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    model_notes: Vec<String>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    requirements: Vec<RequirementResult>,
+}
+
+/// Whether any axis of `sensor` has any error term.
+fn has_any(model: &SensorModel, sensor: Sensor) -> bool {
+    Effect::ALL.iter().any(|&e| model.has(sensor, e))
+}
+
+/// What the model cannot tell, as notes for the reader.
+fn model_notes(model: &SensorModel) -> Vec<String> {
+    let mut notes = Vec::new();
+    if !has_any(model, Sensor::Accel) {
+        notes.push("the model has no accelerometer error terms: perfect accelerometers are assumed, so position and velocity drift come only through tilt from the gyros (optimistic)".into());
+    }
+    if !has_any(model, Sensor::Gyro) {
+        notes.push("the model has no gyro error terms: perfect gyros are assumed, so attitude does not drift".into());
+    }
+    notes
+}
+
+/// Whether the model has a term that drives `channel`.
+fn informs(model: &SensorModel, channel: Channel) -> bool {
+    let gyro = has_any(model, Sensor::Gyro);
+    let accel = has_any(model, Sensor::Accel);
+    if channel.name().ends_with("_rad") {
+        gyro
+    } else {
+        gyro || accel
+    }
 }
 
 pub fn run(args: Args) -> Result<()> {
-    if args.times.is_empty() || args.times.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
+    let requirements = args
+        .require
+        .iter()
+        .map(|r| r.parse::<Requirement>())
+        .collect::<Result<Vec<_>, _>>()
+        .context("--require")?;
+    let mut times: Vec<f64> = match &args.times {
+        Some(t) => t.clone(),
+        None if !requirements.is_empty() => Vec::new(),
+        None => DEFAULT_TIMES_S.to_vec(),
+    };
+    if times.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
         anyhow::bail!("--times: expected positive times in seconds, e.g. 60,600,3600");
     }
-    if !(args.readback_duration.is_finite() && args.readback_duration * READBACK_RATE_HZ >= 1000.0)
-    {
-        anyhow::bail!("--readback-duration: expected at least 10 s");
+    times.extend(requirements.iter().map(|r| r.t_s));
+    times.sort_by(f64::total_cmp);
+    times.dedup();
+    if times.is_empty() {
+        anyhow::bail!("--times: expected positive times in seconds, e.g. 60,600,3600");
+    }
+    let runs = args.runs.unwrap_or(if requirements.is_empty() {
+        DEFAULT_RUNS
+    } else {
+        DEFAULT_RUNS_REQUIRE
+    });
+    let readback_duration = match args.readback_duration {
+        Some(d) => Some(d),
+        None => args.readback.then_some(READBACK_DURATION_S),
+    };
+    if let Some(d) = readback_duration {
+        if !(d.is_finite() && d * READBACK_RATE_HZ >= 1000.0) {
+            anyhow::bail!("--readback-duration: expected at least 10 s");
+        }
+        // 8 bytes per sample per axis; refuse before allocating what the machine cannot hold.
+        if d * READBACK_RATE_HZ > 2e9 {
+            anyhow::bail!(
+                "--readback-duration: {d} s at {READBACK_RATE_HZ} Hz is more than 2e9 samples (16 GB per axis); use at most 5.5e6 s (64 days)"
+            );
+        }
     }
     let filter = TermFilter::parse(
         args.only.as_ref().map(|v| v.join(",")).as_deref(),
@@ -81,17 +175,21 @@ pub fn run(args: Args) -> Result<()> {
         let model = SensorModel::load(path)
             .map_err(|e| anyhow::anyhow!("{e}"))?
             .filtered(&filter);
-        let exp = drift_experiment(&model, &args.times, args.rate, args.runs, args.seed)
+        let exp = drift_experiment(&model, &times, args.rate, runs, args.seed)
             .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
         check_memory(&exp, exp.runs)?;
-        eprintln!(
-            "{}: reading back a {:.0} h, {} Hz static log ...",
-            model.name,
-            args.readback_duration / 3600.0,
-            READBACK_RATE_HZ
-        );
-        let gyro = pool
-            .install(|| gyro_readback(&model, args.seed, args.readback_duration, READBACK_RATE_HZ));
+        let gyro = match readback_duration {
+            Some(d) => {
+                eprintln!(
+                    "{}: reading back a {}, {} Hz static log ...",
+                    model.name,
+                    fmt::time(d),
+                    READBACK_RATE_HZ
+                );
+                pool.install(|| gyro_readback(&model, args.seed, d, READBACK_RATE_HZ))
+            }
+            None => gyro_spec_values(&model, READBACK_RATE_HZ),
+        };
         let batch = pool.install(|| execute(&exp, 0..exp.runs, &model.name));
         let report = exp.report(&batch.matrix, &batch.failures);
         for f in &batch.failures {
@@ -100,16 +198,32 @@ pub fn run(args: Args) -> Result<()> {
                 model.name, f.run, f.message
             );
         }
-        sensors.push(SensorSpec {
-            name: model.name.clone(),
-            gyro,
-            drift: drift_rows(&report),
-            drift_runs: report.runs_ok,
+        let checkpoint_times = exp.scenario.checkpoint_times_s();
+        let requirements = requirements
+            .iter()
+            .map(|req| {
+                let cp = checkpoint_times
+                    .iter()
+                    .position(|&t| (t - req.t_s).abs() <= 0.5 / args.rate)
+                    .context("a requirement's time is not a checkpoint")?;
+                let values = batch.matrix.series(cp, req.channel as usize);
+                Ok(evaluate(req, values, informs(&model, req.channel)))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        sensors.push(SensorOut {
+            spec: SensorSpec {
+                name: model.name.clone(),
+                gyro,
+                drift: drift_rows(&report),
+                drift_runs: report.runs_ok,
+            },
+            model_notes: model_notes(&model),
+            requirements,
         });
     }
     let doc = SpecDoc {
         seed: args.seed,
-        readback_duration_s: args.readback_duration,
+        readback_duration_s: readback_duration,
         readback_rate_hz: READBACK_RATE_HZ,
         readback_confidence: READBACK_CONFIDENCE,
         drift_rate_hz: args.rate,
@@ -128,7 +242,7 @@ pub fn run(args: Args) -> Result<()> {
         write_atomic(&dir.join("spec.csv"), |w| {
             writeln!(w, "sensor,axis,arw_spec,arw_sim,arw_sim_lo,arw_sim_hi,bi_spec,bi_sim,bi_sim_lo,bi_sim_hi")?;
             for s in &doc.sensors {
-                let g = &s.gyro;
+                let (s, g) = (&s.spec, &s.spec.gyro);
                 for a in 0..3 {
                     let f = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v:.6e}"));
                     writeln!(
@@ -153,6 +267,7 @@ pub fn run(args: Args) -> Result<()> {
         write_atomic(&dir.join("drift.csv"), |w| {
             writeln!(w, "sensor,t_s,heading_rms_sim_rad,heading_rms_law_rad,horizontal_mean_sim_m,horizontal_mean_law_m,horizontal_rms_sim_m,horizontal_rms_law_m,horizontal_p95_sim_m")?;
             for s in &doc.sensors {
+                let s = &s.spec;
                 for d in &s.drift {
                     let f = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v:.6e}"));
                     writeln!(
@@ -180,88 +295,183 @@ pub fn run(args: Args) -> Result<()> {
 fn table(doc: &SpecDoc) -> String {
     use std::fmt::Write as _;
     let mut s = String::new();
-    let deg = 180.0 / std::f64::consts::PI;
-    let f =
-        |x: Option<f64>, scale: f64| x.map_or("n/a".to_string(), |v| format!("{:.4}", v * scale));
-    let _ = writeln!(
-        s,
-        "\nspec vs readback (simulated {:.0} h, {} Hz static log; Woodman's method; {:.0} % intervals)",
-        doc.readback_duration_s / 3600.0,
-        doc.readback_rate_hz,
-        100.0 * doc.readback_confidence
-    );
-    let _ = writeln!(
-        s,
-        "{:<22} {:>4} {:>11} {:>11} {:>21} {:>11} {:>11} {:>21}",
-        "sensor", "axis", "ARW spec", "ARW sim", "interval", "BI spec", "BI sim", "interval"
-    );
-    let _ = writeln!(
-        s,
-        "{:<22} {:>4} {:>11} {:>11} {:>21} {:>11} {:>11} {:>21}",
-        "", "", "deg/sqrt(h)", "deg/sqrt(h)", "", "deg/h", "deg/h", ""
-    );
-    for sen in &doc.sensors {
-        let g = &sen.gyro;
+    let opt = |x: Option<f64>, f: fn(f64) -> String| x.map_or("n/a".to_string(), f);
+    if let Some(d) = doc.readback_duration_s {
+        let _ = writeln!(
+            s,
+            "\nspec vs readback (simulated {}, {} Hz static log; Woodman's method; {:.0} % intervals)",
+            fmt::time(d),
+            doc.readback_rate_hz,
+            100.0 * doc.readback_confidence
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "\nspec values (--readback reads them back from a simulated 12 h static log)"
+        );
+        let _ = writeln!(
+            s,
+            "{:<22} {:>4} {:>18} {:>12}",
+            "sensor", "axis", "ARW", "BI"
+        );
+        for sen in &doc.sensors {
+            for a in 0..3 {
+                let g = &sen.spec.gyro;
+                let _ = writeln!(
+                    s,
+                    "{:<22} {:>4} {:>18} {:>12}",
+                    sen.spec.name,
+                    ["x", "y", "z"][a],
+                    opt(g.arw_spec[a], fmt::arw),
+                    opt(g.bi_spec[a], fmt::gyro_bias),
+                );
+            }
+        }
+    }
+    for sen in doc
+        .sensors
+        .iter()
+        .filter(|_| doc.readback_duration_s.is_some())
+    {
+        if std::ptr::eq(sen, &doc.sensors[0]) {
+            let _ = writeln!(
+                s,
+                "{:<22} {:>4} {:>18} {:>18} {:>30} {:>12} {:>12} {:>26}",
+                "sensor",
+                "axis",
+                "ARW spec",
+                "ARW sim",
+                "interval",
+                "BI spec",
+                "BI sim",
+                "interval"
+            );
+        }
+        let g = &sen.spec.gyro;
         for a in 0..3 {
             let _ = writeln!(
                 s,
-                "{:<22} {:>4} {:>11} {:>11} {:>21} {:>11} {:>11} {:>21}",
-                sen.name,
+                "{:<22} {:>4} {:>18} {:>18} {:>30} {:>12} {:>12} {:>26}",
+                sen.spec.name,
                 ["x", "y", "z"][a],
-                // deg/sqrt(h) = 60 deg/sqrt(s) (theory.md §2 unit conversions).
-                f(g.arw_spec[a], deg * 60.0),
-                f(g.arw_sim[a], deg * 60.0),
-                format!(
-                    "[{}, {}]",
-                    f(g.arw_sim_lo[a], deg * 60.0),
-                    f(g.arw_sim_hi[a], deg * 60.0)
-                ),
-                f(g.bi_spec[a], deg * 3600.0),
-                f(g.bi_sim[a], deg * 3600.0),
-                format!(
-                    "[{}, {}]",
-                    f(g.bi_sim_lo[a], deg * 3600.0),
-                    f(g.bi_sim_hi[a], deg * 3600.0)
-                ),
+                opt(g.arw_spec[a], fmt::arw),
+                opt(g.arw_sim[a], fmt::arw),
+                match (g.arw_sim_lo[a], g.arw_sim_hi[a]) {
+                    (Some(lo), Some(hi)) => format!("[{}, {}]", fmt::arw(lo), fmt::arw(hi)),
+                    _ => String::new(),
+                },
+                opt(g.bi_spec[a], fmt::gyro_bias),
+                opt(g.bi_sim[a], fmt::gyro_bias),
+                match (g.bi_sim_lo[a], g.bi_sim_hi[a]) {
+                    (Some(lo), Some(hi)) =>
+                        format!("[{}, {}]", fmt::gyro_bias(lo), fmt::gyro_bias(hi)),
+                    _ => String::new(),
+                },
             );
         }
         for n in &g.notes {
-            let _ = writeln!(s, "  note: {}: {n}", sen.name);
+            let _ = writeln!(s, "  note: {}: {n}", sen.spec.name);
         }
     }
-    let _ = writeln!(s, "\ndrift, static and level ({} Hz Monte Carlo): heading rms (deg) and horizontal position (m), simulation / law", doc.drift_rate_hz);
     let _ = writeln!(
         s,
-        "{:<22} {:>8} {:>10} {:>10} {:>12} {:>12} {:>12} {:>12}",
+        "\ndrift, static and level ({} Hz Monte Carlo, {} runs): heading rms and horizontal position, simulation / law",
+        doc.drift_rate_hz,
+        doc.sensors.first().map_or(0, |x| x.spec.drift_runs)
+    );
+    let _ = writeln!(
+        s,
+        "{:<22} {:>8} {:>11} {:>11} {:>12} {:>12} {:>12} {:>12} {:>12}",
         "sensor",
-        "t_s",
+        "t",
         "hdg sim",
         "hdg law",
         "hor mean sim",
         "hor mean law",
         "hor rms sim",
-        "hor rms law"
+        "hor rms law",
+        "hor p95 sim"
     );
+    let (yaw, hor) = (Channel::Yaw.name(), Channel::PosHorizontal.name());
     for sen in &doc.sensors {
-        for d in &sen.drift {
-            let g = |x: Option<f64>| x.map_or("n/a".to_string(), |v| format!("{v:.4e}"));
+        for d in &sen.spec.drift {
             let _ = writeln!(
                 s,
-                "{:<22} {:>8} {:>10.4} {:>10} {:>12.4e} {:>12} {:>12.4e} {:>12}",
-                sen.name,
-                d.t_s,
-                d.heading_rms_sim_rad * deg,
-                d.heading_rms_law_rad
-                    .map_or("n/a".to_string(), |v| format!("{:.4}", v * deg)),
-                d.horizontal_mean_sim_m,
-                g(d.horizontal_mean_law_m),
-                d.horizontal_rms_sim_m,
-                g(d.horizontal_rms_law_m),
+                "{:<22} {:>8} {:>11} {:>11} {:>12} {:>12} {:>12} {:>12} {:>12}",
+                sen.spec.name,
+                fmt::time(d.t_s),
+                fmt::channel_value(yaw, d.heading_rms_sim_rad),
+                fmt::channel_opt(yaw, d.heading_rms_law_rad),
+                fmt::channel_value(hor, d.horizontal_mean_sim_m),
+                fmt::channel_opt(hor, d.horizontal_mean_law_m),
+                fmt::channel_value(hor, d.horizontal_rms_sim_m),
+                fmt::channel_opt(hor, d.horizontal_rms_law_m),
+                fmt::channel_value(hor, d.horizontal_p95_sim_m),
             );
             if let Some(n) = &d.law_note {
-                let _ = writeln!(s, "  {:<20} t = {} s: {n}", "", d.t_s);
+                let _ = writeln!(s, "  {:<20} t = {}: {n}", "", fmt::time(d.t_s));
             }
         }
+        for n in &sen.model_notes {
+            let _ = writeln!(s, "  note: {}: {n}", sen.spec.name);
+        }
+    }
+    // Every sensor answers the same requirements, in the order given.
+    let reqs: Vec<&String> = doc
+        .sensors
+        .first()
+        .map(|x| x.requirements.iter().map(|r| &r.requirement).collect())
+        .unwrap_or_default();
+    for req in reqs {
+        let _ = writeln!(
+            s,
+            "\nrequirement \"{req}\" (statistic of |error| over the runs, with its 95 % Monte Carlo interval)"
+        );
+        let _ = writeln!(
+            s,
+            "{:<22} {:>10} {:>12} {:>28} {:>12} {:>22}",
+            "sensor", "verdict", "value", "interval", "threshold", "margin"
+        );
+        for sen in &doc.sensors {
+            for r in sen.requirements.iter().filter(|r| &r.requirement == req) {
+                let v = |x: f64| fmt::channel_value(r.channel, x);
+                let verdict = match r.verdict {
+                    Verdict::Pass => "PASS",
+                    Verdict::Fail => "FAIL",
+                    Verdict::Undecided => "undecided",
+                    Verdict::NotInformed => "n/a",
+                };
+                let _ = writeln!(
+                    s,
+                    "{:<22} {:>10} {:>12} {:>28} {:>12} {:>22}",
+                    sen.spec.name,
+                    verdict,
+                    r.value.map_or("n/a".into(), v),
+                    match (r.value_lo, r.value_hi) {
+                        (Some(lo), Some(hi)) => format!("[{}, {}]", v(lo), v(hi)),
+                        _ => String::new(),
+                    },
+                    v(r.threshold),
+                    match (r.margin, r.value) {
+                        (Some(m), Some(value)) if value <= 10.0 * r.threshold => {
+                            format!("{} ({:+.0} %)", v(m), 100.0 * m / r.threshold)
+                        }
+                        (Some(_), Some(value)) => {
+                            format!("{}x the threshold", fmt::sig(value / r.threshold, 3))
+                        }
+                        _ => String::new(),
+                    },
+                );
+                if r.verdict == Verdict::NotInformed {
+                    let _ = writeln!(
+                        s,
+                        "  note: {}: the model has no error term that drives {}",
+                        sen.spec.name, r.channel
+                    );
+                }
+            }
+        }
+        let _ = writeln!(s, "  PASS / FAIL: the whole 95 % interval is under / over the threshold; undecided: more runs (--runs) decide it; margin = threshold - value");
     }
     s
 }

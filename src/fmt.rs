@@ -84,7 +84,10 @@ pub fn time(t_s: f64) -> String {
 
 /// Angle random walk (rad/sqrt(s)) as spec sheets write it, deg/sqrt(h).
 pub fn arw(v_rad_per_sqrt_s: f64) -> String {
-    format!("{} deg/sqrt(h)", sig(v_rad_per_sqrt_s.to_degrees() * 60.0, 3))
+    format!(
+        "{} deg/sqrt(h)",
+        sig(v_rad_per_sqrt_s.to_degrees() * 60.0, 3)
+    )
 }
 
 /// Gyro bias (rad/s) as spec sheets write it, deg/h.

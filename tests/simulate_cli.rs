@@ -211,3 +211,64 @@ fn bad_inputs_name_file_and_key() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("--shard"));
 }
+
+/// A sensor TOML alone runs with the default static scenario; `--duration` and `--rate` shape it;
+/// the JSON has the contract fields and every law-bearing channel beside its law; the result is
+/// the same as an explicit minimal scenario that names only the sensor (every other key defaults).
+#[test]
+fn a_sensor_toml_runs_with_the_default_static_scenario() {
+    let args = [
+        "simulate",
+        "configs/sensors/mtx.toml",
+        "--duration",
+        "1 min",
+        "--rate",
+        "50",
+        "--runs",
+        "40",
+        "--json",
+    ];
+    let out = ok(imudrift(&args));
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(doc["runs"], 40);
+    assert_eq!(doc["seed"], 1, "default seed");
+    let last = doc["checkpoints"]
+        .as_array()
+        .unwrap()
+        .last()
+        .unwrap()
+        .clone();
+    assert_eq!(last["t_s"], 60.0);
+    let h = &last["channels"]["pos_horizontal_m"];
+    assert!(h["law_std"].as_f64().unwrap() > 0.0 && h["ratio"].as_f64().is_some());
+    // The same through a scenario file that gives only the sensor (and the two edited keys).
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = dir.path().join("minimal.toml");
+    let sensor = root().join("configs/sensors/mtx.toml");
+    std::fs::write(
+        &scenario,
+        format!(
+            "sensor = {:?}\nduration_s = 60.0\nrate_hz = 50.0\n",
+            sensor.display().to_string()
+        ),
+    )
+    .unwrap();
+    let explicit = ok(imudrift(&[
+        "simulate",
+        scenario.to_str().unwrap(),
+        "--runs",
+        "40",
+        "--json",
+    ]));
+    let e: serde_json::Value = serde_json::from_slice(&explicit.stdout).unwrap();
+    assert_eq!(e["checkpoints"], doc["checkpoints"]);
+    // A scenario without a sensor says what is missing and how to give it.
+    std::fs::write(&scenario, "runs = 10\n").unwrap();
+    let out = imudrift(&["simulate", scenario.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("key `sensor`") && err.contains("sensor = "),
+        "{err}"
+    );
+}

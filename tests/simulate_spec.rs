@@ -25,7 +25,14 @@ fn spec_json(args: &[&str]) -> Vec<u8> {
 
 #[test]
 fn mtx_spec_reproduces_woodman_table_4() {
-    let stdout = spec_json(&["configs/sensors/mtx.toml", "--runs", "20", "--times", "60"]);
+    let stdout = spec_json(&[
+        "configs/sensors/mtx.toml",
+        "--readback",
+        "--runs",
+        "20",
+        "--times",
+        "60",
+    ]);
     let doc: serde_json::Value = serde_json::from_slice(&stdout).unwrap();
     let g = &doc["sensors"][0]["gyro"];
     // Table 4: ARW deg/sqrt(s) and bias instability (Allan minimum) deg/s, axes x, y, z.
@@ -75,4 +82,104 @@ fn spec_is_identical_for_any_thread_count() {
         run("1") == run("3"),
         "spec output depends on the thread count"
     );
+}
+
+/// Run `imudrift spec ARGS...` expecting failure; its stderr.
+fn spec_error(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_imudrift"))
+        .arg("spec")
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success(), "expected a failure for {args:?}");
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "an error, not a panic: {args:?}"
+    );
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// `--require` answers per sensor with a verdict that agrees with the statistic, its Monte Carlo
+/// interval and the margin; the requirement's time is simulated even when --times does not list
+/// it; no readback runs unless asked (the readback values are null, the spec values are given);
+/// a gyro-only model carries the note that its accelerometers are assumed perfect.
+#[test]
+fn spec_require_answers_pass_fail_with_margin() {
+    let stdout = spec_json(&[
+        "configs/sensors/mtx.toml",
+        "configs/sensors/gg1320an.toml",
+        "--runs",
+        "200",
+        "--require",
+        "pos_horizontal_m < 10 m @ 300 s",
+        "--require",
+        "p50 yaw_rad < 1 deg @ 1 min",
+    ]);
+    let doc: serde_json::Value = serde_json::from_slice(&stdout).unwrap();
+    assert!(doc["readback_duration_s"].is_null());
+    for s in doc["sensors"].as_array().unwrap() {
+        let g = &s["gyro"];
+        assert!(g["arw_spec"][0].as_f64().unwrap() > 0.0, "{g}");
+        assert!(g["arw_sim"][0].is_null(), "no readback unless asked: {g}");
+        let times: Vec<f64> = s["drift"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|d| d["t_s"].as_f64().unwrap())
+            .collect();
+        assert_eq!(times, [60.0, 300.0], "{}", s["name"]);
+        let reqs = s["requirements"].as_array().unwrap();
+        assert_eq!(reqs.len(), 2);
+        for r in reqs {
+            let (value, lo, hi, thr) = (
+                r["value"].as_f64().unwrap(),
+                r["value_lo"].as_f64().unwrap(),
+                r["value_hi"].as_f64().unwrap(),
+                r["threshold"].as_f64().unwrap(),
+            );
+            assert!(lo <= value && value <= hi, "{r}");
+            assert!((r["margin"].as_f64().unwrap() - (thr - value)).abs() < 1e-9 * thr);
+            let expected = if hi < thr {
+                "pass"
+            } else if lo >= thr {
+                "fail"
+            } else {
+                "undecided"
+            };
+            assert_eq!(r["verdict"], expected, "{r}");
+            assert_eq!(r["pass"], value < thr, "{r}");
+        }
+    }
+    let mtx = &doc["sensors"][0];
+    let gg = &doc["sensors"][1];
+    // MTx at 5 min drifts kilometres (Woodman: 150 m at 1 min, growing as t^3): a clear fail.
+    assert_eq!(mtx["requirements"][0]["verdict"], "fail");
+    assert!(mtx["model_notes"].is_null());
+    // The RLG's heading at 1 min is about 1e-3 deg: a clear pass.
+    assert_eq!(gg["requirements"][1]["verdict"], "pass");
+    let notes = gg["model_notes"].as_array().unwrap();
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.as_str().unwrap().contains("no accelerometer")),
+        "{notes:?}"
+    );
+}
+
+#[test]
+fn spec_bad_requirements_are_errors_showing_the_form() {
+    for (req, needle) in [
+        ("pos_horizontal_m < 10", "no `@ TIME`"),
+        ("heading < 2 deg @ 60 s", "unknown channel"),
+        ("pos_horizontal_m < 10 deg @ 60 s", "does not fit"),
+    ] {
+        let e = spec_error(&["configs/sensors/mtx.toml", "--require", req]);
+        assert!(e.contains(needle) && e.contains("e.g."), "{req}: {e}");
+    }
+    let e = spec_error(&["configs/sensors/mtx.toml", "--readback-duration", "1e300"]);
+    assert!(e.contains("--readback-duration"), "{e}");
+    let e = spec_error(&["configs/sensors/mtx.toml", "--times", "0"]);
+    assert!(e.contains("--times"), "{e}");
 }

@@ -21,6 +21,7 @@ pub mod drift;
 pub mod experiment;
 pub mod laws;
 pub mod report;
+pub mod requirement;
 pub mod runner;
 pub mod scenario;
 pub mod shard;

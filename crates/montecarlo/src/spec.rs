@@ -111,31 +111,11 @@ pub fn gyro_readback(model: &SensorModel, seed: u64, duration_s: f64, rate_hz: f
         // The exact Allan variance of the sampled model (noise crate), not the continuous one: at tau
         // near dt they differ (e.g. the flicker band edge).
         let closed = |tau: f64| m.allan_variance_sampled(tau, dt_s);
-        // The plateau window of a flicker bias instability: the averaging times where its Allan
-        // deviation is flat (the noise crate's `allan_minimum` convention solves B over it); outside,
-        // the finite band of Gauss-Markov components bends the curve (a model artifact).
-        let window = match &m.bias_instability {
-            Some(noise::BiasInstability::Flicker(f)) => (30.0 * f.tau_min_s, f.tau_max_s / 30.0),
-            _ => (0.0, f64::INFINITY),
-        };
+        let window = plateau_window(m);
         let in_window = |tau: f64| tau >= window.0 && tau <= window.1;
         if m.bias_instability.is_some() {
-            // The spec value as the sensor file states it: the minimum of the closed-form Allan
-            // deviation over the plateau window (Woodman's reading, TR-696 §5.1), on a fine log grid
-            // independent of the log length (20 per decade); without a window, over the log's taus.
-            let taus: Vec<f64> = if window.1.is_finite() {
-                let decades = (window.1 / window.0).log10();
-                let n = (20.0 * decades).ceil().max(1.0) as usize;
-                (0..=n)
-                    .map(|i| window.0 * 10f64.powf(decades * i as f64 / n as f64))
-                    .collect()
-            } else {
-                points.iter().map(|p| p.tau_s).collect()
-            };
-            g.bi_spec[axis] = taus
-                .iter()
-                .map(|&t| closed(t).sqrt())
-                .min_by(f64::total_cmp);
+            let log_taus: Vec<f64> = points.iter().map(|p| p.tau_s).collect();
+            g.bi_spec[axis] = bi_spec_value(m, dt_s, &log_taus);
         }
         // ARW: the slope -1/2 line touching the curve, read at 1 s (Woodman §5.1).
         if let (Some(nv), Some(p)) = (m.white_noise, at(readings.arw_tau_s)) {
@@ -210,6 +190,57 @@ pub fn gyro_readback(model: &SensorModel, seed: u64, duration_s: f64, rate_hz: f
                     ));
                 }
             }
+        }
+    }
+    g
+}
+
+/// The plateau window of a flicker bias instability: the averaging times where its Allan deviation
+/// is flat (the noise crate's `allan_minimum` convention solves B over it); outside, the finite
+/// band of Gauss-Markov components bends the curve (a model artifact).
+fn plateau_window(m: &noise::AxisModel) -> (f64, f64) {
+    match &m.bias_instability {
+        Some(noise::BiasInstability::Flicker(f)) => (30.0 * f.tau_min_s, f.tau_max_s / 30.0),
+        _ => (0.0, f64::INFINITY),
+    }
+}
+
+/// The bias-instability spec value as the sensor file states it: the minimum of the model's
+/// closed-form Allan deviation over the plateau window (Woodman's reading, TR-696 §5.1), on a
+/// fine log grid independent of the log length (20 per decade); without a window, over `taus`.
+fn bi_spec_value(m: &noise::AxisModel, dt_s: f64, taus: &[f64]) -> Option<f64> {
+    let window = plateau_window(m);
+    let grid: Vec<f64> = if window.1.is_finite() {
+        let decades = (window.1 / window.0).log10();
+        let n = (20.0 * decades).ceil().max(1.0) as usize;
+        (0..=n)
+            .map(|i| window.0 * 10f64.powf(decades * i as f64 / n as f64))
+            .collect()
+    } else {
+        taus.to_vec()
+    };
+    grid.iter()
+        .map(|&t| m.allan_variance_sampled(t, dt_s).sqrt())
+        .min_by(f64::total_cmp)
+}
+
+/// The gyro spec values of `model` without a readback (the `*_sim` fields stay `None`): ARW as
+/// configured and the bias instability as the minimum of the closed-form Allan deviation (for a
+/// bias instability without a plateau window, over the taus a 12 h, 9-bin readback would use).
+pub fn gyro_spec_values(model: &SensorModel, rate_hz: f64) -> GyroSpec {
+    let dt_s = 1.0 / rate_hz;
+    let tau_max = READBACK_DURATION_S / 9.0;
+    let decades = (tau_max / dt_s).log10();
+    let n = (10.0 * decades).floor() as usize;
+    let taus: Vec<f64> = (0..=n)
+        .map(|i| dt_s * 10f64.powf(i as f64 / 10.0))
+        .collect();
+    let mut g = GyroSpec::default();
+    for axis in 0..3 {
+        let m = model.axis(noise::Sensor::Gyro, axis);
+        g.arw_spec[axis] = m.white_noise;
+        if m.bias_instability.is_some() {
+            g.bi_spec[axis] = bi_spec_value(m, dt_s, &taus);
         }
     }
     g
