@@ -8,6 +8,7 @@ mod cmd_allan;
 mod cmd_diagnose;
 mod cmd_generate;
 mod cmd_merge;
+mod cmd_plan;
 mod cmd_simulate;
 mod cmd_spec;
 mod fmt;
@@ -38,6 +39,8 @@ enum Command {
     Allan(cmd_allan::Args),
     /// Spec-sheet comparison: spec values vs values read back from simulation, drift side by side
     Spec(cmd_spec::Args),
+    /// How long a static log must be to read each noise term to a stated uncertainty
+    Plan(cmd_plan::Args),
     /// Find where model and measurement disagree, name the missing effect, show the gap shrink
     Diagnose(cmd_diagnose::Args),
     /// Combine shard outputs of `simulate --shard i/k` into the single-machine result
@@ -51,6 +54,7 @@ fn main() -> std::process::ExitCode {
         Command::Generate(a) => cmd_generate::run(a),
         Command::Allan(a) => cmd_allan::run(a),
         Command::Spec(a) => cmd_spec::run(a),
+        Command::Plan(a) => cmd_plan::run(a),
         Command::Diagnose(a) => cmd_diagnose::run(a),
         Command::Merge(a) => cmd_merge::run(a),
     };

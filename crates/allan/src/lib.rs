@@ -32,6 +32,7 @@ pub mod chi2;
 pub mod edf;
 pub mod fit;
 mod grid;
+pub mod plan;
 pub mod testdata;
 
 pub use grid::TauGrid;

@@ -1,0 +1,226 @@
+//! `imudrift plan SENSOR.toml`: how long a static log must be to read each noise term of each
+//! axis off its Allan deviation to a stated relative uncertainty, and what a given length
+//! resolves (the method and its sources: `allan::plan`).
+
+use crate::cli::{check_rate_hz, parse_duration_s};
+use crate::fmt;
+use allan::plan::{plan_term, Curve, PlanTerm, TermPlan};
+use anyhow::{bail, Context, Result};
+use noise::closed_form::rate_random_walk_avar_sampled;
+use noise::{Sensor, SensorModel};
+use serde::Serialize;
+use std::io::Write;
+use std::path::PathBuf;
+
+/// Longest averaging time searched for a reading, s (about 12 days).
+const MAX_TAU_S: f64 = 1e6;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Sensor TOML (configs/sensors/*.toml)
+    pub sensor: PathBuf,
+    /// Target relative standard uncertainty of each reading: a fraction (0.1) or a percentage (10%)
+    #[arg(long, default_value = "10%")]
+    pub uncertainty: String,
+    /// Also say how well a log of this length reads each term: seconds or a time ("2 h")
+    #[arg(long)]
+    pub duration: Option<String>,
+    /// Sample rate of the log, Hz
+    #[arg(long, default_value_t = 100.0)]
+    pub rate: f64,
+    /// Print one JSON document on stdout (human text stays on stderr)
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Serialize)]
+struct AxisPlan {
+    sensor: &'static str,
+    axis: &'static str,
+    terms: Vec<TermPlan>,
+}
+
+#[derive(Serialize)]
+struct PlanDoc {
+    sensor: String,
+    rate_hz: f64,
+    target_uncertainty: f64,
+    duration_s: Option<f64>,
+    /// The longest of the required durations: a log this long reads every readable term.
+    required_duration_s: Option<f64>,
+    axes: Vec<AxisPlan>,
+}
+
+fn parse_fraction(text: &str) -> Result<f64> {
+    let t = text.trim();
+    let v = match t.strip_suffix('%') {
+        Some(p) => p.trim().parse::<f64>().map(|v| v / 100.0),
+        None => t.parse::<f64>(),
+    }
+    .ok()
+    .filter(|v| v.is_finite() && *v > 0.0 && *v < 1.0);
+    v.with_context(|| {
+        format!("--uncertainty: expected a fraction in (0, 1) or a percentage such as 10%, found \"{text}\"")
+    })
+}
+
+/// The plan of one axis of `model`.
+fn plan_axis(
+    model: &SensorModel,
+    sensor: Sensor,
+    axis: usize,
+    dt_s: f64,
+    target: f64,
+    duration_s: Option<f64>,
+) -> Vec<TermPlan> {
+    let m = model.axis(sensor, axis);
+    let total = |t: f64| m.allan_variance_sampled(t, dt_s);
+    let mut out = Vec::new();
+    let mut term = |kind: PlanTerm, f: &dyn Fn(f64) -> f64| {
+        let curve = Curve {
+            total: &total,
+            term: f,
+        };
+        out.push(plan_term(kind, &curve, dt_s, target, duration_s, MAX_TAU_S));
+    };
+    if let Some(n) = m.white_noise {
+        // The Allan variance of sampled white noise is exactly N^2 / tau (IEEE 952 annex C).
+        term(PlanTerm::WhiteNoise, &|t| n * n / t);
+    }
+    if let Some(bi) = &m.bias_instability {
+        term(PlanTerm::BiasInstability, &|t| bi.avar_sampled(t, dt_s));
+    }
+    if let Some(k) = m.rate_random_walk {
+        term(PlanTerm::RateRandomWalk, &|t| {
+            rate_random_walk_avar_sampled(k, t, dt_s)
+        });
+    }
+    out
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let model = SensorModel::load(&args.sensor).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let target = parse_fraction(&args.uncertainty)?;
+    let rate_hz = check_rate_hz("--rate", args.rate)?;
+    let duration_s = args
+        .duration
+        .as_deref()
+        .map(|d| parse_duration_s("--duration", d))
+        .transpose()?;
+    let dt_s = 1.0 / rate_hz;
+    let mut axes = Vec::new();
+    for (sensor, name) in [(Sensor::Gyro, "gyro"), (Sensor::Accel, "accel")] {
+        for (axis, axis_name) in ["x", "y", "z"].into_iter().enumerate() {
+            let terms = plan_axis(&model, sensor, axis, dt_s, target, duration_s);
+            if !terms.is_empty() {
+                axes.push(AxisPlan {
+                    sensor: name,
+                    axis: axis_name,
+                    terms,
+                });
+            }
+        }
+    }
+    if axes.is_empty() {
+        bail!(
+            "{}: the model has no white noise, bias instability or rate random walk to plan for",
+            args.sensor.display()
+        );
+    }
+    let required_duration_s = axes
+        .iter()
+        .flat_map(|a| a.terms.iter().filter_map(|t| t.required_duration_s))
+        .max_by(f64::total_cmp);
+    let doc = PlanDoc {
+        sensor: model.name.clone(),
+        rate_hz,
+        target_uncertainty: target,
+        duration_s,
+        required_duration_s,
+        axes,
+    };
+    eprint!("{}", text(&doc));
+    if args.json {
+        let mut out = std::io::stdout().lock();
+        serde_json::to_writer_pretty(&mut out, &doc)?;
+        writeln!(out)?;
+    }
+    Ok(())
+}
+
+/// A duration as a person plans it: "41 s", "12.5 min", "3.2 h", "2.1 days".
+fn human_duration(s: f64) -> String {
+    if s < 120.0 {
+        format!("{} s", fmt::sig(s, 3))
+    } else if s < 2.0 * 3600.0 {
+        format!("{} min", fmt::sig(s / 60.0, 3))
+    } else if s < 48.0 * 3600.0 {
+        format!("{} h", fmt::sig(s / 3600.0, 3))
+    } else {
+        format!("{} days", fmt::sig(s / 86400.0, 3))
+    }
+}
+
+fn text(doc: &PlanDoc) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{}: static log at {} Hz; each term read where it dominates the Allan deviation, to {} % (1 sigma)",
+        doc.sensor,
+        doc.rate_hz,
+        fmt::sig(100.0 * doc.target_uncertainty, 3)
+    );
+    let _ = writeln!(
+        s,
+        "{:<6} {:>4} {:<17} {:>11} {:>7} {:>14} {:>16}",
+        "sensor",
+        "axis",
+        "term",
+        "read at",
+        "share",
+        "needs a log of",
+        doc.duration_s
+            .map_or(String::new(), |d| format!("{} gives", human_duration(d)))
+    );
+    for a in &doc.axes {
+        for t in &a.terms {
+            let _ = writeln!(
+                s,
+                "{:<6} {:>4} {:<17} {:>11} {:>7} {:>14} {:>16}",
+                a.sensor,
+                a.axis,
+                t.term.name(),
+                t.tau_s
+                    .map_or("-".into(), |v| format!("{} s", fmt::sig(v, 3))),
+                t.share
+                    .map_or("-".into(), |v| format!("{:.0} %", 100.0 * v)),
+                t.required_duration_s
+                    .map_or("cannot".into(), human_duration),
+                match (doc.duration_s, t.uncertainty_at_duration) {
+                    (None, _) => String::new(),
+                    (Some(_), Some(u)) => format!("{} %", fmt::sig(100.0 * u, 2)),
+                    (Some(_), None) => "not resolved".into(),
+                }
+            );
+            if let Some(n) = &t.note {
+                let _ = writeln!(s, "  note: {} {} {}: {n}", a.sensor, a.axis, t.term.name());
+            }
+        }
+    }
+    if let Some(d) = doc.required_duration_s {
+        let _ = writeln!(
+            s,
+            "\na static log of {} ({} samples at {} Hz) reads every readable term above to {} %",
+            human_duration(d),
+            (d * doc.rate_hz).ceil(),
+            doc.rate_hz,
+            fmt::sig(100.0 * doc.target_uncertainty, 3)
+        );
+    }
+    let _ = writeln!(
+        s,
+        "uncertainty = 1/sqrt(2 nu), nu the equivalent degrees of freedom of the overlapping Allan variance at that tau (Greenhall & Riley 2003; NIST SP 1065 5.3); share = the term's part of the model's Allan variance there (the rest biases the reading)"
+    );
+    s
+}
