@@ -97,7 +97,7 @@ struct RawTriad {
 struct RawAxis {
     quantization: Option<Text>,
     white_noise: Option<Text>,
-    bias_instability: Option<RawBiasInstability>,
+    bias_instability: Option<toml::Spanned<RawBiasField>>,
     rate_random_walk: Option<Text>,
     rate_ramp: Option<Text>,
     gauss_markov: Option<RawGaussMarkov>,
@@ -107,6 +107,59 @@ struct RawAxis {
     turn_on_bias: Option<Text>,
     scale_factor: Option<Text>,
     misalignment: Option<Vec<Text>>,
+}
+
+/// What `bias_instability` may be: a value with a unit (the Allan-deviation minimum, as spec
+/// sheets quote "in-run bias stability") or the table form with its convention stated.
+#[derive(Clone)]
+enum RawBiasField {
+    Plain(String),
+    Table(RawBiasInstability),
+}
+
+/// The accepted forms, for error messages.
+const BIAS_INSTABILITY_FORMS: &str = "a value with a unit, e.g. bias_instability = \"10 deg/h\" (the Allan-deviation minimum, as spec sheets quote in-run bias stability), or a table: { value = \"10 deg/h\", convention = \"allan_minimum\" | \"ieee\" }, or { model = \"random_walk\", stability = \"36 ug\", period = \"800 s\" }";
+
+impl<'de> Deserialize<'de> for RawBiasField {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = RawBiasField;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str(BIAS_INSTABILITY_FORMS)
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<RawBiasField, E> {
+                Ok(RawBiasField::Plain(v.to_string()))
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> Result<RawBiasField, A::Error> {
+                RawBiasInstability::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+                    .map(RawBiasField::Table)
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+impl RawBiasField {
+    /// The table form; a plain value becomes `{ value, convention = "allan_minimum" }` with the
+    /// value's place in the file.
+    fn table(field: &toml::Spanned<RawBiasField>) -> RawBiasInstability {
+        match field.get_ref() {
+            RawBiasField::Table(t) => t.clone(),
+            RawBiasField::Plain(v) => RawBiasInstability {
+                model: None,
+                value: Some(toml::Spanned::new(field.span(), v.clone())),
+                convention: Some(toml::Spanned::new(field.span(), "allan_minimum".into())),
+                band: None,
+                per_decade: None,
+                stability: None,
+                period: None,
+            },
+        }
+    }
 }
 
 #[derive(Deserialize, Clone)]
@@ -208,7 +261,7 @@ impl SensorModel {
     pub fn from_toml_str(text: &str, source_name: &str) -> Result<SensorModel, ConfigError> {
         let raw: RawSensor = toml::from_str(text).map_err(|e| ConfigError::Parse {
             file: source_name.to_string(),
-            message: e.to_string().trim_end().to_string(),
+            message: with_shape_hint(e.to_string().trim_end()),
         })?;
         let ctx = Ctx {
             file: source_name,
@@ -622,7 +675,8 @@ fn convert_axis(
     }
     // Bias instability last: the "allan_minimum" convention needs the other terms.
     if let Some((b, key)) = pick!(bias_instability) {
-        m.bias_instability = Some(convert_bias_instability(ctx, &key, b, sig, &m)?);
+        let table = RawBiasField::table(b);
+        m.bias_instability = Some(convert_bias_instability(ctx, &key, &table, sig, &m)?);
     }
     Ok(m)
 }
@@ -784,6 +838,56 @@ fn convert_bias_instability(
             format!("\"{other}\""),
         )),
     }
+}
+
+/// An example of each value-with-unit key, for errors about a value of the wrong shape.
+const KEY_EXAMPLES: [(&str, &str); 10] = [
+    ("quantization", "quantization = \"0.001 deg\""),
+    (
+        "white_noise",
+        "white_noise = \"0.05 deg/s/sqrt(Hz)\" (gyro) or \"40 ug/sqrt(Hz)\" (accelerometer)",
+    ),
+    (
+        "rate_random_walk",
+        "rate_random_walk = \"0.5 deg/h/sqrt(h)\"",
+    ),
+    ("rate_ramp", "rate_ramp = \"0.01 deg/h/h\""),
+    ("temperature_bias", "temperature_bias = \"0.01 deg/s/degC\""),
+    (
+        "constant_bias",
+        "constant_bias = \"0.1 deg/s\" (gyro) or \"2 mg\" (accelerometer)",
+    ),
+    ("turn_on_bias", "turn_on_bias = \"3 deg/s\""),
+    ("scale_factor", "scale_factor = \"0.1 %\""),
+    ("misalignment", "misalignment = [\"0.1 deg\", \"0.1 deg\"]"),
+    ("name", "name = \"My IMU\""),
+];
+
+/// A TOML error about a value of the wrong shape, with the accepted form and an example added:
+/// numbers need their unit, so a bare number is the commonest mistake.
+fn with_shape_hint(message: &str) -> String {
+    if message.contains("missing field `name`") {
+        return format!("{message}\n  a sensor file starts with its name, e.g. name = \"My IMU\"");
+    }
+    if !message.contains("expected a string") {
+        return message.to_string();
+    }
+    // toml quotes the offending line as "N | key = value".
+    let key = message
+        .lines()
+        .find_map(|l| l.split_once(" | ").map(|(_, rest)| rest))
+        .and_then(|rest| rest.split('=').next())
+        .map(|k| k.trim().trim_matches('"'))
+        .unwrap_or("");
+    let example = KEY_EXAMPLES
+        .iter()
+        .find(|(k, _)| *k == key)
+        .map_or("e.g. \"0.05 deg/s\"".to_string(), |(_, e)| {
+            format!("e.g. {e}")
+        });
+    format!(
+        "{message}\n  values carry their unit in a string, as spec sheets write them: {example}"
+    )
 }
 
 /// `value` (SI) written in the unit of `like` (a config value such as "0.01 deg/h"), for messages.
@@ -988,5 +1092,38 @@ sinusoidal = { amplitude = "1 mg", frequency = "2 Hz" }
         assert!(e.contains("bad.toml") && e.contains("string"), "{e}");
         let e = err("[gyro.x]\n");
         assert!(e.contains("name"), "{e}");
+    }
+
+    #[test]
+    fn a_plain_bias_instability_is_the_allan_minimum_as_spec_sheets_quote_it() {
+        let plain = "name = \"p\"\n[gyro.all]\nwhite_noise = \"0.05 deg/s/rtHz\"\nbias_instability = \"20 deg/h\"\n";
+        let table = "name = \"p\"\n[gyro.all]\nwhite_noise = \"0.05 deg/s/sqrt(Hz)\"\nbias_instability = { value = \"20 deg/h\", convention = \"allan_minimum\" }\n";
+        let a = SensorModel::from_toml_str(plain, "plain.toml").unwrap();
+        let b = SensorModel::from_toml_str(table, "table.toml").unwrap();
+        assert_eq!(a.gyro, b.gyro);
+        // The error of a plain value too low for the axis names its line and key.
+        let e = err("name = \"p\"\n[gyro.all]\nwhite_noise = \"0.05 deg/s/rtHz\"\nbias_instability = \"2 deg/h\"\n");
+        assert!(
+            e.contains("bad.toml:4: key `gyro.all.bias_instability.value`"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn wrong_shapes_show_the_accepted_forms_with_an_example() {
+        let e = err("name = \"b\"\n[gyro.all]\nwhite_noise = 0.05\n");
+        assert!(
+            e.contains("line 3") && e.contains("white_noise = \"0.05 deg/s/sqrt(Hz)\""),
+            "{e}"
+        );
+        let e = err("name = \"b\"\n[gyro.all]\nbias_instability = 2\n");
+        assert!(
+            e.contains("line 3")
+                && e.contains("bias_instability = \"10 deg/h\"")
+                && e.contains("convention"),
+            "{e}"
+        );
+        let e = err("[gyro.all]\nwhite_noise = \"1 deg/sqrt(h)\"\n");
+        assert!(e.contains("name = \"My IMU\""), "{e}");
     }
 }

@@ -337,7 +337,8 @@ fn atom(name: &str) -> Option<(f64, Dim)> {
         "rad" => (1.0, angle),
         "mrad" => (1e-3, angle),
         "urad" | "µrad" => (1e-6, angle),
-        "deg" | "°" => (deg, angle),
+        // `º` (the ordinal indicator) is often typed for the degree sign.
+        "deg" | "°" | "º" => (deg, angle),
         "arcmin" => (deg / 60.0, angle),
         "arcsec" => (deg / 3600.0, angle),
         "m" => (1.0, length),
@@ -354,6 +355,7 @@ fn atom(name: &str) -> Option<(f64, Dim)> {
         "mg" => (1e-3 * STANDARD_GRAVITY_MPS2, accel),
         "ug" | "µg" => (1e-6 * STANDARD_GRAVITY_MPS2, accel),
         "dps" => (deg, Dim::new(1, 0, -1, 0)),
+        "dph" => (deg / 3600.0, Dim::new(1, 0, -1, 0)),
         "degC" | "°C" | "C" | "K" => (1.0, temp),
         "ppm" => (1e-6, Dim::NONE),
         "%" => (1e-2, Dim::NONE),
@@ -367,7 +369,14 @@ fn atom(name: &str) -> Option<(f64, Dim)> {
 struct Parser<'a> {
     s: &'a str,
     pos: usize,
+    /// Nesting depth of parentheses and roots: bounded so no input can exhaust the stack.
+    depth: usize,
 }
+
+/// Deepest nesting of parentheses and roots a unit may have (real units need two or three).
+const MAX_UNIT_DEPTH: usize = 16;
+/// Largest integer power a unit may carry (`m/s^2`, `Hz^-1`; nothing needs more).
+const MAX_UNIT_POWER: i32 = 8;
 
 impl<'a> Parser<'a> {
     fn peek(&self) -> Option<char> {
@@ -410,11 +419,29 @@ impl<'a> Parser<'a> {
         }
     }
     fn factor(&mut self) -> Result<Unit, UnitError> {
+        self.depth += 1;
+        if self.depth > MAX_UNIT_DEPTH {
+            return Err(self.err(&format!(
+                "more than {MAX_UNIT_DEPTH} nested parentheses or roots"
+            )));
+        }
+        let u = self.factor_inner();
+        self.depth -= 1;
+        u
+    }
+    fn factor_inner(&mut self) -> Result<Unit, UnitError> {
         self.skip_ws();
         let rest = &self.s[self.pos..];
-        let mut u = if let Some(r) = rest.strip_prefix("sqrt(") {
-            let _ = r;
-            self.pos += 5;
+        // `rt(Hz)` is the datasheet shorthand for sqrt(Hz).
+        let root_len = if rest.starts_with("sqrt(") {
+            5
+        } else if rest.starts_with("rt(") {
+            3
+        } else {
+            0
+        };
+        let mut u = if root_len > 0 {
+            self.pos += root_len;
             let inner = self.product()?;
             self.skip_ws();
             if self.peek() != Some(')') {
@@ -438,35 +465,71 @@ impl<'a> Parser<'a> {
         } else {
             let len: usize = rest
                 .char_indices()
-                .find(|&(_, c)| !(c.is_alphanumeric() || c == '%' || c == '°' || c == 'µ'))
+                .find(|&(_, c)| {
+                    !(c.is_alphanumeric() || matches!(c, '%' | '°' | 'º' | 'µ'))
+                        || matches!(c, '²' | '³')
+                })
                 .map(|(i, _)| i)
                 .unwrap_or(rest.len());
             let name = &rest[..len];
             if name.is_empty() {
                 return Err(self.err("expected a unit name"));
             }
-            let (factor, dim) = atom(name).ok_or_else(|| {
+            let unknown = || {
                 self.err(&format!(
-                    "unknown unit `{name}` (known: rad mrad urad deg arcmin arcsec m mm s ms us min h Hz kHz mHz g mg ug dps degC K ppm %)"
+                    "unknown unit `{name}` (known: rad mrad urad deg arcmin arcsec m mm s ms us min h Hz kHz mHz g mg ug dps dph degC K ppm %, with sqrt(..), √.., rt.. for roots, e.g. \"0.05 deg/s/sqrt(Hz)\", \"0.2 °/√h\", \"40 ug/rtHz\")"
                 ))
-            })?;
+            };
+            // `rtHz`, `rth`, `rthr`: the datasheet shorthand for the root of a unit.
+            let (factor, dim, root) = match atom(name) {
+                Some((f, d)) => (f, d, false),
+                None => match name.strip_prefix("rt").and_then(atom) {
+                    Some((f, d)) => (f, d, true),
+                    None => return Err(unknown()),
+                },
+            };
             self.pos += len;
-            Unit {
+            let unit = Unit {
                 factor,
                 offset: if name == "K" { -273.15 } else { 0.0 },
                 dim,
+            };
+            if root {
+                sqrt_unit(unit, self)?
+            } else {
+                unit
             }
         };
         self.skip_ws();
-        if self.peek() == Some('^') {
-            self.pos += 1;
-            self.skip_ws();
-            let rest = &self.s[self.pos..];
-            let len = number_prefix_len(rest);
-            let p: i32 = rest[..len]
-                .parse()
-                .map_err(|_| self.err("expected an integer power"))?;
-            self.pos += len;
+        let power = match self.peek() {
+            Some('^') => {
+                self.pos += 1;
+                self.skip_ws();
+                let rest = &self.s[self.pos..];
+                let len = number_prefix_len(rest);
+                let p: i32 = rest[..len]
+                    .parse()
+                    .ok()
+                    .filter(|p: &i32| (-MAX_UNIT_POWER..=MAX_UNIT_POWER).contains(p))
+                    .ok_or_else(|| {
+                        self.err(&format!(
+                            "expected an integer power from -{MAX_UNIT_POWER} to {MAX_UNIT_POWER}"
+                        ))
+                    })?;
+                self.pos += len;
+                Some(p)
+            }
+            Some('²') => {
+                self.pos += '²'.len_utf8();
+                Some(2)
+            }
+            Some('³') => {
+                self.pos += '³'.len_utf8();
+                Some(3)
+            }
+            _ => None,
+        };
+        if let Some(p) = power {
             u.factor = u.factor.powi(p);
             u.dim = u.dim.pow_half(2 * p).expect("integer power");
             u.offset = 0.0;
@@ -488,7 +551,11 @@ fn sqrt_unit(inner: Unit, p: &Parser) -> Result<Unit, UnitError> {
 }
 
 fn parse_unit(text: &str) -> Result<Unit, UnitError> {
-    let mut p = Parser { s: text, pos: 0 };
+    let mut p = Parser {
+        s: text,
+        pos: 0,
+        depth: 0,
+    };
     let u = p.product()?;
     p.skip_ws();
     if p.pos != text.len() {
@@ -500,6 +567,51 @@ fn parse_unit(text: &str) -> Result<Unit, UnitError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn datasheet_spellings_of_roots_and_degrees() {
+        let arw = Quantity::NoiseDensity(Signal::AngularRate);
+        let want = parse_quantity("0.05 deg/s/sqrt(Hz)", arw).unwrap();
+        for text in [
+            "0.05 deg/s/rtHz",
+            "0.05 deg/s/rt(Hz)",
+            "0.05 °/s/√Hz",
+            "0.05 º/s/√Hz",
+            "0.05 dps/rtHz",
+            "3 deg/rth",
+            "3 °/√h",
+            "3 deg/rt(hr)",
+        ] {
+            let v = parse_quantity(text, arw).unwrap_or_else(|e| panic!("{text}: {e}"));
+            assert!((v / want - 1.0).abs() < 1e-12, "{text}: {v} vs {want}");
+        }
+        let g = parse_quantity("9.80665 m/s²", Quantity::Signal(Signal::Acceleration)).unwrap();
+        assert!((g - 9.80665).abs() < 1e-12);
+        let bi = parse_quantity("36 dph", Quantity::Signal(Signal::AngularRate)).unwrap();
+        assert!((bi - 0.01f64.to_radians()).abs() < 1e-15);
+        let vrw =
+            parse_quantity("40 ug/rtHz", Quantity::NoiseDensity(Signal::Acceleration)).unwrap();
+        assert!((vrw - 40e-6 * STANDARD_GRAVITY_MPS2).abs() < 1e-15);
+    }
+
+    #[test]
+    fn hostile_units_are_errors_not_crashes() {
+        // 30 000 nested parentheses: an error naming the limit, not a stack overflow.
+        let deep = format!("1 {}s{}", "(".repeat(30_000), ")".repeat(30_000));
+        let e = parse_quantity(&deep, Quantity::Time)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("nested"), "{e}");
+        let deep_roots = format!("1 {}Hz", "√".repeat(30_000));
+        assert!(parse_quantity(&deep_roots, Quantity::Frequency).is_err());
+        // An exponent that would wrap when doubled: refused.
+        for text in ["1 rad/s^-2147483648", "1 s^2147483647", "1 s^99"] {
+            let e = parse_quantity(text, Quantity::Time)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("integer power"), "{text}: {e}");
+        }
+    }
     use std::f64::consts::PI;
     use Signal::*;
 
