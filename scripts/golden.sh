@@ -30,7 +30,7 @@ adis=$data/adis16405_imudata
 cols=gx=gyro_x_dps,gy=gyro_y_dps,gz=gyro_z_dps,ax=acc_x_g,ay=acc_y_g,az=acc_z_g
 run allan-adis1 allan "$adis/adis16405_imu1.csv.gz" --rate 100 --gyro-unit deg/s --accel-unit g --col "$cols"
 mkdir -p "$out/spec"
-"$bin" spec configs/sensors/*.toml --json >"$out/spec/stdout.json" 2>/dev/null
+"$bin" spec configs/sensors/*.toml --readback --json >"$out/spec/stdout.json" 2>/dev/null
 mkdir -p "$out/generate"
 "$bin" generate configs/sensors/mtx.toml --duration 20 --rate 100 --seed 7 -o "$out/generate/mtx.csv" 2>/dev/null
 run diagnose-adis1 diagnose "$adis/adis16405_imu1.csv.gz" --model configs/sensors/adis16405.toml \

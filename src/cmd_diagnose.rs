@@ -12,7 +12,6 @@ use diagnose::{diagnose_with_progress, Diagnosis, LogInput, Settings};
 use noise::SensorModel;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
@@ -119,21 +118,10 @@ fn run_inner(args: &Args) -> Result<()> {
         ..Settings::default()
     };
     let started = std::time::Instant::now();
-    // A spinner on stderr when it is a terminal (CLI convention); silent otherwise.
-    let spinner = std::io::stderr().is_terminal().then(|| {
-        let bar = indicatif::ProgressBar::new_spinner();
-        bar.enable_steady_tick(std::time::Duration::from_millis(200));
-        bar
-    });
-    let progress = |what: &str| {
-        if let Some(bar) = &spinner {
-            bar.set_message(what.to_string());
-        }
-    };
+    let stages = crate::progress::Progress::stages("diagnose");
+    let progress = |what: &str| stages.stage(what);
     let result = diagnose_with_progress(&input, &model, &settings, &progress);
-    if let Some(bar) = &spinner {
-        bar.finish_and_clear();
-    }
+    stages.finish();
     let result = result
         .with_context(|| format!("diagnosing {} against {}", log.source, args.model.display()))?;
     let elapsed_s = started.elapsed().as_secs_f64();

@@ -13,7 +13,7 @@ use nalgebra::Vector3;
 use noise::units::STANDARD_GRAVITY_MPS2;
 use noise::{ImuErrors, SensorModel, TermFilter, CHANNEL_NAMES};
 use rayon::prelude::*;
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 use std::path::PathBuf;
 
 /// Samples generated per block (per channel); bounds memory at ~0.8 MB of samples plus their text.
@@ -101,22 +101,13 @@ pub fn run(args: Args) -> Result<()> {
         .num_threads(args.threads)
         .build()
         .context("cannot start the worker threads")?;
-    let progress = std::io::stderr().is_terminal().then(|| {
-        let bar = indicatif::ProgressBar::new(plan.samples);
-        bar.set_style(
-            indicatif::ProgressStyle::with_template("{bar:40} {percent}% {eta} left")
-                .expect("static template"),
-        );
-        bar
-    });
+    let progress = crate::progress::Progress::new("generate", "samples", plan.samples);
     let started = std::time::Instant::now();
     // Atomic for files; devices and FIFOs (/dev/null) are written directly (output.rs).
     output::write_atomic(&args.output, |w| {
-        write_log(w, &plan, &args, &pool, progress.as_ref())
+        write_log(w, &plan, &args, &pool, &progress)
     })?;
-    if let Some(bar) = progress {
-        bar.finish_and_clear();
-    }
+    progress.finish();
     let elapsed_s = started.elapsed().as_secs_f64();
     eprintln!(
         "wrote {} samples ({} s at {} Hz) of {} to {} in {elapsed_s:.2} s (seed {}, run {})",
@@ -151,7 +142,7 @@ fn write_log(
     plan: &Plan,
     args: &Args,
     pool: &rayon::ThreadPool,
-    progress: Option<&indicatif::ProgressBar>,
+    progress: &crate::progress::Progress,
 ) -> Result<()> {
     let dt_s = 1.0 / plan.rate_hz;
     writeln!(
@@ -220,9 +211,7 @@ fn write_log(
             for t in texts {
                 w.write_all(&t)?;
             }
-            if let Some(bar) = progress {
-                bar.set_position(k_done);
-            }
+            progress.set(k_done);
         }
         Ok(())
     })

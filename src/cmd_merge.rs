@@ -1,11 +1,17 @@
 //! `imudrift merge SHARD...`: combine the shard files of `simulate --shard i/k` into exactly the
 //! result a single `simulate` computes (same per-run values, merged in run-index order).
 
-use crate::cmd_simulate::{emit, experiment_from, Inputs};
+use crate::cmd_simulate::{ablation_experiments, emit, experiment_from, Inputs};
 use anyhow::{bail, Context, Result};
 use montecarlo::experiment::Overrides;
+use montecarlo::runner::RunFailure;
 use montecarlo::shard::{ShardFile, SHARD_FORMAT};
 use montecarlo::RunMatrix;
+
+/// Number of ablation terms a shard carries.
+fn a_len(f: &ShardFile) -> usize {
+    f.ablation.as_ref().map_or(0, Vec::len)
+}
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -75,10 +81,63 @@ pub fn run(args: Args) -> Result<()> {
         without: first.without.clone(),
     };
     let exp = experiment_from(&inputs, &overrides)?;
-    let mut failures: Vec<_> = files.iter().flat_map(|(_, f)| f.failures.clone()).collect();
-    failures.sort_by_key(|f| f.run);
-    let matrix = RunMatrix::merge(files.into_iter().map(|(_, f)| f.matrix).collect())
-        .context("shard matrices have different shapes or overlapping runs")?;
+    // Per-run values of one experiment from every shard, merged in run-index order.
+    let merge = |parts: Vec<(RunMatrix, Vec<RunFailure>)>, what: &str| -> Result<_> {
+        let mut failures: Vec<_> = parts.iter().flat_map(|(_, f)| f.clone()).collect();
+        failures.sort_by_key(|f| f.run);
+        let matrix =
+            RunMatrix::merge(parts.into_iter().map(|(m, _)| m).collect()).with_context(|| {
+                format!("{what}: shard matrices have different shapes or overlapping runs")
+            })?;
+        Ok((matrix, failures))
+    };
+    let ablation = match &first.ablation {
+        None => None,
+        Some(_) => {
+            let subs = ablation_experiments(&inputs, &overrides)?;
+            let names: Vec<&String> = subs.iter().map(|t| &t.term).collect();
+            let mut per_term = Vec::new();
+            for (i, sub) in subs.iter().enumerate() {
+                let mut only = Vec::new();
+                let mut without = Vec::new();
+                for (path, f) in &files {
+                    let t = f
+                        .ablation
+                        .as_ref()
+                        .and_then(|a| a.get(i))
+                        .filter(|t| t.term == sub.term && a_len(f) == subs.len())
+                        .with_context(|| {
+                            format!(
+                                "{}: key `ablation`: expected the terms {names:?} (in that order)",
+                                path.display()
+                            )
+                        })?;
+                    only.push((t.only.matrix.clone(), t.only.failures.clone()));
+                    without.push((t.without.matrix.clone(), t.without.failures.clone()));
+                }
+                let (m, f) = merge(only, &sub.term)?;
+                let only_report = sub.only.report(&m, &f);
+                let (m, f) = merge(without, &sub.term)?;
+                let without_report = sub.without.report(&m, &f);
+                per_term.push((sub.term.clone(), only_report, without_report));
+            }
+            Some(per_term)
+        }
+    };
+    let (matrix, failures) = merge(
+        files
+            .into_iter()
+            .map(|(_, f)| (f.matrix, f.failures))
+            .collect(),
+        "simulate",
+    )?;
     let report = exp.report(&matrix, &failures);
-    emit(&report, &exp, None, args.json, args.out.as_deref())
+    let rows = ablation.map(|per_term| montecarlo::ablation::rows(&report, &per_term));
+    emit(
+        &report,
+        &exp,
+        rows.as_deref(),
+        args.json,
+        args.out.as_deref(),
+    )
 }

@@ -4,6 +4,7 @@ use crate::fmt;
 use crate::output::{ensure_dir, write_atomic, write_string};
 use crate::plot::{Band, LogLogPlot, Series, PALETTE};
 use anyhow::{bail, Context, Result};
+use montecarlo::ablation::{self, AblationRow};
 use montecarlo::channels::Channel;
 use montecarlo::experiment::{Experiment, Overrides};
 use montecarlo::report::DriftReport;
@@ -12,7 +13,7 @@ use montecarlo::scenario::Scenario;
 use montecarlo::shard::{ShardFile, SHARD_FORMAT};
 use noise::SensorModel;
 use serde::Serialize;
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
@@ -170,10 +171,29 @@ pub fn read_inputs(path: &Path, edits: &ScenarioEdits) -> Result<(Inputs, Scenar
 
 /// Rebuild the experiment from texts (also used by `merge` on a shard's stored texts).
 pub fn experiment_from(inputs: &Inputs, overrides: &Overrides) -> Result<Experiment> {
+    Ok(parse_inputs(inputs, overrides)?.2)
+}
+
+/// The parsed scenario and model of `inputs`, and the experiment with `overrides`.
+pub fn parse_inputs(
+    inputs: &Inputs,
+    overrides: &Overrides,
+) -> Result<(Scenario, SensorModel, Experiment)> {
     let scenario = Scenario::from_toml_str(&inputs.scenario_toml, &inputs.scenario_source)?;
     let model = SensorModel::from_toml_str(&inputs.sensor_toml, &inputs.sensor_source)
         .map_err(|e| anyhow::anyhow!("{e}"))?;
-    Experiment::new(scenario, &model, overrides).map_err(|e| anyhow::anyhow!("{e}"))
+    let exp =
+        Experiment::new(scenario.clone(), &model, overrides).map_err(|e| anyhow::anyhow!("{e}"))?;
+    Ok((scenario, model, exp))
+}
+
+/// The ablation sub-experiments of `exp` (each active term alone, the model without it).
+pub fn ablation_experiments(
+    inputs: &Inputs,
+    overrides: &Overrides,
+) -> Result<Vec<ablation::TermExperiments>> {
+    let (scenario, model, exp) = parse_inputs(inputs, overrides)?;
+    ablation::experiments(&scenario, &model, overrides, &exp).map_err(|e| anyhow::anyhow!("{e}"))
 }
 
 /// A rayon pool of `threads` workers (default: all cores).
@@ -205,30 +225,12 @@ pub fn check_memory(exp: &Experiment, runs: u64) -> Result<()> {
     Ok(())
 }
 
-/// Run `exp` over `runs`, with a progress bar on a terminal.
+/// Run `exp` over `runs`, with progress on stderr (`crate::progress`).
 pub fn execute(exp: &Experiment, runs: std::ops::Range<u64>, label: &str) -> BatchResult {
     let kernel = exp.kernel();
-    let total = runs.end - runs.start;
-    let bar = std::io::stderr().is_terminal().then(|| {
-        let b = indicatif::ProgressBar::new(total);
-        b.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{msg} [{bar:40}] {pos}/{len} runs, {eta} left",
-            )
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        b.set_message(label.to_string());
-        b
-    });
-    let progress = |done: u64| {
-        if let Some(b) = &bar {
-            b.set_position(done);
-        }
-    };
-    let result = run_range(&kernel, runs, &progress);
-    if let Some(b) = bar {
-        b.finish_and_clear();
-    }
+    let progress = crate::progress::Progress::new(label, "runs", runs.end - runs.start);
+    let result = run_range(&kernel, runs, &|done| progress.set(done));
+    progress.finish();
     result
 }
 
@@ -243,14 +245,40 @@ pub fn run(args: Args) -> Result<()> {
     };
     let exp = experiment_from(&inputs, &overrides)?;
     let pool = pool(args.threads)?;
+    let with_ablation = args.ablation || (exp.scenario.ablation && !args.no_ablation);
+    let subs = if with_ablation {
+        ablation_experiments(&inputs, &overrides)?
+    } else {
+        Vec::new()
+    };
     if let Some(text) = &args.shard {
         let shard = Shard::parse(text).map_err(|e| anyhow::anyhow!("--shard: {e}"))?;
         let Some(dir) = &args.out else {
             bail!("--shard: expected --out DIR for the shard file");
         };
         let range = shard.runs(exp.runs);
-        check_memory(&exp, range.end - range.start)?;
-        let result = pool.install(|| execute(&exp, range, "shard"));
+        check_memory(
+            &exp,
+            (range.end - range.start) * (1 + 2 * subs.len() as u64),
+        )?;
+        let result = pool.install(|| execute(&exp, range.clone(), "shard"));
+        // The shard's slice of every ablation sub-experiment, so `merge` rebuilds the table.
+        let batch = |e: &Experiment, label: &str| {
+            let r = pool.install(|| execute(e, range.clone(), label));
+            ablation::Batch {
+                matrix: r.matrix,
+                failures: r.failures,
+            }
+        };
+        let ablation = with_ablation.then(|| {
+            subs.iter()
+                .map(|t| ablation::TermBatches {
+                    term: t.term.clone(),
+                    only: batch(&t.only, &t.term),
+                    without: batch(&t.without, &t.term),
+                })
+                .collect()
+        });
         let file = ShardFile {
             format: SHARD_FORMAT.into(),
             scenario_source: inputs.scenario_source,
@@ -264,18 +292,24 @@ pub fn run(args: Args) -> Result<()> {
             shard,
             matrix: result.matrix,
             failures: result.failures,
+            ablation,
         };
         ensure_dir(dir)?;
         let path = dir.join(format!("shard-{}-of-{}.json", shard.index, shard.count));
         write_atomic(&path, |w| Ok(serde_json::to_writer(w, &file)?))?;
         report_failures(&file.failures);
         eprintln!(
-            "shard {}/{}: runs {:?} of {}, {} finished; wrote {}",
+            "shard {}/{}: runs {:?} of {}, {} finished{}; wrote {}",
             shard.index,
             shard.count,
             shard.runs(exp.runs),
             exp.runs,
             file.matrix.runs(),
+            if with_ablation {
+                format!(" (and {} ablation sub-runs)", 2 * subs.len())
+            } else {
+                String::new()
+            },
             path.display()
         );
         return Ok(());
@@ -283,11 +317,19 @@ pub fn run(args: Args) -> Result<()> {
     check_memory(&exp, exp.runs)?;
     let result = pool.install(|| execute(&exp, 0..exp.runs, "simulate"));
     let report = exp.report(&result.matrix, &result.failures);
-    let ablation = if args.ablation || (exp.scenario.ablation && !args.no_ablation) {
-        Some(pool.install(|| ablation(&inputs, &overrides, &report))?)
-    } else {
-        None
-    };
+    let ablation = with_ablation.then(|| {
+        let per_term: Vec<_> = subs
+            .iter()
+            .map(|t| {
+                let run = |e: &Experiment| {
+                    let r = pool.install(|| execute(e, 0..e.runs, &t.term));
+                    e.report(&r.matrix, &r.failures)
+                };
+                (t.term.clone(), run(&t.only), run(&t.without))
+            })
+            .collect();
+        ablation::rows(&report, &per_term)
+    });
     emit(
         &report,
         &exp,
@@ -295,90 +337,6 @@ pub fn run(args: Args) -> Result<()> {
         args.json,
         args.out.as_deref(),
     )
-}
-
-/// One row of the ablation table (Woodman's "selectively removing sensor noise").
-#[derive(Debug, Clone, Serialize)]
-pub struct AblationRow {
-    pub term: String,
-    /// Mean horizontal error at the last checkpoint with only this term.
-    pub only_mean_m: f64,
-    /// Its share of the full model's mean square horizontal error, only_rms^2 / full_rms^2.
-    pub only_share: f64,
-    /// Mean horizontal error at the last checkpoint with every term but this one.
-    pub without_mean_m: f64,
-    /// Horizontal rms with only this term, at every checkpoint.
-    pub only_rms_m: Vec<f64>,
-}
-
-fn last_horizontal(r: &DriftReport) -> (f64, f64) {
-    let c = &r
-        .checkpoints
-        .last()
-        .expect("at least one checkpoint")
-        .channels[Channel::PosHorizontal.name()];
-    (c.mean, c.rms)
-}
-
-fn ablation(
-    inputs: &Inputs,
-    overrides: &Overrides,
-    full_report: &DriftReport,
-) -> Result<Vec<AblationRow>> {
-    let (_, full_rms) = last_horizontal(full_report);
-    let mut rows = Vec::new();
-    for term in &full_report.active_terms {
-        if term.starts_with("alignment.") {
-            continue;
-        }
-        let sub = |o: Overrides| -> Result<DriftReport> {
-            let e = experiment_from(inputs, &o)?;
-            let r = execute(&e, 0..e.runs, term);
-            Ok(e.report(&r.matrix, &r.failures))
-        };
-        let only = sub(Overrides {
-            only: Some(vec![term.clone()]),
-            ..overrides.clone()
-        })?;
-        let (only_mean_m, only_rms) = last_horizontal(&only);
-        let mut without = overrides.without.clone();
-        without.push(term.clone());
-        let (without_mean_m, _) = last_horizontal(&sub(Overrides {
-            without,
-            ..overrides.clone()
-        })?);
-        rows.push(AblationRow {
-            term: term.clone(),
-            only_mean_m,
-            only_share: (only_rms / full_rms).powi(2),
-            without_mean_m,
-            only_rms_m: only
-                .checkpoints
-                .iter()
-                .map(|c| c.channels[Channel::PosHorizontal.name()].rms)
-                .collect(),
-        });
-    }
-    Ok(rows)
-}
-
-/// The term with the largest horizontal mean square alone, per checkpoint, merged into time spans:
-/// (term, first t_s, last t_s). Woodman: accelerometer noise dominates only the first ~0.3 s.
-fn dominant_spans(report: &DriftReport, rows: &[AblationRow]) -> Vec<(String, f64, f64)> {
-    let mut spans: Vec<(String, f64, f64)> = Vec::new();
-    for (i, cp) in report.checkpoints.iter().enumerate() {
-        let Some(best) = rows
-            .iter()
-            .max_by(|a, b| a.only_rms_m[i].total_cmp(&b.only_rms_m[i]))
-        else {
-            continue;
-        };
-        match spans.last_mut() {
-            Some(last) if last.0 == best.term => last.2 = cp.t_s,
-            _ => spans.push((best.term.clone(), cp.t_s, cp.t_s)),
-        }
-    }
-    spans
 }
 
 fn report_failures(failures: &[montecarlo::RunFailure]) {
@@ -611,7 +569,7 @@ fn table(
         }
     }
     if let Some(rows) = ablation {
-        let spans = dominant_spans(r, rows);
+        let spans = ablation::dominant_spans(r, rows);
         let _ = writeln!(
             s,
             "\nlargest contributor to the horizontal error (term alone, mean square) vs time:"

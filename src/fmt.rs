@@ -1,6 +1,5 @@
 //! Numbers for people: engineering notation with SI prefixes, significant digits, and the units
-//! spec sheets use (deg rather than rad for attitude, deg/h and deg/sqrt(h) for gyro terms,
-//! ug and m/s/sqrt(h) for accelerometer terms). JSON and CSV stay in SI; only human text uses these.
+//! spec sheets use (deg rather than rad for attitude, deg/h and deg/sqrt(h) for gyro terms). JSON and CSV stay in SI; only human text uses these.
 
 /// `v` with `digits` significant digits as a plain decimal ("0.0259", "226.7", "1480"), falling
 /// back to scientific notation outside 1e-4 ..= 1e7. NaN prints as "NaN" (never as 0).
@@ -95,19 +94,6 @@ pub fn gyro_bias(v_rad_per_s: f64) -> String {
     format!("{} deg/h", sig(v_rad_per_s.to_degrees() * 3600.0, 3))
 }
 
-/// Velocity random walk (m/s/sqrt(s)) as spec sheets write it, m/s/sqrt(h).
-pub fn vrw(v_mps_per_sqrt_s: f64) -> String {
-    format!("{} m/s/sqrt(h)", sig(v_mps_per_sqrt_s * 60.0, 3))
-}
-
-/// Accelerometer bias (m/s^2) as spec sheets write it, ug (standard gravity).
-pub fn accel_bias(v_mps2: f64) -> String {
-    format!(
-        "{} ug",
-        sig(v_mps2 / noise::units::STANDARD_GRAVITY_MPS2 * 1e6, 3)
-    )
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -133,6 +119,5 @@ mod tests {
         // Woodman Table 4 (MTx): 0.075 deg/sqrt(s) = 4.5 deg/sqrt(h).
         assert_eq!(arw(0.075f64.to_radians()), "4.50 deg/sqrt(h)");
         assert_eq!(gyro_bias(0.01f64.to_radians()), "36.0 deg/h");
-        assert_eq!(accel_bias(9.80665e-4), "100 ug");
     }
 }

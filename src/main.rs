@@ -15,6 +15,7 @@ mod fmt;
 mod logio;
 mod output;
 mod plot;
+mod progress;
 
 use clap::{Parser, Subcommand};
 

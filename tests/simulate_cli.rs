@@ -65,6 +65,7 @@ fn one_and_four_threads_and_merged_shards_give_identical_json() {
             &shard,
             "--out",
             d,
+            "--no-ablation",
         ]));
         shards.push(format!("{d}/shard-{i}-of-4.json"));
     }
@@ -87,7 +88,7 @@ fn one_and_four_threads_and_merged_shards_give_identical_json() {
 fn woodman_experiment_prints_reference_and_ablation() {
     let out = ok(imudrift(&["simulate", SCENARIO, "--runs", "40", "--json"]));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("published 152.67"), "{err}");
+    assert!(err.contains("published 152.7 m"), "{err}");
     assert!(
         err.contains("ablation") && err.contains("gyro.white_noise"),
         "{err}"
@@ -271,4 +272,96 @@ fn a_sensor_toml_runs_with_the_default_static_scenario() {
         err.contains("key `sensor`") && err.contains("sensor = "),
         "{err}"
     );
+}
+
+/// The ablation table survives sharding: `merge` of k shards gives the single run's JSON (with
+/// its ablation rows) and the same --out files, byte for byte.
+#[test]
+fn merged_shards_carry_the_ablation_table() {
+    let dir = tempfile::tempdir().unwrap();
+    let single_out = dir.path().join("single");
+    let base = [
+        "simulate", SCENARIO, "--runs", "24", "--seed", "5", "--json",
+    ];
+    let single = ok(imudrift(
+        &[&base[..], &["--out", single_out.to_str().unwrap()]].concat(),
+    ))
+    .stdout;
+    let doc: serde_json::Value = serde_json::from_slice(&single).unwrap();
+    let rows = doc["ablation"]
+        .as_array()
+        .expect("the scenario asks for ablation");
+    assert!(rows.len() >= 3, "{rows:?}");
+    let shard_dir = dir.path().join("shards");
+    let mut merge_args = vec!["merge".to_string(), "--json".to_string()];
+    for i in 0..3 {
+        ok(imudrift(&[
+            "simulate",
+            SCENARIO,
+            "--runs",
+            "24",
+            "--seed",
+            "5",
+            "--shard",
+            &format!("{i}/3"),
+            "--out",
+            shard_dir.to_str().unwrap(),
+        ]));
+        merge_args.push(format!("{}/shard-{i}-of-3.json", shard_dir.display()));
+    }
+    let merged_out = dir.path().join("merged");
+    merge_args.extend(["--out".to_string(), merged_out.display().to_string()]);
+    let args: Vec<&str> = merge_args.iter().map(String::as_str).collect();
+    let merged = ok(imudrift(&args)).stdout;
+    assert!(merged == single, "merge differs from the single run");
+    for f in ["drift.json", "drift.csv", "drift.svg"] {
+        let a = std::fs::read(single_out.join(f)).unwrap();
+        let b = std::fs::read(merged_out.join(f)).unwrap();
+        assert!(a == b, "{f} differs");
+    }
+    // A shard without the ablation cannot be merged with shards that have it.
+    ok(imudrift(&[
+        "simulate",
+        SCENARIO,
+        "--runs",
+        "24",
+        "--seed",
+        "5",
+        "--shard",
+        "2/3",
+        "--no-ablation",
+        "--out",
+        dir.path().join("plain").to_str().unwrap(),
+    ]));
+    let mut mixed: Vec<String> = merge_args[2..4].to_vec();
+    mixed.push(format!("{}/plain/shard-2-of-3.json", dir.path().display()));
+    let mut args = vec!["merge"];
+    args.extend(mixed.iter().map(String::as_str));
+    let out = imudrift(&args);
+    assert_eq!(out.status.code(), Some(1));
+}
+
+/// Progress reaches a log that is not a terminal: plain lines on stderr (never stdout).
+#[test]
+fn progress_lines_when_stderr_is_not_a_terminal() {
+    let out = ok(Command::new(env!("CARGO_BIN_EXE_imudrift"))
+        .args([
+            "simulate",
+            SCENARIO,
+            "--runs",
+            "200",
+            "--no-ablation",
+            "--json",
+        ])
+        .env("IMUDRIFT_PROGRESS_INTERVAL_S", "0")
+        .current_dir(root())
+        .output()
+        .unwrap());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.lines()
+            .any(|l| l.starts_with("simulate: ") && l.contains(" runs (")),
+        "{err}"
+    );
+    serde_json::from_slice::<serde_json::Value>(&out.stdout).expect("stdout is only the JSON");
 }

@@ -16,6 +16,7 @@
 //! Units are SI (rad, m, m/s, s). Frames: navigation NED, body forward-right-down; a static level
 //! IMU reads specific force (0, 0, -g).
 
+pub mod ablation;
 pub mod channels;
 pub mod drift;
 pub mod experiment;

@@ -27,6 +27,9 @@ pub struct ShardFile {
     pub shard: Shard,
     pub matrix: RunMatrix,
     pub failures: Vec<RunFailure>,
+    /// The shard's slices of the ablation sub-experiments, when the run has an ablation table.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ablation: Option<Vec<crate::ablation::TermBatches>>,
 }
 
 impl ShardFile {
@@ -40,5 +43,6 @@ impl ShardFile {
             && self.only == other.only
             && self.without == other.without
             && self.shard.count == other.shard.count
+            && self.ablation.is_some() == other.ablation.is_some()
     }
 }

@@ -114,7 +114,7 @@ struct RawAxis {
 #[derive(Clone)]
 enum RawBiasField {
     Plain(String),
-    Table(RawBiasInstability),
+    Table(Box<RawBiasInstability>),
 }
 
 /// The accepted forms, for error messages.
@@ -136,7 +136,7 @@ impl<'de> Deserialize<'de> for RawBiasField {
                 map: A,
             ) -> Result<RawBiasField, A::Error> {
                 RawBiasInstability::deserialize(serde::de::value::MapAccessDeserializer::new(map))
-                    .map(RawBiasField::Table)
+                    .map(|t| RawBiasField::Table(Box::new(t)))
             }
         }
         d.deserialize_any(V)
@@ -148,7 +148,7 @@ impl RawBiasField {
     /// value's place in the file.
     fn table(field: &toml::Spanned<RawBiasField>) -> RawBiasInstability {
         match field.get_ref() {
-            RawBiasField::Table(t) => t.clone(),
+            RawBiasField::Table(t) => (**t).clone(),
             RawBiasField::Plain(v) => RawBiasInstability {
                 model: None,
                 value: Some(toml::Spanned::new(field.span(), v.clone())),
