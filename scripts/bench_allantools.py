@@ -32,7 +32,7 @@ def make_channel(n, rate_hz, seed):
     dt = 1.0 / rate_hz
     y = 1e-3 / np.sqrt(dt) * rng.standard_normal(n)              # white, N = 1e-3 rad/s/sqrt(Hz)
     y += np.cumsum(3e-6 * np.sqrt(dt) * rng.standard_normal(n))  # rate random walk K = 3e-6
-    # flicker-like: sum of Gauss-Markov processes (theory.md §3), B = 1e-4, 1 s .. 1e4 s
+    # flicker-like: sum of Gauss-Markov processes (docs/model.md §3), B = 1e-4, 1 s .. 1e4 s
     rho = np.sqrt(10.0)
     for i in range(9):
         tc = 1.0 * rho ** i

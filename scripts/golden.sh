@@ -6,14 +6,13 @@
 #
 # Covers: `simulate` of every shipped scenario (--json and --out), `allan` on ADIS16405 run 1
 # (--json and --out), `spec` of every shipped sensor (--json), `generate` (a short log), and
-# `diagnose` on ADIS16405 run 1 (--json and --out). The real logs are read from $IMUDRIFT_DATA
-# (default: the `shared/data` directory beside the repository).
+# `diagnose` on ADIS16405 run 1 (--json and --out). The real logs are read from $IMUDRIFT_DATA.
 # Human text on stderr is not compared (it holds progress and timings).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 mode=${1:?usage: golden.sh capture|check DIR}
 ref=${2:?usage: golden.sh capture|check DIR}
-data=${IMUDRIFT_DATA:-$(cd .. && pwd)/shared/data}
+data=${IMUDRIFT_DATA:?set IMUDRIFT_DATA to the directory of the real IMU logs}
 cargo build --release --quiet
 bin=$PWD/target/release/imudrift
 if [ "$mode" = capture ]; then out=$ref; mkdir -p "$out"; else out=$(mktemp -d); trap 'rm -rf "$out"' EXIT; fi

@@ -232,7 +232,7 @@ fn format_rows(
     let mut temp_text = Vec::new();
     for i in range {
         let k = k0 + i as u64;
-        // t = k / rate from the integer index (DESIGN.md: never t += dt).
+        // t = k / rate from the integer index (docs/architecture.md: never t += dt).
         text.extend_from_slice(buf.format(k as f64 / rate_hz).as_bytes());
         for channel in block {
             text.push(b',');

@@ -2,7 +2,7 @@
 //! IMU log reader shared by `allan`, `diagnose` and `simulate`: CSV or gzip-compressed CSV,
 //! `#` comment lines, a header row, columns found by name, units mapped to SI.
 //!
-//! Canonical columns (DESIGN.md): `t` (s), `gx gy gz` (rad/s), `ax ay az` (m/s^2), `temp` (degC).
+//! Canonical columns (docs/cli.md): `t` (s), `gx gy gz` (rad/s), `ax ay az` (m/s^2), `temp` (degC).
 //! `--col gx=gyro_x_dps` maps a file column to a canonical name; `--gyro-unit deg/s` and
 //! `--accel-unit g` convert; `--rate HZ` gives the sample rate when there is no time column.
 //! Other numeric columns are kept under their own names, unconverted.

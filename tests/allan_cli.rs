@@ -1,5 +1,5 @@
 //! End-to-end tests of `imudrift allan`: reading CSV and gzip CSV, units, column mapping,
-//! outputs (table, JSON fields of DESIGN.md, CSV, SVG), errors with line numbers, and the
+//! outputs (table, JSON fields of docs/cli.md, CSV, SVG), errors with line numbers, and the
 //! command on the real ADIS16405 log against allantools' curve.
 
 use std::io::Write;
@@ -146,6 +146,10 @@ fn thread_count_does_not_change_results() {
 }
 
 #[test]
+#[cfg_attr(
+    imudrift_no_data,
+    ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
+)]
 fn adis16405_log_through_the_command() {
     // The real log, read by the command (gz, # comments, columns mapped, deg/s and g), against
     // allantools 2024.06 oadev on the same data (expected_allantools_oadev_imu1.csv), converted

@@ -7,6 +7,10 @@ use std::process::Command;
 const COLUMNS: &str = "gx=gyro_x_dps,gy=gyro_y_dps,gz=gyro_z_dps,ax=acc_x_g,ay=acc_y_g,az=acc_z_g";
 
 #[test]
+#[cfg_attr(
+    imudrift_no_data,
+    ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
+)]
 fn adis16405_run1_diagnosis_generalises_to_runs_2_to_6() {
     let Some(dir) = allan::testdata::data_dir() else {
         return;

@@ -1,6 +1,6 @@
 //! `imudrift diagnose` end to end: a log with a hidden rate random walk on gx, written as CSV, diagnosed
 //! against the base model through the CLI: the effect is named with its parameter, the JSON carries the
-//! DESIGN.md fields, `--out` writes the report, the corrected TOML (which loads back with the effect) and
+//! docs/cli.md fields, `--out` writes the report, the corrected TOML (which loads back with the effect) and
 //! the plots; the output does not depend on the thread count; bad inputs give errors that name them.
 
 use diagnose::model_terms::channel_axis;

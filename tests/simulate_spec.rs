@@ -1,4 +1,4 @@
-//! `imudrift spec configs/sensors/mtx.toml` reproduces Woodman's Table 4 (theory.md §1.4): the ARW
+//! `imudrift spec configs/sensors/mtx.toml` reproduces Woodman's Table 4 (docs/model.md §1.4): the ARW
 //! and bias instability read back from a simulated 12 h, 100 Hz static log (Woodman's method)
 //! contain the table's values inside the readback's 99 % interval, per axis. Six intervals at 99 %:
 //! family-wise false-positive rate ~6 % for a fresh seed (10 seeds tried after the level was fixed:

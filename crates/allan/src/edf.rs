@@ -2,7 +2,7 @@
 //!
 //! - Greenhall's general EDF algorithm: C. A. Greenhall and W. J. Riley, "Uncertainty of
 //!   stability variances based on finite differences", PTTI 2003 (Greenhall 2004), eqs (7)–(13)
-//!   and Tables 1–3, as implemented in allantools `ci.py::edf_greenhall` (theory.md §2.1).
+//!   and Tables 1–3, as implemented in allantools `ci.py::edf_greenhall` (docs/model.md §2.1).
 //! - Simple EDF formulas: NIST SP 1065 Table 5 (allantools `edf_simple`).
 //! - Total deviation EDF: NIST SP 1065 Table 7 (allantools `edf_totdev`).
 //! - Noise identification by the lag-1 autocorrelation: W. J. Riley and C. A. Greenhall,

@@ -1,6 +1,6 @@
 //! IEEE 952 noise-term fit of an Allan deviation curve, and the spec-sheet readings.
 //!
-//! Model (theory.md §2, IEEE 952-1997 Annex C via Hou 2004 eqs 4.29, 4.36, 4.38, 4.53, 4.56):
+//! Model (docs/model.md §2, IEEE 952-1997 Annex C via Hou 2004 eqs 4.29, 4.36, 4.38, 4.53, 4.56):
 //! sigma^2(tau) = 3 Q^2/tau^2 + N^2/tau + (2 ln 2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2.
 //! The five coefficients Q^2, N^2, B^2, K^2, R^2 enter linearly and are non-negative, so the
 //! fit is a weighted non-negative least-squares problem. It is solved exactly by trying every
@@ -24,10 +24,10 @@
 use crate::AllanPoint;
 use serde::{Deserialize, Serialize};
 
-/// sqrt(2 ln 2 / pi): the flicker plateau in units of B (theory.md §2, IEEE 952).
+/// sqrt(2 ln 2 / pi): the flicker plateau in units of B (docs/model.md §2, IEEE 952).
 pub const BI_PLATEAU_FACTOR: f64 = 0.664_282_470_267_960_1;
 
-/// Names of the five terms, in the DESIGN.md spelling of their parameters.
+/// Names of the five terms, in the docs/cli.md spelling of their parameters.
 pub const TERM_NAMES: [&str; 5] = ["q", "n", "b", "k", "r"];
 
 /// Term coefficient with its standard error (both SI: Q in unit*s, N in unit*sqrt(s),
@@ -100,7 +100,7 @@ impl Fit {
     }
 }
 
-/// The Allan variance of each term per unit coefficient^2 at tau (theory.md §2 table).
+/// The Allan variance of each term per unit coefficient^2 at tau (docs/model.md §2 table).
 pub fn basis(tau_s: f64) -> [f64; 5] {
     [
         3.0 / (tau_s * tau_s),

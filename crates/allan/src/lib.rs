@@ -14,7 +14,7 @@
 //! - total deviation, SP 1065 eq (25) (doubly reflected phase).
 //!
 //! Rate samples y_k (one per `tau0_s`) are turned into phase x_0 = 0, x_n = tau0 * sum_{k<n} (y_k - mean)
-//! (theory.md §2.1; the mean removal is allantools' `frequency2phase`), summed with compensated
+//! (docs/model.md §2.1; the mean removal is allantools' `frequency2phase`), summed with compensated
 //! (TwoSum) summation so the phase carries no accumulated rounding error.
 //!
 //! The per-tau cost is O(N) with no allocation besides the phase array (computed in the
@@ -432,7 +432,7 @@ impl<'a> Series<'a> {
 }
 
 /// Phase (integrated rate) with x_0 = 0 and x_n = tau0 * sum_{k<n} (y_k - mean(y)),
-/// theory.md §2.1 and allantools `frequency2phase` (mean removed before the sum to keep the
+/// docs/model.md §2.1 and allantools `frequency2phase` (mean removed before the sum to keep the
 /// phase small). The running sum is compensated (Knuth's TwoSum error term carried along,
 /// as in Neumaier 1974), so x_n is the partial sum to within a few ulps.
 pub fn rate_to_phase(rate: &[f64], tau0_s: f64) -> Vec<f64> {
@@ -1073,7 +1073,7 @@ mod tests {
             &TauGrid::Octave,
         );
         let last = a.len() - 1;
-        // R^2 tau^2 / 2 dominates at long tau (theory.md §2): 1e-3 * tau / sqrt 2.
+        // R^2 tau^2 / 2 dominates at long tau (docs/model.md §2): 1e-3 * tau / sqrt 2.
         let want = 1e-3 * a[last].tau_s / 2f64.sqrt();
         assert!(
             (b[last].dev / want - 1.0).abs() < 0.05,

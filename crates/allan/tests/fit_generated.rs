@@ -1,6 +1,6 @@
 //! The IEEE 952 fit recovers the parameters of generated logs within its stated uncertainty.
 //!
-//! Generators: the noise crate's discrete processes (theory.md §3, exact at the sample interval
+//! Generators: the noise crate's discrete processes (docs/model.md §3, exact at the sample interval
 //! dt): white rate noise N/sqrt(dt) w_k; rate random walk b_{k+1} = b_k + K sqrt(dt) w_k; flicker
 //! (bias instability B) as a bank of Gauss–Markov processes with log-spaced correlation times and
 //! variance B^2 ln(rho)/pi each; quantisation of the integrated output to the LSB Q sqrt(12);
@@ -39,7 +39,7 @@ struct Truth {
 fn generate(t: &Truth, dt: f64, len: usize, seed: u64) -> Vec<f64> {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
     // Flicker band 0.05 s .. 5e4 s, two Gauss-Markov processes per decade, each with variance
-    // B^2 ln(rho) / pi (theory.md §3).
+    // B^2 ln(rho) / pi (docs/model.md §3).
     let rho: f64 = 10f64.sqrt();
     let sd_each = (t.b * t.b * rho.ln() / std::f64::consts::PI).sqrt();
     let components: Vec<(f64, f64)> = (0..13).map(|i| (0.05 * rho.powi(i), sd_each)).collect();

@@ -1,5 +1,5 @@
 //! The deviations against the Stable32 / NIST SP 1065 reference tables shipped with allantools
-//! (shared/data/allantools, see its SOURCE.txt): NBS14, PHASE.DAT, OCXO, GPS 1PPS, Cs 5071A,
+//! ($IMUDRIFT_DATA/allantools, see its SOURCE.txt): NBS14, PHASE.DAT, OCXO, GPS 1PPS, Cs 5071A,
 //! pink FM and the 53230A noise floor.
 //!
 //! For each table row: the averaging factor AF, the number of terms "#" (must be equal), the
@@ -221,6 +221,10 @@ fn tables_in(dir: &Path, filter: impl Fn(&str) -> bool) -> Vec<std::path::PathBu
 }
 
 #[test]
+#[cfg_attr(
+    imudrift_no_data,
+    ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
+)]
 fn phase_dat() {
     let Some(dir) = testdata::data_dir() else {
         return;
@@ -236,6 +240,10 @@ fn phase_dat() {
 }
 
 #[test]
+#[cfg_attr(
+    imudrift_no_data,
+    ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
+)]
 fn cs5071a() {
     let Some(dir) = testdata::data_dir() else {
         return;
@@ -251,6 +259,10 @@ fn cs5071a() {
 }
 
 #[test]
+#[cfg_attr(
+    imudrift_no_data,
+    ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
+)]
 fn gps_1pps() {
     let Some(dir) = testdata::data_dir() else {
         return;
@@ -265,6 +277,10 @@ fn gps_1pps() {
 }
 
 #[test]
+#[cfg_attr(
+    imudrift_no_data,
+    ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
+)]
 fn keysight_noise_floor() {
     let Some(dir) = testdata::data_dir() else {
         return;
@@ -279,6 +295,10 @@ fn keysight_noise_floor() {
 }
 
 #[test]
+#[cfg_attr(
+    imudrift_no_data,
+    ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
+)]
 fn pink_frequency() {
     let Some(dir) = testdata::data_dir() else {
         return;
@@ -294,6 +314,10 @@ fn pink_frequency() {
 }
 
 #[test]
+#[cfg_attr(
+    imudrift_no_data,
+    ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
+)]
 fn ocxo() {
     let Some(dir) = testdata::data_dir() else {
         return;
@@ -331,6 +355,10 @@ fn ocxo() {
 }
 
 #[test]
+#[cfg_attr(
+    imudrift_no_data,
+    ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
+)]
 fn nbs14() {
     let Some(dir) = testdata::data_dir() else {
         return;
@@ -410,6 +438,10 @@ fn nbs14() {
 }
 
 #[test]
+#[cfg_attr(
+    imudrift_no_data,
+    ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
+)]
 fn noise_id_matches_stable32_alpha() {
     // allantools test_ocxo.py::test_noise_id: the lag-1 ACF noise type (from frequency data)
     // equals Stable32's alpha column of the OCXO MDEV table wherever N/AF > 20.

@@ -1,12 +1,12 @@
 //! The candidate effects of diagnose step 4 and their Allan-variance signatures per unit squared
-//! parameter, from the noise crate's closed forms (theory.md §2; the `_sampled` forms are exact for the
+//! parameter, from the noise crate's closed forms (docs/model.md §2; the `_sampled` forms are exact for the
 //! discrete generator at the log's sample interval).
 
 use noise::closed_form as cf;
 use noise::{Effect, Flicker};
 use serde::Serialize;
 
-/// Effects diagnose can name (DESIGN.md list); the temperature bias only when the log has a temperature column.
+/// Effects diagnose can name (docs/diagnose.md list); the temperature bias only when the log has a temperature column.
 pub const CANDIDATES: [Effect; 8] = [
     Effect::Quantization,
     Effect::WhiteNoise,
@@ -18,7 +18,7 @@ pub const CANDIDATES: [Effect; 8] = [
     Effect::TemperatureBias,
 ];
 
-/// Parameters of a term in diagnose's parameterisation (SI; DESIGN.md JSON names).
+/// Parameters of a term in diagnose's parameterisation (SI; docs/diagnose.md JSON names).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub enum TermParams {
     /// One level: q, n, b, k, r or the temperature coefficient (signed).
@@ -52,7 +52,7 @@ impl TermParams {
         }
     }
 
-    /// (name, value) pairs with the DESIGN.md JSON names.
+    /// (name, value) pairs with the docs/cli.md JSON names.
     pub fn named(&self, effect: Effect) -> Vec<(&'static str, f64)> {
         match *self {
             TermParams::Level(p) => vec![(level_name(effect), p)],
@@ -67,7 +67,7 @@ impl TermParams {
     }
 }
 
-/// JSON name of a one-level term's parameter (DESIGN.md: q, n, b, k, r, coefficient).
+/// JSON name of a one-level term's parameter (docs/cli.md: q, n, b, k, r, coefficient).
 pub fn level_name(effect: Effect) -> &'static str {
     match effect {
         Effect::Quantization => "q",
@@ -112,7 +112,7 @@ pub fn unit_family_signature(effect: Effect, shape: f64, tau_s: f64, dt_s: f64) 
 }
 
 /// Shape grid for a family over the measured tau range.
-/// Gauss-Markov: correlation times whose ADEV peak (at 1.8927 T, theory.md §2) lies between a third of
+/// Gauss-Markov: correlation times whose ADEV peak (at 1.8927 T, docs/model.md §2) lies between a third of
 /// the shortest and three times the longest tau, 8 per decade. Sinusoid: frequencies from 1/(4 tau_max)
 /// to 1/(4 dt) (at least four samples per period: faster sinusoids alias on an octave grid, where their
 /// Allan lobes are indistinguishable from quantisation; the PSD is the tool for those, Hou 4.64 note),

@@ -1,4 +1,4 @@
-//! Drift consequence of a static log (DESIGN.md, diagnose step 6): heading and horizontal position
+//! Drift consequence of a static log (docs/diagnose.md, diagnose step 6): heading and horizontal position
 //! drift over segments of a log, computed the same way for the measured log and for logs simulated
 //! from the model, so the three are directly comparable.
 //!
@@ -6,13 +6,13 @@
 //! `Accurate` scheme; Woodman eqs 41-46 and better, crate `strapdown`), starting level at the origin,
 //! after the static calibration a user would do: each channel's mean over the whole log is taken as its
 //! bias and removed, the accelerometers are then referred to the ideal specific force (0, 0, -g) of a
-//! level IMU (Woodman §3.2.1 gyro, §4.2 accelerometer; theory.md §1.5, §1.6). The errors are the
+//! level IMU (Woodman §3.2.1 gyro, §4.2 accelerometer; docs/model.md §1.5, §1.6). The errors are the
 //! navigation solution minus the static truth (`strapdown::nav_error`).
 
 use serde::Serialize;
 use strapdown::{nav_error, BodyVector, NavState, Scheme, Strapdown};
 
-/// Standard gravity, m/s^2 (DESIGN.md / INTERFACES.md convention).
+/// Standard gravity, m/s^2 (docs/cli.md / docs/cli.md convention).
 pub const G_MPS2: f64 = 9.80665;
 
 /// Channels of an IMU log in the order gx gy gz ax ay az.
@@ -120,7 +120,7 @@ mod tests {
     fn constant_gyro_error_gives_cubic_position_law() {
         // Bias calibrated from a different (zero-mean) window is equivalent to a constant error eps
         // after calibration; build that with two halves: the first half has +eps, the second -eps, so the
-        // mean is 0 and each 10 s segment sees a constant eps. Woodman / theory.md §1.3: s = g eps t^3 / 6.
+        // mean is 0 and each 10 s segment sees a constant eps. Woodman / docs/model.md §1.3: s = g eps t^3 / 6.
         let dt = 0.001;
         let eps = 1e-3;
         let n = 20_000;

@@ -1,7 +1,7 @@
-//! Fitting candidate effects to the gap (DESIGN.md, diagnose step 4).
+//! Fitting candidate effects to the gap (docs/diagnose.md, diagnose step 4).
 //!
 //! Every candidate effect adds (or changes) one independent noise term, so it changes the model's Allan
-//! variance additively (IEEE 952 Annex C, theory.md §2: "summing the terms assumes the processes are
+//! variance additively (IEEE 952 Annex C, docs/model.md §2: "summing the terms assumes the processes are
 //! independent"). A candidate is its Allan-variance signature per unit squared parameter, `f(tau)`,
 //! evaluated on the tau grid, optionally as a family over one shape parameter (the Gauss-Markov
 //! correlation time, the sinusoid frequency). The fitted squared parameter `c >= 0` replaces the level
@@ -315,7 +315,7 @@ mod tests {
         let k2 = 3e-8;
         let avar_band: Vec<f64> = tau.iter().map(|t| n2 / t).collect();
         let ln_band: Vec<f64> = avar_band.iter().map(|a| 0.5 * a.ln()).collect();
-        let f_rrw: Vec<f64> = tau.iter().map(|t| t / 3.0).collect(); // K^2 T / 3 (theory.md §2, Hou 4.53)
+        let f_rrw: Vec<f64> = tau.iter().map(|t| t / 3.0).collect(); // K^2 T / 3 (docs/model.md §2, Hou 4.53)
         let ln_meas: Vec<f64> = tau
             .iter()
             .map(|t| 0.5 * (n2 / t + k2 * t / 3.0).ln())

@@ -1,4 +1,4 @@
-//! The gap between a measured Allan curve and a simulated model band (DESIGN.md, diagnose step 3).
+//! The gap between a measured Allan curve and a simulated model band (docs/diagnose.md, diagnose step 3).
 //!
 //! At each tau, z = (ln adev_meas - ln adev_model) / s. `ln adev_model` is the mean of ln adev over
 //! the simulated seeds (so the small-EDF bias of ln adev, E[ln chi2_v / v] < 0, is the same on both
@@ -9,7 +9,7 @@
 use montecarlo::stats::quantile_sorted;
 use serde::Serialize;
 
-/// |z| above which a tau is in disagreement (DESIGN.md: "contiguous tau ranges with |z| > 3").
+/// |z| above which a tau is in disagreement (docs/cli.md: "contiguous tau ranges with |z| > 3").
 pub const DISAGREEMENT_Z: f64 = 3.0;
 
 /// A measured Allan curve: one point per tau, with the equivalent degrees of freedom of each point.
@@ -95,7 +95,7 @@ pub fn trigamma(mut x: f64) -> f64 {
 }
 
 /// Standard error of ln adev for a point with `edf` equivalent degrees of freedom.
-/// NIST SP 1065 eq (45) (theory.md §2.1): avar_hat = avar * chi2_v / v. ln of a chi2_v / v variable has
+/// NIST SP 1065 eq (45) (docs/model.md §2.1): avar_hat = avar * chi2_v / v. ln of a chi2_v / v variable has
 /// variance psi'(v/2) (log-gamma moments), so ln adev = ln(avar)/2 has sd sqrt(psi'(v/2))/2; for large v
 /// this is the familiar 1/sqrt(2v).
 pub fn ln_adev_se(edf: f64) -> f64 {
@@ -192,7 +192,7 @@ pub fn disagreements(tau_s: &[f64], z: &[f64]) -> Vec<Disagreement> {
     out
 }
 
-/// The gap of a measurement against a band (DESIGN.md diagnose step 3).
+/// The gap of a measurement against a band (docs/diagnose.md diagnose step 3).
 pub fn gap(measured: &Curve, band: &Band) -> Gap {
     let s = standard_errors(measured, band);
     let z = z_scores(measured, &band.ln_mean, &s);

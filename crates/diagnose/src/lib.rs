@@ -1,5 +1,5 @@
 //! imudrift diagnose: where a sensor model and a measured log disagree, which effect is missing, and
-//! what adding it is worth (DESIGN.md, "The diagnose workflow").
+//! what adding it is worth (docs/diagnose.md, "The diagnose workflow").
 //!
 //! Units: SI throughout (rad/s for gyro channels, m/s^2 for accelerometer channels, s for tau).
 //! Frames: channels are body-frame axes (forward-right-down); the drift consequence linearises a

@@ -1,4 +1,4 @@
-//! The model's Allan band (DESIGN.md, diagnose step 2) and its drift consequence (step 6): the sensor
+//! The model's Allan band (docs/diagnose.md, diagnose step 2) and its drift consequence (step 6): the sensor
 //! model simulated as a static, level log at the measured rate and length, many seeds, in memory.
 //!
 //! Each seed is one montecarlo run (the deterministic ordered runner), so the band is bit-identical for
@@ -63,7 +63,7 @@ impl Kernel<'_> {
 pub fn static_log(model: &SensorModel, setup: &SimSetup, seed: u64, run: u64) -> [Vec<f64>; 6] {
     let n = setup.samples;
     let mut errors = ImuErrors::new(model, setup.dt_s, seed, run);
-    // A static level IMU reads zero rate and specific force (0, 0, -g) (INTERFACES.md convention).
+    // A static level IMU reads zero rate and specific force (0, 0, -g) (docs/cli.md convention).
     let gyro = Vector3::zeros();
     let accel = Vector3::new(0.0, 0.0, -G_MPS2);
     let mut out: [Vec<f64>; 6] = Default::default();

@@ -1,4 +1,4 @@
-//! The diagnose loop (DESIGN.md, "The diagnose workflow", steps 1-6): measure, simulate, locate the gap,
+//! The diagnose loop (docs/diagnose.md, "The diagnose workflow", steps 1-6): measure, simulate, locate the gap,
 //! name and fit the missing effect, add it, re-simulate, repeat; then the drift consequence.
 
 use crate::candidates::{
@@ -35,7 +35,7 @@ pub struct Settings {
     pub seeds: usize,
     /// Add-and-resimulate rounds at most.
     pub max_rounds: usize,
-    /// Drift horizons, seconds (DESIGN.md: 60 s and 1 h).
+    /// Drift horizons, seconds (docs/cli.md: 60 s and 1 h).
     pub horizons_s: Vec<f64>,
     /// An effect is named only if it lowers BIC by at least this much. Above 10 is "very strong"
     /// evidence on the Kass & Raftery (1995) scale; 16 sets the false-alarm rate: for one parameter and
@@ -105,7 +105,7 @@ pub enum DiagnoseError {
 #[derive(Clone, Debug, Serialize)]
 pub struct FoundEffect {
     pub effect: String,
-    /// SI parameters (DESIGN.md names).
+    /// SI parameters (docs/cli.md names).
     pub parameters: BTreeMap<String, f64>,
     /// 95 % profile-likelihood interval of each parameter.
     pub parameters_lo: BTreeMap<String, f64>,

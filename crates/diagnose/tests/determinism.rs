@@ -1,4 +1,4 @@
-//! Same seed, any thread count: the simulated band and drifts are bit-identical (DESIGN.md, Randomness).
+//! Same seed, any thread count: the simulated band and drifts are bit-identical (docs/architecture.md, Randomness).
 
 use diagnose::simulate::{simulate, SimResult, SimSetup};
 use noise::{BiasInstability, Flicker, SensorModel};

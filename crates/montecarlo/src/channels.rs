@@ -1,4 +1,4 @@
-//! The drift channels recorded at each checkpoint (DESIGN.md JSON names).
+//! The drift channels recorded at each checkpoint (docs/cli.md JSON names).
 
 /// One recorded navigation-error channel. The discriminant is the column index.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -31,7 +31,7 @@ impl Channel {
         Channel::VelHorizontal,
     ];
 
-    /// The JSON / CSV name (DESIGN.md: these may not be renamed).
+    /// The JSON / CSV name (docs/cli.md: these may not be renamed).
     pub fn name(self) -> &'static str {
         match self {
             Channel::Roll => "roll_rad",

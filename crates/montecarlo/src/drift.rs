@@ -169,9 +169,9 @@ pub fn law_terms(
     dt_s: f64,
 ) -> (Vec<Term>, LawContext) {
     let g = gravity_mps2;
-    // Static, level, north-facing: the laws of theory.md §4. A constant rate about body z from
+    // Static, level, north-facing: the laws of docs/model.md §4. A constant rate about body z from
     // level keeps the z gyro error on the yaw channel (rotations about one axis commute): only the
-    // yaw law holds (calibration errors ~ rate x duration, theory.md §1.5 Table 2).
+    // yaw law holds (calibration errors ~ rate x duration, docs/model.md §1.5 Table 2).
     let (static_level, yaw_rate, reason) = match *spec {
         TrajectorySpec::Static {
             roll_deg,
@@ -219,9 +219,9 @@ pub fn law_terms(
                 let no_law = |why: &str| Source::NoLaw(why.to_string());
                 let source = match effect {
                     // The error of the quantised integrated output is bounded by the LSB and
-                    // depends on the dither the other terms provide; theory.md §4 has no closed form.
+                    // depends on the dither the other terms provide; docs/model.md §4 has no closed form.
                     Effect::Quantization => no_law(
-                        "quantisation: the error of the quantised integrated output is bounded by the LSB and depends on the dither from the other terms; no closed form in theory.md §4",
+                        "quantisation: the error of the quantised integrated output is bounded by the LSB and depends on the dither from the other terms; no closed form in docs/model.md §4",
                     ),
                     Effect::WhiteNoise => Source::White(m.white_noise.unwrap_or(0.0)),
                     Effect::BiasInstability => match &m.bias_instability {
@@ -261,7 +261,7 @@ pub fn law_terms(
                                 Source::Bias(c * (temp_c - model.temperature_reference_c))
                             }
                             // A steady temperature ramp: a bias plus a rate ramp (the k-fold
-                            // integrals of c (T0 - Tref) and of c r t, theory.md §4 bias row).
+                            // integrals of c (T0 - Tref) and of c r t, docs/model.md §4 bias row).
                             TemperatureProfile::Ramp {
                                 start_c,
                                 rate_c_per_s,
@@ -391,7 +391,7 @@ mod tests {
         let out = run(&k);
         let roll = out[Channel::Roll as usize];
         assert!((roll - 0.1f64.to_radians()).abs() < 1e-12, "{roll}");
-        // After one step the east velocity is g sin(eps) dt (theory.md §1.2), to rounding.
+        // After one step the east velocity is g sin(eps) dt (docs/model.md §1.2), to rounding.
         let ve = out[Channel::VelEast as usize];
         let expected = 9.80665 * 0.1f64.to_radians().sin() * 0.01;
         assert!((ve / expected - 1.0).abs() < 1e-9, "{ve} vs {expected}");

@@ -1,11 +1,11 @@
-//! Growth laws: the closed-form drift of each channel from its active error terms (theory.md §4:
+//! Growth laws: the closed-form drift of each channel from its active error terms (docs/model.md §4:
 //! 1-D, small angle, static level north-facing IMU, zero initial errors unless stated), built from
 //! the noise crate's per-term functions (`noise::closed_form`, which owns the formulas).
 //!
 //! Coupling (static, level, north-facing; body forward-right-down = NED): a gyro error on body
 //! axis x, y, z integrates into roll, pitch, yaw. An attitude error psi (nav-frame rotation vector)
 //! turns the specific force (0, 0, -g) into (0, 0, -g) + psi x (0, 0, -g) = (-g psi_e, g psi_n, 0)
-//! (theory.md §1.2: tilt projects g sin(eps) onto the horizontal), so roll error drives east and
+//! (docs/model.md §1.2: tilt projects g sin(eps) onto the horizontal), so roll error drives east and
 //! pitch error drives north (negative sign); yaw has no first-order effect on a static IMU. An
 //! accelerometer error on body x, y, z integrates into north, east, down velocity and position.
 //! Independent terms add in variance; deterministic ones add in mean.
@@ -72,12 +72,12 @@ pub enum Source {
         phase: Option<f64>,
         sample_interval_s: f64,
     },
-    /// Active, but no closed-form growth law exists in theory.md §4 (e.g. quantisation): the
+    /// Active, but no closed-form growth law exists in docs/model.md §4 (e.g. quantisation): the
     /// report says so.
     NoLaw(String),
 }
 
-/// One active term: where it enters, what it is, and its DESIGN.md name (`gyro.white_noise`).
+/// One active term: where it enters, what it is, and its docs/cli.md name (`gyro.white_noise`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Term {
     pub name: String,
@@ -195,7 +195,7 @@ fn tilt_gain2(how: Integration) -> f64 {
 /// Variance of the k-fold integral (k = `how.folds()`, times the tilt gain g^2 through tilt) of a
 /// stationary Gauss-Markov process of std `sigma` and correlation time `tc_s`, at time `t_s`: the
 /// noise crate's exact closed forms (`noise::closed_form::gauss_markov_kfold_variance`, which holds
-/// for every t, where theory.md §4 gives the once-integrated form and the t >> T asymptotes).
+/// for every t, where docs/model.md §4 gives the once-integrated form and the t >> T asymptotes).
 pub fn gauss_markov_variance(sigma: f64, tc_s: f64, t_s: f64, how: Integration) -> f64 {
     let gain2 = tilt_gain2(how);
     cf::gauss_markov_kfold_variance(sigma, tc_s, t_s, how.folds()).map_or(f64::NAN, |v| v * gain2)
@@ -329,7 +329,7 @@ pub fn gauss_markov_from_window_variance(
 /// The single-axis channels an entry drives, each with (channel, integration, sign x gain factor).
 /// The tilt gain g is inside `Integration::Tilt` (standard gravity); `g_scale` rescales it for a
 /// scenario gravity other than standard; for initial attitude the tilt acts as an accelerometer bias
-/// g sin(eps) (theory.md §1.2), integrated once and twice.
+/// g sin(eps) (docs/model.md §1.2), integrated once and twice.
 fn paths(entry: Entry, gravity_mps2: f64) -> Vec<(Channel, Option<Integration>, f64)> {
     use Channel::*;
     let g_scale = gravity_mps2 / noise::units::STANDARD_GRAVITY_MPS2;
@@ -434,7 +434,7 @@ pub fn channel_laws(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
         .fold(0.0, f64::max);
     let large = worst_angle > SMALL_ANGLE_LIMIT_RAD;
     // An attitude error without a law couples into every velocity and position channel at second
-    // order (g (1 - cos eps) vertically, theory.md §1.2), so those channels have no law either.
+    // order (g (1 - cos eps) vertically, docs/model.md §1.2), so those channels have no law either.
     let angle_missing = [Channel::Roll, Channel::Pitch, Channel::Yaw]
         .iter()
         .find_map(|&c| missing[c as usize].clone());
@@ -459,7 +459,7 @@ pub fn channel_laws(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
     };
     let mut laws: Vec<Law> = (0..n).map(single).collect();
     // The vertical channels' law is first order; a tilt eps adds g (1 - cos eps) ~ g eps^2/2 to the
-    // vertical specific force (theory.md §1.2). Bound its effect with the final tilt mean square
+    // vertical specific force (docs/model.md §1.2). Bound its effect with the final tilt mean square
     // (tilt grows with t, so this overestimates) and withhold the law where it exceeds 10 % of it.
     let tilt_ms: f64 = [Channel::Roll, Channel::Pitch]
         .iter()
@@ -472,7 +472,7 @@ pub fn channel_laws(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
             let bound = second_order * growth;
             if bound > 0.1 * first {
                 laws[i] = Law::NotApplicable(format!(
-                    "first-order law incomplete: the second-order tilt term g(1-cos eps) (theory.md §1.2) may reach {bound:.3e}, over 10 % of the law {first:.3e}"
+                    "first-order law incomplete: the second-order tilt term g(1-cos eps) (docs/model.md §1.2) may reach {bound:.3e}, over 10 % of the law {first:.3e}"
                 ));
             }
         }
@@ -491,7 +491,7 @@ pub fn channel_laws(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
 /// rms^2 = (m_n^2 + s_n^2) + (m_e^2 + s_e^2) always. The mean: deterministic components give the
 /// magnitude itself; zero-mean components give, writing (n, e) = (s_n R cos th, s_e R sin th) with R
 /// Rayleigh (E R = sqrt(pi/2)) and th uniform, E|h| = sqrt(pi/2) (1/2pi) int sqrt(s_n^2 cos^2 + s_e^2 sin^2)
-/// d th, which for s_n = s_e = s is the Rayleigh mean s sqrt(pi/2) (theory.md §4). Mixed cases,
+/// d th, which for s_n = s_e = s is the Rayleigh mean s sqrt(pi/2) (docs/model.md §4). Mixed cases,
 /// and random components that are not Gaussian (`gaussian = false`: a random-phase sinusoid),
 /// report only the rms (mean = NaN marks "mean unknown").
 fn horizontal_law(north: &Law, east: &Law, gaussian: bool) -> Law {
@@ -563,7 +563,7 @@ mod tests {
 
     #[test]
     fn woodman_white_noise_mean_matches_theory_note() {
-        // theory.md §1.4: MTx Table-4 ARWs, white noise only, 60 s: analytic Rayleigh mean 102.4 m.
+        // docs/model.md §1.4: MTx Table-4 ARWs, white noise only, 60 s: analytic Rayleigh mean 102.4 m.
         let arw = [0.075f64, 0.078, 0.079].map(|d| d.to_radians());
         let terms: Vec<Term> = (0..3)
             .map(|a| Term {
@@ -864,7 +864,7 @@ mod tests {
                     < 1e-12
             );
         }
-        // t >> T: theory.md §4 asymptotes 2 sigma^2 T t^3/3 and g^2 2 sigma^2 T t^5/20; the
+        // t >> T: docs/model.md §4 asymptotes 2 sigma^2 T t^3/3 and g^2 2 sigma^2 T t^5/20; the
         // relative correction is O(T/t), so at t = 1e5 T agreement to 1e-4 (k = 2, 3 leading terms).
         let t = 1e5 * tc;
         let a2 = cf::gauss_markov_growth_std(sigma, tc, t, Integration::Twice)

@@ -10,7 +10,7 @@
 //! overrides), [`drift`] (the per-run kernel and the active terms), [`runner`] (parallel blocks,
 //! ordered merge, shards, failed runs), [`stats`] (run matrix, Welford moments, exact quantiles,
 //! ratio intervals), [`laws`], [`report`] (the `simulate` JSON), [`shard`] (shard files for
-//! `merge`), [`spec`] (spec-sheet readback and drift table), [`channels`] (the DESIGN.md names).
+//! `merge`), [`spec`] (spec-sheet readback and drift table), [`channels`] (the docs/cli.md names).
 //! The only parallelism is rayon inside [`runner::run_range`] and [`spec::gyro_readback`]; no I/O.
 //!
 //! Units are SI (rad, m, m/s, s). Frames: navigation NED, body forward-right-down; a static level

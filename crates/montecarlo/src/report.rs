@@ -1,5 +1,5 @@
 //! The drift report: per checkpoint and channel, the simulated statistics beside the law of the
-//! active terms, the ratio simulated/law and its 99.9 % confidence interval (DESIGN.md `simulate`
+//! active terms, the ratio simulated/law and its 99.9 % confidence interval (docs/cli.md `simulate`
 //! JSON fields: `seed`, `runs`, `checkpoints[]` with `t_s` and `channels{name: {mean, std, rms, p50,
 //! p95, law_std, ratio}}`; more fields are added, none renamed).
 
@@ -69,7 +69,7 @@ pub struct DriftReport {
     pub duration_s: f64,
     pub scheme: String,
     pub trajectory: String,
-    /// The active error terms after `--only` / `--without` (DESIGN.md names).
+    /// The active error terms after `--only` / `--without` (docs/cli.md names).
     pub active_terms: Vec<String>,
     pub only: Option<Vec<String>>,
     pub without: Vec<String>,

@@ -1,5 +1,5 @@
 //! Deterministic parallel runner: runs are computed in parallel in fixed-size blocks, each block
-//! collected in index order and appended to the [`RunMatrix`] in index order (DESIGN.md,
+//! collected in index order and appended to the [`RunMatrix`] in index order (docs/cli.md,
 //! Randomness). Nothing reported is summed across threads, so the result is bit-identical for any
 //! thread count. A failing (or panicking) run is recorded and skipped, never the whole batch.
 

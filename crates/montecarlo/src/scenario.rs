@@ -134,7 +134,7 @@ pub struct Scenario {
     pub ablation: bool,
 }
 
-/// Standard gravity (m/s^2), the value INTERFACES.md fixes for a static level IMU.
+/// Standard gravity (m/s^2), the value docs/cli.md fixes for a static level IMU.
 pub const STANDARD_GRAVITY_MPS2: f64 = 9.80665;
 /// Default duration when a scenario leaves `duration_s` out (s): Woodman's 60 s runs.
 pub const DEFAULT_DURATION_S: f64 = 60.0;

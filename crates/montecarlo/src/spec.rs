@@ -12,7 +12,7 @@ use noise::{ImuErrors, SensorModel};
 use rayon::prelude::*;
 use serde::Serialize;
 
-/// Woodman's readback log: 12 h at 100 Hz (TR-696 §5.1, Table 4; theory.md §1.4).
+/// Woodman's readback log: 12 h at 100 Hz (TR-696 §5.1, Table 4; docs/model.md §1.4).
 pub const READBACK_DURATION_S: f64 = 12.0 * 3600.0;
 pub const READBACK_RATE_HZ: f64 = 100.0;
 /// Confidence level of the readback intervals: 99 %, so that reading both values on three axes
@@ -95,7 +95,7 @@ pub fn gyro_readback(model: &SensorModel, seed: u64, duration_s: f64, rate_hz: f
                 &TauGrid::PerDecade(10),
                 &opts,
             );
-            // Woodman's rule (TR-696 §5.1, theory.md §1.7): a tau needs at least 9 bins.
+            // Woodman's rule (TR-696 §5.1, docs/model.md §1.7): a tau needs at least 9 bins.
             let points: Vec<_> = points.into_iter().filter(|p| p.woodman_ok()).collect();
             (axis, points)
         })

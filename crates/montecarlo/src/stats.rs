@@ -1,6 +1,6 @@
 //! Drift statistics over runs: per checkpoint and channel, the mean, std, rms and quantiles.
 //!
-//! Storage choice (DESIGN.md, Statistics): quantiles are exact, so the per-run value of every
+//! Storage choice (docs/architecture.md, Statistics): quantiles are exact, so the per-run value of every
 //! (checkpoint, channel) is kept as one `f64` (8 bytes per run per checkpoint per channel: 10 000
 //! runs x 25 checkpoints x 11 channels = 22 MB). Everything else (strapdown state, noise state) is
 //! per run and dropped when the run ends, so memory grows only by that vector. Statistics are always

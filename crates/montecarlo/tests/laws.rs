@@ -1,4 +1,4 @@
-//! Every error term alone against its growth law (theory.md §4, Tables 2 and 3 of the seed):
+//! Every error term alone against its growth law (docs/model.md §4, Tables 2 and 3 of the seed):
 //! at every checkpoint and for every channel that has a law, the 99.9 % interval of
 //! simulated rms / law rms (from the runs, plus the stated discretisation allowance) must contain 1.
 //!
@@ -197,7 +197,7 @@ fn gauss_markov_and_alignment_follow_their_laws() {
         &r,
         &[Roll, Pitch, Yaw, PosNorth, PosEast, PosHorizontal],
     );
-    // Initial alignment: fixed plus random tilt (g eps t^2/2 through tilt, theory.md §1.2).
+    // Initial alignment: fixed plus random tilt (g eps t^2/2 through tilt, docs/model.md §1.2).
     let r = simulate(
         "",
         &format!("[alignment]\nroll_deg = 0.05\npitch_std_deg = 0.1\nyaw_std_deg = 0.5\n{CHECKS}"),
@@ -233,7 +233,7 @@ fn gyro_scale_factor_while_turning_grows_with_rate_and_duration() {
 #[test]
 fn mtx_gyro_white_noise_mean_horizontal_is_the_rayleigh_mean() {
     // Issue 5: MTx Table-4 ARWs only, 60 s, Woodman's scheme: mean horizontal error within 3 % of
-    // the analytic Rayleigh mean (~102.4 m, theory.md §1.4). 4000 runs: the standard error of the
+    // the analytic Rayleigh mean (~102.4 m, docs/model.md §1.4). 4000 runs: the standard error of the
     // mean of a Rayleigh variable is 0.523/sqrt(4000) = 0.83 %, so 3 % is 3.6 standard errors
     // (false-positive rate 3e-4) beyond the law's own small discretisation and small-angle terms.
     let sensor = "[gyro.x]\nwhite_noise = \"0.075 deg/sqrt(s)\"\n[gyro.y]\nwhite_noise = \"0.078 deg/sqrt(s)\"\n[gyro.z]\nwhite_noise = \"0.079 deg/sqrt(s)\"\n";

@@ -1,5 +1,5 @@
-//! Closed forms: the Allan variance of each error term (theory.md §2, IEEE Std 952-1997 Annex C via
-//! Hou 2004) and its growth law when integrated once, twice and through tilt (theory.md §4).
+//! Closed forms: the Allan variance of each error term (docs/model.md §2, IEEE Std 952-1997 Annex C via
+//! Hou 2004) and its growth law when integrated once, twice and through tilt (docs/model.md §4).
 //!
 //! All arguments and results are SI: rad/s (gyro) or m/s^2 (accel) for the signal, s for times.
 //! `*_avar` functions take the averaging time `tau_s` of a continuous record; `*_avar_sampled`
@@ -48,12 +48,12 @@ pub fn rate_ramp_avar(r: f64, tau_s: f64) -> f64 {
 }
 
 /// First-order Gauss-Markov of stationary std sigma and correlation time T (Hou 4.60 written with
-/// sigma_b^2 = q_c^2 T / 2, theory.md §2):
+/// sigma_b^2 = q_c^2 T / 2, docs/model.md §2):
 /// sigma^2 = (2 sigma^2 T / tau) [1 - (T / 2 tau)(3 - 4 e^{-tau/T} + e^{-2 tau/T})].
 pub fn gauss_markov_avar(sigma: f64, tc_s: f64, tau_s: f64) -> f64 {
     let x = tau_s / tc_s;
     // The bracket cancels badly for x -> 0; there use its series
-    // x^2/3 - x^3/4 + 7x^4/60 - x^5/24 + 31x^6/2520 (sympy, theory.md §6 style check).
+    // x^2/3 - x^3/4 + 7x^4/60 - x^5/24 + 31x^6/2520 (sympy, docs/model.md §6 style check).
     let bracket = if x < 1e-2 {
         x * x * (1.0 / 3.0 + x * (-0.25 + x * (7.0 / 60.0 + x * (-1.0 / 24.0 + x * 31.0 / 2520.0))))
     } else {
@@ -68,7 +68,7 @@ pub fn gauss_markov_avar(sigma: f64, tc_s: f64, tau_s: f64) -> f64 {
 /// and Cov = sigma^2 phi (1-phi^m)^2/(1-phi)^2 for adjacent sums S, S' of m samples.
 /// (Derived from the AR(1) autocovariance sigma^2 phi^|j|; tends to `gauss_markov_avar` as dt goes to 0.)
 /// For T >> tau the sum cancels; there the process is the random walk of density K^2 = 2 sigma^2 / T
-/// (theory.md §2, "T << T_c: q_c^2 T/3") with relative error O(tau/T) < 1e-4.
+/// (docs/model.md §2, "T << T_c: q_c^2 T/3") with relative error O(tau/T) < 1e-4.
 pub fn gauss_markov_avar_sampled(sigma: f64, tc_s: f64, tau_s: f64, dt_s: f64) -> f64 {
     let m = (tau_s / dt_s).round().max(1.0);
     let a = dt_s / tc_s;
@@ -117,12 +117,12 @@ pub fn woodman_bias_random_walk(stability: f64, period_s: f64) -> f64 {
     stability / period_s.sqrt()
 }
 
-/// ADEV maximum of a Gauss-Markov process: 0.6174 sigma at tau = 1.8927 T (theory.md §2, numerical maximisation).
+/// ADEV maximum of a Gauss-Markov process: 0.6174 sigma at tau = 1.8927 T (docs/model.md §2, numerical maximisation).
 pub const GAUSS_MARKOV_ADEV_PEAK_PER_SIGMA: f64 = 0.6174;
 /// Where that maximum lies, in correlation times.
 pub const GAUSS_MARKOV_ADEV_PEAK_TAU_PER_TC: f64 = 1.8927;
 
-/// How an error reaches the navigation solution (theory.md §4, static level IMU, small angles).
+/// How an error reaches the navigation solution (docs/model.md §4, static level IMU, small angles).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Integration {
     /// Integrated once: angle from a gyro error, velocity from an accelerometer error.
@@ -156,18 +156,18 @@ fn factorial(k: i32) -> f64 {
 }
 
 /// Variance of the k-fold integral of white noise of density N: N^2 t^{2k-1} / ((k-1)!^2 (2k-1))
-/// (theory.md §4 key identity: t, t^3/3, t^5/20, t^7/252).
+/// (docs/model.md §4 key identity: t, t^3/3, t^5/20, t^7/252).
 pub fn white_kfold_variance(n: f64, t_s: f64, k: i32) -> f64 {
     n * n * t_s.powi(2 * k - 1) / (factorial(k - 1).powi(2) * f64::from(2 * k - 1))
 }
 
-/// Constant bias b: b t, b t^2/2 (Woodman eq 10), g b t^3/6 (theory.md §4). Deterministic, signed.
+/// Constant bias b: b t, b t^2/2 (Woodman eq 10), g b t^3/6 (docs/model.md §4). Deterministic, signed.
 pub fn constant_bias_growth(b: f64, t_s: f64, how: Integration) -> f64 {
     let k = how.folds();
     how.gain() * b * t_s.powi(k) / factorial(k)
 }
 
-/// Rate ramp R t: the k-fold integral is R t^{k+1}/(k+1)! (the constant-bias row of theory.md §4
+/// Rate ramp R t: the k-fold integral is R t^{k+1}/(k+1)! (the constant-bias row of docs/model.md §4
 /// integrated once more). Deterministic, signed.
 pub fn rate_ramp_growth(r: f64, t_s: f64, how: Integration) -> f64 {
     let k = how.folds() + 1;
@@ -175,20 +175,20 @@ pub fn rate_ramp_growth(r: f64, t_s: f64, how: Integration) -> f64 {
 }
 
 /// Standard deviation from white noise N: N sqrt(t) (Woodman eq 5), N sqrt(t^3/3) (eq 18),
-/// g N sqrt(t^5/20) (theory.md §1.3, §4).
+/// g N sqrt(t^5/20) (docs/model.md §1.3, §4).
 pub fn white_noise_growth_std(n: f64, t_s: f64, how: Integration) -> f64 {
     how.gain() * white_kfold_variance(n, t_s, how.folds()).sqrt()
 }
 
 /// Standard deviation from a random walk K (RRW or Woodman's bias random walk, zero initial bias):
-/// K sqrt(t^3/3), K sqrt(t^5/20), g K sqrt(t^7/252) (theory.md §4).
+/// K sqrt(t^3/3), K sqrt(t^5/20), g K sqrt(t^7/252) (docs/model.md §4).
 pub fn random_walk_growth_std(k: f64, t_s: f64, how: Integration) -> f64 {
     how.gain() * white_kfold_variance(k, t_s, how.folds() + 1).sqrt()
 }
 
 /// Standard deviation from a stationary Gauss-Markov bias (sigma, T). Once: exact,
 /// 2 sigma^2 T [t - T(1 - e^{-t/T})]. Twice and through tilt: the t >> T asymptotes 2 sigma^2 T t^3/3 and
-/// g^2 2 sigma^2 T t^5/20 (theory.md §4); `None` while t < 10 T, where they do not hold.
+/// g^2 2 sigma^2 T t^5/20 (docs/model.md §4); `None` while t < 10 T, where they do not hold.
 pub fn gauss_markov_growth_std(sigma: f64, tc_s: f64, t_s: f64, how: Integration) -> Option<f64> {
     let var = match how {
         Integration::Once => {
@@ -210,7 +210,7 @@ pub fn gauss_markov_growth_std(sigma: f64, tc_s: f64, t_s: f64, how: Integration
 /// Sinusoid A sin(2 pi f t + phi) with its phase uniform (drawn per run): the variance over the phase of
 /// its integral, w = 2 pi f: once (A/w)^2 (1 - cos wt); twice (A/w)^2 [t^2/2 - t sin(wt)/w + (1 - cos wt)/w^2];
 /// thrice (A/w)^2 [t^4/8 + t^2 cos(wt)/(2 w^2) - t sin(wt)/w^3 + (1 - cos wt)/w^4]. The mean is zero.
-/// (Derived with sympy by integrating the sinusoid and averaging the square over the phase; not in theory.md.)
+/// (Derived with sympy by integrating the sinusoid and averaging the square over the phase; not in docs/model.md.)
 pub fn sinusoid_growth_std(amplitude: f64, f0_hz: f64, t_s: f64, how: Integration) -> f64 {
     let w = std::f64::consts::TAU * f0_hz;
     let (c, sn) = ((w * t_s).cos(), (w * t_s).sin());
@@ -263,7 +263,7 @@ fn half_u2_minus_one_minus_cos(u: f64) -> f64 {
 ///   d/dt I1 = cos phi sin wt + sin phi cos wt = sin(wt + phi);
 ///   d/dt I2 = cos phi (1 - cos wt)/w + sin phi sin wt/w = I1;
 ///   d/dt I3 = cos phi (t/w - sin wt/w^2) + sin phi (1 - cos wt)/w^2 = I2.
-/// (\[derived\] k-fold integral of a sinusoid; theory.md §2 gives its Allan form, Hou 4.64.)
+/// (\[derived\] k-fold integral of a sinusoid; docs/model.md §2 gives its Allan form, Hou 4.64.)
 /// The cancelling differences use series for small wt (`u_minus_sin`, `half_u2_minus_one_minus_cos`).
 pub fn sinusoid_kfold_coefficients(f0_hz: f64, t_s: f64, k: i32) -> Option<(f64, f64)> {
     let w = std::f64::consts::TAU * f0_hz;
@@ -285,7 +285,7 @@ pub fn sinusoid_kfold_coefficients(f0_hz: f64, t_s: f64, k: i32) -> Option<(f64,
 /// `sinusoid_kfold_coefficients`. Fixed phase: mean A (a_k cos phi + b_k sin phi), variance 0.
 /// Phase uniform on [0, 2 pi) (drawn per run, `phase_rad = None`): mean 0, variance
 /// A^2 (a_k^2 + b_k^2)/2 (E cos^2 = E sin^2 = 1/2, E cos sin = 0).
-/// (\[derived\] k-fold integral of a sinusoid; theory.md §2 gives its Allan form, Hou 4.64.)
+/// (\[derived\] k-fold integral of a sinusoid; docs/model.md §2 gives its Allan form, Hou 4.64.)
 pub fn sinusoid_growth(
     amplitude: f64,
     f0_hz: f64,
@@ -309,7 +309,7 @@ pub fn sinusoid_growth(
 /// are applied to every fold (nested sums add O(dt/t) relative, the mechanisation's own
 /// discretisation). A random phase is unchanged by the delay; its variance takes the gain squared.
 /// `dt_s = 0` gives the continuous law.
-/// (\[derived\] k-fold integral of a sampled sinusoid; theory.md §2 gives its Allan form, Hou 4.64.)
+/// (\[derived\] k-fold integral of a sampled sinusoid; docs/model.md §2 gives its Allan form, Hou 4.64.)
 pub fn sinusoid_growth_sampled(
     amplitude: f64,
     f0_hz: f64,
@@ -360,11 +360,11 @@ pub fn temperature_bias_growth(
 
 /// Exact variance of the k-fold integral (k = 1, 2, 3) of a stationary Gauss-Markov process of std
 /// sigma and correlation time T at time t, with x = t/T: sigma^2 T^{2k} V_k(x),
-/// V_1 = 2(x - 1 + e^{-x}) (theory.md §4),
+/// V_1 = 2(x - 1 + e^{-x}) (docs/model.md §4),
 /// V_2 = 2x^3/3 - x^2 + 2 - 2(1 + x) e^{-x},
 /// V_3 = x^5/10 - x^4/4 + x^3/3 - 2 + (2 + 2x + x^2) e^{-x}.
 /// (Derived with sympy from Var I_k = int int w(u) w(v) sigma^2 e^{-|u-v|/T} du dv, w(u) = (t-u)^{k-1}/(k-1)!.
-/// For t >> T they tend to theory.md §4's asymptotes 2 sigma^2 T t^{2k-1}/((k-1)!^2 (2k-1)), for t << T to a
+/// For t >> T they tend to docs/model.md §4's asymptotes 2 sigma^2 T t^{2k-1}/((k-1)!^2 (2k-1)), for t << T to a
 /// random constant's (sigma t^k/k!)^2.) Below x = 0.5 the series V_k = 2 sum_{n>=2k} (-1)^n C(n-1, k-1) x^n/n!
 /// avoids the cancellation. `None` for k outside 1..=3.
 pub fn gauss_markov_kfold_variance(sigma: f64, tc_s: f64, t_s: f64, k: i32) -> Option<f64> {
@@ -400,7 +400,7 @@ pub fn gauss_markov_kfold_variance(sigma: f64, tc_s: f64, t_s: f64, k: i32) -> O
 /// normalised by sigma^2: (rho, Var(m)/sigma^2, Var(m | b(0))/sigma^2), rho = Cov(m, b(0))/sigma^2.
 ///
 /// ```text
-/// [derived] from Cov(b(s), b(u)) = sigma^2 e^{-|s-u|/T} (theory.md §3), with u = W/T:
+/// [derived] from Cov(b(s), b(u)) = sigma^2 e^{-|s-u|/T} (docs/model.md §3), with u = W/T:
 ///   rho            = (1 - e^{-u}) / u
 ///   Var(m)/sigma^2 = (2/u) (1 - rho)
 ///   Var(m|b0)/sigma^2 = Var(m)/sigma^2 - rho^2 = (2u - 3 + 4 e^{-u} - e^{-2u}) / u^2
@@ -447,7 +447,7 @@ mod tests {
 
     #[test]
     fn gauss_markov_limits_match_white_and_random_walk() {
-        // theory.md §2: T >> T_c behaves like ARW with Q = q_c T_c; T << T_c like RRW q_c^2 T/3,
+        // docs/model.md §2: T >> T_c behaves like ARW with Q = q_c T_c; T << T_c like RRW q_c^2 T/3,
         // with sigma_b^2 = q_c^2 T_c / 2.
         let (sigma, tc) = (0.3, 10.0);
         let qc2 = 2.0 * sigma * sigma / tc;
@@ -459,7 +459,7 @@ mod tests {
         let a = gauss_markov_avar(sigma, 1.0, 0.0099999);
         let b = gauss_markov_avar(sigma, 1.0, 0.0100001);
         assert!((a / b - 1.0).abs() < 1e-4);
-        // Peak 0.6174 sigma at 1.8927 T (theory.md §2).
+        // Peak 0.6174 sigma at 1.8927 T (docs/model.md §2).
         let peak = gauss_markov_avar(sigma, tc, GAUSS_MARKOV_ADEV_PEAK_TAU_PER_TC * tc).sqrt();
         assert!((peak / sigma - GAUSS_MARKOV_ADEV_PEAK_PER_SIGMA).abs() < 1e-4);
     }
@@ -484,23 +484,23 @@ mod tests {
 
     #[test]
     fn growth_laws_match_theory_table() {
-        // theory.md §4 and §6: t, t^3/3, t^5/20, t^7/252; constant bias t^3/6 through tilt.
+        // docs/model.md §4 and §6: t, t^3/3, t^5/20, t^7/252; constant bias t^3/6 through tilt.
         let t = 60.0;
         assert!((white_kfold_variance(1.0, t, 1) - t).abs() < 1e-9);
         assert!((white_kfold_variance(1.0, t, 2) - t.powi(3) / 3.0).abs() < 1e-6);
         assert!((white_kfold_variance(1.0, t, 3) - t.powi(5) / 20.0).abs() < 1e-3);
         assert!((white_kfold_variance(1.0, t, 4) - t.powi(7) / 252.0).abs() < 1.0);
-        // theory.md §6: gyro const bias 0.010 deg/s -> g eps t^3/6 = 61.6 m at 60 s.
+        // docs/model.md §6: gyro const bias 0.010 deg/s -> g eps t^3/6 = 61.6 m at 60 s.
         let eps = 0.010f64.to_radians();
         assert!((constant_bias_growth(eps, t, Integration::Tilt) - 61.6).abs() < 0.05);
-        // theory.md §6: N = 0.075 deg/sqrt(s), 60 s -> 80.07 m per horizontal axis (with g = 9.81;
+        // docs/model.md §6: N = 0.075 deg/sqrt(s), 60 s -> 80.07 m per horizontal axis (with g = 9.81;
         // 80.04 m with 9.80665); theta 0.01014 rad.
         let n = 0.075f64.to_radians();
         assert!(
             (white_noise_growth_std(n, t, Integration::Tilt) - 80.07 * 9.80665 / 9.81).abs() < 0.01
         );
         assert!((white_noise_growth_std(n, t, Integration::Once) - 0.01014).abs() < 1e-5);
-        // theory.md §6: gyro RRW K = 1e-3 -> 1034.0 m at 60 s; accel bias RW 1e-3 -> 6.235 m.
+        // docs/model.md §6: gyro RRW K = 1e-3 -> 1034.0 m at 60 s; accel bias RW 1e-3 -> 6.235 m.
         assert!((random_walk_growth_std(1e-3, t, Integration::Tilt) - 1034.0).abs() < 0.5);
         assert!((random_walk_growth_std(1e-3, t, Integration::Twice) - 6.235).abs() < 0.001);
         // Gauss-Markov once: -> 2 sigma^2 T t for t >> T.
@@ -601,7 +601,7 @@ mod tests {
     fn exact_gauss_markov_integrals_meet_both_limits() {
         let (sigma, tc) = (0.2, 3.0);
         for k in 1..=3 {
-            // t >> T: theory.md §4 asymptote 2 sigma^2 T * white k-fold (relative error O(T/t)).
+            // t >> T: docs/model.md §4 asymptote 2 sigma^2 T * white k-fold (relative error O(T/t)).
             let t = 1e4 * tc;
             let exact = gauss_markov_kfold_variance(sigma, tc, t, k).unwrap();
             let asym = white_kfold_variance((2.0 * sigma * sigma * tc).sqrt(), t, k);
@@ -625,7 +625,7 @@ mod tests {
                 "k {k}: {below} vs {above}"
             );
         }
-        // k = 1 is theory.md §4's exact form.
+        // k = 1 is docs/model.md §4's exact form.
         let once = gauss_markov_growth_std(sigma, tc, 7.0, Integration::Once).unwrap();
         assert!(
             (gauss_markov_kfold_variance(sigma, tc, 7.0, 1).unwrap() / (once * once) - 1.0).abs()

@@ -17,7 +17,7 @@
 //! `rate_ramp`, `gauss_markov = { sigma, time_constant }`, `sinusoidal = { amplitude, frequency, phase? }`,
 //! `temperature_bias`, `constant_bias`, `turn_on_bias`, `scale_factor`, `misalignment = [a, b]`.
 //!
-//! `bias_instability` states its convention (DESIGN.md, Units):
+//! `bias_instability` states its convention (docs/architecture.md, Units):
 //! - `{ value, convention = "ieee" }`: value is the IEEE coefficient B (Allan plateau 0.664 B);
 //! - `{ value, convention = "allan_minimum" }`: value is the minimum of the axis' Allan deviation, as
 //!   Woodman (TR-696 §5.1) and many spec sheets report it; B is solved so that the closed-form Allan

@@ -1,4 +1,4 @@
-//! Names of the sensors and error effects (the DESIGN.md names), and the `--only` / `--without`
+//! Names of the sensors and error effects (the docs/cli.md names), and the `--only` / `--without`
 //! term filter used for ablation by `generate`, `simulate` and `spec`.
 
 use std::collections::BTreeSet;

@@ -2,9 +2,9 @@
 //!
 //! - Stochastic terms (IEEE Std 952 / 1293): quantisation, white noise (ARW / VRW), bias instability
 //!   (flicker, or Woodman's bias random walk), rate random walk, rate ramp, first-order Gauss-Markov,
-//!   sinusoid; each discretised exactly at the sample interval (theory.md §3; Gauss-Markov components
+//!   sinusoid; each discretised exactly at the sample interval (docs/model.md §3; Gauss-Markov components
 //!   with T >= 1000 dt exactly on a coarser grid and held, see [`process::GaussMarkovBank`]) and with its closed-form
-//!   Allan variance and growth laws in [`closed_form`] (theory.md §2, §4).
+//!   Allan variance and growth laws in [`closed_form`] (docs/model.md §2, §4).
 //! - Deterministic and per-run terms: constant bias, turn-on bias drawn per run, scale-factor error,
 //!   misalignment, temperature-dependent bias driven by a [`TemperatureProfile`].
 //!

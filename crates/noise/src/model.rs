@@ -2,7 +2,7 @@
 //! accelerometer triad per sensor, and the temperature profile driving temperature-dependent bias.
 //!
 //! Signal units: rad/s (gyro) or m/s^2 (accel). Each term's coefficient is stated in the IEEE 952
-//! convention (theory.md §2): Q (signal·s), N (signal·sqrt(s)), B (signal), K (signal/sqrt(s)),
+//! convention (docs/model.md §2): Q (signal·s), N (signal·sqrt(s)), B (signal), K (signal/sqrt(s)),
 //! R (signal/s).
 
 use crate::closed_form as cf;
@@ -36,7 +36,7 @@ pub(crate) fn check(what: &'static str, value: f64, positive: bool) -> Result<f6
 
 /// Flicker (1/f) bias instability of IEEE coefficient B, generated as a sum of log-spaced
 /// Gauss-Markov processes with correlation times spanning `[tau_min_s, tau_max_s]`
-/// (theory.md §3, kshana `Flicker`: equal variance sigma_0^2 = B^2 ln(rho) / pi each).
+/// (docs/model.md §3, kshana `Flicker`: equal variance sigma_0^2 = B^2 ln(rho) / pi each).
 /// The Allan plateau 0.664 B holds for averaging times in [30 tau_min, tau_max / 30] (see `per_decade`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Flicker {
@@ -106,14 +106,14 @@ impl Flicker {
         let decades = (self.tau_max_s / self.tau_min_s).log10();
         let intervals = ((decades * f64::from(self.per_decade)).round() as usize).max(1);
         let ln_rho = (self.tau_max_s / self.tau_min_s).ln() / intervals as f64;
-        // theory.md §3: for IEEE B, sigma_0^2 = B^2 ln(rho) / pi per component.
+        // docs/model.md §3: for IEEE B, sigma_0^2 = B^2 ln(rho) / pi per component.
         let sigma0 = self.b * (ln_rho / std::f64::consts::PI).sqrt();
         (0..=intervals)
             .map(|i| (self.tau_min_s * (ln_rho * i as f64).exp(), sigma0))
             .collect()
     }
 
-    /// Allan variance of the component sum (theory.md §2 Gauss-Markov closed form, summed).
+    /// Allan variance of the component sum (docs/model.md §2 Gauss-Markov closed form, summed).
     pub fn avar(&self, tau_s: f64) -> f64 {
         self.avar_at(tau_s, None)
     }
@@ -151,7 +151,7 @@ pub enum BiasInstability {
 }
 
 impl BiasInstability {
-    /// Allan variance (theory.md §2: flicker as GM sum; random walk K^2 tau/3).
+    /// Allan variance (docs/model.md §2: flicker as GM sum; random walk K^2 tau/3).
     pub fn avar(&self, tau_s: f64) -> f64 {
         self.avar_at(tau_s, None)
     }
@@ -272,7 +272,7 @@ pub struct AxisModel {
 
 impl AxisModel {
     /// Closed-form Allan variance of the stochastic terms at averaging time `tau_s`
-    /// (theory.md §2: sum of independent terms). Deterministic and per-run terms add nothing,
+    /// (docs/model.md §2: sum of independent terms). Deterministic and per-run terms add nothing,
     /// except the rate ramp (R^2 tau^2/2) and the sinusoid (phase-averaged, Hou 4.64).
     pub fn allan_variance(&self, tau_s: f64) -> f64 {
         self.avar_at(tau_s, None)
@@ -440,7 +440,7 @@ impl TemperatureProfile {
     /// I_k = int_0^t (t-s)^{k-1}/(k-1)! f(s) ds applied to each profile:
     /// a constant c gives c t^k/k!; a ramp r s held from t_e on gives r (t^{k+1} - (t - t_e)_+^{k+1})/(k+1)!;
     /// e^{-s/tau} gives tau^k sum_{n>=k} (-1)^{n-k} x^n/n! (x = t/tau); sin(w s) gives
-    /// (1 - cos wt)/w, t/w - sin(wt)/w^2, t^2/(2w) - (1 - cos wt)/w^3. (Derived; not in theory.md.)
+    /// (1 - cos wt)/w, t/w - sin(wt)/w^2, t^2/(2w) - (1 - cos wt)/w^3. (Derived; not in docs/model.md.)
     /// `None` for k outside 1..=3.
     pub fn excursion_integral(&self, reference_c: f64, t_s: f64, k: i32) -> Option<f64> {
         if !(1..=3).contains(&k) {

@@ -1,5 +1,5 @@
 //! The per-run error state: exact discretisation of every term at the sample interval
-//! (theory.md §3), one random sub-stream per (channel, term) so adding a term does not reshuffle others.
+//! (docs/model.md §3), one random sub-stream per (channel, term) so adding a term does not reshuffle others.
 //! The discrete processes take their RNG as an argument; `ChannelErrors` pairs each with its sub-stream.
 
 use crate::effect::{Effect, Sensor};
@@ -36,7 +36,7 @@ fn draws<'a>(rng: &mut ImuRng, scratch: &'a mut Vec<f64>, n: usize) -> &'a [f64]
     &scratch[..n]
 }
 
-/// White noise of density N sampled every dt: n_k = (N / sqrt(dt)) w_k (theory.md §3; Kalibr
+/// White noise of density N sampled every dt: n_k = (N / sqrt(dt)) w_k (docs/model.md §3; Kalibr
 /// sigma_d = sigma / sqrt(dt); Woodman sigma = N / sqrt(dt)).
 #[derive(Clone, Copy, Debug)]
 pub struct WhiteNoise {
@@ -63,7 +63,7 @@ impl WhiteNoise {
 }
 
 /// A bank of independent first-order Gauss-Markov processes, summed (one process, or flicker's band).
-/// Exact discretisation (theory.md §3, rotors_simulator / Maybeck 4-114):
+/// Exact discretisation (docs/model.md §3, rotors_simulator / Maybeck 4-114):
 /// x_{k+1} = phi x_k + sigma sqrt(1 - phi^2) w_k, phi = e^{-dt/T}; started from the stationary distribution.
 ///
 /// Multi-rate option ([`GaussMarkovBank::multirate`]): a component whose correlation time T is at
@@ -71,7 +71,7 @@ impl WhiteNoise {
 /// samples, x_{j+m} = phi^m x_j + sigma sqrt(1 - phi^(2m)) w (the same exact discretisation at interval
 /// m dt, so its values on the coarse grid are an exact sample of the process) and held in between.
 /// Over a hold interval M = m dt <= T / 1000 such a component moves like a random walk of density
-/// K^2 = 2 sigma^2 / T (theory.md §2); a random walk updated every m samples with m times the step
+/// K^2 = 2 sigma^2 / T (docs/model.md §2); a random walk updated every m samples with m times the step
 /// variance has, averaged over the grid's phase (which the overlapping estimator does), exactly the
 /// same Allan variance K^2 dt (2n^2 + 1)/(6n) at every tau = n dt as one updated every sample, so
 /// the hold changes that component's Allan variance only at relative order M/T <= 1e-3
@@ -297,7 +297,7 @@ impl GaussMarkovBank {
     }
 }
 
-/// Random walk b_{k+1} = b_k + K sqrt(dt) w_k from b_0 = 0 (theory.md §3, Kalibr: sigma_bd = sigma_b sqrt(dt)).
+/// Random walk b_{k+1} = b_k + K sqrt(dt) w_k from b_0 = 0 (docs/model.md §3, Kalibr: sigma_bd = sigma_b sqrt(dt)).
 #[derive(Clone, Copy, Debug)]
 pub struct RandomWalk {
     step: f64,
@@ -328,7 +328,7 @@ impl RandomWalk {
     }
 }
 
-/// Quantisation of the integrated output (DESIGN.md: so its Allan signature is the tau^-1 slope):
+/// Quantisation of the integrated output (docs/cli.md: so its Allan signature is the tau^-1 slope):
 /// the output released in a sample is a whole number of LSBs of the integral, LSB = Q sqrt(12)
 /// (Hou §4.3.1, Q = LSB/sqrt(12)). `residual` is the integral not yet released.
 #[derive(Clone, Copy, Debug)]

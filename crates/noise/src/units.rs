@@ -7,7 +7,7 @@
 //! are both recognised as angle·time^-1/2 and a unit that does not fit the quantity is an error.
 //!
 //! Conversion constants: degree = pi/180 rad; arc-second = pi/648000 rad; h = 3600 s;
-//! g = 9.80665 m/s^2 (standard gravity, DESIGN.md); ppm = 1e-6; % = 1e-2. Temperature intervals
+//! g = 9.80665 m/s^2 (standard gravity, docs/cli.md); ppm = 1e-6; % = 1e-2. Temperature intervals
 //! in degC or K are equal (a coefficient per degC is a coefficient per K).
 
 use std::fmt;
@@ -621,7 +621,7 @@ mod tests {
 
     #[test]
     fn spec_sheet_units_convert_to_si() {
-        // theory.md §2 unit conversions: N[rad/sqrt(s)] = N[deg/sqrt(h)]·(pi/180)/60.
+        // docs/model.md §2 unit conversions: N[rad/sqrt(s)] = N[deg/sqrt(h)]·(pi/180)/60.
         let arw = parse_quantity("0.2 deg/sqrt(h)", Quantity::NoiseDensity(AngularRate)).unwrap();
         assert!(close(arw, 0.2 * PI / 180.0 / 60.0));
         let arw2 =
@@ -637,11 +637,11 @@ mod tests {
         assert!(close(vrw, 0.004));
         let ug = parse_quantity("40 ug/sqrt(Hz)", Quantity::NoiseDensity(Acceleration)).unwrap();
         assert!(close(ug, 40e-6 * STANDARD_GRAVITY_MPS2));
-        // VRW[m/s/sqrt(h)] = 60·VRW[m/s/sqrt(s)] (theory.md §2).
+        // VRW[m/s/sqrt(h)] = 60·VRW[m/s/sqrt(s)] (docs/model.md §2).
         let vrw_h =
             parse_quantity("0.6 m/s/sqrt(h)", Quantity::NoiseDensity(Acceleration)).unwrap();
         assert!(close(vrw_h, 0.01));
-        // K[deg/h/sqrt(h)] -> rad/s/sqrt(s): multiply by (pi/180)/3600/60 (theory.md §2).
+        // K[deg/h/sqrt(h)] -> rad/s/sqrt(s): multiply by (pi/180)/3600/60 (docs/model.md §2).
         let k = parse_quantity("1 deg/h/sqrt(h)", Quantity::RandomWalk(AngularRate)).unwrap();
         assert!(close(k, PI / 180.0 / 3600.0 / 60.0));
         let ramp = parse_quantity("1 deg/h/h", Quantity::Ramp(AngularRate)).unwrap();

@@ -1,5 +1,5 @@
 //! Every stochastic term, generated at 10 Hz, 100 Hz and 1 kHz, has the overlapping Allan variance
-//! of its closed form (theory.md §2; exact sampled forms from `noise::closed_form`), within
+//! of its closed form (docs/model.md §2; exact sampled forms from `noise::closed_form`), within
 //! chi-squared bounds from Greenhall's EDF at a per-comparison false-positive rate of 1e-6
 //! (see `common::ALPHA`).
 
@@ -153,7 +153,7 @@ fn flicker_matches_its_closed_form_and_plateau() {
             |tau| axis.allan_variance_sampled(tau, dt),
         );
         // Plateau: there the closed form of the component sum is within RIPPLE of 0.664 B (IEEE 952,
-        // Hou 4.38-4.50; 0.987 .. 1.010 computed for 1 or 2 components per decade, theory.md §3 measured
+        // Hou 4.38-4.50; 0.987 .. 1.010 computed for 1 or 2 components per decade, docs/model.md §3 measured
         // 0.653-0.677 by simulation), and the estimate within the chi-squared bound widened by it.
         const RIPPLE: f64 = 0.015;
         let plateau = cf::flicker_plateau_avar(b);
@@ -229,7 +229,7 @@ fn sinusoid_matches_phase_averaged_closed_form() {
 
 #[test]
 fn sum_of_terms_matches_sum_of_closed_forms() {
-    // Independent terms add (theory.md §2, "Usual sum for fitting").
+    // Independent terms add (docs/model.md §2, "Usual sum for fitting").
     let axis = AxisModel {
         white_noise: Some(1e-3),
         bias_instability: Some(BiasInstability::Flicker(

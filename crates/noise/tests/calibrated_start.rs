@@ -102,7 +102,7 @@ fn simpson(f: impl Fn(f64) -> f64, w: f64, n: usize) -> f64 {
 
 #[test]
 fn window_mean_moments_match_quadrature() {
-    // With m = (1/W) int_{-W}^0 b and Cov(b(s), b(u)) = e^{-|s-u|/T} (sigma = 1, theory.md §3):
+    // With m = (1/W) int_{-W}^0 b and Cov(b(s), b(u)) = e^{-|s-u|/T} (sigma = 1, docs/model.md §3):
     //   Cov(m, b(0)) = (1/W) int_0^W e^{-v/T} dv,
     //   Var(m) = (2/W^2) int_0^W (W - v) e^{-v/T} dv  (the double integral folded onto v = |s - u|).
     for &(tc, w) in &[

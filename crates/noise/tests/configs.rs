@@ -70,7 +70,7 @@ fn honeywell_and_adis_values() {
     let adis = load("adis16405.toml");
     let deg_h = PI / 180.0 / 3600.0;
     for axis in 0..3 {
-        // 0.0035 deg/sqrt(h) = 0.0035/60 deg/sqrt(s) (theory.md §2).
+        // 0.0035 deg/sqrt(h) = 0.0035/60 deg/sqrt(s) (docs/model.md §2).
         assert!(
             rel(
                 gg1320.gyro.axes[axis].white_noise.unwrap(),

@@ -1,5 +1,5 @@
 //! Time-domain laws over many runs: Gauss-Markov autocorrelation, random-walk variance growth, and
-//! the growth of each stochastic term integrated once, twice and through tilt (theory.md §4),
+//! the growth of each stochastic term integrated once, twice and through tilt (docs/model.md §4),
 //! each within chi-squared (or normal) bounds at a per-comparison false-positive rate of 1e-6.
 
 mod common;
@@ -55,7 +55,7 @@ fn check_growth(label: &str, axis: &AxisModel, law: impl Fn(f64, Integration) ->
 
 #[test]
 fn white_noise_grows_as_sqrt_t_t3_t5() {
-    // Woodman eqs 5 and 18; g N t^{5/2}/sqrt(20) (theory.md §1.3). Discrete sums differ by O(1/n) = 0.15 %.
+    // Woodman eqs 5 and 18; g N t^{5/2}/sqrt(20) (docs/model.md §1.3). Discrete sums differ by O(1/n) = 0.15 %.
     let n = 1e-3;
     let axis = AxisModel {
         white_noise: Some(n),
@@ -73,7 +73,7 @@ fn random_walk_variance_grows_linearly_and_its_integrals_as_t3_t5_t7() {
         rate_random_walk: Some(k),
         ..AxisModel::default()
     };
-    // The walk itself: Var b_j = K^2 j dt (theory.md §3, b_{j+1} = b_j + K sqrt(dt) w).
+    // The walk itself: Var b_j = K^2 j dt (docs/model.md §3, b_{j+1} = b_j + K sqrt(dt) w).
     let rate = 100.0;
     for j in [10usize, 100, 999] {
         let at_j: Vec<f64> = (0..RUNS)
@@ -144,7 +144,7 @@ fn gauss_markov_starts_stationary_and_integrates_as_its_law() {
         .map(|run| gyro_x_series(&axis, rate, 1, SEED, run)[0])
         .collect();
     assert_variance("Gauss-Markov at t = 0", &first, sigma * sigma);
-    // Once: exact 2 sigma^2 T [t - T(1 - e^{-t/T})] (theory.md §4); t = 10 s = 5 T; the rectangle
+    // Once: exact 2 sigma^2 T [t - T(1 - e^{-t/T})] (docs/model.md §4); t = 10 s = 5 T; the rectangle
     // sum of samples differs from the integral by O(dt/T) = 0.5 %.
     let n = 1000;
     let [once, twice, thrice] = integrals(&axis, rate, n);

@@ -88,7 +88,7 @@ fn exact_allan_variance_of_the_held_component_is_within_the_bound() {
 #[test]
 fn held_component_steps_every_m_samples_with_the_exact_increment() {
     // T = 5000 dt: m = 5. The value is constant within each hold and its coarse-grid increments have
-    // variance 2 sigma^2 (1 - phi^m) (stationary AR(1) at lag m, theory.md §3).
+    // variance 2 sigma^2 (1 - phi^m) (stationary AR(1) at lag m, docs/model.md §3).
     let (sigma, tc, dt): (f64, f64, f64) = (2.0, 5000.0, 1.0);
     let m = hold(tc, dt) as usize;
     assert_eq!(m, 5);

@@ -1,5 +1,5 @@
 //! A 12 h, 100 Hz static log from configs/sensors/mtx.toml reads back Woodman's Table 4
-//! (TR-696; theory.md §1.4) through the allan crate's overlapping Allan deviation:
+//! (TR-696; docs/model.md §1.4) through the allan crate's overlapping Allan deviation:
 //! - ADEV at tau = 1 s within 5 % of the configured ARW per axis. Reason: at m = 100 of 4.32e6
 //!   samples the white-FM EDF is ~6.5e4, a 0.3 % standard error, and the other terms add 0.7 % at 1 s;
 //! - the minimum over the octave grid within 20 % of 0.010 / 0.009 / 0.012 deg/s. Reason: near

@@ -123,7 +123,7 @@ impl Attitude {
 }
 
 /// `(sin s / s, (1 - cos s) / s^2)` as functions of `s^2`: the coefficients of Woodman eq 41.
-/// Below `s = 0.1` the Taylor series (theory.md §1.1 note) is used; truncated after the `s^8` term its
+/// Below `s = 0.1` the Taylor series (docs/model.md §1.1 note) is used; truncated after the `s^8` term its
 /// remainder is below `0.1^10 / 10! < 3e-17`, i.e. it is exact to rounding, and needs no sqrt/sin/cos.
 #[inline]
 pub(crate) fn rodrigues_coefficients(s2: f64) -> (f64, f64) {

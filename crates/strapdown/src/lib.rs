@@ -14,7 +14,7 @@
 //! - Units: SI (rad, rad/s, m/s^2, m/s, m, s). IMU samples are *interval averages*: sample `k` is the
 //!   body-frame angle and velocity increment over `[k dt, (k+1) dt]` divided by `dt` (an integrating IMU).
 //!
-//! **Schemes** ([`Scheme`]): `Woodman` is TR-696 eqs 41, 42, 45, 46 exactly (theory.md §1.1-1.2);
+//! **Schemes** ([`Scheme`]): `Woodman` is TR-696 eqs 41, 42, 45, 46 exactly (docs/model.md §1.1-1.2);
 //! `Accurate` (default) uses the exact rotation for a constant rate over each step with a
 //! one-plus-previous-sample coning correction, and trapezoidal velocity and position.
 //!
@@ -36,7 +36,7 @@ pub use nav_error::{nav_error, NavError};
 pub use spec::{TrajectoryError, TrajectorySpec};
 pub use trajectory::{AnyTrajectory, Coning, ConstantRate, Profile, Segment, Static, Trajectory};
 
-/// Standard gravity, m/s^2 (the constant of the seed and of DESIGN.md).
+/// Standard gravity, m/s^2 (the constant of the seed and of docs/cli.md).
 pub const STANDARD_GRAVITY_MPS2: f64 = 9.80665;
 
 impl Strapdown {

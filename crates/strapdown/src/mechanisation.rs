@@ -23,7 +23,7 @@ pub struct NavState {
 /// The integration scheme.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Scheme {
-    /// Woodman's rectangular scheme exactly (theory.md §1.1-1.2): `C <- C exp(B)` with `B = [w dt x]`
+    /// Woodman's rectangular scheme exactly (docs/model.md §1.1-1.2): `C <- C exp(B)` with `B = [w dt x]`
     /// (eq 41), `a_nav = C_{k+1} f` (eq 42), `v += dt (a_nav + gamma)` (eq 45), `p += dt v_{k+1}` (eq 46).
     Woodman,
     /// Exact rotation for constant rate over each step with a one-plus-previous-sample coning correction,
@@ -119,7 +119,7 @@ impl Strapdown {
             }
             Scheme::Accurate => {
                 // One-plus-previous-sample coning correction phi = dtheta + (1/12) dtheta_prev x dtheta
-                // (not in theory.md; source: G. Yan's PSINS toolbox `cnscl.m`, branch "single sample +
+                // (not in docs/model.md; source: G. Yan's PSINS toolbox `cnscl.m`, branch "single sample +
                 // previous sample", `dphim = 1/12*cros(wm_1, wm)`, public copy in
                 // BohemianRhapsodyz/IMMKF-INS base/base1/cnscl.m; the algorithm class is Savage 1998,
                 // JGCD 21(1) 19-28). Its order is measured by tests/order on classical coning.

@@ -1,5 +1,5 @@
 //! One error at a time, static and level IMU, small angles: the mechanisation reproduces the closed-form
-//! drift laws of theory.md §4 (table "Analytic drift laws") within 1 %.
+//! drift laws of docs/model.md §4 (table "Analytic drift laws") within 1 %.
 //!
 //! Errors are injected directly into the ideal outputs (constant bias added, or white noise from
 //! `rand_distr::StandardNormal` with one `Xoshiro256PlusPlus` per run), independent of the noise crate.
@@ -44,7 +44,7 @@ fn assert_within(what: &str, got: f64, law: f64, tol: f64) {
 
 #[test]
 fn constant_gyro_bias_gives_cubic_position_error() {
-    // theory.md §4: position via tilt from a constant gyro bias b is g b t^3 / 6 (§1.3, verified there by
+    // docs/model.md §4: position via tilt from a constant gyro bias b is g b t^3 / 6 (§1.3, verified there by
     // Monte Carlo). Woodman's MTx bias 0.010 deg/s (Table 4), 60 s at 100 Hz: tilt 0.6 deg, so the
     // small-angle error sin(x)/x - 1 is ~2e-5; the discretisation error is O(dt/t) = O(1/6000).
     let eps = 0.010_f64.to_radians();
@@ -136,8 +136,8 @@ fn discrete_position_variance_coefficient(scheme: Scheme, n: usize) -> f64 {
 
 #[test]
 fn gyro_white_noise_gives_t_to_five_halves_position_std() {
-    // theory.md §1.3/§4: sigma_s = g N t^{5/2} / sqrt(20) per horizontal axis for gyro white noise of
-    // density N (rad/sqrt(s)); samples are N/sqrt(dt) * w (theory.md §3, integrating sampler).
+    // docs/model.md §1.3/§4: sigma_s = g N t^{5/2} / sqrt(20) per horizontal axis for gyro white noise of
+    // density N (rad/sqrt(s)); samples are N/sqrt(dt) * w (docs/model.md §3, integrating sampler).
     //
     // Budget: the discrete scheme's exact std differs from the law by O(1/n) (~5/(2n): 0.17 % at
     // n = 1500, checked below); the rest of the 1 % is statistics. Position errors are Gaussian to first
