@@ -240,12 +240,19 @@ fn tables(log: &Log, samples: usize, results: &[ChannelResult], est: Estimator) 
         est.name()
     );
     for r in results {
-        let _ = writeln!(s, "\nchannel {} ({})", r.name, r.unit);
+        let units = crate::fmt::allan_units(r.unit);
+        let (dev_scale, dev_unit) = (&units[0].0, &units[0].1);
         let _ = writeln!(
             s,
-            "{:>12} {:>9} {:>10} {:>3} {:>10} {:>13} {:>13} {:>13}",
-            "tau_s", "m", "terms", "a", "edf", "dev_lo", "dev", "dev_hi"
+            "\nchannel {} (deviation in {dev_unit}; JSON and CSV in {})",
+            r.name, r.unit
         );
+        let _ = writeln!(
+            s,
+            "{:>10} {:>9} {:>10} {:>3} {:>9} {:>11} {:>11} {:>11}",
+            "tau", "m", "terms", "a", "edf", "dev_lo", "dev", "dev_hi"
+        );
+        let d = |v: f64| crate::fmt::sig(v * dev_scale, 4);
         for p in &r.points {
             let flag = if est == Estimator::NonOverlapping && !p.woodman_ok() {
                 " <9 bins"
@@ -254,8 +261,15 @@ fn tables(log: &Log, samples: usize, results: &[ChannelResult], est: Estimator) 
             };
             let _ = writeln!(
                 s,
-                "{:>12.5e} {:>9} {:>10} {:>3} {:>10.4e} {:>13.6e} {:>13.6e} {:>13.6e}{flag}",
-                p.tau_s, p.m, p.n_terms, p.alpha, p.edf, p.lo, p.dev, p.hi
+                "{:>10} {:>9} {:>10} {:>3} {:>9} {:>11} {:>11} {:>11}{flag}",
+                crate::fmt::time(p.tau_s),
+                p.m,
+                p.n_terms,
+                p.alpha,
+                crate::fmt::sig(p.edf, 3),
+                d(p.lo),
+                d(p.dev),
+                d(p.hi)
             );
         }
         let Some(f) = &r.fit else {
@@ -273,7 +287,7 @@ fn tables(log: &Log, samples: usize, results: &[ChannelResult], est: Estimator) 
             f.reduced_chi2,
             100.0 * f.model_error
         );
-        let units = [
+        let si_units = [
             format!("{unit}*s"),
             format!("{unit}*sqrt(s)"),
             unit.to_string(),
@@ -287,10 +301,18 @@ fn tables(log: &Log, samples: usize, results: &[ChannelResult], est: Estimator) 
             "K rate random walk",
             "R rate ramp",
         ];
-        for ((t, label), u) in f.terms().iter().zip(labels).zip(&units) {
+        for (i, (t, label)) in f.terms().iter().zip(labels).enumerate() {
+            let (scale, shown) = (&units[i + 1].0, &units[i + 1].1);
             match t {
                 Some(t) => {
-                    let _ = writeln!(s, "  {label:<20} {:.4e} +- {:.2e} {u}", t.value, t.sigma);
+                    let _ = writeln!(
+                        s,
+                        "  {label:<20} {} +- {} {shown}   ({:.4e} {})",
+                        crate::fmt::sig(t.value * scale, 4),
+                        crate::fmt::sig(t.sigma * scale, 2),
+                        t.value,
+                        si_units[i]
+                    );
                 }
                 None => {
                     let _ = writeln!(s, "  {label:<20} not present");
@@ -300,8 +322,16 @@ fn tables(log: &Log, samples: usize, results: &[ChannelResult], est: Estimator) 
         let rd = &f.readings;
         let _ = writeln!(
             s,
-            "readings: ARW (-1/2 line at 1 s) {:.4e} {unit}*sqrt(s); bias instability min {:.4e} {unit} at {:.4e} s (IEEE B = min/0.664 = {:.4e}); RRW (+1/2 line at 3 s) {:.4e} {unit}/sqrt(s)",
-            rd.arw_at_1s, rd.bi_min, rd.bi_min_tau_s, rd.bi_ieee, rd.rrw_at_3s
+            "readings: ARW (-1/2 line at 1 s) {} {}; bias instability min {} {} at tau = {} (IEEE B = min/0.664 = {} {}); RRW (+1/2 line at 3 s) {} {}",
+            crate::fmt::sig(rd.arw_at_1s * units[2].0, 4),
+            units[2].1,
+            crate::fmt::sig(rd.bi_min * units[3].0, 4),
+            units[3].1,
+            crate::fmt::time(rd.bi_min_tau_s),
+            crate::fmt::sig(rd.bi_ieee * units[3].0, 4),
+            units[3].1,
+            crate::fmt::sig(rd.rrw_at_3s * units[4].0, 4),
+            units[4].1
         );
     }
     s

@@ -189,7 +189,13 @@ fn corrected_model(result: &Diagnosis, model: &SensorModel) -> String {
     );
     for (name, report) in &result.channels {
         for e in &report.effects {
-            let _ = writeln!(out, "# {name}: {} {} {}", e.kind, e.effect, params_text(e));
+            let _ = writeln!(
+                out,
+                "# {name}: {} {} {}",
+                e.kind,
+                e.effect,
+                params_text(e, name)
+            );
         }
     }
     let temperature_found = result
@@ -208,12 +214,30 @@ fn corrected_model(result: &Diagnosis, model: &SensorModel) -> String {
 }
 
 /// `n = 1.2e-4 [1.1e-4, 1.3e-4]` for every parameter.
-fn params_text(e: &FoundEffect) -> String {
+/// An effect's parameters: SI with their interval, and for the IEEE 952 coefficients also in the
+/// units spec sheets use (deg/sqrt(h), deg/h, ug ...) for a channel `ch` (gx.. gyro, ax.. accel).
+fn params_text(e: &FoundEffect, ch: &str) -> String {
+    let units = crate::fmt::allan_units(if ch.starts_with('g') {
+        "rad/s"
+    } else {
+        "m/s^2"
+    });
     e.parameters
         .iter()
         .map(|(k, v)| {
+            let shown = match k.as_str() {
+                "q" => Some(&units[1]),
+                "n" => Some(&units[2]),
+                "b" => Some(&units[3]),
+                "k" => Some(&units[4]),
+                "r" => Some(&units[5]),
+                _ => None,
+            }
+            .map_or(String::new(), |(scale, unit)| {
+                format!(" ({} {unit})", crate::fmt::sig(v * scale, 4))
+            });
             format!(
-                "{k} = {v:.4e} [{:.3e}, {:.3e}]",
+                "{k} = {v:.4e}{shown} [{:.3e}, {:.3e}]",
                 e.parameters_lo.get(k).copied().unwrap_or(f64::NAN),
                 e.parameters_hi.get(k).copied().unwrap_or(f64::NAN)
             )
@@ -225,12 +249,12 @@ fn params_text(e: &FoundEffect) -> String {
 fn drift_line(d: &DriftRow) -> String {
     let cell = |s: &diagnose::drift::DriftSummary| {
         if s.segments == 0 {
-            "            -            ".to_string()
+            format!("{:>11} {:>11}", "-", "-")
         } else {
             format!(
-                "{:9.4} deg {:9.3} m",
-                s.heading_rms_rad.to_degrees(),
-                s.horizontal_rms_m
+                "{:>11} {:>11}",
+                crate::fmt::channel_value("heading_rad", s.heading_rms_rad),
+                crate::fmt::channel_value("pos_horizontal_m", s.horizontal_rms_m)
             )
         }
     };
@@ -275,7 +299,7 @@ fn text_report(result: &Diagnosis, log: &str, model: &Path, elapsed_s: f64) -> S
                 e.kind,
                 e.effect,
                 model_text(e),
-                params_text(e),
+                params_text(e, name),
                 e.gap_before,
                 e.gap_after,
                 e.delta_bic,
@@ -386,7 +410,7 @@ fn markdown_report(
                     e.kind,
                     e.effect,
                     model_text(e),
-                    params_text(e)
+                    params_text(e, name)
                 )
             })
             .collect();

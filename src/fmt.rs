@@ -18,7 +18,7 @@ pub fn sig(v: f64, digits: usize) -> String {
     format!("{v:.decimals$}")
 }
 
-/// `v` (in `unit`) in engineering notation with an SI prefix and 4 significant digits:
+/// `v` (in `unit`) in engineering notation with an SI prefix (femto to kilo) and 4 significant digits:
 /// `si(2.2667e2, "m")` = "226.7 m", `si(1.0224e-4, "m")` = "102.2 µm".
 pub fn si(v: f64, unit: &str) -> String {
     const PREFIXES: [(i32, &str); 9] = [
@@ -35,7 +35,8 @@ pub fn si(v: f64, unit: &str) -> String {
     if !v.is_finite() || v == 0.0 {
         return format!("{} {unit}", sig(v, 4));
     }
-    let exp3 = ((v.abs().log10() / 3.0).floor() as i32 * 3).clamp(-15, 9);
+    // Kilo is the largest prefix: "22360 km" reads better than "22.36 Mm" (easily taken for mm).
+    let exp3 = ((v.abs().log10() / 3.0).floor() as i32 * 3).clamp(-15, 3);
     let prefix = PREFIXES
         .iter()
         .find(|(e, _)| *e == exp3)
@@ -94,6 +95,40 @@ pub fn gyro_bias(v_rad_per_s: f64) -> String {
     format!("{} deg/h", sig(v_rad_per_s.to_degrees() * 3600.0, 3))
 }
 
+/// Display scale and unit for an Allan deviation and the five IEEE 952 coefficients (Q, N, B, K,
+/// R) of a channel whose SI unit is `si_unit`, as spec sheets write them: gyro deg/h, deg/sqrt(h),
+/// deg/h/sqrt(h); accelerometer ug, m/s/sqrt(h). A value in SI times the scale is in the unit.
+pub fn allan_units(si_unit: &str) -> [(f64, String); 6] {
+    let deg = 180.0 / std::f64::consts::PI;
+    let g = noise::units::STANDARD_GRAVITY_MPS2;
+    match si_unit {
+        "rad/s" => [
+            (deg * 3600.0, "deg/h".into()),
+            (deg * 3600.0, "deg/h*s".into()),
+            (deg * 60.0, "deg/sqrt(h)".into()),
+            (deg * 3600.0, "deg/h".into()),
+            (deg * 3600.0 * 60.0, "deg/h/sqrt(h)".into()),
+            (deg * 3600.0 * 3600.0, "deg/h^2".into()),
+        ],
+        "m/s^2" => [
+            (1e6 / g, "ug".into()),
+            (1.0, "m/s".into()),
+            (60.0, "m/s/sqrt(h)".into()),
+            (1e6 / g, "ug".into()),
+            (1e6 / g, "ug/sqrt(s)".into()),
+            (1e6 / g, "ug/s".into()),
+        ],
+        other => [
+            (1.0, other.to_string()),
+            (1.0, format!("{other}*s")),
+            (1.0, format!("{other}*sqrt(s)")),
+            (1.0, other.to_string()),
+            (1.0, format!("{other}/sqrt(s)")),
+            (1.0, format!("{other}/s")),
+        ],
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -109,7 +144,7 @@ mod tests {
         assert_eq!(si(1.0224e-4, "m"), "102.2 µm");
         assert_eq!(si(4.9218, "m"), "4.922 m");
         assert_eq!(si(0.0, "m"), "0 m");
-        assert_eq!(si(2.4e6, "m"), "2.400 Mm");
+        assert_eq!(si(2.4e6, "m"), "2400 km");
         assert_eq!(channel_value("yaw_rad", std::f64::consts::PI), "180.0 deg");
         assert_eq!(channel_value("vel_horizontal_mps", 9.58), "9.580 m/s");
         assert_eq!(time(600.0), "10 min");
@@ -119,5 +154,12 @@ mod tests {
         // Woodman Table 4 (MTx): 0.075 deg/sqrt(s) = 4.5 deg/sqrt(h).
         assert_eq!(arw(0.075f64.to_radians()), "4.50 deg/sqrt(h)");
         assert_eq!(gyro_bias(0.01f64.to_radians()), "36.0 deg/h");
+        // 0.075 deg/sqrt(s) is 4.5 deg/sqrt(h); 1 mg is 1000 ug; 1 m/s/sqrt(s) is 60 m/s/sqrt(h).
+        let gy = allan_units("rad/s");
+        assert!((0.075f64.to_radians() * gy[2].0 - 4.5).abs() < 1e-12);
+        assert!((0.01f64.to_radians() * gy[0].0 - 36.0).abs() < 1e-12);
+        let ac = allan_units("m/s^2");
+        assert!((9.80665e-3 * ac[0].0 - 1000.0).abs() < 1e-9);
+        assert_eq!((ac[2].0, ac[2].1.as_str()), (60.0, "m/s/sqrt(h)"));
     }
 }
