@@ -32,13 +32,13 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Monte Carlo drift run of a scenario; drift statistics beside their analytic laws
+    /// Monte Carlo drift of a scenario (or of a sensor lying still); drift beside its analytic laws
     Simulate(cmd_simulate::Args),
     /// Write a synthetic static IMU log (CSV) from a sensor model
     Generate(cmd_generate::Args),
     /// Allan deviations of a log's channels, with confidence intervals and fitted noise terms
     Allan(cmd_allan::Args),
-    /// Spec-sheet comparison: spec values vs values read back from simulation, drift side by side
+    /// Sensors side by side: drift with laws, requirements pass/fail, spec values read back
     Spec(cmd_spec::Args),
     /// How long a static log must be to read each noise term to a stated uncertainty
     Plan(cmd_plan::Args),
