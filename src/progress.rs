@@ -62,18 +62,12 @@ impl Progress {
             b.set_position(done);
             return;
         }
-        let Some((interval, last)) = &self.lines else {
-            return;
-        };
-        let Ok(mut last) = last.lock() else {
-            return;
-        };
-        let now = Instant::now();
-        if now.duration_since(*last) < *interval || done >= self.total {
+        if done >= self.total {
             return;
         }
-        *last = now;
-        let elapsed = now.duration_since(self.started).as_secs_f64();
+        let Some(elapsed) = self.line_due() else {
+            return;
+        };
         let left = if done > 0 {
             elapsed * (self.total - done) as f64 / done as f64
         } else {
@@ -107,22 +101,22 @@ impl Progress {
             b.set_message(what.to_string());
             return;
         }
-        let Some((interval, last)) = &self.lines else {
-            return;
-        };
-        let Ok(mut last) = last.lock() else {
-            return;
-        };
+        if let Some(elapsed) = self.line_due() {
+            eprintln!("{}: {what} ({elapsed:.0} s elapsed)", self.label);
+        }
+    }
+
+    /// When stderr is not a terminal and a line is due (an interval since the last one): the
+    /// seconds elapsed since the start, and the line counts as printed.
+    fn line_due(&self) -> Option<f64> {
+        let (interval, last) = self.lines.as_ref()?;
+        let mut last = last.lock().ok()?;
         let now = Instant::now();
         if now.duration_since(*last) < *interval {
-            return;
+            return None;
         }
         *last = now;
-        eprintln!(
-            "{}: {what} ({:.0} s elapsed)",
-            self.label,
-            now.duration_since(self.started).as_secs_f64()
-        );
+        Some(now.duration_since(self.started).as_secs_f64())
     }
 
     /// The job is done: clear the bar.
