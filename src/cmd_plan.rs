@@ -14,6 +14,11 @@ use std::path::PathBuf;
 
 /// Longest averaging time searched for a reading, s (about 12 days).
 const MAX_TAU_S: f64 = 1e6;
+/// Sample rates a plan accepts, Hz (the reading of white noise needs samples well below 1 s).
+const MIN_RATE_HZ: f64 = 1e-2;
+const MAX_RATE_HZ: f64 = 1e6;
+/// Longest log a plan reasons about, s.
+const MAX_DURATION_S: f64 = 1e10;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -102,11 +107,19 @@ pub fn run(args: Args) -> Result<()> {
     let model = SensorModel::load(&args.sensor).map_err(|e| anyhow::anyhow!("{e}"))?;
     let target = parse_fraction(&args.uncertainty)?;
     let rate_hz = check_rate_hz("--rate", args.rate)?;
+    if !(MIN_RATE_HZ..=MAX_RATE_HZ).contains(&rate_hz) {
+        bail!("--rate: expected {MIN_RATE_HZ} to {MAX_RATE_HZ} Hz, found {rate_hz}");
+    }
     let duration_s = args
         .duration
         .as_deref()
         .map(|d| parse_duration_s("--duration", d))
         .transpose()?;
+    if let Some(d) = duration_s {
+        if d > MAX_DURATION_S || d * rate_hz < 3.0 {
+            bail!("--duration: expected at least 3 samples and at most {MAX_DURATION_S:e} s (about 300 years), found {d:e} s");
+        }
+    }
     let dt_s = 1.0 / rate_hz;
     let mut axes = Vec::new();
     for (sensor, name) in [(Sensor::Gyro, "gyro"), (Sensor::Accel, "accel")] {

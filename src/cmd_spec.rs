@@ -25,6 +25,10 @@ const DEFAULT_TIMES_S: [f64; 3] = [60.0, 600.0, 3600.0];
 /// placed against a threshold (500 runs: the p95's 95 % interval spans about ranks 465-485).
 const DEFAULT_RUNS: u64 = 200;
 const DEFAULT_RUNS_REQUIRE: u64 = 500;
+/// Highest drift sample rate accepted, Hz.
+const MAX_RATE_HZ: f64 = 1e6;
+/// Most mechanisation steps (runs x samples) per sensor a spec run may ask for.
+const MAX_STEPS_PER_SENSOR: f64 = 1e11;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -137,7 +141,21 @@ pub fn run(args: Args) -> Result<()> {
     if times.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
         anyhow::bail!("--times: expected positive times in seconds, e.g. 60,600,3600");
     }
+    let rate = crate::cli::check_rate_hz("--rate", args.rate)?;
+    if rate > MAX_RATE_HZ {
+        anyhow::bail!("--rate: expected at most {MAX_RATE_HZ} Hz, found {rate}");
+    }
     times.extend(requirements.iter().map(|r| r.t_s));
+    // Drift is recorded at whole samples: each time is rounded to the nearest sample.
+    for t in &mut times {
+        let k = (*t * rate).round();
+        if k < 1.0 {
+            anyhow::bail!(
+                "--times / --require: {t} s is shorter than one sample at --rate {rate} Hz"
+            );
+        }
+        *t = k / rate;
+    }
     times.sort_by(f64::total_cmp);
     times.dedup();
     if times.is_empty() {
@@ -148,6 +166,17 @@ pub fn run(args: Args) -> Result<()> {
     } else {
         DEFAULT_RUNS_REQUIRE
     });
+    if runs == 0 {
+        anyhow::bail!("--runs: expected an integer >= 1");
+    }
+    // Refuse work that would run for hours before starting it (about 1e7 steps/s per core).
+    let steps = runs as f64 * times.last().copied().unwrap_or(0.0) * rate;
+    if steps > MAX_STEPS_PER_SENSOR {
+        anyhow::bail!(
+            "{runs} runs of {} at {rate} Hz are {steps:.2e} mechanisation steps per sensor (limit {MAX_STEPS_PER_SENSOR:.0e}, about 3 h on 2 cores): use fewer --runs, a lower --rate or an earlier time",
+            crate::fmt::time(times.last().copied().unwrap_or(0.0))
+        );
+    }
     let readback_duration = match args.readback_duration {
         Some(d) => Some(d),
         None => args.readback.then_some(READBACK_DURATION_S),
@@ -175,7 +204,7 @@ pub fn run(args: Args) -> Result<()> {
         let model = SensorModel::load(path)
             .map_err(|e| anyhow::anyhow!("{e}"))?
             .filtered(&filter);
-        let exp = drift_experiment(&model, &times, args.rate, runs, args.seed)
+        let exp = drift_experiment(&model, &times, rate, runs, args.seed)
             .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
         check_memory(&exp, exp.runs)?;
         let gyro = match readback_duration {
@@ -204,7 +233,7 @@ pub fn run(args: Args) -> Result<()> {
             .map(|req| {
                 let cp = checkpoint_times
                     .iter()
-                    .position(|&t| (t - req.t_s).abs() <= 0.5 / args.rate)
+                    .position(|&t| (t - req.t_s).abs() <= 0.5 / rate)
                     .context("a requirement's time is not a checkpoint")?;
                 let values = batch.matrix.series(cp, req.channel as usize);
                 Ok(evaluate(req, values, informs(&model, req.channel)))

@@ -145,3 +145,26 @@ fn check(target: f64, slow_rate: &str) {
     }
     assert!(checked >= 6, "only {checked} terms checked");
 }
+
+/// Bad requests are errors naming the option, never a panic or a nonsense answer.
+#[test]
+fn plan_refuses_what_it_cannot_answer() {
+    for (args, needle) in [
+        (&["--rate", "0"][..], "--rate"),
+        (&["--rate", "1e12"][..], "--rate"),
+        (&["--uncertainty", "0"][..], "--uncertainty"),
+        (&["--uncertainty", "150%"][..], "--uncertainty"),
+        (&["--duration", "1e300"][..], "--duration"),
+        (&["--duration", "soon"][..], "--duration"),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_imudrift"))
+            .args(["plan", "configs/sensors/mtx.toml"])
+            .args(args)
+            .current_dir(root())
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(1), "{args:?}");
+        let e = String::from_utf8_lossy(&out.stderr);
+        assert!(e.contains(needle), "{args:?}: {e}");
+    }
+}

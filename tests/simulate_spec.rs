@@ -180,6 +180,20 @@ fn spec_bad_requirements_are_errors_showing_the_form() {
     }
     let e = spec_error(&["configs/sensors/mtx.toml", "--readback-duration", "1e300"]);
     assert!(e.contains("--readback-duration"), "{e}");
-    let e = spec_error(&["configs/sensors/mtx.toml", "--times", "0"]);
-    assert!(e.contains("--times"), "{e}");
+    for (args, needle) in [
+        (&["--times", "0"][..], "--times"),
+        (&["--runs", "0"][..], "--runs"),
+        (&["--rate", "0"][..], "--rate"),
+        (&["--times", "0.001"][..], "shorter than one sample"),
+        (&["--times", "1e9"][..], "mechanisation steps"),
+        (
+            &["--require", "pos_horizontal_m < 1 @ 1e12 s"][..],
+            "mechanisation steps",
+        ),
+    ] {
+        let mut all = vec!["configs/sensors/mtx.toml"];
+        all.extend_from_slice(args);
+        let e = spec_error(&all);
+        assert!(e.contains(needle), "{args:?}: {e}");
+    }
 }

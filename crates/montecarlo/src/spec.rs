@@ -246,18 +246,24 @@ pub fn gyro_spec_values(model: &SensorModel, rate_hz: f64) -> GyroSpec {
     g
 }
 
-/// A static, level drift scenario for the comparison (checkpoints at `times_s`).
-pub fn drift_scenario(times_s: &[f64], rate_hz: f64, runs: u64, seed: u64) -> Scenario {
+/// A static, level drift scenario for the comparison (checkpoints at `times_s`, which must be
+/// whole numbers of samples at `rate_hz`).
+pub fn drift_scenario(
+    times_s: &[f64],
+    rate_hz: f64,
+    runs: u64,
+    seed: u64,
+) -> Result<Scenario, crate::scenario::ScenarioError> {
     let duration = times_s.iter().cloned().fold(0.0, f64::max);
     let times = times_s
         .iter()
-        .map(|t| t.to_string())
+        .map(|t| format!("{t:?}"))
         .collect::<Vec<_>>()
         .join(", ");
     let text = format!(
-        "sensor = \"(given)\"\nduration_s = {duration}\nrate_hz = {rate_hz}\nruns = {runs}\nseed = {seed}\n[checkpoints]\ntimes_s = [{times}]\n"
+        "sensor = \"(given)\"\nduration_s = {duration:?}\nrate_hz = {rate_hz:?}\nruns = {runs}\nseed = {seed}\n[checkpoints]\ntimes_s = [{times}]\n"
     );
-    Scenario::from_toml_str(&text, "spec drift scenario").expect("valid generated scenario")
+    Scenario::from_toml_str(&text, "spec drift scenario")
 }
 
 /// Drift rows from a static Monte Carlo report.
@@ -291,9 +297,6 @@ pub fn drift_experiment(
     runs: u64,
     seed: u64,
 ) -> Result<Experiment, String> {
-    Experiment::new(
-        drift_scenario(times_s, rate_hz, runs, seed),
-        model,
-        &Overrides::default(),
-    )
+    let scenario = drift_scenario(times_s, rate_hz, runs, seed).map_err(|e| e.to_string())?;
+    Experiment::new(scenario, model, &Overrides::default())
 }
