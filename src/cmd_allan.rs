@@ -49,6 +49,9 @@ pub struct Args {
     pub timing: bool,
 }
 
+/// Fewest averaging times with 9 or more intervals a channel must give (a slope needs two).
+const MIN_USABLE_TAUS: usize = 2;
+
 /// The analysis of one channel.
 pub struct ChannelResult {
     pub name: String,
@@ -141,6 +144,29 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
         .map(|(name, data)| analyse(data, &name, dt_s, est, grid, opts, &stage))
         .collect();
     stage("all channels");
+    for r in &results {
+        // A constant channel (stuck sensor, a column of zeros) has no Allan deviation to read.
+        if !r.points.is_empty() && r.points.iter().all(|p| p.dev == 0.0) {
+            bail!(
+                "{}: channel {} is constant: it has no noise to analyse (a stuck or disconnected sensor, or a column of zeros?); leave it out with --channels",
+                log.source,
+                r.name
+            );
+        }
+        let usable = r.points.iter().filter(|p| p.woodman_ok()).count();
+        if usable < MIN_USABLE_TAUS {
+            bail!(
+                "{}: {samples} samples give {usable} averaging time(s) with at least 9 intervals (Woodman's rule) for channel {}; an Allan analysis needs at least {MIN_USABLE_TAUS}: use a longer log{}",
+                log.source,
+                r.name,
+                if r.points.is_empty() {
+                    " (the --grid has no averaging factor this log can hold)"
+                } else {
+                    ""
+                }
+            );
+        }
+    }
     let table = tables(&log, samples, &results, est);
     let doc = json_document(&log, samples, &results, est, &args.grid, opts.confidence);
     if args.json {

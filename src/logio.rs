@@ -283,8 +283,21 @@ fn advise_huge_pages<T>(buf: &[T]) {
 
 /// Parse log text (already decompressed).
 pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> {
+    // Old Mac line endings (CR only) would make the whole file one line: read them as newlines.
+    if !bytes.contains(&b'\n') && bytes.contains(&b'\r') {
+        let unix: Vec<u8> = bytes
+            .iter()
+            .map(|&b| if b == b'\r' { b'\n' } else { b })
+            .collect();
+        return parse_log(&unix, source, opts);
+    }
+    // A UTF-8 byte-order mark (spreadsheet exports) is not part of the first column's name.
+    let mut pos = if bytes.starts_with(&[0xef, 0xbb, 0xbf]) {
+        3
+    } else {
+        0
+    };
     // Header: the first line that is neither blank nor a comment.
-    let mut pos = 0;
     let mut line_no = 0usize;
     let header = loop {
         if pos >= bytes.len() {
@@ -346,18 +359,31 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
     if channels.is_empty() {
         bail!("{source}:{header_line}: no data columns besides `t`");
     }
-    let rate_hz = match (opts.rate_hz, &t_s) {
-        (Some(r), _) => r,
-        (None, Some(t)) => {
-            for (k, w) in t.windows(2).enumerate() {
-                if w[1] <= w[0] || !w[1].is_finite() {
-                    let line = line_of_row(bytes, pos, header_line, k + 1);
-                    bail!(
-                        "{source}:{line}: time t = {} does not increase (previous {}); expected strictly increasing times in s",
-                        w[1], w[0]
-                    );
-                }
+    if let Some(t) = &t_s {
+        for (k, w) in t.windows(2).enumerate() {
+            if w[1] <= w[0] || !w[1].is_finite() {
+                let line = line_of_row(bytes, pos, header_line, k + 1);
+                bail!(
+                    "{source}:{line}: time t = {} does not increase (previous {}); expected strictly increasing times in s",
+                    w[1], w[0]
+                );
             }
+        }
+    }
+    let rate_hz = match (opts.rate_hz, &t_s) {
+        (Some(r), Some(t)) => {
+            check_uniform(t, bytes, pos, header_line, source)?;
+            let from_t = (n_rows - 1) as f64 / (t[n_rows - 1] - t[0]);
+            if ((from_t - r) / r).abs() > RATE_TOLERANCE {
+                bail!(
+                    "{source}: --rate {r} Hz disagrees with the `t` column ({from_t:.6} Hz); give the rate the log was sampled at, or leave --rate out to use `t`"
+                );
+            }
+            r
+        }
+        (Some(r), None) => r,
+        (None, Some(t)) => {
+            check_uniform(t, bytes, pos, header_line, source)?;
             (n_rows - 1) as f64 / (t[n_rows - 1] - t[0])
         }
         (None, None) => bail!(
@@ -371,6 +397,47 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
         channels,
         order,
     })
+}
+
+/// Relative difference allowed between `--rate` and the rate of the `t` column.
+const RATE_TOLERANCE: f64 = 1e-3;
+/// Steps of `t` farther than this fraction from the median step are a gap (or a burst):
+/// timestamps jitter, but a missing sample doubles the step.
+const STEP_TOLERANCE: f64 = 0.5;
+/// Highest sample rate a log may have, Hz.
+const MAX_LOG_RATE_HZ: f64 = 1e9;
+
+/// A uniformly sampled `t`: every step within [`STEP_TOLERANCE`] of the median step, and a rate
+/// that is a number. Analyses assume uniform sampling; a gap would silently change the rate.
+fn check_uniform(
+    t: &[f64],
+    bytes: &[u8],
+    pos: usize,
+    header_line: usize,
+    source: &str,
+) -> Result<()> {
+    let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    let mut sorted = steps.clone();
+    sorted.sort_unstable_by(f64::total_cmp);
+    let median = sorted[sorted.len() / 2];
+    if !(median.is_normal() && 1.0 / median <= MAX_LOG_RATE_HZ) {
+        bail!(
+            "{source}: the `t` column's median step is {median:e} s; expected a sample rate of at most {MAX_LOG_RATE_HZ:e} Hz (is `t` in seconds?)"
+        );
+    }
+    if let Some(k) = steps
+        .iter_mut()
+        .position(|d| (*d - median).abs() > STEP_TOLERANCE * median)
+    {
+        let line = line_of_row(bytes, pos, header_line, k + 1);
+        bail!(
+            "{source}:{line}: t steps from {} to {} s ({:.4} s) where the log's median step is {median:.4} s: a gap or irregular sampling; imudrift analyses uniformly sampled logs: cut the log at the gap, or resample it",
+            t[k],
+            t[k + 1],
+            t[k + 1] - t[k]
+        );
+    }
+    Ok(())
 }
 
 /// Parse the data rows from `start` in parallel chunks; each chunk ends at a newline.

@@ -210,7 +210,9 @@ pub fn confidence_interval(dev: f64, edf: f64, ci: f64) -> (f64, f64) {
     if edf.is_nan() || edf <= 0.0 || !edf.is_finite() {
         return (f64::NAN, f64::NAN);
     }
-    let p_lo = ci.abs().min((ci - 1.0).abs()) / 2.0;
+    // Two-sided: (1 - ci)/2 in each tail (ci in (0, 1); allantools' min(ci, 1 - ci) would turn a
+    // 30 % interval into a 70 % one). For ci >= 0.5 this is bit-identical to that form.
+    let p_lo = (1.0 - ci).clamp(0.0, 1.0) / 2.0;
     let p_hi = 1.0 - p_lo;
     let var = dev * dev;
     let lo = (edf * var / chi2_ppf(p_hi, edf)).sqrt();
@@ -221,6 +223,16 @@ pub fn confidence_interval(dev: f64, edf: f64, ci: f64) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_narrow_level_gives_a_narrow_interval() {
+        // A 30 % interval lies inside the 70 % one (it used to be the same interval).
+        let (lo30, hi30) = confidence_interval(1.0, 20.0, 0.3);
+        let (lo70, hi70) = confidence_interval(1.0, 20.0, 0.7);
+        assert!(lo70 < lo30 && hi30 < hi70, "{lo30} {hi30} {lo70} {hi70}");
+        // 1 - ci = 0.7 split over two tails: chi2 quantiles at 0.35 and 0.65.
+        assert!((lo30 - (20.0 / chi2_ppf(0.65, 20.0)).sqrt()).abs() < 1e-14);
+    }
 
     #[test]
     fn against_scipy() {
