@@ -27,3 +27,26 @@ pub fn check_rate_hz(flag: &str, rate_hz: f64) -> Result<f64> {
     }
     Ok(rate_hz)
 }
+
+/// Most worker threads a command starts: four per core, and at least 64.
+fn max_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get()) * 4
+}
+
+/// The one rayon pool of every command: `--threads N` workers (absent or 0: one per core).
+/// Results never depend on N; N beyond [`max_threads`] is refused rather than started.
+pub fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
+    let n = threads.unwrap_or(0);
+    let max = max_threads().max(64);
+    if n > max {
+        bail!(
+            "--threads {n}: expected at most {max} (this machine has {} cores; 0 or no --threads uses them all)",
+            std::thread::available_parallelism().map_or(1, |n| n.get())
+        );
+    }
+    use anyhow::Context as _;
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .context("cannot start the worker threads")
+}

@@ -8,7 +8,7 @@ use crate::output;
 use crate::plot::{Band, LogLogPlot, Series, PALETTE};
 use allan::fit::{fit_ieee952, Fit, TERM_NAMES};
 use allan::{AllanPoint, EdfMethod, Estimator, Options, TauGrid};
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{anyhow, bail, Result};
 use rayon::prelude::*;
 use serde_json::{json, Map, Value};
 use std::fmt::Write as _;
@@ -92,10 +92,7 @@ pub fn run(args: Args) -> Result<()> {
         confidence: args.confidence,
         ..Options::default()
     };
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(args.threads.unwrap_or(0))
-        .build()
-        .context("cannot start the worker threads")?;
+    let pool = crate::cli::pool(args.threads)?;
     pool.install(|| run_inner(&args, est, &grid, &opts))
 }
 

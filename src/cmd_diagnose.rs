@@ -80,14 +80,7 @@ pub fn run(args: Args) -> Result<()> {
             args.min_delta_bic
         );
     }
-    let mut pool = rayon::ThreadPoolBuilder::new();
-    if let Some(t) = args.threads {
-        if t == 0 {
-            bail!("--threads 0: expected at least 1");
-        }
-        pool = pool.num_threads(t);
-    }
-    let pool = pool.build().context("cannot start the worker threads")?;
+    let pool = crate::cli::pool(args.threads)?;
     pool.install(|| run_inner(&args))
 }
 

@@ -8,7 +8,7 @@
 
 use crate::cli::{check_rate_hz, parse_duration_s};
 use crate::output;
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use nalgebra::Vector3;
 use noise::units::STANDARD_GRAVITY_MPS2;
 use noise::{ImuErrors, SensorModel, TermFilter, CHANNEL_NAMES};
@@ -97,10 +97,7 @@ fn plan(args: &Args) -> Result<Plan> {
 
 pub fn run(args: Args) -> Result<()> {
     let plan = plan(&args)?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(args.threads)
-        .build()
-        .context("cannot start the worker threads")?;
+    let pool = crate::cli::pool(Some(args.threads))?;
     let progress = crate::progress::Progress::new("generate", "samples", plan.samples);
     let started = std::time::Instant::now();
     // Atomic for files; devices and FIFOs (/dev/null) are written directly (output.rs).

@@ -196,17 +196,7 @@ pub fn ablation_experiments(
     ablation::experiments(&scenario, &model, overrides, &exp).map_err(|e| anyhow::anyhow!("{e}"))
 }
 
-/// A rayon pool of `threads` workers (default: all cores).
-pub fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
-    let mut b = rayon::ThreadPoolBuilder::new();
-    if let Some(n) = threads {
-        if n == 0 {
-            bail!("--threads: expected an integer >= 1");
-        }
-        b = b.num_threads(n);
-    }
-    b.build().context("cannot start the worker threads")
-}
+pub use crate::cli::pool;
 
 /// Memory for the per-run values above which `simulate` asks for shards instead (8 GiB).
 const MAX_VALUE_BYTES: u64 = 8 << 30;
@@ -402,6 +392,17 @@ pub fn emit(
     json: bool,
     out: Option<&Path>,
 ) -> Result<()> {
+    if report.runs_ok == 0 {
+        report_failures(&report.failed_runs);
+        bail!(
+            "every one of the {} runs failed ({}): no drift statistics to report; the model's values are probably far too large (check their units)",
+            report.runs,
+            report
+                .failed_runs
+                .first()
+                .map_or("no run finished".to_string(), |f| f.message.clone())
+        );
+    }
     let reference = reference_out(report, exp);
     eprint!("{}", table(report, reference.as_ref(), ablation));
     report_failures(&report.failed_runs);

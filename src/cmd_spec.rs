@@ -220,6 +220,16 @@ pub fn run(args: Args) -> Result<()> {
             None => gyro_spec_values(&model, READBACK_RATE_HZ),
         };
         let batch = pool.install(|| execute(&exp, 0..exp.runs, &model.name));
+        if batch.matrix.runs() == 0 {
+            anyhow::bail!(
+                "{}: every one of the {runs} drift runs failed ({}); the model's values are probably far too large (check their units)",
+                path.display(),
+                batch
+                    .failures
+                    .first()
+                    .map_or("no run finished".to_string(), |f| f.message.clone())
+            );
+        }
         let report = exp.report(&batch.matrix, &batch.failures);
         for f in &batch.failures {
             eprintln!(

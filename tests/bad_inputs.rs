@@ -147,3 +147,65 @@ fn a_narrow_confidence_level_gives_a_narrow_interval() {
     assert!(width("0.3") < width("0.7"));
     refused(&["allan", &log, "--confidence", "1.5"], &["--confidence"]);
 }
+
+/// Sizes that used to abort, hang or allocate without bound are refused before any work.
+#[test]
+fn sizes_beyond_reason_are_refused_up_front() {
+    let dir = tempfile::tempdir().unwrap();
+    let mtx = root().join("configs/sensors/mtx.toml");
+    let mtx = mtx.to_str().unwrap();
+    // A flicker band of 600 decades (capacity overflow before) and 6000 components (minutes).
+    for band in [
+        "[\"1e-300 s\", \"1e300 s\"]",
+        "[\"1e-150 s\", \"1e150 s\"], per_decade = 20",
+    ] {
+        let sensor = write(
+            dir.path(),
+            "band.toml",
+            format!("name = \"b\"\n[gyro.all]\nwhite_noise = \"0.1 deg/sqrt(h)\"\nbias_instability = {{ value = \"10 deg/h\", convention = \"ieee\", band = {band} }}\n").as_bytes(),
+        );
+        refused(
+            &["simulate", &sensor, "--runs", "2"],
+            &[
+                "band.toml:4",
+                "bias_instability.band",
+                "at most 100 components",
+            ],
+        );
+    }
+    // 1e13 checkpoints (allocation abort before).
+    let scenario = write(
+        dir.path(),
+        "lc.toml",
+        format!("sensor = {mtx:?}\n[checkpoints]\nlog_count = 10000000000000\n").as_bytes(),
+    );
+    refused(
+        &["simulate", &scenario],
+        &["checkpoints.log_count", "100000"],
+    );
+    // 10 000 threads (started, and hung, before).
+    refused(
+        &["simulate", mtx, "--threads", "10000", "--runs", "2"],
+        &["--threads 10000", "at most"],
+    );
+    refused(&["spec", mtx, "--threads", "10000"], &["--threads 10000"]);
+}
+
+/// Every run failing is an error, not a table of zeros and NaN with exit status 0.
+#[test]
+fn every_run_failing_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let sensor = write(
+        dir.path(),
+        "huge.toml",
+        b"name = \"huge\"\n[gyro.all]\nconstant_bias = \"1e307 rad/s\"\n",
+    );
+    refused(
+        &["simulate", &sensor, "--runs", "3", "--json"],
+        &["every one of the 3 runs failed", "not finite"],
+    );
+    refused(
+        &["spec", &sensor, "--runs", "3", "--times", "1"],
+        &["every one of the 3 drift runs failed"],
+    );
+}

@@ -144,6 +144,8 @@ pub const DEFAULT_RATE_HZ: f64 = 100.0;
 pub const DEFAULT_RUNS: u64 = 500;
 /// Default master seed when a scenario leaves `seed` out.
 pub const DEFAULT_SEED: u64 = 1;
+/// Most checkpoints a scenario may ask for: each costs 8 bytes per run per channel.
+pub const MAX_CHECKPOINTS: usize = 100_000;
 /// Default number of log-spaced checkpoints.
 pub const DEFAULT_LOG_COUNT: usize = 25;
 /// Default first checkpoint, in samples: early enough to see the accelerometer-dominated start
@@ -384,10 +386,10 @@ fn checkpoint_steps(
         }
         None => {
             let count = raw.log_count.unwrap_or(DEFAULT_LOG_COUNT);
-            if count == 0 {
+            if count == 0 || count > MAX_CHECKPOINTS {
                 return Err(err(
                     "checkpoints.log_count",
-                    "expected an integer >= 1".into(),
+                    format!("expected an integer from 1 to {MAX_CHECKPOINTS}, got {count}"),
                 ));
             }
             let first = match raw.first_s {

@@ -35,6 +35,9 @@ use serde::Deserialize;
 use std::fmt::Write as _;
 use std::path::Path;
 
+/// Most Gauss-Markov components a flicker bias instability may have (20 decades at 5 per decade).
+const MAX_FLICKER_COMPONENTS: f64 = 100.0;
+
 /// A config that cannot be used: names the file, the key and what was expected.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum ConfigError {
@@ -795,6 +798,19 @@ fn convert_bias_instability(
                     ))
                 }
             };
+            // One Gauss-Markov component per 1/per_decade decade of the band: bound their number,
+            // which sets the cost of every sample.
+            let components = (tau_max_s / tau_min_s).log10() * f64::from(per_decade);
+            if !(components <= MAX_FLICKER_COMPONENTS) {
+                return Err(ctx.invalid_at(
+                    &sub("band"),
+                    raw.band.as_ref().and_then(|b| b.first()),
+                    format!(
+                        "a band and per_decade giving at most {MAX_FLICKER_COMPONENTS} components (decades x per_decade), e.g. [\"0.1 s\", \"1e5 s\"] with per_decade = 1"
+                    ),
+                    format!("{components:.3e} components"),
+                ));
+            }
             let flicker = |b: f64| Flicker {
                 b,
                 tau_min_s,
