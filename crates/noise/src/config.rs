@@ -801,7 +801,7 @@ fn convert_bias_instability(
             // One Gauss-Markov component per 1/per_decade decade of the band: bound their number,
             // which sets the cost of every sample.
             let components = (tau_max_s / tau_min_s).log10() * f64::from(per_decade);
-            if !(components <= MAX_FLICKER_COMPONENTS) {
+            if components.is_nan() || components > MAX_FLICKER_COMPONENTS {
                 return Err(ctx.invalid_at(
                     &sub("band"),
                     raw.band.as_ref().and_then(|b| b.first()),
