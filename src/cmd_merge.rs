@@ -44,14 +44,41 @@ pub fn run(args: Args) -> Result<()> {
         files.push((path, file));
     }
     let (first_path, first) = &files[0];
-    for (path, f) in &files[1..] {
-        if !first.same_experiment(f) {
+    // Each file's experiment, resolved against its scenario: runs and seed compare by value.
+    let experiment_of = |f: &ShardFile| {
+        let inputs = Inputs {
+            scenario_source: f.scenario_source.clone(),
+            scenario_toml: f.scenario_toml.clone(),
+            sensor_source: f.sensor_source.clone(),
+            sensor_toml: f.sensor_toml.clone(),
+        };
+        let overrides = Overrides {
+            runs: f.runs,
+            seed: f.seed,
+            only: f.only.clone(),
+            without: f.without.clone(),
+        };
+        let exp = experiment_from(&inputs, &overrides)?;
+        anyhow::Ok((inputs, overrides, exp))
+    };
+    let (inputs, overrides, exp) = experiment_of(first)
+        .with_context(|| format!("{}: the stored scenario", first_path.display()))?;
+    for (path, f) in &files {
+        let (_, _, e) =
+            experiment_of(f).with_context(|| format!("{}: the stored scenario", path.display()))?;
+        if !first.same_experiment(f) || (e.runs, e.seed) != (exp.runs, exp.seed) {
             bail!(
-                "{} and {} belong to different experiments or splits (scenario, sensor, runs, seed, terms and k must match)",
+                "{} and {} belong to different experiments or splits (scenario, sensor, runs, seed, terms, ablation and k must match)",
                 first_path.display(),
                 path.display()
             );
         }
+        f.check(
+            exp.runs,
+            exp.scenario.checkpoint_steps.len(),
+            montecarlo::channels::Channel::ALL.len(),
+        )
+        .with_context(|| format!("{}: not a consistent shard file", path.display()))?;
     }
     let k = first.shard.count;
     let mut seen = vec![None; k as usize];
@@ -68,19 +95,6 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(i) = seen.iter().position(Option::is_none) {
         bail!("shard {i}/{k} is missing: all {k} shards are needed");
     }
-    let inputs = Inputs {
-        scenario_source: first.scenario_source.clone(),
-        scenario_toml: first.scenario_toml.clone(),
-        sensor_source: first.sensor_source.clone(),
-        sensor_toml: first.sensor_toml.clone(),
-    };
-    let overrides = Overrides {
-        runs: first.runs,
-        seed: first.seed,
-        only: first.only.clone(),
-        without: first.without.clone(),
-    };
-    let exp = experiment_from(&inputs, &overrides)?;
     // Per-run values of one experiment from every shard, merged in run-index order.
     let merge = |parts: Vec<(RunMatrix, Vec<RunFailure>)>, what: &str| -> Result<_> {
         let mut failures: Vec<_> = parts.iter().flat_map(|(_, f)| f.clone()).collect();

@@ -209,3 +209,75 @@ fn every_run_failing_is_an_error() {
         &["every one of the 3 drift runs failed"],
     );
 }
+
+/// `merge` refuses corrupted, hand-edited or inconsistent shards with the reason (it panicked on
+/// several before), and takes an explicit `--seed` equal to the scenario's own as the same run.
+#[test]
+fn merge_refuses_corrupted_shards_with_the_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().to_str().unwrap();
+    let scenario = "configs/scenarios/mtx-static-60s.toml";
+    for (i, seed) in [(0, None), (1, Some("2007"))] {
+        let mut args = vec![
+            "simulate",
+            scenario,
+            "--runs",
+            "10",
+            "--no-ablation",
+            "--shard",
+        ];
+        let shard = format!("{i}/2");
+        args.push(&shard);
+        args.extend(["--out", d]);
+        if let Some(s) = seed {
+            args.extend(["--seed", s]);
+        }
+        common::ok(imudrift(&args));
+    }
+    let s0 = format!("{d}/shard-0-of-2.json");
+    let s1 = format!("{d}/shard-1-of-2.json");
+    // Explicit --seed 2007 (the scenario's own) on one shard: the same experiment.
+    common::ok(imudrift(&["merge", &s0, &s1, "--json"]));
+    let original: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&s1).unwrap()).unwrap();
+    let corrupt = |name: &str, edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut v = original.clone();
+        edit(&mut v);
+        write(dir.path(), name, v.to_string().as_bytes())
+    };
+    let cases: Vec<(String, &str)> = vec![
+        (
+            corrupt("index.json", &|v| v["shard"]["index"] = 5.into()),
+            "expected 0 <= index < count",
+        ),
+        (
+            corrupt("count.json", &|v| v["shard"]["count"] = 0.into()),
+            "different experiments or splits",
+        ),
+        (
+            corrupt("values.json", &|v| {
+                v["matrix"]["values"][3].as_array_mut().unwrap().pop();
+            }),
+            "series 3 has 4 values for 5 runs",
+        ),
+        (
+            corrupt("runs.json", &|v| v["matrix"]["run_ids"][0] = 0.into()),
+            "run 0 is outside this shard's runs 5..10",
+        ),
+        (
+            corrupt("order.json", &|v| v["matrix"]["run_ids"][1] = 5.into()),
+            "not strictly ascending",
+        ),
+        (
+            corrupt("shape.json", &|v| v["matrix"]["checkpoints"] = 3.into()),
+            "value series for 3 checkpoints",
+        ),
+        (
+            write(dir.path(), "garbage.json", b"{\"format\": 7}"),
+            "not an imudrift shard file",
+        ),
+    ];
+    for (path, needle) in &cases {
+        refused(&["merge", &s0, path], &[needle]);
+    }
+}

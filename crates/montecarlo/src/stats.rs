@@ -47,6 +47,37 @@ impl RunMatrix {
         self.run_ids.len()
     }
 
+    /// Whether a matrix read from a file is well formed: one series per (checkpoint, channel),
+    /// each with one value per run, run indices strictly ascending. `Err` says what is wrong.
+    pub fn check(&self) -> Result<(), String> {
+        if self.values.len() != self.checkpoints * self.channels {
+            return Err(format!(
+                "{} value series for {} checkpoints x {} channels",
+                self.values.len(),
+                self.checkpoints,
+                self.channels
+            ));
+        }
+        if let Some(i) = self
+            .values
+            .iter()
+            .position(|s| s.len() != self.run_ids.len())
+        {
+            return Err(format!(
+                "series {i} has {} values for {} runs",
+                self.values[i].len(),
+                self.run_ids.len()
+            ));
+        }
+        if let Some(w) = self.run_ids.windows(2).find(|w| w[1] <= w[0]) {
+            return Err(format!(
+                "run indices not strictly ascending ({} then {})",
+                w[0], w[1]
+            ));
+        }
+        Ok(())
+    }
+
     /// The values of one (checkpoint, channel) over runs, in run-index order.
     pub fn series(&self, checkpoint: usize, channel: usize) -> &[f64] {
         &self.values[checkpoint * self.channels + channel]
