@@ -168,7 +168,9 @@ fn write_log(
     let ideal_accel = Vector3::new(0.0, 0.0, -STANDARD_GRAVITY_MPS2);
     // A producer thread generates and formats block after block (both in parallel on the pool) while
     // this thread writes the previous one; at most two formatted blocks wait in the channel.
-    let (tx, rx) = std::sync::mpsc::sync_channel::<(u64, Vec<Vec<u8>>)>(2);
+    // A block with a value that is not finite (a model whose values overflow) ends the log with
+    // an error instead of writing `inf` or `NaN` into it.
+    let (tx, rx) = std::sync::mpsc::sync_channel::<Result<(u64, Vec<Vec<u8>>), String>>(2);
     std::thread::scope(|scope| {
         scope.spawn(move || {
             let mut block: Vec<Vec<f64>> = vec![vec![0.0; BLOCK_SAMPLES]; 6];
@@ -186,6 +188,20 @@ fn write_log(
                             channel.fill_static(k0, ideal, &mut out[..n]);
                         })
                 });
+                let bad = block.iter().enumerate().find_map(|(c, out)| {
+                    out[..n]
+                        .iter()
+                        .position(|v| !v.is_finite())
+                        .map(|i| (c, k0 + i as u64, out[i]))
+                });
+                if let Some((c, k, v)) = bad {
+                    let _ = tx.send(Err(format!(
+                        "channel {} is {v} at sample {k} (t = {} s): the model's values overflow; check their units",
+                        CHANNEL_NAMES[c],
+                        k as f64 / plan.rate_hz
+                    )));
+                    return;
+                }
                 let texts: Vec<Vec<u8>> = pool.install(|| {
                     (0..n)
                         .step_by(FORMAT_ROWS)
@@ -199,12 +215,13 @@ fn write_log(
                 });
                 k0 += n as u64;
                 // The writer hung up (a write failed): stop generating.
-                if tx.send((k0, texts)).is_err() {
+                if tx.send(Ok((k0, texts))).is_err() {
                     return;
                 }
             }
         });
-        for (k_done, texts) in rx {
+        for item in rx {
+            let (k_done, texts) = item.map_err(|e| anyhow::anyhow!("{e}"))?;
             for t in texts {
                 w.write_all(&t)?;
             }

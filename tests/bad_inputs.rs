@@ -281,3 +281,32 @@ fn merge_refuses_corrupted_shards_with_the_reason() {
         refused(&["merge", &s0, path], &[needle]);
     }
 }
+
+/// `generate` never writes `inf` or `NaN` into a log: a model whose values overflow is an error
+/// and no file is left behind.
+#[test]
+fn generate_refuses_values_that_overflow() {
+    let dir = tempfile::tempdir().unwrap();
+    let sensor = write(
+        dir.path(),
+        "ovf.toml",
+        b"name = \"ovf\"\n[gyro.all]\nconstant_bias = \"1.7e308 rad/s\"\nturn_on_bias = \"1e308 rad/s\"\n",
+    );
+    let log = dir.path().join("o.csv");
+    refused(
+        &[
+            "generate",
+            &sensor,
+            "--duration",
+            "10",
+            "--rate",
+            "10",
+            "-o",
+            log.to_str().unwrap(),
+        ],
+        &["is -inf at sample 0", "overflow"],
+    );
+    assert!(!log.exists(), "a partial log was left behind");
+    let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert_eq!(left.len(), 1, "temporary files left behind: {left:?}");
+}

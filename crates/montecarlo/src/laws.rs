@@ -518,7 +518,15 @@ fn horizontal_law(north: &Law, east: &Law, gaussian: bool) -> Law {
     };
     Law::Value {
         mean,
-        std: (rms2 - mean * mean).max(0.0).sqrt(),
+        // Rounding can make the difference slightly negative; NaN must stay NaN.
+        std: {
+            let var = rms2 - mean * mean;
+            if var.is_nan() {
+                f64::NAN
+            } else {
+                var.max(0.0).sqrt()
+            }
+        },
     }
 }
 

@@ -219,7 +219,12 @@ pub fn summarise(values: &[f64]) -> Summary {
         count: m.count,
         mean: m.mean,
         std: m.variance().sqrt(),
-        rms: m.mean_sq.max(0.0).sqrt(),
+        // NaN stays NaN (f64::max would turn it into 0 and a failed statistic into a zero).
+        rms: if m.mean_sq.is_nan() {
+            f64::NAN
+        } else {
+            m.mean_sq.max(0.0).sqrt()
+        },
         p5: quantile_sorted(&sorted, 0.05),
         p50: quantile_sorted(&sorted, 0.50),
         p95: quantile_sorted(&sorted, 0.95),
@@ -310,5 +315,19 @@ mod tests {
         // Width ~ 2 z sqrt(1/(2n)) for Gaussian data.
         let expected = 2.0 * Z_999 * (0.5 / 4000.0f64).sqrt();
         assert!(((hi - lo) - expected).abs() < 0.2 * expected);
+    }
+}
+
+#[cfg(test)]
+mod nan_tests {
+    use super::*;
+
+    /// A NaN among the values makes the rms NaN, never 0 (it used to be hidden by `max(0.0)`).
+    #[test]
+    fn nan_is_not_displayed_as_zero() {
+        let s = summarise(&[1.0, f64::NAN, 2.0]);
+        assert!(s.rms.is_nan(), "{s:?}");
+        let s = summarise(&[3.0, 4.0]);
+        assert_eq!(s.rms, 12.5f64.sqrt());
     }
 }
