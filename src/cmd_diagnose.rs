@@ -59,6 +59,9 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    if let Some(dir) = &args.out {
+        crate::output::prepare_dir(dir)?;
+    }
     if args.seeds < 2 {
         bail!(
             "--seeds {}: at least 2 simulated logs are needed for a band",

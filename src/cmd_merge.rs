@@ -28,6 +28,9 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    if let Some(dir) = &args.out {
+        crate::output::prepare_dir(dir)?;
+    }
     let mut files = Vec::new();
     for path in &args.shards {
         let text = std::fs::read_to_string(path)

@@ -131,7 +131,8 @@ fn edit_scenario_toml(text: &str, source: &str, edits: &ScenarioEdits) -> Result
 /// place of a scenario gets the default static scenario.
 pub fn read_inputs(path: &Path, edits: &ScenarioEdits) -> Result<(Inputs, Scenario)> {
     let given = path.display().to_string();
-    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {given}"))?;
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read {given}"))?;
+    let text = noise::utf8_text(bytes, &given)?;
     let (scenario_source, scenario_toml) = if is_sensor_toml(&text) {
         let file = path
             .file_name()
@@ -155,9 +156,10 @@ pub fn read_inputs(path: &Path, edits: &ScenarioEdits) -> Result<(Inputs, Scenar
         _ => scenario.sensor.clone(),
     };
     let sensor_source = sensor_path.display().to_string();
-    let sensor_toml = std::fs::read_to_string(&sensor_path).with_context(|| {
+    let sensor_bytes = std::fs::read(&sensor_path).with_context(|| {
         format!("{scenario_source}: key `sensor`: cannot read sensor file {sensor_source}")
     })?;
+    let sensor_toml = noise::utf8_text(sensor_bytes, &sensor_source)?;
     Ok((
         Inputs {
             scenario_source,
@@ -225,6 +227,9 @@ pub fn execute(exp: &Experiment, runs: std::ops::Range<u64>, label: &str) -> Bat
 }
 
 pub fn run(args: Args) -> Result<()> {
+    if let Some(dir) = &args.out {
+        crate::output::prepare_dir(dir)?;
+    }
     let edits = ScenarioEdits::from_flags(args.duration.as_deref(), args.rate)?;
     let (inputs, _) = read_inputs(&args.scenario, &edits)?;
     let overrides = Overrides {

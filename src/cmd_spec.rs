@@ -127,6 +127,9 @@ fn informs(model: &SensorModel, channel: Channel) -> bool {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    if let Some(dir) = &args.out {
+        crate::output::prepare_dir(dir)?;
+    }
     let requirements = args
         .require
         .iter()

@@ -376,7 +376,9 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
             let from_t = (n_rows - 1) as f64 / (t[n_rows - 1] - t[0]);
             if ((from_t - r) / r).abs() > RATE_TOLERANCE {
                 bail!(
-                    "{source}: --rate {r} Hz disagrees with the `t` column ({from_t:.6} Hz); give the rate the log was sampled at, or leave --rate out to use `t`"
+                    "{source}: --rate {} Hz disagrees with the `t` column ({} Hz); give the rate the log was sampled at, or leave --rate out to use `t`",
+                    crate::fmt::sig(r, 6),
+                    crate::fmt::sig(from_t, 6)
                 );
             }
             r

@@ -55,6 +55,15 @@ pub fn write_string(path: &Path, text: &str) -> Result<()> {
     write_atomic(path, |w| Ok(w.write_all(text.as_bytes())?))
 }
 
+/// Check an `--out` directory before any work: create it (and parents) and make sure a file can be
+/// written there, so a long run does not end in "cannot create directory".
+pub fn prepare_dir(dir: &Path) -> Result<()> {
+    ensure_dir(dir)?;
+    tempfile::NamedTempFile::new_in(dir)
+        .map(drop)
+        .with_context(|| format!("--out {}: cannot write files there", dir.display()))
+}
+
 /// Create the `--out` directory (and parents) if needed.
 pub fn ensure_dir(dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir)

@@ -101,7 +101,7 @@ fn time_column_gaps_rates_and_tiny_steps_are_refused() {
     let ok = write(dir.path(), "ok.csv", log_text(2000, "\n").as_bytes());
     refused(
         &["allan", &ok, "--rate", "50"],
-        &["--rate 50 Hz disagrees with the `t` column"],
+        &["--rate 50.0000 Hz disagrees with the `t` column (100.000 Hz)"],
     );
     let tiny = write(dir.path(), "tiny.csv", b"t,gx\n0,1\n5e-324,2\n1e-323,3\n");
     refused(&["allan", &tiny], &["median step", "is `t` in seconds"]);
@@ -309,4 +309,30 @@ fn generate_refuses_values_that_overflow() {
     assert!(!log.exists(), "a partial log was left behind");
     let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
     assert_eq!(left.len(), 1, "temporary files left behind: {left:?}");
+}
+
+/// A config that is not UTF-8 names the line and column of the first bad byte; an `--out` that
+/// cannot be written is refused before the work, not after it.
+#[test]
+fn non_utf8_configs_and_unwritable_out_are_refused_early() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = write(dir.path(), "latin1.toml", b"name = \"caf\xe9\"\n");
+    refused(
+        &["simulate", &cfg],
+        &["line 1, column 12", "0xe9 is not UTF-8"],
+    );
+    refused(&["plan", &cfg], &["line 1, column 12"]);
+    let file = write(dir.path(), "a-file", b"");
+    let started = std::time::Instant::now();
+    refused(
+        &[
+            "simulate",
+            "configs/scenarios/gg1320an-static-1h.toml",
+            "--out",
+            &format!("{file}/sub"),
+        ],
+        &["cannot create directory"],
+    );
+    // The 1 h, 200-run simulation takes seconds; the refusal comes before it.
+    assert!(started.elapsed().as_secs_f64() < 1.0);
 }

@@ -286,10 +286,11 @@ impl SensorModel {
     /// Read a config file.
     pub fn load(path: &Path) -> Result<SensorModel, ConfigError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| ConfigError::Io {
+        let bytes = std::fs::read(path).map_err(|e| ConfigError::Io {
             file: name.clone(),
             message: e.to_string(),
         })?;
+        let text = utf8_text(bytes, &name)?;
         SensorModel::from_toml_str(&text, &name)
     }
 
@@ -854,6 +855,23 @@ fn convert_bias_instability(
             format!("\"{other}\""),
         )),
     }
+}
+
+/// A config file's text; a byte that is not UTF-8 is an error naming its line and column.
+pub fn utf8_text(bytes: Vec<u8>, file: &str) -> Result<String, ConfigError> {
+    String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let before = &e.as_bytes()[..at];
+        let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+        let column = at - before.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1) + 1;
+        ConfigError::Parse {
+            file: file.to_string(),
+            message: format!(
+                "line {line}, column {column}: byte 0x{:02x} is not UTF-8; save the file as UTF-8 text",
+                e.as_bytes()[at]
+            ),
+        }
+    })
 }
 
 /// An example of each value-with-unit key, for errors about a value of the wrong shape.

@@ -21,7 +21,7 @@ pub mod process;
 pub mod units;
 mod ziggurat;
 
-pub use config::ConfigError;
+pub use config::{utf8_text, ConfigError};
 pub use effect::{Effect, FilterError, Sensor, TermFilter};
 pub use model::{
     AxisModel, BiasInstability, Flicker, GaussMarkov, ModelError, SensorModel, Sinusoid,
