@@ -183,14 +183,14 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
             &dir.join("allan.json"),
             &serde_json::to_string_pretty(&doc)?,
         )?;
-        for r in &results {
-            let file = dir.join(format!("allan_{}.svg", sanitize(&r.name)));
-            output::write_string(&file, &plot(r, est, &log.source).to_svg())?;
+        let files = svg_names(results.iter().map(|r| r.name.as_str()));
+        for (r, name) in results.iter().zip(&files) {
+            output::write_string(&dir.join(name), &plot(r, est, &log.source).to_svg())?;
         }
         stage("files written");
         eprintln!(
-            "wrote allan.csv, allan.json and {} SVG plot(s) to {}",
-            results.len(),
+            "wrote allan.csv, allan.json and {} to {}",
+            files.join(", "),
             dir.display()
         );
     }
@@ -512,6 +512,24 @@ fn plot(r: &ChannelResult, est: Estimator, source: &str) -> LogLogPlot {
         }
     }
     p
+}
+
+/// One SVG file name per channel, `allan_<name>.svg` with the name made safe for a file system;
+/// names that become equal (`a.b`, `a_b`, `a b`) get `_2`, `_3` ... so no plot overwrites another.
+fn svg_names<'a>(names: impl Iterator<Item = &'a str>) -> Vec<String> {
+    let mut used = std::collections::BTreeSet::new();
+    names
+        .map(|n| {
+            let base = sanitize(n);
+            let mut name = format!("allan_{base}.svg");
+            let mut k = 2;
+            while !used.insert(name.clone()) {
+                name = format!("allan_{base}_{k}.svg");
+                k += 1;
+            }
+            name
+        })
+        .collect()
 }
 
 fn sanitize(name: &str) -> String {

@@ -297,6 +297,11 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
     } else {
         0
     };
+    // A binary file (NUL bytes) or one without a line end for megabytes is not a CSV log: say so
+    // before reading gigabytes into one "header".
+    if bytes[pos..bytes.len().min(pos + 4096)].contains(&0) {
+        bail!("{source}: contains NUL bytes: not a CSV text file (expected a header such as `t,gx,gy,gz,ax,ay,az`)");
+    }
     // Header: the first line that is neither blank nor a comment.
     let mut line_no = 0usize;
     let header = loop {
@@ -305,6 +310,12 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
         }
         let end = memchr(b'\n', &bytes[pos..]).map_or(bytes.len(), |i| pos + i);
         line_no += 1;
+        if end - pos > MAX_HEADER_BYTES {
+            bail!(
+                "{source}:{line_no}: a line of more than {} MiB before the header: not a CSV log",
+                MAX_HEADER_BYTES >> 20
+            );
+        }
         let line = trim_ascii(&bytes[pos..end]);
         pos = (end + 1).min(bytes.len());
         if !line.is_empty() && line[0] != b'#' {
@@ -401,6 +412,8 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
     })
 }
 
+/// Longest comment or header line accepted, bytes.
+const MAX_HEADER_BYTES: usize = 1 << 20;
 /// Relative difference allowed between `--rate` and the rate of the `t` column.
 const RATE_TOLERANCE: f64 = 1e-3;
 /// Steps of `t` farther than this fraction from the median step are a gap (or a burst):

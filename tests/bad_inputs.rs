@@ -336,3 +336,38 @@ fn non_utf8_configs_and_unwritable_out_are_refused_early() {
     // The 1 h, 200-run simulation takes seconds; the refusal comes before it.
     assert!(started.elapsed().as_secs_f64() < 1.0);
 }
+
+/// A binary file is refused at once (it used to be read whole into one header line).
+#[test]
+fn binary_files_are_not_logs() {
+    let dir = tempfile::tempdir().unwrap();
+    let nul = write(dir.path(), "nul.bin", &vec![0u8; 1 << 20]);
+    refused(&["allan", &nul, "--rate", "100"], &["NUL bytes"]);
+}
+
+/// Channel names that become the same file name get distinct SVG files, and the message lists
+/// the files written.
+#[test]
+fn colliding_channel_names_get_distinct_plots() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut text = String::from("a.b,a_b,a b\n");
+    for line in log_text(2000, "\n").lines().skip(1) {
+        let v = line.split(',').nth(1).unwrap();
+        text += &format!("{v},{v},{v}\n");
+    }
+    let log = write(dir.path(), "names.csv", text.as_bytes());
+    let out = dir.path().join("out");
+    let res = common::ok(imudrift(&[
+        "allan",
+        &log,
+        "--rate",
+        "100",
+        "--out",
+        out.to_str().unwrap(),
+    ]));
+    let err = String::from_utf8_lossy(&res.stderr);
+    for f in ["allan_a_b.svg", "allan_a_b_2.svg", "allan_a_b_3.svg"] {
+        assert!(out.join(f).exists(), "{f} missing");
+        assert!(err.contains(f), "{err}");
+    }
+}
