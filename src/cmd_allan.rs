@@ -63,9 +63,11 @@ pub struct ChannelResult {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    if let Some(dir) = &args.out {
-        crate::output::prepare_dir(dir)?;
-    }
+    let _out_lock = args
+        .out
+        .as_deref()
+        .map(crate::output::prepare_dir)
+        .transpose()?;
     let est = Estimator::from_name(&args.estimator).ok_or_else(|| {
         anyhow!(
             "--estimator {:?}: expected one of adev, oadev, mdev, hdev, ohdev, totdev",

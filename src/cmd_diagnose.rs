@@ -59,9 +59,11 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    if let Some(dir) = &args.out {
-        crate::output::prepare_dir(dir)?;
-    }
+    let _out_lock = args
+        .out
+        .as_deref()
+        .map(crate::output::prepare_dir)
+        .transpose()?;
     if args.seeds < 2 {
         bail!(
             "--seeds {}: at least 2 simulated logs are needed for a band",

@@ -28,9 +28,11 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    if let Some(dir) = &args.out {
-        crate::output::prepare_dir(dir)?;
-    }
+    let _out_lock = args
+        .out
+        .as_deref()
+        .map(crate::output::prepare_dir)
+        .transpose()?;
     let mut files = Vec::new();
     for path in &args.shards {
         let text = std::fs::read_to_string(path)

@@ -227,9 +227,12 @@ pub fn execute(exp: &Experiment, runs: std::ops::Range<u64>, label: &str) -> Bat
 }
 
 pub fn run(args: Args) -> Result<()> {
-    if let Some(dir) = &args.out {
-        crate::output::prepare_dir(dir)?;
-    }
+    // Shards of one job write their own files into one directory at once: no lock for them.
+    let _out_lock = match (&args.out, &args.shard) {
+        (Some(dir), None) => Some(crate::output::prepare_dir(dir)?),
+        (Some(dir), Some(_)) => Some(crate::output::prepare_shared_dir(dir)?),
+        (None, _) => None,
+    };
     let edits = ScenarioEdits::from_flags(args.duration.as_deref(), args.rate)?;
     let (inputs, _) = read_inputs(&args.scenario, &edits)?;
     let overrides = Overrides {

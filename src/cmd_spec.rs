@@ -127,9 +127,11 @@ fn informs(model: &SensorModel, channel: Channel) -> bool {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    if let Some(dir) = &args.out {
-        crate::output::prepare_dir(dir)?;
-    }
+    let _out_lock = args
+        .out
+        .as_deref()
+        .map(crate::output::prepare_dir)
+        .transpose()?;
     let requirements = args
         .require
         .iter()

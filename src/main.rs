@@ -50,6 +50,7 @@ enum Command {
 
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
+    output::clean_up_on_signals();
     let result = match cli.command {
         Command::Simulate(a) => cmd_simulate::run(a),
         Command::Generate(a) => cmd_generate::run(a),

@@ -1,11 +1,66 @@
-#![allow(dead_code)] // used by the commands as they land
-//! Atomic output files: everything is written to a temporary file in the destination
-//! directory and renamed into place only when complete, so an error never leaves a
-//! partial output file behind.
+//! Output files that are never partial, never mixed and never left behind.
+//!
+//! - Every file is written to a temporary file in the destination directory and renamed into
+//!   place only when complete, so an error or a kill never leaves a partial file under the final
+//!   name. A path that is a symbolic link is written through (its target is replaced, the link
+//!   stays), and an existing file keeps its permissions.
+//! - Temporary files are registered while they exist; SIGINT, SIGTERM and SIGHUP remove them
+//!   before the process exits (a `kill -9` cannot be caught: it may leave a `.tmp*` file, never a
+//!   partial output).
+//! - `--out DIR` is created, checked writable and locked (`DIR/.imudrift.lock`) before any work,
+//!   so two runs writing the same directory cannot interleave their files.
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// Temporary files that exist now (removed on a termination signal).
+static TEMPORARIES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Remove the registered temporary files when SIGINT, SIGTERM or SIGHUP arrives, then exit with
+/// 128 + 2 as a shell does for an interrupt. Called once at start-up.
+pub fn clean_up_on_signals() {
+    let _ = ctrlc::set_handler(|| {
+        if let Ok(list) = TEMPORARIES.lock() {
+            for p in list.iter() {
+                let _ = std::fs::remove_file(p);
+            }
+        }
+        eprintln!("interrupted: no output was written");
+        std::process::exit(130);
+    });
+}
+
+/// A registered temporary file: unregistered when dropped.
+struct Registered(PathBuf);
+
+impl Registered {
+    fn new(path: &Path) -> Registered {
+        if let Ok(mut list) = TEMPORARIES.lock() {
+            list.push(path.to_path_buf());
+        }
+        Registered(path.to_path_buf())
+    }
+}
+
+impl Drop for Registered {
+    fn drop(&mut self) {
+        if let Ok(mut list) = TEMPORARIES.lock() {
+            list.retain(|p| p != &self.0);
+        }
+    }
+}
+
+/// The file a write to `path` must replace: the target of a symbolic link, else `path`.
+fn destination(path: &Path) -> PathBuf {
+    match std::fs::symlink_metadata(path) {
+        Ok(m) if m.file_type().is_symlink() => {
+            std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())
+        }
+        _ => path.to_path_buf(),
+    }
+}
 
 /// Write `path` atomically: `fill` writes into a buffered temporary file beside `path`,
 /// which replaces `path` only if `fill` and the final flush succeed.
@@ -26,26 +81,29 @@ where
             .flush()
             .with_context(|| format!("cannot write {}", path.display()));
     }
-    let dir = match path.parent() {
+    let target = destination(path);
+    let dir = match target.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => PathBuf::from("."),
     };
     let tmp = tempfile::NamedTempFile::new_in(&dir)
         .with_context(|| format!("cannot create a temporary file in {}", dir.display()))?;
+    let _registered = Registered::new(tmp.path());
     {
         let mut w = BufWriter::with_capacity(1 << 20, tmp.as_file());
         fill(&mut w).with_context(|| format!("while writing {}", path.display()))?;
         w.flush()
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
-    // NamedTempFile creates 0600 files; give the output the mode a plainly created file would
-    // have (0666 less the umask, approximated by the common 0644).
+    // An existing file keeps its permissions; a new one gets those a plainly created file has
+    // (NamedTempFile makes 0600 files; 0644 approximates 0666 less the usual umask).
     #[cfg(unix)]
     {
         use std::os::unix::fs::PermissionsExt;
-        let _ = std::fs::set_permissions(tmp.path(), std::fs::Permissions::from_mode(0o644));
+        let mode = std::fs::metadata(&target).map_or(0o644, |m| m.permissions().mode());
+        let _ = std::fs::set_permissions(tmp.path(), std::fs::Permissions::from_mode(mode));
     }
-    tmp.persist(path)
+    tmp.persist(&target)
         .with_context(|| format!("cannot move the finished file to {}", path.display()))?;
     Ok(())
 }
@@ -55,13 +113,44 @@ pub fn write_string(path: &Path, text: &str) -> Result<()> {
     write_atomic(path, |w| Ok(w.write_all(text.as_bytes())?))
 }
 
-/// Check an `--out` directory before any work: create it (and parents) and make sure a file can be
-/// written there, so a long run does not end in "cannot create directory".
-pub fn prepare_dir(dir: &Path) -> Result<()> {
+/// The lock on an `--out` directory, held until dropped (the end of the command); `None` inside
+/// for directories shared on purpose (shards of one job write distinct files into one directory).
+#[must_use = "the directory is locked only while this value lives"]
+pub struct OutLock {
+    _file: Option<std::fs::File>,
+}
+
+/// Check a directory shared by design (shard files): create it and make sure a file can be
+/// written there, without locking it.
+pub fn prepare_shared_dir(dir: &Path) -> Result<OutLock> {
     ensure_dir(dir)?;
     tempfile::NamedTempFile::new_in(dir)
         .map(drop)
-        .with_context(|| format!("--out {}: cannot write files there", dir.display()))
+        .with_context(|| format!("--out {}: cannot write files there", dir.display()))?;
+    Ok(OutLock { _file: None })
+}
+
+/// Check an `--out` directory before any work: create it (and parents), make sure a file can be
+/// written there, and lock it against another imudrift writing the same directory.
+pub fn prepare_dir(dir: &Path) -> Result<OutLock> {
+    ensure_dir(dir)?;
+    let path = dir.join(".imudrift.lock");
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(&path)
+        .with_context(|| format!("--out {}: cannot write files there", dir.display()))?;
+    match file.try_lock() {
+        Ok(()) => Ok(OutLock { _file: Some(file) }),
+        Err(std::fs::TryLockError::WouldBlock) => bail!(
+            "--out {}: another imudrift is writing to this directory; wait for it or choose another --out",
+            dir.display()
+        ),
+        Err(std::fs::TryLockError::Error(e)) => {
+            Err(e).with_context(|| format!("--out {}: cannot lock the directory", dir.display()))
+        }
+    }
 }
 
 /// Create the `--out` directory (and parents) if needed.

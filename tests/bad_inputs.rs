@@ -371,3 +371,69 @@ fn colliding_channel_names_get_distinct_plots() {
         assert!(err.contains(f), "{err}");
     }
 }
+
+/// Nothing lost: a termination signal during a long write leaves no temporary file; an output
+/// that is a symbolic link is written through (the link stays); an existing file keeps its mode;
+/// a second run on a locked --out is refused.
+#[cfg(unix)]
+#[test]
+fn outputs_are_never_partial_mixed_or_left_behind() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // SIGTERM while a 60 h log (about 15 GB of text, many seconds) is being written.
+    let log = d.join("big.csv");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_imudrift"))
+        .args(["generate", "configs/sensors/mtx.toml", "--duration", "60h"])
+        .args(["--rate", "100", "-o", log.to_str().unwrap()])
+        .current_dir(root())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    while std::fs::read_dir(d).unwrap().count() == 0 && started.elapsed().as_secs() < 20 {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(200));
+    let killed = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130), "{status:?}");
+    let left: Vec<_> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert!(left.is_empty(), "left behind: {left:?}");
+
+    // A symbolic link to a 0600 file: written through, the link kept, the mode kept.
+    let out = d.join("out");
+    std::fs::create_dir(&out).unwrap();
+    let real = d.join("real.json");
+    std::fs::write(&real, "old").unwrap();
+    std::fs::set_permissions(&real, std::fs::Permissions::from_mode(0o600)).unwrap();
+    std::os::unix::fs::symlink(&real, out.join("allan.json")).unwrap();
+    let csv = write(d, "a.csv", log_text(2000, "\n").as_bytes());
+    common::ok(imudrift(&["allan", &csv, "--out", out.to_str().unwrap()]));
+    let link = std::fs::symlink_metadata(out.join("allan.json")).unwrap();
+    assert!(link.file_type().is_symlink(), "the link was replaced");
+    let text = std::fs::read_to_string(&real).unwrap();
+    assert!(text.contains("\"channels\""), "the target was not written");
+    let mode = std::fs::metadata(&real).unwrap().permissions().mode() & 0o777;
+    assert_eq!(mode, 0o600);
+
+    // A locked --out (another run writing it) is refused before any work.
+    let lock = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(out.join(".imudrift.lock"))
+        .unwrap();
+    lock.try_lock().unwrap();
+    refused(
+        &["allan", &csv, "--out", out.to_str().unwrap()],
+        &["another imudrift is writing to this directory"],
+    );
+}
