@@ -43,6 +43,11 @@ impl Log {
         self.channels.values().next().map_or(0, Vec::len)
     }
 
+    /// Whether the log has no samples (never true for a log `read_log` returns).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
     /// Sample interval, s.
     pub fn dt_s(&self) -> f64 {
         1.0 / self.rate_hz

@@ -2,20 +2,10 @@
 //!
 //! Thin by design: argument parsing, file I/O, progress bars and plots live here; every
 //! piece of physics and statistics lives in the library crates under `crates/`.
+//! (The modules are compiled as the `imudrift` library too, so the fuzz targets and the
+//! property tests can reach the log reader; the library is not a public API.)
 
-mod cli;
-mod cmd_allan;
-mod cmd_diagnose;
-mod cmd_generate;
-mod cmd_merge;
-mod cmd_plan;
-mod cmd_simulate;
-mod cmd_spec;
-mod fmt;
-mod logio;
-mod output;
-mod plot;
-mod progress;
+use imudrift::*;
 
 use clap::{Parser, Subcommand};
 
