@@ -49,6 +49,36 @@ pub struct Args {
     pub timing: bool,
 }
 
+/// Reduced chi-square above which the IEEE 952 fit is reported as not describing the curve.
+const FIT_CHI2_WARNING: f64 = 25.0;
+
+/// What makes a channel's result weak though still meaningful (printed and in the JSON).
+fn warnings(r: &ChannelResult) -> Vec<String> {
+    let mut w = Vec::new();
+    if let Some(last) = r.points.last() {
+        if last.edf < 2.0 {
+            w.push(format!(
+                "the longest averaging time ({}) has {} equivalent degrees of freedom (< 2): its deviation is uncertain by more than a factor of 2",
+                crate::fmt::time(last.tau_s),
+                crate::fmt::sig(last.edf, 2)
+            ));
+        }
+    }
+    if let Some(f) = &r.fit {
+        // The Allan points are correlated and the flicker model is a finite sum, so even logs made
+        // from the five-term model give reduced chi-squares up to about 9 (30 channels of 2 h MTx
+        // logs, seeds 2-6); only a fit far beyond that is flagged.
+        let limit = FIT_CHI2_WARNING;
+        if f.reduced_chi2 > limit {
+            w.push(format!(
+                "the IEEE 952 fit does not describe the curve (reduced chi-square {:.1}, expected below {:.1}): effects outside the five terms (a filter, a sinusoid, a Gauss-Markov process) shape it, so the fitted values are approximate; `imudrift diagnose` names such effects",
+                f.reduced_chi2, limit
+            ));
+        }
+    }
+    w
+}
+
 /// Fewest averaging times with 9 or more intervals a channel must give (a slope needs two).
 const MIN_USABLE_TAUS: usize = 2;
 
@@ -347,6 +377,9 @@ fn tables(log: &Log, samples: usize, results: &[ChannelResult], est: Estimator) 
                 }
             }
         }
+        for w in warnings(r) {
+            let _ = writeln!(s, "warning: {}: {w}", r.name);
+        }
         let rd = &f.readings;
         let _ = writeln!(
             s,
@@ -424,6 +457,7 @@ fn json_document(
                 "fit_reduced_chi2": r.fit.as_ref().map_or(Value::Null, |f| num(f.reduced_chi2)),
                 "fit_model_error": r.fit.as_ref().map_or(Value::Null, |f| num(f.model_error)),
                 "readings": readings,
+                "warnings": warnings(r),
             }),
         );
     }

@@ -437,3 +437,27 @@ fn outputs_are_never_partial_mixed_or_left_behind() {
         &["another imudrift is writing to this directory"],
     );
 }
+
+/// Weak but meaningful results carry warnings, printed and in the JSON: a fit the five IEEE 952
+/// terms cannot describe (a sinusoid dominating the curve here).
+#[test]
+fn weak_results_carry_warnings() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut text = String::from("t,gx\n");
+    for (i, line) in log_text(20000, "\n").lines().skip(1).enumerate() {
+        let v: f64 = line.split(',').nth(1).unwrap().parse().unwrap();
+        let t = i as f64 * 0.01;
+        let s = 20.0 * (2.0 * std::f64::consts::PI * 0.37 * t).sin();
+        text += &format!("{t:.2},{}\n", v + s);
+    }
+    let log = write(dir.path(), "sine.csv", text.as_bytes());
+    let out = common::ok(imudrift(&["allan", &log, "--json"]));
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let w = doc["channels"]["gx"]["warnings"].as_array().unwrap();
+    assert!(
+        w.iter()
+            .any(|w| w.as_str().unwrap().contains("does not describe the curve")),
+        "{w:?}"
+    );
+    assert!(String::from_utf8_lossy(&out.stderr).contains("warning: gx:"));
+}
