@@ -193,7 +193,7 @@ pub fn run(args: Args) -> Result<()> {
         // 8 bytes per sample per axis; refuse before allocating what the machine cannot hold.
         if d * READBACK_RATE_HZ > 2e9 {
             anyhow::bail!(
-                "--readback-duration: {d} s at {READBACK_RATE_HZ} Hz is more than 2e9 samples (16 GB per axis); use at most 5.5e6 s (64 days)"
+                "--readback-duration: {d:e} s at {READBACK_RATE_HZ} Hz is more than 2e9 samples (16 GB per axis); use at most 5.5e6 s (64 days)"
             );
         }
     }
