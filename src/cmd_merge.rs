@@ -68,6 +68,11 @@ pub fn run(args: Args) -> Result<()> {
     };
     let (inputs, overrides, exp) = experiment_of(first)
         .with_context(|| format!("{}: the stored scenario", first_path.display()))?;
+    // The merged values must fit, as for `simulate` itself (which would have asked for shards).
+    crate::cmd_simulate::check_memory(
+        &exp,
+        exp.runs * (1 + 2 * first.ablation.as_ref().map_or(0, Vec::len) as u64),
+    )?;
     for (path, f) in &files {
         let (_, _, e) =
             experiment_of(f).with_context(|| format!("{}: the stored scenario", path.display()))?;
@@ -100,11 +105,6 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(i) = seen.iter().position(Option::is_none) {
         bail!("shard {i}/{k} is missing: all {k} shards are needed");
     }
-    // The merged values must fit, as for `simulate` itself (which would have asked for shards).
-    crate::cmd_simulate::check_memory(
-        &exp,
-        exp.runs * (1 + 2 * first.ablation.as_ref().map_or(0, Vec::len) as u64),
-    )?;
     // Per-run values of one experiment from every shard, merged in run-index order.
     let merge = |parts: Vec<(RunMatrix, Vec<RunFailure>)>, what: &str| -> Result<_> {
         let mut failures: Vec<_> = parts.iter().flat_map(|(_, f)| f.clone()).collect();

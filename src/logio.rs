@@ -141,8 +141,11 @@ impl LogArgs {
             map.push((name.to_string(), col.trim().to_string()));
         }
         if let Some(r) = self.rate {
-            if !(r.is_finite() && r > 0.0) {
-                bail!("--rate {r}: expected a positive sample rate in Hz");
+            if !(r.is_finite() && r > 0.0 && r <= MAX_LOG_RATE_HZ) {
+                bail!(
+                    "--rate {}: expected the log's sample rate in Hz, above 0 and at most {MAX_LOG_RATE_HZ:e}",
+                    crate::fmt::sig(r, 6)
+                );
             }
         }
         Ok(ReadOptions {

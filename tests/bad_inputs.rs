@@ -105,6 +105,18 @@ fn time_column_gaps_rates_and_tiny_steps_are_refused() {
     );
     let tiny = write(dir.path(), "tiny.csv", b"t,gx\n0,1\n5e-324,2\n1e-323,3\n");
     refused(&["allan", &tiny], &["median step", "is `t` in seconds"]);
+    // A rate no log has (it used to end in "no Allan point at or above --tau-min").
+    refused(
+        &[
+            "diagnose",
+            &tiny,
+            "--model",
+            "configs/sensors/mtx.toml",
+            "--rate",
+            "1e300",
+        ],
+        &["--rate 1.00000e300", "at most 1e9"],
+    );
 }
 
 #[test]
@@ -252,7 +264,7 @@ fn merge_refuses_corrupted_shards_with_the_reason() {
         ),
         (
             corrupt("count.json", &|v| v["shard"]["count"] = 0.into()),
-            "different experiments or splits",
+            "got 1/0",
         ),
         (
             corrupt("values.json", &|v| {
@@ -276,9 +288,14 @@ fn merge_refuses_corrupted_shards_with_the_reason() {
             write(dir.path(), "garbage.json", b"{\"format\": 7}"),
             "not an imudrift shard file",
         ),
+        // A job of 1e12 runs (simulate itself refuses it for memory): refused before merging.
+        (
+            corrupt("huge.json", &|v| v["runs"] = 1_000_000_000_000u64.into()),
+            "limit 8 GiB",
+        ),
     ];
     for (path, needle) in &cases {
-        refused(&["merge", &s0, path], &[needle]);
+        refused(&["merge", path, &s0], &[needle]);
     }
 }
 
