@@ -101,6 +101,21 @@ fn run_inner(args: &Args) -> Result<()> {
             log.order.join(", ")
         );
     }
+    // Each worker holds a simulated six-channel log of the same length (and its phase): refuse a
+    // log whose simulation would not fit rather than be killed for memory halfway.
+    let need = rayon::current_num_threads() as u64 * 6 * log.len() as u64 * 16;
+    if let Some(available) = logio::available_memory_bytes() {
+        if need > available {
+            bail!(
+                "{}: simulating logs of {} samples on {} threads needs about {:.1} GiB and {:.1} GiB is available: use fewer --threads or a shorter log",
+                log.source,
+                log.len(),
+                rayon::current_num_threads(),
+                need as f64 / (1u64 << 30) as f64,
+                available as f64 / (1u64 << 30) as f64
+            );
+        }
+    }
     // A constant channel has no Allan curve: comparing it with the model would say nothing.
     for (name, data) in CHANNELS.iter().zip(&channels) {
         if let Some(d) = data {

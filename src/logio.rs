@@ -182,13 +182,27 @@ impl Default for ReadOptions {
 pub fn read_log(path: &Path, opts: &ReadOptions) -> Result<Log> {
     let source = path.display().to_string();
     let raw = FileBytes::open(path).with_context(|| format!("cannot read {source}"))?;
+    // What the machine can hold: a log and its parsed columns must fit, or the read is refused
+    // before it starts rather than ending in an out-of-memory kill.
+    let available = available_memory_bytes();
     if raw.starts_with(&[0x1f, 0x8b]) {
-        let mut out = Vec::with_capacity(raw.len() * 4);
+        let limit = available.map_or(u64::MAX, |a| a / 3);
+        let mut out = Vec::with_capacity(raw.len().saturating_mul(4).min(limit as usize));
         flate2::read::MultiGzDecoder::new(&raw[..])
+            .take(limit)
             .read_to_end(&mut out)
             .with_context(|| format!("{source}: not a valid gzip file"))?;
+        if out.len() as u64 == limit {
+            bail!(
+                "{source}: decompresses to more than {:.1} GiB, a third of the memory available ({:.1} GiB): split the log or analyse it on a larger machine",
+                limit as f64 / GIB,
+                available.unwrap_or(0) as f64 / GIB
+            );
+        }
+        check_fits(&out, &source, available)?;
         parse_log(&out, &source, opts)
     } else {
+        check_fits(&raw, &source, available)?;
         parse_log(&raw, &source, opts)
     }
 }
@@ -418,6 +432,56 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
         channels,
         order,
     })
+}
+
+const GIB: f64 = (1u64 << 30) as f64;
+
+/// Memory the system can still give (Linux `MemAvailable`), bytes, or less when the environment
+/// variable `IMUDRIFT_MEMORY_LIMIT` (bytes) says so (a share of a shared machine); `None` when
+/// neither is known.
+pub fn available_memory_bytes() -> Option<u64> {
+    let system = std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|info| {
+            let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+            let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+            Some(kib * 1024)
+        });
+    let limit = std::env::var("IMUDRIFT_MEMORY_LIMIT")
+        .ok()
+        .and_then(|v| v.trim().parse::<u64>().ok());
+    match (system, limit) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
+    }
+}
+
+/// Refuse a log whose parsed columns (8 bytes per value, and as much again for the analyses'
+/// working copies) would not fit in the memory available.
+fn check_fits(bytes: &[u8], source: &str, available: Option<u64>) -> Result<()> {
+    let Some(available) = available else {
+        return Ok(());
+    };
+    // Values are at least 2 bytes of text each ("0,"): an upper bound without a scan.
+    let upper = bytes.len() as u64 / 2 * 16;
+    if upper <= available {
+        return Ok(());
+    }
+    let rows = bytes.iter().filter(|&&b| b == b'\n').count() as u64;
+    let first = bytes
+        .iter()
+        .position(|&b| b == b'\n')
+        .unwrap_or(bytes.len());
+    let cols = bytes[..first].iter().filter(|&&b| b == b',').count() as u64 + 1;
+    let need = rows * cols * 16;
+    if need > available {
+        bail!(
+            "{source}: {rows} rows x {cols} columns need about {:.1} GiB to analyse, and {:.1} GiB is available: split the log, or drop columns you do not need",
+            need as f64 / GIB,
+            available as f64 / GIB
+        );
+    }
+    Ok(())
 }
 
 /// Longest comment or header line accepted, bytes.

@@ -478,3 +478,43 @@ fn weak_results_carry_warnings() {
     );
     assert!(String::from_utf8_lossy(&out.stderr).contains("warning: gx:"));
 }
+
+/// A log whose parsed values would not fit in the memory available is refused before parsing
+/// (here with the limit lowered through `IMUDRIFT_MEMORY_LIMIT`), plain and gzip-compressed.
+#[test]
+fn logs_larger_than_memory_are_refused_up_front() {
+    use std::io::Write as _;
+    let dir = tempfile::tempdir().unwrap();
+    let text = log_text(5000, "\n");
+    let plain = write(dir.path(), "big.csv", text.as_bytes());
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    gz.write_all(text.as_bytes()).unwrap();
+    let gz = write(dir.path(), "big.csv.gz", &gz.finish().unwrap());
+    // diagnose: the simulated logs of the same length would not fit (the log itself does).
+    let out = Command::new(env!("CARGO_BIN_EXE_imudrift"))
+        .args([
+            "diagnose",
+            &plain,
+            "--model",
+            "configs/sensors/mtx.toml",
+            "--threads",
+            "2",
+        ])
+        .env("IMUDRIFT_MEMORY_LIMIT", "500000")
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("simulating logs of 5000 samples"));
+    for (path, needle) in [(&plain, "need about"), (&gz, "decompresses to more than")] {
+        let out = Command::new(env!("CARGO_BIN_EXE_imudrift"))
+            .args(["allan", path])
+            .env("IMUDRIFT_MEMORY_LIMIT", "60000")
+            .current_dir(root())
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(1));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(needle), "{err}");
+    }
+}
