@@ -209,7 +209,7 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
     }
     stage("printed");
     if let Some(dir) = &args.out {
-        output::ensure_dir(dir)?;
+        let _set = output::begin_set(dir)?;
         output::write_string(&dir.join("allan.csv"), &csv(&results))?;
         output::write_string(
             &dir.join("allan.json"),

@@ -3,7 +3,7 @@
 //! diagnose workflow").
 
 use crate::logio::{self, LogArgs};
-use crate::output::{ensure_dir, write_string};
+use crate::output::write_string;
 use crate::plot::{Band, LogLogPlot, Series};
 use anyhow::{anyhow, bail, Context, Result};
 use diagnose::drift::CHANNELS;
@@ -176,7 +176,7 @@ fn run_inner(args: &Args) -> Result<()> {
         println!("{doc}");
     }
     if let Some(dir) = &args.out {
-        ensure_dir(dir)?;
+        let _set = crate::output::begin_set(dir)?;
         let toml_name = format!("{}-diagnosed.toml", file_stem(&args.model));
         write_string(&dir.join(&toml_name), &corrected)?;
         write_string(&dir.join("diagnose.json"), &doc)?;

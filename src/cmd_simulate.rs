@@ -426,7 +426,7 @@ pub fn emit(
         stdout.flush()?;
     }
     if let Some(dir) = out {
-        ensure_dir(dir)?;
+        let _set = crate::output::begin_set(dir)?;
         write_string(&dir.join("drift.json"), &text)?;
         write_atomic(&dir.join("drift.csv"), |w| write_csv(w, report))?;
         write_string(&dir.join("drift.svg"), &svg(report, Channel::PosHorizontal))?;

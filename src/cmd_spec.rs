@@ -6,7 +6,7 @@
 
 use crate::cmd_simulate::{check_memory, execute, pool};
 use crate::fmt;
-use crate::output::{ensure_dir, write_atomic, write_string};
+use crate::output::{write_atomic, write_string};
 use anyhow::{Context, Result};
 use montecarlo::channels::Channel;
 use montecarlo::requirement::{evaluate, Requirement, RequirementResult, Verdict};
@@ -281,7 +281,7 @@ pub fn run(args: Args) -> Result<()> {
         out.flush()?;
     }
     if let Some(dir) = &args.out {
-        ensure_dir(dir)?;
+        let _set = crate::output::begin_set(dir)?;
         write_string(&dir.join("spec.json"), &text)?;
         write_atomic(&dir.join("spec.csv"), |w| {
             writeln!(w, "sensor,axis,arw_spec,arw_sim,arw_sim_lo,arw_sim_hi,bi_spec,bi_sim,bi_sim_lo,bi_sim_hi")?;

@@ -5,31 +5,66 @@
 //!   name. A path that is a symbolic link is written through (its target is replaced, the link
 //!   stays), and an existing file keeps its permissions.
 //! - Temporary files are registered while they exist; SIGINT, SIGTERM and SIGHUP remove them
-//!   before the process exits (a `kill -9` cannot be caught: it may leave a `.tmp*` file, never a
-//!   partial output).
+//!   before the process exits, and wait for a set of output files being moved into place to be
+//!   complete (a `kill -9` cannot be caught: it may leave a `.tmp*` file, never a partial output).
 //! - `--out DIR` is created, checked writable and locked (`DIR/.imudrift.lock`) before any work,
 //!   so two runs writing the same directory cannot interleave their files.
 
 use anyhow::{bail, Context, Result};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Mutex;
 
 /// Temporary files that exist now (removed on a termination signal).
 static TEMPORARIES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+/// Output sets being written now (a signal waits until they are complete).
+static SETS_OPEN: AtomicUsize = AtomicUsize::new(0);
+/// A termination signal arrived while a set was being written.
+static EXIT_PENDING: AtomicBool = AtomicBool::new(false);
+
+fn exit_interrupted() -> ! {
+    if let Ok(list) = TEMPORARIES.lock() {
+        for p in list.iter() {
+            let _ = std::fs::remove_file(p);
+        }
+    }
+    eprintln!("interrupted");
+    std::process::exit(130);
+}
 
 /// Remove the registered temporary files when SIGINT, SIGTERM or SIGHUP arrives, then exit with
-/// 128 + 2 as a shell does for an interrupt. Called once at start-up.
+/// 128 + 2 as a shell does for an interrupt; while a set of output files is being moved into
+/// place, the exit waits until the set is complete, so `--out` never holds files of two runs.
+/// Called once at start-up.
 pub fn clean_up_on_signals() {
     let _ = ctrlc::set_handler(|| {
-        if let Ok(list) = TEMPORARIES.lock() {
-            for p in list.iter() {
-                let _ = std::fs::remove_file(p);
-            }
+        if SETS_OPEN.load(Ordering::SeqCst) > 0 {
+            EXIT_PENDING.store(true, Ordering::SeqCst);
+        } else {
+            exit_interrupted();
         }
-        eprintln!("interrupted: no output was written");
-        std::process::exit(130);
     });
+}
+
+/// The files of one `--out` set being written: a termination signal meanwhile takes effect when
+/// the set is complete (when this is dropped).
+#[must_use = "the set is protected only while this value lives"]
+pub struct FileSet(());
+
+impl Drop for FileSet {
+    fn drop(&mut self) {
+        if SETS_OPEN.fetch_sub(1, Ordering::SeqCst) == 1 && EXIT_PENDING.load(Ordering::SeqCst) {
+            exit_interrupted();
+        }
+    }
+}
+
+/// Start writing the set of files of `--out DIR` (creating DIR if needed).
+pub fn begin_set(dir: &Path) -> Result<FileSet> {
+    ensure_dir(dir)?;
+    SETS_OPEN.fetch_add(1, Ordering::SeqCst);
+    Ok(FileSet(()))
 }
 
 /// A registered temporary file: unregistered when dropped.
