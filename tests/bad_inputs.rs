@@ -3,18 +3,10 @@
 //! was accepted or crashed before its fix.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Command;
 
 mod common;
-use common::{ok, root};
-
-fn imudrift(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_imudrift"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("run imudrift")
-}
+use common::{imudrift, ok, root};
 
 /// The command fails with exit status 1 and every `needle` in its message; nothing on stdout.
 fn refused(args: &[&str], needles: &[&str]) {

@@ -2,18 +2,10 @@
 //! output files, errors naming file and key.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Command;
 
 mod common;
-use common::{ok, root};
-
-fn imudrift(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_imudrift"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("run imudrift")
-}
+use common::{imudrift, ok, root};
 
 const SCENARIO: &str = "configs/scenarios/mtx-static-60s.toml";
 

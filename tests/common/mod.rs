@@ -17,3 +17,13 @@ pub fn ok(out: Output) -> Output {
     );
     out
 }
+
+/// Run `imudrift ARGS...` in the workspace root.
+#[allow(dead_code)] // not every test file runs the binary this way
+pub fn imudrift(args: &[&str]) -> Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_imudrift"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("run imudrift")
+}
