@@ -90,11 +90,17 @@ impl ScenarioEdits {
     }
 }
 
-/// Whether a TOML text is a sensor model rather than a scenario: it has `[gyro]` or `[accel]`
-/// tables and no `sensor` key.
+/// Whether a TOML text is a sensor model rather than a scenario: no `sensor` key, and sensor
+/// tables (`[gyro]`, `[accel]`, `[temperature]`) or nothing but a name and a description (an
+/// ideal sensor).
 fn is_sensor_toml(text: &str) -> bool {
     text.parse::<toml::Table>().is_ok_and(|t| {
-        !t.contains_key("sensor") && (t.contains_key("gyro") || t.contains_key("accel"))
+        !t.contains_key("sensor")
+            && (["gyro", "accel", "temperature"]
+                .iter()
+                .any(|k| t.contains_key(*k))
+                || (t.contains_key("name")
+                    && t.keys().all(|k| k == "name" || k == "description")))
     })
 }
 
