@@ -99,8 +99,7 @@ fn is_sensor_toml(text: &str) -> bool {
             && (["gyro", "accel", "temperature"]
                 .iter()
                 .any(|k| t.contains_key(*k))
-                || (t.contains_key("name")
-                    && t.keys().all(|k| k == "name" || k == "description")))
+                || (t.contains_key("name") && t.keys().all(|k| k == "name" || k == "description")))
     })
 }
 
