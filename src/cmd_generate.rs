@@ -62,6 +62,12 @@ struct Plan {
     samples: u64,
 }
 
+/// Highest sample rate a generated log may have, Hz.
+const MAX_RATE_HZ: f64 = 1e6;
+/// Upper estimate of one CSV row (t, six channels, temp; shortest round-trip numbers of up to
+/// 24 characters each), bytes.
+const BYTES_PER_ROW: f64 = 8.0 * 25.0;
+
 fn plan(args: &Args) -> Result<Plan> {
     let model = SensorModel::load(&args.sensor)?;
     let filter = TermFilter::parse(args.only.as_deref(), args.without.as_deref())?;
@@ -74,6 +80,28 @@ fn plan(args: &Args) -> Result<Plan> {
             args.duration,
             args.rate
         );
+    }
+    if args.rate > MAX_RATE_HZ {
+        bail!("--rate {}: expected at most {MAX_RATE_HZ:e} Hz", args.rate);
+    }
+    // The log must fit where it goes: refuse before writing rather than fill the disk.
+    if std::fs::metadata(&args.output).map_or(true, |m| m.is_file()) {
+        let dir = match args.output.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => std::path::PathBuf::from("."),
+        };
+        let need = samples * BYTES_PER_ROW;
+        if let Ok(free) = fs4::available_space(&dir) {
+            if need > free as f64 {
+                bail!(
+                    "-o {}: {samples:.3e} samples are about {:.1} GB of CSV and {} has {:.1} GB free: generate a shorter log, at a lower --rate, or on another disk",
+                    args.output.display(),
+                    need / 1e9,
+                    dir.display(),
+                    free as f64 / 1e9
+                );
+            }
+        }
     }
     // An --only list that keeps none of the model's terms leaves an ideal IMU: allowed, but say so.
     if let Some(only) = filter.only_terms() {

@@ -327,6 +327,33 @@ fn generate_refuses_values_that_overflow() {
         &["is -inf at sample 0", "overflow"],
     );
     assert!(!log.exists(), "a partial log was left behind");
+    // 1e12 samples (about 200 TB) used to start writing; now refused up front with the sizes.
+    refused(
+        &[
+            "generate",
+            "configs/sensors/mtx.toml",
+            "--duration",
+            "1e6",
+            "--rate",
+            "1e6",
+            "-o",
+            log.to_str().unwrap(),
+        ],
+        &["GB of CSV", "GB free"],
+    );
+    refused(
+        &[
+            "generate",
+            "configs/sensors/mtx.toml",
+            "--duration",
+            "1",
+            "--rate",
+            "1e12",
+            "-o",
+            log.to_str().unwrap(),
+        ],
+        &["--rate"],
+    );
     let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
     assert_eq!(left.len(), 1, "temporary files left behind: {left:?}");
 }
