@@ -196,6 +196,19 @@ pub fn run(args: Args) -> Result<()> {
                 "--readback-duration: {d:e} s at {READBACK_RATE_HZ} Hz is more than 2e9 samples (16 GB per axis); use at most 5.5e6 s (64 days)"
             );
         }
+        // The three axes are generated and analysed at once: each holds its samples and their
+        // integral (16 bytes a sample).
+        let need = 3.0 * 16.0 * d * READBACK_RATE_HZ;
+        if let Some(available) = crate::logio::available_memory_bytes() {
+            if need > available as f64 {
+                anyhow::bail!(
+                    "--readback-duration: a {} readback log needs about {:.1} GiB and {:.1} GiB is available: use a shorter --readback-duration",
+                    crate::fmt::time(d),
+                    need / (1u64 << 30) as f64,
+                    available as f64 / (1u64 << 30) as f64
+                );
+            }
+        }
     }
     let filter = TermFilter::parse(
         args.only.as_ref().map(|v| v.join(",")).as_deref(),

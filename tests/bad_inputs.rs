@@ -536,6 +536,20 @@ fn logs_larger_than_memory_are_refused_up_front() {
         .unwrap();
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("simulating logs of 5000 samples"));
+    // spec: a readback log of 1 day would not fit in 100 MB.
+    let out = Command::new(env!("CARGO_BIN_EXE_imudrift"))
+        .args([
+            "spec",
+            "configs/sensors/mtx.toml",
+            "--readback-duration",
+            "86400",
+        ])
+        .env("IMUDRIFT_MEMORY_LIMIT", "100000000")
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("readback log needs about"));
     for (path, needle) in [(&plain, "need about"), (&gz, "decompresses to more than")] {
         let out = Command::new(env!("CARGO_BIN_EXE_imudrift"))
             .args(["allan", path])
