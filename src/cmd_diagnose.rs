@@ -58,6 +58,10 @@ pub struct Args {
     pub threads: Option<usize>,
 }
 
+/// Most simulated logs per band and add-and-resimulate rounds a diagnose run may ask for.
+const MAX_SEEDS: usize = 4096;
+const MAX_ROUNDS: usize = 100;
+
 pub fn run(args: Args) -> Result<()> {
     let _out_lock = args
         .out
@@ -69,6 +73,17 @@ pub fn run(args: Args) -> Result<()> {
             "--seeds {}: at least 2 simulated logs are needed for a band",
             args.seeds
         );
+    }
+    // The band's own error falls as 1/sqrt(seeds): beyond a few thousand logs it is negligible
+    // and the run only takes longer (each log is as long as the measured one).
+    if args.seeds > MAX_SEEDS {
+        bail!(
+            "--seeds {}: expected at most {MAX_SEEDS} simulated logs per band",
+            args.seeds
+        );
+    }
+    if args.rounds > MAX_ROUNDS {
+        bail!("--rounds {}: expected at most {MAX_ROUNDS}", args.rounds);
     }
     if let Some(h) = args.horizons.iter().find(|h| !(h.is_finite() && **h > 0.0)) {
         bail!("--horizons: {h} is not a positive duration in seconds");

@@ -198,6 +198,16 @@ fn sizes_beyond_reason_are_refused_up_front() {
         &["simulate", &scenario],
         &["checkpoints.log_count", "100000"],
     );
+    // A diagnose band of 1e8 simulated logs, or 1e6 rounds: hours of work for nothing.
+    let log = write(dir.path(), "ok.csv", log_text(2000, "\n").as_bytes());
+    refused(
+        &["diagnose", &log, "--model", mtx, "--seeds", "100000000"],
+        &["--seeds 100000000", "at most 4096"],
+    );
+    refused(
+        &["diagnose", &log, "--model", mtx, "--rounds", "1000000"],
+        &["--rounds 1000000"],
+    );
     // 10 000 threads (started, and hung, before).
     refused(
         &["simulate", mtx, "--threads", "10000", "--runs", "2"],
