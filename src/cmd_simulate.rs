@@ -6,7 +6,7 @@ use crate::plot::{Band, LogLogPlot, Series, PALETTE};
 use anyhow::{bail, Context, Result};
 use montecarlo::ablation::{self, AblationRow};
 use montecarlo::channels::Channel;
-use montecarlo::experiment::{Experiment, Overrides};
+use montecarlo::experiment::{Experiment, ExperimentError, Overrides};
 use montecarlo::report::DriftReport;
 use montecarlo::runner::{run_range, BatchResult, Shard};
 use montecarlo::scenario::Scenario;
@@ -189,9 +189,16 @@ pub fn parse_inputs(
     let scenario = Scenario::from_toml_str(&inputs.scenario_toml, &inputs.scenario_source)?;
     let model = SensorModel::from_toml_str(&inputs.sensor_toml, &inputs.sensor_source)
         .map_err(|e| anyhow::anyhow!("{e}"))?;
-    let exp =
-        Experiment::new(scenario.clone(), &model, overrides).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let exp = Experiment::new(scenario.clone(), &model, overrides).map_err(with_flag)?;
     Ok((scenario, model, exp))
+}
+
+/// An experiment error with the command-line option it comes from, when it comes from one.
+fn with_flag(e: ExperimentError) -> anyhow::Error {
+    match e {
+        ExperimentError::NoRuns => anyhow::anyhow!("--runs: expected an integer >= 1"),
+        other => anyhow::Error::new(other),
+    }
 }
 
 /// The ablation sub-experiments of `exp` (each active term alone, the model without it).
@@ -200,7 +207,7 @@ pub fn ablation_experiments(
     overrides: &Overrides,
 ) -> Result<Vec<ablation::TermExperiments>> {
     let (scenario, model, exp) = parse_inputs(inputs, overrides)?;
-    ablation::experiments(&scenario, &model, overrides, &exp).map_err(|e| anyhow::anyhow!("{e}"))
+    ablation::experiments(&scenario, &model, overrides, &exp).map_err(with_flag)
 }
 
 pub use crate::cli::pool;
@@ -255,7 +262,7 @@ pub fn run(args: Args) -> Result<()> {
         Vec::new()
     };
     if let Some(text) = &args.shard {
-        let shard = Shard::parse(text).map_err(|e| anyhow::anyhow!("--shard: {e}"))?;
+        let shard = Shard::parse(text).context("--shard")?;
         let Some(dir) = &args.out else {
             bail!("--shard: expected --out DIR for the shard file");
         };

@@ -223,7 +223,7 @@ pub fn run(args: Args) -> Result<()> {
             .map_err(|e| anyhow::anyhow!("{e}"))?
             .filtered(&filter);
         let exp = drift_experiment(&model, &times, rate, runs, args.seed)
-            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+            .with_context(|| path.display().to_string())?;
         check_memory(&exp, exp.runs)?;
         let gyro = match readback_duration {
             Some(d) => {

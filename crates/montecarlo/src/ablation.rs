@@ -67,7 +67,7 @@ pub fn experiments(
     model: &SensorModel,
     overrides: &Overrides,
     full: &Experiment,
-) -> Result<Vec<TermExperiments>, String> {
+) -> Result<Vec<TermExperiments>, crate::experiment::ExperimentError> {
     terms(full)
         .into_iter()
         .map(|term| {

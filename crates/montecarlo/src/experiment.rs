@@ -21,6 +21,20 @@ pub struct Overrides {
     pub without: Vec<String>,
 }
 
+/// Why an experiment cannot be built from a scenario, a model and overrides.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ExperimentError {
+    /// The run count (an override; a scenario's own `runs` is checked when it is read) is 0.
+    #[error("the number of runs must be at least 1")]
+    NoRuns,
+    /// A term switch (`only` / `without`) names no known term.
+    #[error(transparent)]
+    Terms(#[from] noise::FilterError),
+    /// A generated scenario (spec's drift scenario) is not valid.
+    #[error(transparent)]
+    Scenario(#[from] crate::scenario::ScenarioError),
+}
+
 /// A ready experiment.
 #[derive(Debug, Clone)]
 pub struct Experiment {
@@ -41,10 +55,10 @@ impl Experiment {
         scenario: Scenario,
         model: &SensorModel,
         overrides: &Overrides,
-    ) -> Result<Experiment, String> {
+    ) -> Result<Experiment, ExperimentError> {
         let runs = overrides.runs.unwrap_or(scenario.runs);
         if runs == 0 {
-            return Err("--runs: expected an integer >= 1".into());
+            return Err(ExperimentError::NoRuns);
         }
         let seed = overrides.seed.unwrap_or(scenario.seed);
         let only = overrides.only.clone().or_else(|| scenario.only.clone());
@@ -53,8 +67,7 @@ impl Experiment {
         let filter = TermFilter::parse(
             only.as_ref().map(|v| v.join(",")).as_deref(),
             (!without.is_empty()).then(|| without.join(",")).as_deref(),
-        )
-        .map_err(|e| e.to_string())?;
+        )?;
         let model = model.filtered(&filter);
         let (terms, law_context) = law_terms(
             &model,

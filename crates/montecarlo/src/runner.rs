@@ -97,25 +97,22 @@ pub struct Shard {
     pub count: u64,
 }
 
+/// A shard specification that is not `i/k` with 0 <= i < k.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("shard `{0}`: expected `i/k` with integers 0 <= i < k (e.g. `0/4`, as Slurm's SLURM_ARRAY_TASK_ID/array size)")]
+pub struct ShardSpecError(pub String);
+
 impl Shard {
     pub const WHOLE: Shard = Shard { index: 0, count: 1 };
 
     /// Parse "i/k". Errors say what was expected.
-    pub fn parse(text: &str) -> Result<Shard, String> {
-        let expected = "expected `i/k` with integers 0 <= i < k (e.g. `0/4`, as Slurm's SLURM_ARRAY_TASK_ID/array size)";
-        let (i, k) = text
-            .split_once('/')
-            .ok_or_else(|| format!("shard `{text}`: {expected}"))?;
-        let index: u64 = i
-            .trim()
-            .parse()
-            .map_err(|_| format!("shard `{text}`: {expected}"))?;
-        let count: u64 = k
-            .trim()
-            .parse()
-            .map_err(|_| format!("shard `{text}`: {expected}"))?;
+    pub fn parse(text: &str) -> Result<Shard, ShardSpecError> {
+        let bad = || ShardSpecError(text.to_string());
+        let (i, k) = text.split_once('/').ok_or_else(bad)?;
+        let index: u64 = i.trim().parse().map_err(|_| bad())?;
+        let count: u64 = k.trim().parse().map_err(|_| bad())?;
         if count == 0 || index >= count {
-            return Err(format!("shard `{text}`: {expected}"));
+            return Err(bad());
         }
         Ok(Shard { index, count })
     }

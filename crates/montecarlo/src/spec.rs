@@ -296,7 +296,7 @@ pub fn drift_experiment(
     rate_hz: f64,
     runs: u64,
     seed: u64,
-) -> Result<Experiment, String> {
-    let scenario = drift_scenario(times_s, rate_hz, runs, seed).map_err(|e| e.to_string())?;
+) -> Result<Experiment, crate::experiment::ExperimentError> {
+    let scenario = drift_scenario(times_s, rate_hz, runs, seed)?;
     Experiment::new(scenario, model, &Overrides::default())
 }

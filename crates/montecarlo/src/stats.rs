@@ -12,6 +12,11 @@ use serde::{Deserialize, Serialize};
 /// Two-sided 99.9 % standard normal quantile, z_{1 - 0.001/2}.
 pub const Z_999: f64 = 3.290_526_731_491_926;
 
+/// A run matrix read from a file that is not well formed, and how.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct MatrixError(pub String);
+
 /// Per-run values, `values[(checkpoint * channels + channel) * runs + run]`, runs in index order.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RunMatrix {
@@ -49,9 +54,10 @@ impl RunMatrix {
 
     /// Whether a matrix read from a file is well formed: one series per (checkpoint, channel),
     /// each with one value per run, run indices strictly ascending. `Err` says what is wrong.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), MatrixError> {
+        let fail = |what: String| Err(MatrixError(what));
         if self.values.len() != self.checkpoints * self.channels {
-            return Err(format!(
+            return fail(format!(
                 "{} value series for {} checkpoints x {} channels",
                 self.values.len(),
                 self.checkpoints,
@@ -63,14 +69,14 @@ impl RunMatrix {
             .iter()
             .position(|s| s.len() != self.run_ids.len())
         {
-            return Err(format!(
+            return fail(format!(
                 "series {i} has {} values for {} runs",
                 self.values[i].len(),
                 self.run_ids.len()
             ));
         }
         if let Some(w) = self.run_ids.windows(2).find(|w| w[1] <= w[0]) {
-            return Err(format!(
+            return fail(format!(
                 "run indices not strictly ascending ({} then {})",
                 w[0], w[1]
             ));
