@@ -12,8 +12,8 @@
 use serde::Serialize;
 use strapdown::{nav_error, BodyVector, NavState, Scheme, Strapdown};
 
-/// Standard gravity, m/s^2 (docs/cli.md / docs/cli.md convention).
-pub const G_MPS2: f64 = 9.80665;
+/// Standard gravity, m/s^2 (the noise crate's definition, shared by the workspace).
+pub use noise::units::STANDARD_GRAVITY_MPS2 as G_MPS2;
 
 /// Channels of an IMU log in the order gx gy gz ax ay az.
 pub const CHANNELS: [&str; 6] = ["gx", "gy", "gz", "ax", "ay", "az"];

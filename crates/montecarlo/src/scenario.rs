@@ -134,8 +134,9 @@ pub struct Scenario {
     pub ablation: bool,
 }
 
-/// Standard gravity (m/s^2), the value docs/cli.md fixes for a static level IMU.
-pub const STANDARD_GRAVITY_MPS2: f64 = 9.80665;
+/// Standard gravity (m/s^2) for a static level IMU.
+/// (One definition for the workspace: the noise crate's, used by its unit conversions.)
+pub use noise::units::STANDARD_GRAVITY_MPS2;
 /// Default duration when a scenario leaves `duration_s` out (s): Woodman's 60 s runs.
 pub const DEFAULT_DURATION_S: f64 = 60.0;
 /// Default sample rate when a scenario leaves `rate_hz` out (Hz).
