@@ -18,9 +18,17 @@ use std::path::Path;
 pub const STANDARD_GRAVITY_MPS2: f64 = 9.806_65;
 
 /// Canonical gyro channel names.
-pub const GYRO_CHANNELS: [&str; 3] = ["gx", "gy", "gz"];
+pub const GYRO_CHANNELS: [&str; 3] = [
+    noise::CHANNEL_NAMES[0],
+    noise::CHANNEL_NAMES[1],
+    noise::CHANNEL_NAMES[2],
+];
 /// Canonical accelerometer channel names.
-pub const ACCEL_CHANNELS: [&str; 3] = ["ax", "ay", "az"];
+pub const ACCEL_CHANNELS: [&str; 3] = [
+    noise::CHANNEL_NAMES[3],
+    noise::CHANNEL_NAMES[4],
+    noise::CHANNEL_NAMES[5],
+];
 
 /// A log in SI units.
 #[derive(Clone, Debug)]
@@ -135,7 +143,7 @@ impl LogArgs {
                 .split_once('=')
                 .ok_or_else(|| anyhow!("--col {c:?}: expected NAME=COLUMN, e.g. gx=gyro_x_dps"))?;
             let name = name.trim();
-            if !["t", "gx", "gy", "gz", "ax", "ay", "az", "temp"].contains(&name) {
+            if !(name == "t" || name == "temp" || noise::CHANNEL_NAMES.contains(&name)) {
                 bail!("--col {c:?}: {name:?} is not one of t, gx, gy, gz, ax, ay, az, temp");
             }
             map.push((name.to_string(), col.trim().to_string()));

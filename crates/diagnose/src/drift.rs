@@ -16,7 +16,7 @@ use strapdown::{nav_error, BodyVector, NavState, Scheme, Strapdown};
 pub use noise::units::STANDARD_GRAVITY_MPS2 as G_MPS2;
 
 /// Channels of an IMU log in the order gx gy gz ax ay az.
-pub const CHANNELS: [&str; 6] = ["gx", "gy", "gz", "ax", "ay", "az"];
+pub use noise::CHANNEL_NAMES as CHANNELS;
 
 /// Heading and horizontal position error at the end of every full segment of one length.
 #[derive(Clone, Debug, Default, Serialize)]
