@@ -50,3 +50,11 @@ pub fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
         .build()
         .context("cannot start the worker threads")
 }
+
+/// The term switches of `--only a,b` and `--without c` (comma lists in every command).
+pub fn term_filter(only: Option<&[String]>, without: &[String]) -> Result<noise::TermFilter> {
+    Ok(noise::TermFilter::parse(
+        only.map(|v| v.join(",")).as_deref(),
+        (!without.is_empty()).then(|| without.join(",")).as_deref(),
+    )?)
+}

@@ -41,14 +41,14 @@ pub struct Args {
     #[arg(long, default_value_t = 0)]
     pub run: u64,
     /// Only these terms, e.g. gyro.white_noise,accel.constant_bias (or `white_noise`, `gyro`)
-    #[arg(long)]
-    pub only: Option<String>,
+    #[arg(long, value_delimiter = ',')]
+    pub only: Option<Vec<String>>,
     /// All terms but these, same syntax as --only
+    #[arg(long, value_delimiter = ',')]
+    pub without: Vec<String>,
+    /// Worker threads (default: all cores); the output does not depend on it
     #[arg(long)]
-    pub without: Option<String>,
-    /// Worker threads (0: all cores); the output does not depend on it
-    #[arg(long, default_value_t = 0)]
-    pub threads: usize,
+    pub threads: Option<usize>,
     /// Print a JSON summary on stdout
     #[arg(long)]
     pub json: bool,
@@ -70,7 +70,7 @@ const BYTES_PER_ROW: f64 = 8.0 * 25.0;
 
 fn plan(args: &Args) -> Result<Plan> {
     let model = SensorModel::load(&args.sensor)?;
-    let filter = TermFilter::parse(args.only.as_deref(), args.without.as_deref())?;
+    let filter = crate::cli::term_filter(args.only.as_deref(), &args.without)?;
     check_rate_hz("--rate", args.rate)?;
     let duration_s = parse_duration_s("--duration", &args.duration)?;
     let samples = (duration_s * args.rate).round();
@@ -125,7 +125,7 @@ fn plan(args: &Args) -> Result<Plan> {
 
 pub fn run(args: Args) -> Result<()> {
     let plan = plan(&args)?;
-    let pool = crate::cli::pool(Some(args.threads))?;
+    let pool = crate::cli::pool(args.threads)?;
     let progress = crate::progress::Progress::new("generate", "samples", plan.samples);
     let started = std::time::Instant::now();
     // Atomic for files; devices and FIFOs (/dev/null) are written directly (output.rs).

@@ -14,7 +14,7 @@ use montecarlo::spec::{
     drift_experiment, drift_rows, gyro_readback, gyro_spec_values, SensorSpec, READBACK_CONFIDENCE,
     READBACK_DURATION_S, READBACK_RATE_HZ,
 };
-use noise::{Effect, Sensor, SensorModel, TermFilter};
+use noise::{Effect, Sensor, SensorModel};
 use serde::Serialize;
 use std::io::Write;
 use std::path::PathBuf;
@@ -210,12 +210,7 @@ pub fn run(args: Args) -> Result<()> {
             }
         }
     }
-    let filter = TermFilter::parse(
-        args.only.as_ref().map(|v| v.join(",")).as_deref(),
-        (!args.without.is_empty())
-            .then(|| args.without.join(","))
-            .as_deref(),
-    )?;
+    let filter = crate::cli::term_filter(args.only.as_deref(), &args.without)?;
     let pool = pool(args.threads)?;
     let mut sensors = Vec::new();
     for path in &args.sensors {
