@@ -1,7 +1,8 @@
 //! `imudrift merge SHARD...`: combine the shard files of `simulate --shard i/k` into exactly the
 //! result a single `simulate` computes (same per-run values, merged in run-index order).
 
-use crate::cmd_simulate::{ablation_experiments, emit, experiment_from, Inputs};
+use crate::cmd_simulate::emit;
+use crate::experiment_run::{ablation_experiments, check_memory, experiment_from, Inputs};
 use anyhow::{bail, Context, Result};
 use montecarlo::experiment::Overrides;
 use montecarlo::runner::RunFailure;
@@ -69,7 +70,7 @@ pub fn run(args: Args) -> Result<()> {
     let (inputs, overrides, exp) = experiment_of(first)
         .with_context(|| format!("{}: the stored scenario", first_path.display()))?;
     // The merged values must fit, as for `simulate` itself (which would have asked for shards).
-    crate::cmd_simulate::check_memory(
+    check_memory(
         &exp,
         exp.runs * (1 + 2 * first.ablation.as_ref().map_or(0, Vec::len) as u64),
     )?;

@@ -4,7 +4,8 @@
 //! request (`--readback`) the spec ARW and bias instability beside the values read back from a
 //! simulated 12 h, 100 Hz static log (Woodman's Allan method).
 
-use crate::cmd_simulate::{check_memory, execute, pool};
+use crate::cli::pool;
+use crate::experiment_run::{check_memory, execute};
 use crate::fmt;
 use crate::output::{write_atomic, write_string};
 use anyhow::{Context, Result};

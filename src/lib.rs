@@ -10,6 +10,7 @@ pub mod cmd_merge;
 pub mod cmd_plan;
 pub mod cmd_simulate;
 pub mod cmd_spec;
+pub mod experiment_run;
 pub mod fmt;
 pub mod logio;
 pub mod output;

@@ -1,0 +1,187 @@
+//! Running a Monte Carlo experiment from files, shared by `simulate`, `spec` and `merge`: read
+//! a scenario (or a sensor alone, with the default static scenario) and its sensor, apply
+//! `--duration` / `--rate`, build the experiment and its ablation sub-experiments, check the
+//! memory of the per-run values, and run a range of runs with progress.
+
+use anyhow::{bail, Context, Result};
+use montecarlo::ablation;
+use montecarlo::channels::Channel;
+use montecarlo::experiment::{Experiment, ExperimentError, Overrides};
+use montecarlo::runner::{run_range, BatchResult};
+use montecarlo::scenario::Scenario;
+use noise::SensorModel;
+use std::path::Path;
+
+/// Scenario and sensor texts as read, with their names (kept verbatim for shard files).
+pub struct Inputs {
+    pub scenario_source: String,
+    pub scenario_toml: String,
+    pub sensor_source: String,
+    pub sensor_toml: String,
+}
+
+/// Scenario keys set from the command line (`--duration`, `--rate`).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ScenarioEdits {
+    pub duration_s: Option<f64>,
+    pub rate_hz: Option<f64>,
+}
+
+impl ScenarioEdits {
+    pub fn from_flags(duration: Option<&str>, rate_hz: Option<f64>) -> Result<Self> {
+        Ok(ScenarioEdits {
+            duration_s: duration
+                .map(|d| crate::cli::parse_duration_s("--duration", d))
+                .transpose()?,
+            rate_hz: rate_hz
+                .map(|r| crate::cli::check_rate_hz("--rate", r))
+                .transpose()?,
+        })
+    }
+}
+
+/// Whether a TOML text is a sensor model rather than a scenario: no `sensor` key, and sensor
+/// tables (`[gyro]`, `[accel]`, `[temperature]`) or nothing but a name and a description (an
+/// ideal sensor).
+fn is_sensor_toml(text: &str) -> bool {
+    text.parse::<toml::Table>().is_ok_and(|t| {
+        !t.contains_key("sensor")
+            && (["gyro", "accel", "temperature"]
+                .iter()
+                .any(|k| t.contains_key(*k))
+                || (t.contains_key("name") && t.keys().all(|k| k == "name" || k == "description")))
+    })
+}
+
+/// The default static scenario for a sensor file (every other key takes its documented default).
+fn default_scenario_toml(sensor_file: &str, stem: &str) -> String {
+    format!(
+        "# The default static scenario of `imudrift simulate SENSOR.toml`: the sensor lying still and level.\n\
+         name = {name:?}\n\
+         description = {desc:?}\n\
+         sensor = {sensor_file:?}\n",
+        name = format!("{stem}-static"),
+        desc = format!("{stem}: default static scenario (still and level)"),
+    )
+}
+
+/// Apply `--duration` / `--rate` to a scenario text (the edited text is what a shard stores).
+fn edit_scenario_toml(text: &str, source: &str, edits: &ScenarioEdits) -> Result<String> {
+    if edits.duration_s.is_none() && edits.rate_hz.is_none() {
+        return Ok(text.to_string());
+    }
+    let mut table: toml::Table = text
+        .parse()
+        .with_context(|| format!("cannot read scenario {source} as TOML"))?;
+    if let Some(d) = edits.duration_s {
+        table.insert("duration_s".into(), toml::Value::Float(d));
+    }
+    if let Some(r) = edits.rate_hz {
+        table.insert("rate_hz".into(), toml::Value::Float(r));
+    }
+    Ok(toml::to_string(&table)?)
+}
+
+/// Read the scenario and its sensor (path relative to the scenario file). A sensor TOML given in
+/// place of a scenario gets the default static scenario.
+pub fn read_inputs(path: &Path, edits: &ScenarioEdits) -> Result<(Inputs, Scenario)> {
+    let given = path.display().to_string();
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read {given}"))?;
+    let text = noise::utf8_text(bytes, &given)?;
+    let (scenario_source, scenario_toml) = if is_sensor_toml(&text) {
+        let file = path
+            .file_name()
+            .map(|f| f.to_string_lossy().into_owned())
+            .unwrap_or_else(|| given.clone());
+        let stem = path
+            .file_stem()
+            .map(|f| f.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "sensor".into());
+        (
+            format!("default static scenario for {given}"),
+            default_scenario_toml(&file, &stem),
+        )
+    } else {
+        (given, text)
+    };
+    let scenario_toml = edit_scenario_toml(&scenario_toml, &scenario_source, edits)?;
+    let scenario = Scenario::from_toml_str(&scenario_toml, &scenario_source)?;
+    let sensor_path = match path.parent() {
+        Some(dir) if scenario.sensor.is_relative() => dir.join(&scenario.sensor),
+        _ => scenario.sensor.clone(),
+    };
+    let sensor_source = sensor_path.display().to_string();
+    let sensor_bytes = std::fs::read(&sensor_path).with_context(|| {
+        format!("{scenario_source}: key `sensor`: cannot read sensor file {sensor_source}")
+    })?;
+    let sensor_toml = noise::utf8_text(sensor_bytes, &sensor_source)?;
+    Ok((
+        Inputs {
+            scenario_source,
+            scenario_toml,
+            sensor_source,
+            sensor_toml,
+        },
+        scenario,
+    ))
+}
+
+/// Rebuild the experiment from texts (also used by `merge` on a shard's stored texts).
+pub fn experiment_from(inputs: &Inputs, overrides: &Overrides) -> Result<Experiment> {
+    Ok(parse_inputs(inputs, overrides)?.2)
+}
+
+/// The parsed scenario and model of `inputs`, and the experiment with `overrides`.
+pub fn parse_inputs(
+    inputs: &Inputs,
+    overrides: &Overrides,
+) -> Result<(Scenario, SensorModel, Experiment)> {
+    let scenario = Scenario::from_toml_str(&inputs.scenario_toml, &inputs.scenario_source)?;
+    let model = SensorModel::from_toml_str(&inputs.sensor_toml, &inputs.sensor_source)
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let exp = Experiment::new(scenario.clone(), &model, overrides).map_err(with_flag)?;
+    Ok((scenario, model, exp))
+}
+
+/// An experiment error with the command-line option it comes from, when it comes from one.
+fn with_flag(e: ExperimentError) -> anyhow::Error {
+    match e {
+        ExperimentError::NoRuns => anyhow::anyhow!("--runs: expected an integer >= 1"),
+        other => anyhow::Error::new(other),
+    }
+}
+
+/// The ablation sub-experiments of `exp` (each active term alone, the model without it).
+pub fn ablation_experiments(
+    inputs: &Inputs,
+    overrides: &Overrides,
+) -> Result<Vec<ablation::TermExperiments>> {
+    let (scenario, model, exp) = parse_inputs(inputs, overrides)?;
+    ablation::experiments(&scenario, &model, overrides, &exp).map_err(with_flag)
+}
+
+/// Memory for the per-run values above which `simulate` asks for shards instead (8 GiB).
+const MAX_VALUE_BYTES: u64 = 8 << 30;
+
+/// Refuse a run range whose per-run values (8 bytes per run, checkpoint and channel) would not fit.
+pub fn check_memory(exp: &Experiment, runs: u64) -> Result<()> {
+    let per_run = (exp.scenario.checkpoint_steps.len() * Channel::ALL.len() * 8) as u64;
+    let bytes = runs.saturating_mul(per_run);
+    if bytes > MAX_VALUE_BYTES {
+        bail!(
+            "--runs: {runs} runs x {} checkpoints keep {:.1} GiB of per-run values (limit 8 GiB); split them with --shard i/k and `imudrift merge`, or use fewer checkpoints",
+            exp.scenario.checkpoint_steps.len(),
+            bytes as f64 / (1u64 << 30) as f64
+        );
+    }
+    Ok(())
+}
+
+/// Run `exp` over `runs`, with progress on stderr (`crate::progress`).
+pub fn execute(exp: &Experiment, runs: std::ops::Range<u64>, label: &str) -> BatchResult {
+    let kernel = exp.kernel();
+    let progress = crate::progress::Progress::new(label, "runs", runs.end - runs.start);
+    let result = run_range(&kernel, runs, &|done| progress.set(done));
+    progress.finish();
+    result
+}
