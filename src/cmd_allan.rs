@@ -6,7 +6,7 @@
 use crate::logio::{self, Log, LogArgs};
 use crate::output;
 use crate::plot::{Band, LogLogPlot, Series, PALETTE};
-use allan::fit::{fit_ieee952, Fit, TERM_NAMES};
+use allan::fit::{Fit, TERM_NAMES};
 use allan::{AllanPoint, EdfMethod, Estimator, Options, TauGrid};
 use anyhow::{anyhow, bail, Result};
 use rayon::prelude::*;
@@ -229,8 +229,7 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
     Ok(())
 }
 
-/// Deviation curve (taus in parallel; each tau is computed by one thread, so the result does not
-/// depend on the thread count), intervals and fit of one channel.
+/// Deviation curve, intervals and fit of one channel ([`allan::analyse_rate`]).
 pub fn analyse(
     data: Vec<f64>,
     name: &str,
@@ -240,44 +239,8 @@ pub fn analyse(
     opts: &Options,
     stage: &(dyn Fn(&str) + Sync),
 ) -> ChannelResult {
-    let series = allan::Series::from_rate(data, dt_s);
-    stage(&format!("{name}: phase"));
-    let ms = series.grid_m(est, grid, opts.stable32_stop);
-    // The deviations (one blocked pass) and the per-tau noise identification are independent:
-    // run them side by side. Every number is computed by one thread in a fixed order, so the
-    // result does not depend on the thread count.
-    let identify = opts.edf != EdfMethod::None && opts.alpha.is_none();
-    let d = est.difference_order();
-    let (mut points, alphas) = rayon::join(
-        || {
-            let r = series.raw_points(est, &ms);
-            stage(&format!("{name}: deviations"));
-            r
-        },
-        || -> Vec<(usize, Option<i32>)> {
-            if identify {
-                let r = ms.par_iter().map(|&m| (m, series.noise_id(m, d))).collect();
-                stage(&format!("{name}: noise identification"));
-                r
-            } else {
-                ms.iter().map(|&m| (m, opts.alpha)).collect()
-            }
-        },
-    );
-    if opts.edf != EdfMethod::None {
-        let alphas: Vec<Option<i32>> = points
-            .iter()
-            .map(|p| alphas.iter().find(|(m, _)| *m == p.m).and_then(|(_, a)| *a))
-            .collect();
-        series.attach_intervals_with_alphas(est, &mut points, &alphas, opts);
-    }
-    let allan_variance = matches!(
-        est,
-        Estimator::NonOverlapping | Estimator::Overlapping | Estimator::Total
-    );
-    stage(&format!("{name}: intervals"));
-    let fit = allan_variance.then(|| fit_ieee952(&points));
-    stage(&format!("{name}: fit"));
+    let allan::Analysis { points, fit } =
+        allan::analyse_rate(data, dt_s, est, grid, opts, &|s| stage(&format!("{name}: {s}")));
     ChannelResult {
         name: name.to_string(),
         unit: Log::unit_of(name),

@@ -1,0 +1,66 @@
+//! One call for a channel's whole analysis: deviation curve, noise identification, intervals and,
+//! for Allan-variance estimators, the IEEE 952 term fit.
+
+use crate::fit::{fit_ieee952, Fit};
+use crate::{AllanPoint, EdfMethod, Estimator, Options, Series, TauGrid};
+use rayon::prelude::*;
+
+/// A channel's analysis.
+#[derive(Clone, Debug)]
+pub struct Analysis {
+    pub points: Vec<AllanPoint>,
+    /// The IEEE 952 fit (Allan-variance estimators only: non-overlapping, overlapping, total).
+    pub fit: Option<Fit>,
+}
+
+/// Analyse rate samples taken every `dt_s` seconds: the deviation at every tau of `grid`, each
+/// point's noise type and interval (as `opts` asks), and the IEEE 952 fit. The deviations (one
+/// blocked pass) and the per-tau noise identification run side by side; every number is
+/// computed by one thread in a fixed order, so the result does not depend on the thread count.
+/// `stage` is told when each stage ends ("phase", "deviations", "noise identification",
+/// "intervals", "fit"), for progress displays.
+pub fn analyse_rate(
+    data: Vec<f64>,
+    dt_s: f64,
+    est: Estimator,
+    grid: &TauGrid,
+    opts: &Options,
+    stage: &(dyn Fn(&str) + Sync),
+) -> Analysis {
+    let series = Series::from_rate(data, dt_s);
+    stage("phase");
+    let ms = series.grid_m(est, grid, opts.stable32_stop);
+    let identify = opts.edf != EdfMethod::None && opts.alpha.is_none();
+    let d = est.difference_order();
+    let (mut points, alphas) = rayon::join(
+        || {
+            let r = series.raw_points(est, &ms);
+            stage("deviations");
+            r
+        },
+        || -> Vec<(usize, Option<i32>)> {
+            if identify {
+                let r = ms.par_iter().map(|&m| (m, series.noise_id(m, d))).collect();
+                stage("noise identification");
+                r
+            } else {
+                ms.iter().map(|&m| (m, opts.alpha)).collect()
+            }
+        },
+    );
+    if opts.edf != EdfMethod::None {
+        let alphas: Vec<Option<i32>> = points
+            .iter()
+            .map(|p| alphas.iter().find(|(m, _)| *m == p.m).and_then(|(_, a)| *a))
+            .collect();
+        series.attach_intervals_with_alphas(est, &mut points, &alphas, opts);
+    }
+    stage("intervals");
+    let allan_variance = matches!(
+        est,
+        Estimator::NonOverlapping | Estimator::Overlapping | Estimator::Total
+    );
+    let fit = allan_variance.then(|| fit_ieee952(&points));
+    stage("fit");
+    Analysis { points, fit }
+}

@@ -1,0 +1,217 @@
+//! [`Series`]: a log prepared once (its phase) for many deviations, the normalisation of the
+//! estimators' sums (SP 1065), and the confidence intervals attached to each point.
+
+use crate::kernels::{
+    blocked_diff_sums_fast, estimator_sum_fast, rate_noise_id_fast, BLOCKED_MAX_M,
+};
+use crate::phase::{rate_to_phase, rate_to_phase_in_place};
+use crate::{chi2, edf, AllanPoint, DataKind, EdfMethod, Estimator, Options, TauGrid};
+
+/// A time series prepared once for many deviations: the phase array (and, for phase input,
+/// the original samples for noise identification).
+pub struct Series<'a> {
+    phase: Vec<f64>,
+    /// Number of rate samples, for rate input.
+    rate_len: Option<usize>,
+    source_phase: Option<&'a [f64]>,
+    tau0_s: f64,
+}
+
+impl<'a> Series<'a> {
+    /// Prepare `data` sampled every `tau0_s` seconds.
+    pub fn new(data: &'a [f64], kind: DataKind, tau0_s: f64) -> Series<'a> {
+        match kind {
+            DataKind::Rate => Series {
+                phase: rate_to_phase(data, tau0_s),
+                rate_len: Some(data.len()),
+                source_phase: None,
+                tau0_s,
+            },
+            DataKind::Phase => Series {
+                phase: data.to_vec(),
+                rate_len: None,
+                source_phase: Some(data),
+                tau0_s,
+            },
+        }
+    }
+
+    /// Prepare rate samples given by value: the phase is computed in their buffer (no second
+    /// array of the record's size). Same result as [`Series::new`] with [`DataKind::Rate`].
+    pub fn from_rate(data: Vec<f64>, tau0_s: f64) -> Series<'static> {
+        let rate_len = data.len();
+        Series {
+            phase: rate_to_phase_in_place(data, tau0_s),
+            rate_len: Some(rate_len),
+            source_phase: None,
+            tau0_s,
+        }
+    }
+
+    /// Number of phase points (rate samples + 1).
+    pub fn phase_len(&self) -> usize {
+        self.phase.len()
+    }
+
+    /// Sample interval, seconds.
+    pub fn tau0_s(&self) -> f64 {
+        self.tau0_s
+    }
+
+    /// The averaging factors of a grid for this series and estimator.
+    pub fn grid_m(&self, est: Estimator, grid: &TauGrid, stable32_stop: bool) -> Vec<usize> {
+        let n_phase = self.phase.len();
+        let max_m = match grid {
+            TauGrid::Explicit(_) => usize::MAX,
+            _ if stable32_stop => n_phase.saturating_sub(1) / est.stable32_stop_ratio(),
+            _ => usize::MAX,
+        };
+        grid.ms(n_phase)
+            .into_iter()
+            .filter(|&m| m >= 1 && m <= max_m && m < n_phase)
+            .collect()
+    }
+
+    /// The deviation at averaging factor `m` without interval (`None` if fewer than 2 terms).
+    pub fn raw_point(&self, est: Estimator, m: usize) -> Option<AllanPoint> {
+        let (sum_sq, n_terms) = estimator_sum_fast(&self.phase, est, m)?;
+        self.point_from_sum(est, m, sum_sq, n_terms)
+    }
+
+    /// The deviations at all `ms` without intervals, skipping factors with fewer than 2 terms.
+    /// The overlapping estimators use one cache-blocked pass for all small factors (the phase
+    /// array is streamed from memory once instead of once per tau); the result is identical to
+    /// [`Series::raw_point`] up to the order of the floating-point additions.
+    pub fn raw_points(&self, est: Estimator, ms: &[usize]) -> Vec<AllanPoint> {
+        let multi = match est {
+            Estimator::Overlapping => Some(2),
+            Estimator::OverlappingHadamard => Some(3),
+            _ => None,
+        };
+        let Some(order) = multi else {
+            return ms.iter().filter_map(|&m| self.raw_point(est, m)).collect();
+        };
+        let n = self.phase.len();
+        let valid: Vec<usize> = ms
+            .iter()
+            .copied()
+            .filter(|&m| m >= 1 && order * m < n)
+            .collect();
+        // Factors whose reuse window fits in cache go through the blocked kernel together.
+        let (small, large): (Vec<usize>, Vec<usize>) =
+            valid.iter().partition(|&&m| m <= BLOCKED_MAX_M);
+        let sums = blocked_diff_sums_fast(&self.phase, &small, order);
+        let mut out: Vec<AllanPoint> = small
+            .iter()
+            .zip(sums)
+            .filter_map(|(&m, s)| self.point_from_sum(est, m, s, n - order * m))
+            .collect();
+        out.extend(large.iter().filter_map(|&m| self.raw_point(est, m)));
+        out
+    }
+
+    fn point_from_sum(
+        &self,
+        est: Estimator,
+        m: usize,
+        sum_sq: f64,
+        n_terms: usize,
+    ) -> Option<AllanPoint> {
+        if n_terms < 2 {
+            return None;
+        }
+        let tau_s = m as f64 * self.tau0_s;
+        let var = match est {
+            // SP 1065 eqs (7), (11): sigma^2 = sum / (2 tau^2 n)
+            Estimator::NonOverlapping | Estimator::Overlapping => {
+                sum_sq / (2.0 * tau_s * tau_s * n_terms as f64)
+            }
+            // SP 1065 eq (14): Mod sigma^2 = sum / (2 m^2 tau^2 n)
+            Estimator::Modified => sum_sq / (2.0 * (m * m) as f64 * tau_s * tau_s * n_terms as f64),
+            // SP 1065 eqs (18), (20): H sigma^2 = sum / (6 tau^2 n)
+            Estimator::Hadamard | Estimator::OverlappingHadamard => {
+                sum_sq / (6.0 * tau_s * tau_s * n_terms as f64)
+            }
+            // SP 1065 eq (25): Tot sigma^2 = sum / (2 tau^2 (N - 2))
+            Estimator::Total => sum_sq / (2.0 * tau_s * tau_s * n_terms as f64),
+        };
+        Some(AllanPoint {
+            tau_s,
+            m,
+            dev: var.sqrt(),
+            n_terms,
+            edf: f64::NAN,
+            lo: f64::NAN,
+            hi: f64::NAN,
+            bins: (self.phase.len() - 1) / m,
+            alpha: 0,
+        })
+    }
+
+    /// Identify the noise type, compute the EDF and the chi-squared interval of each point.
+    pub fn attach_intervals(&self, est: Estimator, points: &mut [AllanPoint], opts: &Options) {
+        if opts.edf == EdfMethod::None {
+            return;
+        }
+        let d = est.difference_order();
+        // One tau per task, each identified by one thread: the same for any thread count.
+        use rayon::prelude::*;
+        let alphas: Vec<Option<i32>> = points
+            .par_iter()
+            .map(|p| opts.alpha.or_else(|| self.noise_id(p.m, d)))
+            .collect();
+        self.attach_intervals_with_alphas(est, points, &alphas, opts);
+    }
+
+    /// As [`Series::attach_intervals`] with the noise exponents already identified (callers may
+    /// run [`Series::noise_id`] in parallel). Where the record is too short for the lag-1 ACF
+    /// method (fewer than 30 averaged points, Riley 2004) `None` is given, and the nearest
+    /// shorter tau's alpha is reused (the first identified one for leading gaps).
+    pub fn attach_intervals_with_alphas(
+        &self,
+        est: Estimator,
+        points: &mut [AllanPoint],
+        alphas: &[Option<i32>],
+        opts: &Options,
+    ) {
+        if opts.edf == EdfMethod::None {
+            return;
+        }
+        let first_known = alphas.iter().flatten().next().copied().unwrap_or(0);
+        let n_phase = self.phase.len();
+        let mut last = first_known;
+        for (p, alpha) in points.iter_mut().zip(alphas) {
+            let alpha = alpha.unwrap_or(last);
+            last = alpha;
+            p.alpha = alpha;
+            if est == Estimator::Total && opts.totvar_bias_correction {
+                p.dev /= edf::totvar_bias(alpha, p.m, n_phase - 1).sqrt();
+            }
+            p.edf = edf::edf_for(est, opts.edf, alpha, p.m, n_phase, p.n_terms);
+            let (lo, hi) = chi2::confidence_interval(p.dev, p.edf, opts.confidence);
+            p.lo = lo;
+            p.hi = hi;
+        }
+    }
+
+    /// Lag-1 autocorrelation noise identification at averaging factor m (Riley 2004),
+    /// on the data as given (rate or phase); `None` when too few points.
+    pub fn noise_id(&self, m: usize, d_max: u32) -> Option<i32> {
+        match (self.rate_len, self.source_phase) {
+            (Some(rate_len), _) => {
+                // The block averages of the rate are phase differences at stride m
+                // (x_{(j+1)m} - x_{jm} = tau0 * sum of the block, mean removed): no pass over
+                // the m samples of each block. Scale and offset do not change the ACF.
+                let m = m.max(1);
+                let blocks = rate_len / m;
+                if blocks < 30 {
+                    return None;
+                }
+                let x = &self.phase;
+                rate_noise_id_fast(x, m, blocks, d_max)
+            }
+            (None, Some(x)) => edf::autocorr_noise_id(x, m, DataKind::Phase, d_max),
+            _ => None,
+        }
+    }
+}

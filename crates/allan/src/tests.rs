@@ -1,0 +1,298 @@
+//! Unit tests of the estimators, the phase conversion and the kernels.
+
+use super::kernels::*;
+use super::*;
+
+/// Deterministic pseudo-random series (SplitMix64 mapped to [-0.5, 0.5)).
+fn series(n: usize, seed: u64) -> Vec<f64> {
+    let mut s = seed;
+    (0..n)
+        .map(|_| {
+            s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = s;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            z ^= z >> 31;
+            (z >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        })
+        .collect()
+}
+
+/// Direct textbook formulas (no phase, no running sums), O(N m) per tau.
+fn naive(y: &[f64], est: Estimator, m: usize) -> f64 {
+    let n = y.len();
+    let avg = |k: usize| y[k..k + m].iter().sum::<f64>() / m as f64;
+    match est {
+        Estimator::Overlapping | Estimator::NonOverlapping => {
+            let stride = if est == Estimator::Overlapping { 1 } else { m };
+            let mut s = 0.0;
+            let mut c = 0;
+            let mut k = 0;
+            while k + 2 * m <= n {
+                let d = avg(k + m) - avg(k);
+                s += d * d;
+                c += 1;
+                k += stride;
+            }
+            (s / (2.0 * c as f64)).sqrt()
+        }
+        Estimator::Hadamard | Estimator::OverlappingHadamard => {
+            let stride = if est == Estimator::OverlappingHadamard {
+                1
+            } else {
+                m
+            };
+            let mut s = 0.0;
+            let mut c = 0;
+            let mut k = 0;
+            while k + 3 * m <= n {
+                let d = avg(k + 2 * m) - 2.0 * avg(k + m) + avg(k);
+                s += d * d;
+                c += 1;
+                k += stride;
+            }
+            (s / (6.0 * c as f64)).sqrt()
+        }
+        Estimator::Modified => {
+            // Mod sigma^2 = 1/(2 m^2 (N-3m+2)) sum_j [sum_{i=j}^{j+m-1} (ybar_{i+m} - ybar_i)]^2
+            // with ybar the m-averages (SP 1065 eq (15), frequency form).
+            let mut s = 0.0;
+            let mut c = 0;
+            let mut j = 0;
+            while j + 3 * m <= n + 1 {
+                let inner: f64 = (j..j + m).map(|i| avg(i + m) - avg(i)).sum();
+                s += inner * inner;
+                c += 1;
+                j += 1;
+            }
+            (s / (2.0 * (m * m) as f64 * c as f64)).sqrt()
+        }
+        Estimator::Total => unreachable!(),
+    }
+}
+
+#[test]
+fn fast_sums_match_textbook_formulas() {
+    // Reason for 1e-11: both sides are exact formulas; the difference is rounding only.
+    const REL_TOL: f64 = 1e-11;
+    let y: Vec<f64> = series(3000, 7).iter().map(|v| 3.0 + v).collect();
+    for est in [
+        Estimator::Overlapping,
+        Estimator::NonOverlapping,
+        Estimator::Hadamard,
+        Estimator::OverlappingHadamard,
+        Estimator::Modified,
+    ] {
+        for m in [1usize, 2, 3, 7, 50, 333] {
+            let p = deviation_with(
+                &y,
+                DataKind::Rate,
+                1.0,
+                est,
+                &TauGrid::Explicit(vec![m]),
+                &Options {
+                    edf: EdfMethod::None,
+                    ..Options::default()
+                },
+            );
+            let got = p[0].dev;
+            let want = naive(&y, est, m);
+            assert!(
+                ((got - want) / want).abs() < REL_TOL,
+                "{est:?} m={m}: {got} vs {want}"
+            );
+        }
+    }
+}
+
+#[test]
+fn blocked_kernel_matches_single_tau_path() {
+    // Same sums, different association of the additions: 1e-12 relative.
+    let y = series(300_000, 9);
+    let s = Series::new(&y, DataKind::Rate, 0.01);
+    let ms: Vec<usize> = (0..17)
+        .map(|k| 1usize << k)
+        .chain([3, 7, 1000, 4097])
+        .collect();
+    let mut ms = ms;
+    ms.sort_unstable();
+    for est in [Estimator::Overlapping, Estimator::OverlappingHadamard] {
+        let blocked = s.raw_points(est, &ms);
+        let single: Vec<AllanPoint> = ms.iter().filter_map(|&m| s.raw_point(est, m)).collect();
+        assert_eq!(blocked.len(), single.len());
+        for (p, q) in blocked.iter().zip(&single) {
+            assert_eq!((p.m, p.n_terms), (q.m, q.n_terms));
+            assert!(((p.dev - q.dev) / q.dev).abs() < 1e-12, "{est:?} m={}", p.m);
+        }
+    }
+}
+
+#[test]
+fn wide_vector_variants_give_the_same_bits() {
+    // The dispatched kernels (AVX-512 or AVX2 on CPUs that have them) against the same
+    // code compiled for the baseline target: identical results, not merely close.
+    let y = series(100_003, 11);
+    let x = rate_to_phase(&y, 0.01);
+    let ms: Vec<usize> = (0..14).map(|k| 1usize << k).chain([3, 4097]).collect();
+    let mut ms = ms;
+    ms.sort_unstable();
+    for order in [2, 3] {
+        let fast = blocked_diff_sums_fast(&x, &ms, order);
+        let base = blocked_diff_sums(&x, &ms, order);
+        assert_eq!(fast.len(), base.len());
+        for (a, b) in fast.iter().zip(&base) {
+            assert_eq!(a.to_bits(), b.to_bits(), "order {order}");
+        }
+    }
+    for est in [
+        Estimator::Overlapping,
+        Estimator::OverlappingHadamard,
+        Estimator::Modified,
+        Estimator::Total,
+    ] {
+        for m in [1, 5, 64, 20_000] {
+            let fast = estimator_sum_fast(&x, est, m).map(|(s, n)| (s.to_bits(), n));
+            let base = estimator_sum(&x, est, m).map(|(s, n)| (s.to_bits(), n));
+            assert_eq!(fast, base, "{est:?} m={m}");
+        }
+    }
+    for m in [1, 2, 16, 1000] {
+        let blocks = y.len() / m;
+        let base = edf::rate_noise_id_fn(blocks, |j| x[(j + 1) * m] - x[j * m], 2);
+        assert!(base.is_some());
+        assert_eq!(rate_noise_id_fast(&x, m, blocks, 2), base, "m={m}");
+    }
+}
+
+#[test]
+fn phase_sum_is_compensated() {
+    // A large offset plus small noise over 4M samples: a naive running sum loses about
+    // log10(N) digits; the compensated phase must give the m = 1 Allan deviation that the
+    // direct first-difference formula gives (no summation at all) to 1e-12.
+    const REL_TOL: f64 = 1e-12;
+    let n = 4_000_000;
+    let y: Vec<f64> = series(n, 11).iter().map(|v| 1.0e3 + 1.0e-3 * v).collect();
+    let p = deviation_with(
+        &y,
+        DataKind::Rate,
+        0.01,
+        Estimator::Overlapping,
+        &TauGrid::Explicit(vec![1]),
+        &Options {
+            edf: EdfMethod::None,
+            ..Options::default()
+        },
+    );
+    let direct: f64 = y
+        .windows(2)
+        .map(|w| (w[1] - w[0]) * (w[1] - w[0]))
+        .sum::<f64>()
+        / (2.0 * (n - 1) as f64);
+    let direct = direct.sqrt();
+    assert!(
+        ((p[0].dev - direct) / direct).abs() < REL_TOL,
+        "{} vs {}",
+        p[0].dev,
+        direct
+    );
+}
+
+#[test]
+fn rate_and_phase_input_agree() {
+    const REL_TOL: f64 = 1e-10;
+    let y = series(2000, 3);
+    let x = rate_to_phase(&y, 0.5);
+    for est in Estimator::ALL {
+        let a = deviation(&y, DataKind::Rate, 0.5, est, &TauGrid::Octave);
+        let b = deviation(&x, DataKind::Phase, 0.5, est, &TauGrid::Octave);
+        assert_eq!(a.len(), b.len());
+        for (p, q) in a.iter().zip(&b) {
+            assert_eq!(p.n_terms, q.n_terms);
+            assert!(((p.dev - q.dev) / q.dev).abs() < REL_TOL);
+        }
+    }
+}
+
+#[test]
+fn hadamard_ignores_a_rate_ramp_allan_does_not() {
+    // A rate ramp integrates to a quadratic phase, which every third difference removes
+    // exactly (SP 1065 §5.2.8): HDEV of white + ramp equals HDEV of white alone up to
+    // rounding (1e-9: the ramp's phase is ~1e4 times the noise's), while OADEV grows.
+    let white = series(20_000, 21);
+    let ramp: Vec<f64> = white
+        .iter()
+        .enumerate()
+        .map(|(k, w)| w + 1e-3 * k as f64)
+        .collect();
+    for est in [Estimator::Hadamard, Estimator::OverlappingHadamard] {
+        let a = deviation(&white, DataKind::Rate, 1.0, est, &TauGrid::Octave);
+        let b = deviation(&ramp, DataKind::Rate, 1.0, est, &TauGrid::Octave);
+        for (p, q) in a.iter().zip(&b) {
+            assert!(((p.dev - q.dev) / p.dev).abs() < 1e-9, "{est:?} m={}", p.m);
+        }
+    }
+    let a = deviation(
+        &white,
+        DataKind::Rate,
+        1.0,
+        Estimator::Overlapping,
+        &TauGrid::Octave,
+    );
+    let b = deviation(
+        &ramp,
+        DataKind::Rate,
+        1.0,
+        Estimator::Overlapping,
+        &TauGrid::Octave,
+    );
+    let last = a.len() - 1;
+    // R^2 tau^2 / 2 dominates at long tau (docs/model.md §2): 1e-3 * tau / sqrt 2.
+    let want = 1e-3 * a[last].tau_s / 2f64.sqrt();
+    assert!(
+        (b[last].dev / want - 1.0).abs() < 0.05,
+        "{} vs {want}",
+        b[last].dev
+    );
+}
+
+#[test]
+fn short_or_degenerate_inputs_do_not_panic() {
+    let grids = [
+        TauGrid::Octave,
+        TauGrid::Decade,
+        TauGrid::All,
+        TauGrid::PerDecade(3),
+    ];
+    for n in 0..40 {
+        let y = series(n, n as u64);
+        let constant = vec![1.0; n];
+        for data in [&y, &constant] {
+            for est in Estimator::ALL {
+                for g in &grids {
+                    for kind in [DataKind::Rate, DataKind::Phase] {
+                        let p = deviation(data, kind, 0.01, est, g);
+                        assert!(p.iter().all(|q| q.n_terms >= 2));
+                        let _ = fit::fit_ieee952(&p);
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn woodman_bins_rule() {
+    let y = series(1000, 5);
+    let p = deviation(
+        &y,
+        DataKind::Rate,
+        1.0,
+        Estimator::NonOverlapping,
+        &TauGrid::All,
+    );
+    for q in &p {
+        assert_eq!(q.bins, 1000 / q.m);
+        assert_eq!(q.n_terms, q.bins - 1);
+        assert_eq!(q.woodman_ok(), q.m <= 111);
+    }
+}
