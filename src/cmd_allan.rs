@@ -239,8 +239,9 @@ pub fn analyse(
     opts: &Options,
     stage: &(dyn Fn(&str) + Sync),
 ) -> ChannelResult {
-    let allan::Analysis { points, fit } =
-        allan::analyse_rate(data, dt_s, est, grid, opts, &|s| stage(&format!("{name}: {s}")));
+    let allan::Analysis { points, fit } = allan::analyse_rate(data, dt_s, est, grid, opts, &|s| {
+        stage(&format!("{name}: {s}"))
+    });
     ChannelResult {
         name: name.to_string(),
         unit: Log::unit_of(name),

@@ -1,0 +1,140 @@
+#![allow(dead_code)] // shared reader: parts are used by diagnose and simulate
+//! IMU log reader shared by `allan`, `diagnose` and `simulate`: CSV or gzip-compressed CSV,
+//! `#` comment lines, a header row, columns found by name, units mapped to SI.
+//!
+//! Canonical columns (docs/cli.md): `t` (s), `gx gy gz` (rad/s), `ax ay az` (m/s^2), `temp` (degC).
+//! `--col gx=gyro_x_dps` maps a file column to a canonical name; `--gyro-unit deg/s` and
+//! `--accel-unit g` convert; `--rate HZ` gives the sample rate when there is no time column.
+//! Other numeric columns are kept under their own names, unconverted.
+//! Errors name the file, the line and the column, and say what was expected.
+
+mod args;
+mod csv;
+mod file;
+mod float;
+mod units;
+
+pub use args::LogArgs;
+pub use csv::parse_log;
+pub use file::available_memory_bytes;
+pub use units::{AccelUnit, GyroUnit};
+
+use anyhow::{bail, Context, Result};
+use file::{check_fits, FileBytes, GIB};
+use std::collections::BTreeMap;
+use std::io::Read;
+use std::path::Path;
+
+/// Standard gravity for `g` units (m/s^2): the noise crate's one definition.
+pub use noise::units::STANDARD_GRAVITY_MPS2;
+
+/// Canonical gyro channel names.
+pub const GYRO_CHANNELS: [&str; 3] = [
+    noise::CHANNEL_NAMES[0],
+    noise::CHANNEL_NAMES[1],
+    noise::CHANNEL_NAMES[2],
+];
+/// Canonical accelerometer channel names.
+pub const ACCEL_CHANNELS: [&str; 3] = [
+    noise::CHANNEL_NAMES[3],
+    noise::CHANNEL_NAMES[4],
+    noise::CHANNEL_NAMES[5],
+];
+
+/// A log in SI units.
+#[derive(Clone, Debug)]
+pub struct Log {
+    /// Where it came from (file name), for messages.
+    pub source: String,
+    /// Sample rate, Hz.
+    pub rate_hz: f64,
+    /// Time column, s (if the file had one).
+    pub t_s: Option<Vec<f64>>,
+    /// Channels by name (canonical where mapped), SI units for gyro and accel channels.
+    pub channels: BTreeMap<String, Vec<f64>>,
+    /// Channel names in file order (without `t`).
+    pub order: Vec<String>,
+}
+
+impl Log {
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.channels.values().next().map_or(0, Vec::len)
+    }
+
+    /// Whether the log has no samples (never true for a log `read_log` returns).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Sample interval, s.
+    pub fn dt_s(&self) -> f64 {
+        1.0 / self.rate_hz
+    }
+
+    /// SI unit of a channel, for tables and plots.
+    pub fn unit_of(name: &str) -> &'static str {
+        if GYRO_CHANNELS.contains(&name) {
+            "rad/s"
+        } else if ACCEL_CHANNELS.contains(&name) {
+            "m/s^2"
+        } else if name == "temp" {
+            "degC"
+        } else {
+            "1"
+        }
+    }
+}
+
+/// Reader options.
+#[derive(Clone, Debug)]
+pub struct ReadOptions {
+    pub rate_hz: Option<f64>,
+    pub gyro_unit: GyroUnit,
+    pub accel_unit: AccelUnit,
+    /// (canonical name, file column) pairs.
+    pub columns: Vec<(String, String)>,
+}
+
+impl Default for ReadOptions {
+    fn default() -> Self {
+        ReadOptions {
+            rate_hz: None,
+            gyro_unit: GyroUnit::RadPerS,
+            accel_unit: AccelUnit::MPerS2,
+            columns: Vec::new(),
+        }
+    }
+}
+
+/// Read a CSV or gzip-compressed CSV log file.
+pub fn read_log(path: &Path, opts: &ReadOptions) -> Result<Log> {
+    let source = path.display().to_string();
+    let raw = FileBytes::open(path).with_context(|| format!("cannot read {source}"))?;
+    // What the machine can hold: a log and its parsed columns must fit, or the read is refused
+    // before it starts rather than ending in an out-of-memory kill.
+    let available = available_memory_bytes();
+    if raw.starts_with(&[0x1f, 0x8b]) {
+        let limit = available.map_or(u64::MAX, |a| a / 3);
+        let mut out = Vec::with_capacity(raw.len().saturating_mul(4).min(limit as usize));
+        flate2::read::MultiGzDecoder::new(&raw[..])
+            .take(limit)
+            .read_to_end(&mut out)
+            .with_context(|| format!("{source}: not a valid gzip file"))?;
+        if out.len() as u64 == limit {
+            bail!(
+                "{source}: decompresses to more than {:.1} GiB, a third of the memory available ({:.1} GiB): split the log or analyse it on a larger machine",
+                limit as f64 / GIB,
+                available.unwrap_or(0) as f64 / GIB
+            );
+        }
+        check_fits(&out, &source, available)?;
+        parse_log(&out, &source, opts)
+    } else {
+        check_fits(&raw, &source, available)?;
+        parse_log(&raw, &source, opts)
+    }
+}
+
+#[cfg(test)]
+mod tests;
