@@ -1,0 +1,167 @@
+//! Sensor configs in TOML, with units as spec sheets write them, converted into validated SI models.
+//!
+//! ```toml
+//! name = "Xsens MTx"
+//! [temperature]                 # optional: constant 25 degC
+//! profile = "warmup"            # constant (value) | ramp (start, rate, end?) | warmup (start, end, time_constant) | sinusoid (mean, amplitude, period)
+//! start = "20 degC"
+//! end = "35 degC"
+//! time_constant = "600 s"
+//! reference = "25 degC"         # temperature_bias is zero here
+//! [gyro.all]                    # every axis, unless the axis table sets the same key
+//! white_noise = "0.075 deg/sqrt(s)"
+//! [gyro.x]
+//! bias_instability = { value = "0.010 deg/s", convention = "allan_minimum" }
+//! ```
+//! Axis keys: `quantization`, `white_noise`, `bias_instability` (a table), `rate_random_walk`,
+//! `rate_ramp`, `gauss_markov = { sigma, time_constant }`, `sinusoidal = { amplitude, frequency, phase? }`,
+//! `temperature_bias`, `constant_bias`, `turn_on_bias`, `scale_factor`, `misalignment = [a, b]`.
+//!
+//! `bias_instability` states its convention (docs/architecture.md, Units):
+//! - `{ value, convention = "ieee" }`: value is the IEEE coefficient B (Allan plateau 0.664 B);
+//! - `{ value, convention = "allan_minimum" }`: value is the minimum of the axis' Allan deviation, as
+//!   Woodman (TR-696 §5.1) and many spec sheets report it; B is solved so that the closed-form Allan
+//!   deviation of the whole axis model (white noise, random walks ... included) has that minimum over
+//!   the flicker band's plateau, averaging times [30 tau_min, tau_max / 30] (3 s .. 3333 s by default);
+//! - `{ model = "random_walk", stability, period }`: Woodman's bias random walk (eq 9).
+//!
+//! Flicker options: `band = ["0.1 s", "1e5 s"]` (correlation times), `per_decade = 1`.
+
+mod allan_minimum;
+mod convert;
+mod raw;
+mod write;
+
+pub(crate) use convert::signal_of;
+
+use crate::effect::Sensor;
+use crate::model::*;
+use convert::{convert_temperature, convert_triad, Ctx};
+use raw::RawSensor;
+use std::path::Path;
+
+/// A config that cannot be used: names the file, the key and what was expected.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ConfigError {
+    #[error("{file}: cannot read the file: {message}")]
+    Io { file: String, message: String },
+    /// TOML syntax, unknown keys, wrong types (the message carries line and column).
+    #[error("{file}: {message}")]
+    Parse { file: String, message: String },
+    /// A value that parses but is not acceptable.
+    #[error("{file}{at}: key `{key}`: expected {expected}, found {found}", at = line.map(|l| format!(":{l}")).unwrap_or_default())]
+    Invalid {
+        file: String,
+        /// 1-based line of the value, when the value exists.
+        line: Option<usize>,
+        key: String,
+        expected: String,
+        found: String,
+    },
+}
+
+impl SensorModel {
+    /// Parse and validate a sensor config. `source_name` (usually the file path) appears in errors.
+    pub fn from_toml_str(text: &str, source_name: &str) -> Result<SensorModel, ConfigError> {
+        let raw: RawSensor = toml::from_str(text).map_err(|e| ConfigError::Parse {
+            file: source_name.to_string(),
+            message: with_shape_hint(e.to_string().trim_end()),
+        })?;
+        let ctx = Ctx {
+            file: source_name,
+            source: text,
+        };
+        let (temperature, reference) = convert_temperature(&ctx, raw.temperature.as_ref())?;
+        let gyro = convert_triad(&ctx, Sensor::Gyro, raw.gyro.unwrap_or_default())?;
+        let accel = convert_triad(&ctx, Sensor::Accel, raw.accel.unwrap_or_default())?;
+        Ok(SensorModel {
+            name: raw.name,
+            description: raw.description,
+            gyro,
+            accel,
+            temperature,
+            temperature_reference_c: reference,
+        })
+    }
+
+    /// Read a config file.
+    pub fn load(path: &Path) -> Result<SensorModel, ConfigError> {
+        let name = path.display().to_string();
+        let bytes = std::fs::read(path).map_err(|e| ConfigError::Io {
+            file: name.clone(),
+            message: e.to_string(),
+        })?;
+        let text = utf8_text(bytes, &name)?;
+        SensorModel::from_toml_str(&text, &name)
+    }
+}
+
+/// A config file's text; a byte that is not UTF-8 is an error naming its line and column.
+pub fn utf8_text(bytes: Vec<u8>, file: &str) -> Result<String, ConfigError> {
+    String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let before = &e.as_bytes()[..at];
+        let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+        let column = at - before.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1) + 1;
+        ConfigError::Parse {
+            file: file.to_string(),
+            message: format!(
+                "line {line}, column {column}: byte 0x{:02x} is not UTF-8; save the file as UTF-8 text",
+                e.as_bytes()[at]
+            ),
+        }
+    })
+}
+
+/// An example of each value-with-unit key, for errors about a value of the wrong shape.
+const KEY_EXAMPLES: [(&str, &str); 10] = [
+    ("quantization", "quantization = \"0.001 deg\""),
+    (
+        "white_noise",
+        "white_noise = \"0.05 deg/s/sqrt(Hz)\" (gyro) or \"40 ug/sqrt(Hz)\" (accelerometer)",
+    ),
+    (
+        "rate_random_walk",
+        "rate_random_walk = \"0.5 deg/h/sqrt(h)\"",
+    ),
+    ("rate_ramp", "rate_ramp = \"0.01 deg/h/h\""),
+    ("temperature_bias", "temperature_bias = \"0.01 deg/s/degC\""),
+    (
+        "constant_bias",
+        "constant_bias = \"0.1 deg/s\" (gyro) or \"2 mg\" (accelerometer)",
+    ),
+    ("turn_on_bias", "turn_on_bias = \"3 deg/s\""),
+    ("scale_factor", "scale_factor = \"0.1 %\""),
+    ("misalignment", "misalignment = [\"0.1 deg\", \"0.1 deg\"]"),
+    ("name", "name = \"My IMU\""),
+];
+
+/// A TOML error about a value of the wrong shape, with the accepted form and an example added:
+/// numbers need their unit, so a bare number is the commonest mistake.
+fn with_shape_hint(message: &str) -> String {
+    if message.contains("missing field `name`") {
+        return format!("{message}\n  a sensor file starts with its name, e.g. name = \"My IMU\"");
+    }
+    if !message.contains("expected a string") {
+        return message.to_string();
+    }
+    // toml quotes the offending line as "N | key = value".
+    let key = message
+        .lines()
+        .find_map(|l| l.split_once(" | ").map(|(_, rest)| rest))
+        .and_then(|rest| rest.split('=').next())
+        .map(|k| k.trim().trim_matches('"'))
+        .unwrap_or("");
+    let example = KEY_EXAMPLES
+        .iter()
+        .find(|(k, _)| *k == key)
+        .map_or("e.g. \"0.05 deg/s\"".to_string(), |(_, e)| {
+            format!("e.g. {e}")
+        });
+    format!(
+        "{message}\n  values carry their unit in a string, as spec sheets write them: {example}"
+    )
+}
+
+#[cfg(test)]
+mod tests;
