@@ -119,7 +119,7 @@ impl RunKernel for Kernel<'_> {
     fn channels(&self) -> usize {
         6
     }
-    fn run(&self, run: u64, out: &mut [f64]) -> Result<(), String> {
+    fn run(&self, run: u64, out: &mut [f64]) -> Result<(), montecarlo::runner::RunError> {
         let log = static_log(self.model, self.setup, self.seed, run);
         let m = self.taus();
         for ch in 0..6 {

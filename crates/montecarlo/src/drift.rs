@@ -4,7 +4,7 @@
 
 use crate::channels::Channel;
 use crate::laws::{Entry, LawContext, Source, Term};
-use crate::runner::RunKernel;
+use crate::runner::{RunError, RunKernel};
 use crate::scenario::{Alignment, Scenario};
 use nalgebra::Vector3;
 use noise::closed_form as cf;
@@ -86,7 +86,7 @@ impl RunKernel for DriftKernel {
         Channel::ALL.len()
     }
 
-    fn run(&self, run: u64, out: &mut [f64]) -> Result<(), String> {
+    fn run(&self, run: u64, out: &mut [f64]) -> Result<(), RunError> {
         let mut errors = ImuErrors::new(&self.model, self.dt_s, self.seed, run);
         if let Some(w) = self.bias_calibration_window_s {
             errors = errors.with_calibration_window(w, self.seed, run);
@@ -147,11 +147,11 @@ impl RunKernel for DriftKernel {
             let e = nav_error(nav.state(), &truth);
             let values = Channel::values(&e);
             if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-                return Err(format!(
-                    "run {run}: {} is not finite at t = {} s",
-                    Channel::ALL[i].name(),
-                    k as f64 * self.dt_s
-                ));
+                return Err(RunError::NonFinite {
+                    run,
+                    quantity: Channel::ALL[i].name().to_string(),
+                    t_s: k as f64 * self.dt_s,
+                });
             }
             out[cp * width..(cp + 1) * width].copy_from_slice(&values);
         }

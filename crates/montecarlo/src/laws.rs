@@ -105,7 +105,7 @@ impl Law {
 
 /// Per-channel mean and variance contribution of one term through one integration path.
 /// `folds` = 0 for the quantity itself (initial attitude error), 1, 2 or 3 (through tilt).
-fn moments(source: &Source, t_s: f64, how: Option<Integration>) -> Result<(f64, f64), String> {
+fn moments(source: &Source, t_s: f64, how: Option<Integration>) -> Result<(f64, f64), &str> {
     // A constant error seen without integration (an initial angle) is itself.
     let constant = |b: f64| how.map_or(b, |h| cf::constant_bias_growth(b, t_s, h));
     Ok(match source {
@@ -113,19 +113,19 @@ fn moments(source: &Source, t_s: f64, how: Option<Integration>) -> Result<(f64, 
         Source::RandomConstant(s) => (0.0, constant(*s).powi(2)),
         Source::Ramp(r) => match how {
             Some(h) => (cf::rate_ramp_growth(*r, t_s, h), 0.0),
-            None => return Err("a ramp needs an integration".into()),
+            None => return Err("a ramp needs an integration"),
         },
         Source::White(n) => match how {
             Some(h) => (0.0, cf::white_noise_growth_std(*n, t_s, h).powi(2)),
-            None => return Err("white noise needs an integration".into()),
+            None => return Err("white noise needs an integration"),
         },
         Source::RandomWalk(k) => match how {
             Some(h) => (0.0, cf::random_walk_growth_std(*k, t_s, h).powi(2)),
-            None => return Err("a random walk needs an integration".into()),
+            None => return Err("a random walk needs an integration"),
         },
         Source::GaussMarkov { sigma, tc_s } => match how {
             Some(h) => (0.0, gauss_markov_variance(*sigma, *tc_s, t_s, h)),
-            None => return Err("Gauss-Markov needs an integration".into()),
+            None => return Err("Gauss-Markov needs an integration"),
         },
         Source::GaussMarkovSum(parts) | Source::GaussMarkovSumFromStart(parts) => match how {
             Some(h) => {
@@ -142,7 +142,7 @@ fn moments(source: &Source, t_s: f64, how: Option<Integration>) -> Result<(f64, 
                         .sum(),
                 )
             }
-            None => return Err("Gauss-Markov needs an integration".into()),
+            None => return Err("Gauss-Markov needs an integration"),
         },
         Source::GaussMarkovSumFromWindow { parts, window_s } => match how {
             Some(h) => (
@@ -154,7 +154,7 @@ fn moments(source: &Source, t_s: f64, how: Option<Integration>) -> Result<(f64, 
                     })
                     .sum(),
             ),
-            None => return Err("Gauss-Markov needs an integration".into()),
+            None => return Err("Gauss-Markov needs an integration"),
         },
         Source::Sinusoid {
             amplitude,
@@ -170,9 +170,9 @@ fn moments(source: &Source, t_s: f64, how: Option<Integration>) -> Result<(f64, 
                 *sample_interval_s,
                 h,
             ),
-            None => return Err("a sinusoid needs an integration".into()),
+            None => return Err("a sinusoid needs an integration"),
         },
-        Source::NoLaw(why) => return Err(why.clone()),
+        Source::NoLaw(why) => return Err(why),
     })
 }
 

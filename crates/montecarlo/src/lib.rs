@@ -29,5 +29,5 @@ pub mod shard;
 pub mod spec;
 pub mod stats;
 
-pub use runner::{run_range, BatchResult, RunFailure, RunKernel, Shard};
+pub use runner::{run_range, BatchResult, RunError, RunFailure, RunKernel, Shard};
 pub use stats::{RunMatrix, Summary};

@@ -18,8 +18,29 @@ pub const BLOCK_RUNS: u64 = 64;
 pub trait RunKernel: Sync {
     fn checkpoints(&self) -> usize;
     fn channels(&self) -> usize;
-    /// Simulate run `run`; an error message names what went wrong (e.g. non-finite state).
-    fn run(&self, run: u64, out: &mut [f64]) -> Result<(), String>;
+    /// Simulate run `run`; the error says what went wrong (e.g. a non-finite state).
+    fn run(&self, run: u64, out: &mut [f64]) -> Result<(), RunError>;
+}
+
+/// Why a run did not finish (recorded as a [`RunFailure`], never the end of the batch).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RunError {
+    /// A state variable of the kernel became NaN or infinite.
+    #[error("run {run}: {quantity} is not finite at t = {t_s} s")]
+    NonFinite {
+        run: u64,
+        quantity: String,
+        t_s: f64,
+    },
+    /// The kernel wrote a non-finite output value.
+    #[error("non-finite value at checkpoint {checkpoint} channel {channel}")]
+    NonFiniteOutput { checkpoint: usize, channel: usize },
+    /// The kernel panicked (the payload's message, when it has one).
+    #[error("run panicked{}", .0.as_ref().map(|m| format!(": {m}")).unwrap_or_default())]
+    Panicked(Option<String>),
+    /// A reason of the kernel's own.
+    #[error("{0}")]
+    Kernel(String),
 }
 
 /// A run that did not finish.
@@ -36,26 +57,23 @@ pub struct BatchResult {
     pub failures: Vec<RunFailure>,
 }
 
-fn run_one<K: RunKernel>(kernel: &K, run: u64, width: usize) -> Result<Vec<f64>, String> {
+fn run_one<K: RunKernel>(kernel: &K, run: u64, width: usize) -> Result<Vec<f64>, RunError> {
     let mut out = vec![f64::NAN; width];
     match catch_unwind(AssertUnwindSafe(|| kernel.run(run, &mut out))) {
         Ok(Ok(())) => match out.iter().position(|v| !v.is_finite()) {
             None => Ok(out),
-            Some(i) => Err(format!(
-                "non-finite value at checkpoint {} channel {}",
-                i / kernel.channels().max(1),
-                i % kernel.channels().max(1)
-            )),
+            Some(i) => Err(RunError::NonFiniteOutput {
+                checkpoint: i / kernel.channels().max(1),
+                channel: i % kernel.channels().max(1),
+            }),
         },
-        Ok(Err(msg)) => Err(msg),
-        Err(panic) => Err(panic
-            .downcast_ref::<&str>()
-            .map(|s| s.to_string())
-            .or_else(|| panic.downcast_ref::<String>().cloned())
-            .map_or_else(
-                || "run panicked".to_string(),
-                |m| format!("run panicked: {m}"),
-            )),
+        Ok(Err(e)) => Err(e),
+        Err(panic) => Err(RunError::Panicked(
+            panic
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| panic.downcast_ref::<String>().cloned()),
+        )),
     }
 }
 
@@ -73,14 +91,17 @@ pub fn run_range<K: RunKernel>(
     while start < runs.end {
         let end = (start + BLOCK_RUNS).min(runs.end);
         // Ordered collect: element i of the block is run start + i whatever thread computed it.
-        let block: Vec<Result<Vec<f64>, String>> = (start..end)
+        let block: Vec<Result<Vec<f64>, RunError>> = (start..end)
             .into_par_iter()
             .map(|run| run_one(kernel, run, width))
             .collect();
         for (run, result) in (start..end).zip(block) {
             match result {
                 Ok(row) => matrix.push(run, &row),
-                Err(message) => failures.push(RunFailure { run, message }),
+                Err(e) => failures.push(RunFailure {
+                    run,
+                    message: e.to_string(),
+                }),
             }
         }
         progress(end - runs.start);
@@ -146,9 +167,9 @@ mod tests {
         fn channels(&self) -> usize {
             2
         }
-        fn run(&self, run: u64, out: &mut [f64]) -> Result<(), String> {
+        fn run(&self, run: u64, out: &mut [f64]) -> Result<(), RunError> {
             if run == 5 {
-                return Err("diverged".into());
+                return Err(RunError::Kernel("diverged".into()));
             }
             if run == 7 {
                 panic!("boom");

@@ -41,10 +41,14 @@ use raw::RawSensor;
 use std::path::Path;
 
 /// A config that cannot be used: names the file, the key and what was expected.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[derive(Clone, Debug, thiserror::Error)]
 pub enum ConfigError {
-    #[error("{file}: cannot read the file: {message}")]
-    Io { file: String, message: String },
+    #[error("{file}: cannot read the file: {source}")]
+    Io {
+        file: String,
+        #[source]
+        source: std::sync::Arc<std::io::Error>,
+    },
     /// TOML syntax, unknown keys, wrong types (the message carries line and column).
     #[error("{file}: {message}")]
     Parse { file: String, message: String },
@@ -89,7 +93,7 @@ impl SensorModel {
         let name = path.display().to_string();
         let bytes = std::fs::read(path).map_err(|e| ConfigError::Io {
             file: name.clone(),
-            message: e.to_string(),
+            source: std::sync::Arc::new(e),
         })?;
         let text = utf8_text(bytes, &name)?;
         SensorModel::from_toml_str(&text, &name)
