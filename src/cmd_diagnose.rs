@@ -7,7 +7,7 @@ use crate::output::write_string;
 use crate::plot::{Band, LogLogPlot, Series};
 use anyhow::{anyhow, bail, Context, Result};
 use diagnose::drift::CHANNELS;
-use diagnose::workflow::{ChannelReport, DriftRow, FoundEffect, HeldOutGap};
+use diagnose::report::{ChannelReport, DriftRow, FoundEffect, HeldOutGap};
 use diagnose::{diagnose_with_progress, Diagnosis, LogInput, Settings};
 use noise::SensorModel;
 use std::collections::BTreeMap;
@@ -238,10 +238,11 @@ fn corrected_model(result: &Diagnosis, model: &SensorModel) -> String {
             );
         }
     }
-    let temperature_found = result
-        .channels
-        .values()
-        .any(|r| r.effects.iter().any(|e| e.effect == "temperature_bias"));
+    let temperature_found = result.channels.values().any(|r| {
+        r.effects
+            .iter()
+            .any(|e| e.effect == noise::Effect::TemperatureBias)
+    });
     if temperature_found {
         let _ = writeln!(
             out,
@@ -346,7 +347,14 @@ fn text_report(result: &Diagnosis, log: &str, model: &Path, elapsed_s: f64) -> S
                 if e.cannot_tell_from.is_empty() {
                     String::new()
                 } else {
-                    format!("; cannot tell it from {}", e.cannot_tell_from.join(", "))
+                    format!(
+                        "; cannot tell it from {}",
+                        e.cannot_tell_from
+                            .iter()
+                            .map(|x| x.name())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    )
                 }
             );
         }

@@ -12,10 +12,12 @@ pub mod candidates;
 pub mod drift;
 pub mod fit;
 pub mod gap;
+mod measure;
 pub mod model_terms;
+pub mod report;
 pub mod simulate;
+mod trials;
 pub mod workflow;
 
-pub use workflow::{
-    diagnose, diagnose_with_progress, DiagnoseError, Diagnosis, LogInput, Settings,
-};
+pub use report::{DiagnoseError, Diagnosis, LogInput, Settings};
+pub use workflow::{diagnose, diagnose_with_progress};

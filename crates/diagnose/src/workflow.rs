@@ -1,587 +1,17 @@
 //! The diagnose loop (docs/diagnose.md, "The diagnose workflow", steps 1-6): measure, simulate, locate the gap,
 //! name and fit the missing effect, add it, re-simulate, repeat; then the drift consequence.
 
-use crate::candidates::{
-    free_parameters, shape_grid, shape_search_penalty, unit_family_signature, unit_signature,
-    TermParams, CANDIDATES,
-};
-use crate::drift::{segment_drift, DriftSummary, CHANNELS};
-use crate::fit::{
-    aic, bic, birge_scale, fit_family, fit_linear, linear_interval, predicted_ln_adev, FitData,
-    LinearFit, CHI2_1_95,
-};
-use crate::gap::{gap, Band, Curve, Disagreement, Gap};
-use crate::model_terms::{flicker_band, has_random_walk_bias_instability, set_term, term_level};
-use crate::simulate::{adev_at, simulate, SimError, SimResult, SimSetup};
-use allan::{DataKind, Estimator, TauGrid};
+use crate::candidates::TermParams;
+use crate::drift::{segment_drift, CHANNELS};
+use crate::fit::{bic, predicted_ln_adev, FitData};
+use crate::gap::{gap, Band, Gap};
+use crate::measure::*;
+use crate::model_terms::{set_term, term_level};
+use crate::report::*;
+use crate::simulate::{adev_at, simulate, SimResult, SimSetup};
+use crate::trials::*;
 use noise::{Effect, SensorModel};
-use serde::Serialize;
 use std::collections::BTreeMap;
-
-/// The measured log, SI, channels in the order gx gy gz ax ay az (None: not in the log).
-#[derive(Clone, Copy, Debug)]
-pub struct LogInput<'a> {
-    pub dt_s: f64,
-    pub channels: [Option<&'a [f64]>; 6],
-    pub temperature_c: Option<&'a [f64]>,
-}
-
-/// Settings of the workflow.
-#[derive(Clone, Debug)]
-pub struct Settings {
-    /// Master seed of the simulated logs (written into the report).
-    pub seed: u64,
-    /// Simulated logs per band.
-    pub seeds: usize,
-    /// Add-and-resimulate rounds at most.
-    pub max_rounds: usize,
-    /// Drift horizons, seconds (docs/cli.md: 60 s and 1 h).
-    pub horizons_s: Vec<f64>,
-    /// An effect is named only if it lowers BIC by at least this much. Above 10 is "very strong"
-    /// evidence on the Kass & Raftery (1995) scale; 16 sets the false-alarm rate: for one parameter and
-    /// M ~ 15 taus it needs delta chi2 >= 18.7, a chi2_1 tail of 1.5e-5 if nothing is missing, so about
-    /// 1e-3 per 6-channel log over the ~8 candidates per channel (measured on clean logs: see the
-    /// hidden-effect tests; the tails of ln adev at small EDF are heavier than Gaussian).
-    pub min_delta_bic: f64,
-    /// Candidates whose BIC is within this of the best are reported as indistinguishable from it
-    /// (below 6 the evidence for the best is not "strong", Kass & Raftery 1995).
-    pub ambiguity_delta_bic: f64,
-    /// Effects a channel may take in one round before the model is re-simulated.
-    pub effects_per_round: usize,
-    /// Taus below this are left out (e.g. where a sensor's internal anti-alias filter shapes the curve,
-    /// an effect outside the candidate set), s.
-    pub tau_min_s: f64,
-}
-
-impl Default for Settings {
-    fn default() -> Self {
-        Settings {
-            seed: 1,
-            seeds: 16,
-            max_rounds: 6,
-            horizons_s: vec![60.0, 3600.0],
-            min_delta_bic: 16.0,
-            ambiguity_delta_bic: 6.0,
-            effects_per_round: 3,
-            tau_min_s: 0.0,
-        }
-    }
-}
-
-/// Errors of the workflow (inputs the caller has to fix, or a failed simulation).
-#[derive(Debug, thiserror::Error)]
-pub enum DiagnoseError {
-    #[error("the log has no gyro or accelerometer channel (expected columns gx gy gz ax ay az)")]
-    NoChannels,
-    #[error("channel {channel} has {got} samples, channel {first} has {expected}: all channels must have the same length")]
-    Length {
-        channel: &'static str,
-        got: usize,
-        first: &'static str,
-        expected: usize,
-    },
-    #[error(
-        "the log is too short for an Allan analysis ({samples} samples; at least 64 are needed)"
-    )]
-    TooShort { samples: usize },
-    #[error("sample interval must be positive and finite, got {0} s")]
-    BadInterval(f64),
-    #[error("the temperature column has {got} samples, the log {expected}")]
-    TemperatureLength { got: usize, expected: usize },
-    #[error("no Allan point at or above --tau-min {tau_min_s} s")]
-    NoTaus { tau_min_s: f64 },
-    #[error("a log checked against the diagnosis must have its rate and length: got {samples} samples at {dt_s} s, expected {expected_samples} at {expected_dt_s} s")]
-    CheckShape {
-        samples: usize,
-        dt_s: f64,
-        expected_samples: usize,
-        expected_dt_s: f64,
-    },
-    #[error(transparent)]
-    Simulation(#[from] SimError),
-}
-
-/// A named effect: what, how much (95 % interval), and the gap around it.
-#[derive(Clone, Debug, Serialize)]
-pub struct FoundEffect {
-    pub effect: String,
-    /// SI parameters (docs/cli.md names).
-    pub parameters: BTreeMap<String, f64>,
-    /// 95 % profile-likelihood interval of each parameter.
-    pub parameters_lo: BTreeMap<String, f64>,
-    pub parameters_hi: BTreeMap<String, f64>,
-    /// "missing" (the model lacks the term) or "wrong_level" (it has it at another level).
-    pub kind: String,
-    /// The model's own parameters when `kind` is "wrong_level".
-    pub model_parameters: Option<BTreeMap<String, f64>>,
-    /// Channel gap (RMS z) with the model before and after the round that added the effect (both
-    /// simulated; effects found in the same round share them), and as the closed forms predicted it
-    /// right after adding this effect.
-    pub gap_before: f64,
-    pub gap_predicted: f64,
-    pub gap_after: f64,
-    /// BIC improvement over the unchanged model.
-    pub delta_bic: f64,
-    /// Other candidates the data cannot tell from this one (BIC within `ambiguity_delta_bic`).
-    pub cannot_tell_from: Vec<String>,
-    /// Round in which it was found (1 = first).
-    pub round: usize,
-    /// Later rounds that refitted its level after re-simulation.
-    pub refinements: usize,
-}
-
-/// Why a candidate was weighed: its BIC gain and fitted parameters (every candidate, every round).
-#[derive(Clone, Debug, Serialize)]
-pub struct CandidateRecord {
-    pub round: usize,
-    pub effect: String,
-    /// BIC (the selection criterion) and AIC improvement over the model without it (both with the
-    /// shape-search cost); `delta_aic` is NaN on the record of a rejected round.
-    pub delta_bic: f64,
-    pub delta_aic: f64,
-    pub parameters: BTreeMap<String, f64>,
-}
-
-/// Curves of one channel for plots: measured with 1-sigma interval, band before and after.
-#[derive(Clone, Debug, Serialize)]
-pub struct ChannelCurves {
-    pub tau_s: Vec<f64>,
-    pub adev: Vec<f64>,
-    pub adev_lo: Vec<f64>,
-    pub adev_hi: Vec<f64>,
-    pub edf: Vec<f64>,
-    pub band_initial: BandView,
-    pub band_final: BandView,
-}
-
-/// Band centre and 95 % seed range.
-#[derive(Clone, Debug, Serialize)]
-pub struct BandView {
-    pub centre: Vec<f64>,
-    pub lo: Vec<f64>,
-    pub hi: Vec<f64>,
-}
-
-/// Everything diagnose says about one channel.
-#[derive(Clone, Debug, Serialize)]
-pub struct ChannelReport {
-    pub gap_initial: f64,
-    pub gap_final: f64,
-    pub effects: Vec<FoundEffect>,
-    pub z_initial: Vec<f64>,
-    pub z_final: Vec<f64>,
-    pub disagreements_initial: Vec<Disagreement>,
-    pub disagreements_final: Vec<Disagreement>,
-    /// One sentence: agrees, or what remains unexplained.
-    pub verdict: String,
-    pub candidates: Vec<CandidateRecord>,
-    pub curves: ChannelCurves,
-}
-
-/// Drift over one horizon: measured-log segments vs the model before and after.
-#[derive(Clone, Debug, Serialize)]
-pub struct DriftRow {
-    pub horizon_s: f64,
-    pub measured: DriftSummary,
-    pub model_initial: DriftSummary,
-    pub model_final: DriftSummary,
-}
-
-/// The result of diagnose.
-#[derive(Clone, Debug, Serialize)]
-pub struct Diagnosis {
-    pub seed: u64,
-    pub seeds: usize,
-    pub rounds: usize,
-    pub dt_s: f64,
-    pub samples: usize,
-    pub channels: BTreeMap<String, ChannelReport>,
-    pub drift: Vec<DriftRow>,
-    /// Shortest tau analysed, s.
-    pub tau_min_s: f64,
-    /// The corrected model (written as TOML by the CLI).
-    #[serde(skip)]
-    pub model_final: SensorModel,
-    /// Averaging factors of the tau grid and the bands of the original and corrected models (for
-    /// checking held-out logs).
-    #[serde(skip)]
-    pub grid_m: Vec<usize>,
-    #[serde(skip)]
-    pub bands_initial: [Option<Band>; 6],
-    #[serde(skip)]
-    pub bands_final: [Option<Band>; 6],
-}
-
-/// One channel's measurement on the common grid: indices into the grid it has valid points at.
-struct Measured {
-    idx: Vec<usize>,
-    curve: Curve,
-    lo: Vec<f64>,
-    hi: Vec<f64>,
-}
-
-/// Measured Allan deviations of every channel in the log on the octave grid, and the grid's averaging
-/// factors. Points without a positive deviation and EDF, or below `tau_min_s`, are left out.
-fn measure(log: &LogInput, tau_min_s: f64) -> (Vec<usize>, [Option<Measured>; 6]) {
-    let mut grid_m: Vec<usize> = Vec::new();
-    let mut points: [Vec<allan::AllanPoint>; 6] = Default::default();
-    for c in 0..6 {
-        if let Some(s) = log.channels[c] {
-            points[c] = allan::deviation(
-                s,
-                DataKind::Rate,
-                log.dt_s,
-                Estimator::Overlapping,
-                &TauGrid::Octave,
-            );
-            if grid_m.is_empty() {
-                grid_m = points[c].iter().map(|p| p.m).collect();
-            }
-        }
-    }
-    let measured = std::array::from_fn(|c| {
-        log.channels[c]?;
-        let mut idx = Vec::new();
-        let (mut tau, mut adev, mut edf, mut lo, mut hi) = (vec![], vec![], vec![], vec![], vec![]);
-        for p in &points[c] {
-            let Some(i) = grid_m.iter().position(|&m| m == p.m) else {
-                continue;
-            };
-            let valid = p.dev > 0.0 && p.dev.is_finite() && p.edf > 0.0 && p.edf.is_finite();
-            if valid && p.tau_s >= tau_min_s {
-                idx.push(i);
-                tau.push(p.tau_s);
-                adev.push(p.dev);
-                edf.push(p.edf);
-                lo.push(p.lo);
-                hi.push(p.hi);
-            }
-        }
-        Some(Measured {
-            idx,
-            curve: Curve {
-                tau_s: tau,
-                adev,
-                edf,
-            },
-            lo,
-            hi,
-        })
-    });
-    (grid_m, measured)
-}
-
-/// Gap of a held-out log against the model before and after diagnosis.
-#[derive(Clone, Copy, Debug, Serialize)]
-pub struct HeldOutGap {
-    pub gap_model: f64,
-    pub gap_corrected: f64,
-}
-
-impl Diagnosis {
-    /// The gap of another log of the same rate and length (data the diagnosis did not see) against the
-    /// original model's band and the corrected model's band, per channel.
-    pub fn check(&self, log: &LogInput) -> Result<BTreeMap<String, HeldOutGap>, DiagnoseError> {
-        let samples = validate(log)?;
-        if samples != self.samples || (log.dt_s - self.dt_s).abs() > 1e-12 * self.dt_s {
-            return Err(DiagnoseError::CheckShape {
-                samples,
-                dt_s: log.dt_s,
-                expected_samples: self.samples,
-                expected_dt_s: self.dt_s,
-            });
-        }
-        let (grid_m, measured) = measure(log, self.tau_min_s);
-        let mut out = BTreeMap::new();
-        for c in 0..6 {
-            let (Some(m), Some(b0), Some(b1)) = (
-                measured[c].as_ref(),
-                self.bands_initial[c].as_ref(),
-                self.bands_final[c].as_ref(),
-            ) else {
-                continue;
-            };
-            if grid_m != self.grid_m {
-                return Err(DiagnoseError::CheckShape {
-                    samples,
-                    dt_s: log.dt_s,
-                    expected_samples: self.samples,
-                    expected_dt_s: self.dt_s,
-                });
-            }
-            out.insert(
-                CHANNELS[c].to_string(),
-                HeldOutGap {
-                    gap_model: gap(&m.curve, &restrict(b0, &m.idx)).rms,
-                    gap_corrected: gap(&m.curve, &restrict(b1, &m.idx)).rms,
-                },
-            );
-        }
-        Ok(out)
-    }
-}
-
-/// Check the log's shape; returns the number of samples.
-fn validate(log: &LogInput) -> Result<usize, DiagnoseError> {
-    if !(log.dt_s > 0.0 && log.dt_s.is_finite()) {
-        return Err(DiagnoseError::BadInterval(log.dt_s));
-    }
-    let first = (0..6)
-        .find(|&c| log.channels[c].is_some())
-        .ok_or(DiagnoseError::NoChannels)?;
-    let samples = log.channels[first].map(|c| c.len()).unwrap_or(0);
-    for c in 0..6 {
-        if let Some(s) = log.channels[c] {
-            if s.len() != samples {
-                return Err(DiagnoseError::Length {
-                    channel: CHANNELS[c],
-                    got: s.len(),
-                    first: CHANNELS[first],
-                    expected: samples,
-                });
-            }
-        }
-    }
-    if samples < 64 {
-        return Err(DiagnoseError::TooShort { samples });
-    }
-    if let Some(t) = log.temperature_c {
-        if t.len() != samples {
-            return Err(DiagnoseError::TemperatureLength {
-                got: t.len(),
-                expected: samples,
-            });
-        }
-    }
-    Ok(samples)
-}
-
-/// Restrict a band to a channel's valid grid indices.
-fn restrict(band: &Band, idx: &[usize]) -> Band {
-    let pick = |v: &[f64]| idx.iter().map(|&i| v[i]).collect::<Vec<f64>>();
-    Band {
-        tau_s: pick(&band.tau_s),
-        ln_mean: pick(&band.ln_mean),
-        ln_sd: pick(&band.ln_sd),
-        avar_mean: pick(&band.avar_mean),
-        adev_lo: pick(&band.adev_lo),
-        adev_hi: pick(&band.adev_hi),
-        seeds: band.seeds,
-    }
-}
-
-/// A channel changed in this round: (channel, [(effect, previous level)], gap at the round's start).
-type Pending = (usize, Vec<(Effect, Option<TermParams>)>, f64);
-
-/// A fitted candidate before selection.
-struct Trial {
-    effect: Effect,
-    params: TermParams,
-    lo: TermParams,
-    hi: TermParams,
-    model: Option<TermParams>,
-    bic: f64,
-    aic: f64,
-    /// (c - c0) f(tau): the change of the band's Allan variance.
-    delta_avar: Vec<f64>,
-}
-
-fn sqrt_params(p: TermParams, c: f64) -> TermParams {
-    match p {
-        TermParams::Level(v) => {
-            TermParams::Level(c.max(0.0).sqrt().copysign(if v < 0.0 { -1.0 } else { 1.0 }))
-        }
-        TermParams::GaussMarkov { tau_s, .. } => TermParams::GaussMarkov {
-            sigma: c.max(0.0).sqrt(),
-            tau_s,
-        },
-        TermParams::Sinusoid { frequency_hz, .. } => TermParams::Sinusoid {
-            amplitude: c.max(0.0).sqrt(),
-            frequency_hz,
-        },
-    }
-}
-
-/// Fit every candidate to one channel; the trials are in CANDIDATES order.
-#[allow(clippy::too_many_arguments)]
-fn trials(
-    model: &SensorModel,
-    ch: usize,
-    measured: &Curve,
-    band: &Band,
-    g: &Gap,
-    dt_s: f64,
-    temp: Option<(&[f64], f64, f64)>,
-    ramp_slope: f64,
-) -> Vec<Trial> {
-    let ln_meas: Vec<f64> = measured.adev.iter().map(|a| a.ln()).collect();
-    let data = FitData {
-        ln_meas: &ln_meas,
-        ln_band: &band.ln_mean,
-        avar_band: &band.avar_mean,
-        s: &g.s,
-    };
-    let m = ln_meas.len();
-    let tau = &measured.tau_s;
-    let mut out = Vec::new();
-    for effect in CANDIDATES {
-        // A Woodman random-walk bias instability occupies the axis's one bias-instability slot; a flicker
-        // candidate would replace it, so it is not offered (its level shows as a rate random walk).
-        if effect == Effect::BiasInstability && has_random_walk_bias_instability(model, ch) {
-            continue;
-        }
-        let k = free_parameters(effect);
-        let current = term_level(model, ch, effect);
-        // Signature(s) of this candidate.
-        let shaped = matches!(effect, Effect::GaussMarkov | Effect::Sinusoidal);
-        let (fit, params, shape_lo, shape_hi, f, penalty): (
-            LinearFit,
-            TermParams,
-            f64,
-            f64,
-            Vec<f64>,
-            f64,
-        ) = if shaped {
-            // A term the model has keeps its shape (a wrong level); an absent one is searched over shapes.
-            let shapes = match current.and_then(|c| c.shape()) {
-                Some(s) => vec![s],
-                None => shape_grid(effect, tau[0], tau[m - 1], dt_s),
-            };
-            let sigs: Vec<Vec<f64>> = shapes
-                .iter()
-                .map(|&s| {
-                    tau.iter()
-                        .map(|&t| unit_family_signature(effect, s, t, dt_s))
-                        .collect()
-                })
-                .collect();
-            let c0 = current.map(|c| c.c()).unwrap_or(0.0);
-            let Some(ff) = fit_family(&data, &shapes, &sigs, &|_| c0) else {
-                continue;
-            };
-            let j = shapes.iter().position(|&s| s == ff.shape).unwrap_or(0);
-            let p = match effect {
-                Effect::GaussMarkov => TermParams::GaussMarkov {
-                    sigma: ff.fit.c.sqrt(),
-                    tau_s: ff.shape,
-                },
-                _ => TermParams::Sinusoid {
-                    amplitude: ff.fit.c.sqrt(),
-                    frequency_hz: ff.shape,
-                },
-            };
-            // Shape interval at the 95 % threshold widened by this fit's Birge ratio.
-            let scale = birge_scale(ff.fit.chi2, k, m);
-            let (shape_lo, shape_hi) = ff.shape_interval(CHI2_1_95 * scale * scale);
-            (
-                ff.fit,
-                p,
-                shape_lo,
-                shape_hi,
-                sigs[j].clone(),
-                shape_search_penalty(shapes.len()),
-            )
-        } else if effect == Effect::TemperatureBias {
-            // The sign comes from the correlation with temperature (the Allan signature is even).
-            let Some((temp_avar, sign, current_k)) = temp else {
-                continue;
-            };
-            let f: Vec<f64> = temp_avar.to_vec();
-            let fit = fit_linear(&data, &f, current_k * current_k);
-            (
-                fit,
-                TermParams::Level(fit.c.sqrt() * sign),
-                0.0,
-                0.0,
-                f,
-                0.0,
-            )
-        } else {
-            let flicker = flicker_band(model, ch);
-            let f: Vec<f64> = tau
-                .iter()
-                .map(|&t| unit_signature(effect, t, dt_s, &flicker))
-                .collect();
-            let c0 = current.map(|c| c.c()).unwrap_or(0.0);
-            let fit = fit_linear(&data, &f, c0);
-            if effect == Effect::RateRamp {
-                // A ramp is deterministic: its level is the least-squares slope of the log (the ML
-                // estimate of a ramp in white noise), not a free Allan parameter. A long-tau rise that is
-                // really a random walk then fits as a ramp only if the log does drift that way, which the
-                // last two or three Allan points (a handful of EDF) cannot tell.
-                let c = ramp_slope * ramp_slope;
-                let ramp = LinearFit {
-                    c,
-                    chi2: data.chi2(&f, c - c0),
-                    ..fit
-                };
-                (ramp, TermParams::Level(ramp_slope), 0.0, 0.0, f, 0.0)
-            } else {
-                (fit, TermParams::Level(fit.c.sqrt()), 0.0, 0.0, f, 0.0)
-            }
-        };
-        let c0 = match (effect, temp) {
-            (Effect::TemperatureBias, Some((_, _, k))) => k * k,
-            _ => current.map(|c| c.c()).unwrap_or(0.0),
-        };
-        // 95 % interval widened by the Birge ratio of this fit.
-        let scale = birge_scale(fit.chi2, k, m);
-        // (For the ramp: the profile interval of the Allan fit alone, around its own optimum.)
-        let allan_fit = if effect == Effect::RateRamp {
-            fit_linear(&data, &f, c0)
-        } else {
-            fit
-        };
-        let (c_lo, c_hi) = linear_interval(&data, &f, c0, &allan_fit, CHI2_1_95 * scale * scale);
-        let mut lo = sqrt_params(params, c_lo);
-        let mut hi = sqrt_params(params, c_hi);
-        if let (TermParams::Level(l), TermParams::Level(h)) = (lo, hi) {
-            if l > h {
-                (lo, hi) = (TermParams::Level(h), TermParams::Level(l));
-            }
-        }
-        match (&mut lo, &mut hi) {
-            (
-                TermParams::GaussMarkov { tau_s: a, .. },
-                TermParams::GaussMarkov { tau_s: b, .. },
-            )
-            | (
-                TermParams::Sinusoid {
-                    frequency_hz: a, ..
-                },
-                TermParams::Sinusoid {
-                    frequency_hz: b, ..
-                },
-            ) => {
-                *a = shape_lo;
-                *b = shape_hi;
-            }
-            _ => {}
-        }
-        out.push(Trial {
-            effect,
-            params,
-            lo,
-            hi,
-            model: if effect == Effect::TemperatureBias {
-                None
-            } else {
-                current
-            },
-            bic: bic(fit.chi2, k, m) + penalty,
-            aic: aic(fit.chi2, k) + penalty,
-            delta_avar: f.iter().map(|v| (fit.c - c0) * v).collect(),
-        });
-    }
-    out
-}
-
-fn named_map(effect: Effect, p: &TermParams) -> BTreeMap<String, f64> {
-    p.named(effect)
-        .into_iter()
-        .map(|(k, v)| (k.to_string(), v))
-        .collect()
-}
 
 /// Run the diagnose workflow on a measured log against a sensor model.
 pub fn diagnose(
@@ -719,7 +149,10 @@ pub fn diagnose_with_progress(
                 for t in &ts {
                     records[c].push(CandidateRecord {
                         round,
-                        effect: t.effect.name().to_string(),
+                        effect: Candidate {
+                            effect: t.effect,
+                            rejected: false,
+                        },
                         delta_bic: base_bic - t.bic,
                         delta_aic: data.chi2_base() - t.aic,
                         parameters: named_map(t.effect, &t.params),
@@ -732,7 +165,7 @@ pub fn diagnose_with_progress(
                 // another one unless the other is better by the ambiguity margin.
                 if let Some(refine) = ts
                     .iter()
-                    .filter(|t| effects[c].iter().any(|e| e.effect == t.effect.name()))
+                    .filter(|t| effects[c].iter().any(|e| e.effect == t.effect))
                     .min_by(|a, b| a.bic.total_cmp(&b.bic))
                 {
                     if refine.bic - best.bic < settings.ambiguity_delta_bic {
@@ -743,12 +176,12 @@ pub fn diagnose_with_progress(
                 if delta < settings.min_delta_bic {
                     break;
                 }
-                let cannot_tell_from: Vec<String> = ts
+                let cannot_tell_from: Vec<Effect> = ts
                     .iter()
                     .filter(|t| {
                         t.effect != best.effect && t.bic - best.bic < settings.ambiguity_delta_bic
                     })
-                    .map(|t| t.effect.name().to_string())
+                    .map(|t| t.effect)
                     .collect();
                 let previous = if best.effect == Effect::TemperatureBias {
                     (setup.temp_coeff[c] != 0.0).then_some(TermParams::Level(setup.temp_coeff[c]))
@@ -767,16 +200,15 @@ pub fn diagnose_with_progress(
                 predicted = shifted_band(&predicted, &best.delta_avar);
                 g_pred = gap(&m.curve, &predicted);
                 effects[c].push(FoundEffect {
-                    effect: best.effect.name().to_string(),
+                    effect: best.effect,
                     parameters: named_map(best.effect, &best.params),
                     parameters_lo: named_map(best.effect, &best.lo),
                     parameters_hi: named_map(best.effect, &best.hi),
                     kind: if best.model.is_some() {
-                        "wrong_level"
+                        FindingKind::WrongLevel
                     } else {
-                        "missing"
-                    }
-                    .to_string(),
+                        FindingKind::Missing
+                    },
                     model_parameters: best.model.map(|p| named_map(best.effect, &p)),
                     gap_before: g.rms,
                     gap_predicted: g_pred.rms,
@@ -819,10 +251,10 @@ pub fn diagnose_with_progress(
                 for rejected in effects[c].drain(first_new..) {
                     records[c].push(CandidateRecord {
                         round,
-                        effect: format!(
-                            "{} rejected: gap did not shrink on re-simulation",
-                            rejected.effect
-                        ),
+                        effect: Candidate {
+                            effect: rejected.effect,
+                            rejected: true,
+                        },
                         delta_bic: rejected.delta_bic,
                         delta_aic: f64::NAN,
                         parameters: rejected.parameters,
@@ -1002,7 +434,7 @@ fn verdict(g: &Gap, effects: &[FoundEffect]) -> String {
     } else {
         effects
             .iter()
-            .map(|e| e.effect.as_str())
+            .map(|e| e.effect.name())
             .collect::<Vec<_>>()
             .join(" + ")
     };

@@ -222,7 +222,7 @@ fn check(trial: &Trial) -> Result<(), String> {
     let mut problems = Vec::new();
     for (c, name) in CHANNELS.iter().enumerate() {
         let report = &trial.result.channels[*name];
-        let named: Vec<&str> = report.effects.iter().map(|e| e.effect.as_str()).collect();
+        let named: Vec<&str> = report.effects.iter().map(|e| e.effect.name()).collect();
         match trial.channels.iter().position(|&h| h == c) {
             None => {
                 if !named.is_empty() {
@@ -232,11 +232,7 @@ fn check(trial: &Trial) -> Result<(), String> {
                 }
             }
             Some(j) => {
-                let Some(found) = report
-                    .effects
-                    .iter()
-                    .find(|e| e.effect == trial.effect.name())
-                else {
+                let Some(found) = report.effects.iter().find(|e| e.effect == trial.effect) else {
                     problems.push(format!(
                         "{name}: hidden {} {:?} not named (named {named:?}; candidates {:?})",
                         trial.effect.name(),
@@ -244,7 +240,7 @@ fn check(trial: &Trial) -> Result<(), String> {
                         report
                             .candidates
                             .iter()
-                            .map(|r| (r.round, r.effect.clone(), r.delta_bic as i64))
+                            .map(|r| (r.round, r.effect, r.delta_bic as i64))
                             .collect::<Vec<_>>()
                     ));
                     continue;
@@ -418,13 +414,13 @@ fn temperature_ramp_cannot_be_told_from_rate_ramp() {
     let gy = &d.channels["gy"];
     assert_eq!(gy.effects.len(), 1, "{:?}", gy.effects);
     let e = &gy.effects[0];
-    let (named, other) = match e.effect.as_str() {
+    let (named, other) = match e.effect.name() {
         "temperature_bias" => ("temperature_bias", "rate_ramp"),
         "rate_ramp" => ("rate_ramp", "temperature_bias"),
         x => panic!("named {x}, expected temperature_bias or rate_ramp"),
     };
     assert!(
-        e.cannot_tell_from.iter().any(|c| c == other),
+        e.cannot_tell_from.iter().any(|c| c.name() == other),
         "{named} named without saying it cannot be told from {other}: {:?}",
         e.cannot_tell_from
     );

@@ -32,6 +32,7 @@ impl fmt::Display for Sensor {
 }
 
 /// One error effect of an axis. The order here is the order terms are drawn and summed.
+/// Serialised as its [`Effect::name`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Effect {
     Quantization,
@@ -46,6 +47,12 @@ pub enum Effect {
     TurnOnBias,
     ScaleFactor,
     Misalignment,
+}
+
+impl serde::Serialize for Effect {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
 }
 
 impl Effect {

@@ -1,0 +1,226 @@
+//! Step 3: every candidate effect fitted to one channel's gap.
+
+use crate::candidates::{
+    free_parameters, shape_grid, shape_search_penalty, unit_family_signature, unit_signature,
+    TermParams, CANDIDATES,
+};
+use crate::fit::{
+    aic, bic, birge_scale, fit_family, fit_linear, linear_interval, FitData, LinearFit, CHI2_1_95,
+};
+use crate::gap::{Band, Curve, Gap};
+use crate::model_terms::{flicker_band, has_random_walk_bias_instability, term_level};
+use noise::{Effect, SensorModel};
+use std::collections::BTreeMap;
+
+/// A channel changed in this round: (channel, [(effect, previous level)], gap at the round's start).
+pub(crate) type Pending = (usize, Vec<(Effect, Option<TermParams>)>, f64);
+
+/// A fitted candidate before selection.
+pub(crate) struct Trial {
+    pub(crate) effect: Effect,
+    pub(crate) params: TermParams,
+    pub(crate) lo: TermParams,
+    pub(crate) hi: TermParams,
+    pub(crate) model: Option<TermParams>,
+    pub(crate) bic: f64,
+    pub(crate) aic: f64,
+    /// (c - c0) f(tau): the change of the band's Allan variance.
+    pub(crate) delta_avar: Vec<f64>,
+}
+
+pub(crate) fn sqrt_params(p: TermParams, c: f64) -> TermParams {
+    match p {
+        TermParams::Level(v) => {
+            TermParams::Level(c.max(0.0).sqrt().copysign(if v < 0.0 { -1.0 } else { 1.0 }))
+        }
+        TermParams::GaussMarkov { tau_s, .. } => TermParams::GaussMarkov {
+            sigma: c.max(0.0).sqrt(),
+            tau_s,
+        },
+        TermParams::Sinusoid { frequency_hz, .. } => TermParams::Sinusoid {
+            amplitude: c.max(0.0).sqrt(),
+            frequency_hz,
+        },
+    }
+}
+
+/// Fit every candidate to one channel; the trials are in CANDIDATES order.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn trials(
+    model: &SensorModel,
+    ch: usize,
+    measured: &Curve,
+    band: &Band,
+    g: &Gap,
+    dt_s: f64,
+    temp: Option<(&[f64], f64, f64)>,
+    ramp_slope: f64,
+) -> Vec<Trial> {
+    let ln_meas: Vec<f64> = measured.adev.iter().map(|a| a.ln()).collect();
+    let data = FitData {
+        ln_meas: &ln_meas,
+        ln_band: &band.ln_mean,
+        avar_band: &band.avar_mean,
+        s: &g.s,
+    };
+    let m = ln_meas.len();
+    let tau = &measured.tau_s;
+    let mut out = Vec::new();
+    for effect in CANDIDATES {
+        // A Woodman random-walk bias instability occupies the axis's one bias-instability slot; a flicker
+        // candidate would replace it, so it is not offered (its level shows as a rate random walk).
+        if effect == Effect::BiasInstability && has_random_walk_bias_instability(model, ch) {
+            continue;
+        }
+        let k = free_parameters(effect);
+        let current = term_level(model, ch, effect);
+        // Signature(s) of this candidate.
+        let shaped = matches!(effect, Effect::GaussMarkov | Effect::Sinusoidal);
+        let (fit, params, shape_lo, shape_hi, f, penalty): (
+            LinearFit,
+            TermParams,
+            f64,
+            f64,
+            Vec<f64>,
+            f64,
+        ) = if shaped {
+            // A term the model has keeps its shape (a wrong level); an absent one is searched over shapes.
+            let shapes = match current.and_then(|c| c.shape()) {
+                Some(s) => vec![s],
+                None => shape_grid(effect, tau[0], tau[m - 1], dt_s),
+            };
+            let sigs: Vec<Vec<f64>> = shapes
+                .iter()
+                .map(|&s| {
+                    tau.iter()
+                        .map(|&t| unit_family_signature(effect, s, t, dt_s))
+                        .collect()
+                })
+                .collect();
+            let c0 = current.map(|c| c.c()).unwrap_or(0.0);
+            let Some(ff) = fit_family(&data, &shapes, &sigs, &|_| c0) else {
+                continue;
+            };
+            let j = shapes.iter().position(|&s| s == ff.shape).unwrap_or(0);
+            let p = match effect {
+                Effect::GaussMarkov => TermParams::GaussMarkov {
+                    sigma: ff.fit.c.sqrt(),
+                    tau_s: ff.shape,
+                },
+                _ => TermParams::Sinusoid {
+                    amplitude: ff.fit.c.sqrt(),
+                    frequency_hz: ff.shape,
+                },
+            };
+            // Shape interval at the 95 % threshold widened by this fit's Birge ratio.
+            let scale = birge_scale(ff.fit.chi2, k, m);
+            let (shape_lo, shape_hi) = ff.shape_interval(CHI2_1_95 * scale * scale);
+            (
+                ff.fit,
+                p,
+                shape_lo,
+                shape_hi,
+                sigs[j].clone(),
+                shape_search_penalty(shapes.len()),
+            )
+        } else if effect == Effect::TemperatureBias {
+            // The sign comes from the correlation with temperature (the Allan signature is even).
+            let Some((temp_avar, sign, current_k)) = temp else {
+                continue;
+            };
+            let f: Vec<f64> = temp_avar.to_vec();
+            let fit = fit_linear(&data, &f, current_k * current_k);
+            (
+                fit,
+                TermParams::Level(fit.c.sqrt() * sign),
+                0.0,
+                0.0,
+                f,
+                0.0,
+            )
+        } else {
+            let flicker = flicker_band(model, ch);
+            let f: Vec<f64> = tau
+                .iter()
+                .map(|&t| unit_signature(effect, t, dt_s, &flicker))
+                .collect();
+            let c0 = current.map(|c| c.c()).unwrap_or(0.0);
+            let fit = fit_linear(&data, &f, c0);
+            if effect == Effect::RateRamp {
+                // A ramp is deterministic: its level is the least-squares slope of the log (the ML
+                // estimate of a ramp in white noise), not a free Allan parameter. A long-tau rise that is
+                // really a random walk then fits as a ramp only if the log does drift that way, which the
+                // last two or three Allan points (a handful of EDF) cannot tell.
+                let c = ramp_slope * ramp_slope;
+                let ramp = LinearFit {
+                    c,
+                    chi2: data.chi2(&f, c - c0),
+                    ..fit
+                };
+                (ramp, TermParams::Level(ramp_slope), 0.0, 0.0, f, 0.0)
+            } else {
+                (fit, TermParams::Level(fit.c.sqrt()), 0.0, 0.0, f, 0.0)
+            }
+        };
+        let c0 = match (effect, temp) {
+            (Effect::TemperatureBias, Some((_, _, k))) => k * k,
+            _ => current.map(|c| c.c()).unwrap_or(0.0),
+        };
+        // 95 % interval widened by the Birge ratio of this fit.
+        let scale = birge_scale(fit.chi2, k, m);
+        // (For the ramp: the profile interval of the Allan fit alone, around its own optimum.)
+        let allan_fit = if effect == Effect::RateRamp {
+            fit_linear(&data, &f, c0)
+        } else {
+            fit
+        };
+        let (c_lo, c_hi) = linear_interval(&data, &f, c0, &allan_fit, CHI2_1_95 * scale * scale);
+        let mut lo = sqrt_params(params, c_lo);
+        let mut hi = sqrt_params(params, c_hi);
+        if let (TermParams::Level(l), TermParams::Level(h)) = (lo, hi) {
+            if l > h {
+                (lo, hi) = (TermParams::Level(h), TermParams::Level(l));
+            }
+        }
+        match (&mut lo, &mut hi) {
+            (
+                TermParams::GaussMarkov { tau_s: a, .. },
+                TermParams::GaussMarkov { tau_s: b, .. },
+            )
+            | (
+                TermParams::Sinusoid {
+                    frequency_hz: a, ..
+                },
+                TermParams::Sinusoid {
+                    frequency_hz: b, ..
+                },
+            ) => {
+                *a = shape_lo;
+                *b = shape_hi;
+            }
+            _ => {}
+        }
+        out.push(Trial {
+            effect,
+            params,
+            lo,
+            hi,
+            model: if effect == Effect::TemperatureBias {
+                None
+            } else {
+                current
+            },
+            bic: bic(fit.chi2, k, m) + penalty,
+            aic: aic(fit.chi2, k) + penalty,
+            delta_avar: f.iter().map(|v| (fit.c - c0) * v).collect(),
+        });
+    }
+    out
+}
+
+pub(crate) fn named_map(effect: Effect, p: &TermParams) -> BTreeMap<String, f64> {
+    p.named(effect)
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect()
+}
