@@ -289,7 +289,7 @@ fn write_csv(w: &mut dyn Write, r: &DriftReport) -> Result<()> {
             let c = &cp.channels[ch.name()];
             writeln!(
                 w,
-                "{},{},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{},{},{},{},{},{},\"{}\"",
+                "{},{},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{},{},{},{},{},{},{}",
                 cp.t_s,
                 ch.name(),
                 c.mean,
@@ -304,7 +304,7 @@ fn write_csv(w: &mut dyn Write, r: &DriftReport) -> Result<()> {
                 opt(c.ratio),
                 opt(c.ratio_lo),
                 opt(c.ratio_hi),
-                c.law_note.as_deref().unwrap_or("").replace('"', "'")
+                crate::fmt::csv_text(c.law_note.as_deref().unwrap_or(""))
             )?;
         }
     }

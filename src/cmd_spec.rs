@@ -300,8 +300,8 @@ pub fn run(args: Args) -> Result<()> {
                     let f = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v:.6e}"));
                     writeln!(
                         w,
-                        "\"{}\",{},{},{},{},{},{},{},{},{}",
-                        s.name,
+                        "{},{},{},{},{},{},{},{},{},{}",
+                        crate::fmt::csv_text(&s.name),
                         ["x", "y", "z"][a],
                         f(g.arw_spec[a]),
                         f(g.arw_sim[a]),
@@ -325,8 +325,8 @@ pub fn run(args: Args) -> Result<()> {
                     let f = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v:.6e}"));
                     writeln!(
                         w,
-                        "\"{}\",{},{:.6e},{},{:.6e},{},{:.6e},{},{:.6e}",
-                        s.name,
+                        "{},{},{:.6e},{},{:.6e},{},{:.6e},{},{:.6e}",
+                        crate::fmt::csv_text(&s.name),
                         d.t_s,
                         d.heading_rms_sim_rad,
                         f(d.heading_rms_law_rad),

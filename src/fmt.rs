@@ -129,9 +129,22 @@ pub fn allan_units(si_unit: &str) -> [(f64, String); 6] {
     }
 }
 
+/// A text field of a CSV file: always quoted, an inner `"` doubled (RFC 4180 §2.7), so names and
+/// notes with commas, quotes or line breaks stay one field. The one place CSV text is quoted.
+pub fn csv_text(s: &str) -> String {
+    format!("\"{}\"", s.replace('"', "\"\""))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn csv_text_is_one_rfc4180_field() {
+        assert_eq!(csv_text("Xsens MTx"), "\"Xsens MTx\"");
+        assert_eq!(csv_text("a \"b\", c"), "\"a \"\"b\"\", c\"");
+        assert_eq!(csv_text(""), "\"\"");
+    }
 
     #[test]
     fn significant_digits_and_prefixes() {
