@@ -1,7 +1,7 @@
 //! Reading and changing one term of one channel of a `SensorModel` in diagnose's parameterisation.
 
 use crate::candidates::TermParams;
-use noise::{BiasInstability, Effect, Flicker, GaussMarkov, Sensor, SensorModel, Sinusoid};
+use noise::{BiasInstability, Effect, Flicker, GaussMarkov, Sensor, SensorModel, Sinusoid, Term};
 
 /// Channel index (gx gy gz ax ay az) to (sensor, axis).
 pub fn channel_axis(ch: usize) -> (Sensor, usize) {
@@ -16,27 +16,23 @@ pub fn channel_axis(ch: usize) -> (Sensor, usize) {
 /// form diagnose fits: a Woodman random-walk bias instability is read as absent flicker).
 pub fn term_level(model: &SensorModel, ch: usize, effect: Effect) -> Option<TermParams> {
     let (sensor, axis) = channel_axis(ch);
-    let a = model.axis(sensor, axis);
-    match effect {
-        Effect::Quantization => a.quantization.map(TermParams::Level),
-        Effect::WhiteNoise => a.white_noise.map(TermParams::Level),
-        Effect::BiasInstability => match &a.bias_instability {
-            Some(BiasInstability::Flicker(f)) => Some(TermParams::Level(f.b)),
-            _ => None,
-        },
-        Effect::RateRandomWalk => a.rate_random_walk.map(TermParams::Level),
-        Effect::RateRamp => a.rate_ramp.map(TermParams::Level),
-        Effect::GaussMarkov => a.gauss_markov.map(|g| TermParams::GaussMarkov {
+    Some(match model.axis(sensor, axis).term(effect)? {
+        Term::Quantization(v)
+        | Term::WhiteNoise(v)
+        | Term::RateRandomWalk(v)
+        | Term::RateRamp(v)
+        | Term::TemperatureBias(v) => TermParams::Level(v),
+        Term::BiasInstability(BiasInstability::Flicker(f)) => TermParams::Level(f.b),
+        Term::GaussMarkov(g) => TermParams::GaussMarkov {
             sigma: g.sigma,
             tau_s: g.tau_s,
-        }),
-        Effect::Sinusoidal => a.sinusoidal.map(|s| TermParams::Sinusoid {
+        },
+        Term::Sinusoidal(s) => TermParams::Sinusoid {
             amplitude: s.amplitude,
             frequency_hz: s.frequency_hz,
-        }),
-        Effect::TemperatureBias => a.temperature_bias.map(TermParams::Level),
-        _ => None,
-    }
+        },
+        _ => return None,
+    })
 }
 
 /// Does channel `ch` model its bias instability as Woodman's random walk (TR-696 eq 9)?
@@ -60,22 +56,23 @@ pub fn flicker_band(model: &SensorModel, ch: usize) -> Flicker {
     }
 }
 
-/// Set `effect` on channel `ch` to `params` (adding it if absent).
+/// Set `effect` on channel `ch` to `params` (adding it if absent); parameters that do not fit the
+/// effect change nothing.
 pub fn set_term(model: &mut SensorModel, ch: usize, effect: Effect, params: &TermParams) {
     let band = flicker_band(model, ch);
     let (sensor, axis) = channel_axis(ch);
     let a = model.axis_mut(sensor, axis);
-    match (effect, *params) {
-        (Effect::Quantization, TermParams::Level(v)) => a.quantization = Some(v),
-        (Effect::WhiteNoise, TermParams::Level(v)) => a.white_noise = Some(v),
+    let term = match (effect, *params) {
+        (Effect::Quantization, TermParams::Level(v)) => Term::Quantization(v),
+        (Effect::WhiteNoise, TermParams::Level(v)) => Term::WhiteNoise(v),
         (Effect::BiasInstability, TermParams::Level(v)) => {
-            a.bias_instability = Some(BiasInstability::Flicker(Flicker { b: v, ..band }))
+            Term::BiasInstability(BiasInstability::Flicker(Flicker { b: v, ..band }))
         }
-        (Effect::RateRandomWalk, TermParams::Level(v)) => a.rate_random_walk = Some(v),
-        (Effect::RateRamp, TermParams::Level(v)) => a.rate_ramp = Some(v),
-        (Effect::TemperatureBias, TermParams::Level(v)) => a.temperature_bias = Some(v),
+        (Effect::RateRandomWalk, TermParams::Level(v)) => Term::RateRandomWalk(v),
+        (Effect::RateRamp, TermParams::Level(v)) => Term::RateRamp(v),
+        (Effect::TemperatureBias, TermParams::Level(v)) => Term::TemperatureBias(v),
         (Effect::GaussMarkov, TermParams::GaussMarkov { sigma, tau_s }) => {
-            a.gauss_markov = Some(GaussMarkov { sigma, tau_s })
+            Term::GaussMarkov(GaussMarkov { sigma, tau_s })
         }
         (
             Effect::Sinusoidal,
@@ -83,16 +80,14 @@ pub fn set_term(model: &mut SensorModel, ch: usize, effect: Effect, params: &Ter
                 amplitude,
                 frequency_hz,
             },
-        ) => {
-            let phase_rad = a.sinusoidal.and_then(|s| s.phase_rad);
-            a.sinusoidal = Some(Sinusoid {
-                amplitude,
-                frequency_hz,
-                phase_rad,
-            })
-        }
-        _ => {}
-    }
+        ) => Term::Sinusoidal(Sinusoid {
+            amplitude,
+            frequency_hz,
+            phase_rad: a.sinusoidal.and_then(|s| s.phase_rad),
+        }),
+        _ => return,
+    };
+    a.set_term(term);
 }
 
 /// Remove `effect` from channel `ch`.

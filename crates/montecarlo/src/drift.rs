@@ -8,7 +8,9 @@ use crate::runner::{RunError, RunKernel};
 use crate::scenario::{Alignment, Scenario};
 use nalgebra::Vector3;
 use noise::closed_form as cf;
-use noise::{BiasInstability, Effect, ImuErrors, Sensor, SensorModel, TemperatureProfile};
+use noise::{
+    BiasInstability, ImuErrors, Sensor, SensorModel, TemperatureProfile, Term as NoiseTerm,
+};
 use rand_distr::{Distribution, StandardNormal};
 use strapdown::{
     nav_error, AnyTrajectory, Attitude, BodyVector, NavState, Scheme, Strapdown, Trajectory,
@@ -215,46 +217,37 @@ pub fn law_terms(
                 1 => [ideal.x, ideal.z],
                 _ => [ideal.x, ideal.y],
             };
-            for effect in m.effects() {
+            for term in m.terms() {
+                let effect = term.effect();
                 let no_law = |why: &str| Source::NoLaw(why.to_string());
-                let source = match effect {
+                let source = match term {
                     // The error of the quantised integrated output is bounded by the LSB and
                     // depends on the dither the other terms provide; docs/model.md §4 has no closed form.
-                    Effect::Quantization => no_law(
+                    NoiseTerm::Quantization(_) => no_law(
                         "quantisation: the error of the quantised integrated output is bounded by the LSB and depends on the dither from the other terms; no closed form in docs/model.md §4",
                     ),
-                    Effect::WhiteNoise => Source::White(m.white_noise.unwrap_or(0.0)),
-                    Effect::BiasInstability => match &m.bias_instability {
-                        Some(BiasInstability::RandomWalk {
-                            stability,
-                            period_s,
-                        }) => {
-                            Source::RandomWalk(cf::woodman_bias_random_walk(*stability, *period_s))
-                        }
-                        // Flicker as realised: a sum of stationary Gauss-Markov components.
-                        Some(BiasInstability::Flicker(f)) => Source::GaussMarkovSum(f.components()),
-                        None => continue,
+                    NoiseTerm::WhiteNoise(n) => Source::White(n),
+                    NoiseTerm::BiasInstability(BiasInstability::RandomWalk {
+                        stability,
+                        period_s,
+                    }) => Source::RandomWalk(cf::woodman_bias_random_walk(stability, period_s)),
+                    // Flicker as realised: a sum of stationary Gauss-Markov components.
+                    NoiseTerm::BiasInstability(BiasInstability::Flicker(f)) => {
+                        Source::GaussMarkovSum(f.components())
+                    }
+                    NoiseTerm::RateRandomWalk(k) => Source::RandomWalk(k),
+                    NoiseTerm::RateRamp(r) => Source::Ramp(r),
+                    NoiseTerm::GaussMarkov(gm) => Source::GaussMarkov {
+                        sigma: gm.sigma,
+                        tc_s: gm.tau_s,
                     },
-                    Effect::RateRandomWalk => Source::RandomWalk(m.rate_random_walk.unwrap_or(0.0)),
-                    Effect::RateRamp => Source::Ramp(m.rate_ramp.unwrap_or(0.0)),
-                    Effect::GaussMarkov => match &m.gauss_markov {
-                        Some(gm) => Source::GaussMarkov {
-                            sigma: gm.sigma,
-                            tc_s: gm.tau_s,
-                        },
-                        None => continue,
+                    NoiseTerm::Sinusoidal(w) => Source::Sinusoid {
+                        amplitude: w.amplitude,
+                        freq_hz: w.frequency_hz,
+                        phase: w.phase_rad,
+                        sample_interval_s: dt_s,
                     },
-                    Effect::Sinusoidal => match m.sinusoidal {
-                        Some(w) => Source::Sinusoid {
-                            amplitude: w.amplitude,
-                            freq_hz: w.frequency_hz,
-                            phase: w.phase_rad,
-                            sample_interval_s: dt_s,
-                        },
-                        None => continue,
-                    },
-                    Effect::TemperatureBias => {
-                        let c = m.temperature_bias.unwrap_or(0.0);
+                    NoiseTerm::TemperatureBias(c) => {
                         match model.temperature {
                             // Table 2: a residual temperature bias integrates like a constant bias.
                             TemperatureProfile::Constant { temp_c } => {
@@ -277,15 +270,12 @@ pub fn law_terms(
                             _ => no_law("temperature bias under a varying temperature profile"),
                         }
                     }
-                    Effect::ConstantBias => Source::Bias(m.constant_bias.unwrap_or(0.0)),
-                    Effect::TurnOnBias => Source::RandomConstant(m.turn_on_bias.unwrap_or(0.0)),
+                    NoiseTerm::ConstantBias(b) => Source::Bias(b),
+                    NoiseTerm::TurnOnBias(s) => Source::RandomConstant(s),
                     // Calibration errors act as a bias proportional to the reading (Table 2:
                     // "drift proportional to rate and duration of motion").
-                    Effect::ScaleFactor => {
-                        Source::Bias(m.scale_factor.unwrap_or(0.0) * ideal[axis])
-                    }
-                    Effect::Misalignment => {
-                        let mis = m.misalignment.unwrap_or([0.0; 2]);
+                    NoiseTerm::ScaleFactor(s) => Source::Bias(s * ideal[axis]),
+                    NoiseTerm::Misalignment(mis) => {
                         Source::Bias(mis[0] * others[0] + mis[1] * others[1])
                     }
                 };

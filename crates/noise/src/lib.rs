@@ -25,7 +25,7 @@ pub use config::{utf8_text, ConfigError};
 pub use effect::{Effect, FilterError, Sensor, TermFilter};
 pub use model::{
     AxisModel, BiasInstability, Flicker, GaussMarkov, ModelError, SensorModel, Sinusoid,
-    TemperatureProfile, TriadModel, AXIS_NAMES,
+    TemperatureProfile, Term, TriadModel, AXIS_NAMES,
 };
 pub use process::{ChannelErrors, ImuErrors, CHANNEL_NAMES};
 

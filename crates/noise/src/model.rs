@@ -242,6 +242,44 @@ impl Sinusoid {
     }
 }
 
+/// One term of an axis with its parameters (SI, as in [`AxisModel`]'s fields): the closed form of
+/// "an effect and its values", used from the config to the growth laws to diagnose.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Term {
+    Quantization(f64),
+    WhiteNoise(f64),
+    BiasInstability(BiasInstability),
+    RateRandomWalk(f64),
+    RateRamp(f64),
+    GaussMarkov(GaussMarkov),
+    Sinusoidal(Sinusoid),
+    TemperatureBias(f64),
+    ConstantBias(f64),
+    TurnOnBias(f64),
+    ScaleFactor(f64),
+    Misalignment([f64; 2]),
+}
+
+impl Term {
+    /// Which effect this is.
+    pub fn effect(&self) -> Effect {
+        match self {
+            Term::Quantization(_) => Effect::Quantization,
+            Term::WhiteNoise(_) => Effect::WhiteNoise,
+            Term::BiasInstability(_) => Effect::BiasInstability,
+            Term::RateRandomWalk(_) => Effect::RateRandomWalk,
+            Term::RateRamp(_) => Effect::RateRamp,
+            Term::GaussMarkov(_) => Effect::GaussMarkov,
+            Term::Sinusoidal(_) => Effect::Sinusoidal,
+            Term::TemperatureBias(_) => Effect::TemperatureBias,
+            Term::ConstantBias(_) => Effect::ConstantBias,
+            Term::TurnOnBias(_) => Effect::TurnOnBias,
+            Term::ScaleFactor(_) => Effect::ScaleFactor,
+            Term::Misalignment(_) => Effect::Misalignment,
+        }
+    }
+}
+
 /// The error model of one axis, SI. `None` means the term is absent.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct AxisModel {
@@ -305,22 +343,46 @@ impl AxisModel {
         terms.into_iter().flatten().sum()
     }
 
+    /// The term of `effect` with its parameters, if the axis has it: the one place that maps an
+    /// effect to its field.
+    pub fn term(&self, effect: Effect) -> Option<Term> {
+        match effect {
+            Effect::Quantization => self.quantization.map(Term::Quantization),
+            Effect::WhiteNoise => self.white_noise.map(Term::WhiteNoise),
+            Effect::BiasInstability => self.bias_instability.clone().map(Term::BiasInstability),
+            Effect::RateRandomWalk => self.rate_random_walk.map(Term::RateRandomWalk),
+            Effect::RateRamp => self.rate_ramp.map(Term::RateRamp),
+            Effect::GaussMarkov => self.gauss_markov.map(Term::GaussMarkov),
+            Effect::Sinusoidal => self.sinusoidal.map(Term::Sinusoidal),
+            Effect::TemperatureBias => self.temperature_bias.map(Term::TemperatureBias),
+            Effect::ConstantBias => self.constant_bias.map(Term::ConstantBias),
+            Effect::TurnOnBias => self.turn_on_bias.map(Term::TurnOnBias),
+            Effect::ScaleFactor => self.scale_factor.map(Term::ScaleFactor),
+            Effect::Misalignment => self.misalignment.map(Term::Misalignment),
+        }
+    }
+
+    /// Set a term (adding it if absent, replacing it otherwise).
+    pub fn set_term(&mut self, term: Term) {
+        match term {
+            Term::Quantization(v) => self.quantization = Some(v),
+            Term::WhiteNoise(v) => self.white_noise = Some(v),
+            Term::BiasInstability(b) => self.bias_instability = Some(b),
+            Term::RateRandomWalk(v) => self.rate_random_walk = Some(v),
+            Term::RateRamp(v) => self.rate_ramp = Some(v),
+            Term::GaussMarkov(g) => self.gauss_markov = Some(g),
+            Term::Sinusoidal(w) => self.sinusoidal = Some(w),
+            Term::TemperatureBias(v) => self.temperature_bias = Some(v),
+            Term::ConstantBias(v) => self.constant_bias = Some(v),
+            Term::TurnOnBias(v) => self.turn_on_bias = Some(v),
+            Term::ScaleFactor(v) => self.scale_factor = Some(v),
+            Term::Misalignment(m) => self.misalignment = Some(m),
+        }
+    }
+
     /// Is the term present?
     pub fn has(&self, effect: Effect) -> bool {
-        match effect {
-            Effect::Quantization => self.quantization.is_some(),
-            Effect::WhiteNoise => self.white_noise.is_some(),
-            Effect::BiasInstability => self.bias_instability.is_some(),
-            Effect::RateRandomWalk => self.rate_random_walk.is_some(),
-            Effect::RateRamp => self.rate_ramp.is_some(),
-            Effect::GaussMarkov => self.gauss_markov.is_some(),
-            Effect::Sinusoidal => self.sinusoidal.is_some(),
-            Effect::TemperatureBias => self.temperature_bias.is_some(),
-            Effect::ConstantBias => self.constant_bias.is_some(),
-            Effect::TurnOnBias => self.turn_on_bias.is_some(),
-            Effect::ScaleFactor => self.scale_factor.is_some(),
-            Effect::Misalignment => self.misalignment.is_some(),
-        }
+        self.term(effect).is_some()
     }
 
     /// Remove a term.
@@ -339,6 +401,14 @@ impl AxisModel {
             Effect::ScaleFactor => self.scale_factor = None,
             Effect::Misalignment => self.misalignment = None,
         }
+    }
+
+    /// The terms present with their parameters, in `Effect` order.
+    pub fn terms(&self) -> Vec<Term> {
+        Effect::ALL
+            .into_iter()
+            .filter_map(|e| self.term(e))
+            .collect()
     }
 
     /// The terms present, in `Effect` order.
@@ -562,6 +632,46 @@ impl SensorModel {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_effect_has_one_term_that_round_trips() {
+        let terms = [
+            Term::Quantization(1e-3),
+            Term::WhiteNoise(2e-3),
+            Term::BiasInstability(BiasInstability::Flicker(Flicker::with_b(3e-5))),
+            Term::RateRandomWalk(4e-6),
+            Term::RateRamp(5e-7),
+            Term::GaussMarkov(GaussMarkov {
+                sigma: 6e-4,
+                tau_s: 70.0,
+            }),
+            Term::Sinusoidal(Sinusoid {
+                amplitude: 8e-3,
+                frequency_hz: 9.0,
+                phase_rad: Some(0.1),
+            }),
+            Term::TemperatureBias(1e-5),
+            Term::ConstantBias(2e-2),
+            Term::TurnOnBias(3e-2),
+            Term::ScaleFactor(4e-4),
+            Term::Misalignment([5e-4, 6e-4]),
+        ];
+        // One term per effect, in Effect order.
+        assert_eq!(terms.clone().map(|t| t.effect()), Effect::ALL);
+        let mut axis = AxisModel::default();
+        for t in &terms {
+            assert!(!axis.has(t.effect()));
+            axis.set_term(t.clone());
+            assert_eq!(axis.term(t.effect()).as_ref(), Some(t));
+        }
+        assert_eq!(axis.terms(), terms.to_vec());
+        assert_eq!(axis.effects(), Effect::ALL.to_vec());
+        for e in Effect::ALL {
+            axis.remove(e);
+            assert!(!axis.has(e));
+        }
+        assert_eq!(axis, AxisModel::default());
+    }
 
     #[test]
     fn temperature_excursion_integrals_match_numerical_integration() {
