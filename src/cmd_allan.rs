@@ -9,6 +9,7 @@ use crate::plot::{Band, LogLogPlot, Series, PALETTE};
 use allan::fit::{Fit, TERM_NAMES};
 use allan::{AllanPoint, EdfMethod, Estimator, Options, TauGrid};
 use anyhow::{anyhow, bail, Result};
+use noise::noise_file::AxisValue;
 use rayon::prelude::*;
 use serde_json::{json, Map, Value};
 use std::fmt::Write as _;
@@ -47,6 +48,8 @@ pub struct Args {
     /// Print the time spent in each stage on stderr
     #[arg(long)]
     pub timing: bool,
+    #[command(flatten)]
+    pub noise_file: crate::noise_out::NoiseFileArgs,
 }
 
 /// Reduced chi-square above which the IEEE 952 fit is reported as not describing the curve.
@@ -93,6 +96,7 @@ pub struct ChannelResult {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    args.noise_file.check()?;
     let _out_lock = args
         .out
         .as_deref()
@@ -142,6 +146,7 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
         }
     };
     let log = logio::read_log(&args.log, &args.log_args.options()?)?;
+    eprintln!("{}: {}", log.source, log.mapping_text());
     stage("read + parse");
     let names: Vec<String> = if args.channels.is_empty() {
         log.order
@@ -208,6 +213,15 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
         print!("{table}");
     }
     stage("printed");
+    let per_channel: [Option<(AxisValue, AxisValue)>; 6] = std::array::from_fn(|c| {
+        let r = results.iter().find(|r| r.name == noise::CHANNEL_NAMES[c])?;
+        noise_file_values(r)
+    });
+    args.noise_file.write(
+        &per_channel,
+        log.rate_hz,
+        &format!("`imudrift allan` of {}", log.source),
+    )?;
     if let Some(dir) = &args.out {
         let _set = output::begin_set(dir)?;
         output::write_string(&dir.join("allan.csv"), &csv(&results))?;
@@ -432,8 +446,45 @@ fn json_document(
         "estimator": est.name(),
         "grid": grid,
         "confidence": confidence,
+        "columns": log.columns,
+        "skipped_columns": log.skipped,
         "channels": channels,
     })
+}
+
+/// A channel's noise density and random walk for a noise file: the IEEE 952 fit's N and K with
+/// their standard errors; where the fit has no such term, the spec-sheet reading (the slope line
+/// touching the curve: for K an upper bound, the largest random walk the curve allows).
+fn noise_file_values(r: &ChannelResult) -> Option<(AxisValue, AxisValue)> {
+    let fit = r.fit.as_ref()?;
+    let rd = &fit.readings;
+    let n = match fit.n {
+        Some(t) => AxisValue {
+            value: t.value,
+            how: format!("fit, sigma {:.2e}", t.sigma),
+        },
+        None => AxisValue {
+            value: rd.arw_at_1s,
+            how: format!(
+                "-1/2 line touching the curve at {}",
+                crate::fmt::time(rd.arw_tau_s)
+            ),
+        },
+    };
+    let k = match fit.k {
+        Some(t) => AxisValue {
+            value: t.value,
+            how: format!("fit, sigma {:.2e}", t.sigma),
+        },
+        None => AxisValue {
+            value: rd.rrw_at_3s,
+            how: format!(
+                "not resolved; bound: +1/2 line touching the curve at {}",
+                crate::fmt::time(rd.rrw_tau_s)
+            ),
+        },
+    };
+    Some((n, k))
 }
 
 fn csv(results: &[ChannelResult]) -> String {
@@ -485,7 +536,9 @@ fn plot(r: &ChannelResult, est: Estimator, source: &str) -> LogLogPlot {
             .map(|i| 10f64.powf(a + (b - a) * i as f64 / 100.0))
             .collect()
     };
-    let Some(fit) = &r.fit else { return p };
+    let Some(fit) = &r.fit else {
+        return p.in_spec_sheet_units(est.name(), r.unit);
+    };
     p.series.push(Series::dashed(
         "IEEE 952 fit",
         fine.clone(),
@@ -511,7 +564,7 @@ fn plot(r: &ChannelResult, est: Estimator, source: &str) -> LogLogPlot {
             ));
         }
     }
-    p
+    p.in_spec_sheet_units(est.name(), r.unit)
 }
 
 /// One SVG file name per channel, `allan_<name>.svg` with the name made safe for a file system;

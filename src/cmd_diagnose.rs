@@ -9,6 +9,7 @@ use anyhow::{anyhow, bail, Context, Result};
 use diagnose::drift::CHANNELS;
 use diagnose::report::{ChannelReport, DriftRow, FoundEffect, HeldOutGap};
 use diagnose::{diagnose_with_progress, Diagnosis, LogInput, Settings};
+use noise::noise_file::AxisValue;
 use noise::SensorModel;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -56,6 +57,8 @@ pub struct Args {
     /// Worker threads (default: all cores); results do not depend on it
     #[arg(long)]
     pub threads: Option<usize>,
+    #[command(flatten)]
+    pub noise_file: crate::noise_out::NoiseFileArgs,
 }
 
 /// Most simulated logs per band and add-and-resimulate rounds a diagnose run may ask for.
@@ -63,6 +66,7 @@ const MAX_SEEDS: usize = 4096;
 const MAX_ROUNDS: usize = 100;
 
 pub fn run(args: Args) -> Result<()> {
+    args.noise_file.check()?;
     let _out_lock = args
         .out
         .as_deref()
@@ -107,6 +111,7 @@ pub fn run(args: Args) -> Result<()> {
 fn run_inner(args: &Args) -> Result<()> {
     let model = SensorModel::load(&args.model)?;
     let log = logio::read_log(&args.log, &args.log_args.options()?)?;
+    eprintln!("{}: {}", log.source, log.mapping_text());
     let channels: [Option<&[f64]>; 6] =
         std::array::from_fn(|c| log.channels.get(CHANNELS[c]).map(Vec::as_slice));
     if channels.iter().all(Option::is_none) {
@@ -165,7 +170,7 @@ fn run_inner(args: &Args) -> Result<()> {
     let result = result
         .with_context(|| format!("diagnosing {} against {}", log.source, args.model.display()))?;
     let elapsed_s = started.elapsed().as_secs_f64();
-    let corrected = corrected_model(&result, &model);
+    let corrected = corrected_model(&result, &model, &args.model);
     eprint!(
         "{}",
         text_report(&result, &log.source, &args.model, elapsed_s)
@@ -186,7 +191,23 @@ fn run_inner(args: &Args) -> Result<()> {
     if !checks.is_empty() {
         eprint!("{}", checks_text(&checks));
     }
-    let doc = json_document(&result, &log.source, &args.model, &corrected, &checks)?;
+    let doc = json_document(&result, &log, &args.model, &corrected, &checks)?;
+    let per_channel: [Option<(AxisValue, AxisValue)>; 6] = std::array::from_fn(|c| {
+        result
+            .channels
+            .contains_key(CHANNELS[c])
+            .then(|| model_noise_values(&result, c))
+            .flatten()
+    });
+    args.noise_file.write(
+        &per_channel,
+        log.rate_hz,
+        &format!(
+            "the model `imudrift diagnose` corrected on {} (from {})",
+            log.source,
+            args.model.display()
+        ),
+    )?;
     if args.json {
         println!("{doc}");
     }
@@ -220,7 +241,7 @@ fn file_stem(path: &Path) -> String {
 }
 
 /// The corrected model as TOML, with a header saying where it came from.
-fn corrected_model(result: &Diagnosis, model: &SensorModel) -> String {
+fn corrected_model(result: &Diagnosis, model: &SensorModel, model_path: &Path) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -250,7 +271,11 @@ fn corrected_model(result: &Diagnosis, model: &SensorModel) -> String {
              # model apply it to the [temperature] profile below, so set that profile to the conditions of interest."
         );
     }
-    out.push_str(&result.model_final.to_toml_string());
+    // In the units and conventions of the input model (spec-sheet units where it has none).
+    let style = std::fs::read_to_string(model_path)
+        .map(|text| noise::UnitStyle::from_config_text(&text))
+        .unwrap_or_default();
+    out.push_str(&result.model_final.to_toml_string_styled(&style));
     out
 }
 
@@ -402,9 +427,44 @@ fn checks_text(checks: &Checks) -> String {
     s
 }
 
+/// A channel's noise density and random walk for a noise file, from the corrected model: its
+/// white noise N, and its rate random walk K or, where it has none, the largest random walk its
+/// Allan curve allows over the log's averaging times (the +1/2 line touching the model's curve,
+/// which covers its bias instability there).
+fn model_noise_values(result: &Diagnosis, c: usize) -> Option<(AxisValue, AxisValue)> {
+    let (sensor, axis) = diagnose::model_terms::channel_axis(c);
+    let a = result.model_final.axis(sensor, axis);
+    let n = AxisValue {
+        value: a.white_noise?,
+        how: "corrected model".into(),
+    };
+    let k = match a.rate_random_walk {
+        Some(k) => AxisValue {
+            value: k,
+            how: "corrected model".into(),
+        },
+        None => {
+            let (k, tau) = result
+                .grid_m
+                .iter()
+                .map(|&m| m as f64 * result.dt_s)
+                .map(|tau| ((a.allan_variance(tau) * 3.0 / tau).sqrt(), tau))
+                .min_by(|x, y| x.0.total_cmp(&y.0))?;
+            AxisValue {
+                value: k,
+                how: format!(
+                    "no rate random walk in the model; bound: +1/2 line touching its Allan curve at {}",
+                    crate::fmt::time(tau)
+                ),
+            }
+        }
+    };
+    Some((n, k))
+}
+
 fn json_document(
     result: &Diagnosis,
-    log: &str,
+    log: &logio::Log,
     model: &Path,
     corrected: &str,
     checks: &Checks,
@@ -418,7 +478,12 @@ fn json_document(
         .map(|(log, gaps)| serde_json::json!({ "log": log, "channels": gaps }))
         .collect();
     obj.insert("checks".into(), checks.into());
-    obj.insert("log".into(), log.into());
+    obj.insert("log".into(), log.source.clone().into());
+    obj.insert("columns".into(), serde_json::to_value(&log.columns)?);
+    obj.insert(
+        "skipped_columns".into(),
+        serde_json::to_value(&log.skipped)?,
+    );
     obj.insert("model".into(), model.display().to_string().into());
     obj.insert("corrected_model_toml".into(), corrected.into());
     serde_json::to_string_pretty(&v).context("cannot serialise the diagnosis")
@@ -576,5 +641,6 @@ fn plot(name: &str, r: &ChannelReport) -> String {
             },
         ],
     }
+    .in_spec_sheet_units("Allan deviation", unit)
     .to_svg()
 }

@@ -13,6 +13,7 @@ pub mod cmd_spec;
 pub mod experiment_run;
 pub mod fmt;
 pub mod logio;
+pub mod noise_out;
 pub mod output;
 pub mod plot;
 pub mod progress;

@@ -74,6 +74,28 @@ const TOP: f64 = 50.0;
 const BOTTOM: f64 = 70.0;
 
 impl LogLogPlot {
+    /// The same plot with its y values (an Allan deviation in `si_unit`, rad/s or m/s^2) in the
+    /// unit spec sheets use for it (deg/h, ug), the label saying which and how it relates to SI.
+    pub fn in_spec_sheet_units(mut self, quantity: &str, si_unit: &str) -> LogLogPlot {
+        let (k, unit) = crate::fmt::allan_units(si_unit)[0].clone();
+        if k != 1.0 {
+            for s in &mut self.series {
+                s.y.iter_mut().for_each(|v| *v *= k);
+            }
+            for b in &mut self.bands {
+                b.lo.iter_mut().for_each(|v| *v *= k);
+                b.hi.iter_mut().for_each(|v| *v *= k);
+            }
+            self.y_label = format!(
+                "{quantity} ({unit}; 1 {unit} = {} {si_unit})",
+                crate::fmt::sig(1.0 / k, 4)
+            );
+        } else {
+            self.y_label = format!("{quantity} ({si_unit})");
+        }
+        self
+    }
+
     /// Render to an SVG document. Non-positive and non-finite values are skipped.
     pub fn to_svg(&self) -> String {
         let ok = |v: f64| v.is_finite() && v > 0.0;

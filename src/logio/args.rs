@@ -1,7 +1,7 @@
 //! The log reader's command-line options, shared by every command that reads a log.
 
 use super::csv::MAX_LOG_RATE_HZ;
-use super::{AccelUnit, GyroUnit, ReadOptions};
+use super::{AccelUnit, GyroUnit, ReadOptions, TimeUnit};
 use anyhow::{anyhow, bail, Result};
 
 /// Command-line options of the log reader (flatten into a command's Args).
@@ -10,13 +10,16 @@ pub struct LogArgs {
     /// Sample rate in Hz (required when the log has no `t` column; overrides it otherwise)
     #[arg(long, value_name = "HZ")]
     pub rate: Option<f64>,
-    /// Unit of the gyro columns
-    #[arg(long, value_enum, default_value = "rad/s", value_name = "UNIT")]
-    pub gyro_unit: GyroUnit,
-    /// Unit of the accelerometer columns
-    #[arg(long, value_enum, default_value = "m/s^2", value_name = "UNIT")]
-    pub accel_unit: AccelUnit,
-    /// Map a file column to a canonical name, e.g. `--col gx=gyro_x_dps` (repeat or comma-separate)
+    /// Unit of every gyro column whose name does not say it (`gyro_x_dps` does; `gx` defaults to rad/s)
+    #[arg(long, value_enum, value_name = "UNIT")]
+    pub gyro_unit: Option<GyroUnit>,
+    /// Unit of every accelerometer column whose name does not say it (`acc_x_g` does; `ax` defaults to m/s^2)
+    #[arg(long, value_enum, value_name = "UNIT")]
+    pub accel_unit: Option<AccelUnit>,
+    /// Unit of the time column when its name does not say it (`t_ms`, `timestamp_ns` do; default s)
+    #[arg(long, value_enum, value_name = "UNIT")]
+    pub time_unit: Option<TimeUnit>,
+    /// Map a file column to a channel by hand, e.g. `--col gx=gyro_meas_x` (repeat or comma-separate); columns are otherwise recognised by name
     #[arg(long = "col", value_name = "NAME=COLUMN", value_delimiter = ',')]
     pub columns: Vec<String>,
 }
@@ -45,8 +48,11 @@ impl LogArgs {
         }
         Ok(ReadOptions {
             rate_hz: self.rate,
-            gyro_unit: self.gyro_unit,
-            accel_unit: self.accel_unit,
+            units: super::UnitOptions {
+                gyro: self.gyro_unit,
+                accel: self.accel_unit,
+                time: self.time_unit,
+            },
             columns: map,
         })
     }

@@ -2,6 +2,7 @@
 //! lines, a general path that names the line and column of anything wrong), the time column's
 //! checks and the units mapped to SI.
 
+use super::columns::map_header;
 use super::file::advise_huge_pages;
 use super::float::{fast_f64, number};
 use super::{Log, ReadOptions, ACCEL_CHANNELS, GYRO_CHANNELS};
@@ -53,22 +54,22 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
     };
     let header_line = line_no;
     let names: Vec<String> = header.split(',').map(|s| s.trim().to_string()).collect();
-    // Map file column names to channel names.
-    let mut channel_names = names.clone();
-    for (canon, col) in &opts.columns {
-        let idx = names.iter().position(|n| n == col).ok_or_else(|| {
-            anyhow!("{source}:{header_line}: --col {canon}={col}: no column {col:?} in the header (columns: {})", names.join(", "))
-        })?;
-        channel_names[idx] = canon.clone();
-    }
-    for (i, n) in channel_names.iter().enumerate() {
+    for (i, n) in names.iter().enumerate() {
         if n.is_empty() {
             bail!("{source}:{header_line}: column {} has an empty name", i + 1);
         }
-        if channel_names[..i].contains(n) {
+        if names[..i].contains(n) {
             bail!("{source}:{header_line}: column name {n:?} appears twice");
         }
     }
+    for (canon, col) in &opts.columns {
+        if !names.contains(col) {
+            bail!("{source}:{header_line}: --col {canon}={col}: no column {col:?} in the header (columns: {})", names.join(", "));
+        }
+    }
+    // Which channel and unit each column holds (docs/cli.md, "Log columns").
+    let (uses, skipped) = map_header(&names, &opts.columns, opts.units)
+        .map_err(|e| anyhow!("{source}:{header_line}: {e}"))?;
     let columns = parse_body(bytes, pos, header_line, names.len(), source, &names)?;
     let n_rows = columns.first().map_or(0, Vec::len);
     if n_rows < 2 {
@@ -77,26 +78,28 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
     let mut channels = BTreeMap::new();
     let mut order = Vec::new();
     let mut t_s = None;
-    for (name, mut data) in channel_names.into_iter().zip(columns) {
-        if name == "t" {
+    let mut used = Vec::new();
+    for (u, mut data) in uses.into_iter().zip(columns) {
+        let Some(u) = u else { continue };
+        if u.to_si != 1.0 {
+            data.iter_mut().for_each(|v| *v *= u.to_si);
+        }
+        if u.channel == "t" {
             t_s = Some(data);
-            continue;
-        }
-        let scale = if GYRO_CHANNELS.contains(&name.as_str()) {
-            opts.gyro_unit.to_si()
-        } else if ACCEL_CHANNELS.contains(&name.as_str()) {
-            opts.accel_unit.to_si()
         } else {
-            1.0
-        };
-        if scale != 1.0 {
-            data.iter_mut().for_each(|v| *v *= scale);
+            order.push(u.channel.to_string());
+            channels.insert(u.channel.to_string(), data);
         }
-        order.push(name.clone());
-        channels.insert(name, data);
+        used.push(u);
     }
-    if channels.is_empty() {
-        bail!("{source}:{header_line}: no data columns besides `t`");
+    if !channels
+        .keys()
+        .any(|c| GYRO_CHANNELS.contains(&c.as_str()) || ACCEL_CHANNELS.contains(&c.as_str()))
+    {
+        bail!(
+            "{source}:{header_line}: no gyro or accelerometer column recognised among {}; name them like gyro_x_dps, gyr_x, wx, angular_velocity.x, acc_x_g, accel_x, linear_acceleration.x (unit suffixes dps, rad_s, g, mps2), or map them with --col gx=NAME",
+            names.join(", ")
+        );
     }
     if let Some(t) = &t_s {
         for (k, w) in t.windows(2).enumerate() {
@@ -137,6 +140,8 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
         t_s,
         channels,
         order,
+        columns: used,
+        skipped,
     })
 }
 

@@ -3,21 +3,25 @@
 //! `#` comment lines, a header row, columns found by name, units mapped to SI.
 //!
 //! Canonical columns (docs/cli.md): `t` (s), `gx gy gz` (rad/s), `ax ay az` (m/s^2), `temp` (degC).
-//! `--col gx=gyro_x_dps` maps a file column to a canonical name; `--gyro-unit deg/s` and
-//! `--accel-unit g` convert; `--rate HZ` gives the sample rate when there is no time column.
-//! Other numeric columns are kept under their own names, unconverted.
+//! Other names are recognised with their unit suffixes (`columns.rs`: `gyro_x_dps`, `acc_x_g`,
+//! `angular_velocity.x`, `timestamp_ns`, ...); `--col gx=NAME` maps a column by hand;
+//! `--gyro-unit`, `--accel-unit`, `--time-unit` give units names do not state; `--rate HZ` gives
+//! the sample rate when there is no time column. Columns that are none of these are skipped and
+//! listed.
 //! Errors name the file, the line and the column, and say what was expected.
 
 mod args;
+mod columns;
 mod csv;
 mod file;
 mod float;
 mod units;
 
 pub use args::LogArgs;
+pub use columns::{ColumnUse, Skipped, UnitOptions};
 pub use csv::parse_log;
 pub use file::available_memory_bytes;
-pub use units::{AccelUnit, GyroUnit};
+pub use units::{AccelUnit, GyroUnit, TimeUnit};
 
 use anyhow::{bail, Context, Result};
 use file::{check_fits, FileBytes, GIB};
@@ -54,6 +58,10 @@ pub struct Log {
     pub channels: BTreeMap<String, Vec<f64>>,
     /// Channel names in file order (without `t`).
     pub order: Vec<String>,
+    /// How each used column was mapped (file order, `t` included).
+    pub columns: Vec<ColumnUse>,
+    /// Columns not used, with the reason.
+    pub skipped: Vec<Skipped>,
 }
 
 impl Log {
@@ -72,6 +80,34 @@ impl Log {
         1.0 / self.rate_hz
     }
 
+    /// The column mapping in one line for people: `gyro_x_dps -> gx (deg/s, from the name)`, and
+    /// the skipped columns.
+    pub fn mapping_text(&self) -> String {
+        let used: Vec<String> = self
+            .columns
+            .iter()
+            .map(|c| {
+                let how = match (c.channel_from, c.unit_from) {
+                    ("--col", "name") => "--col, unit from the name".to_string(),
+                    ("--col", u) => format!("--col, unit {u}"),
+                    (_, "name") => "from the name".to_string(),
+                    (_, u) => format!("unit {u}"),
+                };
+                format!("{} -> {} ({}, {how})", c.column, c.channel, c.unit)
+            })
+            .collect();
+        let mut s = format!("columns: {}", used.join("; "));
+        if !self.skipped.is_empty() {
+            let skipped: Vec<String> = self
+                .skipped
+                .iter()
+                .map(|k| format!("{} ({})", k.column, k.reason))
+                .collect();
+            s.push_str(&format!("\nskipped: {}", skipped.join("; ")));
+        }
+        s
+    }
+
     /// SI unit of a channel, for tables and plots.
     pub fn unit_of(name: &str) -> &'static str {
         if GYRO_CHANNELS.contains(&name) {
@@ -87,24 +123,14 @@ impl Log {
 }
 
 /// Reader options.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct ReadOptions {
     pub rate_hz: Option<f64>,
-    pub gyro_unit: GyroUnit,
-    pub accel_unit: AccelUnit,
+    /// Units the command line gives (each applies to every column of its kind whose name does
+    /// not state one).
+    pub units: UnitOptions,
     /// (canonical name, file column) pairs.
     pub columns: Vec<(String, String)>,
-}
-
-impl Default for ReadOptions {
-    fn default() -> Self {
-        ReadOptions {
-            rate_hz: None,
-            gyro_unit: GyroUnit::RadPerS,
-            accel_unit: AccelUnit::MPerS2,
-            columns: Vec::new(),
-        }
-    }
 }
 
 /// Read a CSV or gzip-compressed CSV log file.

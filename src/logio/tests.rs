@@ -13,8 +13,11 @@ fn reads_comments_units_and_mapping() {
     let text = b"# a comment\n# another\ngyro_x_dps,acc_z_g,other\n1.0,-1.0,5\n# mid comment\n2.0,-0.5,6\n\n3.0,0,7\n";
     let o = ReadOptions {
         rate_hz: Some(100.0),
-        gyro_unit: GyroUnit::DegPerS,
-        accel_unit: AccelUnit::G,
+        units: UnitOptions {
+            gyro: Some(GyroUnit::DegPerS),
+            accel: Some(AccelUnit::G),
+            time: None,
+        },
         columns: vec![
             ("gx".into(), "gyro_x_dps".into()),
             ("az".into(), "acc_z_g".into()),
@@ -22,11 +25,43 @@ fn reads_comments_units_and_mapping() {
     };
     let log = parse_log(text, "x.csv", &o).unwrap();
     assert_eq!(log.len(), 3);
-    assert_eq!(log.order, vec!["gx", "az", "other"]);
+    // Unrecognised columns are skipped and listed, never analysed without a quantity and unit.
+    assert_eq!(log.order, vec!["gx", "az"]);
+    assert_eq!(log.skipped.len(), 1);
+    assert_eq!(log.skipped[0].column, "other");
     assert!((log.channels["gx"][1] - 2.0f64.to_radians()).abs() < 1e-15);
     assert!((log.channels["az"][0] + STANDARD_GRAVITY_MPS2).abs() < 1e-12);
-    assert_eq!(log.channels["other"], vec![5.0, 6.0, 7.0]);
     assert_eq!(log.rate_hz, 100.0);
+    // The same without --col and without the unit options: the names say it all.
+    let o = ReadOptions {
+        rate_hz: Some(100.0),
+        ..ReadOptions::default()
+    };
+    let auto = parse_log(text, "x.csv", &o).unwrap();
+    assert_eq!(auto.channels, log.channels);
+    assert!(auto
+        .mapping_text()
+        .contains("gyro_x_dps -> gx (deg/s, from the name)"));
+}
+
+#[test]
+fn time_columns_in_other_units_are_converted() {
+    let log = parse_log(
+        b"timestamp_ns,gx\n0,1\n10000000,2\n20000000,3\n",
+        "x",
+        &opts(),
+    )
+    .unwrap();
+    assert!((log.rate_hz - 100.0).abs() < 1e-9);
+    let o = ReadOptions {
+        units: UnitOptions {
+            time: Some(TimeUnit::Ms),
+            ..UnitOptions::default()
+        },
+        ..ReadOptions::default()
+    };
+    let log = parse_log(b"time,gx\n0,1\n10,2\n20,3\n", "x", &o).unwrap();
+    assert!((log.rate_hz - 100.0).abs() < 1e-9);
 }
 
 #[test]

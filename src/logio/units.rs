@@ -1,9 +1,9 @@
-//! Units of the gyro and accelerometer columns and their factors to SI.
+//! Units of the time, gyro and accelerometer columns and their factors to SI.
 
 use super::STANDARD_GRAVITY_MPS2;
 
 /// Gyro units accepted on the command line.
-#[derive(Clone, Copy, Debug, PartialEq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum GyroUnit {
     #[value(name = "rad/s")]
     RadPerS,
@@ -14,6 +14,15 @@ pub enum GyroUnit {
 }
 
 impl GyroUnit {
+    /// As written on the command line and in outputs.
+    pub fn name(self) -> &'static str {
+        match self {
+            GyroUnit::RadPerS => "rad/s",
+            GyroUnit::DegPerS => "deg/s",
+            GyroUnit::DegPerH => "deg/h",
+        }
+    }
+
     pub(super) fn to_si(self) -> f64 {
         match self {
             GyroUnit::RadPerS => 1.0,
@@ -24,7 +33,7 @@ impl GyroUnit {
 }
 
 /// Accelerometer units accepted on the command line.
-#[derive(Clone, Copy, Debug, PartialEq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum AccelUnit {
     #[value(name = "m/s^2")]
     MPerS2,
@@ -35,11 +44,54 @@ pub enum AccelUnit {
 }
 
 impl AccelUnit {
+    /// As written on the command line and in outputs.
+    pub fn name(self) -> &'static str {
+        match self {
+            AccelUnit::MPerS2 => "m/s^2",
+            AccelUnit::G => "g",
+            AccelUnit::MilliG => "mg",
+        }
+    }
+
     pub(super) fn to_si(self) -> f64 {
         match self {
             AccelUnit::MPerS2 => 1.0,
             AccelUnit::G => STANDARD_GRAVITY_MPS2,
             AccelUnit::MilliG => STANDARD_GRAVITY_MPS2 * 1e-3,
+        }
+    }
+}
+
+/// Units of the time column.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum TimeUnit {
+    #[value(name = "s")]
+    S,
+    #[value(name = "ms")]
+    Ms,
+    #[value(name = "us")]
+    Us,
+    #[value(name = "ns")]
+    Ns,
+}
+
+impl TimeUnit {
+    /// As written on the command line and in outputs.
+    pub fn name(self) -> &'static str {
+        match self {
+            TimeUnit::S => "s",
+            TimeUnit::Ms => "ms",
+            TimeUnit::Us => "us",
+            TimeUnit::Ns => "ns",
+        }
+    }
+
+    pub(super) fn to_si(self) -> f64 {
+        match self {
+            TimeUnit::S => 1.0,
+            TimeUnit::Ms => 1e-3,
+            TimeUnit::Us => 1e-6,
+            TimeUnit::Ns => 1e-9,
         }
     }
 }

@@ -17,11 +17,12 @@ pub mod closed_form;
 mod config;
 mod effect;
 mod model;
+pub mod noise_file;
 pub mod process;
 pub mod units;
 mod ziggurat;
 
-pub use config::{utf8_text, ConfigError};
+pub use config::{utf8_text, ConfigError, UnitStyle};
 pub use effect::{Effect, FilterError, Sensor, TermFilter};
 pub use model::{
     AxisModel, BiasInstability, Flicker, GaussMarkov, ModelError, SensorModel, Sinusoid,

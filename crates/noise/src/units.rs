@@ -289,6 +289,12 @@ pub fn format_si(value: f64, quantity: Quantity) -> String {
     format!("{value:?} {}", quantity.si_unit())
 }
 
+/// The unit part of a config value ("0.15 deg/sqrt(h)" -> "deg/sqrt(h)"); empty when none.
+pub fn unit_part(text: &str) -> &str {
+    let text = text.trim();
+    &text[number_prefix_len(text)..]
+}
+
 fn number_prefix_len(s: &str) -> usize {
     let b = s.as_bytes();
     let mut i = 0;

@@ -32,6 +32,8 @@ mod convert;
 mod raw;
 mod write;
 
+pub use write::UnitStyle;
+
 pub(crate) use convert::signal_of;
 
 use crate::effect::Sensor;
@@ -52,6 +54,9 @@ pub enum ConfigError {
     /// TOML syntax, unknown keys, wrong types (the message carries line and column).
     #[error("{file}: {message}")]
     Parse { file: String, message: String },
+    /// A Kalibr / OpenVINS / VINS-Fusion noise file that cannot be used.
+    #[error(transparent)]
+    NoiseFile(#[from] crate::noise_file::NoiseFileError),
     /// A value that parses but is not acceptable.
     #[error("{file}{at}: key `{key}`: expected {expected}, found {found}", at = line.map(|l| format!(":{l}")).unwrap_or_default())]
     Invalid {
@@ -96,6 +101,17 @@ impl SensorModel {
             source: std::sync::Arc::new(e),
         })?;
         let text = utf8_text(bytes, &name)?;
+        // A Kalibr / OpenVINS / VINS-Fusion IMU noise file is accepted wherever a sensor TOML is.
+        let yaml = matches!(
+            path.extension().and_then(|e| e.to_str()),
+            Some("yaml" | "yml")
+        );
+        if yaml
+            || (crate::noise_file::is_noise_file(&text)
+                && toml::from_str::<toml::Value>(&text).is_err())
+        {
+            return Ok(crate::noise_file::read_noise_file(&text, &name)?);
+        }
         SensorModel::from_toml_str(&text, &name)
     }
 }

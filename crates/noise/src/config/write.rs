@@ -88,6 +88,16 @@ fn toml_str(text: &str) -> String {
 }
 
 fn write_axis(s: &mut String, a: &AxisModel, sig: Signal) {
+    write_axis_with(s, a, sig, &format_si);
+}
+
+/// The keys of one axis, each value written by `format_si` (value, quantity) -> "value unit".
+fn write_axis_with(
+    s: &mut String,
+    a: &AxisModel,
+    sig: Signal,
+    format_si: &dyn Fn(f64, Quantity) -> String,
+) {
     let mut line = |key: &str, v: f64, q: Quantity| {
         let _ = writeln!(s, "{key} = \"{}\"", format_si(v, q));
     };
@@ -166,5 +176,221 @@ fn write_axis(s: &mut String, a: &AxisModel, sig: Signal) {
             format_si(m1, Quantity::Angle),
             format_si(m2, Quantity::Angle)
         );
+    }
+}
+
+/// The units a written config uses for each quantity: those of an existing config where it has
+/// the quantity, else the units spec sheets use (deg/h, deg/sqrt(h), ug, m/s/sqrt(h), ...).
+#[derive(Clone, Debug, Default)]
+pub struct UnitStyle {
+    /// (quantity, unit text) found in the config, first occurrence.
+    units: Vec<(Quantity, String)>,
+}
+
+impl UnitStyle {
+    /// The units of a config's text (a sensor TOML); unknown or unreadable parts are ignored.
+    pub fn from_config_text(text: &str) -> UnitStyle {
+        let mut units: Vec<(Quantity, String)> = Vec::new();
+        let Ok(doc) = text.parse::<toml::Table>() else {
+            return UnitStyle::default();
+        };
+        let mut note = |q: Quantity, v: &toml::Value| {
+            if let Some(t) = v.as_str() {
+                let unit = crate::units::unit_part(t).trim().to_string();
+                if !unit.is_empty()
+                    && !units.iter().any(|(k, _)| *k == q)
+                    && crate::units::parse_quantity(&format!("1 {unit}"), q).is_ok()
+                {
+                    units.push((q, unit));
+                }
+            }
+        };
+        for sensor in Sensor::ALL {
+            let sig = signal_of(sensor);
+            let Some(tables) = doc.get(sensor.name()).and_then(|v| v.as_table()) else {
+                continue;
+            };
+            for axis in tables.values().filter_map(|v| v.as_table()) {
+                for (key, v) in axis {
+                    let q = match key.as_str() {
+                        "quantization" => Quantity::Integrated(sig),
+                        "white_noise" => Quantity::NoiseDensity(sig),
+                        "rate_random_walk" => Quantity::RandomWalk(sig),
+                        "rate_ramp" => Quantity::Ramp(sig),
+                        "temperature_bias" => Quantity::PerDegree(sig),
+                        "constant_bias" | "turn_on_bias" | "bias_instability" => {
+                            Quantity::Signal(sig)
+                        }
+                        "scale_factor" => Quantity::Ratio,
+                        "misalignment" => {
+                            if let Some(first) = v.as_array().and_then(|a| a.first()) {
+                                note(Quantity::Angle, first);
+                            }
+                            continue;
+                        }
+                        _ => continue,
+                    };
+                    match v.as_table() {
+                        None => note(q, v),
+                        Some(t) => {
+                            for (k, inner) in t {
+                                match k.as_str() {
+                                    "value" | "sigma" | "amplitude" | "stability" => {
+                                        note(Quantity::Signal(sig), inner)
+                                    }
+                                    "time_constant" | "period" => note(Quantity::Time, inner),
+                                    "frequency" => note(Quantity::Frequency, inner),
+                                    _ => {}
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        UnitStyle { units }
+    }
+
+    /// The unit for a quantity.
+    fn unit(&self, q: Quantity) -> &str {
+        if let Some((_, u)) = self.units.iter().find(|(k, _)| *k == q) {
+            return u;
+        }
+        match q {
+            Quantity::Signal(Signal::AngularRate) => "deg/h",
+            Quantity::Signal(Signal::Acceleration) => "ug",
+            Quantity::NoiseDensity(Signal::AngularRate) => "deg/sqrt(h)",
+            Quantity::NoiseDensity(Signal::Acceleration) => "m/s/sqrt(h)",
+            Quantity::RandomWalk(Signal::AngularRate) => "deg/h/sqrt(h)",
+            Quantity::RandomWalk(Signal::Acceleration) => "ug/sqrt(h)",
+            Quantity::Ramp(Signal::AngularRate) => "deg/h/h",
+            Quantity::Ramp(Signal::Acceleration) => "ug/h",
+            Quantity::Integrated(Signal::AngularRate) => "deg",
+            Quantity::Integrated(Signal::Acceleration) => "m/s",
+            Quantity::PerDegree(Signal::AngularRate) => "deg/h/degC",
+            Quantity::PerDegree(Signal::Acceleration) => "ug/degC",
+            Quantity::Angle => "deg",
+            Quantity::Ratio => "ppm",
+            Quantity::Time => "s",
+            Quantity::Frequency => "Hz",
+            Quantity::Temperature => "degC",
+            Quantity::TemperatureRate => "degC/s",
+        }
+    }
+
+    /// `value` (SI) as "v unit" with five significant digits.
+    pub fn format(&self, value: f64, q: Quantity) -> String {
+        let unit = self.unit(q);
+        match crate::units::parse_quantity(&format!("1 {unit}"), q) {
+            Ok(factor) if factor > 0.0 && q != Quantity::Temperature => {
+                format!("{} {unit}", sig5(value / factor))
+            }
+            _ => format!("{} {}", sig5(value), q.si_unit()),
+        }
+    }
+}
+
+/// Five significant digits, plain where that is short, else with an exponent.
+fn sig5(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let e = v.abs().log10().floor() as i32;
+    if (-3..6).contains(&e) {
+        let decimals = (4 - e).max(0) as usize;
+        let t = format!("{v:.decimals$}");
+        if t.contains('.') {
+            t.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            t
+        }
+    } else {
+        format!("{v:.4e}")
+    }
+}
+
+impl SensorModel {
+    /// Write the model as a config in `style`'s units with about five significant digits: a
+    /// triad whose three axes agree as one `[sensor.all]` table, no empty tables, the temperature
+    /// table only when it is not the default (constant 25 degC). For people; `to_toml_string` is
+    /// the exact SI form.
+    pub fn to_toml_string_styled(&self, style: &UnitStyle) -> String {
+        let f = |v: f64, q: Quantity| style.format(v, q);
+        let mut s = String::new();
+        let _ = writeln!(s, "name = {}", toml_str(&self.name));
+        if let Some(d) = &self.description {
+            let _ = writeln!(s, "description = {}", toml_str(d));
+        }
+        let default_temperature = self.temperature == TemperatureProfile::default()
+            && self.temperature_reference_c == 25.0;
+        if !default_temperature {
+            let t = Quantity::Temperature;
+            let _ = writeln!(s, "\n[temperature]");
+            match &self.temperature {
+                TemperatureProfile::Constant { temp_c } => {
+                    let _ = writeln!(s, "profile = \"constant\"\nvalue = \"{}\"", f(*temp_c, t));
+                }
+                TemperatureProfile::Ramp {
+                    start_c,
+                    rate_c_per_s,
+                    end_c,
+                } => {
+                    let _ = writeln!(
+                        s,
+                        "profile = \"ramp\"\nstart = \"{}\"\nrate = \"{}\"",
+                        f(*start_c, t),
+                        f(*rate_c_per_s, Quantity::TemperatureRate)
+                    );
+                    if let Some(e) = end_c {
+                        let _ = writeln!(s, "end = \"{}\"", f(*e, t));
+                    }
+                }
+                TemperatureProfile::Warmup {
+                    start_c,
+                    end_c,
+                    time_constant_s,
+                } => {
+                    let _ = writeln!(
+                        s,
+                        "profile = \"warmup\"\nstart = \"{}\"\nend = \"{}\"\ntime_constant = \"{}\"",
+                        f(*start_c, t),
+                        f(*end_c, t),
+                        f(*time_constant_s, Quantity::Time)
+                    );
+                }
+                TemperatureProfile::Sinusoid {
+                    mean_c,
+                    amplitude_c,
+                    period_s,
+                } => {
+                    let _ = writeln!(
+                        s,
+                        "profile = \"sinusoid\"\nmean = \"{}\"\namplitude = \"{}\"\nperiod = \"{}\"",
+                        f(*mean_c, t),
+                        f(*amplitude_c, t),
+                        f(*period_s, Quantity::Time)
+                    );
+                }
+            }
+            let _ = writeln!(s, "reference = \"{}\"", f(self.temperature_reference_c, t));
+        }
+        for sensor in Sensor::ALL {
+            let sig = signal_of(sensor);
+            let axes = &self.triad(sensor).axes;
+            if axes[0] == axes[1] && axes[1] == axes[2] {
+                if axes[0] != AxisModel::default() {
+                    let _ = writeln!(s, "\n[{}.all]", sensor.name());
+                    write_axis_with(&mut s, &axes[0], sig, &f);
+                }
+                continue;
+            }
+            for (axis, name) in axes.iter().zip(AXIS_NAMES) {
+                if *axis != AxisModel::default() {
+                    let _ = writeln!(s, "\n[{}.{}]", sensor.name(), name);
+                    write_axis_with(&mut s, axis, sig, &f);
+                }
+            }
+        }
+        s
     }
 }

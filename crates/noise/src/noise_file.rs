@@ -1,0 +1,319 @@
+//! IMU noise files of visual-inertial tools, written and read: Kalibr's `imu.yaml`, OpenVINS's
+//! `kalibr_imu_chain.yaml` (the same keys under `imu0:`) and VINS-Fusion's config keys.
+//!
+//! The four values are continuous-time densities of the two terms these estimators model
+//! (docs/noise-files.md, after the Kalibr wiki "IMU Noise Model"):
+//! - noise density sigma_g (rad/s/sqrt(Hz)), sigma_a (m/s^2/sqrt(Hz)): the white-noise density N of
+//!   IEEE 952, the Allan deviation of the -1/2 slope line read at tau = 1 s;
+//! - random walk sigma_bg (rad/s^2/sqrt(Hz)), sigma_ba (m/s^3/sqrt(Hz)): the rate random walk K of
+//!   IEEE 952, the +1/2 slope line read at tau = 3 s.
+//!
+//! Their discrete-time forms at sample interval dt are sigma_d = sigma / sqrt(dt) for the noise and
+//! sigma_bd = sigma_b * sqrt(dt) for the random walk (Kalibr wiki); the files hold the continuous
+//! values. One value per sensor: these tools take no per-axis values, so the largest of the three
+//! axes is written (the worst axis, stated in the file) and each axis is given in a comment.
+
+use crate::model::{AxisModel, SensorModel, TemperatureProfile, TriadModel};
+use std::fmt::Write as _;
+
+/// Which tool's keys.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Flavor {
+    /// Kalibr `imu.yaml`: `gyroscope_noise_density`, `gyroscope_random_walk`,
+    /// `accelerometer_noise_density`, `accelerometer_random_walk`, `rostopic`, `update_rate`.
+    Kalibr,
+    /// OpenVINS `kalibr_imu_chain.yaml`: Kalibr's keys under `imu0:`, with `T_i_b`, `time_offset`
+    /// and `model: "kalibr"`.
+    OpenVins,
+    /// VINS-Fusion config keys `gyr_n`, `gyr_w`, `acc_n`, `acc_w` (same continuous-time meaning).
+    VinsFusion,
+}
+
+impl Flavor {
+    pub fn name(self) -> &'static str {
+        match self {
+            Flavor::Kalibr => "kalibr",
+            Flavor::OpenVins => "openvins",
+            Flavor::VinsFusion => "vins-fusion",
+        }
+    }
+}
+
+/// One per-axis value and how it was obtained (written as a comment).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AxisValue {
+    pub value: f64,
+    /// e.g. "IEEE 952 fit" or "bound: random-walk line through the Allan deviation at 1000 s".
+    pub how: String,
+}
+
+/// The values of a noise file, SI continuous-time, per axis (x, y, z).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NoiseValues {
+    pub gyro_noise_density: [AxisValue; 3],
+    pub gyro_random_walk: [AxisValue; 3],
+    pub accel_noise_density: [AxisValue; 3],
+    pub accel_random_walk: [AxisValue; 3],
+    pub rostopic: String,
+    pub update_rate_hz: f64,
+    /// Where the values come from, for the header comment (e.g. "allan on imu1.csv").
+    pub origin: String,
+}
+
+/// Write a noise file. `inflate` multiplies the four written values (1 = as measured); the
+/// measured values stay in the comments.
+pub fn write_noise_file(v: &NoiseValues, flavor: Flavor, inflate: f64) -> String {
+    let worst = |a: &[AxisValue; 3]| a.iter().map(|x| x.value).fold(f64::NAN, f64::max);
+    let rows: [(&str, &str, &str, &[AxisValue; 3]); 4] = [
+        (
+            "accelerometer_noise_density",
+            "acc_n",
+            "m/s^2/sqrt(Hz), accelerometer white noise",
+            &v.accel_noise_density,
+        ),
+        (
+            "accelerometer_random_walk",
+            "acc_w",
+            "m/s^3/sqrt(Hz), accelerometer bias random walk",
+            &v.accel_random_walk,
+        ),
+        (
+            "gyroscope_noise_density",
+            "gyr_n",
+            "rad/s/sqrt(Hz), gyro white noise",
+            &v.gyro_noise_density,
+        ),
+        (
+            "gyroscope_random_walk",
+            "gyr_w",
+            "rad/s^2/sqrt(Hz), gyro bias random walk",
+            &v.gyro_random_walk,
+        ),
+    ];
+    let mut s = String::new();
+    if flavor != Flavor::Kalibr {
+        s.push_str("%YAML:1.0\n");
+    }
+    let _ = writeln!(
+        s,
+        "# IMU noise ({} keys) written by imudrift from {}.",
+        flavor.name(),
+        v.origin
+    );
+    s.push_str(
+        "# Continuous-time densities: noise density = white noise N (Allan deviation at tau = 1 s),\n\
+         # random walk = rate random walk K (+1/2 slope read at tau = 3 s), IEEE 952.\n\
+         # Discrete at dt: noise sigma/sqrt(dt), random walk sigma*sqrt(dt).\n\
+         # One value per sensor: the largest of the three axes (worst axis); each axis below.\n",
+    );
+    if inflate != 1.0 {
+        let _ = writeln!(
+            s,
+            "# The written values are the measured ones multiplied by {inflate} (--inflate), a margin for what the\n# two-term model leaves out (bias instability, temperature, vibration); the measured values are below."
+        );
+    }
+    for (key, _, unit, axes) in &rows {
+        let per_axis: Vec<String> = axes
+            .iter()
+            .zip(["x", "y", "z"])
+            .map(|(a, n)| format!("{n} {} ({})", sci(a.value), a.how))
+            .collect();
+        let _ = writeln!(s, "# {key} [{unit}]: {}", per_axis.join(", "));
+    }
+    let indent = if flavor == Flavor::OpenVins { "  " } else { "" };
+    if flavor == Flavor::OpenVins {
+        s.push_str("imu0:\n  T_i_b:\n    - [1.0, 0.0, 0.0, 0.0]\n    - [0.0, 1.0, 0.0, 0.0]\n    - [0.0, 0.0, 1.0, 0.0]\n    - [0.0, 0.0, 0.0, 1.0]\n");
+    }
+    if flavor == Flavor::VinsFusion {
+        // VINS-Fusion's preintegration adds (value * dt)^2 per sample (mid-point rule: half of
+        // it for the white noise), so a continuous density acts smaller there; the values that
+        // make it carry the continuous model, for users who want that (docs/noise-files.md).
+        let dt = 1.0 / v.update_rate_hz;
+        if dt.is_finite() && dt > 0.0 {
+            let _ = writeln!(
+                s,
+                "# VINS-Fusion applies these per sample; to make its propagation carry the continuous model at {} Hz use\n# gyr_n {}, acc_n {}, gyr_w {}, acc_w {} (sqrt(2/dt) N and K/sqrt(dt), worst axis).",
+                v.update_rate_hz,
+                sci(worst(&v.gyro_noise_density) * inflate * (2.0 / dt).sqrt()),
+                sci(worst(&v.accel_noise_density) * inflate * (2.0 / dt).sqrt()),
+                sci(worst(&v.gyro_random_walk) * inflate / dt.sqrt()),
+                sci(worst(&v.accel_random_walk) * inflate / dt.sqrt()),
+            );
+        }
+        let _ = writeln!(s, "imu_topic: \"{}\"", v.rostopic);
+    }
+    for (key, short, unit, axes) in &rows {
+        let name = if flavor == Flavor::VinsFusion {
+            short
+        } else {
+            key
+        };
+        let _ = writeln!(
+            s,
+            "{indent}{name}: {}  # [{unit}]",
+            sci(worst(axes) * inflate)
+        );
+    }
+    if flavor != Flavor::VinsFusion {
+        let _ = writeln!(s, "{indent}rostopic: {}", v.rostopic);
+        let _ = writeln!(s, "{indent}update_rate: {}", v.update_rate_hz);
+    }
+    if flavor == Flavor::OpenVins {
+        // OpenVINS's parser requires the intrinsics too; "calibrated" with identity matrices
+        // and a zero g-sensitivity says the IMU is taken as already corrected.
+        s.push_str("  time_offset: 0.0\n  model: \"calibrated\"\n");
+        for (key, rows) in [
+            ("Tw", EYE3),
+            ("R_IMUtoGYRO", EYE3),
+            ("Ta", EYE3),
+            ("R_IMUtoACC", EYE3),
+            ("Tg", ["0.0, 0.0, 0.0"; 3]),
+        ] {
+            let _ = writeln!(s, "  {key}:");
+            for r in rows {
+                let _ = writeln!(s, "    - [{r}]");
+            }
+        }
+    }
+    s
+}
+
+const EYE3: [&str; 3] = ["1.0, 0.0, 0.0", "0.0, 1.0, 0.0", "0.0, 0.0, 1.0"];
+
+/// Five significant digits in scientific notation with a signed exponent (`1.6968e-04`):
+/// Kalibr reads with PyYAML, whose YAML 1.1 floats need the dot and the exponent's sign
+/// (`1e-3` would be read as text).
+fn sci(v: f64) -> String {
+    let t = format!("{v:.4e}");
+    match t.split_once('e') {
+        Some((m, e)) => {
+            let (sign, digits) = match e.strip_prefix('-') {
+                Some(d) => ('-', d),
+                None => ('+', e),
+            };
+            format!("{m}e{sign}{digits:0>2}")
+        }
+        None => t,
+    }
+}
+
+/// A noise file that cannot be used: the file, the line where known, the key and what was expected.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{file}{at}: {message}", at = line.map(|l| format!(":{l}")).unwrap_or_default())]
+pub struct NoiseFileError {
+    pub file: String,
+    pub line: Option<usize>,
+    pub message: String,
+}
+
+/// The key spellings of each value: Kalibr / OpenVINS, then VINS-Fusion.
+const KEYS: [(&str, &str); 4] = [
+    ("gyroscope_noise_density", "gyr_n"),
+    ("gyroscope_random_walk", "gyr_w"),
+    ("accelerometer_noise_density", "acc_n"),
+    ("accelerometer_random_walk", "acc_w"),
+];
+
+/// `key: value` lines of the YAML subset these files use (comments, one level of nesting under
+/// `imu0:`, matrices and lists ignored), with their line numbers; the first occurrence of a key.
+fn flat_entries(text: &str) -> Vec<(String, String, usize)> {
+    let mut out: Vec<(String, String, usize)> = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let line = match raw.find('#') {
+            Some(k) => &raw[..k],
+            None => raw,
+        };
+        let Some((key, value)) = line.split_once(':') else {
+            continue;
+        };
+        let key = key.trim();
+        if key.is_empty() || !key.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+            continue;
+        }
+        if out.iter().any(|(k, _, _)| k == key) {
+            continue;
+        }
+        out.push((
+            key.to_string(),
+            value.trim().trim_matches('"').to_string(),
+            i + 1,
+        ));
+    }
+    out
+}
+
+/// Does this text look like a Kalibr / OpenVINS / VINS-Fusion IMU noise file?
+pub fn is_noise_file(text: &str) -> bool {
+    let e = flat_entries(text);
+    KEYS.iter()
+        .any(|(a, b)| e.iter().any(|(k, _, _)| k == a || k == b))
+}
+
+/// Read a noise file as a sensor model: white noise and rate random walk on every axis (the same
+/// value on the three axes of a sensor), nothing else. `source` names the file in errors and
+/// gives the model its name.
+pub fn read_noise_file(text: &str, source: &str) -> Result<SensorModel, NoiseFileError> {
+    let entries = flat_entries(text);
+    let err = |line: Option<usize>, message: String| NoiseFileError {
+        file: source.to_string(),
+        line,
+        message,
+    };
+    let mut values = [0.0f64; 4];
+    for (slot, (long, short)) in KEYS.iter().enumerate() {
+        let found = entries
+            .iter()
+            .find(|(k, _, _)| k == long || k == short)
+            .ok_or_else(|| {
+                err(
+                    None,
+                    format!(
+                        "no `{long}` (or `{short}`): an IMU noise file gives gyroscope_noise_density, gyroscope_random_walk, accelerometer_noise_density and accelerometer_random_walk"
+                    ),
+                )
+            })?;
+        let (key, text_value, line) = found;
+        let v: f64 = text_value.parse().map_err(|_| {
+            err(
+                Some(*line),
+                format!("key `{key}`: expected a number (continuous-time density, SI), found `{text_value}`"),
+            )
+        })?;
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(err(
+                Some(*line),
+                format!("key `{key}`: expected a value >= 0, found {text_value}"),
+            ));
+        }
+        values[slot] = v;
+    }
+    let axis = |n: f64, k: f64| AxisModel {
+        white_noise: (n > 0.0).then_some(n),
+        rate_random_walk: (k > 0.0).then_some(k),
+        ..AxisModel::default()
+    };
+    let triad = |n: f64, k: f64| TriadModel {
+        axes: [axis(n, k), axis(n, k), axis(n, k)],
+    };
+    let name = std::path::Path::new(source)
+        .file_stem()
+        .map_or("noise file".to_string(), |s| {
+            s.to_string_lossy().to_string()
+        });
+    let rate = entries
+        .iter()
+        .find(|(k, _, _)| k == "update_rate")
+        .map(|(_, v, _)| v.clone());
+    Ok(SensorModel {
+        name,
+        description: Some(format!(
+            "from the IMU noise file {source}{}: white noise and bias random walk only",
+            rate.map(|r| format!(" (update_rate {r} Hz)"))
+                .unwrap_or_default()
+        )),
+        gyro: triad(values[0], values[1]),
+        accel: triad(values[2], values[3]),
+        temperature: TemperatureProfile::default(),
+        temperature_reference_c: 25.0,
+    })
+}

@@ -1,0 +1,618 @@
+//! Which quantity and unit a log column holds, from its header name: the names robotics and
+//! navigation logs use (`gyro_x`, `gyr_x`, `wx`, `omega_x`, `angular_velocity.x`, `acc_x`,
+//! `accel_x`, `linear_acceleration.x`, `t`, `time`, `timestamp`, `temp`, ...) and the unit
+//! suffixes they carry (`gyro_x_dps`, `gyro_x_rad_s`, `acc_x_g`, `acc_x_mps2`, `t_ms`, `time_ns`,
+//! `gyro_x[deg/s]`, `acc_x (m/s^2)`). `rostopic echo -p` columns (`field.angular_velocity.x`,
+//! `%time` in ns) are read too.
+//!
+//! No guessing: a column whose name says neither a known quantity nor axis is skipped (and listed);
+//! a unit suffix that is not one of the known spellings makes the column skipped too.
+
+use super::units::{AccelUnit, GyroUnit, TimeUnit};
+
+/// What a column holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Quantity {
+    Time,
+    /// Gyro axis 0, 1, 2 (x, y, z).
+    Gyro(usize),
+    /// Accelerometer axis 0, 1, 2.
+    Accel(usize),
+    Temperature,
+}
+
+impl Quantity {
+    /// The canonical channel name (docs/cli.md).
+    pub fn channel(self) -> &'static str {
+        match self {
+            Quantity::Time => "t",
+            Quantity::Gyro(a) => noise::CHANNEL_NAMES[a],
+            Quantity::Accel(a) => noise::CHANNEL_NAMES[3 + a],
+            Quantity::Temperature => "temp",
+        }
+    }
+
+    /// The quantity of a canonical channel name.
+    pub fn of_channel(name: &str) -> Option<Quantity> {
+        match name {
+            "t" => Some(Quantity::Time),
+            "temp" => Some(Quantity::Temperature),
+            _ => noise::CHANNEL_NAMES
+                .iter()
+                .position(|&c| c == name)
+                .map(|i| {
+                    if i < 3 {
+                        Quantity::Gyro(i)
+                    } else {
+                        Quantity::Accel(i - 3)
+                    }
+                }),
+        }
+    }
+}
+
+/// A unit a column name states.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NamedUnit {
+    Gyro(GyroUnit),
+    Accel(AccelUnit),
+    Time(TimeUnit),
+    Celsius,
+}
+
+/// What a header name says: the quantity and, when the name carries one, the unit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Recognised {
+    pub quantity: Quantity,
+    pub unit: Option<NamedUnit>,
+}
+
+/// Why a column is not used.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum NotRecognised {
+    /// The name is not a quantity the reader knows.
+    Unknown,
+    /// A known quantity with a unit suffix that is not one of the known spellings.
+    Unit(String),
+}
+
+const GYRO_WORDS: [&str; 8] = [
+    "gyro",
+    "gyr",
+    "gyroscope",
+    "w",
+    "omega",
+    "angular",
+    "ang",
+    "g",
+];
+const ACCEL_WORDS: [&str; 7] = [
+    "acc",
+    "accel",
+    "accelerometer",
+    "a",
+    "linear",
+    "lin",
+    "acceleration",
+];
+const TIME_WORDS: [&str; 6] = ["t", "time", "timestamp", "stamp", "%time", "times"];
+const TEMP_WORDS: [&str; 3] = ["temp", "temperature", "tmp"];
+
+fn axis_of(token: &str) -> Option<usize> {
+    match token {
+        "x" => Some(0),
+        "y" => Some(1),
+        "z" => Some(2),
+        _ => None,
+    }
+}
+
+/// Recognise a header name.
+pub fn recognise(name: &str) -> Result<Recognised, NotRecognised> {
+    let lower = name.trim().to_ascii_lowercase();
+    // A unit in brackets: `gyro_x[deg/s]`, `acc_x (m/s^2)`.
+    let (stem, bracket_unit) = match lower.find(['[', '(']) {
+        Some(i) => {
+            let unit = lower[i + 1..]
+                .trim_end_matches([']', ')'])
+                .trim()
+                .to_string();
+            (lower[..i].trim().to_string(), Some(unit))
+        }
+        None => (lower.clone(), None),
+    };
+    let stem = stem.strip_prefix("field.").unwrap_or(&stem);
+    let tokens: Vec<&str> = stem
+        .split(['_', '.', '-', ' '])
+        .filter(|t| !t.is_empty())
+        .collect();
+    let first = *tokens.first().ok_or(NotRecognised::Unknown)?;
+    // The unit tokens: what follows the quantity (and axis), or the bracket.
+    let unit_text = |rest: &[&str]| -> Option<String> {
+        match (&bracket_unit, rest.is_empty()) {
+            (Some(u), _) => Some(u.clone()),
+            (None, false) => Some(rest.join("_")),
+            (None, true) => None,
+        }
+    };
+    // Time and temperature: a word, then an optional unit.
+    if TIME_WORDS.contains(&first) {
+        let unit = match unit_text(&tokens[1..]) {
+            // `rostopic echo -p` writes `%time` in nanoseconds.
+            None if first == "%time" => Some(TimeUnit::Ns),
+            None => None,
+            Some(u) => Some(time_unit(&u).ok_or(NotRecognised::Unit(u))?),
+        };
+        return Ok(Recognised {
+            quantity: Quantity::Time,
+            unit: unit.map(NamedUnit::Time),
+        });
+    }
+    if TEMP_WORDS.contains(&first) {
+        return match unit_text(&tokens[1..]) {
+            None => Ok(Recognised {
+                quantity: Quantity::Temperature,
+                unit: None,
+            }),
+            Some(u) if ["c", "degc", "deg_c", "celsius", "°c"].contains(&u.as_str()) => {
+                Ok(Recognised {
+                    quantity: Quantity::Temperature,
+                    unit: Some(NamedUnit::Celsius),
+                })
+            }
+            Some(u) => Err(NotRecognised::Unit(u)),
+        };
+    }
+    // Gyro or accelerometer: a quantity word (the axis may be glued to it: `wx`, `gyrox`), words
+    // that qualify it (`velocity`, `out`, `meas`, `raw`), the axis, then an optional unit.
+    let (is_gyro, axis_at, glued) = {
+        let split_glued = |t: &str| -> Option<(String, usize)> {
+            let (head, last) = t.split_at(t.len().checked_sub(1)?);
+            Some((head.to_string(), axis_of(last)?))
+        };
+        if let Some((head, axis)) = split_glued(first) {
+            if GYRO_WORDS.contains(&head.as_str()) {
+                (true, 0, Some(axis))
+            } else if ACCEL_WORDS.contains(&head.as_str()) {
+                (false, 0, Some(axis))
+            } else {
+                (GYRO_WORDS.contains(&first), usize::MAX, None)
+            }
+        } else {
+            (GYRO_WORDS.contains(&first), usize::MAX, None)
+        }
+    };
+    let is_accel = ACCEL_WORDS.contains(&first) || (glued.is_some() && !is_gyro);
+    if !(is_gyro || is_accel) {
+        return Err(NotRecognised::Unknown);
+    }
+    let (axis, rest) = match glued {
+        Some(axis) => (axis, &tokens[axis_at + 1..]),
+        None => {
+            let k = tokens[1..]
+                .iter()
+                .position(|t| axis_of(t).is_some())
+                .ok_or(NotRecognised::Unknown)?
+                + 1;
+            // Between the quantity word and the axis only qualifiers, never another quantity.
+            if tokens[1..k]
+                .iter()
+                .any(|t| TIME_WORDS.contains(t) || TEMP_WORDS.contains(t))
+            {
+                return Err(NotRecognised::Unknown);
+            }
+            (axis_of(tokens[k]).expect("found above"), &tokens[k + 1..])
+        }
+    };
+    let unit = match unit_text(rest) {
+        None => None,
+        Some(u) if is_gyro => Some(NamedUnit::Gyro(
+            gyro_unit(&u).ok_or(NotRecognised::Unit(u))?,
+        )),
+        Some(u) => Some(NamedUnit::Accel(
+            accel_unit(&u).ok_or(NotRecognised::Unit(u))?,
+        )),
+    };
+    Ok(Recognised {
+        quantity: if is_gyro {
+            Quantity::Gyro(axis)
+        } else {
+            Quantity::Accel(axis)
+        },
+        unit,
+    })
+}
+
+/// Unit spellings, separators normalised to `_` (`rad/s`, `rad_s`, `rads`, `radps` are one).
+fn norm(u: &str) -> String {
+    u.replace(['/', ' ', '-', '.'], "_").replace("^", "")
+}
+
+fn gyro_unit(u: &str) -> Option<GyroUnit> {
+    match norm(u).as_str() {
+        "rad_s" | "rads" | "radps" | "rad_sec" | "rad_per_s" | "r_s" => Some(GyroUnit::RadPerS),
+        "deg_s" | "degs" | "dps" | "degps" | "deg_sec" | "deg_per_s" | "d_s" => {
+            Some(GyroUnit::DegPerS)
+        }
+        "deg_h" | "dph" | "degph" | "deg_hr" | "deg_per_h" => Some(GyroUnit::DegPerH),
+        _ => None,
+    }
+}
+
+fn accel_unit(u: &str) -> Option<AccelUnit> {
+    match norm(u).as_str() {
+        "m_s2" | "ms2" | "mps2" | "m_s_2" | "m_ss" | "mpss" | "m_s_s" | "m_per_s2" => {
+            Some(AccelUnit::MPerS2)
+        }
+        "g" => Some(AccelUnit::G),
+        "mg" => Some(AccelUnit::MilliG),
+        _ => None,
+    }
+}
+
+fn time_unit(u: &str) -> Option<TimeUnit> {
+    match norm(u).as_str() {
+        "s" | "sec" | "secs" | "seconds" => Some(TimeUnit::S),
+        "ms" | "msec" => Some(TimeUnit::Ms),
+        "us" | "usec" | "µs" => Some(TimeUnit::Us),
+        "ns" | "nsec" => Some(TimeUnit::Ns),
+        _ => None,
+    }
+}
+
+/// How a file column is used: its channel, the unit its values are in, and where that came from.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ColumnUse {
+    /// The file's column name.
+    pub column: String,
+    /// The canonical channel (`t`, `gx` .. `az`, `temp`).
+    pub channel: &'static str,
+    /// The unit of the file's values (converted to SI on reading).
+    pub unit: &'static str,
+    /// How the channel was chosen: "name" (recognised) or "--col"; and the unit: "name",
+    /// an option (`--gyro-unit`, `--accel-unit`, `--time-unit`) or "default" (the SI unit the
+    /// canonical names and --col mappings default to).
+    pub channel_from: &'static str,
+    pub unit_from: &'static str,
+    /// Factor from the file's unit to SI.
+    #[serde(skip)]
+    pub to_si: f64,
+}
+
+/// A column not used, and why.
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct Skipped {
+    pub column: String,
+    pub reason: String,
+}
+
+/// The units the command line gives.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct UnitOptions {
+    pub gyro: Option<GyroUnit>,
+    pub accel: Option<AccelUnit>,
+    pub time: Option<TimeUnit>,
+}
+
+/// The channel and unit of every column of a header (`None` for a skipped one), and the skipped
+/// columns with their reasons. `explicit` are the `--col NAME=COLUMN` pairs (checked by the
+/// caller to name columns of the header). Errors: a unit the name and the option disagree on, a
+/// gyro or accelerometer column whose unit nothing states.
+pub fn map_header(
+    names: &[String],
+    explicit: &[(String, String)],
+    units: UnitOptions,
+) -> Result<(Vec<Option<ColumnUse>>, Vec<Skipped>), String> {
+    let mut uses: Vec<Option<ColumnUse>> = vec![None; names.len()];
+    let mut skipped = Vec::new();
+    let mut taken: Vec<(&'static str, usize)> = Vec::new();
+    // Explicit mappings first: they win over a recognised name for the same channel.
+    let mut order: Vec<(usize, Option<Quantity>)> = Vec::new();
+    for (canon, col) in explicit {
+        if let Some(i) = names.iter().position(|n| n == col) {
+            order.push((i, Quantity::of_channel(canon)));
+        }
+    }
+    for i in 0..names.len() {
+        if !order.iter().any(|&(j, _)| j == i) {
+            order.push((i, None));
+        }
+    }
+    let mut missing_unit: Vec<String> = Vec::new();
+    for (i, forced) in order {
+        let name = &names[i];
+        let recognised = recognise(name);
+        let (quantity, channel_from) = match (forced, &recognised) {
+            (Some(q), _) => (q, "--col"),
+            (None, Ok(r)) => (r.quantity, "name"),
+            (None, Err(NotRecognised::Unknown)) => {
+                skipped.push(Skipped {
+                    column: name.clone(),
+                    reason:
+                        "not a quantity imudrift reads (time, gyro, accelerometer, temperature)"
+                            .into(),
+                });
+                continue;
+            }
+            (None, Err(NotRecognised::Unit(u))) => {
+                skipped.push(Skipped {
+                    column: name.clone(),
+                    reason: format!("unit `{u}` in the name is not one imudrift knows (map the column with --col and give the unit option)"),
+                });
+                continue;
+            }
+        };
+        let channel = quantity.channel();
+        if let Some(&(_, j)) = taken.iter().find(|(c, _)| *c == channel) {
+            skipped.push(Skipped {
+                column: name.clone(),
+                reason: format!(
+                    "also {channel}, which is read from `{}` (choose with --col {channel}={name})",
+                    names[j]
+                ),
+            });
+            continue;
+        }
+        // The unit the name states, if it is one of this quantity's.
+        let named = match (&recognised, quantity) {
+            (Ok(r), _) if r.quantity == quantity => r.unit,
+            (Ok(r), Quantity::Gyro(_)) if matches!(r.quantity, Quantity::Gyro(_)) => r.unit,
+            (Ok(r), Quantity::Accel(_)) if matches!(r.quantity, Quantity::Accel(_)) => r.unit,
+            _ => None,
+        };
+        // Canonical names and explicit mappings default to SI (docs/cli.md); other recognised
+        // names need their unit stated.
+        let may_default = channel_from == "--col" || name.trim() == channel;
+        let (unit, to_si, unit_from) = match quantity {
+            Quantity::Gyro(_) => {
+                let from_name = match named {
+                    Some(NamedUnit::Gyro(u)) => Some(u),
+                    _ => None,
+                };
+                match (from_name, units.gyro) {
+                    (Some(a), Some(b)) if a != b => {
+                        return Err(format!(
+                            "column `{name}` says {} in its name but --gyro-unit is {}; leave the option out or correct it",
+                            a.name(),
+                            b.name()
+                        ))
+                    }
+                    (Some(a), _) => (a.name(), a.to_si(), "name"),
+                    (None, Some(b)) => (b.name(), b.to_si(), "--gyro-unit"),
+                    (None, None) if may_default => ("rad/s", 1.0, "default"),
+                    (None, None) => {
+                        missing_unit.push(format!("`{name}` (gyro)"));
+                        ("", f64::NAN, "")
+                    }
+                }
+            }
+            Quantity::Accel(_) => {
+                let from_name = match named {
+                    Some(NamedUnit::Accel(u)) => Some(u),
+                    _ => None,
+                };
+                match (from_name, units.accel) {
+                    (Some(a), Some(b)) if a != b => {
+                        return Err(format!(
+                            "column `{name}` says {} in its name but --accel-unit is {}; leave the option out or correct it",
+                            a.name(),
+                            b.name()
+                        ))
+                    }
+                    (Some(a), _) => (a.name(), a.to_si(), "name"),
+                    (None, Some(b)) => (b.name(), b.to_si(), "--accel-unit"),
+                    (None, None) if may_default => ("m/s^2", 1.0, "default"),
+                    (None, None) => {
+                        missing_unit.push(format!("`{name}` (accelerometer)"));
+                        ("", f64::NAN, "")
+                    }
+                }
+            }
+            Quantity::Time => {
+                let from_name = match named {
+                    Some(NamedUnit::Time(u)) => Some(u),
+                    _ => None,
+                };
+                match (from_name, units.time) {
+                    (Some(a), Some(b)) if a != b => {
+                        return Err(format!(
+                            "column `{name}` says {} in its name but --time-unit is {}; leave the option out or correct it",
+                            a.name(),
+                            b.name()
+                        ))
+                    }
+                    (Some(a), _) => (a.name(), a.to_si(), "name"),
+                    (None, Some(b)) => (b.name(), b.to_si(), "--time-unit"),
+                    (None, None) => ("s", 1.0, "default"),
+                }
+            }
+            Quantity::Temperature => (
+                "degC",
+                1.0,
+                if named.is_some() { "name" } else { "default" },
+            ),
+        };
+        taken.push((channel, i));
+        uses[i] = Some(ColumnUse {
+            column: name.clone(),
+            channel,
+            unit,
+            channel_from,
+            unit_from,
+            to_si,
+        });
+    }
+    if !missing_unit.is_empty() {
+        let mut options = Vec::new();
+        if missing_unit.iter().any(|m| m.ends_with("(gyro)")) {
+            options.push("--gyro-unit rad/s|deg/s|deg/h");
+        }
+        if missing_unit.iter().any(|m| m.ends_with("(accelerometer)")) {
+            options.push("--accel-unit m/s^2|g|mg");
+        }
+        return Err(format!(
+            "no unit in the name of {}: give {} (each applies to every such column)",
+            missing_unit.join(", "),
+            options.join(" and ")
+        ));
+    }
+    skipped.sort_by_key(|s| names.iter().position(|n| *n == s.column));
+    Ok((uses, skipped))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn q(name: &str) -> (Quantity, Option<NamedUnit>) {
+        let r = recognise(name).unwrap_or_else(|e| panic!("{name}: {e:?}"));
+        (r.quantity, r.unit)
+    }
+
+    #[test]
+    fn the_usual_names_and_suffixes() {
+        use AccelUnit as A;
+        use GyroUnit as G;
+        use NamedUnit as U;
+        use Quantity::*;
+        let cases: &[(&str, Quantity, Option<NamedUnit>)] = &[
+            ("gx", Gyro(0), None),
+            ("az", Accel(2), None),
+            ("gyro_x", Gyro(0), None),
+            ("gyr_y", Gyro(1), None),
+            ("wx", Gyro(0), None),
+            ("omega_z", Gyro(2), None),
+            ("angular_velocity.x", Gyro(0), None),
+            ("field.angular_velocity.y", Gyro(1), None),
+            ("gyro_x_dps", Gyro(0), Some(U::Gyro(G::DegPerS))),
+            ("gyro_x_rad_s", Gyro(0), Some(U::Gyro(G::RadPerS))),
+            ("Gyro_X [deg/s]", Gyro(0), Some(U::Gyro(G::DegPerS))),
+            ("gyro_out_x", Gyro(0), None),
+            ("gyro_meas_z", Gyro(2), None),
+            ("acc_x", Accel(0), None),
+            ("accel_y", Accel(1), None),
+            ("linear_acceleration.z", Accel(2), None),
+            ("acc_x_g", Accel(0), Some(U::Accel(A::G))),
+            ("acc_x_mps2", Accel(0), Some(U::Accel(A::MPerS2))),
+            ("accel_z (m/s^2)", Accel(2), Some(U::Accel(A::MPerS2))),
+            ("accx_mg", Accel(0), Some(U::Accel(A::MilliG))),
+            ("t", Time, None),
+            ("t_s", Time, Some(U::Time(TimeUnit::S))),
+            ("time", Time, None),
+            ("timestamp", Time, None),
+            ("timestamp_ns", Time, Some(U::Time(TimeUnit::Ns))),
+            ("time_ms", Time, Some(U::Time(TimeUnit::Ms))),
+            ("t_us", Time, Some(U::Time(TimeUnit::Us))),
+            ("%time", Time, Some(U::Time(TimeUnit::Ns))),
+            ("temp", Temperature, None),
+            ("temperature_c", Temperature, Some(U::Celsius)),
+        ];
+        for &(name, quantity, unit) in cases {
+            assert_eq!(q(name), (quantity, unit), "{name}");
+        }
+    }
+
+    fn header(names: &[&str]) -> Vec<String> {
+        names.iter().map(|s| s.to_string()).collect()
+    }
+
+    #[test]
+    fn a_header_maps_with_units_from_names_options_or_the_si_default() {
+        let h = header(&[
+            "t_s",
+            "gyro_x_dps",
+            "gyro_y_dps",
+            "gz",
+            "acc_x_g",
+            "mag_x",
+            "temp",
+        ]);
+        let (uses, skipped) = map_header(&h, &[], UnitOptions::default()).unwrap();
+        let got: Vec<_> = uses
+            .iter()
+            .map(|u| u.as_ref().map(|u| (u.channel, u.unit, u.unit_from)))
+            .collect();
+        assert_eq!(
+            got,
+            [
+                Some(("t", "s", "name")),
+                Some(("gx", "deg/s", "name")),
+                Some(("gy", "deg/s", "name")),
+                Some(("gz", "rad/s", "default")),
+                Some(("ax", "g", "name")),
+                None,
+                Some(("temp", "degC", "default")),
+            ]
+        );
+        assert_eq!(skipped.len(), 1);
+        assert_eq!(skipped[0].column, "mag_x");
+        assert!((uses[1].as_ref().unwrap().to_si - std::f64::consts::PI / 180.0).abs() < 1e-18);
+    }
+
+    #[test]
+    fn units_must_be_stated_and_must_agree() {
+        let h = header(&["gyro_x", "acc_x"]);
+        let e = map_header(&h, &[], UnitOptions::default()).unwrap_err();
+        assert!(
+            e.contains("`gyro_x` (gyro)")
+                && e.contains("`acc_x` (accelerometer)")
+                && e.contains("--gyro-unit"),
+            "{e}"
+        );
+        let units = UnitOptions {
+            gyro: Some(GyroUnit::RadPerS),
+            accel: Some(AccelUnit::G),
+            time: None,
+        };
+        let (uses, _) = map_header(&h, &[], units).unwrap();
+        assert_eq!(uses[0].as_ref().unwrap().unit_from, "--gyro-unit");
+        assert_eq!(uses[1].as_ref().unwrap().unit, "g");
+        let h = header(&["gyro_x_dps"]);
+        let e = map_header(&h, &[], units).unwrap_err();
+        assert!(
+            e.contains("deg/s") && e.contains("--gyro-unit is rad/s"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_second_column_for_one_channel_is_skipped_unless_chosen() {
+        let h = header(&["gyro_out_x", "gyro_meas_x"]);
+        let units = UnitOptions {
+            gyro: Some(GyroUnit::RadPerS),
+            ..UnitOptions::default()
+        };
+        let (uses, skipped) = map_header(&h, &[], units).unwrap();
+        assert_eq!(uses[0].as_ref().unwrap().channel, "gx");
+        assert!(uses[1].is_none());
+        assert!(
+            skipped[0].reason.contains("--col gx=gyro_meas_x"),
+            "{skipped:?}"
+        );
+        let explicit = [("gx".to_string(), "gyro_meas_x".to_string())];
+        let (uses, skipped) = map_header(&h, &explicit, units).unwrap();
+        assert!(uses[0].is_none());
+        assert_eq!(uses[1].as_ref().unwrap().channel_from, "--col");
+        assert_eq!(skipped[0].column, "gyro_out_x");
+    }
+
+    #[test]
+    fn unknown_names_and_units_are_not_guessed() {
+        for name in [
+            "mag_x",
+            "pressure",
+            "gyro",
+            "frame_id",
+            "orientation.x",
+            "seq",
+            "",
+        ] {
+            assert_eq!(recognise(name), Err(NotRecognised::Unknown), "{name}");
+        }
+        assert_eq!(
+            recognise("gyro_x_furlongs"),
+            Err(NotRecognised::Unit("furlongs".into()))
+        );
+        assert_eq!(recognise("t_days"), Err(NotRecognised::Unit("days".into())));
+    }
+}

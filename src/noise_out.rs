@@ -1,0 +1,104 @@
+//! `--kalibr FILE`: the IMU noise file (Kalibr, OpenVINS or VINS-Fusion keys) that `allan` and
+//! `diagnose` write, from the Allan fit of a log or from a corrected model. The format and the
+//! meaning of each value are in docs/noise-files.md; the writer is `noise::noise_file`.
+
+use anyhow::{bail, Result};
+use noise::noise_file::{write_noise_file, AxisValue, Flavor, NoiseValues};
+use std::path::PathBuf;
+
+/// The noise-file options, shared by `allan` and `diagnose`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct NoiseFileArgs {
+    /// Write the IMU noise file visual-inertial tools read (Kalibr imu.yaml keys by default):
+    /// continuous-time noise density and random walk, worst axis, per-axis values in comments
+    #[arg(long, value_name = "FILE")]
+    pub kalibr: Option<PathBuf>,
+    /// Keys of the noise file: kalibr (imu.yaml), openvins (kalibr_imu_chain.yaml), vins-fusion
+    #[arg(long, value_name = "FORMAT", default_value = "kalibr", value_parser = ["kalibr", "openvins", "vins-fusion"])]
+    pub noise_format: String,
+    /// Multiply the written values by this margin (e.g. 10 for the random walk is common in VIO
+    /// tuning); the measured values stay in the file's comments
+    #[arg(long, value_name = "FACTOR", default_value_t = 1.0)]
+    pub inflate: f64,
+    /// `rostopic` written into the noise file
+    #[arg(long, value_name = "TOPIC", default_value = "/imu0")]
+    pub rostopic: String,
+}
+
+impl NoiseFileArgs {
+    fn flavor(&self) -> Flavor {
+        match self.noise_format.as_str() {
+            "openvins" => Flavor::OpenVins,
+            "vins-fusion" => Flavor::VinsFusion,
+            _ => Flavor::Kalibr,
+        }
+    }
+
+    /// Check the options before any work.
+    pub fn check(&self) -> Result<()> {
+        if !(self.inflate.is_finite() && self.inflate >= 1.0) {
+            bail!(
+                "--inflate {}: expected a factor of at least 1 (1 = the measured values)",
+                self.inflate
+            );
+        }
+        Ok(())
+    }
+
+    /// Write the file if asked. `per_channel[c]` = (noise density, random walk) of channel c
+    /// (gx gy gz ax ay az), `None` where the log has no such channel.
+    pub fn write(
+        &self,
+        per_channel: &[Option<(AxisValue, AxisValue)>; 6],
+        update_rate_hz: f64,
+        origin: &str,
+    ) -> Result<()> {
+        let Some(path) = &self.kalibr else {
+            return Ok(());
+        };
+        let missing: Vec<&str> = (0..6)
+            .filter(|&c| per_channel[c].is_none())
+            .map(|c| noise::CHANNEL_NAMES[c])
+            .collect();
+        if !missing.is_empty() {
+            bail!(
+                "--kalibr {}: a noise file needs the three gyro and three accelerometer channels; the log has no {}",
+                path.display(),
+                missing.join(", ")
+            );
+        }
+        let get = |c: usize, which: usize| -> AxisValue {
+            let (n, k) = per_channel[c].clone().expect("checked above");
+            if which == 0 {
+                n
+            } else {
+                k
+            }
+        };
+        let axes = |first: usize, which: usize| -> [AxisValue; 3] {
+            std::array::from_fn(|a| get(first + a, which))
+        };
+        let values = NoiseValues {
+            gyro_noise_density: axes(0, 0),
+            gyro_random_walk: axes(0, 1),
+            accel_noise_density: axes(3, 0),
+            accel_random_walk: axes(3, 1),
+            rostopic: self.rostopic.clone(),
+            update_rate_hz,
+            origin: origin.to_string(),
+        };
+        let text = write_noise_file(&values, self.flavor(), self.inflate);
+        crate::output::write_string(path, &text)?;
+        eprintln!(
+            "wrote {} ({} keys{})",
+            path.display(),
+            self.noise_format,
+            if self.inflate != 1.0 {
+                format!(", inflated x{}", self.inflate)
+            } else {
+                String::new()
+            }
+        );
+        Ok(())
+    }
+}
