@@ -402,31 +402,40 @@ fn binary_files_are_not_logs() {
     refused(&["allan", &nul, "--rate", "100"], &["NUL bytes"]);
 }
 
-/// Channel names that become the same file name get distinct SVG files, and the message lists
-/// the files written.
+/// Columns whose names are no quantity imudrift reads are never analysed as unitless channels:
+/// with nothing recognised the log is refused, naming the columns and the accepted forms; beside
+/// recognised ones they are skipped and listed (text and JSON).
 #[test]
-fn colliding_channel_names_get_distinct_plots() {
+fn unrecognised_columns_are_listed_never_analysed() {
     let dir = tempfile::tempdir().unwrap();
     let mut text = String::from("a.b,a_b,a b\n");
+    let mut with_gyro = String::from("gyro_x_dps,a.b,pressure\n");
     for line in log_text(2000, "\n").lines().skip(1) {
         let v = line.split(',').nth(1).unwrap();
         text += &format!("{v},{v},{v}\n");
+        with_gyro += &format!("{v},{v},{v}\n");
     }
     let log = write(dir.path(), "names.csv", text.as_bytes());
-    let out = dir.path().join("out");
-    let res = common::ok(imudrift(&[
-        "allan",
-        &log,
-        "--rate",
-        "100",
-        "--out",
-        out.to_str().unwrap(),
-    ]));
+    refused(
+        &["allan", &log, "--rate", "100"],
+        &[
+            "names.csv:1",
+            "no gyro or accelerometer column recognised among a.b, a_b, a b",
+            "--col gx=NAME",
+        ],
+    );
+    let log = write(dir.path(), "gyro.csv", with_gyro.as_bytes());
+    let res = common::ok(imudrift(&["allan", &log, "--rate", "100", "--json"]));
     let err = String::from_utf8_lossy(&res.stderr);
-    for f in ["allan_a_b.svg", "allan_a_b_2.svg", "allan_a_b_3.svg"] {
-        assert!(out.join(f).exists(), "{f} missing");
-        assert!(err.contains(f), "{err}");
-    }
+    assert!(
+        err.contains("gyro_x_dps -> gx (deg/s, from the name)") && err.contains("skipped: a.b"),
+        "{err}"
+    );
+    let doc: serde_json::Value = serde_json::from_slice(&res.stdout).unwrap();
+    assert_eq!(doc["channels"].as_object().unwrap().len(), 1);
+    assert_eq!(doc["columns"][0]["channel"], "gx");
+    assert_eq!(doc["columns"][0]["unit"], "deg/s");
+    assert_eq!(doc["skipped_columns"][1]["column"], "pressure");
 }
 
 /// Nothing lost: a termination signal during a long write leaves no temporary file; an output

@@ -19,6 +19,9 @@ pub struct LogArgs {
     /// Unit of the time column when its name does not say it (`t_ms`, `timestamp_ns` do; default s)
     #[arg(long, value_enum, value_name = "UNIT")]
     pub time_unit: Option<TimeUnit>,
+    /// The sensor_msgs/Imu topic to read from a ROS bag or MCAP file (default: the only one)
+    #[arg(long, value_name = "TOPIC")]
+    pub topic: Option<String>,
     /// Map a file column to a channel by hand, e.g. `--col gx=gyro_meas_x` (repeat or comma-separate); columns are otherwise recognised by name
     #[arg(long = "col", value_name = "NAME=COLUMN", value_delimiter = ',')]
     pub columns: Vec<String>,
@@ -54,6 +57,7 @@ impl LogArgs {
                 time: self.time_unit,
             },
             columns: map,
+            topic: self.topic.clone(),
         })
     }
 }

@@ -101,39 +101,8 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
             names.join(", ")
         );
     }
-    if let Some(t) = &t_s {
-        for (k, w) in t.windows(2).enumerate() {
-            if w[1] <= w[0] || !w[1].is_finite() {
-                let line = line_of_row(bytes, pos, header_line, k + 1);
-                bail!(
-                    "{source}:{line}: time t = {} does not increase (previous {}); expected strictly increasing times in s",
-                    w[1], w[0]
-                );
-            }
-        }
-    }
-    let rate_hz = match (opts.rate_hz, &t_s) {
-        (Some(r), Some(t)) => {
-            check_uniform(t, bytes, pos, header_line, source)?;
-            let from_t = (n_rows - 1) as f64 / (t[n_rows - 1] - t[0]);
-            if ((from_t - r) / r).abs() > RATE_TOLERANCE {
-                bail!(
-                    "{source}: --rate {} Hz disagrees with the `t` column ({} Hz); give the rate the log was sampled at, or leave --rate out to use `t`",
-                    crate::fmt::sig(r, 6),
-                    crate::fmt::sig(from_t, 6)
-                );
-            }
-            r
-        }
-        (Some(r), None) => r,
-        (None, Some(t)) => {
-            check_uniform(t, bytes, pos, header_line, source)?;
-            (n_rows - 1) as f64 / (t[n_rows - 1] - t[0])
-        }
-        (None, None) => bail!(
-            "{source}: no `t` column: give the sample rate with --rate HZ (or map a time column with --col t=NAME)"
-        ),
-    };
+    let locate = |row: usize| format!("{source}:{}", line_of_row(bytes, pos, header_line, row));
+    let rate_hz = rate_of(t_s.as_deref(), opts.rate_hz, source, &locate)?;
     Ok(Log {
         source: source.to_string(),
         rate_hz,
@@ -155,15 +124,55 @@ const STEP_TOLERANCE: f64 = 0.5;
 /// Highest sample rate a log may have, Hz.
 pub(super) const MAX_LOG_RATE_HZ: f64 = 1e9;
 
+/// The log's sample rate from its times `t` (s) and `--rate`, after checking the times increase
+/// and are uniform. `locate(row)` names where data row `row` is ("file:line", "file: message k").
+pub(super) fn rate_of(
+    t: Option<&[f64]>,
+    rate_hz: Option<f64>,
+    source: &str,
+    locate: &dyn Fn(usize) -> String,
+) -> Result<f64> {
+    if let Some(t) = t {
+        for (k, w) in t.windows(2).enumerate() {
+            if w[1] <= w[0] || !w[1].is_finite() {
+                bail!(
+                    "{}: time t = {} does not increase (previous {}); expected strictly increasing times in s",
+                    locate(k + 1),
+                    w[1],
+                    w[0]
+                );
+            }
+        }
+    }
+    Ok(match (rate_hz, t) {
+        (Some(r), Some(t)) => {
+            let n = t.len();
+            check_uniform(t, source, locate)?;
+            let from_t = (n - 1) as f64 / (t[n - 1] - t[0]);
+            if ((from_t - r) / r).abs() > RATE_TOLERANCE {
+                bail!(
+                    "{source}: --rate {} Hz disagrees with the `t` column ({} Hz); give the rate the log was sampled at, or leave --rate out to use `t`",
+                    crate::fmt::sig(r, 6),
+                    crate::fmt::sig(from_t, 6)
+                );
+            }
+            r
+        }
+        (Some(r), None) => r,
+        (None, Some(t)) => {
+            let n = t.len();
+            check_uniform(t, source, locate)?;
+            (n - 1) as f64 / (t[n - 1] - t[0])
+        }
+        (None, None) => bail!(
+            "{source}: no `t` column: give the sample rate with --rate HZ (or map a time column with --col t=NAME)"
+        ),
+    })
+}
+
 /// A uniformly sampled `t`: every step within [`STEP_TOLERANCE`] of the median step, and a rate
 /// that is a number. Analyses assume uniform sampling; a gap would silently change the rate.
-fn check_uniform(
-    t: &[f64],
-    bytes: &[u8],
-    pos: usize,
-    header_line: usize,
-    source: &str,
-) -> Result<()> {
+fn check_uniform(t: &[f64], source: &str, locate: &dyn Fn(usize) -> String) -> Result<()> {
     // The median by selection (linear time; a full sort of millions of steps costs 0.1 s).
     let median = {
         let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
@@ -172,16 +181,16 @@ fn check_uniform(
     };
     if !(median.is_normal() && 1.0 / median <= MAX_LOG_RATE_HZ) {
         bail!(
-            "{source}: the `t` column's median step is {median:e} s; expected a sample rate of at most {MAX_LOG_RATE_HZ:e} Hz (is `t` in seconds?)"
+            "{source}: the `t` column's median step is {median:e} s; expected a sample rate of at most {MAX_LOG_RATE_HZ:e} Hz (is `t` in seconds? --time-unit ms|us|ns says otherwise)"
         );
     }
     if let Some(k) = t
         .windows(2)
         .position(|w| ((w[1] - w[0]) - median).abs() > STEP_TOLERANCE * median)
     {
-        let line = line_of_row(bytes, pos, header_line, k + 1);
         bail!(
-            "{source}:{line}: t steps from {} to {} s ({:.4} s) where the log's median step is {median:.4} s: a gap or irregular sampling; imudrift analyses uniformly sampled logs: cut the log at the gap, or resample it",
+            "{}: t steps from {} to {} s ({:.4} s) where the log's median step is {median:.4} s: a gap or irregular sampling; imudrift analyses uniformly sampled logs: cut the log at the gap, or resample it",
+            locate(k + 1),
             t[k],
             t[k + 1],
             t[k + 1] - t[k]

@@ -11,6 +11,7 @@
 //! Errors name the file, the line and the column, and say what was expected.
 
 mod args;
+pub mod bag;
 mod columns;
 mod csv;
 mod file;
@@ -131,12 +132,73 @@ pub struct ReadOptions {
     pub units: UnitOptions,
     /// (canonical name, file column) pairs.
     pub columns: Vec<(String, String)>,
+    /// The sensor_msgs/Imu topic of a bag or MCAP file (default: the only one).
+    pub topic: Option<String>,
 }
 
-/// Read a CSV or gzip-compressed CSV log file.
+/// A bag or MCAP file's IMU topic as a log: channels gx..az in SI (sensor_msgs/Imu is SI by
+/// definition, REP 103), times from header.stamp, the same rate and uniformity checks as a CSV.
+fn read_bag(path: &Path, format: bag::Format, opts: &ReadOptions) -> Result<Log> {
+    let source = path.display().to_string();
+    if !opts.columns.is_empty() {
+        bail!("{source}: --col maps CSV columns; a bag's sensor_msgs/Imu fields are always angular_velocity and linear_acceleration");
+    }
+    let units = opts.units;
+    if units.gyro.is_some_and(|u| u != GyroUnit::RadPerS)
+        || units.accel.is_some_and(|u| u != AccelUnit::MPerS2)
+    {
+        bail!("{source}: sensor_msgs/Imu is in rad/s and m/s^2 (ROS REP 103); leave --gyro-unit and --accel-unit out");
+    }
+    let series = bag::read_imu(path, format, opts.topic.as_deref())?;
+    let t = series.t_s();
+    let topic = series.topic.clone();
+    let locate = |k: usize| format!("{source}: topic {topic} message {}", k + 1);
+    let rate_hz = csv::rate_of(Some(&t), opts.rate_hz, &source, &locate)?;
+    let mut channels = BTreeMap::new();
+    let mut order = Vec::new();
+    let mut columns = Vec::new();
+    let [gx, gy, gz] = series.gyro;
+    let [ax, ay, az] = series.accel;
+    for (i, data) in [gx, gy, gz, ax, ay, az].into_iter().enumerate() {
+        let name = noise::CHANNEL_NAMES[i];
+        let field = if i < 3 {
+            "angular_velocity"
+        } else {
+            "linear_acceleration"
+        };
+        columns.push(ColumnUse {
+            column: format!("{topic} {field}.{}", ["x", "y", "z"][i % 3]),
+            channel: name,
+            unit: if i < 3 { "rad/s" } else { "m/s^2" },
+            channel_from: "sensor_msgs/Imu",
+            unit_from: "REP 103",
+            to_si: 1.0,
+        });
+        order.push(name.to_string());
+        channels.insert(name.to_string(), data);
+    }
+    Ok(Log {
+        source,
+        rate_hz,
+        t_s: Some(t),
+        channels,
+        order,
+        columns,
+        skipped: Vec::new(),
+    })
+}
+
+/// Read a log file: CSV, gzip-compressed CSV, a ROS 1 bag or a ROS 2 MCAP file.
 pub fn read_log(path: &Path, opts: &ReadOptions) -> Result<Log> {
     let source = path.display().to_string();
     let raw = FileBytes::open(path).with_context(|| format!("cannot read {source}"))?;
+    if let Some(format) = bag::format_of(&raw[..raw.len().min(16)]) {
+        drop(raw);
+        return read_bag(path, format, opts);
+    }
+    if opts.topic.is_some() {
+        bail!("{source}: --topic applies to ROS bags and MCAP files; this is a CSV log");
+    }
     // What the machine can hold: a log and its parsed columns must fit, or the read is refused
     // before it starts rather than ending in an out-of-memory kill.
     let available = available_memory_bytes();

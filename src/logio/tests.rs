@@ -22,6 +22,7 @@ fn reads_comments_units_and_mapping() {
             ("gx".into(), "gyro_x_dps".into()),
             ("az".into(), "acc_z_g".into()),
         ],
+        topic: None,
     };
     let log = parse_log(text, "x.csv", &o).unwrap();
     assert_eq!(log.len(), 3);
