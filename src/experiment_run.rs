@@ -88,22 +88,23 @@ pub fn read_inputs(path: &Path, edits: &ScenarioEdits) -> Result<(Inputs, Scenar
     let given = path.display().to_string();
     let bytes = std::fs::read(path).with_context(|| format!("cannot read {given}"))?;
     let text = noise::utf8_text(bytes, &given)?;
-    let (scenario_source, scenario_toml) = if is_sensor_toml(&text) {
-        let file = path
-            .file_name()
-            .map(|f| f.to_string_lossy().into_owned())
-            .unwrap_or_else(|| given.clone());
-        let stem = path
-            .file_stem()
-            .map(|f| f.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "sensor".into());
-        (
-            format!("default static scenario for {given}"),
-            default_scenario_toml(&file, &stem),
-        )
-    } else {
-        (given, text)
-    };
+    let (scenario_source, scenario_toml) =
+        if is_sensor_toml(&text) || noise::is_noise_file_text(&text, &given) {
+            let file = path
+                .file_name()
+                .map(|f| f.to_string_lossy().into_owned())
+                .unwrap_or_else(|| given.clone());
+            let stem = path
+                .file_stem()
+                .map(|f| f.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "sensor".into());
+            (
+                format!("default static scenario for {given}"),
+                default_scenario_toml(&file, &stem),
+            )
+        } else {
+            (given, text)
+        };
     let scenario_toml = edit_scenario_toml(&scenario_toml, &scenario_source, edits)?;
     let scenario = Scenario::from_toml_str(&scenario_toml, &scenario_source)?;
     let sensor_path = match path.parent() {
@@ -137,7 +138,7 @@ pub fn parse_inputs(
     overrides: &Overrides,
 ) -> Result<(Scenario, SensorModel, Experiment)> {
     let scenario = Scenario::from_toml_str(&inputs.scenario_toml, &inputs.scenario_source)?;
-    let model = SensorModel::from_toml_str(&inputs.sensor_toml, &inputs.sensor_source)
+    let model = SensorModel::from_text(&inputs.sensor_toml, &inputs.sensor_source)
         .map_err(|e| anyhow::anyhow!("{e}"))?;
     let exp = Experiment::new(scenario.clone(), &model, overrides).map_err(with_flag)?;
     Ok((scenario, model, exp))

@@ -170,7 +170,11 @@ fn two_hour_200_hz_bag_in_under_five_seconds() {
         let t0 = std::time::Instant::now();
         let doc = allan(path, &[]);
         let secs = t0.elapsed().as_secs_f64();
-        println!("{}: {} messages, allan in {secs:.2} s", path.display(), doc["samples"]);
+        println!(
+            "{}: {} messages, allan in {secs:.2} s",
+            path.display(),
+            doc["samples"]
+        );
         assert_eq!(doc["samples"], 1_440_000);
         assert!(secs < 5.0, "{secs} s");
     }

@@ -347,7 +347,7 @@ pub fn map_header(
             skipped.push(Skipped {
                 column: name.clone(),
                 reason: format!(
-                    "also {channel}, which is read from `{}` (choose with --col {channel}={name})",
+                    "also {channel}, read from `{}`; choose with --col {channel}={name}",
                     names[j]
                 ),
             });

@@ -22,7 +22,7 @@ pub mod process;
 pub mod units;
 mod ziggurat;
 
-pub use config::{utf8_text, ConfigError, UnitStyle};
+pub use config::{is_noise_file_text, utf8_text, ConfigError, UnitStyle};
 pub use effect::{Effect, FilterError, Sensor, TermFilter};
 pub use model::{
     AxisModel, BiasInstability, Flicker, GaussMarkov, ModelError, SensorModel, Sinusoid,

@@ -101,19 +101,23 @@ impl SensorModel {
             source: std::sync::Arc::new(e),
         })?;
         let text = utf8_text(bytes, &name)?;
-        // A Kalibr / OpenVINS / VINS-Fusion IMU noise file is accepted wherever a sensor TOML is.
-        let yaml = matches!(
-            path.extension().and_then(|e| e.to_str()),
-            Some("yaml" | "yml")
-        );
-        if yaml
-            || (crate::noise_file::is_noise_file(&text)
-                && toml::from_str::<toml::Value>(&text).is_err())
-        {
-            return Ok(crate::noise_file::read_noise_file(&text, &name)?);
-        }
-        SensorModel::from_toml_str(&text, &name)
+        SensorModel::from_text(&text, &name)
     }
+
+    /// A sensor TOML, or a Kalibr / OpenVINS / VINS-Fusion IMU noise file (accepted wherever a
+    /// sensor TOML is): a `.yaml` / `.yml` `source`, or text with their keys that is not TOML.
+    pub fn from_text(text: &str, source: &str) -> Result<SensorModel, ConfigError> {
+        if is_noise_file_text(text, source) {
+            return Ok(crate::noise_file::read_noise_file(text, source)?);
+        }
+        SensorModel::from_toml_str(text, source)
+    }
+}
+
+/// Is this a noise file rather than a sensor TOML (by its name, or by its keys when not TOML)?
+pub fn is_noise_file_text(text: &str, source: &str) -> bool {
+    let yaml = source.ends_with(".yaml") || source.ends_with(".yml");
+    yaml || (crate::noise_file::is_noise_file(text) && text.parse::<toml::Table>().is_err())
 }
 
 /// A config file's text; a byte that is not UTF-8 is an error naming its line and column.
