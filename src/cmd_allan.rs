@@ -17,7 +17,8 @@ use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Log file: CSV or gzip-compressed CSV with a header row (`#` lines are comments)
+    /// Log file: CSV or gzip-compressed CSV with a header row (`#` lines are comments), a ROS 1
+    /// bag or a ROS 2 MCAP file (sensor_msgs/Imu)
     pub log: PathBuf,
     #[command(flatten)]
     pub log_args: LogArgs,
@@ -221,6 +222,7 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
         &per_channel,
         log.rate_hz,
         &format!("`imudrift allan` of {}", log.source),
+        log.topic.as_deref(),
     )?;
     if let Some(dir) = &args.out {
         let _set = output::begin_set(dir)?;

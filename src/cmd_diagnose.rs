@@ -17,8 +17,8 @@ use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Measured static log: CSV or gzip-compressed CSV with a header (`#` lines are comments);
-    /// columns gx gy gz (rad/s), ax ay az (m/s^2), optional temp (degC) and t (s)
+    /// Measured static log: CSV or gzip-compressed CSV with a header (`#` lines are comments;
+    /// columns recognised by name, docs/cli.md), a ROS 1 bag or a ROS 2 MCAP file
     pub log: PathBuf,
     /// Sensor model TOML to check against the log
     #[arg(long, value_name = "SENSOR.toml")]
@@ -207,6 +207,7 @@ fn run_inner(args: &Args) -> Result<()> {
             log.source,
             args.model.display()
         ),
+        log.topic.as_deref(),
     )?;
     if args.json {
         println!("{doc}");

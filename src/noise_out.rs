@@ -20,9 +20,9 @@ pub struct NoiseFileArgs {
     /// tuning); the measured values stay in the file's comments
     #[arg(long, value_name = "FACTOR", default_value_t = 1.0)]
     pub inflate: f64,
-    /// `rostopic` written into the noise file
-    #[arg(long, value_name = "TOPIC", default_value = "/imu0")]
-    pub rostopic: String,
+    /// `rostopic` written into the noise file (default: the bag's IMU topic, else /imu0)
+    #[arg(long, value_name = "TOPIC")]
+    pub rostopic: Option<String>,
 }
 
 impl NoiseFileArgs {
@@ -52,6 +52,7 @@ impl NoiseFileArgs {
         per_channel: &[Option<(AxisValue, AxisValue)>; 6],
         update_rate_hz: f64,
         origin: &str,
+        log_topic: Option<&str>,
     ) -> Result<()> {
         let Some(path) = &self.kalibr else {
             return Ok(());
@@ -83,7 +84,11 @@ impl NoiseFileArgs {
             gyro_random_walk: axes(0, 1),
             accel_noise_density: axes(3, 0),
             accel_random_walk: axes(3, 1),
-            rostopic: self.rostopic.clone(),
+            rostopic: self
+                .rostopic
+                .clone()
+                .or(log_topic.map(str::to_string))
+                .unwrap_or_else(|| "/imu0".into()),
             update_rate_hz,
             origin: origin.to_string(),
         };

@@ -111,6 +111,7 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
         order,
         columns: used,
         skipped,
+        topic: None,
     })
 }
 

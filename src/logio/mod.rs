@@ -63,6 +63,8 @@ pub struct Log {
     pub columns: Vec<ColumnUse>,
     /// Columns not used, with the reason.
     pub skipped: Vec<Skipped>,
+    /// The sensor_msgs/Imu topic, for a bag or MCAP file.
+    pub topic: Option<String>,
 }
 
 impl Log {
@@ -185,6 +187,7 @@ fn read_bag(path: &Path, format: bag::Format, opts: &ReadOptions) -> Result<Log>
         order,
         columns,
         skipped: Vec::new(),
+        topic: Some(topic),
     })
 }
 
