@@ -1,8 +1,8 @@
 """Cross-check of the bag and MCAP readers against an independent writer (manual, not in CI).
 
     pip install rosbags numpy
-    python3 scripts/bags_crosscheck.py          # writes imu.csv, imu.bag (ROS 1), imu2/imu2.mcap (ROS 2)
-    for f in imu.csv imu.bag imu2/imu2.mcap; do imudrift allan $f --json > $(basename $f).json; done
+    python3 scripts/bags_crosscheck.py   # imu.csv, imu.bag, bz2.bag, lz4.bag (ROS 1), imu2/imu2.mcap (ROS 2)
+    for f in imu.csv imu.bag bz2.bag lz4.bag imu2/imu2.mcap imu2; do imudrift allan $f --json > $(basename $f).json; done
 
 The three Allan results must agree (docs/validation.md, "Log inputs").
 """
@@ -39,3 +39,15 @@ with W2('imu2', version=8, storage_plugin=StoragePlugin.MCAP) as w:
         m, ns = msg(ts2, k, True)
         w.write(c, ns, ts2.serialize_cdr(m, 'sensor_msgs/msg/Imu'))
 print('written')
+
+# The same samples in ROS 1 bags with bz2- and lz4-compressed chunks.
+for comp, name in [(W1.CompressionFormat.BZ2, 'bz2.bag'), (W1.CompressionFormat.LZ4, 'lz4.bag')]:
+    w = W1(name)
+    w.set_compression(comp)
+    w.open()
+    c = w.add_connection('/imu0', 'sensor_msgs/msg/Imu', typestore=ts1)
+    for k in range(n):
+        m, ns = msg(ts1, k, False)
+        w.write(c, ns, ts1.serialize_ros1(m, 'sensor_msgs/msg/Imu'))
+    w.close()
+print('compressed bags written')

@@ -35,6 +35,38 @@ pub fn format_of(first_bytes: &[u8]) -> Option<Format> {
     }
 }
 
+/// The MCAP file of a ROS 2 bag directory (as `ros2 bag record -s mcap` writes it).
+pub fn bag_directory_file(dir: &Path) -> Result<std::path::PathBuf> {
+    let source = dir.display().to_string();
+    let mut mcap = Vec::new();
+    let mut db3 = false;
+    for entry in
+        std::fs::read_dir(dir).with_context(|| format!("cannot read the directory {source}"))?
+    {
+        let p = entry
+            .with_context(|| format!("cannot read the directory {source}"))?
+            .path();
+        match p.extension().and_then(|e| e.to_str()) {
+            Some("mcap") => mcap.push(p),
+            Some("db3") => db3 = true,
+            _ => {}
+        }
+    }
+    mcap.sort();
+    match mcap.len() {
+        1 => Ok(mcap.remove(0)),
+        0 if db3 => bail!(
+            "{source}: a ROS 2 bag in sqlite3 storage (.db3); imudrift reads MCAP: convert it with `ros2 bag convert` (storage_id: mcap) or record with `-s mcap`"
+        ),
+        0 => bail!("{source}: a directory without a .mcap file; give a log file, a ROS 1 bag or a ROS 2 MCAP file"),
+        _ => bail!(
+            "{source}: a bag split into {} files ({}); give one of them (each is analysed on its own)",
+            mcap.len(),
+            mcap.iter().map(|p| p.file_name().unwrap_or_default().to_string_lossy().into_owned()).collect::<Vec<_>>().join(", ")
+        ),
+    }
+}
+
 /// IMU samples of one topic, SI (rad/s, m/s^2), in stamp order.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ImuSeries {

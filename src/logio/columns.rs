@@ -76,7 +76,7 @@ pub enum NotRecognised {
     Unit(String),
 }
 
-const GYRO_WORDS: [&str; 8] = [
+const GYRO_WORDS: [&str; 11] = [
     "gyro",
     "gyr",
     "gyroscope",
@@ -85,8 +85,11 @@ const GYRO_WORDS: [&str; 8] = [
     "angular",
     "ang",
     "g",
+    "angularvelocity",
+    "angvel",
+    "angularrate",
 ];
-const ACCEL_WORDS: [&str; 7] = [
+const ACCEL_WORDS: [&str; 10] = [
     "acc",
     "accel",
     "accelerometer",
@@ -94,6 +97,22 @@ const ACCEL_WORDS: [&str; 7] = [
     "linear",
     "lin",
     "acceleration",
+    "linearacceleration",
+    "linacc",
+    "specificforce",
+];
+/// Words that make a gyro- or accelerometer-like name something else (an estimate's bias, a
+/// covariance, a standard deviation): such columns are not samples.
+const NOT_SAMPLES: [&str; 9] = [
+    "bias",
+    "cov",
+    "covariance",
+    "std",
+    "stddev",
+    "var",
+    "variance",
+    "offset",
+    "scale",
 ];
 const TIME_WORDS: [&str; 6] = ["t", "time", "timestamp", "stamp", "%time", "times"];
 const TEMP_WORDS: [&str; 3] = ["temp", "temperature", "tmp"];
@@ -122,10 +141,27 @@ pub fn recognise(name: &str) -> Result<Recognised, NotRecognised> {
         None => (lower.clone(), None),
     };
     let stem = stem.strip_prefix("field.").unwrap_or(&stem);
-    let tokens: Vec<&str> = stem
-        .split(['_', '.', '-', ' '])
+    let all: Vec<&str> = stem
+        .split(['_', '.', '-', ' ', '/'])
         .filter(|t| !t.is_empty())
         .collect();
+    if all.iter().any(|t| NOT_SAMPLES.contains(t)) {
+        return Err(NotRecognised::Unknown);
+    }
+    // Words before the quantity are a prefix (`imu_gyro_x`, `imu0.angular_velocity.x`).
+    let is_word = |t: &str| {
+        let glued = t.len() > 1
+            && axis_of(&t[t.len() - 1..]).is_some()
+            && (GYRO_WORDS.contains(&&t[..t.len() - 1])
+                || ACCEL_WORDS.contains(&&t[..t.len() - 1]));
+        GYRO_WORDS.contains(&t)
+            || ACCEL_WORDS.contains(&t)
+            || TIME_WORDS.contains(&t)
+            || TEMP_WORDS.contains(&t)
+            || glued
+    };
+    let start = all.iter().position(|t| is_word(t)).unwrap_or(0);
+    let tokens = &all[start..];
     let first = *tokens.first().ok_or(NotRecognised::Unknown)?;
     // The unit tokens: what follows the quantity (and axis), or the bracket.
     let unit_text = |rest: &[&str]| -> Option<String> {
@@ -230,8 +266,10 @@ fn norm(u: &str) -> String {
 
 fn gyro_unit(u: &str) -> Option<GyroUnit> {
     match norm(u).as_str() {
-        "rad_s" | "rads" | "radps" | "rad_sec" | "rad_per_s" | "r_s" => Some(GyroUnit::RadPerS),
-        "deg_s" | "degs" | "dps" | "degps" | "deg_sec" | "deg_per_s" | "d_s" => {
+        "rad_s" | "rads" | "radps" | "rad_sec" | "rad_per_s" | "r_s" | "rad_s_1" | "rads_1" => {
+            Some(GyroUnit::RadPerS)
+        }
+        "deg_s" | "degs" | "dps" | "degps" | "deg_sec" | "deg_per_s" | "d_s" | "deg_s_1" => {
             Some(GyroUnit::DegPerS)
         }
         "deg_h" | "dph" | "degph" | "deg_hr" | "deg_per_h" => Some(GyroUnit::DegPerH),
@@ -241,7 +279,7 @@ fn gyro_unit(u: &str) -> Option<GyroUnit> {
 
 fn accel_unit(u: &str) -> Option<AccelUnit> {
     match norm(u).as_str() {
-        "m_s2" | "ms2" | "mps2" | "m_s_2" | "m_ss" | "mpss" | "m_s_s" | "m_per_s2" => {
+        "m_s2" | "ms2" | "mps2" | "m_s_2" | "m_ss" | "mpss" | "m_s_s" | "m_per_s2" | "ms_2" => {
             Some(AccelUnit::MPerS2)
         }
         "g" => Some(AccelUnit::G),
@@ -506,6 +544,13 @@ mod tests {
             ("%time", Time, Some(U::Time(TimeUnit::Ns))),
             ("temp", Temperature, None),
             ("temperature_c", Temperature, Some(U::Celsius)),
+            ("w_RS_S_x [rad s^-1]", Gyro(0), Some(U::Gyro(G::RadPerS))),
+            ("a_RS_S_z [m s^-2]", Accel(2), Some(U::Accel(A::MPerS2))),
+            ("imu_gyro_y_dps", Gyro(1), Some(U::Gyro(G::DegPerS))),
+            ("imu0/angular_velocity/z", Gyro(2), None),
+            ("AngularVelocity.X", Gyro(0), None),
+            ("gyroX", Gyro(0), None),
+            ("LinearAcceleration_Y", Accel(1), None),
         ];
         for &(name, quantity, unit) in cases {
             assert_eq!(q(name), (quantity, unit), "{name}");

@@ -31,9 +31,12 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
     if bytes[pos..bytes.len().min(pos + 4096)].contains(&0) {
         bail!("{source}: contains NUL bytes: not a CSV text file (expected a header such as `t,gx,gy,gz,ax,ay,az`)");
     }
-    // Header: the first line that is neither blank nor a comment.
+    // Header: the first line that is neither blank nor a comment; or, when that line holds only
+    // numbers, the comment line before it with as many fields (EuRoC and TUM-VI write their
+    // header as `#timestamp [ns],w_RS_S_x [rad s^-1],...`).
     let mut line_no = 0usize;
-    let header = loop {
+    let mut last_comment: Option<String> = None;
+    let (header, header_line) = loop {
         if pos >= bytes.len() {
             bail!("{source}: no header line (expected a CSV header such as `t,gx,gy,gz,ax,ay,az`)");
         }
@@ -46,13 +49,28 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
             );
         }
         let line = trim_ascii(&bytes[pos..end]);
+        let line_start = pos;
         pos = (end + 1).min(bytes.len());
-        if !line.is_empty() && line[0] != b'#' {
-            break std::str::from_utf8(line)
+        if line.first() == Some(&b'#') {
+            last_comment = std::str::from_utf8(&line[1..])
+                .ok()
+                .map(|c| c.trim().to_string());
+            continue;
+        }
+        if !line.is_empty() {
+            let text = std::str::from_utf8(line)
                 .with_context(|| format!("{source}:{line_no}: header is not UTF-8"))?;
+            let fields = text.split(',').count();
+            let numeric = text.split(',').all(|f| f.trim().parse::<f64>().is_ok());
+            match last_comment {
+                Some(c) if numeric && fields > 1 && c.split(',').count() == fields => {
+                    pos = line_start;
+                    break (c, line_no - 1);
+                }
+                _ => break (text.to_string(), line_no),
+            }
         }
     };
-    let header_line = line_no;
     let names: Vec<String> = header.split(',').map(|s| s.trim().to_string()).collect();
     for (i, n) in names.iter().enumerate() {
         if n.is_empty() {
@@ -70,7 +88,9 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
     // Which channel and unit each column holds (docs/cli.md, "Log columns").
     let (uses, skipped) = map_header(&names, &opts.columns, opts.units)
         .map_err(|e| anyhow!("{source}:{header_line}: {e}"))?;
-    let columns = parse_body(bytes, pos, header_line, names.len(), source, &names)?;
+    // Skipped columns may hold anything (a frame_id, a status word); they are not read.
+    let skip: Vec<bool> = uses.iter().map(Option::is_none).collect();
+    let columns = parse_body(bytes, pos, header_line, source, &names, &skip)?;
     let n_rows = columns.first().map_or(0, Vec::len);
     if n_rows < 2 {
         bail!("{source}: {n_rows} data rows; at least 2 are needed");
@@ -205,10 +225,11 @@ fn parse_body(
     bytes: &[u8],
     start: usize,
     header_line: usize,
-    n_cols: usize,
     source: &str,
     names: &[String],
+    skip: &[bool],
 ) -> Result<Vec<Vec<f64>>> {
+    let n_cols = names.len();
     let body = &bytes[start.min(bytes.len())..];
     let n_chunks = (rayon::current_num_threads() * 4).clamp(1, 64);
     let target = body.len() / n_chunks + 1;
@@ -252,7 +273,7 @@ fn parse_body(
     let results: Vec<(usize, ChunkRows)> = bounds
         .par_windows(2)
         .zip(parts.par_iter_mut())
-        .map(|(w, part)| parse_chunk_into(&body[w[0]..w[1]], part, names))
+        .map(|(w, part)| parse_chunk_into(&body[w[0]..w[1]], part, names, skip))
         .collect();
     // Errors in file order; then close the gaps left by comment and blank lines.
     let mut line_offset = header_line;
@@ -295,7 +316,7 @@ pub(super) fn parse_chunk(
     let cap = lines_in(chunk);
     let mut cols: Vec<Vec<f64>> = (0..n_cols).map(|_| vec![0.0; cap]).collect();
     let mut out: Vec<&mut [f64]> = cols.iter_mut().map(|c| c.as_mut_slice()).collect();
-    let (lines, res) = parse_chunk_into(chunk, &mut out, names);
+    let (lines, res) = parse_chunk_into(chunk, &mut out, names, &vec![false; n_cols]);
     match res {
         Ok(rows) => {
             cols.iter_mut().for_each(|c| c.truncate(rows));
@@ -308,7 +329,12 @@ pub(super) fn parse_chunk(
 /// Parse one chunk into `out` (one slice per column, at least as long as the chunk has lines):
 /// (number of lines, rows written or error), in one scan over the bytes: plain lines by
 /// [`fast_line`], anything unusual field by field, through the standard parser if need be.
-fn parse_chunk_into(chunk: &[u8], out: &mut [&mut [f64]], names: &[String]) -> (usize, ChunkRows) {
+fn parse_chunk_into(
+    chunk: &[u8],
+    out: &mut [&mut [f64]],
+    names: &[String],
+    skip: &[bool],
+) -> (usize, ChunkRows) {
     let n_cols = out.len();
     let mut row = 0usize;
     let n = chunk.len();
@@ -369,6 +395,7 @@ fn parse_chunk_into(chunk: &[u8], out: &mut [&mut [f64]], names: &[String]) -> (
             if k < n_cols {
                 match value {
                     Some(v) if v.is_finite() => out[k][row] = v,
+                    _ if skip[k] => out[k][row] = f64::NAN,
                     _ => {
                         let end = chunk[i..]
                             .iter()

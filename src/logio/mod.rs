@@ -193,6 +193,10 @@ fn read_bag(path: &Path, format: bag::Format, opts: &ReadOptions) -> Result<Log>
 
 /// Read a log file: CSV, gzip-compressed CSV, a ROS 1 bag or a ROS 2 MCAP file.
 pub fn read_log(path: &Path, opts: &ReadOptions) -> Result<Log> {
+    // A ROS 2 bag is a directory (metadata.yaml and the storage file): read its one MCAP file.
+    if path.is_dir() {
+        return read_log(&bag::bag_directory_file(path)?, opts);
+    }
     let source = path.display().to_string();
     let raw = FileBytes::open(path).with_context(|| format!("cannot read {source}"))?;
     if let Some(format) = bag::format_of(&raw[..raw.len().min(16)]) {

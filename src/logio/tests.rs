@@ -283,3 +283,67 @@ fn comments_and_blank_lines_inside_large_chunks() {
         "{e:#}"
     );
 }
+
+/// EuRoC / TUM-VI write their header as a comment line; the units are in brackets.
+#[test]
+fn euroc_style_comment_header_with_units_in_brackets() {
+    let text = b"#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]\n\
+1403636579758555392,-0.099134701513277898,0.14730578886832138,0.02722713633111154,8.1476917083333333,-0.37592158333333331,-2.4026292499999999\n\
+1403636579763555584,-0.099134701513277898,0.14032447186034408,0.029321531433504733,8.033280791666666,-0.40861041666666664,-2.4026292499999999\n\
+1403636579768555520,-0.098436569812480182,0.12426744274199649,0.02931365027581343,7.8861057916666666,-0.42495483333333334,-2.4353180833333332\n";
+    let log = parse_log(text, "data.csv", &opts()).unwrap();
+    assert_eq!(log.len(), 3);
+    assert!((log.rate_hz - 200.0).abs() < 0.1, "{}", log.rate_hz);
+    assert_eq!(log.order, vec!["gx", "gy", "gz", "ax", "ay", "az"]);
+    assert_eq!(
+        log.channels["ax"][0],
+        "8.1476917083333333".parse::<f64>().unwrap()
+    );
+    assert!(
+        log.mapping_text()
+            .contains("timestamp [ns] -> t (ns, from the name)"),
+        "{}",
+        log.mapping_text()
+    );
+    assert!(
+        log.mapping_text()
+            .contains("w_RS_S_x [rad s^-1] -> gx (rad/s"),
+        "{}",
+        log.mapping_text()
+    );
+}
+
+/// `rostopic echo -p` CSVs: `%time` in ns, `field.` prefixes, text columns that are skipped.
+#[test]
+fn rostopic_csv_with_text_columns() {
+    let text = b"%time,field.header.seq,field.header.stamp,field.header.frame_id,field.angular_velocity.x,field.angular_velocity.y,field.angular_velocity.z,field.angular_velocity_covariance0,field.linear_acceleration.x,field.linear_acceleration.y,field.linear_acceleration.z\n\
+1000000000,1,1000000000,imu_link,0.1,0.2,0.3,0.0,1,2,3\n\
+1010000000,2,1010000000,imu_link,0.1,0.2,0.3,0.0,1,2,3\n\
+1020000000,3,1020000000,imu_link,0.1,0.2,0.3,0.0,1,2,3\n";
+    let log = parse_log(text, "echo.csv", &opts())
+        .unwrap_err()
+        .to_string();
+    // angular_velocity.x has no unit in its name: the option is needed (REP 103 says rad/s, but
+    // a CSV column is not a message).
+    assert!(
+        log.contains("--gyro-unit") && log.contains("field.angular_velocity.x"),
+        "{log}"
+    );
+    let o = ReadOptions {
+        units: UnitOptions {
+            gyro: Some(GyroUnit::RadPerS),
+            accel: Some(AccelUnit::MPerS2),
+            time: None,
+        },
+        ..ReadOptions::default()
+    };
+    let log = parse_log(text, "echo.csv", &o).unwrap();
+    assert!((log.rate_hz - 100.0).abs() < 1e-6);
+    assert_eq!(log.channels["gz"], vec![0.3; 3]);
+    let skipped: Vec<&str> = log.skipped.iter().map(|s| s.column.as_str()).collect();
+    assert!(
+        skipped.contains(&"field.header.frame_id")
+            && skipped.contains(&"field.angular_velocity_covariance0"),
+        "{skipped:?}"
+    );
+}
