@@ -5,6 +5,7 @@
 pub mod cli;
 pub mod cmd_allan;
 pub mod cmd_diagnose;
+pub mod cmd_drift;
 pub mod cmd_generate;
 pub mod cmd_merge;
 pub mod cmd_plan;

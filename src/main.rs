@@ -36,6 +36,8 @@ enum Command {
     Diagnose(cmd_diagnose::Args),
     /// Combine shard outputs of `simulate --shard i/k` into the single-machine result
     Merge(cmd_merge::Args),
+    /// Drift measured on static logs against the model's prediction under one protocol, with a verdict
+    Drift(cmd_drift::Args),
 }
 
 fn main() -> std::process::ExitCode {
@@ -49,6 +51,7 @@ fn main() -> std::process::ExitCode {
         Command::Plan(a) => cmd_plan::run(a),
         Command::Diagnose(a) => cmd_diagnose::run(a),
         Command::Merge(a) => cmd_merge::run(a),
+        Command::Drift(a) => cmd_drift::run(a),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -10,10 +10,12 @@
 
 pub mod candidates;
 pub mod drift;
+pub mod drift_check;
 pub mod fit;
 pub mod gap;
 mod measure;
 pub mod model_terms;
+pub mod protocol;
 pub mod report;
 pub mod simulate;
 mod trials;

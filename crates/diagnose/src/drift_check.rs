@@ -1,0 +1,342 @@
+//! Drift predicted against drift measured (docs/drift.md): the measured logs of one sensor and
+//! logs simulated from its model, cut and calibrated by one `Protocol`; per horizon and drift
+//! quantity the measured statistics with an interval, the model's distribution of the same
+//! statistic, and a verdict.
+//!
+//! Measured interval: the RMS over n segments is read as an RMS of n_eff independent errors,
+//! RMS^2 ~ E[e^2] chi2(n_eff) / n_eff (Gaussian errors), so its 95 % interval is
+//! [RMS sqrt(n_eff / chi2_0.975), RMS sqrt(n_eff / chi2_0.025)]. n_eff = n (1 - rho) / (1 + rho)
+//! with rho the lag-1 autocorrelation of e^2 over consecutive segments of a log (the AR(1)
+//! effective count, e.g. Bayley & Hammersley 1946), clamped to [0, 0.95] and taken as 0 below
+//! 8 segments in a log; half-overlapping segments count as half.
+//!
+//! Model band: `replicates` simulated experiments, each one simulated log per measured log (same
+//! length, rate and channels), give the distribution of the same RMS; the band is its central
+//! 95 % (2.5 % and 97.5 % quantiles, linear interpolation). The verdict is "inside" when the
+//! measured RMS lies in the band, "above" or "below" otherwise, "not_informed" when a log lacks a
+//! channel the quantity comes from or no log is as long as the horizon.
+
+use crate::protocol::{segment_errors, Protocol, Quantity, SegmentErrors};
+use crate::report::LogInput;
+use crate::simulate::{static_log, SimSetup};
+use noise::SensorModel;
+use rayon::prelude::*;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// Settings of a drift check.
+#[derive(Clone, Debug)]
+pub struct CheckSettings {
+    pub protocol: Protocol,
+    /// Simulated experiments for the model's band.
+    pub replicates: usize,
+    pub seed: u64,
+}
+
+/// Measured statistics of |error| over the pooled segments.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Measured {
+    pub p50: f64,
+    pub p95: f64,
+    pub rms: f64,
+    pub rms_lo: f64,
+    pub rms_hi: f64,
+    pub n_eff: f64,
+}
+
+/// The model's statistics under the same protocol.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Model {
+    pub p50: f64,
+    pub p95: f64,
+    pub rms: f64,
+    /// Central 95 % of the RMS over as many segments as measured.
+    pub band_lo: f64,
+    pub band_hi: f64,
+}
+
+/// Where the measurement lies against the model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    Inside,
+    Above,
+    Below,
+    NotInformed,
+}
+
+impl Verdict {
+    pub fn name(self) -> &'static str {
+        match self {
+            Verdict::Inside => "inside",
+            Verdict::Above => "above",
+            Verdict::Below => "below",
+            Verdict::NotInformed => "not_informed",
+        }
+    }
+}
+
+/// One quantity at one horizon.
+#[derive(Clone, Debug, Serialize)]
+pub struct QuantityCheck {
+    pub measured: Option<Measured>,
+    pub model: Option<Model>,
+    pub verdict: Verdict,
+    /// Measured RMS / model RMS.
+    pub ratio: Option<f64>,
+    /// Why a quantity is not informed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
+}
+
+/// One horizon.
+#[derive(Clone, Debug, Serialize)]
+pub struct HorizonCheck {
+    pub t_s: f64,
+    /// Measured segments, all logs.
+    pub segments: usize,
+    pub channels: BTreeMap<&'static str, QuantityCheck>,
+}
+
+/// The whole check.
+#[derive(Clone, Debug, Serialize)]
+pub struct DriftCheck {
+    pub protocol: Protocol,
+    pub protocol_text: String,
+    pub seed: u64,
+    pub replicates: usize,
+    pub logs: usize,
+    pub horizons: Vec<HorizonCheck>,
+}
+
+/// Errors of a drift check.
+#[derive(Debug, thiserror::Error)]
+pub enum CheckError {
+    #[error("no logs to check")]
+    NoLogs,
+    #[error("the logs have different sample intervals ({0} s and {1} s); pool logs of one rate")]
+    Rates(f64, f64),
+    #[error("--replicates {0}: at least 10 simulated experiments are needed for a 95 % band")]
+    Replicates(usize),
+    #[error("simulated log {run}: {quantity} is not finite")]
+    NotFinite { run: u64, quantity: &'static str },
+}
+
+fn quantile(sorted: &[f64], p: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    let x = p * (sorted.len() - 1) as f64;
+    let (i, f) = (x.floor() as usize, x - x.floor());
+    if i + 1 < sorted.len() {
+        sorted[i] * (1.0 - f) + sorted[i + 1] * f
+    } else {
+        sorted[i]
+    }
+}
+
+fn abs_sorted(v: &[f64]) -> Vec<f64> {
+    let mut a: Vec<f64> = v.iter().map(|x| x.abs()).collect();
+    a.sort_by(f64::total_cmp);
+    a
+}
+
+fn rms(v: &[f64]) -> f64 {
+    (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
+}
+
+/// The AR(1) effective count of segments (module doc), over the logs' own segment sequences.
+fn effective_count(per_log: &[&[f64]], overlapping: bool) -> f64 {
+    let n: usize = per_log.iter().map(|v| v.len()).sum();
+    let (mut num, mut den) = (0.0, 0.0);
+    for v in per_log.iter().filter(|v| v.len() >= 8) {
+        let sq: Vec<f64> = v.iter().map(|x| x * x).collect();
+        let m = sq.iter().sum::<f64>() / sq.len() as f64;
+        num += sq.windows(2).map(|w| (w[0] - m) * (w[1] - m)).sum::<f64>();
+        den += sq.iter().map(|x| (x - m) * (x - m)).sum::<f64>();
+    }
+    let rho = if den > 0.0 {
+        (num / den).clamp(0.0, 0.95)
+    } else {
+        0.0
+    };
+    let n_eff = n as f64 * (1.0 - rho) / (1.0 + rho);
+    (if overlapping { n_eff / 2.0 } else { n_eff }).max(1.0)
+}
+
+/// Check the measured logs' drift against the model's under `settings.protocol`. `progress` is
+/// told the number of simulated logs done.
+pub fn check_drift(
+    logs: &[LogInput],
+    model: &SensorModel,
+    settings: &CheckSettings,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<DriftCheck, CheckError> {
+    let first = logs.first().ok_or(CheckError::NoLogs)?;
+    for l in logs {
+        if (l.dt_s - first.dt_s).abs() > 1e-9 * first.dt_s {
+            return Err(CheckError::Rates(first.dt_s, l.dt_s));
+        }
+    }
+    if settings.replicates < 10 {
+        return Err(CheckError::Replicates(settings.replicates));
+    }
+    let p = &settings.protocol;
+    let dt = first.dt_s;
+    // Measured segments per horizon, per log (kept apart for the effective count).
+    let measured: Vec<Vec<SegmentErrors>> = p
+        .horizons_s
+        .iter()
+        .map(|&h| {
+            logs.par_iter()
+                .map(|l| segment_errors(&l.channels, dt, h, p))
+                .collect()
+        })
+        .collect();
+    // Simulated experiments: replicate r, log l is montecarlo run r * logs + l of the seed.
+    let jobs: Vec<(usize, usize)> = (0..settings.replicates)
+        .flat_map(|r| (0..logs.len()).map(move |l| (r, l)))
+        .collect();
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let simulated: Vec<Vec<SegmentErrors>> = jobs
+        .par_iter()
+        .map(|&(r, l)| {
+            let log = &logs[l];
+            let samples = log
+                .channels
+                .iter()
+                .flatten()
+                .map(|c| c.len())
+                .min()
+                .unwrap_or(0);
+            let setup = SimSetup {
+                dt_s: dt,
+                samples,
+                grid_m: Vec::new(),
+                active: std::array::from_fn(|c| log.channels[c].is_some()),
+                horizons_s: Vec::new(),
+                temperature_c: None,
+                temp_coeff: [0.0; 6],
+            };
+            let run = (r * logs.len() + l) as u64;
+            let sim = static_log(model, &setup, settings.seed, run);
+            let chans: [Option<&[f64]>; 6] =
+                std::array::from_fn(|c| setup.active[c].then(|| sim[c].as_slice()));
+            let out = p
+                .horizons_s
+                .iter()
+                .map(|&h| segment_errors(&chans, dt, h, p))
+                .collect();
+            let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress(k, jobs.len());
+            out
+        })
+        .collect();
+    let mut horizons = Vec::new();
+    for (hi, &h) in p.horizons_s.iter().enumerate() {
+        let per_log = &measured[hi];
+        let mut pooled = SegmentErrors {
+            horizon_s: h,
+            ..Default::default()
+        };
+        per_log.iter().for_each(|s| pooled.extend(s));
+        let segments = pooled.len();
+        let mut channels = BTreeMap::new();
+        for q in Quantity::ALL {
+            let missing: Vec<&str> = q
+                .needs()
+                .iter()
+                .filter(|&&c| logs.iter().any(|l| l.channels[c].is_none()))
+                .map(|&c| crate::drift::CHANNELS[c])
+                .collect();
+            if !missing.is_empty() || segments == 0 {
+                channels.insert(
+                    q.name(),
+                    QuantityCheck {
+                        measured: None,
+                        model: None,
+                        verdict: Verdict::NotInformed,
+                        ratio: None,
+                        note: Some(if missing.is_empty() {
+                            format!("no log is {h} s long")
+                        } else {
+                            format!("the logs lack {}", missing.join(", "))
+                        }),
+                    },
+                );
+                continue;
+            }
+            let values = pooled.values(q);
+            let sorted = abs_sorted(values);
+            let r = rms(values);
+            let seqs: Vec<&[f64]> = per_log.iter().map(|s| s.values(q)).collect();
+            let n_eff = effective_count(&seqs, p.overlapping);
+            let lo_q = allan::chi2::chi2_ppf(0.975, n_eff);
+            let hi_q = allan::chi2::chi2_ppf(0.025, n_eff);
+            let measured = Measured {
+                p50: quantile(&sorted, 0.5),
+                p95: quantile(&sorted, 0.95),
+                rms: r,
+                rms_lo: r * (n_eff / lo_q).sqrt(),
+                rms_hi: r * (n_eff / hi_q).sqrt(),
+                n_eff,
+            };
+            // The model: RMS of each replicate (its logs pooled), and all segments pooled.
+            let mut rep_rms = Vec::with_capacity(settings.replicates);
+            let mut all = Vec::new();
+            for rep in simulated.chunks(logs.len()) {
+                let mut v = Vec::new();
+                for s in rep {
+                    v.extend_from_slice(s[hi].values(q));
+                }
+                if let Some(bad) = v.iter().position(|x| !x.is_finite()) {
+                    return Err(CheckError::NotFinite {
+                        run: bad as u64,
+                        quantity: q.name(),
+                    });
+                }
+                rep_rms.push(rms(&v));
+                all.extend(v);
+            }
+            rep_rms.sort_by(f64::total_cmp);
+            let all_sorted = abs_sorted(&all);
+            let model = Model {
+                p50: quantile(&all_sorted, 0.5),
+                p95: quantile(&all_sorted, 0.95),
+                rms: rms(&all),
+                band_lo: quantile(&rep_rms, 0.025),
+                band_hi: quantile(&rep_rms, 0.975),
+            };
+            let verdict = if r > model.band_hi {
+                Verdict::Above
+            } else if r < model.band_lo {
+                Verdict::Below
+            } else {
+                Verdict::Inside
+            };
+            channels.insert(
+                q.name(),
+                QuantityCheck {
+                    measured: Some(measured),
+                    ratio: Some(r / model.rms),
+                    model: Some(model),
+                    verdict,
+                    note: None,
+                },
+            );
+        }
+        horizons.push(HorizonCheck {
+            t_s: h,
+            segments,
+            channels,
+        });
+    }
+    Ok(DriftCheck {
+        protocol: p.clone(),
+        protocol_text: p.describe(),
+        seed: settings.seed,
+        replicates: settings.replicates,
+        logs: logs.len(),
+        horizons,
+    })
+}

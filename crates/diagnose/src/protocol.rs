@@ -1,0 +1,363 @@
+//! The drift protocol: one procedure applied identically to a measured static log and to logs
+//! simulated from a model, so that their drifts can be compared (docs/drift.md).
+//!
+//! A log is cut into segments of each horizon's length. Before each segment the user's static
+//! calibration is applied: the bias of every channel is estimated (not at all, from the whole
+//! log's mean, or from the mean over a window just before the segment) and removed, the
+//! accelerometers referred to the specific force (0, 0, -g) of a level IMU (Woodman §3.2.1 for
+//! the gyro, §4.2 for the accelerometer); the attitude starts either perfect (level, north) or
+//! levelled from the calibrated accelerometers' mean over a window (roll = atan2(-f_y, -f_z),
+//! pitch = atan2(f_x, sqrt(f_y^2 + f_z^2)), heading north). Each segment is then dead-reckoned
+//! from rest with the project's mechanisation (`strapdown`, `Accurate` scheme) and its error
+//! against the static truth read at the end (`strapdown::nav_error`).
+
+use crate::drift::G_MPS2;
+use serde::Serialize;
+use strapdown::{nav_error, Attitude, BodyVector, NavState, Scheme, Strapdown};
+
+/// How the bias is removed before each segment.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Calibration {
+    /// Nothing removed: the raw readings are integrated.
+    None,
+    /// Each channel's mean over the whole log (the ideal reading added back).
+    LogMean,
+    /// Each channel's mean over `window_s` just before the segment.
+    Window { window_s: f64 },
+}
+
+/// How the attitude starts.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Initialisation {
+    /// Level and north, as the truth.
+    Perfect,
+    /// Roll and pitch from the calibrated accelerometers' mean over `window_s` before the segment.
+    Levelled { window_s: f64 },
+}
+
+/// The whole protocol.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Protocol {
+    pub calibration: Calibration,
+    pub initialisation: Initialisation,
+    /// Segment lengths, s.
+    pub horizons_s: Vec<f64>,
+    /// Segments start every half segment instead of every segment.
+    pub overlapping: bool,
+}
+
+impl Default for Protocol {
+    fn default() -> Self {
+        Protocol {
+            calibration: Calibration::LogMean,
+            initialisation: Initialisation::Perfect,
+            horizons_s: vec![10.0, 60.0, 600.0, 3600.0],
+            overlapping: false,
+        }
+    }
+}
+
+impl Protocol {
+    /// The protocol in words, for reports.
+    pub fn describe(&self) -> String {
+        let cal = match self.calibration {
+            Calibration::None => "no bias removed".to_string(),
+            Calibration::LogMean => "bias = each channel's mean over the whole log".to_string(),
+            Calibration::Window { window_s } => {
+                format!("bias = each channel's mean over the {window_s} s before each segment")
+            }
+        };
+        let init = match self.initialisation {
+            Initialisation::Perfect => "attitude starts perfect (level, north)".to_string(),
+            Initialisation::Levelled { window_s } => format!(
+                "roll and pitch levelled from the accelerometers over the {window_s} s before each segment"
+            ),
+        };
+        format!(
+            "{cal}; {init}; {} segments",
+            if self.overlapping {
+                "half-overlapping"
+            } else {
+                "consecutive, non-overlapping"
+            }
+        )
+    }
+
+    /// Samples needed before a segment's start (its calibration and levelling windows).
+    fn lead(&self, dt_s: f64) -> usize {
+        let cal = match self.calibration {
+            Calibration::Window { window_s } => window_s,
+            _ => 0.0,
+        };
+        let lev = match self.initialisation {
+            Initialisation::Levelled { window_s } => window_s,
+            Initialisation::Perfect => 0.0,
+        };
+        (cal.max(lev) / dt_s).round() as usize
+    }
+}
+
+/// The errors at the end of each segment of one horizon, in segment order.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct SegmentErrors {
+    pub horizon_s: f64,
+    /// Signed heading, roll and pitch errors, rad.
+    pub heading_rad: Vec<f64>,
+    pub roll_rad: Vec<f64>,
+    pub pitch_rad: Vec<f64>,
+    /// Horizontal position and velocity error magnitudes, m and m/s.
+    pub pos_horizontal_m: Vec<f64>,
+    pub vel_horizontal_mps: Vec<f64>,
+}
+
+impl SegmentErrors {
+    pub fn len(&self) -> usize {
+        self.heading_rad.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.heading_rad.is_empty()
+    }
+
+    /// The values of one quantity (`Quantity::ALL` order).
+    pub fn values(&self, q: Quantity) -> &[f64] {
+        match q {
+            Quantity::Heading => &self.heading_rad,
+            Quantity::Roll => &self.roll_rad,
+            Quantity::Pitch => &self.pitch_rad,
+            Quantity::PosHorizontal => &self.pos_horizontal_m,
+            Quantity::VelHorizontal => &self.vel_horizontal_mps,
+        }
+    }
+
+    /// Append another log's segments (pooling logs of one sensor).
+    pub fn extend(&mut self, other: &SegmentErrors) {
+        self.heading_rad.extend_from_slice(&other.heading_rad);
+        self.roll_rad.extend_from_slice(&other.roll_rad);
+        self.pitch_rad.extend_from_slice(&other.pitch_rad);
+        self.pos_horizontal_m
+            .extend_from_slice(&other.pos_horizontal_m);
+        self.vel_horizontal_mps
+            .extend_from_slice(&other.vel_horizontal_mps);
+    }
+}
+
+/// The drift quantities compared (JSON names in docs/cli.md).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Quantity {
+    Heading,
+    Roll,
+    Pitch,
+    PosHorizontal,
+    VelHorizontal,
+}
+
+impl Quantity {
+    pub const ALL: [Quantity; 5] = [
+        Quantity::Heading,
+        Quantity::Roll,
+        Quantity::Pitch,
+        Quantity::PosHorizontal,
+        Quantity::VelHorizontal,
+    ];
+
+    /// The JSON name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Quantity::Heading => "heading_rad",
+            Quantity::Roll => "roll_rad",
+            Quantity::Pitch => "pitch_rad",
+            Quantity::PosHorizontal => "pos_horizontal_m",
+            Quantity::VelHorizontal => "vel_horizontal_mps",
+        }
+    }
+
+    /// The channels (gx gy gz ax ay az) this quantity's drift comes from to first order in a
+    /// static, level log (docs/model.md §1: heading from gz; roll from gx, pitch from gy;
+    /// horizontal velocity and position from ax, ay and the tilt from gx, gy): a log without
+    /// one of them cannot inform it.
+    pub fn needs(self) -> &'static [usize] {
+        match self {
+            Quantity::Heading => &[2],
+            Quantity::Roll => &[0],
+            Quantity::Pitch => &[1],
+            Quantity::PosHorizontal | Quantity::VelHorizontal => &[0, 1, 3, 4],
+        }
+    }
+}
+
+/// The segment errors of a static log for one horizon under `protocol`. `channels` are gx gy gz
+/// (rad/s) and ax ay az (m/s^2); a missing channel (None) reads its ideal value.
+pub fn segment_errors(
+    channels: &[Option<&[f64]>; 6],
+    dt_s: f64,
+    horizon_s: f64,
+    protocol: &Protocol,
+) -> SegmentErrors {
+    let n = channels
+        .iter()
+        .flatten()
+        .map(|c| c.len())
+        .min()
+        .unwrap_or(0);
+    let len = (horizon_s / dt_s).round() as usize;
+    let mut out = SegmentErrors {
+        horizon_s,
+        ..Default::default()
+    };
+    let lead = protocol.lead(dt_s);
+    if len == 0 || n < lead + len {
+        return out;
+    }
+    let ideal = [0.0, 0.0, 0.0, 0.0, 0.0, -G_MPS2];
+    // Prefix sums for window means (one pass per channel).
+    let prefix: Vec<Option<Vec<f64>>> = channels
+        .iter()
+        .map(|c| {
+            c.map(|c| {
+                let mut p = Vec::with_capacity(n + 1);
+                let mut s = 0.0;
+                p.push(0.0);
+                for &v in &c[..n] {
+                    s += v;
+                    p.push(s);
+                }
+                p
+            })
+        })
+        .collect();
+    let mean_over = |ch: usize, a: usize, b: usize| -> Option<f64> {
+        let p = prefix[ch].as_ref()?;
+        Some((p[b] - p[a]) / (b - a) as f64)
+    };
+    let stride = if protocol.overlapping {
+        (len / 2).max(1)
+    } else {
+        len
+    };
+    let truth = NavState::default();
+    let mut start = lead;
+    while start + len <= n {
+        // The bias removed from each channel for this segment.
+        let offset: [f64; 6] = std::array::from_fn(|ch| match protocol.calibration {
+            Calibration::None => 0.0,
+            Calibration::LogMean => mean_over(ch, 0, n).map_or(0.0, |m| m - ideal[ch]),
+            Calibration::Window { window_s } => {
+                let w = ((window_s / dt_s).round() as usize).max(1);
+                mean_over(ch, start - w, start).map_or(0.0, |m| m - ideal[ch])
+            }
+        });
+        let value = |ch: usize, k: usize| channels[ch].map_or(ideal[ch], |c| c[k] - offset[ch]);
+        let attitude = match protocol.initialisation {
+            Initialisation::Perfect => Attitude::identity(),
+            Initialisation::Levelled { window_s } => {
+                let w = ((window_s / dt_s).round() as usize).max(1);
+                let f: [f64; 3] = std::array::from_fn(|a| {
+                    mean_over(3 + a, start - w, start).map_or(ideal[3 + a], |m| m - offset[3 + a])
+                });
+                let roll = (-f[1]).atan2(-f[2]);
+                let pitch = f[0].atan2(f[1].hypot(f[2]));
+                Attitude::from_euler_rad(roll, pitch, 0.0)
+            }
+        };
+        let init = NavState {
+            attitude,
+            ..NavState::default()
+        };
+        let mut nav = Strapdown::new(Scheme::Accurate, init, G_MPS2);
+        for k in start..start + len {
+            let gyro = BodyVector::new(value(0, k), value(1, k), value(2, k));
+            let accel = BodyVector::new(value(3, k), value(4, k), value(5, k));
+            nav.step(&gyro, &accel, dt_s);
+        }
+        let e = nav_error(nav.state(), &truth);
+        out.heading_rad.push(e.yaw_rad);
+        out.roll_rad.push(e.roll_rad);
+        out.pitch_rad.push(e.pitch_rad);
+        out.pos_horizontal_m.push(e.pos_horizontal_m());
+        out.vel_horizontal_mps.push(e.vel_horizontal_mps());
+        start += stride;
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::drift::segment_drift;
+
+    fn walk(n: usize, seed: u64, step: f64, offset: f64) -> Vec<f64> {
+        let mut s = seed;
+        let mut x = offset;
+        (0..n)
+            .map(|_| {
+                s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
+                let mut z = s;
+                z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+                z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+                z ^= z >> 31;
+                x += step * ((z >> 11) as f64 / (1u64 << 53) as f64 - 0.5);
+                x + 1e-3 * ((z & 0xffff) as f64 / 65536.0 - 0.5)
+            })
+            .collect()
+    }
+
+    /// With the log-mean calibration and a perfect start the protocol is the drift diagnose
+    /// always reported (`drift::segment_drift`): same heading and position, bit for bit.
+    #[test]
+    fn default_protocol_is_the_diagnose_drift() {
+        let n = 30_000;
+        let chans: Vec<Vec<f64>> = (0..6)
+            .map(|c| walk(n, c as u64 + 1, 1e-5, if c == 5 { -G_MPS2 } else { 0.0 }))
+            .collect();
+        let refs: [Option<&[f64]>; 6] = std::array::from_fn(|c| Some(chans[c].as_slice()));
+        let p = Protocol::default();
+        let a = segment_errors(&refs, 0.01, 20.0, &p);
+        let b = segment_drift(&refs, 0.01, 20.0);
+        assert_eq!(a.heading_rad, b.heading_rad);
+        assert_eq!(a.pos_horizontal_m, b.horizontal_m);
+        assert_eq!(a.len(), 15);
+    }
+
+    /// A constant accelerometer bias is invisible after a window calibration, and with a
+    /// levelled start a constant tilt-like accelerometer error gives no position error either.
+    #[test]
+    fn window_calibration_removes_a_constant_bias() {
+        let n = 20_000;
+        let dt = 0.01;
+        let ax = vec![0.05; n];
+        let az = vec![-G_MPS2 + 0.02; n];
+        let refs: [Option<&[f64]>; 6] = [None, None, None, Some(&ax), None, Some(&az)];
+        let raw = Protocol {
+            calibration: Calibration::None,
+            ..Protocol::default()
+        };
+        let e = segment_errors(&refs, dt, 10.0, &raw);
+        // Woodman eq (10): s = eps t^2 / 2 for the uncalibrated bias.
+        let law = 0.05 * 100.0 / 2.0;
+        assert!((e.pos_horizontal_m[0] / law - 1.0).abs() < 2.0 * dt / 10.0);
+        let windowed = Protocol {
+            calibration: Calibration::Window { window_s: 5.0 },
+            initialisation: Initialisation::Levelled { window_s: 5.0 },
+            ..Protocol::default()
+        };
+        let e = segment_errors(&refs, dt, 10.0, &windowed);
+        assert_eq!(e.len(), (n - 500) / 1000);
+        assert!(e.pos_horizontal_m.iter().all(|p| p.abs() < 1e-9), "{e:?}");
+        // Levelling from a raw tilt: with no calibration the accelerometer "bias" reads as a
+        // tilt, which levelling takes out exactly (the classic bias-tilt cancellation).
+        let levelled = Protocol {
+            calibration: Calibration::None,
+            initialisation: Initialisation::Levelled { window_s: 5.0 },
+            ..Protocol::default()
+        };
+        let e = segment_errors(&refs, dt, 10.0, &levelled);
+        assert!(e.pos_horizontal_m.iter().all(|p| p.abs() < 1e-6), "{e:?}");
+        assert!(
+            e.pitch_rad.iter().all(|p| p.abs() > 1e-3),
+            "the start is tilted: {e:?}"
+        );
+    }
+}

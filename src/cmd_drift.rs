@@ -1,0 +1,289 @@
+//! `imudrift drift LOG... --model SENSOR`: the drift measured on static logs against the drift
+//! the model predicts under one protocol, with intervals and a verdict (docs/drift.md,
+//! docs/cli.md for the JSON).
+
+use crate::logio::{self, LogArgs};
+use crate::output::write_string;
+use crate::plot::{Band, LogLogPlot, Series};
+use anyhow::{anyhow, bail, Context, Result};
+use diagnose::drift::CHANNELS;
+use diagnose::drift_check::{check_drift, CheckSettings, DriftCheck, Verdict};
+use diagnose::protocol::{Calibration, Initialisation, Protocol, Quantity};
+use diagnose::LogInput;
+use noise::SensorModel;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Static logs of one sensor (CSV, gzip CSV, ROS bag or MCAP), pooled
+    #[arg(required = true)]
+    pub logs: Vec<PathBuf>,
+    /// Sensor model (TOML, or a Kalibr / OpenVINS / VINS-Fusion noise file)
+    #[arg(long, value_name = "SENSOR.toml")]
+    pub model: PathBuf,
+    #[command(flatten)]
+    pub log_args: LogArgs,
+    /// Bias calibration before each segment: none, log-mean, or window:TIME (the mean over TIME before each segment)
+    #[arg(long, default_value = "log-mean", value_name = "HOW")]
+    pub calibration: String,
+    /// Initial attitude: perfect, or level:TIME (roll and pitch from the accelerometers over TIME before each segment)
+    #[arg(long, default_value = "perfect", value_name = "HOW")]
+    pub init: String,
+    /// Horizons (segment lengths): a comma list of times, e.g. 10,60,10min,1h
+    #[arg(long, value_delimiter = ',', default_value = "10,60,600,3600")]
+    pub horizons: Vec<String>,
+    /// Half-overlapping segments instead of consecutive ones
+    #[arg(long)]
+    pub overlap: bool,
+    /// Simulated experiments for the model's 95 % band (each: one simulated log per measured log)
+    #[arg(long, default_value_t = 40)]
+    pub replicates: usize,
+    /// Master seed of the simulated logs (written into the outputs)
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Print one JSON document on stdout (human text on stderr)
+    #[arg(long)]
+    pub json: bool,
+    /// Write drift.json and drift_<quantity>.svg into this directory
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Worker threads (default: all cores); results do not depend on it
+    #[arg(long)]
+    pub threads: Option<usize>,
+}
+
+fn parse_window(flag: &str, text: &str, prefix: &str) -> Result<Option<f64>> {
+    match text.strip_prefix(prefix) {
+        Some(t) => Ok(Some(crate::cli::parse_duration_s(flag, t)?)),
+        None => Ok(None),
+    }
+}
+
+fn protocol(args: &Args) -> Result<Protocol> {
+    let calibration = match args.calibration.as_str() {
+        "none" => Calibration::None,
+        "log-mean" => Calibration::LogMean,
+        t => match parse_window("--calibration", t, "window:")? {
+            Some(w) => Calibration::Window { window_s: w },
+            None => bail!(
+                "--calibration {t:?}: expected none, log-mean or window:TIME (e.g. window:60s)"
+            ),
+        },
+    };
+    let initialisation = match args.init.as_str() {
+        "perfect" => Initialisation::Perfect,
+        t => match parse_window("--init", t, "level:")? {
+            Some(w) => Initialisation::Levelled { window_s: w },
+            None => bail!("--init {t:?}: expected perfect or level:TIME (e.g. level:10s)"),
+        },
+    };
+    let horizons_s = args
+        .horizons
+        .iter()
+        .map(|h| crate::cli::parse_duration_s("--horizons", h))
+        .collect::<Result<Vec<f64>>>()?;
+    Ok(Protocol {
+        calibration,
+        initialisation,
+        horizons_s,
+        overlapping: args.overlap,
+    })
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let _out_lock = args
+        .out
+        .as_deref()
+        .map(crate::output::prepare_dir)
+        .transpose()?;
+    let protocol = protocol(&args)?;
+    if args.replicates < 10 || args.replicates > 100_000 {
+        bail!(
+            "--replicates {}: expected 10 to 100000 simulated experiments",
+            args.replicates
+        );
+    }
+    let pool = crate::cli::pool(args.threads)?;
+    pool.install(|| run_inner(&args, protocol))
+}
+
+fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
+    let model = SensorModel::load(&args.model)?;
+    let opts = args.log_args.options()?;
+    let mut logs = Vec::new();
+    for path in &args.logs {
+        let log = logio::read_log(path, &opts)?;
+        eprintln!("{}: {}", log.source, log.mapping_text());
+        logs.push(log);
+    }
+    let inputs: Vec<LogInput> = logs
+        .iter()
+        .map(|l| LogInput {
+            dt_s: l.dt_s(),
+            channels: std::array::from_fn(|c| l.channels.get(CHANNELS[c]).map(Vec::as_slice)),
+            temperature_c: None,
+        })
+        .collect();
+    if inputs
+        .iter()
+        .any(|i| i.channels.iter().all(Option::is_none))
+    {
+        bail!("a log has no gyro or accelerometer channel");
+    }
+    let settings = CheckSettings {
+        protocol,
+        replicates: args.replicates,
+        seed: args.seed,
+    };
+    let started = std::time::Instant::now();
+    let total = (args.replicates * logs.len()) as u64;
+    let bar = crate::progress::Progress::new("simulating the model", "logs", total);
+    let result = check_drift(&inputs, &model, &settings, &|k, _| bar.set(k as u64));
+    bar.finish();
+    let result = result.map_err(|e| anyhow!("{e}")).with_context(|| {
+        format!(
+            "checking the drift of {} log(s) against {}",
+            logs.len(),
+            args.model.display()
+        )
+    })?;
+    let elapsed_s = started.elapsed().as_secs_f64();
+    let sources: Vec<String> = logs.iter().map(|l| l.source.clone()).collect();
+    eprint!("{}", text(&result, &sources, &args.model, elapsed_s));
+    let mut doc = serde_json::to_value(&result).context("cannot serialise the drift check")?;
+    if let Some(o) = doc.as_object_mut() {
+        o.insert("logs".into(), sources.clone().into());
+        o.insert("model".into(), args.model.display().to_string().into());
+    }
+    let doc = serde_json::to_string_pretty(&doc)?;
+    if args.json {
+        println!("{doc}");
+    }
+    if let Some(dir) = &args.out {
+        let _set = crate::output::begin_set(dir)?;
+        write_string(&dir.join("drift.json"), &doc)?;
+        for q in Quantity::ALL {
+            if let Some(svg) = plot(&result, q) {
+                write_string(&dir.join(format!("drift_{}.svg", q.name())), &svg)?;
+            }
+        }
+        eprintln!(
+            "wrote drift.json and drift_<quantity>.svg to {}",
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+fn text(r: &DriftCheck, logs: &[String], model: &std::path::Path, elapsed_s: f64) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "drift of {} log(s) against {} ({} simulated experiments, seed {}, {:.1} s)\nprotocol: {}",
+        logs.len(),
+        model.display(),
+        r.replicates,
+        r.seed,
+        elapsed_s,
+        r.protocol_text
+    );
+    let _ = writeln!(
+        s,
+        "{:>7} {:>5}  {:<20} {:>26} {:>30}  {:>6}  verdict",
+        "horizon",
+        "segs",
+        "quantity",
+        "measured rms [95 % interval]",
+        "model rms [95 % band]",
+        "ratio"
+    );
+    for h in &r.horizons {
+        for q in Quantity::ALL {
+            let c = &h.channels[q.name()];
+            let v = |x: f64| crate::fmt::channel_value(q.name(), x);
+            let measured = c
+                .measured
+                .map(|m| format!("{} [{}, {}]", v(m.rms), v(m.rms_lo), v(m.rms_hi)))
+                .unwrap_or_else(|| "-".into());
+            let model = c
+                .model
+                .map(|m| format!("{} [{}, {}]", v(m.rms), v(m.band_lo), v(m.band_hi)))
+                .unwrap_or_else(|| "-".into());
+            let ratio = c.ratio.map_or("-".into(), |x| crate::fmt::sig(x, 3));
+            let verdict = match (c.verdict, &c.note) {
+                (Verdict::NotInformed, Some(n)) => format!("not informed ({n})"),
+                (v, _) => v.name().to_string(),
+            };
+            let _ = writeln!(
+                s,
+                "{:>7} {:>5}  {:<20} {:>26} {:>30}  {:>6}  {verdict}",
+                crate::fmt::time(h.t_s),
+                h.segments,
+                q.name(),
+                measured,
+                model,
+                ratio
+            );
+        }
+    }
+    s
+}
+
+/// Drift against horizon: measured RMS with its interval over the model's 95 % band.
+fn plot(r: &DriftCheck, q: Quantity) -> Option<String> {
+    let rows: Vec<_> = r
+        .horizons
+        .iter()
+        .filter_map(|h| {
+            let c = &h.channels[q.name()];
+            Some((h.t_s, c.measured?, c.model?))
+        })
+        .collect();
+    if rows.is_empty() {
+        return None;
+    }
+    let (scale, unit) = if q.name().ends_with("_rad") {
+        (180.0 / std::f64::consts::PI, "deg")
+    } else if q.name().ends_with("_mps") {
+        (1.0, "m/s")
+    } else {
+        (1.0, "m")
+    };
+    let x: Vec<f64> = rows.iter().map(|r| r.0).collect();
+    let col = |f: &dyn Fn(
+        &(
+            f64,
+            diagnose::drift_check::Measured,
+            diagnose::drift_check::Model,
+        ),
+    ) -> f64| { rows.iter().map(|r| f(r) * scale).collect::<Vec<f64>>() };
+    Some(
+        LogLogPlot {
+            title: format!("{}: measured vs model ({})", q.name(), r.protocol_text),
+            x_label: "horizon (s)".into(),
+            y_label: format!("RMS error ({unit})"),
+            series: vec![
+                Series::new("measured RMS", x.clone(), col(&|r| r.1.rms), "#000000"),
+                Series::dashed("model RMS", x.clone(), col(&|r| r.2.rms), "#1f77b4"),
+            ],
+            bands: vec![
+                Band {
+                    name: "measured 95 % interval".into(),
+                    x: x.clone(),
+                    lo: col(&|r| r.1.rms_lo),
+                    hi: col(&|r| r.1.rms_hi),
+                    color: "#7f7f7f".into(),
+                },
+                Band {
+                    name: "model 95 % band".into(),
+                    x,
+                    lo: col(&|r| r.2.band_lo),
+                    hi: col(&|r| r.2.band_hi),
+                    color: "#1f77b4".into(),
+                },
+            ],
+        }
+        .to_svg(),
+    )
+}
