@@ -313,16 +313,29 @@ fn params_text(e: &FoundEffect, ch: &str) -> String {
         .join(", ")
 }
 
-fn drift_line(d: &DriftRow) -> String {
+/// Whether the log can inform a drift quantity (it has every channel it comes from).
+fn informed(result: &Diagnosis, q: diagnose::protocol::Quantity) -> bool {
+    q.needs()
+        .iter()
+        .all(|&c| result.channels.contains_key(CHANNELS[c]))
+}
+
+fn drift_line(d: &DriftRow, heading: bool, horizontal: bool) -> String {
     let cell = |s: &diagnose::drift::DriftSummary| {
         if s.segments == 0 {
             format!("{:>11} {:>11}", "-", "-")
         } else {
-            format!(
-                "{:>11} {:>11}",
-                crate::fmt::channel_value("heading_rad", s.heading_rms_rad),
+            let h = if heading {
+                crate::fmt::channel_value("heading_rad", s.heading_rms_rad)
+            } else {
+                "n/a".into()
+            };
+            let p = if horizontal {
                 crate::fmt::channel_value("pos_horizontal_m", s.horizontal_rms_m)
-            )
+            } else {
+                "n/a".into()
+            };
+            format!("{h:>11} {p:>11}")
         }
     };
     format!(
@@ -394,8 +407,19 @@ fn text_report(result: &Diagnosis, log: &str, model: &Path, elapsed_s: f64) -> S
         "{:>10}  {:^25}  {:^25}  {:^25}",
         "horizon", "measured", "model before", "model after"
     );
+    use diagnose::protocol::Quantity;
+    let (heading, horizontal) = (
+        informed(result, Quantity::Heading),
+        informed(result, Quantity::PosHorizontal),
+    );
     for d in &result.drift {
-        let _ = writeln!(s, "{}", drift_line(d));
+        let _ = writeln!(s, "{}", drift_line(d, heading, horizontal));
+    }
+    if !(heading && horizontal) {
+        let _ = writeln!(
+            s,
+            "n/a: the log cannot inform it (heading needs gz; horizontal position needs gx, gy, ax, ay); `imudrift drift` compares every quantity a log informs"
+        );
     }
     s
 }
@@ -565,9 +589,15 @@ fn markdown_report(
         "\n## Drift (RMS over segments, bias removed by the log mean)\n"
     );
     let _ = writeln!(s, "| horizon | measured heading | model before | model after | measured horizontal | model before | model after |\n|---|---|---|---|---|---|---|");
+    let (heading, horizontal) = (
+        informed(result, diagnose::protocol::Quantity::Heading),
+        informed(result, diagnose::protocol::Quantity::PosHorizontal),
+    );
     for d in &result.drift {
         let f = |v: f64, scale: f64| {
-            if v.is_finite() {
+            if (scale != 1.0 && !heading) || (scale == 1.0 && !horizontal) {
+                "n/a".into()
+            } else if v.is_finite() {
                 format!("{:.4}", v * scale)
             } else {
                 "-".into()

@@ -10,7 +10,6 @@
 //! navigation solution minus the static truth (`strapdown::nav_error`).
 
 use serde::Serialize;
-use strapdown::{nav_error, BodyVector, NavState, Scheme, Strapdown};
 
 /// Standard gravity, m/s^2 (the noise crate's definition, shared by the workspace).
 pub use noise::units::STANDARD_GRAVITY_MPS2 as G_MPS2;
@@ -59,54 +58,23 @@ impl SegmentDrift {
     }
 }
 
-fn mean(x: &[f64]) -> f64 {
-    if x.is_empty() {
-        0.0
-    } else {
-        x.iter().sum::<f64>() / x.len() as f64
-    }
-}
-
 /// Segment drifts of a static log. `channels` are gx gy gz (rad/s) and ax ay az (m/s^2); a missing
 /// channel (None) reads its ideal value. Segments are consecutive, non-overlapping, of
-/// `round(horizon_s / dt_s)` samples each; a horizon longer than the log gives no segment.
+/// `round(horizon_s / dt_s)` samples each; a horizon longer than the log gives no segment. This
+/// is the default drift protocol (`protocol::Protocol::default()`: the log-mean calibration, a
+/// perfect start), computed by the same code as `imudrift drift`.
 pub fn segment_drift(channels: &[Option<&[f64]>; 6], dt_s: f64, horizon_s: f64) -> SegmentDrift {
-    let n = channels
-        .iter()
-        .flatten()
-        .map(|c| c.len())
-        .min()
-        .unwrap_or(0);
-    let len = (horizon_s / dt_s).round() as usize;
-    let mut out = SegmentDrift {
+    let e = crate::protocol::segment_errors(
+        channels,
+        dt_s,
         horizon_s,
-        ..Default::default()
-    };
-    if len == 0 || n < len {
-        return out;
+        &crate::protocol::Protocol::default(),
+    );
+    SegmentDrift {
+        horizon_s,
+        heading_rad: e.heading_rad,
+        horizontal_m: e.pos_horizontal_m,
     }
-    // Calibrated sample = sample - log mean + ideal value (0 for the gyros, (0, 0, -g) for the accelerometers).
-    let ideal = [0.0, 0.0, 0.0, 0.0, 0.0, -G_MPS2];
-    let offset: Vec<f64> = channels
-        .iter()
-        .zip(ideal)
-        .map(|(c, i)| c.map_or(0.0, |c| mean(&c[..n])) - i)
-        .collect();
-    let value = |ch: usize, k: usize| channels[ch].map_or(ideal[ch], |c| c[k] - offset[ch]);
-    let truth = NavState::default();
-    for seg in 0..n / len {
-        let mut nav = Strapdown::new(Scheme::Accurate, truth, G_MPS2);
-        let k0 = seg * len;
-        for k in k0..k0 + len {
-            let gyro = BodyVector::new(value(0, k), value(1, k), value(2, k));
-            let accel = BodyVector::new(value(3, k), value(4, k), value(5, k));
-            nav.step(&gyro, &accel, dt_s);
-        }
-        let e = nav_error(nav.state(), &truth);
-        out.heading_rad.push(e.yaw_rad);
-        out.horizontal_m.push(e.pos_horizontal_m());
-    }
-    out
 }
 
 #[cfg(test)]

@@ -286,7 +286,6 @@ pub fn segment_errors(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::drift::segment_drift;
 
     fn walk(n: usize, seed: u64, step: f64, offset: f64) -> Vec<f64> {
         let mut s = seed;
@@ -304,10 +303,10 @@ mod tests {
             .collect()
     }
 
-    /// With the log-mean calibration and a perfect start the protocol is the drift diagnose
-    /// always reported (`drift::segment_drift`): same heading and position, bit for bit.
+    /// Determinism and segmentation: consecutive segments from the start, the same values for
+    /// the same input; half-overlapping segments give twice as many less one.
     #[test]
-    fn default_protocol_is_the_diagnose_drift() {
+    fn segments_are_cut_as_stated() {
         let n = 30_000;
         let chans: Vec<Vec<f64>> = (0..6)
             .map(|c| walk(n, c as u64 + 1, 1e-5, if c == 5 { -G_MPS2 } else { 0.0 }))
@@ -315,10 +314,16 @@ mod tests {
         let refs: [Option<&[f64]>; 6] = std::array::from_fn(|c| Some(chans[c].as_slice()));
         let p = Protocol::default();
         let a = segment_errors(&refs, 0.01, 20.0, &p);
-        let b = segment_drift(&refs, 0.01, 20.0);
-        assert_eq!(a.heading_rad, b.heading_rad);
-        assert_eq!(a.pos_horizontal_m, b.horizontal_m);
+        assert_eq!(a, segment_errors(&refs, 0.01, 20.0, &p));
         assert_eq!(a.len(), 15);
+        let overlapping = Protocol {
+            overlapping: true,
+            ..Protocol::default()
+        };
+        let b = segment_errors(&refs, 0.01, 20.0, &overlapping);
+        assert_eq!(b.len(), 29);
+        // Every other overlapping segment is a consecutive one.
+        assert_eq!(b.heading_rad[2], a.heading_rad[1]);
     }
 
     /// A constant accelerometer bias is invisible after a window calibration, and with a
