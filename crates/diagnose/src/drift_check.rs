@@ -16,7 +16,7 @@
 //! measured RMS lies in the band, "above" or "below" otherwise, "not_informed" when a log lacks a
 //! channel the quantity comes from or no log is as long as the horizon.
 
-use crate::protocol::{segment_errors, Protocol, Quantity, SegmentErrors};
+use crate::protocol::{all_segment_errors, Quantity, SegmentErrors};
 use crate::report::LogInput;
 use crate::simulate::{static_log, SimSetup};
 use noise::SensorModel;
@@ -27,7 +27,7 @@ use std::collections::BTreeMap;
 /// Settings of a drift check.
 #[derive(Clone, Debug)]
 pub struct CheckSettings {
-    pub protocol: Protocol,
+    pub protocol: crate::protocol::Protocol,
     /// Simulated experiments for the model's band.
     pub replicates: usize,
     pub seed: u64,
@@ -101,7 +101,7 @@ pub struct HorizonCheck {
 /// The whole check.
 #[derive(Clone, Debug, Serialize)]
 pub struct DriftCheck {
-    pub protocol: Protocol,
+    pub protocol: crate::protocol::Protocol,
     pub protocol_text: String,
     pub seed: u64,
     pub replicates: usize,
@@ -184,14 +184,12 @@ pub fn check_drift(
     let p = &settings.protocol;
     let dt = first.dt_s;
     // Measured segments per horizon, per log (kept apart for the effective count).
-    let measured: Vec<Vec<SegmentErrors>> = p
-        .horizons_s
-        .iter()
-        .map(|&h| {
-            logs.par_iter()
-                .map(|l| segment_errors(&l.channels, dt, h, p))
-                .collect()
-        })
+    let by_log: Vec<Vec<SegmentErrors>> = logs
+        .par_iter()
+        .map(|l| all_segment_errors(&l.channels, dt, p))
+        .collect();
+    let measured: Vec<Vec<SegmentErrors>> = (0..p.horizons_s.len())
+        .map(|h| by_log.iter().map(|l| l[h].clone()).collect())
         .collect();
     // Simulated experiments: replicate r, log l is montecarlo run r * logs + l of the seed.
     let jobs: Vec<(usize, usize)> = (0..settings.replicates)
@@ -222,11 +220,7 @@ pub fn check_drift(
             let sim = static_log(model, &setup, settings.seed, run);
             let chans: [Option<&[f64]>; 6] =
                 std::array::from_fn(|c| setup.active[c].then(|| sim[c].as_slice()));
-            let out = p
-                .horizons_s
-                .iter()
-                .map(|&h| segment_errors(&chans, dt, h, p))
-                .collect();
+            let out = all_segment_errors(&chans, dt, p);
             let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             progress(k, jobs.len());
             out

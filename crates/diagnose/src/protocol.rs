@@ -196,12 +196,83 @@ pub fn segment_errors(
     horizon_s: f64,
     protocol: &Protocol,
 ) -> SegmentErrors {
-    let n = channels
+    let means = Means::new(channels, protocol);
+    segment_errors_with(channels, dt_s, horizon_s, protocol, &means)
+}
+
+/// [`segment_errors`] for every horizon of the protocol, sharing the window sums.
+pub fn all_segment_errors(
+    channels: &[Option<&[f64]>; 6],
+    dt_s: f64,
+    protocol: &Protocol,
+) -> Vec<SegmentErrors> {
+    let means = Means::new(channels, protocol);
+    protocol
+        .horizons_s
         .iter()
-        .flatten()
-        .map(|c| c.len())
-        .min()
-        .unwrap_or(0);
+        .map(|&h| segment_errors_with(channels, dt_s, h, protocol, &means))
+        .collect()
+}
+
+/// Channel means: over the whole log, and prefix sums for window means when the protocol has
+/// windows.
+struct Means {
+    n: usize,
+    whole: [Option<f64>; 6],
+    prefix: Vec<Option<Vec<f64>>>,
+}
+
+impl Means {
+    fn new(channels: &[Option<&[f64]>; 6], protocol: &Protocol) -> Means {
+        let n = channels
+            .iter()
+            .flatten()
+            .map(|c| c.len())
+            .min()
+            .unwrap_or(0);
+        let windows = matches!(protocol.calibration, Calibration::Window { .. })
+            || matches!(protocol.initialisation, Initialisation::Levelled { .. });
+        let whole = std::array::from_fn(|ch| {
+            channels[ch].map(|c| {
+                if n == 0 {
+                    0.0
+                } else {
+                    c[..n].iter().sum::<f64>() / n as f64
+                }
+            })
+        });
+        let prefix = channels
+            .iter()
+            .map(|c| {
+                c.filter(|_| windows).map(|c| {
+                    let mut p = Vec::with_capacity(n + 1);
+                    let mut s = 0.0;
+                    p.push(0.0);
+                    for &v in &c[..n] {
+                        s += v;
+                        p.push(s);
+                    }
+                    p
+                })
+            })
+            .collect();
+        Means { n, whole, prefix }
+    }
+
+    fn window(&self, ch: usize, a: usize, b: usize) -> Option<f64> {
+        let p = self.prefix[ch].as_ref()?;
+        Some((p[b] - p[a]) / (b - a) as f64)
+    }
+}
+
+fn segment_errors_with(
+    channels: &[Option<&[f64]>; 6],
+    dt_s: f64,
+    horizon_s: f64,
+    protocol: &Protocol,
+    means: &Means,
+) -> SegmentErrors {
+    let n = means.n;
     let len = (horizon_s / dt_s).round() as usize;
     let mut out = SegmentErrors {
         horizon_s,
@@ -212,26 +283,6 @@ pub fn segment_errors(
         return out;
     }
     let ideal = [0.0, 0.0, 0.0, 0.0, 0.0, -G_MPS2];
-    // Prefix sums for window means (one pass per channel).
-    let prefix: Vec<Option<Vec<f64>>> = channels
-        .iter()
-        .map(|c| {
-            c.map(|c| {
-                let mut p = Vec::with_capacity(n + 1);
-                let mut s = 0.0;
-                p.push(0.0);
-                for &v in &c[..n] {
-                    s += v;
-                    p.push(s);
-                }
-                p
-            })
-        })
-        .collect();
-    let mean_over = |ch: usize, a: usize, b: usize| -> Option<f64> {
-        let p = prefix[ch].as_ref()?;
-        Some((p[b] - p[a]) / (b - a) as f64)
-    };
     let stride = if protocol.overlapping {
         (len / 2).max(1)
     } else {
@@ -243,10 +294,12 @@ pub fn segment_errors(
         // The bias removed from each channel for this segment.
         let offset: [f64; 6] = std::array::from_fn(|ch| match protocol.calibration {
             Calibration::None => 0.0,
-            Calibration::LogMean => mean_over(ch, 0, n).map_or(0.0, |m| m - ideal[ch]),
+            Calibration::LogMean => means.whole[ch].map_or(0.0, |m| m - ideal[ch]),
             Calibration::Window { window_s } => {
                 let w = ((window_s / dt_s).round() as usize).max(1);
-                mean_over(ch, start - w, start).map_or(0.0, |m| m - ideal[ch])
+                means
+                    .window(ch, start - w, start)
+                    .map_or(0.0, |m| m - ideal[ch])
             }
         });
         let value = |ch: usize, k: usize| channels[ch].map_or(ideal[ch], |c| c[k] - offset[ch]);
@@ -255,7 +308,9 @@ pub fn segment_errors(
             Initialisation::Levelled { window_s } => {
                 let w = ((window_s / dt_s).round() as usize).max(1);
                 let f: [f64; 3] = std::array::from_fn(|a| {
-                    mean_over(3 + a, start - w, start).map_or(ideal[3 + a], |m| m - offset[3 + a])
+                    means
+                        .window(3 + a, start - w, start)
+                        .map_or(ideal[3 + a], |m| m - offset[3 + a])
                 });
                 let roll = (-f[1]).atan2(-f[2]);
                 let pitch = f[0].atan2(f[1].hypot(f[2]));
