@@ -101,6 +101,9 @@ fn calibration_figure() {
         overlapping: false,
     };
     for (h, inside, total) in coverage(200, 180_000, 0.02, &protocol, 100) {
-        println!("{h} s: {inside}/{total} inside ({:.1} %)", 100.0 * inside as f64 / total as f64);
+        println!(
+            "{h} s: {inside}/{total} inside ({:.1} %)",
+            100.0 * inside as f64 / total as f64
+        );
     }
 }

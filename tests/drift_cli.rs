@@ -1,0 +1,165 @@
+//! `imudrift drift`: the JSON contract, pooled logs, channels a log cannot inform, determinism.
+
+mod common;
+use common::imudrift;
+
+const MODEL: &str = r#"
+name = "drift-cli"
+[gyro.all]
+white_noise = "0.5 deg/sqrt(h)"
+bias_instability = "10 deg/h"
+[accel.all]
+white_noise = "100 ug/sqrt(Hz)"
+"#;
+
+fn generate(dir: &std::path::Path, name: &str, seed: &str) -> String {
+    let model = dir.join("m.toml");
+    std::fs::write(&model, MODEL).unwrap();
+    let log = dir.join(name);
+    common::ok(imudrift(&[
+        "generate",
+        model.to_str().unwrap(),
+        "--duration",
+        "10min",
+        "--rate",
+        "50",
+        "--seed",
+        seed,
+        "-o",
+        log.to_str().unwrap(),
+    ]));
+    log.to_str().unwrap().to_string()
+}
+
+#[test]
+fn json_contract_pooling_and_verdicts() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = generate(dir.path(), "a.csv", "11");
+    let b = generate(dir.path(), "b.csv", "12");
+    let model = dir.path().join("m.toml");
+    let run = |threads: &str| {
+        common::ok(imudrift(&[
+            "drift",
+            &a,
+            &b,
+            "--model",
+            model.to_str().unwrap(),
+            "--horizons",
+            "10,60,1h",
+            "--calibration",
+            "window:20s",
+            "--init",
+            "level:20s",
+            "--replicates",
+            "20",
+            "--json",
+            "--threads",
+            threads,
+        ]))
+    };
+    let out = run("2");
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(doc["protocol"]["calibration"]["kind"], "window");
+    assert_eq!(doc["protocol"]["initialisation"]["kind"], "levelled");
+    assert_eq!(doc["logs"].as_array().unwrap().len(), 2);
+    let h = &doc["horizons"][0];
+    assert_eq!(h["t_s"], 10.0);
+    // Two 10 min logs, 20 s lead, 10 s segments: 58 each.
+    assert_eq!(h["segments"], 116);
+    for q in [
+        "heading_rad",
+        "roll_rad",
+        "pitch_rad",
+        "pos_horizontal_m",
+        "vel_horizontal_mps",
+    ] {
+        let c = &h["channels"][q];
+        for k in ["p50", "p95", "rms", "rms_lo", "rms_hi"] {
+            assert!(c["measured"][k].as_f64().unwrap() > 0.0, "{q} measured {k}");
+        }
+        for k in ["p50", "p95", "rms", "band_lo", "band_hi"] {
+            assert!(c["model"][k].as_f64().unwrap() > 0.0, "{q} model {k}");
+        }
+        let m = &c["measured"];
+        assert!(
+            m["rms_lo"].as_f64() < m["rms"].as_f64() && m["rms"].as_f64() < m["rms_hi"].as_f64()
+        );
+        assert!(["inside", "above", "below"].contains(&c["verdict"].as_str().unwrap()));
+    }
+    // A horizon longer than the logs is not informed, with the reason.
+    let long = &doc["horizons"][2]["channels"]["heading_rad"];
+    assert_eq!(long["verdict"], "not_informed");
+    assert!(long["note"].as_str().unwrap().contains("3600 s"));
+    // Same seed, other thread count: the same bytes.
+    assert_eq!(out.stdout, run("1").stdout);
+}
+
+#[test]
+fn channels_a_log_lacks_are_not_informed() {
+    let dir = tempfile::tempdir().unwrap();
+    // A gyro-x-only log (like the MTi-G one): roll is informed, nothing else.
+    let mut text = String::from("gx\n");
+    let mut s = 1u64;
+    for _ in 0..30_000 {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        text += &format!(
+            "{:e}\n",
+            ((s >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 1e-3
+        );
+    }
+    let log = dir.path().join("gx.csv");
+    std::fs::write(&log, text).unwrap();
+    let model = dir.path().join("m.toml");
+    std::fs::write(&model, MODEL).unwrap();
+    let out = common::ok(imudrift(&[
+        "drift",
+        log.to_str().unwrap(),
+        "--model",
+        model.to_str().unwrap(),
+        "--rate",
+        "100",
+        "--horizons",
+        "10",
+        "--replicates",
+        "10",
+        "--json",
+    ]));
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let c = &doc["horizons"][0]["channels"];
+    assert_ne!(c["roll_rad"]["verdict"], "not_informed");
+    for q in [
+        "heading_rad",
+        "pitch_rad",
+        "pos_horizontal_m",
+        "vel_horizontal_mps",
+    ] {
+        assert_eq!(c[q]["verdict"], "not_informed", "{q}");
+        assert!(c[q]["note"].as_str().unwrap().contains("lack"), "{q}");
+    }
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("not informed (the logs lack gz)"), "{err}");
+}
+
+#[test]
+fn bad_protocols_are_refused_with_the_option_named() {
+    for (flag, value, needle) in [
+        ("--calibration", "median", "--calibration \"median\""),
+        ("--init", "level:soon", "--init"),
+        ("--horizons", "0", "--horizons"),
+        ("--replicates", "3", "--replicates 3"),
+    ] {
+        let out = imudrift(&[
+            "drift",
+            "x.csv",
+            "--model",
+            "configs/sensors/mtx.toml",
+            flag,
+            value,
+        ]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{flag}: {err}");
+        assert!(err.contains(needle), "{flag}: {err}");
+    }
+}
