@@ -36,6 +36,11 @@ pub struct CheckSettings {
 /// Measured statistics of |error| over the pooled segments.
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct Measured {
+    /// Mean |error| (Woodman's statistic) and its 95 % interval (normal, standard error
+    /// sd(|e|) / sqrt(n_eff)).
+    pub mean: f64,
+    pub mean_lo: f64,
+    pub mean_hi: f64,
     pub p50: f64,
     pub p95: f64,
     pub rms: f64,
@@ -47,6 +52,7 @@ pub struct Measured {
 /// The model's statistics under the same protocol.
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct Model {
+    pub mean: f64,
     pub p50: f64,
     pub p95: f64,
     pub rms: f64,
@@ -267,7 +273,15 @@ pub fn check_drift(
             let n_eff = effective_count(&seqs, p.overlapping);
             let lo_q = allan::chi2::chi2_ppf(0.975, n_eff);
             let hi_q = allan::chi2::chi2_ppf(0.025, n_eff);
+            let mean = sorted.iter().sum::<f64>() / sorted.len() as f64;
+            let sd = (sorted.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>()
+                / (sorted.len().max(2) - 1) as f64)
+                .sqrt();
+            let half = 1.959_963_984_540_054 * sd / n_eff.sqrt();
             let measured = Measured {
+                mean,
+                mean_lo: mean - half,
+                mean_hi: mean + half,
                 p50: quantile(&sorted, 0.5),
                 p95: quantile(&sorted, 0.95),
                 rms: r,
@@ -295,6 +309,7 @@ pub fn check_drift(
             rep_rms.sort_by(f64::total_cmp);
             let all_sorted = abs_sorted(&all);
             let model = Model {
+                mean: all_sorted.iter().sum::<f64>() / all_sorted.len() as f64,
                 p50: quantile(&all_sorted, 0.5),
                 p95: quantile(&all_sorted, 0.95),
                 rms: rms(&all),
