@@ -11,8 +11,9 @@
 //! 8 segments in a log; half-overlapping segments count as half.
 //!
 //! Model band: `replicates` simulated experiments, each one simulated log per measured log (same
-//! length, rate and channels), give the distribution of the same RMS; the band is its central
-//! 95 % (2.5 % and 97.5 % quantiles, linear interpolation). The verdict is "inside" when the
+//! length, rate and channels), give the distribution of the same RMS; the band is the
+//! distribution-free 95 % prediction interval of those R values (order statistics a and R + 1 - a,
+//! a = 0.025 (R + 1), coverage (R + 1 - 2a) / (R + 1) = 95 %). The verdict is "inside" when the
 //! measured RMS lies in the band, "above" or "below" otherwise, "not_informed" when a log lacks a
 //! channel the quantity comes from or no log is as long as the horizon.
 
@@ -138,6 +139,18 @@ fn quantile(sorted: &[f64], p: f64) -> f64 {
         sorted[i] * (1.0 - f) + sorted[i + 1] * f
     } else {
         sorted[i]
+    }
+}
+
+/// The order statistic of 1-based fractional rank `a` (linear between neighbours, clamped).
+fn order_stat(sorted: &[f64], a: f64) -> f64 {
+    let a = a.clamp(1.0, sorted.len() as f64);
+    let i = a.floor() as usize;
+    let f = a - i as f64;
+    if i < sorted.len() {
+        sorted[i - 1] * (1.0 - f) + sorted[i] * f
+    } else {
+        sorted[i - 1]
     }
 }
 
@@ -307,14 +320,20 @@ pub fn check_drift(
                 all.extend(v);
             }
             rep_rms.sort_by(f64::total_cmp);
+            // Distribution-free 95 % prediction interval from R exchangeable replicates: the
+            // order statistics X_(a) and X_(R+1-a) cover a new measurement with probability
+            // (R + 1 - 2a) / (R + 1) (e.g. Wilks 1941); a = 0.025 (R + 1), between order
+            // statistics by linear interpolation, makes it 95 % for any R (at least 1: the
+            // extremes, for R < 39).
+            let a = (0.025 * (rep_rms.len() + 1) as f64).max(1.0);
             let all_sorted = abs_sorted(&all);
             let model = Model {
                 mean: all_sorted.iter().sum::<f64>() / all_sorted.len() as f64,
                 p50: quantile(&all_sorted, 0.5),
                 p95: quantile(&all_sorted, 0.95),
                 rms: rms(&all),
-                band_lo: quantile(&rep_rms, 0.025),
-                band_hi: quantile(&rep_rms, 0.975),
+                band_lo: order_stat(&rep_rms, a),
+                band_hi: order_stat(&rep_rms, (rep_rms.len() + 1) as f64 - a),
             };
             let verdict = if r > model.band_hi {
                 Verdict::Above
