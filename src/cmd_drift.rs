@@ -198,6 +198,7 @@ fn text(r: &DriftCheck, logs: &[String], model: &std::path::Path, elapsed_s: f64
         "model rms [95 % band]",
         "ratio"
     );
+    let mut causes = Vec::new();
     for h in &r.horizons {
         for q in Quantity::ALL {
             let c = &h.channels[q.name()];
@@ -215,6 +216,9 @@ fn text(r: &DriftCheck, logs: &[String], model: &std::path::Path, elapsed_s: f64
                 (Verdict::NotInformed, Some(n)) => format!("not informed ({n})"),
                 (v, _) => v.name().to_string(),
             };
+            if let Some(cause) = &c.likely_cause {
+                causes.push(format!("{} {}: {cause}", crate::fmt::time(h.t_s), q.name()));
+            }
             let _ = writeln!(
                 s,
                 "{:>7} {:>5}  {:<20} {:>26} {:>30}  {:>6}  {verdict}",
@@ -225,6 +229,12 @@ fn text(r: &DriftCheck, logs: &[String], model: &std::path::Path, elapsed_s: f64
                 model,
                 ratio
             );
+        }
+    }
+    if !causes.is_empty() {
+        let _ = writeln!(s, "likely causes where the measurement leaves the band:");
+        for c in causes {
+            let _ = writeln!(s, "  {c}");
         }
     }
     s

@@ -84,7 +84,14 @@ fn json_contract_pooling_and_verdicts() {
         assert!(
             m["rms_lo"].as_f64() < m["rms"].as_f64() && m["rms"].as_f64() < m["rms_hi"].as_f64()
         );
-        assert!(["inside", "above", "below"].contains(&c["verdict"].as_str().unwrap()));
+        let verdict = c["verdict"].as_str().unwrap();
+        assert!(["inside", "above", "below"].contains(&verdict));
+        // Outside the band the likely cause is named, inside it is not.
+        assert_eq!(
+            c["likely_cause"].is_string(),
+            verdict != "inside",
+            "{q}: {c}"
+        );
     }
     // A horizon longer than the logs is not informed, with the reason.
     let long = &doc["horizons"][2]["channels"]["heading_rad"];

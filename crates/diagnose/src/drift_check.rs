@@ -94,6 +94,61 @@ pub struct QuantityCheck {
     /// Why a quantity is not informed.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub note: Option<String>,
+    /// For a measurement outside the band: the likely cause, from the channels the quantity
+    /// comes from, the horizon and the model's terms (a pointer for `diagnose`, not a proof).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub likely_cause: Option<String>,
+}
+
+/// The likely cause of a verdict outside the band (module doc): which channels, which kind of
+/// term. Short horizons (up to a minute) are ruled by white noise and fast bias wander, long
+/// ones by slow bias wander (Woodman §3.2: white noise grows as sqrt(t), bias terms as t and
+/// faster, so the long-horizon drift is the slow terms').
+fn likely_cause(
+    q: Quantity,
+    horizon_s: f64,
+    verdict: Verdict,
+    model: &SensorModel,
+) -> Option<String> {
+    let chans: Vec<&str> = q
+        .needs()
+        .iter()
+        .map(|&c| crate::drift::CHANNELS[c])
+        .collect();
+    let list = chans.join(", ");
+    let short = horizon_s <= 60.0;
+    match verdict {
+        Verdict::Above if short => Some(format!(
+            "the sensor's white noise or fast bias wander on {list} is above the model's (`imudrift diagnose` on a log measures both)"
+        )),
+        Verdict::Above => Some(format!(
+            "slow bias wander on {list} (bias instability, rate random walk or temperature) larger than the model's; one log's length may not resolve it"
+        )),
+        Verdict::Below => {
+            let stand_ins: Vec<&str> = q
+                .needs()
+                .iter()
+                .filter(|&&c| {
+                    let (sensor, axis) = crate::model_terms::channel_axis(c);
+                    let a = model.axis(sensor, axis);
+                    a.sinusoidal.is_some() || a.gauss_markov.is_some()
+                })
+                .map(|&c| crate::drift::CHANNELS[c])
+                .collect();
+            Some(if stand_ins.is_empty() {
+                format!(
+                    "the model's {} on {list} is above the sensor's",
+                    if short { "white noise" } else { "bias instability or random walk" }
+                )
+            } else {
+                format!(
+                    "the model's sinusoid / Gauss-Markov terms on {} (stand-ins `diagnose` fits for a filter at the shortest averaging times) add drift the sensor does not have",
+                    stand_ins.join(", ")
+                )
+            })
+        }
+        _ => None,
+    }
 }
 
 /// One horizon.
@@ -187,7 +242,7 @@ fn effective_count(per_log: &[&[f64]], overlapping: bool) -> f64 {
 /// told the number of simulated logs done.
 pub fn check_drift(
     logs: &[LogInput],
-    model: &SensorModel,
+    model_sensor: &SensorModel,
     settings: &CheckSettings,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<DriftCheck, CheckError> {
@@ -236,7 +291,7 @@ pub fn check_drift(
                 temp_coeff: [0.0; 6],
             };
             let run = (r * logs.len() + l) as u64;
-            let sim = static_log(model, &setup, settings.seed, run);
+            let sim = static_log(model_sensor, &setup, settings.seed, run);
             let chans: [Option<&[f64]>; 6] =
                 std::array::from_fn(|c| setup.active[c].then(|| sim[c].as_slice()));
             let out = all_segment_errors(&chans, dt, p);
@@ -270,6 +325,7 @@ pub fn check_drift(
                         model: None,
                         verdict: Verdict::NotInformed,
                         ratio: None,
+                        likely_cause: None,
                         note: Some(if missing.is_empty() {
                             format!("no log is {h} s long")
                         } else {
@@ -350,6 +406,7 @@ pub fn check_drift(
                     model: Some(model),
                     verdict,
                     note: None,
+                    likely_cause: likely_cause(q, h, verdict, model_sensor),
                 },
             );
         }
