@@ -116,6 +116,9 @@ fn calibration_figure() {
 fn calibration_figure_every_default_horizon() {
     let protocol = Protocol::default();
     for (h, inside, total) in coverage(40, 144_000, 0.1, &protocol, 100) {
-        println!("{h} s: {inside}/{total} inside ({:.1} %)", 100.0 * inside as f64 / total as f64);
+        println!(
+            "{h} s: {inside}/{total} inside ({:.1} %)",
+            100.0 * inside as f64 / total as f64
+        );
     }
 }

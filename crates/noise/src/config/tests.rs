@@ -176,3 +176,49 @@ fn wrong_shapes_show_the_accepted_forms_with_an_example() {
     let e = err("[gyro.all]\nwhite_noise = \"1 deg/sqrt(h)\"\n");
     assert!(e.contains("name = \"My IMU\""), "{e}");
 }
+
+/// The styled writer: the input config's units, five significant digits, `[sensor.all]` when
+/// the axes agree, no empty tables, no default temperature table; it loads back within the
+/// rounding.
+#[test]
+fn styled_toml_keeps_the_input_units_and_loads_back() {
+    let text = r#"
+name = "styled"
+[gyro.all]
+white_noise = "0.05 deg/s/sqrt(Hz)"
+bias_instability = { value = "0.007 deg/s", convention = "allan_minimum" }
+[accel.x]
+white_noise = "0.5 mg/sqrt(Hz)"
+"#;
+    let m = SensorModel::from_toml_str(text, "styled.toml").unwrap();
+    let styled = m.to_toml_string_styled(&UnitStyle::from_config_text(text));
+    assert!(
+        styled.contains("[gyro.all]") && styled.contains("deg/s/sqrt(Hz)"),
+        "{styled}"
+    );
+    assert!(
+        styled.contains("[accel.x]") && styled.contains("mg/sqrt(Hz)"),
+        "{styled}"
+    );
+    assert!(
+        !styled.contains("[accel.y]") && !styled.contains("[temperature]"),
+        "{styled}"
+    );
+    let back = SensorModel::from_toml_str(&styled, "back.toml").unwrap();
+    let rel = |a: f64, b: f64| (a / b - 1.0).abs();
+    for (a, b) in m.gyro.axes.iter().zip(&back.gyro.axes) {
+        assert!(rel(a.white_noise.unwrap(), b.white_noise.unwrap()) < 5e-5);
+    }
+    assert!(
+        rel(
+            m.accel.axes[0].white_noise.unwrap(),
+            back.accel.axes[0].white_noise.unwrap()
+        ) < 5e-5
+    );
+    // Quantities the input does not use are written in spec-sheet units.
+    let mut k = m.clone();
+    k.gyro.axes[0].rate_random_walk = Some(1e-5);
+    assert!(k
+        .to_toml_string_styled(&UnitStyle::from_config_text(text))
+        .contains("deg/h/sqrt(h)"));
+}

@@ -7,24 +7,13 @@ use crate::units::{format_si, Quantity, Signal};
 use std::fmt::Write as _;
 
 impl SensorModel {
-    /// Write the model back as a config in SI units (every axis explicit, bias instability as IEEE B).
-    /// `from_toml_str` of the result gives this model back bit for bit.
-    pub fn to_toml_string(&self) -> String {
-        let mut s = String::new();
-        let _ = writeln!(s, "# written by imudrift; units SI");
-        let _ = writeln!(s, "name = {}", toml_str(&self.name));
-        if let Some(d) = &self.description {
-            let _ = writeln!(s, "description = {}", toml_str(d));
-        }
+    /// The `[temperature]` table, each value written by `fmt` (value SI, quantity).
+    fn write_temperature(&self, s: &mut String, fmt: &dyn Fn(f64, Quantity) -> String) {
         let t = Quantity::Temperature;
         let _ = writeln!(s, "\n[temperature]");
         match &self.temperature {
             TemperatureProfile::Constant { temp_c } => {
-                let _ = writeln!(
-                    s,
-                    "profile = \"constant\"\nvalue = \"{}\"",
-                    format_si(*temp_c, t)
-                );
+                let _ = writeln!(s, "profile = \"constant\"\nvalue = \"{}\"", fmt(*temp_c, t));
             }
             TemperatureProfile::Ramp {
                 start_c,
@@ -34,11 +23,11 @@ impl SensorModel {
                 let _ = writeln!(
                     s,
                     "profile = \"ramp\"\nstart = \"{}\"\nrate = \"{}\"",
-                    format_si(*start_c, t),
-                    format_si(*rate_c_per_s, Quantity::TemperatureRate)
+                    fmt(*start_c, t),
+                    fmt(*rate_c_per_s, Quantity::TemperatureRate)
                 );
                 if let Some(e) = end_c {
-                    let _ = writeln!(s, "end = \"{}\"", format_si(*e, t));
+                    let _ = writeln!(s, "end = \"{}\"", fmt(*e, t));
                 }
             }
             TemperatureProfile::Warmup {
@@ -49,9 +38,9 @@ impl SensorModel {
                 let _ = writeln!(
                     s,
                     "profile = \"warmup\"\nstart = \"{}\"\nend = \"{}\"\ntime_constant = \"{}\"",
-                    format_si(*start_c, t),
-                    format_si(*end_c, t),
-                    format_si(*time_constant_s, Quantity::Time)
+                    fmt(*start_c, t),
+                    fmt(*end_c, t),
+                    fmt(*time_constant_s, Quantity::Time)
                 );
             }
             TemperatureProfile::Sinusoid {
@@ -62,17 +51,29 @@ impl SensorModel {
                 let _ = writeln!(
                     s,
                     "profile = \"sinusoid\"\nmean = \"{}\"\namplitude = \"{}\"\nperiod = \"{}\"",
-                    format_si(*mean_c, t),
-                    format_si(*amplitude_c, t),
-                    format_si(*period_s, Quantity::Time)
+                    fmt(*mean_c, t),
+                    fmt(*amplitude_c, t),
+                    fmt(*period_s, Quantity::Time)
                 );
             }
         }
         let _ = writeln!(
             s,
             "reference = \"{}\"",
-            format_si(self.temperature_reference_c, t)
+            fmt(self.temperature_reference_c, t)
         );
+    }
+
+    /// Write the model back as a config in SI units (every axis explicit, bias instability as IEEE B).
+    /// `from_toml_str` of the result gives this model back bit for bit.
+    pub fn to_toml_string(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(s, "# written by imudrift; units SI");
+        let _ = writeln!(s, "name = {}", toml_str(&self.name));
+        if let Some(d) = &self.description {
+            let _ = writeln!(s, "description = {}", toml_str(d));
+        }
+        self.write_temperature(&mut s, &format_si);
         for sensor in Sensor::ALL {
             let sig = signal_of(sensor);
             for (axis, name) in self.triad(sensor).axes.iter().zip(AXIS_NAMES) {
@@ -324,55 +325,7 @@ impl SensorModel {
         let default_temperature = self.temperature == TemperatureProfile::default()
             && self.temperature_reference_c == 25.0;
         if !default_temperature {
-            let t = Quantity::Temperature;
-            let _ = writeln!(s, "\n[temperature]");
-            match &self.temperature {
-                TemperatureProfile::Constant { temp_c } => {
-                    let _ = writeln!(s, "profile = \"constant\"\nvalue = \"{}\"", f(*temp_c, t));
-                }
-                TemperatureProfile::Ramp {
-                    start_c,
-                    rate_c_per_s,
-                    end_c,
-                } => {
-                    let _ = writeln!(
-                        s,
-                        "profile = \"ramp\"\nstart = \"{}\"\nrate = \"{}\"",
-                        f(*start_c, t),
-                        f(*rate_c_per_s, Quantity::TemperatureRate)
-                    );
-                    if let Some(e) = end_c {
-                        let _ = writeln!(s, "end = \"{}\"", f(*e, t));
-                    }
-                }
-                TemperatureProfile::Warmup {
-                    start_c,
-                    end_c,
-                    time_constant_s,
-                } => {
-                    let _ = writeln!(
-                        s,
-                        "profile = \"warmup\"\nstart = \"{}\"\nend = \"{}\"\ntime_constant = \"{}\"",
-                        f(*start_c, t),
-                        f(*end_c, t),
-                        f(*time_constant_s, Quantity::Time)
-                    );
-                }
-                TemperatureProfile::Sinusoid {
-                    mean_c,
-                    amplitude_c,
-                    period_s,
-                } => {
-                    let _ = writeln!(
-                        s,
-                        "profile = \"sinusoid\"\nmean = \"{}\"\namplitude = \"{}\"\nperiod = \"{}\"",
-                        f(*mean_c, t),
-                        f(*amplitude_c, t),
-                        f(*period_s, Quantity::Time)
-                    );
-                }
-            }
-            let _ = writeln!(s, "reference = \"{}\"", f(self.temperature_reference_c, t));
+            self.write_temperature(&mut s, &f);
         }
         for sensor in Sensor::ALL {
             let sig = signal_of(sensor);
