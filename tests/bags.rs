@@ -141,6 +141,33 @@ fn damaged_or_irregular_bags_are_refused_without_a_panic() {
             assert!(err.contains("cut-") && !err.contains("panicked"), "{err}");
         }
     }
+    // Damaged length fields (the first record's, and bytes flipped through the file): errors,
+    // never an attempt to allocate exabytes.
+    let bytes = std::fs::read(&mcap).unwrap();
+    let mut variants = Vec::new();
+    let mut huge = bytes.clone();
+    huge[9..17].copy_from_slice(&0xffff_ffff_ffff_ff00u64.to_le_bytes());
+    variants.push(huge);
+    for k in 1..40 {
+        let mut v = bytes.clone();
+        let at = k * bytes.len() / 40;
+        for b in &mut v[at..(at + 8).min(bytes.len())] {
+            *b = 0xff;
+        }
+        variants.push(v);
+    }
+    for (i, v) in variants.iter().enumerate() {
+        let damaged = dir.path().join(format!("flip-{i}.mcap"));
+        std::fs::write(&damaged, v).unwrap();
+        let out = imudrift(&["allan", damaged.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        // Exit 1 with a message, or (a flip inside a float) a valid analysis: never a crash.
+        assert!(matches!(out.status.code(), Some(0) | Some(1)), "{i}: {err}");
+        assert!(
+            !err.contains("panicked") && !err.contains("memory allocation"),
+            "{i}: {err}"
+        );
+    }
     // A gap of 10 samples is named by its message.
     let mut gap = s.clone();
     gap.drain(1000..1010);

@@ -260,36 +260,85 @@ fn read_rosbag(path: &Path, source: &str, topic: Option<&str>) -> Result<ImuSeri
 }
 
 fn read_mcap(path: &Path, source: &str, topic: Option<&str>) -> Result<ImuSeries> {
+    use mcap::records::Record;
+    use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
+    use std::collections::BTreeMap;
     let file = std::fs::File::open(path).with_context(|| format!("cannot read {source}"))?;
     // SAFETY: a read-only private mapping of a regular file this process holds open; the bytes
     // are only read (the hazard of a concurrent truncation is the one every mmap reader accepts).
     let map =
         unsafe { memmap2::Mmap::map(&file) }.with_context(|| format!("cannot map {source}"))?;
-    let summary = mcap::Summary::read(&map)
-        .map_err(|e| anyhow!("{source}: not a readable MCAP file: {e}"))?;
-    let mut topics: Vec<(String, String)> = Vec::new();
-    let channels: Vec<std::sync::Arc<mcap::Channel>> = match &summary {
-        Some(s) => s.channels.values().cloned().collect(),
-        None => Vec::new(),
-    };
-    let type_of = |c: &mcap::Channel| c.schema.as_ref().map_or(String::new(), |s| s.name.clone());
-    if channels.is_empty() {
-        // No summary section: the channels are found by reading the messages.
-        for m in mcap::MessageStream::new(&map)
-            .map_err(|e| anyhow!("{source}: not a readable MCAP file: {e}"))?
-        {
-            let m = m.map_err(|e| anyhow!("{source}: bad MCAP record: {e}"))?;
-            let pair = (m.channel.topic.clone(), type_of(&m.channel));
-            if !topics.contains(&pair) {
-                topics.push(pair);
+    // The crate's sans-io reader with a bound on record lengths: a damaged length field is an
+    // error, not an attempt to allocate it (its MessageStream sets no bound). Chunk CRCs are
+    // checked. Records in file order (mcap.dev/spec: schemas and channels before their use).
+    let opts = LinearReaderOptions::default()
+        .with_validate_chunk_crcs(true)
+        .with_record_length_limit(map.len().max(1 << 30));
+    let mut reader = LinearReader::new_with_options(opts);
+    let mut bytes: &[u8] = &map;
+    let mut schemas: BTreeMap<u16, String> = BTreeMap::new();
+    // channel id -> (topic, schema name, message encoding)
+    let mut channels: BTreeMap<u16, (String, String, String)> = BTreeMap::new();
+    let mut samples: BTreeMap<u16, Vec<ImuSample>> = BTreeMap::new();
+    let mut past_data_end = false;
+    let bad = |e: &dyn std::fmt::Display| anyhow!("{source}: not a readable MCAP file: {e}");
+    while let Some(event) = reader.next_event() {
+        match event.map_err(|e| bad(&e))? {
+            LinearReadEvent::ReadRequest(n) => {
+                let k = n.min(bytes.len());
+                reader.insert(k).copy_from_slice(&bytes[..k]);
+                reader.notify_read(k);
+                bytes = &bytes[k..];
+            }
+            LinearReadEvent::Record { opcode, data } => {
+                // 0x03 schema, 0x04 channel, 0x05 message, 0x0F data end (the summary after
+                // it repeats schemas and channels).
+                if past_data_end || !matches!(opcode, 0x03 | 0x04 | 0x05 | 0x0F) {
+                    continue;
+                }
+                match mcap::parse_record(opcode, data).map_err(|e| bad(&e))? {
+                    Record::DataEnd(_) => past_data_end = true,
+                    Record::Schema { header, .. } => {
+                        schemas.insert(header.id, header.name.clone());
+                    }
+                    Record::Channel(c) => {
+                        let schema = schemas.get(&c.schema_id).cloned().unwrap_or_default();
+                        channels
+                            .insert(c.id, (c.topic.clone(), schema, c.message_encoding.clone()));
+                    }
+                    Record::Message { header, data } => {
+                        let Some((topic, schema, encoding)) = channels.get(&header.channel_id)
+                        else {
+                            bail!(
+                                "{source}: a message refers to channel {}, never defined",
+                                header.channel_id
+                            );
+                        };
+                        if schema != ROS2_TYPE {
+                            continue;
+                        }
+                        let v = samples.entry(header.channel_id).or_default();
+                        if encoding != "cdr" {
+                            bail!("{source}: topic {topic}: message encoding {encoding:?}; expected \"cdr\" (ROS 2)");
+                        }
+                        let s = decode_cdr(&data).ok_or_else(|| {
+                            anyhow!(
+                                "{source}: topic {topic}: message {} is not a valid {ROS2_TYPE}",
+                                v.len() + 1
+                            )
+                        })?;
+                        v.push(s);
+                    }
+                    _ => {}
+                }
             }
         }
-    } else {
-        for c in &channels {
-            let pair = (c.topic.clone(), type_of(c));
-            if !topics.contains(&pair) {
-                topics.push(pair);
-            }
+    }
+    let mut topics: Vec<(String, String)> = Vec::new();
+    for (t, schema, _) in channels.values() {
+        let pair = (t.clone(), schema.clone());
+        if !topics.contains(&pair) {
+            topics.push(pair);
         }
     }
     let chosen = choose_topic(source, &topics, topic, ROS2_TYPE)?;
@@ -297,29 +346,12 @@ fn read_mcap(path: &Path, source: &str, topic: Option<&str>) -> Result<ImuSeries
         topic: chosen,
         ..ImuSeries::default()
     };
-    let mut k = 0usize;
-    for m in mcap::MessageStream::new(&map)
-        .map_err(|e| anyhow!("{source}: not a readable MCAP file: {e}"))?
-    {
-        let m = m.map_err(|e| anyhow!("{source}: bad MCAP record: {e}"))?;
-        if m.channel.topic != out.topic || type_of(&m.channel) != ROS2_TYPE {
-            continue;
+    for (id, v) in samples {
+        if channels[&id].0 == out.topic {
+            for s in v {
+                out.push(s);
+            }
         }
-        k += 1;
-        if m.channel.message_encoding != "cdr" {
-            bail!(
-                "{source}: topic {}: message encoding {:?}; expected \"cdr\" (ROS 2)",
-                out.topic,
-                m.channel.message_encoding
-            );
-        }
-        let s = decode_cdr(&m.data).ok_or_else(|| {
-            anyhow!(
-                "{source}: topic {}: message {k} is not a valid {ROS2_TYPE}",
-                out.topic
-            )
-        })?;
-        out.push(s);
     }
     Ok(out)
 }
