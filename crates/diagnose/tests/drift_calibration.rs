@@ -108,14 +108,14 @@ fn calibration_figure() {
     }
 }
 
-/// Every default horizon, 1 h included: 40 seeds of a 4 h, 10 Hz log (four 1 h segments each),
+/// Every default horizon, 1 h included: 200 seeds of a 4 h, 10 Hz log (four 1 h segments each),
 /// the default protocol. Run with `cargo test --release -p imudrift-diagnose --test
 /// drift_calibration -- --ignored --nocapture`.
 #[test]
 #[ignore = "long: the documented calibration figure"]
 fn calibration_figure_every_default_horizon() {
     let protocol = Protocol::default();
-    for (h, inside, total) in coverage(40, 144_000, 0.1, &protocol, 100) {
+    for (h, inside, total) in coverage(200, 144_000, 0.1, &protocol, 100) {
         println!(
             "{h} s: {inside}/{total} inside ({:.1} %)",
             100.0 * inside as f64 / total as f64
