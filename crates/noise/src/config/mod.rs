@@ -45,7 +45,7 @@ use std::path::Path;
 /// A config that cannot be used: names the file, the key and what was expected.
 #[derive(Clone, Debug, thiserror::Error)]
 pub enum ConfigError {
-    #[error("{file}: cannot read the file: {source}")]
+    #[error("{file}: cannot read the file")]
     Io {
         file: String,
         #[source]
