@@ -327,7 +327,12 @@ pub fn check_drift(
                         ratio: None,
                         likely_cause: None,
                         note: Some(if missing.is_empty() {
-                            format!("no log is {h} s long")
+                            match p.lead_s() {
+                                w if w > 0.0 => {
+                                    format!("no log holds a {h} s segment after the {w} s window")
+                                }
+                                _ => format!("no log is {h} s long"),
+                            }
                         } else {
                             format!("the logs lack {}", missing.join(", "))
                         }),

@@ -85,8 +85,8 @@ impl Protocol {
         )
     }
 
-    /// Samples needed before a segment's start (its calibration and levelling windows).
-    fn lead(&self, dt_s: f64) -> usize {
+    /// Time needed before a segment's start (its calibration and levelling windows), s.
+    pub fn lead_s(&self) -> f64 {
         let cal = match self.calibration {
             Calibration::Window { window_s } => window_s,
             _ => 0.0,
@@ -95,7 +95,12 @@ impl Protocol {
             Initialisation::Levelled { window_s } => window_s,
             Initialisation::Perfect => 0.0,
         };
-        (cal.max(lev) / dt_s).round() as usize
+        cal.max(lev)
+    }
+
+    /// Samples needed before a segment's start (its calibration and levelling windows).
+    fn lead(&self, dt_s: f64) -> usize {
+        (self.lead_s() / dt_s).round() as usize
     }
 }
 
