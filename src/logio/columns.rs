@@ -261,7 +261,10 @@ pub fn recognise(name: &str) -> Result<Recognised, NotRecognised> {
 
 /// Unit spellings, separators normalised to `_` (`rad/s`, `rad_s`, `rads`, `radps` are one).
 fn norm(u: &str) -> String {
-    u.replace(['/', ' ', '-', '.'], "_").replace("^", "")
+    u.replace('²', "2")
+        .replace(['°', 'º'], "deg")
+        .replace(['/', ' ', '-', '.'], "_")
+        .replace("^", "")
 }
 
 fn gyro_unit(u: &str) -> Option<GyroUnit> {
@@ -551,6 +554,17 @@ mod tests {
             ("AngularVelocity.X", Gyro(0), None),
             ("gyroX", Gyro(0), None),
             ("LinearAcceleration_Y", Accel(1), None),
+            ("acc_x [m/s²]", Accel(0), Some(U::Accel(A::MPerS2))),
+            ("Gyr_Z (°/s)", Gyro(2), Some(U::Gyro(G::DegPerS))),
+            ("Gyroscope x (rad/s)", Gyro(0), Some(U::Gyro(G::RadPerS))),
+            (
+                "Acceleration z (m/s^2)",
+                Accel(2),
+                Some(U::Accel(A::MPerS2)),
+            ),
+            ("Time (s)", Time, Some(U::Time(TimeUnit::S))),
+            ("AccX", Accel(0), None),
+            ("Gyro_X(dps)", Gyro(0), Some(U::Gyro(G::DegPerS))),
         ];
         for &(name, quantity, unit) in cases {
             assert_eq!(q(name), (quantity, unit), "{name}");
