@@ -335,6 +335,25 @@ pub struct UnitOptions {
     pub time: Option<TimeUnit>,
 }
 
+/// A column's unit (name, factor to SI, where it came from) as its name or the option `flag`
+/// states it; `None` when neither does. A name and an option that disagree are an error.
+fn stated_unit(
+    column: &str,
+    from_name: Option<(&'static str, f64)>,
+    option: Option<(&'static str, f64)>,
+    flag: &'static str,
+) -> Result<Option<(&'static str, f64, &'static str)>, String> {
+    match (from_name, option) {
+        (Some(a), Some(b)) if a.0 != b.0 => Err(format!(
+            "column `{column}` says {} in its name but {flag} is {}; leave the option out or correct it",
+            a.0, b.0
+        )),
+        (Some(a), _) => Ok(Some((a.0, a.1, "name"))),
+        (None, Some(b)) => Ok(Some((b.0, b.1, flag))),
+        (None, None) => Ok(None),
+    }
+}
+
 /// The channel and unit of every column of a header (`None` for a skipped one), and the skipped
 /// columns with their reasons. `explicit` are the `--col NAME=COLUMN` pairs (checked by the
 /// caller to name columns of the header). Errors: a unit the name and the option disagree on, a
@@ -407,21 +426,14 @@ pub fn map_header(
         let (unit, to_si, unit_from) = match quantity {
             Quantity::Gyro(_) => {
                 let from_name = match named {
-                    Some(NamedUnit::Gyro(u)) => Some(u),
+                    Some(NamedUnit::Gyro(u)) => Some((u.name(), u.to_si())),
                     _ => None,
                 };
-                match (from_name, units.gyro) {
-                    (Some(a), Some(b)) if a != b => {
-                        return Err(format!(
-                            "column `{name}` says {} in its name but --gyro-unit is {}; leave the option out or correct it",
-                            a.name(),
-                            b.name()
-                        ))
-                    }
-                    (Some(a), _) => (a.name(), a.to_si(), "name"),
-                    (None, Some(b)) => (b.name(), b.to_si(), "--gyro-unit"),
-                    (None, None) if may_default => ("rad/s", 1.0, "default"),
-                    (None, None) => {
+                let option = units.gyro.map(|u| (u.name(), u.to_si()));
+                match stated_unit(name, from_name, option, "--gyro-unit")? {
+                    Some(u) => u,
+                    None if may_default => ("rad/s", 1.0, "default"),
+                    None => {
                         missing_unit.push(format!("`{name}` (gyro)"));
                         ("", f64::NAN, "")
                     }
@@ -429,21 +441,14 @@ pub fn map_header(
             }
             Quantity::Accel(_) => {
                 let from_name = match named {
-                    Some(NamedUnit::Accel(u)) => Some(u),
+                    Some(NamedUnit::Accel(u)) => Some((u.name(), u.to_si())),
                     _ => None,
                 };
-                match (from_name, units.accel) {
-                    (Some(a), Some(b)) if a != b => {
-                        return Err(format!(
-                            "column `{name}` says {} in its name but --accel-unit is {}; leave the option out or correct it",
-                            a.name(),
-                            b.name()
-                        ))
-                    }
-                    (Some(a), _) => (a.name(), a.to_si(), "name"),
-                    (None, Some(b)) => (b.name(), b.to_si(), "--accel-unit"),
-                    (None, None) if may_default => ("m/s^2", 1.0, "default"),
-                    (None, None) => {
+                let option = units.accel.map(|u| (u.name(), u.to_si()));
+                match stated_unit(name, from_name, option, "--accel-unit")? {
+                    Some(u) => u,
+                    None if may_default => ("m/s^2", 1.0, "default"),
+                    None => {
                         missing_unit.push(format!("`{name}` (accelerometer)"));
                         ("", f64::NAN, "")
                     }
@@ -451,21 +456,12 @@ pub fn map_header(
             }
             Quantity::Time => {
                 let from_name = match named {
-                    Some(NamedUnit::Time(u)) => Some(u),
+                    Some(NamedUnit::Time(u)) => Some((u.name(), u.to_si())),
                     _ => None,
                 };
-                match (from_name, units.time) {
-                    (Some(a), Some(b)) if a != b => {
-                        return Err(format!(
-                            "column `{name}` says {} in its name but --time-unit is {}; leave the option out or correct it",
-                            a.name(),
-                            b.name()
-                        ))
-                    }
-                    (Some(a), _) => (a.name(), a.to_si(), "name"),
-                    (None, Some(b)) => (b.name(), b.to_si(), "--time-unit"),
-                    (None, None) => ("s", 1.0, "default"),
-                }
+                let option = units.time.map(|u| (u.name(), u.to_si()));
+                stated_unit(name, from_name, option, "--time-unit")?
+                    .unwrap_or(("s", 1.0, "default"))
             }
             Quantity::Temperature => (
                 "degC",
