@@ -628,6 +628,21 @@ mod tests {
             e.contains("deg/s") && e.contains("--gyro-unit is rad/s"),
             "{e}"
         );
+        let t = UnitOptions {
+            time: Some(TimeUnit::S),
+            ..UnitOptions::default()
+        };
+        let e = map_header(&header(&["t_ms", "gx"]), &[], t).unwrap_err();
+        assert!(
+            e.contains("`t_ms` says ms") && e.contains("--time-unit is s"),
+            "{e}"
+        );
+        let a = UnitOptions {
+            accel: Some(AccelUnit::MPerS2),
+            ..UnitOptions::default()
+        };
+        let e = map_header(&header(&["acc_x_g"]), &[], a).unwrap_err();
+        assert!(e.contains("--accel-unit is m/s^2"), "{e}");
     }
 
     #[test]
