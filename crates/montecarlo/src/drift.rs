@@ -219,6 +219,11 @@ pub fn law_terms(
             };
             for term in m.terms() {
                 let effect = term.effect();
+                // The output filter has unit DC gain: it adds no error of its own, and the other
+                // terms' laws hold for times much longer than its impulse response.
+                if effect == noise::Effect::OutputFilter {
+                    continue;
+                }
                 let no_law = |why: &str| Source::NoLaw(why.to_string());
                 let source = match term {
                     // The error of the quantised integrated output is bounded by the LSB and
@@ -278,6 +283,17 @@ pub fn law_terms(
                     NoiseTerm::Misalignment(mis) => {
                         Source::Bias(mis[0] * others[0] + mis[1] * others[1])
                     }
+                    // Each output sample is an independent outlier with probability p, size +-a:
+                    // white noise of variance p a^2 per sample, density a sqrt(p dt).
+                    NoiseTerm::Outliers(o) => {
+                        Source::White(o.size * (o.probability(dt_s) * dt_s).sqrt())
+                    }
+                    NoiseTerm::WarmupTransient(w) => Source::Transient {
+                        amplitude: w.amplitude,
+                        tau_s: w.tau_s,
+                        per_run: w.per_run,
+                    },
+                    NoiseTerm::OutputFilter(_) => unreachable!("skipped above"),
                 };
                 terms.push(Term {
                     name: format!("{}.{}", sensor.name(), effect.name()),

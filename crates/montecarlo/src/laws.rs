@@ -72,6 +72,13 @@ pub enum Source {
         phase: Option<f64>,
         sample_interval_s: f64,
     },
+    /// Warm-up transient `amplitude e^{-t/tau_s}` after turn-on; with `per_run` the amplitude is
+    /// drawn per run from N(0, amplitude^2) (`noise::closed_form::transient_growth`).
+    Transient {
+        amplitude: f64,
+        tau_s: f64,
+        per_run: bool,
+    },
     /// Active, but no closed-form growth law exists in docs/model.md §4 (e.g. quantisation): the
     /// report says so.
     NoLaw(String),
@@ -171,6 +178,21 @@ fn moments(source: &Source, t_s: f64, how: Option<Integration>) -> Result<(f64, 
                 h,
             ),
             None => return Err("a sinusoid needs an integration"),
+        },
+        Source::Transient {
+            amplitude,
+            tau_s,
+            per_run,
+        } => match how {
+            Some(h) => {
+                let v = cf::transient_growth(*amplitude, *tau_s, t_s, h);
+                if *per_run {
+                    (0.0, v * v)
+                } else {
+                    (v, 0.0)
+                }
+            }
+            None => return Err("a transient needs an integration"),
         },
         Source::NoLaw(why) => return Err(why),
     })

@@ -167,6 +167,22 @@ pub fn constant_bias_growth(b: f64, t_s: f64, how: Integration) -> f64 {
     how.gain() * b * t_s.powi(k) / factorial(k)
 }
 
+/// Warm-up transient A e^{-t/tau}: the k-fold integral A tau^k (sum_{j<k} (-1)^{k-1-j} x^j/j! +
+/// (-1)^k e^{-x}), x = t/tau (Cauchy's formula for repeated integrals applied to the exponential;
+/// derived, as `TemperatureProfile::excursion_integral`, which computes it). Deterministic, signed.
+pub fn transient_growth(amplitude: f64, tau_s: f64, t_s: f64, how: Integration) -> f64 {
+    let profile = crate::model::TemperatureProfile::Warmup {
+        start_c: 1.0,
+        end_c: 0.0,
+        time_constant_s: tau_s,
+    };
+    how.gain()
+        * amplitude
+        * profile
+            .excursion_integral(0.0, t_s, how.folds())
+            .unwrap_or(f64::NAN)
+}
+
 /// Rate ramp R t: the k-fold integral is R t^{k+1}/(k+1)! (the constant-bias row of docs/model.md §4
 /// integrated once more). Deterministic, signed.
 pub fn rate_ramp_growth(r: f64, t_s: f64, how: Integration) -> f64 {

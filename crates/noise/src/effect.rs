@@ -47,6 +47,9 @@ pub enum Effect {
     TurnOnBias,
     ScaleFactor,
     Misalignment,
+    Outliers,
+    WarmupTransient,
+    OutputFilter,
 }
 
 impl serde::Serialize for Effect {
@@ -56,7 +59,7 @@ impl serde::Serialize for Effect {
 }
 
 impl Effect {
-    pub const ALL: [Effect; 12] = [
+    pub const ALL: [Effect; 15] = [
         Effect::Quantization,
         Effect::WhiteNoise,
         Effect::BiasInstability,
@@ -69,6 +72,9 @@ impl Effect {
         Effect::TurnOnBias,
         Effect::ScaleFactor,
         Effect::Misalignment,
+        Effect::Outliers,
+        Effect::WarmupTransient,
+        Effect::OutputFilter,
     ];
 
     /// The config / CLI / JSON name, e.g. `"white_noise"`.
@@ -86,6 +92,9 @@ impl Effect {
             Effect::TurnOnBias => "turn_on_bias",
             Effect::ScaleFactor => "scale_factor",
             Effect::Misalignment => "misalignment",
+            Effect::Outliers => "outliers",
+            Effect::WarmupTransient => "warmup_transient",
+            Effect::OutputFilter => "output_filter",
         }
     }
 
@@ -102,6 +111,7 @@ impl Effect {
                 | Effect::BiasInstability
                 | Effect::RateRandomWalk
                 | Effect::GaussMarkov
+                | Effect::Outliers
         )
     }
 
@@ -257,7 +267,7 @@ mod tests {
         assert!(f.allows(Sensor::Gyro, Effect::Quantization));
         assert_eq!(
             f.describe(),
-            "--only gyro.quantization,gyro.white_noise,gyro.bias_instability,gyro.rate_random_walk,gyro.rate_ramp,gyro.gauss_markov,gyro.sinusoidal,gyro.temperature_bias,gyro.constant_bias,gyro.turn_on_bias,gyro.scale_factor,gyro.misalignment --without gyro.white_noise"
+            "--only gyro.quantization,gyro.white_noise,gyro.bias_instability,gyro.rate_random_walk,gyro.rate_ramp,gyro.gauss_markov,gyro.sinusoidal,gyro.temperature_bias,gyro.constant_bias,gyro.turn_on_bias,gyro.scale_factor,gyro.misalignment,gyro.outliers,gyro.warmup_transient,gyro.output_filter --without gyro.white_noise"
         );
         assert!(TermFilter::all().is_all());
     }

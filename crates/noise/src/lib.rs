@@ -16,6 +16,7 @@
 pub mod closed_form;
 mod config;
 mod effect;
+pub mod filter;
 mod model;
 pub mod noise_file;
 pub mod process;
@@ -24,6 +25,7 @@ mod ziggurat;
 
 pub use config::{is_noise_file_text, utf8_text, ConfigError, UnitStyle};
 pub use effect::{Effect, FilterError, Sensor, TermFilter};
+pub use filter::{FilterKind, Outliers, OutputFilter, WarmupTransient};
 pub use model::{
     AxisModel, BiasInstability, Flicker, GaussMarkov, ModelError, SensorModel, Sinusoid,
     TemperatureProfile, Term, TriadModel, AXIS_NAMES,

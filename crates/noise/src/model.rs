@@ -7,6 +7,7 @@
 
 use crate::closed_form as cf;
 use crate::effect::{Effect, Sensor, TermFilter};
+use crate::filter::{Outliers, OutputFilter, WarmupTransient};
 
 /// Why a model value is invalid (programmatic construction; configs report through `ConfigError`).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -258,6 +259,9 @@ pub enum Term {
     TurnOnBias(f64),
     ScaleFactor(f64),
     Misalignment([f64; 2]),
+    Outliers(Outliers),
+    WarmupTransient(WarmupTransient),
+    OutputFilter(OutputFilter),
 }
 
 impl Term {
@@ -276,6 +280,9 @@ impl Term {
             Term::TurnOnBias(_) => Effect::TurnOnBias,
             Term::ScaleFactor(_) => Effect::ScaleFactor,
             Term::Misalignment(_) => Effect::Misalignment,
+            Term::Outliers(_) => Effect::Outliers,
+            Term::WarmupTransient(_) => Effect::WarmupTransient,
+            Term::OutputFilter(_) => Effect::OutputFilter,
         }
     }
 }
@@ -306,6 +313,13 @@ pub struct AxisModel {
     /// Misalignment (rad): sensitivity of this axis to the two other axes, in axis order
     /// (x: [y, z]; y: [x, z]; z: [x, y]).
     pub misalignment: Option<[f64; 2]>,
+    /// Isolated spikes on the output register.
+    pub outliers: Option<Outliers>,
+    /// Bias settling after turn-on.
+    pub warmup_transient: Option<WarmupTransient>,
+    /// The sensor's digital output filter (and decimation), applied to every term but quantisation
+    /// and outliers.
+    pub output_filter: Option<OutputFilter>,
 }
 
 impl AxisModel {
@@ -359,6 +373,9 @@ impl AxisModel {
             Effect::TurnOnBias => self.turn_on_bias.map(Term::TurnOnBias),
             Effect::ScaleFactor => self.scale_factor.map(Term::ScaleFactor),
             Effect::Misalignment => self.misalignment.map(Term::Misalignment),
+            Effect::Outliers => self.outliers.map(Term::Outliers),
+            Effect::WarmupTransient => self.warmup_transient.map(Term::WarmupTransient),
+            Effect::OutputFilter => self.output_filter.map(Term::OutputFilter),
         }
     }
 
@@ -377,6 +394,9 @@ impl AxisModel {
             Term::TurnOnBias(v) => self.turn_on_bias = Some(v),
             Term::ScaleFactor(v) => self.scale_factor = Some(v),
             Term::Misalignment(m) => self.misalignment = Some(m),
+            Term::Outliers(o) => self.outliers = Some(o),
+            Term::WarmupTransient(w) => self.warmup_transient = Some(w),
+            Term::OutputFilter(f) => self.output_filter = Some(f),
         }
     }
 
@@ -400,6 +420,9 @@ impl AxisModel {
             Effect::TurnOnBias => self.turn_on_bias = None,
             Effect::ScaleFactor => self.scale_factor = None,
             Effect::Misalignment => self.misalignment = None,
+            Effect::Outliers => self.outliers = None,
+            Effect::WarmupTransient => self.warmup_transient = None,
+            Effect::OutputFilter => self.output_filter = None,
         }
     }
 
@@ -427,6 +450,8 @@ impl AxisModel {
             rate_ramp: self.rate_ramp,
             gauss_markov: self.gauss_markov,
             sinusoidal: self.sinusoidal,
+            outliers: self.outliers,
+            output_filter: self.output_filter,
             ..AxisModel::default()
         }
     }
@@ -460,11 +485,17 @@ pub enum TemperatureProfile {
         end_c: f64,
         time_constant_s: f64,
     },
-    /// `mean_c + amplitude_c sin(2 pi t / period_s)`.
+    /// `mean_c + amplitude_c sin(2 pi t / period_s)` (temperature cycling).
     Sinusoid {
         mean_c: f64,
         amplitude_c: f64,
         period_s: f64,
+    },
+    /// `before_c` until `at_s`, `after_c` from then on.
+    Step {
+        before_c: f64,
+        after_c: f64,
+        at_s: f64,
     },
 }
 
@@ -501,6 +532,17 @@ impl TemperatureProfile {
                 amplitude_c,
                 period_s,
             } => mean_c + amplitude_c * (std::f64::consts::TAU * t_s / period_s).sin(),
+            TemperatureProfile::Step {
+                before_c,
+                after_c,
+                at_s,
+            } => {
+                if t_s < at_s {
+                    before_c
+                } else {
+                    after_c
+                }
+            }
         }
     }
 
@@ -569,6 +611,15 @@ impl TemperatureProfile {
                     _ => t_s * t_s / (2.0 * w) - one_minus_cos / w.powi(3),
                 };
                 constant(mean_c - reference_c) + amplitude_c * sine
+            }
+            // (after - before) times the k-fold integral of the unit step at t_e: (t - t_e)_+^k / k!.
+            TemperatureProfile::Step {
+                before_c,
+                after_c,
+                at_s,
+            } => {
+                constant(before_c - reference_c)
+                    + (after_c - before_c) * (t_s - at_s.max(0.0)).max(0.0).powi(k) / fact(k)
             }
         })
     }
@@ -655,6 +706,19 @@ mod tests {
             Term::TurnOnBias(3e-2),
             Term::ScaleFactor(4e-4),
             Term::Misalignment([5e-4, 6e-4]),
+            Term::Outliers(Outliers {
+                rate_per_hour: 60.0,
+                size: 0.1,
+            }),
+            Term::WarmupTransient(WarmupTransient {
+                amplitude: 5e-4,
+                tau_s: 600.0,
+                per_run: false,
+            }),
+            Term::OutputFilter(OutputFilter {
+                kind: crate::filter::FilterKind::Bartlett { taps: 8 },
+                decimation: 2,
+            }),
         ];
         // One term per effect, in Effect order.
         assert_eq!(terms.clone().map(|t| t.effect()), Effect::ALL);
@@ -698,6 +762,11 @@ mod tests {
                 mean_c: 26.0,
                 amplitude_c: 4.0,
                 period_s: 2.5,
+            },
+            TemperatureProfile::Step {
+                before_c: 22.0,
+                after_c: 30.0,
+                at_s: 5.0,
             },
         ];
         let dt = 1e-4;

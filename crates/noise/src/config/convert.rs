@@ -252,6 +252,9 @@ fn convert_axis(
         turn_on_bias: scalar(pick!(turn_on_bias), Quantity::Signal(sig), true)?,
         scale_factor: scalar(pick!(scale_factor), Quantity::Ratio, false)?,
         misalignment: None,
+        outliers: None,
+        warmup_transient: None,
+        output_filter: None,
     };
     if let Some((g, key)) = pick!(gauss_markov) {
         m.gauss_markov = Some(GaussMarkov {

@@ -56,6 +56,19 @@ impl SensorModel {
                     fmt(*period_s, Quantity::Time)
                 );
             }
+            TemperatureProfile::Step {
+                before_c,
+                after_c,
+                at_s,
+            } => {
+                let _ = writeln!(
+                    s,
+                    "profile = \"step\"\nstart = \"{}\"\nend = \"{}\"\nat = \"{}\"",
+                    fmt(*before_c, t),
+                    fmt(*after_c, t),
+                    fmt(*at_s, Quantity::Time)
+                );
+            }
         }
         let _ = writeln!(
             s,
