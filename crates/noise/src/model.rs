@@ -336,8 +336,14 @@ impl AxisModel {
         self.avar_at(tau_s, Some(dt_s))
     }
 
-    /// Continuous forms (`dt_s` None) or exact sampled ones.
+    /// Continuous forms (`dt_s` None) or exact sampled ones. The sampled forms include the output
+    /// filter ([`crate::filter::FilteredAllan`]) and the outliers; the continuous forms leave both
+    /// out (the filter's effect vanishes for tau much longer than its span; outliers need the
+    /// sample interval).
     fn avar_at(&self, tau_s: f64, dt_s: Option<f64>) -> f64 {
+        if let (Some(dt), Some(f)) = (dt_s, &self.output_filter) {
+            return self.avar_filtered(tau_s, dt, &crate::filter::FilteredAllan::new(f, dt));
+        }
         let terms = [
             self.quantization.map(|q| cf::quantization_avar(q, tau_s)),
             self.white_noise.map(|n| cf::white_noise_avar(n, tau_s)),
@@ -353,8 +359,56 @@ impl AxisModel {
                 None => cf::sinusoid_avar(w.amplitude, w.frequency_hz, tau_s),
                 Some(dt) => cf::sinusoid_avar_sampled(w.amplitude, w.frequency_hz, tau_s, dt),
             }),
+            self.outliers
+                .zip(dt_s)
+                .map(|(o, dt)| o.avar_sampled(tau_s, dt)),
         ];
         terms.into_iter().flatten().sum()
+    }
+
+    /// Exact Allan variance at output interval `dt_s` with the output filter `fa`: every term through
+    /// the filter but quantisation, the ramp (unit DC gain keeps a ramp a ramp) and the outliers.
+    fn avar_filtered(&self, tau_s: f64, dt_s: f64, fa: &crate::filter::FilteredAllan) -> f64 {
+        let terms = [
+            self.quantization.map(|q| cf::quantization_avar(q, tau_s)),
+            self.white_noise.map(|n| fa.white_noise(n, tau_s)),
+            self.bias_instability.as_ref().map(|b| match b {
+                BiasInstability::Flicker(f) => f
+                    .components()
+                    .iter()
+                    .map(|&(tc, s)| fa.gauss_markov(s, tc, tau_s))
+                    .sum(),
+                BiasInstability::RandomWalk {
+                    stability,
+                    period_s,
+                } => fa.random_walk(cf::woodman_bias_random_walk(*stability, *period_s), tau_s),
+            }),
+            self.rate_random_walk.map(|k| fa.random_walk(k, tau_s)),
+            self.rate_ramp.map(|r| cf::rate_ramp_avar(r, tau_s)),
+            self.gauss_markov
+                .map(|g| fa.gauss_markov(g.sigma, g.tau_s, tau_s)),
+            self.sinusoidal
+                .map(|w| fa.sinusoid(w.amplitude, w.frequency_hz, tau_s)),
+            self.outliers.map(|o| o.avar_sampled(tau_s, dt_s)),
+        ];
+        terms.into_iter().flatten().sum()
+    }
+
+    /// [`AxisModel::allan_variance_sampled`] at several taus (the filter's response computed once).
+    pub fn allan_variance_sampled_many(&self, taus_s: &[f64], dt_s: f64) -> Vec<f64> {
+        match &self.output_filter {
+            Some(f) => {
+                let fa = crate::filter::FilteredAllan::new(f, dt_s);
+                taus_s
+                    .iter()
+                    .map(|&t| self.avar_filtered(t, dt_s, &fa))
+                    .collect()
+            }
+            None => taus_s
+                .iter()
+                .map(|&t| self.avar_at(t, Some(dt_s)))
+                .collect(),
+        }
     }
 
     /// The term of `effect` with its parameters, if the axis has it: the one place that maps an
