@@ -9,6 +9,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod candidates;
+pub mod detect;
 pub mod drift;
 pub mod drift_check;
 pub mod fit;

@@ -1,0 +1,438 @@
+//! Time-domain detectors beside the Allan gap (docs/diagnose.md, "Real-sensor effects"): effects that
+//! are deterministic or not stationary, which an Allan curve hides or mistakes for noise.
+//!
+//! - Outliers: samples far from the median of their neighbours, in robust standard deviations.
+//! - Temperature: least-squares regression of the channel on the log's temperature column.
+//! - Warm-up transient: least-squares fit of an exponential A e^{-t/tau} at the start of the log.
+//!
+//! A regression coefficient c = w . x (w the least-squares weights of the centred regressor) has, when
+//! the channel's noise e is coloured, the variance Var(w . e), not the white-noise sigma^2 sum w^2: a slow
+//! bias wander correlates with any slow regressor. [`coloured_variance`] computes Var(w . e) exactly
+//! for white noise, flicker (the noise crate's Gauss-Markov band) and rate random walk, with the
+//! levels fitted (IEEE 952, `allan::fit_ieee952`) to the Allan deviation of the regression's residual.
+
+use allan::{DataKind, Estimator, TauGrid};
+use noise::Flicker;
+
+/// Largest half-width of the neighbourhood whose median is a sample's reference.
+const HALF_WINDOW: usize = 3;
+
+/// What the outlier detector found in one channel.
+#[derive(Clone, Debug)]
+pub struct Spikes {
+    /// Indices of the outlying samples, ascending.
+    pub indices: Vec<usize>,
+    /// Their displacement from the neighbours' median (signal units, signed).
+    pub excess: Vec<f64>,
+    /// Robust standard deviation of the displacement of ordinary samples (1.4826 MAD).
+    pub sigma: f64,
+    /// Threshold used, in robust standard deviations.
+    pub threshold: f64,
+}
+
+impl Spikes {
+    /// Median absolute displacement of the outliers: the size an outlier term is given.
+    pub fn size(&self) -> f64 {
+        let mut a: Vec<f64> = self.excess.iter().map(|e| e.abs()).collect();
+        median(&mut a)
+    }
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Upper-tail quantile of the standard normal: z with Q(z) = p (Acklam's rational approximation,
+/// relative error below 1.2e-9, then one Newton step on erfc).
+pub fn normal_upper_quantile(p: f64) -> f64 {
+    // Q(z) = p  <=>  Phi(-z) = p.
+    -normal_quantile(p)
+}
+
+fn normal_quantile(p: f64) -> f64 {
+    const A: [f64; 6] = [
+        -3.969_683_028_665_376e1,
+        2.209_460_984_245_205e2,
+        -2.759_285_104_469_687e2,
+        1.383_577_518_672_69e2,
+        -3.066_479_806_614_716e1,
+        2.506_628_277_459_239,
+    ];
+    const B: [f64; 5] = [
+        -5.447_609_879_822_406e1,
+        1.615_858_368_580_409e2,
+        -1.556_989_798_598_866e2,
+        6.680_131_188_771_972e1,
+        -1.328_068_155_288_572e1,
+    ];
+    const C: [f64; 6] = [
+        -7.784_894_002_430_293e-3,
+        -3.223_964_580_411_365e-1,
+        -2.400_758_277_161_838,
+        -2.549_732_539_343_734,
+        4.374_664_141_464_968,
+        2.938_163_982_698_783,
+    ];
+    const D: [f64; 4] = [
+        7.784_695_709_041_462e-3,
+        3.224_671_290_700_398e-1,
+        2.445_134_137_142_996,
+        3.754_408_661_907_416,
+    ];
+    let p_low = 0.024_25;
+    if p < p_low {
+        let q = (-2.0 * p.ln()).sqrt();
+        (((((C[0] * q + C[1]) * q + C[2]) * q + C[3]) * q + C[4]) * q + C[5])
+            / ((((D[0] * q + D[1]) * q + D[2]) * q + D[3]) * q + 1.0)
+    } else if p <= 1.0 - p_low {
+        let q = p - 0.5;
+        let r = q * q;
+        (((((A[0] * r + A[1]) * r + A[2]) * r + A[3]) * r + A[4]) * r + A[5]) * q
+            / (((((B[0] * r + B[1]) * r + B[2]) * r + B[3]) * r + B[4]) * r + 1.0)
+    } else {
+        -normal_quantile(1.0 - p)
+    }
+}
+
+/// The outlier threshold for `n` samples: the two-sided Gaussian level that ordinary samples exceed
+/// with probability 0.01 over the whole log (Bonferroni: 2 n Q(z) = 0.01), and never below 8 robust
+/// standard deviations (real sensors' ordinary noise has heavier tails than Gaussian; 8 sigma is
+/// the customary "gross error" level of robust statistics, Hampel et al. 1986 §1.4).
+pub fn spike_threshold(n: usize) -> f64 {
+    normal_upper_quantile(0.005 / n.max(1) as f64).max(8.0)
+}
+
+/// The median of the up to 2 HALF_WINDOW neighbours of sample k (itself excluded).
+fn neighbour_median(x: &[f64], k: usize, buf: &mut Vec<f64>) -> f64 {
+    buf.clear();
+    let lo = k.saturating_sub(HALF_WINDOW);
+    let hi = (k + HALF_WINDOW + 1).min(x.len());
+    buf.extend(x[lo..k].iter().chain(&x[k + 1..hi]).copied());
+    median(buf)
+}
+
+/// Robust outlier detection: each sample's displacement r_k from the median of its six neighbours,
+/// scaled by the robust standard deviation of all displacements (1.4826 times their median absolute
+/// value); samples beyond [`spike_threshold`] are outliers. An outlier does not move its own
+/// reference (itself excluded) and isolated ones do not move their neighbours' (a median).
+pub fn detect_spikes(x: &[f64]) -> Spikes {
+    let n = x.len();
+    let mut buf = Vec::with_capacity(2 * HALF_WINDOW);
+    let r: Vec<f64> = (0..n)
+        .map(|k| x[k] - neighbour_median(x, k, &mut buf))
+        .collect();
+    let mut a: Vec<f64> = r.iter().map(|v| v.abs()).collect();
+    let mut sigma = 1.4826 * median(&mut a);
+    if sigma <= 0.0 || !sigma.is_finite() {
+        // Coarsely quantised data: most displacements are 0; use the RMS of the central 98 %.
+        let cut = a[(0.98 * (n as f64 - 1.0)) as usize];
+        let (s, c) = a
+            .iter()
+            .filter(|&&v| v <= cut)
+            .fold((0.0, 0usize), |(s, c), v| (s + v * v, c + 1));
+        sigma = (s / c.max(1) as f64).sqrt();
+    }
+    let threshold = spike_threshold(n);
+    let mut indices = Vec::new();
+    let mut excess = Vec::new();
+    if sigma > 0.0 {
+        for (k, &v) in r.iter().enumerate() {
+            if v.abs() > threshold * sigma {
+                indices.push(k);
+                excess.push(v);
+            }
+        }
+    }
+    Spikes {
+        indices,
+        excess,
+        sigma,
+        threshold,
+    }
+}
+
+/// The series with each outlier replaced by the median of its neighbours.
+pub fn remove_spikes(x: &[f64], spikes: &Spikes) -> Vec<f64> {
+    let mut out = x.to_vec();
+    let mut buf = Vec::new();
+    for &k in &spikes.indices {
+        out[k] = neighbour_median(x, k, &mut buf);
+    }
+    out
+}
+
+/// Noise levels of a residual for [`coloured_variance`] (SI, IEEE 952 coefficients).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoiseLevels {
+    pub n: f64,
+    pub b: f64,
+    pub k: f64,
+}
+
+/// White, flicker and random-walk levels of `x` from its octave Allan deviation (IEEE 952 fit).
+/// Quantisation is counted as white noise at the sample interval; the ramp is left out (a trend is a
+/// regressor's business, not noise).
+pub fn noise_levels(x: &[f64], dt_s: f64) -> NoiseLevels {
+    let points = allan::deviation(
+        x,
+        DataKind::Rate,
+        dt_s,
+        Estimator::Overlapping,
+        &TauGrid::Octave,
+    );
+    let fit = allan::fit::fit_ieee952(&points);
+    let v = |t: Option<allan::fit::Term>| t.map_or(0.0, |t| t.value.max(0.0));
+    let q = v(fit.q);
+    // 3 Q^2 / tau^2 at tau = dt equals a white density sqrt(3) Q / sqrt(dt) there.
+    let n = v(fit.n).hypot(3f64.sqrt() * q / dt_s.sqrt());
+    NoiseLevels {
+        n,
+        b: v(fit.b),
+        k: v(fit.k),
+    }
+}
+
+/// Var(w . e) for noise e of the given levels sampled every `dt_s`, with sum w = 0:
+/// white: (N^2/dt) sum w^2; random walk (step variance K^2 dt, any start): K^2 dt sum_l W_l^2 with the
+/// tail sums W_l = sum_{k >= l} w_k; flicker as the noise crate's Gauss-Markov band (sigma_i, T_i):
+/// sigma_i^2 (2 sum_k w_k F_k - sum_k w_k^2), F_k = phi F_{k-1} + w_k, phi = e^{-dt/T_i}.
+pub fn coloured_variance(w: &[f64], dt_s: f64, levels: &NoiseLevels) -> f64 {
+    let sum_w2: f64 = w.iter().map(|v| v * v).sum();
+    let mut var = levels.n * levels.n / dt_s * sum_w2;
+    if levels.k > 0.0 {
+        let mut tail = 0.0;
+        let mut s = 0.0;
+        for &v in w.iter().rev() {
+            tail += v;
+            s += tail * tail;
+        }
+        var += levels.k * levels.k * dt_s * s;
+    }
+    if levels.b > 0.0 {
+        for (tc, sigma) in Flicker::with_b(levels.b).components() {
+            let phi = (-dt_s / tc).exp();
+            let mut f = 0.0;
+            let mut s = 0.0;
+            for &v in w {
+                f = phi * f + v;
+                s += v * f;
+            }
+            var += sigma * sigma * (2.0 * s - sum_w2);
+        }
+    }
+    var
+}
+
+/// Least-squares fit of x on (1, g): the coefficient of g, its weights w (x . w = coefficient), and
+/// the residual. None when g is constant.
+pub fn regress(x: &[f64], g: &[f64]) -> Option<(f64, Vec<f64>, Vec<f64>)> {
+    let n = x.len() as f64;
+    let gm = g.iter().sum::<f64>() / n;
+    let sgg: f64 = g.iter().map(|v| (v - gm) * (v - gm)).sum();
+    if sgg <= 0.0 || !sgg.is_finite() {
+        return None;
+    }
+    let w: Vec<f64> = g.iter().map(|v| (v - gm) / sgg).collect();
+    let c: f64 = w.iter().zip(x).map(|(a, b)| a * b).sum();
+    let xm = x.iter().sum::<f64>() / n;
+    let resid = x
+        .iter()
+        .zip(g)
+        .map(|(xi, gi)| xi - xm - c * (gi - gm))
+        .collect();
+    Some((c, w, resid))
+}
+
+/// A regression with its coloured-noise standard error.
+#[derive(Clone, Debug)]
+pub struct Regression {
+    pub coefficient: f64,
+    pub sd: f64,
+    /// coefficient / sd.
+    pub z: f64,
+    /// The channel with the fitted term removed (the mean kept).
+    pub corrected: Vec<f64>,
+}
+
+/// Regress `x` on `g` and give the coefficient's standard error under the residual's coloured noise.
+pub fn regression(x: &[f64], g: &[f64], dt_s: f64) -> Option<Regression> {
+    let (c, w, resid) = regress(x, g)?;
+    let levels = noise_levels(&resid, dt_s);
+    let sd = coloured_variance(&w, dt_s, &levels).max(0.0).sqrt();
+    let gm = g.iter().sum::<f64>() / g.len() as f64;
+    let corrected = x.iter().zip(g).map(|(xi, gi)| xi - c * (gi - gm)).collect();
+    Some(Regression {
+        coefficient: c,
+        sd,
+        z: if sd > 0.0 { c / sd } else { f64::INFINITY },
+        corrected,
+    })
+}
+
+/// |z| a temperature coefficient must exceed: two-sided 1e-3 per channel under Gaussian errors
+/// (3.29), raised to 4 because the standard error itself comes from fitted noise levels.
+pub const TEMPERATURE_Z: f64 = 4.0;
+
+/// A fitted warm-up transient.
+#[derive(Clone, Debug)]
+pub struct Transient {
+    /// Bias at t = 0 relative to the settled value, signal units.
+    pub amplitude: f64,
+    pub tau_s: f64,
+    pub z: f64,
+    pub corrected: Vec<f64>,
+}
+
+/// |z| a transient must exceed: its time constant is searched over about 40 values (a
+/// look-elsewhere factor), so two-sided 1e-3 / 40 per channel (4.06), raised to 5 for the fitted
+/// noise levels.
+pub const TRANSIENT_Z: f64 = 5.0;
+
+/// Fit A e^{-t/tau} + const by least squares over time constants from 20 samples to a third of the
+/// log (40 per decade... log-spaced, then golden-section refined in ln tau), the amplitude's standard
+/// error from the residual's coloured noise. Returns the best fit whatever its z.
+pub fn fit_transient(x: &[f64], dt_s: f64) -> Option<Transient> {
+    let n = x.len();
+    let t_log = n as f64 * dt_s;
+    let (lo, hi) = (20.0 * dt_s, t_log / 3.0);
+    if hi <= lo {
+        return None;
+    }
+    // Profile: the residual sum of squares after the fit at tau (the fit's own criterion),
+    // RSS = S_xx - S_xg^2 / S_gg with centred sums, g_k = phi^k accumulated in one pass.
+    let xm = x.iter().sum::<f64>() / n as f64;
+    let sxx: f64 = x.iter().map(|v| (v - xm) * (v - xm)).sum();
+    let rss_at = |tau: f64| -> Option<(f64, f64)> {
+        let phi = (-dt_s / tau).exp();
+        let (mut g, mut sg, mut sgg, mut sxg) = (1.0, 0.0, 0.0, 0.0);
+        for &v in x {
+            sg += g;
+            sgg += g * g;
+            sxg += g * (v - xm);
+            g *= phi;
+        }
+        let sgg_c = sgg - sg * sg / n as f64;
+        if sgg_c <= 0.0 {
+            return None;
+        }
+        Some((sxx - sxg * sxg / sgg_c, sxg / sgg_c))
+    };
+    let steps = 40;
+    let mut best: Option<(f64, f64)> = None;
+    for j in 0..=steps {
+        let tau = lo * (hi / lo).powf(j as f64 / steps as f64);
+        if let Some((rss, _)) = rss_at(tau) {
+            if best.is_none_or(|(b, _)| rss < b) {
+                best = Some((rss, tau));
+            }
+        }
+    }
+    let (_, tau0) = best?;
+    let step = (hi / lo).ln() / steps as f64;
+    let (mut a, mut b) = ((tau0.ln() - step).max(lo.ln()), (tau0.ln() + step).min(hi.ln()));
+    let gr = 0.5 * (5f64.sqrt() - 1.0);
+    for _ in 0..30 {
+        let x1 = b - gr * (b - a);
+        let x2 = a + gr * (b - a);
+        let f1 = rss_at(x1.exp()).map_or(f64::INFINITY, |v| v.0);
+        let f2 = rss_at(x2.exp()).map_or(f64::INFINITY, |v| v.0);
+        if f1 < f2 {
+            b = x2;
+        } else {
+            a = x1;
+        }
+    }
+    let tau = (0.5 * (a + b)).exp();
+    let g: Vec<f64> = (0..n).map(|k| (-(k as f64) * dt_s / tau).exp()).collect();
+    let reg = regression(x, &g, dt_s)?;
+    Some(Transient {
+        amplitude: reg.coefficient,
+        tau_s: tau,
+        z: reg.z,
+        corrected: reg.corrected,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn normal_quantiles() {
+        // Table values: Q(1.959964) = 0.025, Q(3.290527) = 5e-4, Q(5.997807) = 1e-9.
+        for (p, z) in [(0.025, 1.959_964), (5e-4, 3.290_527), (1e-9, 5.997_807)] {
+            assert!((normal_upper_quantile(p) - z).abs() < 1e-5, "{p}");
+        }
+    }
+
+    #[test]
+    fn coloured_variance_matches_brute_force() {
+        // Random-walk and Gauss-Markov quadratic forms against O(n^2) sums, n = 300.
+        let n = 300;
+        let dt = 0.1;
+        let g: Vec<f64> = (0..n).map(|k| ((k as f64) * 0.03).sin() + 0.001 * k as f64).collect();
+        let (_, w, _) = regress(&vec![0.0; n], &g).unwrap();
+        let lv = NoiseLevels {
+            n: 0.0,
+            b: 0.0,
+            k: 0.7,
+        };
+        let fast = coloured_variance(&w, dt, &lv);
+        // Random walk from an arbitrary start: Cov(x_i, x_j) = s^2 min(i, j) (+ start, cancelled).
+        let s2 = 0.49 * dt;
+        let mut brute = 0.0;
+        for i in 0..n {
+            for j in 0..n {
+                brute += w[i] * w[j] * s2 * (i.min(j) + 1) as f64;
+            }
+        }
+        assert!((fast - brute).abs() < 1e-9 * brute, "{fast} {brute}");
+        let lv = NoiseLevels {
+            n: 0.3,
+            b: 0.2,
+            k: 0.0,
+        };
+        let fast = coloured_variance(&w, dt, &lv);
+        let mut brute = 0.09 / dt * w.iter().map(|v| v * v).sum::<f64>();
+        for (tc, s) in Flicker::with_b(0.2).components() {
+            let phi = (-dt / tc).exp();
+            for i in 0..n {
+                for j in 0..n {
+                    brute += w[i] * w[j] * s * s * phi.powi((i as i32 - j as i32).abs());
+                }
+            }
+        }
+        assert!((fast - brute).abs() < 1e-9 * brute, "{fast} {brute}");
+    }
+
+    #[test]
+    fn spikes_found_and_removed() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(5);
+        let mut x: Vec<f64> = (0..100_000)
+            .map(|_| {
+                let u: f64 = rng.gen::<f64>() - 0.5;
+                let v: f64 = rng.gen::<f64>() - 0.5;
+                u + v // triangular, bounded: no false outliers possible at 8 sigma
+            })
+            .collect();
+        let at = [10usize, 5000, 5001 + 10, 77_777];
+        for (j, &k) in at.iter().enumerate() {
+            x[k] += if j % 2 == 0 { 9.0 } else { -9.0 };
+        }
+        let s = detect_spikes(&x);
+        assert_eq!(s.indices, at.to_vec());
+        assert!((s.size() - 9.0).abs() < 1.0, "{}", s.size());
+        let clean = remove_spikes(&x, &s);
+        assert!(clean.iter().all(|v| v.abs() < 1.0));
+    }
+}
