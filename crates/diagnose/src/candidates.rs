@@ -3,8 +3,7 @@
 //! discrete generator at the log's sample interval).
 
 use noise::closed_form as cf;
-use noise::{Effect, Flicker};
-use serde::Serialize;
+use noise::{Effect, FilterKind, Flicker, OutputFilter};
 
 /// Effects diagnose can name (docs/diagnose.md list); the temperature bias only when the log has a temperature column.
 pub const CANDIDATES: [Effect; 8] = [
@@ -19,7 +18,7 @@ pub const CANDIDATES: [Effect; 8] = [
 ];
 
 /// Parameters of a term in diagnose's parameterisation (SI; docs/diagnose.md JSON names).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum TermParams {
     /// One level: q, n, b, k, r or the temperature coefficient (signed).
     Level(f64),
@@ -31,6 +30,9 @@ pub enum TermParams {
         amplitude: f64,
         frequency_hz: f64,
     },
+    /// An output filter with the white-noise density N it is fitted with (the filter reshapes the
+    /// white noise, so the two are fitted together).
+    Filter { filter: OutputFilter, n: f64 },
 }
 
 impl TermParams {
@@ -40,13 +42,14 @@ impl TermParams {
             TermParams::Level(p) => p * p,
             TermParams::GaussMarkov { sigma, .. } => sigma * sigma,
             TermParams::Sinusoid { amplitude, .. } => amplitude * amplitude,
+            TermParams::Filter { n, .. } => n * n,
         }
     }
 
     /// The shape parameter, if any (Gauss-Markov time, sinusoid frequency).
     pub fn shape(&self) -> Option<f64> {
         match *self {
-            TermParams::Level(_) => None,
+            TermParams::Level(_) | TermParams::Filter { .. } => None,
             TermParams::GaussMarkov { tau_s, .. } => Some(tau_s),
             TermParams::Sinusoid { frequency_hz, .. } => Some(frequency_hz),
         }
@@ -62,6 +65,19 @@ impl TermParams {
                 frequency_hz,
             } => {
                 vec![("amplitude", amplitude), ("frequency_hz", frequency_hz)]
+            }
+            TermParams::Filter { filter, n } => {
+                let mut v = match filter.kind {
+                    FilterKind::MovingAverage { taps } | FilterKind::Bartlett { taps } => {
+                        vec![("taps", f64::from(taps))]
+                    }
+                    FilterKind::LowPass1 { cutoff_hz } | FilterKind::LowPass2 { cutoff_hz } => {
+                        vec![("cutoff_hz", cutoff_hz)]
+                    }
+                };
+                v.push(("decimation", f64::from(filter.decimation)));
+                v.push(("n", n));
+                v
             }
         }
     }
@@ -83,7 +99,7 @@ pub fn level_name(effect: Effect) -> &'static str {
 /// Number of free parameters of a candidate (for the information criterion).
 pub fn free_parameters(effect: Effect) -> usize {
     match effect {
-        Effect::GaussMarkov | Effect::Sinusoidal => 2,
+        Effect::GaussMarkov | Effect::Sinusoidal | Effect::OutputFilter => 2,
         _ => 1,
     }
 }
@@ -147,5 +163,48 @@ pub fn shape_search_penalty(n: usize) -> f64 {
         2.0 * (n as f64).ln()
     } else {
         0.0
+    }
+}
+
+/// The output filters diagnose tries, at output interval `dt_s`: for decimations 1, 2, 4, 8, 10 and 16,
+/// moving averages of 1..8 output intervals, Bartlett windows of 1.5..16 output intervals, first- and
+/// second-order low-passes with cutoffs from 0.005 to 0.4 times the internal rate, 10 of each,
+/// log-spaced (the Allan signature depends on the filter's response measured in output intervals, so
+/// this spans the filters that shape the shortest taus). Duplicates removed.
+pub fn filter_grid(dt_s: f64) -> Vec<OutputFilter> {
+    let mut out: Vec<OutputFilter> = Vec::new();
+    let log = |lo: f64, hi: f64, j: usize| lo * (hi / lo).powf(j as f64 / 9.0);
+    for d in [1u32, 2, 4, 8, 10, 16] {
+        let f_int = f64::from(d) / dt_s;
+        for j in 0..10 {
+            let ma = (f64::from(d) * log(1.0, 8.0, j)).round() as u32;
+            let bt = (f64::from(d) * log(1.5, 16.0, j)).round() as u32;
+            let fc = f_int * log(0.005, 0.4, j);
+            let kinds = [
+                (ma >= 2).then_some(FilterKind::MovingAverage { taps: ma }),
+                (bt >= 3).then_some(FilterKind::Bartlett { taps: bt }),
+                Some(FilterKind::LowPass1 { cutoff_hz: fc }),
+                Some(FilterKind::LowPass2 { cutoff_hz: fc }),
+            ];
+            for kind in kinds.into_iter().flatten() {
+                if let Ok(f) = OutputFilter::new(kind, d) {
+                    if f.check_rate(dt_s).is_ok() && !out.contains(&f) {
+                        out.push(f);
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Allan variance per unit squared white-noise density at each tau, through `filter` (None: 1/tau).
+pub fn white_signature(filter: Option<&OutputFilter>, taus_s: &[f64], dt_s: f64) -> Vec<f64> {
+    match filter {
+        Some(f) => {
+            let fa = noise::filter::FilteredAllan::new(f, dt_s);
+            taus_s.iter().map(|&t| fa.white_noise(1.0, t)).collect()
+        }
+        None => taus_s.iter().map(|&t| cf::white_noise_avar(1.0, t)).collect(),
     }
 }

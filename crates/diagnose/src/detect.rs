@@ -436,3 +436,114 @@ mod tests {
         assert!(clean.iter().all(|v| v.abs() < 1.0));
     }
 }
+
+/// One time-domain finding on one channel: the term for the corrected model, its parameters with
+/// 95 % bounds, and the evidence (z^2 - ln n, the BIC gain of one regressor with known variance; for
+/// outliers the count's z under the Gaussian false-alarm level).
+#[derive(Clone, Debug)]
+pub struct Finding {
+    pub term: noise::Term,
+    pub parameters: Vec<(&'static str, f64, f64, f64)>,
+    pub delta_bic: f64,
+}
+
+/// What the detectors did to a log: the corrected channels and the findings per channel.
+pub struct Preprocessed {
+    pub channels: [Option<Vec<f64>>; 6],
+    pub findings: [Vec<Finding>; 6],
+}
+
+/// At least this many outliers are needed to name them (the threshold admits 0.01 false ones per log).
+pub const MIN_OUTLIERS: usize = 3;
+
+/// Run the detectors on every channel, in order: outliers (removed), temperature regression
+/// (subtracted when |z| > [`TEMPERATURE_Z`]), warm-up transient (subtracted when |z| > [`TRANSIENT_Z`]).
+/// A temperature column that follows a warm-up looks like a transient: the temperature, a measured
+/// cause, is tried first.
+pub fn preprocess(
+    channels: [Option<&[f64]>; 6],
+    temperature_c: Option<&[f64]>,
+    dt_s: f64,
+) -> Preprocessed {
+    let mut out: [Option<Vec<f64>>; 6] = Default::default();
+    let mut findings: [Vec<Finding>; 6] = Default::default();
+    let hours = |n: usize| n as f64 * dt_s / 3600.0;
+    for c in 0..6 {
+        let Some(raw) = channels[c] else { continue };
+        let n = raw.len();
+        let mut x = raw.to_vec();
+        let spikes = detect_spikes(&x);
+        let count = spikes.indices.len();
+        if count >= MIN_OUTLIERS {
+            x = remove_spikes(&x, &spikes);
+            let rate = count as f64 / hours(n);
+            // Poisson 95 % bounds on the rate (normal approximation with continuity, count >= 3).
+            let (lo, hi) = (
+                (count as f64 - 1.96 * (count as f64).sqrt()).max(0.0) / hours(n),
+                (count as f64 + 1.96 * (count as f64).sqrt() + 1.0) / hours(n),
+            );
+            let size = spikes.size();
+            let n_without = noise_levels(&x, dt_s).n;
+            findings[c].push(Finding {
+                term: noise::Term::Outliers(noise::Outliers {
+                    rate_per_hour: rate,
+                    size,
+                }),
+                parameters: vec![
+                    ("count", count as f64, count as f64, count as f64),
+                    ("rate_per_hour", rate, lo, hi),
+                    ("size", size, size, size),
+                    ("threshold_sigma", spikes.threshold, spikes.threshold, spikes.threshold),
+                    ("n_without", n_without, n_without, n_without),
+                ],
+                delta_bic: f64::INFINITY,
+            });
+        }
+        if let Some(t) = temperature_c {
+            if let Some(reg) = regression(&x, t, dt_s) {
+                if reg.z.abs() > TEMPERATURE_Z {
+                    let c1 = reg.coefficient;
+                    findings[c].push(Finding {
+                        term: noise::Term::TemperatureBias(c1),
+                        parameters: vec![(
+                            "coefficient",
+                            c1,
+                            c1 - 1.96 * reg.sd,
+                            c1 + 1.96 * reg.sd,
+                        )],
+                        delta_bic: reg.z * reg.z - (n as f64).ln(),
+                    });
+                    x = reg.corrected;
+                }
+            }
+        }
+        if let Some(tr) = fit_transient(&x, dt_s) {
+            if tr.z.abs() > TRANSIENT_Z {
+                let sd = (tr.amplitude / tr.z).abs();
+                findings[c].push(Finding {
+                    term: noise::Term::WarmupTransient(noise::WarmupTransient {
+                        amplitude: tr.amplitude,
+                        tau_s: tr.tau_s,
+                        per_run: false,
+                    }),
+                    parameters: vec![
+                        (
+                            "amplitude",
+                            tr.amplitude,
+                            tr.amplitude - 1.96 * sd,
+                            tr.amplitude + 1.96 * sd,
+                        ),
+                        ("tau_s", tr.tau_s, tr.tau_s, tr.tau_s),
+                    ],
+                    delta_bic: tr.z * tr.z - (n as f64).ln(),
+                });
+                x = tr.corrected;
+            }
+        }
+        out[c] = Some(x);
+    }
+    Preprocessed {
+        channels: out,
+        findings,
+    }
+}

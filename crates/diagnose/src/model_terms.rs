@@ -31,8 +31,18 @@ pub fn term_level(model: &SensorModel, ch: usize, effect: Effect) -> Option<Term
             amplitude: s.amplitude,
             frequency_hz: s.frequency_hz,
         },
+        Term::OutputFilter(filter) => TermParams::Filter {
+            filter,
+            n: model.axis(sensor, axis).white_noise.unwrap_or(0.0),
+        },
         _ => return None,
     })
+}
+
+/// The output filter channel `ch` has, if any.
+pub fn output_filter(model: &SensorModel, ch: usize) -> Option<noise::OutputFilter> {
+    let (sensor, axis) = channel_axis(ch);
+    model.axis(sensor, axis).output_filter
 }
 
 /// Does channel `ch` model its bias instability as Woodman's random walk (TR-696 eq 9)?
@@ -85,6 +95,10 @@ pub fn set_term(model: &mut SensorModel, ch: usize, effect: Effect, params: &Ter
             frequency_hz,
             phase_rad: a.sinusoidal.and_then(|s| s.phase_rad),
         }),
+        (Effect::OutputFilter, TermParams::Filter { filter, n }) => {
+            a.white_noise = Some(n);
+            Term::OutputFilter(filter)
+        }
         _ => return,
     };
     a.set_term(term);

@@ -92,12 +92,47 @@ pub enum DiagnoseError {
     Simulation(#[from] SimError),
 }
 
+/// An effect's SI parameters (docs/cli.md names), and for an output filter its kind, serialised
+/// first in the same JSON object (`{"kind": "bartlett", "taps": 8, ...}`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Parameters {
+    pub values: BTreeMap<String, f64>,
+    pub kind: Option<&'static str>,
+}
+
+impl From<BTreeMap<String, f64>> for Parameters {
+    fn from(values: BTreeMap<String, f64>) -> Self {
+        Parameters { values, kind: None }
+    }
+}
+
+impl std::ops::Deref for Parameters {
+    type Target = BTreeMap<String, f64>;
+    fn deref(&self) -> &Self::Target {
+        &self.values
+    }
+}
+
+impl Serialize for Parameters {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = s.serialize_map(Some(self.values.len() + usize::from(self.kind.is_some())))?;
+        if let Some(k) = self.kind {
+            map.serialize_entry("kind", k)?;
+        }
+        for (k, v) in &self.values {
+            map.serialize_entry(k, v)?;
+        }
+        map.end()
+    }
+}
+
 /// A named effect: what, how much (95 % interval), and the gap around it.
 #[derive(Clone, Debug, Serialize)]
 pub struct FoundEffect {
     pub effect: Effect,
     /// SI parameters (docs/cli.md names).
-    pub parameters: BTreeMap<String, f64>,
+    pub parameters: Parameters,
     /// 95 % profile-likelihood interval of each parameter.
     pub parameters_lo: BTreeMap<String, f64>,
     pub parameters_hi: BTreeMap<String, f64>,
@@ -115,8 +150,13 @@ pub struct FoundEffect {
     pub delta_bic: f64,
     /// Other candidates the data cannot tell from this one (BIC within `ambiguity_delta_bic`).
     pub cannot_tell_from: Vec<Effect>,
-    /// Round in which it was found (1 = first).
+    /// Round in which it was found (1 = first; 0: by a time-domain detector before the Allan
+    /// rounds, see `detect`).
     pub round: usize,
+    /// True when the effect is a stand-in: a term fitted to the Allan curve where no physical
+    /// candidate explained the gap (a sinusoid or Gauss-Markov process at the shortest taus, where a
+    /// sensor's own filtering acts, is reported as such).
+    pub stand_in: bool,
     /// Later rounds that refitted its level after re-simulation.
     pub refinements: usize,
 }
@@ -264,7 +304,14 @@ impl Diagnosis {
                 expected_dt_s: self.dt_s,
             });
         }
-        let (grid_m, measured) = measure(log, self.tau_min_s);
+        // The same time-domain corrections as the diagnosed log (outliers, temperature, transient).
+        let pre = crate::detect::preprocess(log.channels, log.temperature_c, log.dt_s);
+        let corrected = LogInput {
+            dt_s: log.dt_s,
+            channels: std::array::from_fn(|c| pre.channels[c].as_deref()),
+            temperature_c: log.temperature_c,
+        };
+        let (grid_m, measured) = measure(&corrected, self.tau_min_s);
         let mut out = BTreeMap::new();
         for c in 0..6 {
             let (Some(m), Some(b0), Some(b1)) = (

@@ -1,14 +1,17 @@
 //! Step 3: every candidate effect fitted to one channel's gap.
 
 use crate::candidates::{
-    free_parameters, shape_grid, shape_search_penalty, unit_family_signature, unit_signature,
-    TermParams, CANDIDATES,
+    filter_grid, free_parameters, shape_grid, shape_search_penalty, unit_family_signature,
+    unit_signature, white_signature, TermParams, CANDIDATES,
 };
 use crate::fit::{
     aic, bic, birge_scale, fit_family, fit_linear, linear_interval, FitData, LinearFit, CHI2_1_95,
 };
 use crate::gap::{Band, Curve, Gap};
-use crate::model_terms::{flicker_band, has_random_walk_bias_instability, term_level};
+use crate::fit::predicted_ln_adev;
+use crate::model_terms::{
+    flicker_band, has_random_walk_bias_instability, output_filter, term_level,
+};
 use noise::{Effect, SensorModel};
 use std::collections::BTreeMap;
 
@@ -40,6 +43,10 @@ pub(crate) fn sqrt_params(p: TermParams, c: f64) -> TermParams {
         TermParams::Sinusoid { frequency_hz, .. } => TermParams::Sinusoid {
             amplitude: c.max(0.0).sqrt(),
             frequency_hz,
+        },
+        TermParams::Filter { filter, .. } => TermParams::Filter {
+            filter,
+            n: c.max(0.0).sqrt(),
         },
     }
 }
@@ -140,10 +147,13 @@ pub(crate) fn trials(
             )
         } else {
             let flicker = flicker_band(model, ch);
-            let f: Vec<f64> = tau
-                .iter()
-                .map(|&t| unit_signature(effect, t, dt_s, &flicker))
-                .collect();
+            let f: Vec<f64> = if effect == Effect::WhiteNoise {
+                white_signature(output_filter(model, ch).as_ref(), tau, dt_s)
+            } else {
+                tau.iter()
+                    .map(|&t| unit_signature(effect, t, dt_s, &flicker))
+                    .collect()
+            };
             let c0 = current.map(|c| c.c()).unwrap_or(0.0);
             let fit = fit_linear(&data, &f, c0);
             if effect == Effect::RateRamp {
@@ -215,7 +225,89 @@ pub(crate) fn trials(
             delta_avar: f.iter().map(|v| (fit.c - c0) * v).collect(),
         });
     }
+    if let Some(t) = filter_trial(model, ch, &data, tau, dt_s) {
+        out.push(t);
+    }
     out
+}
+
+/// The output-filter candidate: every filter of [`filter_grid`] with the white-noise level refitted
+/// through it (the filter reshapes the white noise, the term it visibly changes; the other terms'
+/// filtering is left to the re-simulation, which applies the filter to all of them). The change of
+/// the band is c fw_F(tau) - c0 fw(tau), fw the model's current white signature, fw_F the one through F.
+fn filter_trial(
+    model: &SensorModel,
+    ch: usize,
+    data: &FitData,
+    tau: &[f64],
+    dt_s: f64,
+) -> Option<Trial> {
+    let m = tau.len();
+    let current = output_filter(model, ch);
+    let c0 = term_level(model, ch, Effect::WhiteNoise).map_or(0.0, |p| p.c());
+    let fw_cur = white_signature(current.as_ref(), tau, dt_s);
+    let grid = filter_grid(dt_s);
+    let penalty = shape_search_penalty(grid.len());
+    let mut best: Option<(f64, OutputFilterFit)> = None;
+    for filter in grid {
+        if Some(filter) == current {
+            continue;
+        }
+        let fw = white_signature(Some(&filter), tau, dt_s);
+        let shift: Vec<f64> = (0..m).map(|i| c0 * (fw[i] - fw_cur[i])).collect();
+        let ln_band: Vec<f64> = (0..m)
+            .map(|i| predicted_ln_adev(data.ln_band[i], data.avar_band[i], shift[i]))
+            .collect();
+        let avar_band: Vec<f64> = (0..m)
+            .map(|i| (data.avar_band[i] + shift[i]).max(0.0))
+            .collect();
+        let shifted = FitData {
+            ln_meas: data.ln_meas,
+            ln_band: &ln_band,
+            avar_band: &avar_band,
+            s: data.s,
+        };
+        let fit = fit_linear(&shifted, &fw, c0);
+        if best.as_ref().is_none_or(|(chi2, _)| fit.chi2 < *chi2) {
+            let delta = (0..m).map(|i| fit.c * fw[i] - c0 * fw_cur[i]).collect();
+            best = Some((
+                fit.chi2,
+                OutputFilterFit {
+                    filter,
+                    fit,
+                    delta,
+                },
+            ));
+        }
+    }
+    let (chi2, b) = best?;
+    let k = free_parameters(Effect::OutputFilter);
+    let scale = birge_scale(chi2, k, m);
+    let lo = (b.fit.c_lo / (scale * scale).max(1.0)).min(b.fit.c);
+    let hi = b.fit.c_hi * (scale * scale).max(1.0);
+    let p = |c: f64| TermParams::Filter {
+        filter: b.filter,
+        n: c.max(0.0).sqrt(),
+    };
+    Some(Trial {
+        effect: Effect::OutputFilter,
+        params: p(b.fit.c),
+        lo: p(lo),
+        hi: p(hi),
+        model: current.map(|filter| TermParams::Filter {
+            filter,
+            n: c0.sqrt(),
+        }),
+        bic: bic(chi2, k, m) + penalty,
+        aic: aic(chi2, k) + penalty,
+        delta_avar: b.delta,
+    })
+}
+
+struct OutputFilterFit {
+    filter: noise::OutputFilter,
+    fit: LinearFit,
+    delta: Vec<f64>,
 }
 
 pub(crate) fn named_map(effect: Effect, p: &TermParams) -> BTreeMap<String, f64> {
