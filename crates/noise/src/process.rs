@@ -377,6 +377,13 @@ pub struct ChannelErrors {
     /// coefficient per degC, profile, reference degC
     temperature: Option<(f64, TemperatureProfile, f64)>,
     quantizer: Option<Quantizer>,
+    /// Warm-up transient: this run's amplitude and the time constant, s.
+    transient: Option<(f64, f64)>,
+    /// Interval of the raw error processes: the output interval, or the output filter's internal one.
+    dt_raw: f64,
+    /// The output filter's state (None: the raw samples are the output).
+    filter: Option<FilterState>,
+    outliers: Option<OutlierState>,
     /// A block's normal draws (reused; its contents never outlive a call).
     scratch: Vec<f64>,
     /// The k the next call must bring (the states advance one step per call); checked in debug
@@ -395,6 +402,10 @@ impl ChannelErrors {
         let axis_index = channel % 3;
         let axis = model.axis(sensor, axis_index);
         let rng = |effect: Effect| term_rng(seed, run, channel as u64, effect);
+        // The raw processes run at the filter's internal interval.
+        let dt_out = dt_s;
+        let filter = axis.output_filter.map(|f| FilterState::new(&f, dt_out));
+        let dt_s = axis.output_filter.map_or(dt_s, |f| f.internal_dt(dt_out));
 
         let mut row = [0.0; 3];
         row[axis_index] = 1.0 + axis.scale_factor.unwrap_or(0.0);
@@ -428,8 +439,23 @@ impl ChannelErrors {
             ),
             None => (None, None),
         };
+        let transient = axis.warmup_transient.map(|w| {
+            let a = if w.per_run {
+                w.amplitude * normal(&mut rng(Effect::WarmupTransient))
+            } else {
+                w.amplitude
+            };
+            (a, w.tau_s)
+        });
+        let outliers = axis
+            .outliers
+            .map(|o| OutlierState::new(o.probability(dt_out), o.size, rng(Effect::Outliers)));
         ChannelErrors {
-            dt_s,
+            dt_s: dt_out,
+            dt_raw: dt_s,
+            transient,
+            filter,
+            outliers,
             row,
             bias: axis.constant_bias.unwrap_or(0.0) + turn_on,
             white: axis
@@ -527,7 +553,50 @@ impl ChannelErrors {
             assert_eq!(k0, self.next_k, "samples must be drawn in order");
             self.next_k = k0 + out.len() as u64;
         }
-        let t = |i: usize| (k0 + i as u64) as f64 * self.dt_s;
+        match self.filter.take() {
+            None => self.fill_raw(k0, 0, out, ideal),
+            Some(mut f) => {
+                // Raw samples up to the one output k0 + n - 1 is read at, each with the ideal
+                // input of the output sample it belongs to (zero-order hold).
+                let n = out.len() as u64;
+                let (d, pre) = (f.decimation as u64, f.preroll as u64);
+                let end = pre + (k0 + n - 1) * d + 1;
+                let start = f.raw_done;
+                let mut raw = std::mem::take(&mut f.raw);
+                raw.clear();
+                raw.resize((end - start) as usize, 0.0);
+                self.fill_raw(start, pre, &mut raw, |j| {
+                    let r = start + j as u64;
+                    let o = r.saturating_sub(pre).div_ceil(d);
+                    ideal((o.max(k0) - k0).min(n - 1) as usize)
+                });
+                f.filter(start, &raw, k0, out);
+                f.raw = raw;
+                self.filter = Some(f);
+            }
+        }
+        if let Some(o) = &mut self.outliers {
+            o.add(k0, out);
+        }
+        if let Some(q) = &mut self.quantizer {
+            let dt_s = self.dt_s;
+            out.iter_mut().for_each(|v| *v = q.apply(*v, dt_s));
+        }
+    }
+
+    /// Raw samples `k0 .. k0 + out.len()` at the raw interval (time t = (k - preroll) dt_raw), every
+    /// term but the filter, the outliers and the quantiser.
+    #[inline]
+    fn fill_raw<'a>(
+        &mut self,
+        k0: u64,
+        preroll: u64,
+        out: &mut [f64],
+        ideal: impl Fn(usize) -> &'a Vector3<f64>,
+    ) {
+        let offset = preroll as f64 * self.dt_raw;
+        // x - 0.0 == x bit for bit: without a filter the times are unchanged.
+        let t = |i: usize| (k0 + i as u64) as f64 * self.dt_raw - offset;
         for (i, v) in out.iter_mut().enumerate() {
             let x = ideal(i);
             *v = self.row[0] * x.x + self.row[1] * x.y + self.row[2] * x.z + self.bias;
@@ -564,9 +633,139 @@ impl ChannelErrors {
                 .enumerate()
                 .for_each(|(i, v)| *v += c * (profile.at(t(i)) - reference));
         }
-        if let Some(q) = &mut self.quantizer {
-            let dt_s = self.dt_s;
-            out.iter_mut().for_each(|v| *v = q.apply(*v, dt_s));
+        if let Some((a, tau)) = self.transient {
+            out.iter_mut()
+                .enumerate()
+                .for_each(|(i, v)| *v += a * (-t(i).max(0.0) / tau).exp());
+        }
+    }
+}
+
+/// The output filter's running state: the raw history it needs and where the raw stream stands.
+#[derive(Clone, Debug)]
+struct FilterState {
+    /// Impulse response (FIR kinds; for the IIR kinds only its length sets the pre-roll).
+    h: Vec<f64>,
+    /// (b, a) of the IIR kinds, with their input and output histories (newest first).
+    iir: Option<(Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>)>,
+    decimation: usize,
+    /// Raw samples before the one output 0 is read at: the response's length - 1, so the filter's
+    /// history is full (FIR) or settled to 1e-17 (IIR) at t = 0.
+    preroll: usize,
+    /// Raw samples produced so far.
+    raw_done: u64,
+    /// The last `h.len() - 1` raw samples (FIR), oldest first.
+    history: Vec<f64>,
+    /// Scratch for one block's raw samples.
+    raw: Vec<f64>,
+}
+
+impl FilterState {
+    fn new(f: &crate::filter::OutputFilter, dt_s: f64) -> FilterState {
+        let h = f.impulse_response(dt_s);
+        let iir = f.recursion(dt_s).map(|(b, a)| {
+            let (nb, na) = (b.len(), a.len());
+            (b, a, vec![0.0; nb], vec![0.0; na])
+        });
+        FilterState {
+            preroll: h.len() - 1,
+            h,
+            iir,
+            decimation: f.decimation as usize,
+            raw_done: 0,
+            history: Vec::new(),
+            raw: Vec::new(),
+        }
+    }
+
+    /// Filter the raw samples `start ..` in `raw`, writing the output samples k0 .. into `out`.
+    fn filter(&mut self, start: u64, raw: &[f64], k0: u64, out: &mut [f64]) {
+        let (d, pre) = (self.decimation as u64, self.preroll as u64);
+        let is_output = |r: u64| r >= pre && (r - pre) % d == 0;
+        let slot = |r: u64| ((r - pre) / d - k0) as usize;
+        if let Some((b, a, xs, ys)) = &mut self.iir {
+            for (j, &x) in raw.iter().enumerate() {
+                xs.rotate_right(1);
+                xs[0] = x;
+                let mut y: f64 = b.iter().zip(xs.iter()).map(|(b, x)| b * x).sum();
+                for i in 1..a.len() {
+                    y -= a[i] * ys[i - 1];
+                }
+                ys.rotate_right(1);
+                ys[0] = y;
+                let r = start + j as u64;
+                if is_output(r) {
+                    out[slot(r)] = y;
+                }
+            }
+        } else {
+            // y_r = sum_i h_i x_{r-i}, only at the raw indices that are read out.
+            let l = self.h.len();
+            let hist = self.history.len();
+            let mut joined = std::mem::take(&mut self.history);
+            joined.extend_from_slice(raw);
+            let first = start.max(pre);
+            let mut r = if is_output(first) {
+                first
+            } else {
+                pre + (first - pre).div_ceil(d) * d
+            };
+            let end = start + raw.len() as u64;
+            while r < end {
+                // Position of raw sample r in `joined`.
+                let p = (r - start) as usize + hist;
+                let mut y = 0.0;
+                for (i, hi) in self.h.iter().enumerate() {
+                    y += hi * joined[p - i];
+                }
+                out[slot(r)] = y;
+                r += d;
+            }
+            let keep = (l - 1).min(joined.len());
+            self.history = joined[joined.len() - keep..].to_vec();
+        }
+        self.raw_done = start + raw.len() as u64;
+    }
+}
+
+/// Outliers: the index of the next one and the draws (geometric gaps, random sign).
+#[derive(Clone, Debug)]
+struct OutlierState {
+    p: f64,
+    size: f64,
+    next: u64,
+    rng: ImuRng,
+}
+
+impl OutlierState {
+    fn new(p: f64, size: f64, mut rng: ImuRng) -> OutlierState {
+        let first = Self::gap(p, &mut rng);
+        OutlierState {
+            p,
+            size,
+            next: first.saturating_sub(1),
+            rng,
+        }
+    }
+
+    /// Samples to the next outlier (>= 1): geometric with success probability p (a Bernoulli process).
+    fn gap(p: f64, rng: &mut ImuRng) -> u64 {
+        if p <= 0.0 {
+            return u64::MAX;
+        }
+        if p >= 1.0 {
+            return 1;
+        }
+        let u: f64 = 1.0 - rng.gen::<f64>(); // (0, 1]
+        1 + (u.ln() / (-p).ln_1p()).floor().min(1e18) as u64
+    }
+
+    fn add(&mut self, k0: u64, out: &mut [f64]) {
+        let end = k0 + out.len() as u64;
+        while self.next < end {
+            let sign = if self.rng.gen::<bool>() { 1.0 } else { -1.0 };
+            out[(self.next - k0) as usize] += sign * self.size;
+            self.next = self.next.saturating_add(Self::gap(self.p, &mut self.rng));
         }
     }
 }
