@@ -1,0 +1,143 @@
+//! The output filter read back: generated logs through each filter kind, with decimation, at 10 Hz,
+//! 100 Hz and 1 kHz have the overlapping Allan variance of the exact filtered closed form
+//! (`noise::filter::FilteredAllan` via `AxisModel::allan_variance_sampled`), within chi-squared
+//! bounds from Greenhall's EDF at a per-comparison false-positive rate of 1e-6 (`common::ALPHA`);
+//! outliers read back as white noise of variance p size^2 per sample.
+
+mod common;
+
+use common::*;
+use noise::{AxisModel, BiasInstability, FilterKind, Flicker, GaussMarkov, Outliers, OutputFilter};
+
+const RATES_HZ: [f64; 3] = [10.0, 100.0, 1000.0];
+/// 2^19 samples per series.
+const N: usize = 1 << 19;
+const SEED: u64 = 20_261_124;
+/// Short taus, where the filter shapes the curve, and long ones, where it must not.
+const MS: [usize; 7] = [1, 2, 3, 5, 10, 100, 1000];
+
+fn check(label: &str, axis: &AxisModel, alphas: &[i32]) {
+    for (i, &rate) in RATES_HZ.iter().enumerate() {
+        let dt = 1.0 / rate;
+        let data = gyro_x_series(axis, rate, N, SEED, i as u64);
+        assert_avar_matches(
+            &format!("{label} at {rate} Hz"),
+            &data,
+            dt,
+            &MS,
+            alphas,
+            |tau| axis.allan_variance_sampled(tau, dt),
+        );
+    }
+}
+
+fn filtered(kind: FilterKind, decimation: u32) -> AxisModel {
+    AxisModel {
+        white_noise: Some(1e-3),
+        bias_instability: Some(BiasInstability::Flicker(Flicker::with_b(2e-4))),
+        gauss_markov: Some(GaussMarkov {
+            sigma: 3e-3,
+            tau_s: 0.05,
+        }),
+        output_filter: Some(OutputFilter::new(kind, decimation).unwrap()),
+        ..AxisModel::default()
+    }
+}
+
+#[test]
+fn moving_average_with_decimation_reads_back() {
+    check(
+        "moving average 6 / 4",
+        &filtered(FilterKind::MovingAverage { taps: 6 }, 4),
+        &[0],
+    );
+}
+
+#[test]
+fn bartlett_reads_back() {
+    check(
+        "bartlett 9",
+        &filtered(FilterKind::Bartlett { taps: 9 }, 1),
+        &[0],
+    );
+}
+
+#[test]
+fn second_order_lowpass_with_decimation_reads_back() {
+    // Cutoff at a tenth of the internal rate of each output rate.
+    for (i, &rate) in RATES_HZ.iter().enumerate() {
+        let axis = filtered(
+            FilterKind::LowPass2 {
+                cutoff_hz: 0.1 * rate * 10.0,
+            },
+            10,
+        );
+        let dt = 1.0 / rate;
+        let data = gyro_x_series(&axis, rate, N, SEED + 7, i as u64);
+        assert_avar_matches(
+            &format!("lowpass2 at {rate} Hz"),
+            &data,
+            dt,
+            &MS,
+            &[0],
+            |tau| axis.allan_variance_sampled(tau, dt),
+        );
+    }
+}
+
+#[test]
+fn first_order_lowpass_reads_back() {
+    for (i, &rate) in RATES_HZ.iter().enumerate() {
+        let axis = filtered(
+            FilterKind::LowPass1 {
+                cutoff_hz: 0.05 * rate,
+            },
+            1,
+        );
+        let dt = 1.0 / rate;
+        let data = gyro_x_series(&axis, rate, N, SEED + 11, i as u64);
+        assert_avar_matches(
+            &format!("lowpass1 at {rate} Hz"),
+            &data,
+            dt,
+            &MS,
+            &[0],
+            |tau| axis.allan_variance_sampled(tau, dt),
+        );
+    }
+}
+
+#[test]
+fn outliers_read_back_as_white_noise() {
+    // Outliers dominate (p size^2 = 40 x the white variance). Their Allan variance fluctuates with
+    // their count K ~ Binomial(N, p), relative sd 1/sqrt(N p) at m = 1 and, the overlapping blocks
+    // sharing outliers, no more than sqrt(3) times that at any m (the Allan difference weighs each
+    // outlier in at most 2m of the N overlapping differences, each weight 1/m); bound 6 sd (a normal
+    // tail of 2e-9), plus 6 sd of the chi-squared error of a white Allan estimate, relative sd at most
+    // 1.5 sqrt(2m/N) for the overlapping estimator (SP 1065 Table 5 EDF for white FM).
+    let (size, rate_per_hour) = (0.2, 36_000.0);
+    for (i, &rate) in RATES_HZ.iter().enumerate() {
+        let dt = 1.0 / rate;
+        let axis = AxisModel {
+            white_noise: Some(1e-3),
+            outliers: Some(Outliers::new(rate_per_hour, size).unwrap()),
+            ..AxisModel::default()
+        };
+        let p = axis.outliers.unwrap().probability(dt);
+        let data = gyro_x_series(&axis, rate, N, SEED + 13, i as u64);
+        let est = oavar(&data, dt, &MS);
+        for (&m, &v) in MS.iter().zip(&est) {
+            let tau = m as f64 * dt;
+            let truth = axis.allan_variance_sampled(tau, dt);
+            let outl = p * size * size / m as f64;
+            let white = 1e-6 / tau;
+            let tol = 6.0
+                * (3f64.sqrt() * outl / (N as f64 * p).sqrt()
+                    + 1.5 * (outl + white) * (2.0 * m as f64 / N as f64).sqrt());
+            assert!(
+                (v - truth).abs() <= tol,
+                "outliers at {rate} Hz, m {m}: {v:.4e} vs {truth:.4e} (tolerance {tol:.2e})"
+            );
+        }
+    }
+}
