@@ -32,7 +32,10 @@ pub enum TermParams {
     },
     /// An output filter with the white-noise density N it is fitted with (the filter reshapes the
     /// white noise, so the two are fitted together).
-    Filter { filter: OutputFilter, n: f64 },
+    Filter {
+        filter: OutputFilter,
+        n: f64,
+    },
 }
 
 impl TermParams {
@@ -205,6 +208,9 @@ pub fn white_signature(filter: Option<&OutputFilter>, taus_s: &[f64], dt_s: f64)
             let fa = noise::filter::FilteredAllan::new(f, dt_s);
             taus_s.iter().map(|&t| fa.white_noise(1.0, t)).collect()
         }
-        None => taus_s.iter().map(|&t| cf::white_noise_avar(1.0, t)).collect(),
+        None => taus_s
+            .iter()
+            .map(|&t| cf::white_noise_avar(1.0, t))
+            .collect(),
     }
 }

@@ -338,7 +338,10 @@ pub fn fit_transient(x: &[f64], dt_s: f64) -> Option<Transient> {
     }
     let (_, tau0) = best?;
     let step = (hi / lo).ln() / steps as f64;
-    let (mut a, mut b) = ((tau0.ln() - step).max(lo.ln()), (tau0.ln() + step).min(hi.ln()));
+    let (mut a, mut b) = (
+        (tau0.ln() - step).max(lo.ln()),
+        (tau0.ln() + step).min(hi.ln()),
+    );
     let gr = 0.5 * (5f64.sqrt() - 1.0);
     for _ in 0..30 {
         let x1 = b - gr * (b - a);
@@ -379,7 +382,9 @@ mod tests {
         // Random-walk and Gauss-Markov quadratic forms against O(n^2) sums, n = 300.
         let n = 300;
         let dt = 0.1;
-        let g: Vec<f64> = (0..n).map(|k| ((k as f64) * 0.03).sin() + 0.001 * k as f64).collect();
+        let g: Vec<f64> = (0..n)
+            .map(|k| ((k as f64) * 0.03).sin() + 0.001 * k as f64)
+            .collect();
         let (_, w, _) = regress(&vec![0.0; n], &g).unwrap();
         let lv = NoiseLevels {
             n: 0.0,
@@ -493,7 +498,12 @@ pub fn preprocess(
                     ("count", count as f64, count as f64, count as f64),
                     ("rate_per_hour", rate, lo, hi),
                     ("size", size, size, size),
-                    ("threshold_sigma", spikes.threshold, spikes.threshold, spikes.threshold),
+                    (
+                        "threshold_sigma",
+                        spikes.threshold,
+                        spikes.threshold,
+                        spikes.threshold,
+                    ),
                     ("n_without", n_without, n_without, n_without),
                 ],
                 delta_bic: f64::INFINITY,

@@ -116,7 +116,8 @@ impl std::ops::Deref for Parameters {
 impl Serialize for Parameters {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         use serde::ser::SerializeMap;
-        let mut map = s.serialize_map(Some(self.values.len() + usize::from(self.kind.is_some())))?;
+        let mut map =
+            s.serialize_map(Some(self.values.len() + usize::from(self.kind.is_some())))?;
         if let Some(k) = self.kind {
             map.serialize_entry("kind", k)?;
         }

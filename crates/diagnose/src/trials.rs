@@ -4,11 +4,11 @@ use crate::candidates::{
     filter_grid, free_parameters, shape_grid, shape_search_penalty, unit_family_signature,
     unit_signature, white_signature, TermParams, CANDIDATES,
 };
+use crate::fit::predicted_ln_adev;
 use crate::fit::{
     aic, bic, birge_scale, fit_family, fit_linear, linear_interval, FitData, LinearFit, CHI2_1_95,
 };
 use crate::gap::{Band, Curve, Gap};
-use crate::fit::predicted_ln_adev;
 use crate::model_terms::{
     flicker_band, has_random_walk_bias_instability, output_filter, term_level,
 };
@@ -270,14 +270,7 @@ fn filter_trial(
         let fit = fit_linear(&shifted, &fw, c0);
         if best.as_ref().is_none_or(|(chi2, _)| fit.chi2 < *chi2) {
             let delta = (0..m).map(|i| fit.c * fw[i] - c0 * fw_cur[i]).collect();
-            best = Some((
-                fit.chi2,
-                OutputFilterFit {
-                    filter,
-                    fit,
-                    delta,
-                },
-            ));
+            best = Some((fit.chi2, OutputFilterFit { filter, fit, delta }));
         }
     }
     let (chi2, b) = best?;
