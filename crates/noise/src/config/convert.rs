@@ -5,8 +5,9 @@ use super::allan_minimum::solve_b_for_minimum;
 use super::raw::*;
 use super::ConfigError;
 use crate::effect::Sensor;
+use crate::filter::{FilterKind, Outliers, OutputFilter, WarmupTransient, MAX_RESPONSE};
 use crate::model::*;
-use crate::units::{parse_quantity, Quantity, Signal};
+use crate::units::{parse_quantity, unit_part, Quantity, Signal};
 
 /// Most Gauss-Markov components a flicker bias instability may have (20 decades at 5 per decade).
 const MAX_FLICKER_COMPONENTS: f64 = 100.0;
@@ -68,6 +69,47 @@ impl Ctx<'_> {
         Ok(v)
     }
 
+    /// A rate of events per hour: `"60 /h"`, `"2 /min"`, `"0.01 /s"`, any frequency unit
+    /// (`"1/h"`, `"0.01 Hz"`), or a plain number meaning per hour. A value per hour keeps its bits.
+    fn per_hour(&self, key: &str, text: &Text) -> Result<f64, ConfigError> {
+        let quoted = format!("\"{}\"", text.get_ref());
+        let err = |why: String| {
+            self.invalid_at(
+                key,
+                Some(text),
+                format!("a number of events per time such as \"60 /h\", \"2 /min\", \"0.01 /s\", or a plain number per hour ({why})"),
+                quoted.clone(),
+            )
+        };
+        let all = text.get_ref().trim();
+        let unit = unit_part(all);
+        let value = parse_quantity(&all[..all.len() - unit.len()], Quantity::Ratio)
+            .map_err(|e| err(e.to_string()))?;
+        let unit = unit.trim();
+        let factor = if unit.is_empty() {
+            1.0
+        } else {
+            // "/h" reads as "1/h".
+            let expr = if unit.starts_with('/') {
+                format!("1 1{unit}")
+            } else {
+                format!("1 {unit}")
+            };
+            let per_hour = 3600.0
+                * parse_quantity(&expr, Quantity::Frequency).map_err(|e| err(e.to_string()))?;
+            if (per_hour - 1.0).abs() < 1e-12 {
+                1.0
+            } else {
+                per_hour
+            }
+        };
+        let v = value * factor;
+        if !v.is_finite() || v < 0.0 {
+            return Err(self.invalid_at(key, Some(text), "a rate >= 0", quoted));
+        }
+        Ok(v)
+    }
+
     fn positive(&self, key: &str, text: &Text, q: Quantity) -> Result<f64, ConfigError> {
         let v = self.value(key, text, q, true)?;
         if v == 0.0 {
@@ -93,7 +135,7 @@ pub(super) fn convert_temperature(
         return Ok((TemperatureProfile::default(), 25.0));
     };
     let t = Quantity::Temperature;
-    let fields: [(&str, &Option<Text>); 9] = [
+    let fields: [(&str, &Option<Text>); 10] = [
         ("value", &raw.value),
         ("start", &raw.start),
         ("end", &raw.end),
@@ -102,6 +144,7 @@ pub(super) fn convert_temperature(
         ("mean", &raw.mean),
         ("amplitude", &raw.amplitude),
         ("period", &raw.period),
+        ("at", &raw.at),
         ("reference", &raw.reference),
     ];
     let profile = raw.profile.get_ref().as_str();
@@ -113,11 +156,12 @@ pub(super) fn convert_temperature(
             "start, end, time_constant",
         ),
         "sinusoid" => (&["mean", "amplitude", "period"], "mean, amplitude, period"),
+        "step" => (&["start", "end", "at"], "start, end, at"),
         other => {
             return Err(ctx.invalid_at(
                 "temperature.profile",
                 Some(&raw.profile),
-                "one of \"constant\", \"ramp\", \"warmup\", \"sinusoid\"",
+                "one of \"constant\", \"ramp\", \"warmup\", \"sinusoid\", \"step\"",
                 format!("\"{other}\""),
             ))
         }
@@ -185,6 +229,14 @@ pub(super) fn convert_temperature(
             end_c: get("end", &raw.end, t)?,
             time_constant_s: get_positive("time_constant", &raw.time_constant, Quantity::Time)?,
         },
+        "step" => {
+            let (key, at) = need("at", &raw.at)?;
+            TemperatureProfile::Step {
+                before_c: get("start", &raw.start, t)?,
+                after_c: get("end", &raw.end, t)?,
+                at_s: ctx.value(&key, &at, Quantity::Time, true)?,
+            }
+        }
         _ => TemperatureProfile::Sinusoid {
             mean_c: get("mean", &raw.mean, t)?,
             amplitude_c: get("amplitude", &raw.amplitude, t)?,
@@ -304,6 +356,37 @@ fn convert_axis(
             ctx.value(&format!("{key}[0]"), &list[0], Quantity::Angle, false)?,
             ctx.value(&format!("{key}[1]"), &list[1], Quantity::Angle, false)?,
         ]);
+    }
+    if let Some((f, key)) = pick!(output_filter) {
+        m.output_filter = Some(convert_output_filter(ctx, &key, f)?);
+    }
+    if let Some((o, key)) = pick!(outliers) {
+        let rate = ctx.per_hour(&format!("{key}.rate"), &o.rate)?;
+        let size_key = format!("{key}.size");
+        let size = ctx.value(&size_key, &o.size, Quantity::Signal(sig), true)?;
+        m.outliers =
+            Some(Outliers::new(rate, size).map_err(|e| {
+                ctx.invalid_at(&size_key, Some(&o.size), e.expected, e.to_string())
+            })?);
+    }
+    if let Some((w, key)) = pick!(warmup_transient) {
+        m.warmup_transient = Some(
+            WarmupTransient::new(
+                ctx.value(
+                    &format!("{key}.amplitude"),
+                    &w.amplitude,
+                    Quantity::Signal(sig),
+                    false,
+                )?,
+                ctx.positive(
+                    &format!("{key}.time_constant"),
+                    &w.time_constant,
+                    Quantity::Time,
+                )?,
+                w.per_run.unwrap_or(false),
+            )
+            .map_err(|e| ctx.invalid(&key, e.expected, e.to_string()))?,
+        );
     }
     // Bias instability last: the "allan_minimum" convention needs the other terms.
     if let Some((b, key)) = pick!(bias_instability) {
@@ -483,6 +566,97 @@ fn convert_bias_instability(
             format!("\"{other}\""),
         )),
     }
+}
+
+/// `output_filter = { kind, taps | cutoff, decimation? }`: the kind's own parameter and no other.
+fn convert_output_filter(
+    ctx: &Ctx,
+    key: &str,
+    raw: &RawOutputFilter,
+) -> Result<OutputFilter, ConfigError> {
+    let sub = |name: &str| format!("{key}.{name}");
+    // An integer's place in the file, for `invalid_at`.
+    let at = |i: &Integer| Text::new(i.span(), i.get_ref().to_string());
+    let kind = raw.kind.get_ref().as_str();
+    let fir = match kind {
+        "moving_average" | "bartlett" => true,
+        "lowpass1" | "lowpass2" => false,
+        other => {
+            return Err(ctx.invalid_at(
+                &sub("kind"),
+                Some(&raw.kind),
+                "one of \"moving_average\", \"bartlett\" (with taps), \"lowpass1\", \"lowpass2\" (with cutoff)",
+                format!("\"{other}\""),
+            ))
+        }
+    };
+    let (needs, extra) = if fir {
+        ("taps", raw.cutoff.clone().map(|c| ("cutoff", c)))
+    } else {
+        ("cutoff", raw.taps.as_ref().map(|t| ("taps", at(t))))
+    };
+    if let Some((name, text)) = extra {
+        return Err(ctx.invalid_at(
+            &sub(name),
+            Some(&text),
+            format!("only `{needs}` and `decimation` for kind \"{kind}\""),
+            "an extra key",
+        ));
+    }
+    let kind = if fir {
+        let t = raw.taps.as_ref().ok_or_else(|| {
+            ctx.invalid(
+                &sub("taps"),
+                format!("the number of taps for kind \"{kind}\", an integer such as taps = 8"),
+                "nothing",
+            )
+        })?;
+        let taps = u32::try_from(*t.get_ref())
+            .ok()
+            .filter(|&n| n >= 1 && n as usize <= MAX_RESPONSE)
+            .ok_or_else(|| {
+                ctx.invalid_at(
+                    &sub("taps"),
+                    Some(&at(t)),
+                    format!("an integer from 1 to {MAX_RESPONSE}"),
+                    t.get_ref().to_string(),
+                )
+            })?;
+        if kind == "moving_average" {
+            FilterKind::MovingAverage { taps }
+        } else {
+            FilterKind::Bartlett { taps }
+        }
+    } else {
+        let c = raw.cutoff.as_ref().ok_or_else(|| {
+            ctx.invalid(
+                &sub("cutoff"),
+                format!("the cutoff frequency for kind \"{kind}\", e.g. cutoff = \"25 Hz\""),
+                "nothing",
+            )
+        })?;
+        let cutoff_hz = ctx.positive(&sub("cutoff"), c, Quantity::Frequency)?;
+        if kind == "lowpass1" {
+            FilterKind::LowPass1 { cutoff_hz }
+        } else {
+            FilterKind::LowPass2 { cutoff_hz }
+        }
+    };
+    let decimation = match &raw.decimation {
+        None => 1,
+        Some(d) => u32::try_from(*d.get_ref())
+            .ok()
+            .filter(|&n| n >= 1)
+            .ok_or_else(|| {
+                ctx.invalid_at(
+                    &sub("decimation"),
+                    Some(&at(d)),
+                    "a whole number >= 1 (internal samples per output sample; 1: no decimation)",
+                    d.get_ref().to_string(),
+                )
+            })?,
+    };
+    OutputFilter::new(kind, decimation).map_err(|e| ctx.invalid(key, e.expected, e.to_string()))
 }
 
 /// `value` (SI) written in the unit of `like` (a config value such as "0.01 deg/h"), for messages.

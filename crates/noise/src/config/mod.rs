@@ -3,7 +3,7 @@
 //! ```toml
 //! name = "Xsens MTx"
 //! [temperature]                 # optional: constant 25 degC
-//! profile = "warmup"            # constant (value) | ramp (start, rate, end?) | warmup (start, end, time_constant) | sinusoid (mean, amplitude, period)
+//! profile = "warmup"            # constant (value) | ramp (start, rate, end?) | warmup (start, end, time_constant) | sinusoid (mean, amplitude, period) | step (start, end, at)
 //! start = "20 degC"
 //! end = "35 degC"
 //! time_constant = "600 s"
@@ -15,7 +15,15 @@
 //! ```
 //! Axis keys: `quantization`, `white_noise`, `bias_instability` (a table), `rate_random_walk`,
 //! `rate_ramp`, `gauss_markov = { sigma, time_constant }`, `sinusoidal = { amplitude, frequency, phase? }`,
-//! `temperature_bias`, `constant_bias`, `turn_on_bias`, `scale_factor`, `misalignment = [a, b]`.
+//! `temperature_bias`, `constant_bias`, `turn_on_bias`, `scale_factor`, `misalignment = [a, b]`,
+//! and the real-sensor effects of [`crate::filter`]:
+//! - `output_filter = { kind, taps | cutoff, decimation? }`: kind `"moving_average"` or `"bartlett"`
+//!   with `taps` (an integer, 1 to 8192), `"lowpass1"` or `"lowpass2"` with `cutoff` (a frequency);
+//!   `decimation` (integer >= 1, default 1) internal samples per output sample;
+//! - `outliers = { rate, size }`: `rate` in events per time (`"60 /h"`, `"2 /min"`, `"0.01 /s"`, or a
+//!   plain number per hour), `size` in the signal's unit;
+//! - `warmup_transient = { amplitude, time_constant, per_run? }` (`per_run`: amplitude drawn per run
+//!   from N(0, amplitude^2); default false).
 //!
 //! `bias_instability` states its convention (docs/architecture.md, Units):
 //! - `{ value, convention = "ieee" }`: value is the IEEE coefficient B (Allan plateau 0.664 B);
@@ -138,7 +146,7 @@ pub fn utf8_text(bytes: Vec<u8>, file: &str) -> Result<String, ConfigError> {
 }
 
 /// An example of each value-with-unit key, for errors about a value of the wrong shape.
-const KEY_EXAMPLES: [(&str, &str); 10] = [
+const KEY_EXAMPLES: [(&str, &str); 13] = [
     ("quantization", "quantization = \"0.001 deg\""),
     (
         "white_noise",
@@ -158,6 +166,18 @@ const KEY_EXAMPLES: [(&str, &str); 10] = [
     ("scale_factor", "scale_factor = \"0.1 %\""),
     ("misalignment", "misalignment = [\"0.1 deg\", \"0.1 deg\"]"),
     ("name", "name = \"My IMU\""),
+    (
+        "output_filter",
+        "output_filter = { kind = \"lowpass2\", cutoff = \"25 Hz\", decimation = 4 } or { kind = \"bartlett\", taps = 8 }",
+    ),
+    (
+        "outliers",
+        "outliers = { rate = \"60 /h\", size = \"1 deg/s\" }",
+    ),
+    (
+        "warmup_transient",
+        "warmup_transient = { amplitude = \"0.03 deg/s\", time_constant = \"600 s\", per_run = false }",
+    ),
 ];
 
 /// A TOML error about a value of the wrong shape, with the accepted form and an example added:
@@ -165,6 +185,11 @@ const KEY_EXAMPLES: [(&str, &str); 10] = [
 fn with_shape_hint(message: &str) -> String {
     if message.contains("missing field `name`") {
         return format!("{message}\n  a sensor file starts with its name, e.g. name = \"My IMU\"");
+    }
+    if message.contains("expected i64") {
+        return format!(
+            "{message}\n  counts (taps, decimation, per_decade) are whole numbers without quotes, e.g. output_filter = {{ kind = \"bartlett\", taps = 8, decimation = 4 }}"
+        );
     }
     if !message.contains("expected a string") {
         return message.to_string();

@@ -28,6 +28,7 @@ pub(super) struct RawTemperature {
     pub(super) mean: Option<Text>,
     pub(super) amplitude: Option<Text>,
     pub(super) period: Option<Text>,
+    pub(super) at: Option<Text>,
 }
 
 #[derive(Deserialize, Default)]
@@ -54,6 +55,9 @@ pub(super) struct RawAxis {
     pub(super) turn_on_bias: Option<Text>,
     pub(super) scale_factor: Option<Text>,
     pub(super) misalignment: Option<Vec<Text>>,
+    pub(super) output_filter: Option<RawOutputFilter>,
+    pub(super) outliers: Option<RawOutliers>,
+    pub(super) warmup_transient: Option<RawWarmupTransient>,
 }
 
 /// What `bias_instability` may be: a value with a unit (the Allan-deviation minimum, as spec
@@ -134,4 +138,31 @@ pub(super) struct RawSinusoid {
     pub(super) amplitude: Text,
     pub(super) frequency: Text,
     pub(super) phase: Option<Text>,
+}
+
+/// A whole number with its place in the file.
+pub(super) type Integer = toml::Spanned<i64>;
+
+#[derive(Deserialize, Clone)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawOutputFilter {
+    pub(super) kind: Text,
+    pub(super) taps: Option<Integer>,
+    pub(super) cutoff: Option<Text>,
+    pub(super) decimation: Option<Integer>,
+}
+
+#[derive(Deserialize, Clone)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawOutliers {
+    pub(super) rate: Text,
+    pub(super) size: Text,
+}
+
+#[derive(Deserialize, Clone)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawWarmupTransient {
+    pub(super) amplitude: Text,
+    pub(super) time_constant: Text,
+    pub(super) per_run: Option<bool>,
 }

@@ -3,6 +3,7 @@
 use super::allan_minimum::model_adev_minimum;
 use super::*;
 use crate::closed_form as cf;
+use crate::filter::{FilterKind, Outliers, OutputFilter, WarmupTransient};
 
 const BASIC: &str = r#"
 name = "test"
@@ -63,21 +64,105 @@ constant_bias = "-0.3 deg/s"
 turn_on_bias = "3 deg/s"
 scale_factor = "300 ppm"
 misalignment = ["0.5 mrad", "-1 mrad"]
+output_filter = { kind = "lowpass2", cutoff = "25 Hz", decimation = 4 }
+outliers = { rate = "60 /h", size = "0.02 rad/s" }
+warmup_transient = { amplitude = "5e-4 rad/s", time_constant = "10 min", per_run = true }
+[accel.x]
+output_filter = { kind = "moving_average", taps = 5 }
+outliers = { rate = "3", size = "1.3 mg" }
+[accel.y]
+output_filter = { kind = "lowpass1", cutoff = "0.7 kHz", decimation = 3 }
+outliers = { rate = "0.013 /s", size = "0.3 m/s^2" }
 [accel.z]
 white_noise = "40 ug/sqrt(Hz)"
 bias_instability = { model = "random_walk", stability = "36 ug", period = "800 s" }
 sinusoidal = { amplitude = "1 mg", frequency = "2 Hz" }
+output_filter = { kind = "bartlett", taps = 8, decimation = 8 }
+outliers = { rate = "0.7 /min", size = "0.5 mg" }
+warmup_transient = { amplitude = "-2 mg", time_constant = "600 s" }
 "#;
     let m = SensorModel::from_toml_str(text, "full.toml").unwrap();
     let back = SensorModel::from_toml_str(&m.to_toml_string(), "written.toml").unwrap();
     assert_eq!(m, back);
+    // The real-sensor effects as read.
+    let g = &m.gyro.axes[1];
+    assert_eq!(
+        g.output_filter,
+        Some(OutputFilter {
+            kind: FilterKind::LowPass2 { cutoff_hz: 25.0 },
+            decimation: 4
+        })
+    );
+    assert_eq!(
+        g.outliers,
+        Some(Outliers {
+            rate_per_hour: 60.0,
+            size: 0.02
+        })
+    );
+    assert_eq!(
+        g.warmup_transient,
+        Some(WarmupTransient {
+            amplitude: 5e-4,
+            tau_s: 600.0,
+            per_run: true
+        })
+    );
+    let [ax, ay, az] = &m.accel.axes;
+    assert_eq!(
+        ax.output_filter,
+        Some(OutputFilter {
+            kind: FilterKind::MovingAverage { taps: 5 },
+            decimation: 1
+        })
+    );
+    assert_eq!(ax.outliers.unwrap().rate_per_hour, 3.0);
+    assert_eq!(
+        ay.output_filter.unwrap().kind,
+        FilterKind::LowPass1 { cutoff_hz: 700.0 }
+    );
+    assert!((ay.outliers.unwrap().rate_per_hour / (0.013 * 3600.0) - 1.0).abs() < 1e-15);
+    assert!((az.outliers.unwrap().rate_per_hour / 42.0 - 1.0).abs() < 1e-15);
+    assert!(
+        (az.outliers.unwrap().size / (0.5e-3 * crate::units::STANDARD_GRAVITY_MPS2) - 1.0).abs()
+            < 1e-15
+    );
+    assert_eq!(
+        az.output_filter,
+        Some(OutputFilter {
+            kind: FilterKind::Bartlett { taps: 8 },
+            decimation: 8
+        })
+    );
+    let w = az.warmup_transient.unwrap();
+    assert!(w.amplitude < 0.0 && w.tau_s == 600.0 && !w.per_run);
+    // Every new term written back, bit for bit, on every axis it is on.
+    let written = m.to_toml_string();
+    assert_eq!(written.matches("output_filter = ").count(), 6, "{written}");
+    assert_eq!(written.matches("outliers = ").count(), 6, "{written}");
+    assert_eq!(
+        written.matches("warmup_transient = ").count(),
+        4,
+        "{written}"
+    );
     for profile in [
         "profile = \"constant\"\nvalue = \"21 degC\"",
         "profile = \"warmup\"\nstart = \"20 degC\"\nend = \"35 degC\"\ntime_constant = \"10 min\"",
         "profile = \"sinusoid\"\nmean = \"25 degC\"\namplitude = \"2 degC\"\nperiod = \"1 h\"",
+        "profile = \"step\"\nstart = \"20 degC\"\nend = \"31.5 degC\"\nat = \"15 min\"",
     ] {
         let text = format!("name = \"t\"\n[temperature]\n{profile}\n");
         let m = SensorModel::from_toml_str(&text, "t.toml").unwrap();
+        if profile.contains("step") {
+            assert_eq!(
+                m.temperature,
+                TemperatureProfile::Step {
+                    before_c: 20.0,
+                    after_c: 31.5,
+                    at_s: 900.0
+                }
+            );
+        }
         assert_eq!(
             SensorModel::from_toml_str(&m.to_toml_string(), "w").unwrap(),
             m
@@ -145,6 +230,148 @@ fn bad_configs_name_file_key_and_expectation() {
 }
 
 #[test]
+fn bad_real_sensor_effects_name_the_key() {
+    let axis = |line: &str| err(&format!("name = \"b\"\n[gyro.x]\n{line}\n"));
+    let e = axis("output_filter = { kind = \"boxcar\", taps = 4 }");
+    assert!(
+        e.starts_with("bad.toml:3: key `gyro.x.output_filter.kind`")
+            && e.contains("moving_average")
+            && e.contains("\"boxcar\""),
+        "{e}"
+    );
+    let e = axis("output_filter = { kind = \"bartlett\" }");
+    assert!(
+        e.contains("gyro.x.output_filter.taps") && e.contains("taps = 8"),
+        "{e}"
+    );
+    let e = axis("output_filter = { kind = \"bartlett\", taps = 8, cutoff = \"25 Hz\" }");
+    assert!(
+        e.starts_with("bad.toml:3: key `gyro.x.output_filter.cutoff`")
+            && e.contains("only `taps`")
+            && e.contains("extra key"),
+        "{e}"
+    );
+    let e = axis("output_filter = { kind = \"lowpass1\", cutoff = \"25 Hz\", taps = 8 }");
+    assert!(
+        e.contains("gyro.x.output_filter.taps") && e.contains("only `cutoff`"),
+        "{e}"
+    );
+    let e = axis("output_filter = { kind = \"lowpass2\" }");
+    assert!(
+        e.contains("gyro.x.output_filter.cutoff") && e.contains("Hz"),
+        "{e}"
+    );
+    let e = axis("output_filter = { kind = \"lowpass2\", cutoff = \"0 Hz\" }");
+    assert!(
+        e.contains("gyro.x.output_filter.cutoff") && e.contains("> 0"),
+        "{e}"
+    );
+    let e = axis("output_filter = { kind = \"lowpass2\", cutoff = \"25 s\" }");
+    assert!(
+        e.contains("gyro.x.output_filter.cutoff") && e.contains("Hz"),
+        "{e}"
+    );
+    let e = axis("output_filter = { kind = \"moving_average\", taps = 4, decimation = 0 }");
+    assert!(
+        e.starts_with("bad.toml:3: key `gyro.x.output_filter.decimation`")
+            && e.contains(">= 1")
+            && e.ends_with("found 0"),
+        "{e}"
+    );
+    for taps in ["0", "-3", "9000"] {
+        let e = axis(&format!(
+            "output_filter = {{ kind = \"moving_average\", taps = {taps} }}"
+        ));
+        assert!(
+            e.contains("gyro.x.output_filter.taps") && e.contains("1 to 8192"),
+            "{e}"
+        );
+    }
+    // Wrong types and unknown keys: serde's message, with the key and line.
+    let e = axis("output_filter = { kind = \"bartlett\", taps = \"8\" }");
+    assert!(
+        e.contains("line 3") && e.contains("whole numbers without quotes"),
+        "{e}"
+    );
+    let e = axis("output_filter = { kind = \"bartlett\", taps = 8, order = 2 }");
+    assert!(e.contains("line 3") && e.contains("order"), "{e}");
+    let e = axis("outliers = { rate = \"60 deg\", size = \"1 deg/s\" }");
+    assert!(
+        e.contains("gyro.x.outliers.rate") && e.contains("\"60 /h\""),
+        "{e}"
+    );
+    let e = axis("outliers = { rate = \"-1 /h\", size = \"1 deg/s\" }");
+    assert!(
+        e.contains("gyro.x.outliers.rate") && e.contains(">= 0"),
+        "{e}"
+    );
+    let e = axis("outliers = { rate = \"1 /h\", size = \"1 mg\" }");
+    assert!(
+        e.contains("gyro.x.outliers.size") && e.contains("rad/s"),
+        "{e}"
+    );
+    let e = axis("outliers = { rate = \"1 /h\" }");
+    assert!(e.contains("line 3") && e.contains("size"), "{e}");
+    let e = axis("outliers = { rate = 60, size = \"1 deg/s\" }");
+    assert!(e.contains("outliers = { rate = \"60 /h\""), "{e}");
+    let e = axis("warmup_transient = { amplitude = \"1 deg/s\", time_constant = \"0 s\" }");
+    assert!(
+        e.contains("gyro.x.warmup_transient.time_constant") && e.contains("> 0"),
+        "{e}"
+    );
+    let e = axis("warmup_transient = { amplitude = \"1 deg/s\", time_constant = \"1 s\", per_run = \"yes\" }");
+    assert!(e.contains("line 3") && e.contains("bool"), "{e}");
+    let e = err(
+        "name = \"b\"\n[temperature]\nprofile = \"step\"\nstart = \"20 degC\"\nend = \"30 degC\"\n",
+    );
+    assert!(
+        e.contains("temperature.at") && e.contains("start, end, at"),
+        "{e}"
+    );
+    let e = err("name = \"b\"\n[temperature]\nprofile = \"step\"\nstart = \"20 degC\"\nend = \"30 degC\"\nat = \"-1 s\"\n");
+    assert!(e.starts_with("bad.toml:6: key `temperature.at`"), "{e}");
+    let e = err("name = \"b\"\n[temperature]\nprofile = \"warmup\"\nstart = \"20 degC\"\nend = \"30 degC\"\ntime_constant = \"1 s\"\nat = \"1 s\"\n");
+    assert!(
+        e.contains("temperature.at") && e.contains("extra key"),
+        "{e}"
+    );
+    let e = err("name = \"b\"\n[temperature]\nprofile = \"stair\"\n");
+    assert!(e.contains("\"step\""), "{e}");
+}
+
+#[test]
+fn outlier_rates_in_any_time_unit() {
+    let rate = |text: &str| {
+        SensorModel::from_toml_str(
+            &format!("name = \"r\"\n[gyro.all]\noutliers = {{ rate = \"{text}\", size = \"1 deg/s\" }}\n"),
+            "r.toml",
+        )
+        .unwrap()
+        .gyro
+        .axes[0]
+            .outliers
+            .unwrap()
+            .rate_per_hour
+    };
+    for (text, per_hour) in [
+        ("60 /h", 60.0),
+        ("60/h", 60.0),
+        ("60 1/h", 60.0),
+        ("60 /hr", 60.0),
+        ("60", 60.0),
+        ("1 /min", 60.0),
+        ("0.5 /s", 1800.0),
+        ("0.5 Hz", 1800.0),
+        ("2 h^-1", 2.0),
+    ] {
+        let r = rate(text);
+        assert!((r / per_hour - 1.0).abs() < 1e-14, "{text}: {r}");
+    }
+    // A rate per hour keeps its bits.
+    assert_eq!(rate("0.1 /h").to_bits(), 0.1f64.to_bits());
+}
+
+#[test]
 fn a_plain_bias_instability_is_the_allan_minimum_as_spec_sheets_quote_it() {
     let plain = "name = \"p\"\n[gyro.all]\nwhite_noise = \"0.05 deg/s/rtHz\"\nbias_instability = \"20 deg/h\"\n";
     let table = "name = \"p\"\n[gyro.all]\nwhite_noise = \"0.05 deg/s/sqrt(Hz)\"\nbias_instability = { value = \"20 deg/h\", convention = \"allan_minimum\" }\n";
@@ -187,8 +414,13 @@ name = "styled"
 [gyro.all]
 white_noise = "0.05 deg/s/sqrt(Hz)"
 bias_instability = { value = "0.007 deg/s", convention = "allan_minimum" }
+output_filter = { kind = "lowpass2", cutoff = "40 Hz", decimation = 10 }
+outliers = { rate = "12 /h", size = "2 deg/s" }
 [accel.x]
 white_noise = "0.5 mg/sqrt(Hz)"
+warmup_transient = { amplitude = "3 mg", time_constant = "5 min", per_run = true }
+[accel.y]
+output_filter = { kind = "bartlett", taps = 16 }
 "#;
     let m = SensorModel::from_toml_str(text, "styled.toml").unwrap();
     let styled = m.to_toml_string_styled(&UnitStyle::from_config_text(text));
@@ -201,10 +433,35 @@ white_noise = "0.5 mg/sqrt(Hz)"
         "{styled}"
     );
     assert!(
-        !styled.contains("[accel.y]") && !styled.contains("[temperature]"),
+        !styled.contains("[accel.z]") && !styled.contains("[temperature]"),
+        "{styled}"
+    );
+    assert!(
+        styled.contains("cutoff = \"40 Hz\"")
+            && styled.contains("rate = \"12 /h\"")
+            && styled.contains("size = \"2 deg/s\"")
+            && styled.contains("per_run = true")
+            && styled.contains("kind = \"bartlett\", taps = 16, decimation = 1"),
         "{styled}"
     );
     let back = SensorModel::from_toml_str(&styled, "back.toml").unwrap();
+    // Exact where five digits are exact: integers, round values.
+    for i in 0..3 {
+        assert_eq!(
+            back.gyro.axes[i].output_filter,
+            m.gyro.axes[i].output_filter
+        );
+        assert_eq!(back.gyro.axes[i].outliers, m.gyro.axes[i].outliers);
+    }
+    assert_eq!(
+        back.accel.axes[1].output_filter,
+        m.accel.axes[1].output_filter
+    );
+    let (wb, wm) = (
+        back.accel.axes[0].warmup_transient.unwrap(),
+        m.accel.axes[0].warmup_transient.unwrap(),
+    );
+    assert!(wb.per_run && wb.tau_s == wm.tau_s && (wb.amplitude / wm.amplitude - 1.0).abs() < 5e-5);
     let rel = |a: f64, b: f64| (a / b - 1.0).abs();
     for (a, b) in m.gyro.axes.iter().zip(&back.gyro.axes) {
         assert!(rel(a.white_noise.unwrap(), b.white_noise.unwrap()) < 5e-5);

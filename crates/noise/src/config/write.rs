@@ -2,6 +2,7 @@
 
 use super::signal_of;
 use crate::effect::Sensor;
+use crate::filter::FilterKind;
 use crate::model::*;
 use crate::units::{format_si, Quantity, Signal};
 use std::fmt::Write as _;
@@ -102,15 +103,18 @@ fn toml_str(text: &str) -> String {
 }
 
 fn write_axis(s: &mut String, a: &AxisModel, sig: Signal) {
-    write_axis_with(s, a, sig, &format_si);
+    // `{:?}`: the shortest text that parses back to the same bits.
+    write_axis_with(s, a, sig, &format_si, &|v| format!("{v:?}"));
 }
 
-/// The keys of one axis, each value written by `format_si` (value, quantity) -> "value unit".
+/// The keys of one axis, each value written by `format_si` (value, quantity) -> "value unit",
+/// plain numbers (the outlier rate per hour) by `number`.
 fn write_axis_with(
     s: &mut String,
     a: &AxisModel,
     sig: Signal,
     format_si: &dyn Fn(f64, Quantity) -> String,
+    number: &dyn Fn(f64) -> String,
 ) {
     let mut line = |key: &str, v: f64, q: Quantity| {
         let _ = writeln!(s, "{key} = \"{}\"", format_si(v, q));
@@ -183,6 +187,39 @@ fn write_axis_with(
             format_si(w.frequency_hz, Quantity::Frequency)
         );
     }
+    if let Some(f) = a.output_filter {
+        let parameter = match f.kind {
+            FilterKind::MovingAverage { taps } | FilterKind::Bartlett { taps } => {
+                format!("taps = {taps}")
+            }
+            FilterKind::LowPass1 { cutoff_hz } | FilterKind::LowPass2 { cutoff_hz } => {
+                format!("cutoff = \"{}\"", format_si(cutoff_hz, Quantity::Frequency))
+            }
+        };
+        let _ = writeln!(
+            s,
+            "output_filter = {{ kind = \"{}\", {parameter}, decimation = {} }}",
+            f.kind.name(),
+            f.decimation
+        );
+    }
+    if let Some(o) = a.outliers {
+        let _ = writeln!(
+            s,
+            "outliers = {{ rate = \"{} /h\", size = \"{}\" }}",
+            number(o.rate_per_hour),
+            format_si(o.size, Quantity::Signal(sig))
+        );
+    }
+    if let Some(w) = a.warmup_transient {
+        let _ = writeln!(
+            s,
+            "warmup_transient = {{ amplitude = \"{}\", time_constant = \"{}\", per_run = {} }}",
+            format_si(w.amplitude, Quantity::Signal(sig)),
+            format_si(w.tau_s, Quantity::Time),
+            w.per_run
+        );
+    }
     if let Some([m1, m2]) = a.misalignment {
         let _ = writeln!(
             s,
@@ -232,9 +269,8 @@ impl UnitStyle {
                         "rate_random_walk" => Quantity::RandomWalk(sig),
                         "rate_ramp" => Quantity::Ramp(sig),
                         "temperature_bias" => Quantity::PerDegree(sig),
-                        "constant_bias" | "turn_on_bias" | "bias_instability" => {
-                            Quantity::Signal(sig)
-                        }
+                        "constant_bias" | "turn_on_bias" | "bias_instability" | "outliers"
+                        | "warmup_transient" | "output_filter" => Quantity::Signal(sig),
                         "scale_factor" => Quantity::Ratio,
                         "misalignment" => {
                             if let Some(first) = v.as_array().and_then(|a| a.first()) {
@@ -249,11 +285,11 @@ impl UnitStyle {
                         Some(t) => {
                             for (k, inner) in t {
                                 match k.as_str() {
-                                    "value" | "sigma" | "amplitude" | "stability" => {
+                                    "value" | "sigma" | "amplitude" | "stability" | "size" => {
                                         note(Quantity::Signal(sig), inner)
                                     }
                                     "time_constant" | "period" => note(Quantity::Time, inner),
-                                    "frequency" => note(Quantity::Frequency, inner),
+                                    "frequency" | "cutoff" => note(Quantity::Frequency, inner),
                                     _ => {}
                                 }
                             }
@@ -346,14 +382,14 @@ impl SensorModel {
             if axes[0] == axes[1] && axes[1] == axes[2] {
                 if axes[0] != AxisModel::default() {
                     let _ = writeln!(s, "\n[{}.all]", sensor.name());
-                    write_axis_with(&mut s, &axes[0], sig, &f);
+                    write_axis_with(&mut s, &axes[0], sig, &f, &sig5);
                 }
                 continue;
             }
             for (axis, name) in axes.iter().zip(AXIS_NAMES) {
                 if *axis != AxisModel::default() {
                     let _ = writeln!(s, "\n[{}.{}]", sensor.name(), name);
-                    write_axis_with(&mut s, axis, sig, &f);
+                    write_axis_with(&mut s, axis, sig, &f, &sig5);
                 }
             }
         }
