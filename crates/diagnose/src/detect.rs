@@ -265,10 +265,16 @@ pub struct Regression {
     pub corrected: Vec<f64>,
 }
 
-/// Regress `x` on `g` and give the coefficient's standard error under the residual's coloured noise.
-pub fn regression(x: &[f64], g: &[f64], dt_s: f64) -> Option<Regression> {
+/// Regress `x` on `g` and give the coefficient's standard error under the residual's coloured noise:
+/// each level the larger of the one fitted to the residual and `floor` (the sensor model's own).
+pub fn regression(x: &[f64], g: &[f64], dt_s: f64, floor: &NoiseLevels) -> Option<Regression> {
     let (c, w, resid) = regress(x, g)?;
-    let levels = noise_levels(&resid, dt_s);
+    let fitted = noise_levels(&resid, dt_s);
+    let levels = NoiseLevels {
+        n: fitted.n.max(floor.n),
+        b: fitted.b.max(floor.b),
+        k: fitted.k.max(floor.k),
+    };
     let sd = coloured_variance(&w, dt_s, &levels).max(0.0).sqrt();
     let gm = g.iter().sum::<f64>() / g.len() as f64;
     let corrected = x.iter().zip(g).map(|(xi, gi)| xi - c * (gi - gm)).collect();
@@ -281,8 +287,9 @@ pub fn regression(x: &[f64], g: &[f64], dt_s: f64) -> Option<Regression> {
 }
 
 /// |z| a temperature coefficient must exceed: two-sided 1e-3 per channel under Gaussian errors
-/// (3.29), raised to 4 because the standard error itself comes from fitted noise levels.
-pub const TEMPERATURE_Z: f64 = 4.0;
+/// (3.29), raised to 5 because the standard error itself comes from noise levels fitted to one log
+/// (at 4, one channel of 24 clean 22-minute logs with a recorded warm-up named a temperature effect).
+pub const TEMPERATURE_Z: f64 = 5.0;
 
 /// A fitted warm-up transient.
 #[derive(Clone, Debug)]
@@ -302,7 +309,7 @@ pub const TRANSIENT_Z: f64 = 5.0;
 /// Fit A e^{-t/tau} + const by least squares over time constants from 20 samples to a third of the
 /// log (40 per decade... log-spaced, then golden-section refined in ln tau), the amplitude's standard
 /// error from the residual's coloured noise. Returns the best fit whatever its z.
-pub fn fit_transient(x: &[f64], dt_s: f64) -> Option<Transient> {
+pub fn fit_transient(x: &[f64], dt_s: f64, floor: &NoiseLevels) -> Option<Transient> {
     let n = x.len();
     let t_log = n as f64 * dt_s;
     let (lo, hi) = (20.0 * dt_s, t_log / 3.0);
@@ -358,7 +365,7 @@ pub fn fit_transient(x: &[f64], dt_s: f64) -> Option<Transient> {
     }
     let tau = (0.5 * (a + b)).exp();
     let g: Vec<f64> = (0..n).map(|k| (-(k as f64) * dt_s / tau).exp()).collect();
-    let reg = regression(x, &g, dt_s)?;
+    let reg = regression(x, &g, dt_s, floor)?;
     Some(Transient {
         amplitude: reg.coefficient,
         tau_s: tau,
@@ -475,6 +482,7 @@ pub fn preprocess(
     channels: [Option<&[f64]>; 6],
     temperature_c: Option<&[f64]>,
     dt_s: f64,
+    floors: &[NoiseLevels; 6],
 ) -> Preprocessed {
     let mut out: [Option<Vec<f64>>; 6] = Default::default();
     let mut findings: [Vec<Finding>; 6] = Default::default();
@@ -516,7 +524,7 @@ pub fn preprocess(
             });
         }
         if let Some(t) = temperature_c {
-            if let Some(reg) = regression(&x, t, dt_s) {
+            if let Some(reg) = regression(&x, t, dt_s, &floors[c]) {
                 if reg.z.abs() > TEMPERATURE_Z {
                     let c1 = reg.coefficient;
                     findings[c].push(Finding {
@@ -533,7 +541,7 @@ pub fn preprocess(
                 }
             }
         }
-        if let Some(tr) = fit_transient(&x, dt_s) {
+        if let Some(tr) = fit_transient(&x, dt_s, &floors[c]) {
             if tr.z.abs() > TRANSIENT_Z {
                 let sd = (tr.amplitude / tr.z).abs();
                 findings[c].push(Finding {
@@ -562,4 +570,26 @@ pub fn preprocess(
         channels: out,
         findings,
     }
+}
+
+/// The noise levels of the sensor model's channels (white, flicker B, rate random walk K; a Woodman
+/// bias random walk counts as K), the floor of the regressions' coloured-noise levels.
+pub fn model_levels(model: &noise::SensorModel) -> [NoiseLevels; 6] {
+    std::array::from_fn(|c| {
+        let (sensor, axis) = crate::model_terms::channel_axis(c);
+        let a = model.axis(sensor, axis);
+        let (b, k_bi) = match &a.bias_instability {
+            Some(noise::BiasInstability::Flicker(f)) => (f.b, 0.0),
+            Some(noise::BiasInstability::RandomWalk {
+                stability,
+                period_s,
+            }) => (0.0, stability / period_s.sqrt()),
+            None => (0.0, 0.0),
+        };
+        NoiseLevels {
+            n: a.white_noise.unwrap_or(0.0),
+            b,
+            k: a.rate_random_walk.unwrap_or(0.0).hypot(k_bi),
+        }
+    })
 }

@@ -306,7 +306,12 @@ impl Diagnosis {
             });
         }
         // The same time-domain corrections as the diagnosed log (outliers, temperature, transient).
-        let pre = crate::detect::preprocess(log.channels, log.temperature_c, log.dt_s);
+        let pre = crate::detect::preprocess(
+            log.channels,
+            log.temperature_c,
+            log.dt_s,
+            &crate::detect::model_levels(&self.model_final),
+        );
         let corrected = LogInput {
             dt_s: log.dt_s,
             channels: std::array::from_fn(|c| pre.channels[c].as_deref()),

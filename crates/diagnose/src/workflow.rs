@@ -34,7 +34,12 @@ pub fn diagnose_with_progress(
     let active: [bool; 6] = std::array::from_fn(|c| log.channels[c].is_some());
     let raw_log = log;
     // Step 0: time-domain detectors (`detect`); the Allan analysis sees the corrected channels.
-    let pre = crate::detect::preprocess(log.channels, log.temperature_c, log.dt_s);
+    let pre = crate::detect::preprocess(
+        log.channels,
+        log.temperature_c,
+        log.dt_s,
+        &crate::detect::model_levels(model),
+    );
     let corrected = LogInput {
         dt_s: log.dt_s,
         channels: std::array::from_fn(|c| pre.channels[c].as_deref()),

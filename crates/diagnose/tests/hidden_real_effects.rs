@@ -1,0 +1,301 @@
+//! Hidden real-sensor effects: a log is generated from the base model plus one hidden effect on one
+//! or two random channels, with its parameters drawn at random in the stated ranges, and diagnosed
+//! with the base model. The effect must be named on exactly those channels, parameters within 25 %
+//! (for a filter: its one-sided noise bandwidth), and the final gap at most 1.5 and at most a third
+//! of the initial one (only <= 1.5 when the effect was faint: initial gap below 3). Clean logs must
+//! name nothing.
+//!
+//! Logs: 2^17 samples at 100 Hz (1311 s). Base model: white noise and flicker (the hidden-effect
+//! suite's base: gyro N = 1e-4 rad/s/sqrt(Hz), B = 2e-5 rad/s; accel N = 1e-3, B = 2e-4).
+
+use diagnose::drift::CHANNELS;
+use diagnose::model_terms::channel_axis;
+use diagnose::simulate::{static_log, SimSetup};
+use diagnose::{diagnose, Diagnosis, LogInput, Settings};
+use noise::{
+    BiasInstability, Effect, FilterKind, Flicker, ImuErrors, Outliers, OutputFilter, SensorModel,
+    TemperatureProfile, Term, WarmupTransient,
+};
+use rand::{Rng, SeedableRng};
+use rand_xoshiro::Xoshiro256PlusPlus;
+
+const DT_S: f64 = 0.01;
+const SAMPLES: usize = 1 << 17;
+const SEEDS: usize = 12;
+
+fn base_model() -> SensorModel {
+    let mut m = SensorModel {
+        name: "base".into(),
+        ..Default::default()
+    };
+    for ch in 0..6 {
+        let (n, b) = if ch < 3 { (1e-4, 2e-5) } else { (1e-3, 2e-4) };
+        let (sensor, axis) = channel_axis(ch);
+        let a = m.axis_mut(sensor, axis);
+        a.white_noise = Some(n);
+        a.bias_instability = Some(BiasInstability::Flicker(Flicker::with_b(b)));
+    }
+    m
+}
+
+fn log_uniform(rng: &mut Xoshiro256PlusPlus, lo: f64, hi: f64) -> f64 {
+    (rng.gen::<f64>() * (hi / lo).ln()).exp() * lo
+}
+
+/// White-noise standard deviation per sample of channel `ch` in the base model.
+fn sigma(ch: usize) -> f64 {
+    (if ch < 3 { 1e-4 } else { 1e-3 }) / DT_S.sqrt()
+}
+
+/// The hidden term for channel `ch`, drawn in the stated ranges.
+fn draw(kind: &str, ch: usize, rng: &mut Xoshiro256PlusPlus) -> Term {
+    match kind {
+        // Moving average of 3..8 taps at the output rate.
+        "moving_average" => Term::OutputFilter(
+            OutputFilter::new(
+                FilterKind::MovingAverage {
+                    taps: rng.gen_range(3..=8),
+                },
+                1,
+            )
+            .unwrap(),
+        ),
+        // Second-order low-pass, cutoff 4..15 Hz at an internal 400 Hz, decimated by 4.
+        "lowpass2" => Term::OutputFilter(
+            OutputFilter::new(
+                FilterKind::LowPass2 {
+                    cutoff_hz: log_uniform(rng, 4.0, 15.0),
+                },
+                4,
+            )
+            .unwrap(),
+        ),
+        // 200..1000 spikes per hour of 15..40 sigma.
+        "outliers" => Term::Outliers(Outliers {
+            rate_per_hour: log_uniform(rng, 200.0, 1000.0),
+            size: log_uniform(rng, 15.0, 40.0) * sigma(ch),
+        }),
+        // Settling from 0.3..1 sigma per sample (gyro 3e-4..1e-3 rad/s) with 60..300 s.
+        "transient" => Term::WarmupTransient(WarmupTransient {
+            amplitude: log_uniform(rng, 0.3, 1.0) * sigma(ch) * if rng.gen() { 1.0 } else { -1.0 },
+            tau_s: log_uniform(rng, 60.0, 300.0),
+            per_run: false,
+        }),
+        // Temperature coefficient such that the 15 degC excursion moves the bias by 0.3..1 sigma.
+        "warmup" | "cycling" => Term::TemperatureBias(
+            log_uniform(rng, 0.3, 1.0) * sigma(ch) / 15.0 * if rng.gen() { 1.0 } else { -1.0 },
+        ),
+        _ => unreachable!(),
+    }
+}
+
+fn profile(kind: &str) -> Option<TemperatureProfile> {
+    match kind {
+        // 15 degC warm-up with a 400 s time constant.
+        "warmup" => Some(TemperatureProfile::Warmup {
+            start_c: 20.0,
+            end_c: 35.0,
+            time_constant_s: 400.0,
+        }),
+        // Cycling 25 +- 7.5 degC, period 300 s.
+        "cycling" => Some(TemperatureProfile::Sinusoid {
+            mean_c: 25.0,
+            amplitude_c: 7.5,
+            period_s: 300.0,
+        }),
+        _ => None,
+    }
+}
+
+fn run(model: &SensorModel, seed: u64) -> Diagnosis {
+    let setup = SimSetup {
+        dt_s: DT_S,
+        samples: SAMPLES,
+        grid_m: vec![],
+        active: [true; 6],
+        horizons_s: vec![60.0],
+        temperature_c: None,
+        temp_coeff: [0.0; 6],
+    };
+    let log = static_log(model, &setup, seed, 0);
+    let temp: Vec<f64> = {
+        let errors = ImuErrors::new(model, DT_S, seed, 0);
+        (0..SAMPLES as u64)
+            .map(|k| errors.temperature_c(k))
+            .collect()
+    };
+    let varies = temp.iter().any(|&t| t != temp[0]);
+    let input = LogInput {
+        dt_s: DT_S,
+        channels: std::array::from_fn(|c| Some(log[c].as_slice())),
+        temperature_c: varies.then_some(temp.as_slice()),
+    };
+    let settings = Settings {
+        seeds: SEEDS,
+        horizons_s: vec![60.0],
+        ..Settings::default()
+    };
+    diagnose(&input, &base_model(), &settings).expect("diagnose runs")
+}
+
+/// The parameter the test checks, truth and found.
+fn key_values(term: &Term, found: &diagnose::report::FoundEffect) -> Vec<(&'static str, f64, f64)> {
+    match term {
+        Term::OutputFilter(f) => vec![(
+            "noise_bandwidth_hz",
+            f.noise_bandwidth_hz(DT_S),
+            found.parameters["noise_bandwidth_hz"],
+        )],
+        Term::Outliers(o) => vec![
+            (
+                "rate_per_hour",
+                o.rate_per_hour,
+                found.parameters["rate_per_hour"],
+            ),
+            ("size", o.size, found.parameters["size"]),
+        ],
+        Term::WarmupTransient(w) => vec![
+            ("amplitude", w.amplitude, found.parameters["amplitude"]),
+            ("tau_s", w.tau_s, found.parameters["tau_s"]),
+        ],
+        Term::TemperatureBias(c) => vec![("coefficient", *c, found.parameters["coefficient"])],
+        _ => vec![],
+    }
+}
+
+fn trial(kind: &str, t: u64) -> Result<(), String> {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(0x5EA1 + 131 * t + kind.len() as u64 * 7919);
+    let mut model = base_model();
+    if let Some(p) = profile(kind) {
+        model.temperature = p;
+        model.temperature_reference_c = 25.0;
+    }
+    let first = rng.gen_range(0..6);
+    let mut channels = vec![first];
+    if rng.gen::<bool>() {
+        channels.push((first + rng.gen_range(1..6)) % 6);
+    }
+    let mut truth = Vec::new();
+    for &c in &channels {
+        let term = draw(kind, c, &mut rng);
+        let (sensor, axis) = channel_axis(c);
+        model.axis_mut(sensor, axis).set_term(term.clone());
+        truth.push((c, term));
+    }
+    let result = run(&model, 4000 + t);
+    let mut problems = Vec::new();
+    for (c, name) in CHANNELS.iter().enumerate() {
+        let report = &result.channels[*name];
+        let named: Vec<&str> = report.effects.iter().map(|e| e.effect.name()).collect();
+        match truth.iter().find(|(h, _)| *h == c) {
+            None => {
+                if !named.is_empty() {
+                    problems.push(format!("{name}: named {named:?} without a hidden effect"));
+                }
+            }
+            Some((_, term)) => {
+                let effect = term.effect();
+                let Some(found) = report.effects.iter().find(|e| e.effect == effect) else {
+                    problems.push(format!(
+                        "{name}: hidden {term:?} not named (named {named:?})"
+                    ));
+                    continue;
+                };
+                let others: Vec<&&str> = named.iter().filter(|n| **n != effect.name()).collect();
+                // A filter is fitted with the white-noise level; nothing else may be named.
+                if !others.is_empty() {
+                    problems.push(format!("{name}: also named {others:?}"));
+                }
+                for (key, t, v) in key_values(term, found) {
+                    eprintln!(
+                        "{kind} {name} {key}: {v:.4e} truth {t:.4e} ({:+.1} %), gap {:.2} -> {:.2}",
+                        100.0 * (v / t - 1.0),
+                        report.gap_initial,
+                        report.gap_final
+                    );
+                    if (v / t - 1.0).abs() > 0.25 {
+                        problems.push(format!("{name}: {key} = {v:.4e}, truth {t:.4e}"));
+                    }
+                }
+                // Faint: the effect barely shows in the Allan curve (initial gap below 3); then the
+                // final gap need only be <= 1.5.
+                let faint = report.gap_initial < 3.0;
+                if !(report.gap_final <= 1.5
+                    && (faint || report.gap_final <= report.gap_initial / 3.0))
+                {
+                    problems.push(format!(
+                        "{name}: gap {:.2} -> {:.2}",
+                        report.gap_initial, report.gap_final
+                    ));
+                }
+            }
+        }
+    }
+    if problems.is_empty() {
+        Ok(())
+    } else {
+        Err(format!(
+            "{kind} trial {t} on {channels:?}: {}",
+            problems.join("; ")
+        ))
+    }
+}
+
+fn suite(kind: &str, trials: u64) {
+    let failures: Vec<String> = (0..trials).filter_map(|t| trial(kind, t).err()).collect();
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+#[ignore = "not yet passing: the filter is named with the right noise bandwidth, but a sinusoid, Gauss-Markov or white-noise level is also named on some channels (issue 11 open)"]
+fn hidden_moving_average_filter() {
+    suite("moving_average", 2);
+}
+
+#[test]
+#[ignore = "not yet passing: bandwidth within 7 %, but quantisation/sinusoid also named and one gap stays at 9.7 (issue 11 open)"]
+fn hidden_lowpass2_filter_with_decimation() {
+    suite("lowpass2", 2);
+}
+
+#[test]
+fn hidden_outliers() {
+    suite("outliers", 2);
+}
+
+#[test]
+#[ignore = "not yet passing: amplitudes within 8 %, time constants off by up to 42 % at the small end of the amplitude range (issue 11 open)"]
+fn hidden_warmup_transient() {
+    suite("transient", 2);
+}
+
+#[test]
+fn hidden_temperature_warmup() {
+    suite("warmup", 2);
+}
+
+#[test]
+fn hidden_temperature_cycling() {
+    suite("cycling", 2);
+}
+
+#[test]
+fn clean_logs_with_a_temperature_column_name_nothing() {
+    // Warm-up temperature recorded, no temperature effect: the slow flicker wander must not be taken
+    // for one; 4 clean logs.
+    for t in 0..4 {
+        let mut model = base_model();
+        model.temperature = profile("warmup").unwrap();
+        let r = run(&model, 9000 + t);
+        for (name, rep) in &r.channels {
+            assert!(
+                rep.effects.is_empty(),
+                "clean log {t}: {name} named {:?}",
+                rep.effects
+                    .iter()
+                    .map(|e| e.effect.name())
+                    .collect::<Vec<_>>()
+            );
+        }
+    }
+}
