@@ -357,6 +357,9 @@ impl Quantizer {
 
 /// Samples per sub-block of `ChannelErrors::fill_static` (any value gives the same values).
 const FILL_CHUNK: usize = 512;
+/// Raw (internal-rate) samples per sub-block behind an output filter, at least one output sample's
+/// worth (any value gives the same values; bounds the memory a large decimation needs).
+const RAW_CHUNK: usize = 4096;
 
 /// The error generator of one output channel (one axis of one triad) for one run.
 #[derive(Clone, Debug)]
@@ -556,22 +559,13 @@ impl ChannelErrors {
         match self.filter.take() {
             None => self.fill_raw(k0, 0, out, ideal),
             Some(mut f) => {
-                // Raw samples up to the one output k0 + n - 1 is read at, each with the ideal
-                // input of the output sample it belongs to (zero-order hold).
-                let n = out.len() as u64;
-                let (d, pre) = (f.decimation as u64, f.preroll as u64);
-                let end = pre + (k0 + n - 1) * d + 1;
-                let start = f.raw_done;
-                let mut raw = std::mem::take(&mut f.raw);
-                raw.clear();
-                raw.resize((end - start) as usize, 0.0);
-                self.fill_raw(start, pre, &mut raw, |j| {
-                    let r = start + j as u64;
-                    let o = r.saturating_sub(pre).div_ceil(d);
-                    ideal((o.max(k0) - k0).min(n - 1) as usize)
-                });
-                f.filter(start, &raw, k0, out);
-                f.raw = raw;
+                // Output sub-blocks of about RAW_CHUNK raw samples (the filter's state carries
+                // over, so the split changes no value).
+                let per = (RAW_CHUNK / f.decimation).max(1);
+                for (c, sub) in out.chunks_mut(per).enumerate() {
+                    let first = c * per;
+                    self.fill_filtered(&mut f, k0 + first as u64, sub, |i| ideal(first + i));
+                }
                 self.filter = Some(f);
             }
         }
@@ -582,6 +576,32 @@ impl ChannelErrors {
             let dt_s = self.dt_s;
             out.iter_mut().for_each(|v| *v = q.apply(*v, dt_s));
         }
+    }
+
+    /// Output samples `k0 .. k0 + out.len()` through the output filter `f`: the raw samples up to
+    /// the one output k0 + n - 1 is read at, each with the ideal input of the output sample it
+    /// belongs to (zero-order hold; the pre-roll takes output 0's), then filtered and read out.
+    fn fill_filtered<'a>(
+        &mut self,
+        f: &mut FilterState,
+        k0: u64,
+        out: &mut [f64],
+        ideal: impl Fn(usize) -> &'a Vector3<f64>,
+    ) {
+        let n = out.len() as u64;
+        let (d, pre) = (f.decimation as u64, f.preroll as u64);
+        let end = pre + (k0 + n - 1) * d + 1;
+        let start = f.raw_done;
+        let mut raw = std::mem::take(&mut f.raw);
+        raw.clear();
+        raw.resize((end - start) as usize, 0.0);
+        self.fill_raw(start, pre, &mut raw, |j| {
+            let r = start + j as u64;
+            let o = r.saturating_sub(pre).div_ceil(d);
+            ideal((o.max(k0) - k0).min(n - 1) as usize)
+        });
+        f.filter(start, &raw, k0, out);
+        f.raw = raw;
     }
 
     /// Raw samples `k0 .. k0 + out.len()` at the raw interval (time t = (k - preroll) dt_raw), every
@@ -641,13 +661,22 @@ impl ChannelErrors {
     }
 }
 
+/// An IIR recursion: coefficients (b, a) and the input and output histories (newest first).
+#[derive(Clone, Debug)]
+struct IirState {
+    b: Vec<f64>,
+    a: Vec<f64>,
+    xs: Vec<f64>,
+    ys: Vec<f64>,
+}
+
 /// The output filter's running state: the raw history it needs and where the raw stream stands.
 #[derive(Clone, Debug)]
 struct FilterState {
     /// Impulse response (FIR kinds; for the IIR kinds only its length sets the pre-roll).
     h: Vec<f64>,
-    /// (b, a) of the IIR kinds, with their input and output histories (newest first).
-    iir: Option<(Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>)>,
+    /// The IIR kinds' recursion and histories.
+    iir: Option<IirState>,
     decimation: usize,
     /// Raw samples before the one output 0 is read at: the response's length - 1, so the filter's
     /// history is full (FIR) or settled to 1e-17 (IIR) at t = 0.
@@ -665,7 +694,12 @@ impl FilterState {
         let h = f.impulse_response(dt_s);
         let iir = f.recursion(dt_s).map(|(b, a)| {
             let (nb, na) = (b.len(), a.len());
-            (b, a, vec![0.0; nb], vec![0.0; na])
+            IirState {
+                b,
+                a,
+                xs: vec![0.0; nb],
+                ys: vec![0.0; na],
+            }
         });
         FilterState {
             preroll: h.len() - 1,
@@ -681,9 +715,9 @@ impl FilterState {
     /// Filter the raw samples `start ..` in `raw`, writing the output samples k0 .. into `out`.
     fn filter(&mut self, start: u64, raw: &[f64], k0: u64, out: &mut [f64]) {
         let (d, pre) = (self.decimation as u64, self.preroll as u64);
-        let is_output = |r: u64| r >= pre && (r - pre) % d == 0;
+        let is_output = |r: u64| r >= pre && (r - pre).is_multiple_of(d);
         let slot = |r: u64| ((r - pre) / d - k0) as usize;
-        if let Some((b, a, xs, ys)) = &mut self.iir {
+        if let Some(IirState { b, a, xs, ys }) = &mut self.iir {
             for (j, &x) in raw.iter().enumerate() {
                 xs.rotate_right(1);
                 xs[0] = x;
@@ -770,6 +804,19 @@ impl OutlierState {
     }
 }
 
+/// A model that cannot run at a sample rate: an axis whose output filter does not fit the rate
+/// ([`crate::filter::OutputFilter::check_rate`]).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{axis}.output_filter at {rate_hz} Hz output, decimation {decimation} ({internal_hz} Hz internal): {error}")]
+pub struct RateError {
+    /// The axis, e.g. "gyro.x".
+    pub axis: String,
+    pub rate_hz: f64,
+    pub decimation: u32,
+    pub internal_hz: f64,
+    pub error: crate::model::ModelError,
+}
+
 /// Per-run error state of a whole IMU: six channels (gx gy gz ax ay az).
 #[derive(Clone, Debug)]
 pub struct ImuErrors {
@@ -779,8 +826,28 @@ pub struct ImuErrors {
 }
 
 impl ImuErrors {
+    /// Can `model` run at sample interval `dt_s`? Every output filter's cutoff must lie below its
+    /// internal Nyquist frequency and its response fit [`crate::filter::MAX_RESPONSE`] internal
+    /// samples. Check before [`ImuErrors::new`]: a filter that fails gives meaningless values.
+    pub fn check_rate(model: &SensorModel, dt_s: f64) -> Result<(), RateError> {
+        for sensor in Sensor::ALL {
+            for (axis, name) in model.triad(sensor).axes.iter().zip(crate::AXIS_NAMES) {
+                if let Some(f) = &axis.output_filter {
+                    f.check_rate(dt_s).map_err(|error| RateError {
+                        axis: format!("{}.{name}", sensor.name()),
+                        rate_hz: 1.0 / dt_s,
+                        decimation: f.decimation,
+                        internal_hz: 1.0 / f.internal_dt(dt_s),
+                        error,
+                    })?;
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// Draw run `run`'s per-run values (turn-on bias, initial states, phases) from `seed`.
-    /// `dt_s` must be finite and > 0.
+    /// `dt_s` must be finite and > 0, and the model must pass [`ImuErrors::check_rate`] at it.
     pub fn new(model: &SensorModel, dt_s: f64, seed: u64, run: u64) -> ImuErrors {
         assert!(
             dt_s.is_finite() && dt_s > 0.0,
