@@ -115,8 +115,16 @@ fn plan(args: &Args) -> Result<Plan> {
             );
         }
     }
+    // An output filter must fit the rate (a low-pass cutoff below the internal Nyquist frequency).
+    let model = model.filtered(&filter);
+    ImuErrors::check_rate(&model, 1.0 / args.rate).map_err(|e| {
+        anyhow::anyhow!(
+            "{}: {e}; lower the cutoff or raise --rate",
+            args.sensor.display()
+        )
+    })?;
     Ok(Plan {
-        model: model.filtered(&filter),
+        model,
         filter,
         rate_hz: args.rate,
         samples: samples as u64,

@@ -33,6 +33,9 @@ pub enum ExperimentError {
     /// A generated scenario (spec's drift scenario) is not valid.
     #[error(transparent)]
     Scenario(#[from] crate::scenario::ScenarioError),
+    /// The model cannot run at the scenario's rate (an output filter that does not fit it).
+    #[error(transparent)]
+    Rate(#[from] noise::process::RateError),
 }
 
 /// A ready experiment.
@@ -69,6 +72,7 @@ impl Experiment {
             (!without.is_empty()).then(|| without.join(",")).as_deref(),
         )?;
         let model = model.filtered(&filter);
+        noise::ImuErrors::check_rate(&model, scenario.dt_s())?;
         let (terms, law_context) = law_terms(
             &model,
             &scenario.trajectory_spec,
