@@ -13,7 +13,7 @@ use diagnose::model_terms::channel_axis;
 use diagnose::simulate::{static_log, SimSetup};
 use diagnose::{diagnose, Diagnosis, LogInput, Settings};
 use noise::{
-    BiasInstability, Effect, FilterKind, Flicker, ImuErrors, Outliers, OutputFilter, SensorModel,
+    BiasInstability, FilterKind, Flicker, ImuErrors, Outliers, OutputFilter, SensorModel,
     TemperatureProfile, Term, WarmupTransient,
 };
 use rand::{Rng, SeedableRng};
