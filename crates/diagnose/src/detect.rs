@@ -254,6 +254,45 @@ pub fn regress(x: &[f64], g: &[f64]) -> Option<(f64, Vec<f64>, Vec<f64>)> {
     Some((c, w, resid))
 }
 
+/// `v` minus its least-squares line in the sample index (the residual of a fit on (1, k)).
+pub fn detrend(v: &[f64]) -> Vec<f64> {
+    let n = v.len() as f64;
+    let km = (n - 1.0) / 2.0;
+    let vm = v.iter().sum::<f64>() / n;
+    let (mut skv, mut skk) = (0.0, 0.0);
+    for (k, &x) in v.iter().enumerate() {
+        let d = k as f64 - km;
+        skv += d * (x - vm);
+        skk += d * d;
+    }
+    let b = if skk > 0.0 { skv / skk } else { 0.0 };
+    v.iter()
+        .enumerate()
+        .map(|(k, &x)| x - vm - b * (k as f64 - km))
+        .collect()
+}
+
+/// Least-squares fit of x on (1, k, g): the coefficient of g, its weights w (orthogonal to 1 and k;
+/// x . w = coefficient) and the residual (Frisch-Waugh: g and x both detrended). None when g is a
+/// straight line in time to 1e-9 of its variance (nothing left to fit but rounding).
+pub fn regress_detrended(x: &[f64], g: &[f64]) -> Option<(f64, Vec<f64>, Vec<f64>)> {
+    let gt = detrend(g);
+    let sgg: f64 = gt.iter().map(|v| v * v).sum();
+    let gm = g.iter().sum::<f64>() / g.len() as f64;
+    let centred: f64 = g.iter().map(|v| (v - gm) * (v - gm)).sum();
+    if sgg <= 1e-9 * centred || !sgg.is_finite() {
+        return None;
+    }
+    let w: Vec<f64> = gt.iter().map(|v| v / sgg).collect();
+    let c: f64 = w.iter().zip(x).map(|(a, b)| a * b).sum();
+    let resid = detrend(x)
+        .iter()
+        .zip(&gt)
+        .map(|(xi, gi)| xi - c * gi)
+        .collect();
+    Some((c, w, resid))
+}
+
 /// A regression with its coloured-noise standard error.
 #[derive(Clone, Debug)]
 pub struct Regression {
@@ -297,6 +336,9 @@ pub struct Transient {
     /// Bias at t = 0 relative to the settled value, signal units.
     pub amplitude: f64,
     pub tau_s: f64,
+    /// 95 % profile interval of the time constant.
+    pub tau_lo_s: f64,
+    pub tau_hi_s: f64,
     pub z: f64,
     pub corrected: Vec<f64>,
 }
@@ -316,21 +358,27 @@ pub fn fit_transient(x: &[f64], dt_s: f64, floor: &NoiseLevels) -> Option<Transi
     if hi <= lo {
         return None;
     }
-    // Profile: the residual sum of squares after the fit at tau (the fit's own criterion),
-    // RSS = S_xx - S_xg^2 / S_gg with centred sums, g_k = phi^k accumulated in one pass.
-    let xm = x.iter().sum::<f64>() / n as f64;
-    let sxx: f64 = x.iter().map(|v| (v - xm) * (v - xm)).sum();
+    // The transient must stand out from a straight line (a rate ramp or a slow drift is not a
+    // transient): everything is fitted beside (1, k). Profile: the residual sum of squares at tau,
+    // RSS = S~xx - S~xg^2 / S~gg with x~ the detrended log and S~gg = S_gg - S_g^2/n - S_kg^2/S_kk,
+    // g_k = phi^k accumulated in one pass.
+    let xt = detrend(x);
+    let sxx: f64 = xt.iter().map(|v| v * v).sum();
+    let nf = n as f64;
+    let km = (nf - 1.0) / 2.0;
+    let skk = nf * (nf * nf - 1.0) / 12.0;
     let rss_at = |tau: f64| -> Option<(f64, f64)> {
         let phi = (-dt_s / tau).exp();
-        let (mut g, mut sg, mut sgg, mut sxg) = (1.0, 0.0, 0.0, 0.0);
-        for &v in x {
+        let (mut g, mut sg, mut sgg, mut skg, mut sxg) = (1.0, 0.0, 0.0, 0.0, 0.0);
+        for (k, &v) in xt.iter().enumerate() {
             sg += g;
             sgg += g * g;
-            sxg += g * (v - xm);
+            skg += (k as f64 - km) * g;
+            sxg += g * v;
             g *= phi;
         }
-        let sgg_c = sgg - sg * sg / n as f64;
-        if sgg_c <= 0.0 {
+        let sgg_c = sgg - sg * sg / nf - skg * skg / skk;
+        if sgg_c <= 1e-12 * sgg {
             return None;
         }
         Some((sxx - sxg * sxg / sgg_c, sxg / sgg_c))
@@ -365,12 +413,70 @@ pub fn fit_transient(x: &[f64], dt_s: f64, floor: &NoiseLevels) -> Option<Transi
     }
     let tau = (0.5 * (a + b)).exp();
     let g: Vec<f64> = (0..n).map(|k| (-(k as f64) * dt_s / tau).exp()).collect();
-    let reg = regression(x, &g, dt_s, floor)?;
+    let (c, w, resid) = regress_detrended(x, &g)?;
+    let rss_min: f64 = resid.iter().map(|v| v * v).sum();
+    let fitted = noise_levels(&resid, dt_s);
+    let levels = NoiseLevels {
+        n: fitted.n.max(floor.n),
+        b: fitted.b.max(floor.b),
+        k: fitted.k.max(floor.k),
+    };
+    let var_c = coloured_variance(&w, dt_s, &levels).max(0.0);
+    let sd = var_c.sqrt();
+    // Profile interval of tau: RSS(tau) <= RSS_min + 3.84 s^2 f, s^2 = RSS_min/(n - 3) the white
+    // residual variance and f = Var_coloured(A) / Var_white(A) at the optimum, the design effect of
+    // the coloured noise on this regressor (Kish 1965; the effective-sample-size correction of
+    // regression on autocorrelated errors).
+    let s2 = rss_min / (n as f64 - 4.0);
+    let var_white = s2 * w.iter().map(|v| v * v).sum::<f64>();
+    let f = if var_white > 0.0 {
+        (var_c / var_white).max(1.0)
+    } else {
+        1.0
+    };
+    let level = rss_min + 3.841_458_820_694_124 * s2 * f;
+    let crossing = |inside: f64, outside: f64| -> f64 {
+        let (mut i, mut o) = (inside.ln(), outside.ln());
+        for _ in 0..25 {
+            let mid = 0.5 * (i + o);
+            if rss_at(mid.exp()).is_some_and(|v| v.0 <= level) {
+                i = mid;
+            } else {
+                o = mid;
+            }
+        }
+        i.exp()
+    };
+    let mut tau_lo = lo;
+    let mut t = tau;
+    while t > lo {
+        let next = (t / 1.25).max(lo);
+        if rss_at(next).is_none_or(|v| v.0 > level) {
+            tau_lo = crossing(t, next);
+            break;
+        }
+        t = next;
+        tau_lo = t;
+    }
+    let mut tau_hi = hi;
+    let mut t = tau;
+    while t < hi {
+        let next = (t * 1.25).min(hi);
+        if rss_at(next).is_none_or(|v| v.0 > level) {
+            tau_hi = crossing(t, next);
+            break;
+        }
+        t = next;
+        tau_hi = t;
+    }
+    let gt = detrend(&g);
     Some(Transient {
-        amplitude: reg.coefficient,
+        amplitude: c,
         tau_s: tau,
-        z: reg.z,
-        corrected: reg.corrected,
+        tau_lo_s: tau_lo.min(tau),
+        tau_hi_s: tau_hi.max(tau),
+        z: if sd > 0.0 { c / sd } else { f64::INFINITY },
+        corrected: x.iter().zip(&gt).map(|(xi, gi)| xi - c * gi).collect(),
     })
 }
 
@@ -457,6 +563,8 @@ mod tests {
 #[derive(Clone, Debug)]
 pub struct Finding {
     pub term: noise::Term,
+    /// Effects the data cannot tell this one from.
+    pub cannot_tell_from: Vec<noise::Effect>,
     pub parameters: Vec<(&'static str, f64, f64, f64)>,
     pub delta_bic: f64,
 }
@@ -504,6 +612,7 @@ pub fn preprocess(
             let size = spikes.size();
             let n_without = noise_levels(&x, dt_s).n;
             findings[c].push(Finding {
+                cannot_tell_from: vec![],
                 term: noise::Term::Outliers(noise::Outliers {
                     rate_per_hour: rate,
                     size,
@@ -527,7 +636,27 @@ pub fn preprocess(
             if let Some(reg) = regression(&x, t, dt_s, &floors[c]) {
                 if reg.z.abs() > TEMPERATURE_Z {
                     let c1 = reg.coefficient;
+                    // Beside a straight line, is the temperature still needed? If not, its effect
+                    // cannot be told from a rate ramp (a temperature that rises steadily).
+                    let beside_line = regress_detrended(&x, t).map(|(cd, w, resid)| {
+                        let lv = noise_levels(&resid, dt_s);
+                        let fl = &floors[c];
+                        let lv = NoiseLevels {
+                            n: lv.n.max(fl.n),
+                            b: lv.b.max(fl.b),
+                            k: lv.k.max(fl.k),
+                        };
+                        cd / coloured_variance(&w, dt_s, &lv)
+                            .max(f64::MIN_POSITIVE)
+                            .sqrt()
+                    });
+                    let cannot_tell = beside_line.is_none_or(|z| z.abs() <= TEMPERATURE_Z);
                     findings[c].push(Finding {
+                        cannot_tell_from: if cannot_tell {
+                            vec![noise::Effect::RateRamp]
+                        } else {
+                            vec![]
+                        },
                         term: noise::Term::TemperatureBias(c1),
                         parameters: vec![(
                             "coefficient",
@@ -545,6 +674,7 @@ pub fn preprocess(
             if tr.z.abs() > TRANSIENT_Z {
                 let sd = (tr.amplitude / tr.z).abs();
                 findings[c].push(Finding {
+                    cannot_tell_from: vec![],
                     term: noise::Term::WarmupTransient(noise::WarmupTransient {
                         amplitude: tr.amplitude,
                         tau_s: tr.tau_s,
@@ -557,7 +687,7 @@ pub fn preprocess(
                             tr.amplitude - 1.96 * sd,
                             tr.amplitude + 1.96 * sd,
                         ),
-                        ("tau_s", tr.tau_s, tr.tau_s, tr.tau_s),
+                        ("tau_s", tr.tau_s, tr.tau_lo_s, tr.tau_hi_s),
                     ],
                     delta_bic: tr.z * tr.z - (n as f64).ln(),
                 });

@@ -143,7 +143,7 @@ pub fn diagnose_with_progress(
                 gap_predicted: g1.rms,
                 gap_after: g1.rms,
                 delta_bic: f.delta_bic,
-                cannot_tell_from: vec![],
+                cannot_tell_from: f.cannot_tell_from.clone(),
                 round: 0,
                 refinements: 0,
                 stand_in: false,
