@@ -235,6 +235,33 @@ fn trial(kind: &str, t: u64) -> Result<(), String> {
             }
         }
     }
+    // DIAGNOSE_DUMP=1: on a failure, print each hidden channel's effects and z before and after.
+    if !problems.is_empty() && std::env::var_os("DIAGNOSE_DUMP").is_some() {
+        for &c in &channels {
+            let r = &result.channels[CHANNELS[c]];
+            let z = |v: &[f64]| {
+                v.iter()
+                    .map(|x| format!("{x:.1}"))
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            };
+            eprintln!(
+                "{}: effects {:?}\n  z0 {}\n  z1 {}",
+                CHANNELS[c],
+                r.effects
+                    .iter()
+                    .map(|e| (
+                        e.effect,
+                        e.parameters.kind,
+                        &e.parameters.values,
+                        e.gap_after
+                    ))
+                    .collect::<Vec<_>>(),
+                z(&r.z_initial),
+                z(&r.z_final)
+            );
+        }
+    }
     if problems.is_empty() {
         Ok(())
     } else {
