@@ -42,12 +42,13 @@ fn median(v: &mut [f64]) -> f64 {
     if v.is_empty() {
         return f64::NAN;
     }
-    v.sort_by(f64::total_cmp);
     let n = v.len();
+    let (lower, &mut mid, _) = v.select_nth_unstable_by(n / 2, f64::total_cmp);
     if n % 2 == 1 {
-        v[n / 2]
+        mid
     } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
+        let below = lower.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        0.5 * (below + mid)
     }
 }
 
@@ -115,9 +116,16 @@ pub fn spike_threshold(n: usize) -> f64 {
 /// The median of the window of 2 HALF_WINDOW + 1 samples centred on sample k (Hampel's identifier,
 /// Hampel et al. 1986; shorter at the ends).
 fn neighbour_median(x: &[f64], k: usize, buf: &mut Vec<f64>) -> f64 {
-    buf.clear();
     let lo = k.saturating_sub(HALF_WINDOW);
     let hi = (k + HALF_WINDOW + 1).min(x.len());
+    if hi - lo == 2 * HALF_WINDOW + 1 {
+        // Interior: the full window on the stack.
+        let mut w = [0.0; 2 * HALF_WINDOW + 1];
+        w.copy_from_slice(&x[lo..hi]);
+        w.sort_unstable_by(f64::total_cmp);
+        return w[HALF_WINDOW];
+    }
+    buf.clear();
     buf.extend_from_slice(&x[lo..hi]);
     median(buf)
 }
@@ -592,109 +600,121 @@ pub fn preprocess(
     dt_s: f64,
     floors: &[NoiseLevels; 6],
 ) -> Preprocessed {
-    let mut out: [Option<Vec<f64>>; 6] = Default::default();
-    let mut findings: [Vec<Finding>; 6] = Default::default();
+    use rayon::prelude::*;
     let hours = |n: usize| n as f64 * dt_s / 3600.0;
-    for c in 0..6 {
-        let Some(raw) = channels[c] else { continue };
-        let n = raw.len();
-        let mut x = raw.to_vec();
-        let spikes = detect_spikes(&x);
-        let count = spikes.indices.len();
-        if count >= MIN_OUTLIERS && (count as f64) <= MAX_OUTLIER_FRACTION * n as f64 {
-            x = remove_spikes(&x, &spikes);
-            let rate = count as f64 / hours(n);
-            // Poisson 95 % bounds on the rate (normal approximation with continuity, count >= 3).
-            let (lo, hi) = (
-                (count as f64 - 1.96 * (count as f64).sqrt()).max(0.0) / hours(n),
-                (count as f64 + 1.96 * (count as f64).sqrt() + 1.0) / hours(n),
-            );
-            let size = spikes.size();
-            let n_without = noise_levels(&x, dt_s).n;
-            findings[c].push(Finding {
-                cannot_tell_from: vec![],
-                term: noise::Term::Outliers(noise::Outliers {
-                    rate_per_hour: rate,
-                    size,
-                }),
-                parameters: vec![
-                    ("count", count as f64, count as f64, count as f64),
-                    ("rate_per_hour", rate, lo, hi),
-                    ("size", size, size, size),
-                    (
-                        "threshold_sigma",
-                        spikes.threshold,
-                        spikes.threshold,
-                        spikes.threshold,
-                    ),
-                    ("n_without", n_without, n_without, n_without),
-                ],
-                delta_bic: f64::INFINITY,
-            });
-        }
-        if let Some(t) = temperature_c {
-            if let Some(reg) = regression(&x, t, dt_s, &floors[c]) {
-                if reg.z.abs() > TEMPERATURE_Z {
-                    let c1 = reg.coefficient;
-                    // Beside a straight line, is the temperature still needed? If not, its effect
-                    // cannot be told from a rate ramp (a temperature that rises steadily).
-                    let beside_line = regress_detrended(&x, t).map(|(cd, w, resid)| {
-                        let lv = noise_levels(&resid, dt_s);
-                        let fl = &floors[c];
-                        let lv = NoiseLevels {
-                            n: lv.n.max(fl.n),
-                            b: lv.b.max(fl.b),
-                            k: lv.k.max(fl.k),
-                        };
-                        cd / coloured_variance(&w, dt_s, &lv)
-                            .max(f64::MIN_POSITIVE)
-                            .sqrt()
-                    });
-                    let cannot_tell = beside_line.is_none_or(|z| z.abs() <= TEMPERATURE_Z);
-                    findings[c].push(Finding {
-                        cannot_tell_from: if cannot_tell {
-                            vec![noise::Effect::RateRamp]
-                        } else {
-                            vec![]
-                        },
-                        term: noise::Term::TemperatureBias(c1),
-                        parameters: vec![(
-                            "coefficient",
-                            c1,
-                            c1 - 1.96 * reg.sd,
-                            c1 + 1.96 * reg.sd,
-                        )],
-                        delta_bic: reg.z * reg.z - (n as f64).ln(),
-                    });
-                    x = reg.corrected;
-                }
-            }
-        }
-        if let Some(tr) = fit_transient(&x, dt_s, &floors[c]) {
-            if tr.z.abs() > TRANSIENT_Z {
-                let sd = (tr.amplitude / tr.z).abs();
-                findings[c].push(Finding {
+    // Channels in parallel (each result depends on its channel only).
+    let per: Vec<(Option<Vec<f64>>, Vec<Finding>)> = (0..6)
+        .into_par_iter()
+        .map(|c| {
+            let mut found: Vec<Finding> = Vec::new();
+            let Some(raw) = channels[c] else {
+                return (None, found);
+            };
+            let n = raw.len();
+            let mut x = raw.to_vec();
+            let spikes = detect_spikes(&x);
+            let count = spikes.indices.len();
+            if count >= MIN_OUTLIERS && (count as f64) <= MAX_OUTLIER_FRACTION * n as f64 {
+                x = remove_spikes(&x, &spikes);
+                let rate = count as f64 / hours(n);
+                // Poisson 95 % bounds on the rate (normal approximation with continuity, count >= 3).
+                let (lo, hi) = (
+                    (count as f64 - 1.96 * (count as f64).sqrt()).max(0.0) / hours(n),
+                    (count as f64 + 1.96 * (count as f64).sqrt() + 1.0) / hours(n),
+                );
+                let size = spikes.size();
+                let n_without = noise_levels(&x, dt_s).n;
+                found.push(Finding {
                     cannot_tell_from: vec![],
-                    term: noise::Term::WarmupTransient(noise::WarmupTransient {
-                        amplitude: tr.amplitude,
-                        tau_s: tr.tau_s,
-                        per_run: false,
+                    term: noise::Term::Outliers(noise::Outliers {
+                        rate_per_hour: rate,
+                        size,
                     }),
                     parameters: vec![
+                        ("count", count as f64, count as f64, count as f64),
+                        ("rate_per_hour", rate, lo, hi),
+                        ("size", size, size, size),
                         (
-                            "amplitude",
-                            tr.amplitude,
-                            tr.amplitude - 1.96 * sd,
-                            tr.amplitude + 1.96 * sd,
+                            "threshold_sigma",
+                            spikes.threshold,
+                            spikes.threshold,
+                            spikes.threshold,
                         ),
-                        ("tau_s", tr.tau_s, tr.tau_lo_s, tr.tau_hi_s),
+                        ("n_without", n_without, n_without, n_without),
                     ],
-                    delta_bic: tr.z * tr.z - (n as f64).ln(),
+                    delta_bic: f64::INFINITY,
                 });
-                x = tr.corrected;
             }
-        }
-        out[c] = Some(x);
+            if let Some(t) = temperature_c {
+                if let Some(reg) = regression(&x, t, dt_s, &floors[c]) {
+                    if reg.z.abs() > TEMPERATURE_Z {
+                        let c1 = reg.coefficient;
+                        // Beside a straight line, is the temperature still needed? If not, its effect
+                        // cannot be told from a rate ramp (a temperature that rises steadily).
+                        let beside_line = regress_detrended(&x, t).map(|(cd, w, resid)| {
+                            let lv = noise_levels(&resid, dt_s);
+                            let fl = &floors[c];
+                            let lv = NoiseLevels {
+                                n: lv.n.max(fl.n),
+                                b: lv.b.max(fl.b),
+                                k: lv.k.max(fl.k),
+                            };
+                            cd / coloured_variance(&w, dt_s, &lv)
+                                .max(f64::MIN_POSITIVE)
+                                .sqrt()
+                        });
+                        let cannot_tell = beside_line.is_none_or(|z| z.abs() <= TEMPERATURE_Z);
+                        found.push(Finding {
+                            cannot_tell_from: if cannot_tell {
+                                vec![noise::Effect::RateRamp]
+                            } else {
+                                vec![]
+                            },
+                            term: noise::Term::TemperatureBias(c1),
+                            parameters: vec![(
+                                "coefficient",
+                                c1,
+                                c1 - 1.96 * reg.sd,
+                                c1 + 1.96 * reg.sd,
+                            )],
+                            delta_bic: reg.z * reg.z - (n as f64).ln(),
+                        });
+                        x = reg.corrected;
+                    }
+                }
+            }
+            if let Some(tr) = fit_transient(&x, dt_s, &floors[c]) {
+                if tr.z.abs() > TRANSIENT_Z {
+                    let sd = (tr.amplitude / tr.z).abs();
+                    found.push(Finding {
+                        cannot_tell_from: vec![],
+                        term: noise::Term::WarmupTransient(noise::WarmupTransient {
+                            amplitude: tr.amplitude,
+                            tau_s: tr.tau_s,
+                            per_run: false,
+                        }),
+                        parameters: vec![
+                            (
+                                "amplitude",
+                                tr.amplitude,
+                                tr.amplitude - 1.96 * sd,
+                                tr.amplitude + 1.96 * sd,
+                            ),
+                            ("tau_s", tr.tau_s, tr.tau_lo_s, tr.tau_hi_s),
+                        ],
+                        delta_bic: tr.z * tr.z - (n as f64).ln(),
+                    });
+                    x = tr.corrected;
+                }
+            }
+            (Some(x), found)
+        })
+        .collect();
+    let mut out: [Option<Vec<f64>>; 6] = Default::default();
+    let mut findings: [Vec<Finding>; 6] = Default::default();
+    for (c, (x, f)) in per.into_iter().enumerate() {
+        out[c] = x;
+        findings[c] = f;
     }
     Preprocessed {
         channels: out,
