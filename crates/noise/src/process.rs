@@ -377,6 +377,10 @@ pub struct ChannelErrors {
     gauss_markov: Option<(GaussMarkovBank, ImuRng)>,
     /// amplitude, angular frequency (rad/s), phase (rad)
     sinusoid: Option<(f64, f64, f64)>,
+    /// The sinusoid after the output filter, added at the output rate: a linear filter turns
+    /// A sin(w t + p) into A |H| sin(w t + p + arg H), H = sum_j h_j e^{-i w j dt_i} (exact once the
+    /// pre-roll has filled the filter), so it is not generated at the internal rate.
+    sinusoid_out: Option<(f64, f64, f64)>,
     /// coefficient per degC, profile, reference degC
     temperature: Option<(f64, TemperatureProfile, f64)>,
     quantizer: Option<Quantizer>,
@@ -442,6 +446,12 @@ impl ChannelErrors {
             ),
             None => (None, None),
         };
+        let sinusoid = axis.sinusoidal.map(|s| {
+            let phase = s
+                .phase_rad
+                .unwrap_or_else(|| rng(Effect::Sinusoidal).gen_range(0.0..std::f64::consts::TAU));
+            (s.amplitude, std::f64::consts::TAU * s.frequency_hz, phase)
+        });
         let transient = axis.warmup_transient.map(|w| {
             let a = if w.per_run {
                 w.amplitude * normal(&mut rng(Effect::WarmupTransient))
@@ -473,11 +483,16 @@ impl ChannelErrors {
             gauss_markov: axis
                 .gauss_markov
                 .map(|g| bank(&[(g.tau_s, g.sigma)], Effect::GaussMarkov)),
-            sinusoid: axis.sinusoidal.map(|s| {
-                let phase = s.phase_rad.unwrap_or_else(|| {
-                    rng(Effect::Sinusoidal).gen_range(0.0..std::f64::consts::TAU)
-                });
-                (s.amplitude, std::f64::consts::TAU * s.frequency_hz, phase)
+            sinusoid: sinusoid.filter(|_| axis.output_filter.is_none()),
+            sinusoid_out: sinusoid.and_then(|(a, w, p)| {
+                let f = axis.output_filter?;
+                let (mut re, mut im) = (0.0, 0.0);
+                for (j, h) in f.impulse_response(dt_out).iter().enumerate() {
+                    let arg = w * j as f64 * dt_s;
+                    re += h * arg.cos();
+                    im -= h * arg.sin();
+                }
+                Some((a * re.hypot(im), w, p + im.atan2(re)))
             }),
             temperature: axis
                 .temperature_bias
@@ -567,6 +582,12 @@ impl ChannelErrors {
                     self.fill_filtered(&mut f, k0 + first as u64, sub, |i| ideal(first + i));
                 }
                 self.filter = Some(f);
+                if let Some((a, omega, phase)) = self.sinusoid_out {
+                    let dt = self.dt_s;
+                    out.iter_mut().enumerate().for_each(|(i, v)| {
+                        *v += a * (omega * (k0 + i as u64) as f64 * dt + phase).sin()
+                    });
+                }
             }
         }
         if let Some(o) = &mut self.outliers {

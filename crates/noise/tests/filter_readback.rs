@@ -141,3 +141,39 @@ fn outliers_read_back_as_white_noise() {
         }
     }
 }
+
+#[test]
+fn filtered_sinusoid_is_the_filter_applied_to_the_raw_sinusoid() {
+    // The generator adds a filtered sinusoid at the output rate (gain |H| and phase arg H); it must
+    // equal the filter applied to the sinusoid sampled at the internal rate, sum_j h_j x(t - j dt_i).
+    for (kind, d) in [
+        (FilterKind::Bartlett { taps: 13 }, 8),
+        (FilterKind::LowPass2 { cutoff_hz: 30.0 }, 3),
+    ] {
+        let f = OutputFilter::new(kind, d).unwrap();
+        let (a, hz, phase) = (0.02, 7.3, 0.4);
+        let axis = AxisModel {
+            sinusoidal: Some(noise::Sinusoid::new(a, hz, Some(phase)).unwrap()),
+            output_filter: Some(f),
+            ..AxisModel::default()
+        };
+        let dt = 0.01;
+        let data = gyro_x_series(&axis, 100.0, 300, SEED, 0);
+        let h = f.impulse_response(dt);
+        let dt_i = f.internal_dt(dt);
+        for (n, &v) in data.iter().enumerate() {
+            let t = n as f64 * dt;
+            let direct: f64 = h
+                .iter()
+                .enumerate()
+                .map(|(j, hj)| {
+                    hj * a * (std::f64::consts::TAU * hz * (t - j as f64 * dt_i) + phase).sin()
+                })
+                .sum();
+            assert!(
+                (v - direct).abs() < 1e-12,
+                "{kind:?} n {n}: {v} vs {direct}"
+            );
+        }
+    }
+}
