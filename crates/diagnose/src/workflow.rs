@@ -266,8 +266,8 @@ pub fn diagnose_with_progress(
                 effects[c].push(FoundEffect {
                     effect: best.effect,
                     parameters: parameters_of(best.effect, &best.params, log.dt_s),
-                    parameters_lo: named_map(best.effect, &best.lo),
-                    parameters_hi: named_map(best.effect, &best.hi),
+                    parameters_lo: bounds_of(best.effect, &best.lo, log.dt_s),
+                    parameters_hi: bounds_of(best.effect, &best.hi, log.dt_s),
                     kind: if best.model.is_some() {
                         FindingKind::WrongLevel
                     } else {
@@ -567,6 +567,12 @@ fn slope(x: &[f64], dt_s: f64) -> f64 {
 
 fn mean(x: &[f64]) -> f64 {
     x.iter().sum::<f64>() / x.len().max(1) as f64
+}
+
+/// A bound of a fitted term's parameters; a filter's noise bandwidth is a property of the chosen
+/// filter (its bound is itself: the filter's shape is selected, not interval-estimated).
+fn bounds_of(effect: Effect, params: &TermParams, dt_s: f64) -> BTreeMap<String, f64> {
+    parameters_of(effect, params, dt_s).values
 }
 
 /// The JSON parameters of a fitted term (an output filter's kind and one-sided noise bandwidth added).
