@@ -3,7 +3,7 @@
 //! The effect must be named on exactly those channels with its parameters within 25 % (or inside the
 //! stated 95 % interval), and the final gap must be at most 1.5 and at most a third of the initial gap
 //! (only at most 1.5 when the effect is faint: see `faint`).
-//! Logs without a hidden effect must name nothing on at least 95 % of 20 seeds.
+//! Logs without a hidden effect must name nothing on any of 20 seeds (with the default 16-seed band).
 //!
 //! Log length: 2^16 samples at 100 Hz (655 s), octave taus 0.01..164 s (15 points). Every parameter is
 //! drawn as a "visibility": the tau where the hidden term crosses the base model's Allan variance, or
@@ -151,6 +151,17 @@ struct Trial {
 
 /// Generate a log from `model` (seed `seed`, run 0) and diagnose it with `base`.
 fn run(model: &SensorModel, base: &SensorModel, seed: u64, temperature: bool) -> Diagnosis {
+    run_seeds(model, base, seed, temperature, SEEDS)
+}
+
+/// [`run`] with `seeds` simulated logs per band.
+fn run_seeds(
+    model: &SensorModel,
+    base: &SensorModel,
+    seed: u64,
+    temperature: bool,
+    seeds: usize,
+) -> Diagnosis {
     let setup = SimSetup {
         dt_s: DT_S,
         samples: SAMPLES,
@@ -173,7 +184,7 @@ fn run(model: &SensorModel, base: &SensorModel, seed: u64, temperature: bool) ->
         temperature_c: temp.as_deref(),
     };
     let settings = Settings {
-        seeds: SEEDS,
+        seeds,
         horizons_s: vec![60.0],
         ..Settings::default()
     };
@@ -374,7 +385,9 @@ fn no_hidden_effect_names_nothing() {
     for seed in 0..20 {
         // Both bases: white noise + flicker, and white noise only.
         let base = base_model(seed % 2 == 0);
-        let d = run(&base, &base, 5000 + seed, false);
+        // With the command's default band (16 seeds): at 12, one of the 20 (seed 12) names a
+        // bias-instability level (dBIC 22), the band's seed spread being estimated from fewer logs.
+        let d = run_seeds(&base, &base, 5000 + seed, false, Settings::default().seeds);
         let found: Vec<String> = d
             .channels
             .iter()
@@ -386,7 +399,7 @@ fn no_hidden_effect_names_nothing() {
     }
     eprintln!("clean logs with an effect named: {} of 20", named.len());
     assert!(
-        named.len() <= 1,
+        named.is_empty(),
         "effects named on clean logs:\n{}",
         named.join("\n")
     );
