@@ -246,14 +246,36 @@ fn filter_trial(
     let current = output_filter(model, ch);
     let c0 = term_level(model, ch, Effect::WhiteNoise).map_or(0.0, |p| p.c());
     let fw_cur = white_signature(current.as_ref(), tau, dt_s);
+    // The band scaled by closed-form ratios, not shifted by closed-form differences: a filter can
+    // take the short-tau variance down 30-fold, and subtracting the unfiltered white noise from a
+    // simulated band would leave its seed-to-seed error 30 times larger relative to what remains.
+    // g = band / closed form of the current model, so band + c0 (fw_F - fw) g =
+    // g (closed form - c0 fw + c0 fw_F): the band's relative error carried, not amplified.
+    let (sensor, axis) = crate::model_terms::channel_axis(ch);
+    let cf_old = model
+        .axis(sensor, axis)
+        .allan_variance_sampled_many(tau, dt_s);
+    let g: Vec<f64> = (0..m)
+        .map(|i| {
+            if cf_old[i] > 0.0 {
+                data.avar_band[i] / cf_old[i]
+            } else {
+                1.0
+            }
+        })
+        .collect();
     let grid = filter_grid(dt_s);
     let penalty = shape_search_penalty(grid.len());
     let try_filter = |filter: OutputFilter| -> Option<(f64, OutputFilterFit)> {
         if Some(filter) == current || filter.check_rate(dt_s).is_err() {
             return None;
         }
-        let fw = white_signature(Some(&filter), tau, dt_s);
-        let shift: Vec<f64> = (0..m).map(|i| c0 * (fw[i] - fw_cur[i])).collect();
+        let fw: Vec<f64> = white_signature(Some(&filter), tau, dt_s)
+            .iter()
+            .zip(&g)
+            .map(|(f, g)| f * g)
+            .collect();
+        let shift: Vec<f64> = (0..m).map(|i| c0 * (fw[i] - fw_cur[i] * g[i])).collect();
         let ln_band: Vec<f64> = (0..m)
             .map(|i| predicted_ln_adev(data.ln_band[i], data.avar_band[i], shift[i]))
             .collect();
@@ -267,7 +289,9 @@ fn filter_trial(
             s: data.s,
         };
         let fit = fit_linear(&shifted, &fw, c0);
-        let delta = (0..m).map(|i| fit.c * fw[i] - c0 * fw_cur[i]).collect();
+        let delta = (0..m)
+            .map(|i| fit.c * fw[i] - c0 * fw_cur[i] * g[i])
+            .collect();
         Some((fit.chi2, OutputFilterFit { filter, fit, delta }))
     };
     let mut tried: Vec<(f64, OutputFilterFit)> = grid.into_iter().filter_map(try_filter).collect();

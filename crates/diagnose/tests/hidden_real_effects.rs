@@ -278,7 +278,6 @@ fn suite(kind: &str, trials: u64) {
 }
 
 #[test]
-#[ignore = "not yet passing: the filter is named with the right noise bandwidth, but a sinusoid, Gauss-Markov or white-noise level is also named on some channels (issue 11 open)"]
 fn hidden_moving_average_filter() {
     suite("moving_average", 2);
 }
