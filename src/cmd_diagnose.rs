@@ -153,6 +153,14 @@ fn run_inner(args: &Args) -> Result<()> {
         channels,
         temperature_c: log.channels.get("temp").map(Vec::as_slice),
     };
+    // An output filter in the model must fit the log's rate.
+    noise::ImuErrors::check_rate(&model, input.dt_s).map_err(|e| {
+        anyhow::anyhow!(
+            "{}: {e}; the log is at {:.6} Hz",
+            args.model.display(),
+            1.0 / input.dt_s
+        )
+    })?;
     let settings = Settings {
         seed: args.seed,
         seeds: args.seeds,

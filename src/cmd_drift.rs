@@ -125,6 +125,16 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
             temperature_c: None,
         })
         .collect();
+    // An output filter in the model must fit the logs' rate.
+    if let Some(first) = inputs.first() {
+        noise::ImuErrors::check_rate(&model, first.dt_s).map_err(|e| {
+            anyhow!(
+                "{}: {e}; the logs are at {:.6} Hz",
+                args.model.display(),
+                1.0 / first.dt_s
+            )
+        })?;
+    }
     if inputs
         .iter()
         .any(|i| i.channels.iter().all(Option::is_none))
