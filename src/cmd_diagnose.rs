@@ -302,7 +302,7 @@ fn params_text(e: &FoundEffect, ch: &str) -> String {
         .map(|(k, v)| {
             let shown = match k.as_str() {
                 "q" => Some(&units[1]),
-                "n" => Some(&units[2]),
+                "n" | "n_without" => Some(&units[2]),
                 "b" => Some(&units[3]),
                 "k" => Some(&units[4]),
                 "r" => Some(&units[5]),
