@@ -50,6 +50,53 @@ fn bench(c: &mut Criterion) {
         )
     });
     group.finish();
+
+    // The same model behind an output filter: Bartlett 16 taps at 8x the output rate (the raw
+    // processes run at the internal rate), and a second-order low-pass at the output rate (IIR).
+    let mut group = c.benchmark_group("generate_mtx_filtered");
+    group.throughput(Throughput::Elements(SAMPLES));
+    group.sample_size(10);
+    for (name, kind, d) in [
+        ("bartlett16_x8", noise::FilterKind::Bartlett { taps: 16 }, 8),
+        (
+            "lowpass2_30hz_x1",
+            noise::FilterKind::LowPass2 { cutoff_hz: 30.0 },
+            1,
+        ),
+    ] {
+        let mut m = model.clone();
+        for s in noise::Sensor::ALL {
+            for a in &mut m.triad_mut(s).axes {
+                a.output_filter = Some(noise::OutputFilter::new(kind, d).unwrap());
+            }
+        }
+        group.bench_function(name, |b| {
+            let mut out = vec![0.0; SAMPLES as usize];
+            b.iter_batched(
+                || ImuErrors::new(&m, 0.01, 1, 0),
+                |mut e| {
+                    for (c, ch) in e.channels_mut().iter_mut().enumerate() {
+                        ch.fill_static(0, if c < 3 { &ideal_g } else { &ideal_a }, &mut out);
+                        black_box(&out);
+                    }
+                },
+                BatchSize::LargeInput,
+            )
+        });
+    }
+    group.finish();
+
+    // The exact filtered Allan variance of the MTx gyro at 18 octave taus (what diagnose's filter
+    // candidate and the readback tests evaluate).
+    let mut group = c.benchmark_group("filtered_allan");
+    let taus: Vec<f64> = (0..18).map(|j| 0.01 * f64::from(1u32 << j)).collect();
+    let mut axis = model.gyro.axes[0].clone();
+    axis.output_filter =
+        Some(noise::OutputFilter::new(noise::FilterKind::Bartlett { taps: 16 }, 8).unwrap());
+    group.bench_function("mtx_gyro_bartlett16_x8_18_taus", |b| {
+        b.iter(|| black_box(axis.allan_variance_sampled_many(&taus, 0.01)))
+    });
+    group.finish();
 }
 
 criterion_group!(benches, bench);
