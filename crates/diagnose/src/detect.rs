@@ -441,6 +441,66 @@ pub fn fit_transient(x: &[f64], dt_s: f64, floor: &NoiseLevels) -> Option<Transi
     })
 }
 
+/// Power of `x` near frequency `f0_hz`, Welch-averaged over segments of `seg` samples (Hann
+/// window), at f0 + j df for j = -span..=span, df = 1 / (seg dt). Each value is a direct DFT at that
+/// frequency (Goertzel-style rotation), so f0 need not lie on a bin.
+fn local_spectrum(x: &[f64], dt_s: f64, f0_hz: f64, seg: usize, span: i32) -> Vec<f64> {
+    let k = x.len() / seg;
+    let df = 1.0 / (seg as f64 * dt_s);
+    let window: Vec<f64> = (0..seg)
+        .map(|n| 0.5 - 0.5 * (std::f64::consts::TAU * n as f64 / seg as f64).cos())
+        .collect();
+    (-span..=span)
+        .map(|j| {
+            let w = std::f64::consts::TAU * (f0_hz + f64::from(j) * df) * dt_s;
+            let (c1, s1) = (w.cos(), w.sin());
+            let mut total = 0.0;
+            for s in 0..k {
+                let seg_x = &x[s * seg..(s + 1) * seg];
+                let mean = seg_x.iter().sum::<f64>() / seg as f64;
+                let (mut re, mut im) = (0.0, 0.0);
+                let (mut c, mut sn) = (1.0, 0.0);
+                for (v, wn) in seg_x.iter().zip(&window) {
+                    let a = (v - mean) * wn;
+                    re += a * c;
+                    im -= a * sn;
+                    let c2 = c * c1 - sn * s1;
+                    sn = sn * c1 + c * s1;
+                    c = c2;
+                }
+                total += re * re + im * im;
+            }
+            total / k.max(1) as f64
+        })
+        .collect()
+}
+
+/// Is there a spectral line (a sinusoid) at `f0_hz` in `x`? A Welch spectrum (segments of 4096
+/// samples, or a sixteenth of the log if shorter, Hann window) must, at f0, exceed the median of the
+/// bins 6 to 20 resolutions away by a factor above both 2 and 1 + 6/sqrt(K) (K segments: the
+/// relative spread of a K-segment average is 1/sqrt(K), so 6 sigma), and fall to a quarter of its
+/// peak 4 resolutions away (a Hann-windowed line leaks over +-2 bins; a broad narrow-band process
+/// does not fall off). Used to tell a physical tone from a sinusoid fitted as a stand-in.
+pub fn is_spectral_line(x: &[f64], dt_s: f64, f0_hz: f64) -> bool {
+    let seg = 4096.min(x.len() / 16);
+    if seg < 64 || !(f0_hz > 0.0) || f0_hz >= 0.5 / dt_s {
+        return false;
+    }
+    let df = 1.0 / (seg as f64 * dt_s);
+    if f0_hz < 6.0 * df {
+        return false;
+    }
+    let k = (x.len() / seg) as f64;
+    let span = 20;
+    let p = local_spectrum(x, dt_s, f0_hz, seg, span);
+    let at = |j: i32| p[(j + span) as usize];
+    let peak = (-1..=1).map(at).fold(0.0, f64::max);
+    let mut side: Vec<f64> = (6..=span).flat_map(|j| [at(j), at(-j)]).collect();
+    let background = median(&mut side);
+    let far = at(4).max(at(-4));
+    background > 0.0 && peak > background * 2f64.max(1.0 + 6.0 / k.sqrt()) && far < 0.25 * peak
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -493,6 +553,35 @@ mod tests {
             }
         }
         assert!((fast - brute).abs() < 1e-9 * brute, "{fast} {brute}");
+    }
+
+    #[test]
+    fn spectral_lines_are_told_from_broad_peaks() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(9);
+        let dt = 0.01;
+        let n = 200_000;
+        let noise: Vec<f64> = (0..n).map(|_| rng.gen::<f64>() - 0.5).collect();
+        // A tone at 0.56 Hz, 0.05 of the noise amplitude: a line.
+        let tone: Vec<f64> = (0..n)
+            .map(|k| noise[k] + 0.05 * (std::f64::consts::TAU * 0.56 * k as f64 * dt).sin())
+            .collect();
+        assert!(is_spectral_line(&tone, dt, 0.56));
+        assert!(!is_spectral_line(&noise, dt, 0.56));
+        // A broad resonance near 20.6 Hz (an AR(2) process, bandwidth about 0.4 Hz): not a line.
+        let r: f64 = (-std::f64::consts::PI * 0.4 * dt).exp();
+        let th = std::f64::consts::TAU * 20.6 * dt;
+        let (mut y1, mut y2) = (0.0, 0.0);
+        let broad: Vec<f64> = noise
+            .iter()
+            .map(|&e| {
+                let y = 2.0 * r * th.cos() * y1 - r * r * y2 + e;
+                y2 = y1;
+                y1 = y;
+                y
+            })
+            .collect();
+        assert!(!is_spectral_line(&broad, dt, 20.6));
     }
 
     #[test]

@@ -373,9 +373,18 @@ pub fn diagnose_with_progress(
             continue;
         };
         // Shaped terms fitted where the model still disagrees are stand-ins, not physical findings.
+        // A sinusoid whose frequency carries a spectral line in the log is a physical tone (a
+        // vibration, an interference), not a stand-in.
         if g1.rms > STAND_IN_GAP {
             for e in &mut effects[c] {
-                e.stand_in = matches!(e.effect, Effect::GaussMarkov | Effect::Sinusoidal);
+                e.stand_in = match e.effect {
+                    Effect::GaussMarkov => true,
+                    Effect::Sinusoidal => !e.parameters.get("frequency_hz").is_some_and(|&f| {
+                        log.channels[c]
+                            .is_some_and(|x| crate::detect::is_spectral_line(x, log.dt_s, f))
+                    }),
+                    _ => false,
+                };
             }
         }
         let verdict = verdict(&g1, &effects[c]);
@@ -502,8 +511,9 @@ fn shifted_band(band: &Band, delta_avar: &[f64]) -> Band {
     out
 }
 
-/// Above this final gap (RMS z) a channel's fitted Gauss-Markov and sinusoid terms are called
-/// stand-ins: the hidden-effect tests close a physical effect's gap to below 1.5.
+/// Above this final gap (RMS z) a channel's fitted Gauss-Markov terms, and sinusoids without a
+/// spectral line in the log (`detect::is_spectral_line`), are called stand-ins: the hidden-effect
+/// tests close a physical effect's gap to below 1.5.
 pub const STAND_IN_GAP: f64 = 1.5;
 
 fn verdict(g: &Gap, effects: &[FoundEffect]) -> String {
