@@ -281,9 +281,21 @@ pub fn regression(x: &[f64], g: &[f64], dt_s: f64, floor: &NoiseLevels) -> Optio
     Some(Regression {
         coefficient: c,
         sd,
-        z: if sd > 0.0 { c / sd } else { f64::INFINITY },
+        z: z_score(c, sd),
         corrected,
     })
+}
+
+/// c / sd, with a noiseless channel's exact fit counted as decisive only when it finds something
+/// (a constant channel's zero coefficient is z = 0, not 0/0).
+fn z_score(c: f64, sd: f64) -> f64 {
+    if sd > 0.0 {
+        c / sd
+    } else if c == 0.0 {
+        0.0
+    } else {
+        f64::INFINITY.copysign(c)
+    }
 }
 
 /// |z| a temperature coefficient must exceed: two-sided 1e-3 per channel under Gaussian errors
@@ -436,7 +448,7 @@ pub fn fit_transient(x: &[f64], dt_s: f64, floor: &NoiseLevels) -> Option<Transi
         tau_s: tau,
         tau_lo_s: tau_lo.min(tau),
         tau_hi_s: tau_hi.max(tau),
-        z: if sd > 0.0 { c / sd } else { f64::INFINITY },
+        z: z_score(c, sd),
         corrected: x.iter().zip(&gt).map(|(xi, gi)| xi - c * gi).collect(),
     })
 }
@@ -585,6 +597,30 @@ mod tests {
     }
 
     #[test]
+    fn a_constant_or_quantised_channel_names_nothing() {
+        // A channel stuck at one value, and one that toggles between two LSB values: no outliers,
+        // no temperature effect, no transient (and no 0/0).
+        let n = 20_000;
+        let constant = vec![0.25; n];
+        let toggling: Vec<f64> = (0..n)
+            .map(|k| if k % 3 == 0 { 0.05 } else { 0.0 })
+            .collect();
+        let temp: Vec<f64> = (0..n).map(|k| 20.0 + 1e-3 * k as f64).collect();
+        let floors = [NoiseLevels::default(); 6];
+        let mut channels: [Option<&[f64]>; 6] = [None; 6];
+        channels[0] = Some(&constant);
+        channels[1] = Some(&toggling);
+        let pre = preprocess(channels, Some(&temp), 0.01, &floors);
+        for c in 0..2 {
+            assert!(
+                pre.findings[c].is_empty(),
+                "channel {c}: {:?}",
+                pre.findings[c]
+            );
+        }
+    }
+
+    #[test]
     fn spikes_found_and_removed() {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(5);
@@ -687,9 +723,20 @@ pub fn preprocess(
                     delta_bic: f64::INFINITY,
                 });
             }
+            // An effect smaller than 1e-9 of the channel's magnitude is floating-point rounding of
+            // the log's values (text logs carry at most 17 significant digits, sensors 4 to 6).
+            let scale = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let visible = |c: f64, g: &[f64]| {
+                let (lo, hi) = g
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                        (a.min(v), b.max(v))
+                    });
+                (c * (hi - lo)).abs() > 1e-9 * scale
+            };
             if let Some(t) = temperature_c {
                 if let Some(reg) = regression(&x, t, dt_s, &floors[c]) {
-                    if reg.z.abs() > TEMPERATURE_Z {
+                    if reg.z.abs() > TEMPERATURE_Z && visible(reg.coefficient, t) {
                         let c1 = reg.coefficient;
                         // Beside a straight line, is the temperature still needed? If not, its effect
                         // cannot be told from a rate ramp (a temperature that rises steadily).
@@ -726,7 +773,7 @@ pub fn preprocess(
                 }
             }
             if let Some(tr) = fit_transient(&x, dt_s, &floors[c]) {
-                if tr.z.abs() > TRANSIENT_Z {
+                if tr.z.abs() > TRANSIENT_Z && visible(tr.amplitude, &[0.0, 1.0]) {
                     let sd = (tr.amplitude / tr.z).abs();
                     found.push(Finding {
                         cannot_tell_from: vec![],
