@@ -297,7 +297,8 @@ fn params_text(e: &FoundEffect, ch: &str) -> String {
     } else {
         "m/s^2"
     });
-    e.parameters
+    let values = e
+        .parameters
         .iter()
         .map(|(k, v)| {
             let shown = match k.as_str() {
@@ -317,6 +318,13 @@ fn params_text(e: &FoundEffect, ch: &str) -> String {
                 e.parameters_hi.get(k).copied().unwrap_or(f64::NAN)
             )
         })
+        .collect::<Vec<_>>();
+    // An output filter's kind first.
+    e.parameters
+        .kind
+        .map(|k| format!("kind = {k}"))
+        .into_iter()
+        .chain(values)
         .collect::<Vec<_>>()
         .join(", ")
 }
