@@ -495,7 +495,7 @@ fn local_spectrum(x: &[f64], dt_s: f64, f0_hz: f64, seg: usize, span: i32) -> Ve
 /// does not fall off). Used to tell a physical tone from a sinusoid fitted as a stand-in.
 pub fn is_spectral_line(x: &[f64], dt_s: f64, f0_hz: f64) -> bool {
     let seg = 4096.min(x.len() / 16);
-    if seg < 64 || !(f0_hz > 0.0) || f0_hz >= 0.5 / dt_s {
+    if seg < 64 || f0_hz.is_nan() || f0_hz <= 0.0 || f0_hz >= 0.5 / dt_s {
         return false;
     }
     let df = 1.0 / (seg as f64 * dt_s);
