@@ -150,10 +150,14 @@ pub fn recognise(name: &str) -> Result<Recognised, NotRecognised> {
     }
     // Words before the quantity are a prefix (`imu_gyro_x`, `imu0.angular_velocity.x`).
     let is_word = |t: &str| {
-        let glued = t.len() > 1
-            && axis_of(&t[t.len() - 1..]).is_some()
-            && (GYRO_WORDS.contains(&&t[..t.len() - 1])
-                || ACCEL_WORDS.contains(&&t[..t.len() - 1]));
+        // A word glued to its axis letter (`gyrx`); split at the last character, not byte.
+        let glued = match t.char_indices().last() {
+            Some((i, _)) if i > 0 => {
+                axis_of(&t[i..]).is_some()
+                    && (GYRO_WORDS.contains(&&t[..i]) || ACCEL_WORDS.contains(&&t[..i]))
+            }
+            _ => false,
+        };
         GYRO_WORDS.contains(&t)
             || ACCEL_WORDS.contains(&t)
             || TIME_WORDS.contains(&t)
@@ -203,7 +207,9 @@ pub fn recognise(name: &str) -> Result<Recognised, NotRecognised> {
     // that qualify it (`velocity`, `out`, `meas`, `raw`), the axis, then an optional unit.
     let (is_gyro, axis_at, glued) = {
         let split_glued = |t: &str| -> Option<(String, usize)> {
-            let (head, last) = t.split_at(t.len().checked_sub(1)?);
+            // Split before the last character (a name may hold any UTF-8).
+            let (i, _) = t.char_indices().last()?;
+            let (head, last) = t.split_at(i);
             Some((head.to_string(), axis_of(last)?))
         };
         if let Some((head, axis)) = split_glued(first) {
