@@ -6,7 +6,7 @@ use noise::closed_form as cf;
 use noise::{Effect, FilterKind, Flicker, OutputFilter};
 
 /// Effects diagnose can name (docs/diagnose.md list); the temperature bias only when the log has a temperature column.
-pub const CANDIDATES: [Effect; 8] = [
+pub const CANDIDATES: [Effect; 9] = [
     Effect::Quantization,
     Effect::WhiteNoise,
     Effect::BiasInstability,
@@ -15,6 +15,7 @@ pub const CANDIDATES: [Effect; 8] = [
     Effect::GaussMarkov,
     Effect::Sinusoidal,
     Effect::TemperatureBias,
+    Effect::Resonance,
 ];
 
 /// Parameters of a term in diagnose's parameterisation (SI; docs/diagnose.md JSON names).
@@ -29,6 +30,11 @@ pub enum TermParams {
     Sinusoid {
         amplitude: f64,
         frequency_hz: f64,
+    },
+    Resonance {
+        sigma: f64,
+        frequency_hz: f64,
+        bandwidth_hz: f64,
     },
     /// An output filter with the white-noise density N it is fitted with (the filter reshapes the
     /// white noise, so the two are fitted together).
@@ -45,6 +51,7 @@ impl TermParams {
             TermParams::Level(p) => p * p,
             TermParams::GaussMarkov { sigma, .. } => sigma * sigma,
             TermParams::Sinusoid { amplitude, .. } => amplitude * amplitude,
+            TermParams::Resonance { sigma, .. } => sigma * sigma,
             TermParams::Filter { n, .. } => n * n,
         }
     }
@@ -52,7 +59,7 @@ impl TermParams {
     /// The shape parameter, if any (Gauss-Markov time, sinusoid frequency).
     pub fn shape(&self) -> Option<f64> {
         match *self {
-            TermParams::Level(_) | TermParams::Filter { .. } => None,
+            TermParams::Level(_) | TermParams::Filter { .. } | TermParams::Resonance { .. } => None,
             TermParams::GaussMarkov { tau_s, .. } => Some(tau_s),
             TermParams::Sinusoid { frequency_hz, .. } => Some(frequency_hz),
         }
@@ -69,6 +76,15 @@ impl TermParams {
             } => {
                 vec![("amplitude", amplitude), ("frequency_hz", frequency_hz)]
             }
+            TermParams::Resonance {
+                sigma,
+                frequency_hz,
+                bandwidth_hz,
+            } => vec![
+                ("sigma", sigma),
+                ("frequency_hz", frequency_hz),
+                ("bandwidth_hz", bandwidth_hz),
+            ],
             TermParams::Filter { filter, n } => {
                 let mut v = match filter.kind {
                     FilterKind::MovingAverage { taps } | FilterKind::Bartlett { taps } => {
@@ -103,6 +119,7 @@ pub fn level_name(effect: Effect) -> &'static str {
 pub fn free_parameters(effect: Effect) -> usize {
     match effect {
         Effect::GaussMarkov | Effect::Sinusoidal | Effect::OutputFilter => 2,
+        Effect::Resonance => 3,
         _ => 1,
     }
 }
@@ -156,6 +173,46 @@ pub fn shape_grid(effect: Effect, tau_min_s: f64, tau_max_s: f64, dt_s: f64) -> 
     (0..=n)
         .map(|j| lo * (hi / lo).powf(j as f64 / n as f64))
         .collect()
+}
+
+/// The resonance shapes (frequency, bandwidth) tried around a broad spectral peak: frequency at the
+/// peak's plus {-1, -2/3, ..., +1} times its bandwidth, bandwidth at {1/2, 0.7, 1, 1.4, 2, 3} times
+/// the peak's; only underdamped shapes below the Nyquist frequency (42 at most).
+pub fn resonance_grid(peak: crate::spectrum::SpectralPeak, dt_s: f64) -> Vec<(f64, f64)> {
+    let nyquist = 0.5 / dt_s;
+    let mut out = Vec::new();
+    for i in -3..=3 {
+        let f = peak.frequency_hz + f64::from(i) / 3.0 * peak.bandwidth_hz;
+        for s in [0.5, 0.7, 1.0, 1.4, 2.0, 3.0] {
+            let b = s * peak.bandwidth_hz;
+            if f > 0.0 && f < nyquist && b < 2.0 * f {
+                out.push((f, b));
+            }
+        }
+    }
+    out
+}
+
+/// Allan variance per unit variance of a resonance (f0, bandwidth) at each tau, through `filter`.
+pub fn resonance_signature(
+    filter: Option<&OutputFilter>,
+    (f0_hz, bandwidth_hz): (f64, f64),
+    taus_s: &[f64],
+    dt_s: f64,
+) -> Vec<f64> {
+    match filter {
+        Some(f) => {
+            let fa = noise::filter::FilteredAllan::new(f, dt_s);
+            taus_s
+                .iter()
+                .map(|&t| fa.resonance(1.0, f0_hz, bandwidth_hz, t))
+                .collect()
+        }
+        None => taus_s
+            .iter()
+            .map(|&t| cf::resonance_avar_sampled(1.0, f0_hz, bandwidth_hz, t, dt_s))
+            .collect(),
+    }
 }
 
 /// Look-elsewhere cost of a shape chosen from `n` grid values, on the chi2 (-2 ln L) scale: the

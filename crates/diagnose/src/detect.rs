@@ -659,6 +659,8 @@ pub struct Finding {
 pub struct Preprocessed {
     pub channels: [Option<Vec<f64>>; 6],
     pub findings: [Vec<Finding>; 6],
+    /// The broad spectral peak of each corrected channel (a resonance's frequency and bandwidth).
+    pub peaks: [Option<crate::spectrum::SpectralPeak>; 6],
 }
 
 /// At least this many outliers are needed to name them (the threshold admits 0.01 false ones per log).
@@ -681,12 +683,17 @@ pub fn preprocess(
     use rayon::prelude::*;
     let hours = |n: usize| n as f64 * dt_s / 3600.0;
     // Channels in parallel (each result depends on its channel only).
-    let per: Vec<(Option<Vec<f64>>, Vec<Finding>)> = (0..6)
+    #[allow(clippy::type_complexity)]
+    let per: Vec<(
+        Option<Vec<f64>>,
+        Vec<Finding>,
+        Option<crate::spectrum::SpectralPeak>,
+    )> = (0..6)
         .into_par_iter()
         .map(|c| {
             let mut found: Vec<Finding> = Vec::new();
             let Some(raw) = channels[c] else {
-                return (None, found);
+                return (None, found, None);
             };
             let n = raw.len();
             let mut x = raw.to_vec();
@@ -796,18 +803,22 @@ pub fn preprocess(
                     x = tr.corrected;
                 }
             }
-            (Some(x), found)
+            let peak = crate::spectrum::broad_peak(&x, dt_s);
+            (Some(x), found, peak)
         })
         .collect();
     let mut out: [Option<Vec<f64>>; 6] = Default::default();
     let mut findings: [Vec<Finding>; 6] = Default::default();
-    for (c, (x, f)) in per.into_iter().enumerate() {
+    let mut peaks: [Option<crate::spectrum::SpectralPeak>; 6] = Default::default();
+    for (c, (x, f, p)) in per.into_iter().enumerate() {
         out[c] = x;
         findings[c] = f;
+        peaks[c] = p;
     }
     Preprocessed {
         channels: out,
         findings,
+        peaks,
     }
 }
 

@@ -19,6 +19,8 @@ use serde::Serialize;
 
 /// chi2_1 quantile at 0.95: profile-likelihood 95 % interval threshold.
 pub const CHI2_1_95: f64 = 3.841_458_820_694_124;
+/// 95 % quantile of chi-squared with 2 degrees of freedom (-2 ln 0.05): a joint interval for two shape parameters.
+pub const CHI2_2_95: f64 = 5.991_464_547_107_979;
 
 /// Smallest ratio (model variance after the change) / (band variance) allowed: a candidate that would take
 /// the variance to zero or below at some tau is clamped there (and pays the misfit).

@@ -19,6 +19,7 @@ pub mod model_terms;
 pub mod protocol;
 pub mod report;
 pub mod simulate;
+pub mod spectrum;
 mod trials;
 pub mod workflow;
 

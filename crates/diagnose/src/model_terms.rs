@@ -31,6 +31,11 @@ pub fn term_level(model: &SensorModel, ch: usize, effect: Effect) -> Option<Term
             amplitude: s.amplitude,
             frequency_hz: s.frequency_hz,
         },
+        Term::Resonance(r) => TermParams::Resonance {
+            sigma: r.sigma,
+            frequency_hz: r.frequency_hz,
+            bandwidth_hz: r.bandwidth_hz,
+        },
         Term::OutputFilter(filter) => TermParams::Filter {
             filter,
             n: model.axis(sensor, axis).white_noise.unwrap_or(0.0),
@@ -95,6 +100,17 @@ pub fn set_term(model: &mut SensorModel, ch: usize, effect: Effect, params: &Ter
             frequency_hz,
             phase_rad: a.sinusoidal.and_then(|s| s.phase_rad),
         }),
+        (
+            Effect::Resonance,
+            TermParams::Resonance {
+                sigma,
+                frequency_hz,
+                bandwidth_hz,
+            },
+        ) => match noise::Resonance::new(sigma, frequency_hz, bandwidth_hz) {
+            Ok(r) => Term::Resonance(r),
+            Err(_) => return,
+        },
         (Effect::OutputFilter, TermParams::Filter { filter, n }) => {
             a.white_noise = Some(n);
             Term::OutputFilter(filter)

@@ -1,12 +1,14 @@
 //! Step 3: every candidate effect fitted to one channel's gap.
 
 use crate::candidates::{
-    filter_grid, free_parameters, shape_grid, shape_search_penalty, unit_family_signature,
-    unit_signature, white_signature, TermParams, CANDIDATES,
+    filter_grid, free_parameters, resonance_grid, resonance_signature, shape_grid,
+    shape_search_penalty, unit_family_signature, unit_signature, white_signature, TermParams,
+    CANDIDATES,
 };
 use crate::fit::predicted_ln_adev;
 use crate::fit::{
     aic, bic, birge_scale, fit_family, fit_linear, linear_interval, FitData, LinearFit, CHI2_1_95,
+    CHI2_2_95,
 };
 use crate::gap::{Band, Curve, Gap};
 use crate::model_terms::{
@@ -44,6 +46,15 @@ pub(crate) fn sqrt_params(p: TermParams, c: f64) -> TermParams {
             amplitude: c.max(0.0).sqrt(),
             frequency_hz,
         },
+        TermParams::Resonance {
+            frequency_hz,
+            bandwidth_hz,
+            ..
+        } => TermParams::Resonance {
+            sigma: c.max(0.0).sqrt(),
+            frequency_hz,
+            bandwidth_hz,
+        },
         TermParams::Filter { filter, .. } => TermParams::Filter {
             filter,
             n: c.max(0.0).sqrt(),
@@ -62,6 +73,7 @@ pub(crate) fn trials(
     dt_s: f64,
     temp: Option<(&[f64], f64, f64)>,
     ramp_slope: f64,
+    peak: Option<crate::spectrum::SpectralPeak>,
 ) -> Vec<Trial> {
     let ln_meas: Vec<f64> = measured.adev.iter().map(|a| a.ln()).collect();
     let data = FitData {
@@ -81,6 +93,8 @@ pub(crate) fn trials(
         }
         let k = free_parameters(effect);
         let current = term_level(model, ch, effect);
+        // A resonance's (frequency, bandwidth) interval, when its shape was searched.
+        let mut res_shape: Option<((f64, f64), (f64, f64))> = None;
         // Signature(s) of this candidate.
         let shaped = matches!(effect, Effect::GaussMarkov | Effect::Sinusoidal);
         let (fit, params, shape_lo, shape_hi, f, penalty): (
@@ -92,9 +106,19 @@ pub(crate) fn trials(
             f64,
         ) = if shaped {
             // A term the model has keeps its shape (a wrong level); an absent one is searched over shapes.
+            // A sinusoid is not offered inside a broad spectral peak: the spectrum shows the power
+            // there spread over many resolutions, not a line (the resonance candidate describes it).
             let shapes = match current.and_then(|c| c.shape()) {
                 Some(s) => vec![s],
-                None => shape_grid(effect, tau[0], tau[m - 1], dt_s),
+                None => {
+                    let mut g = shape_grid(effect, tau[0], tau[m - 1], dt_s);
+                    if effect == Effect::Sinusoidal {
+                        if let Some(p) = peak {
+                            g.retain(|&f| !p.covers(f));
+                        }
+                    }
+                    g
+                }
             };
             let sigs: Vec<Vec<f64>> = shapes
                 .iter()
@@ -130,6 +154,60 @@ pub(crate) fn trials(
                 sigs[j].clone(),
                 shape_search_penalty(shapes.len()),
             )
+        } else if effect == Effect::Resonance {
+            // A resonance the model has keeps its shape (a wrong level). An absent one needs a broad
+            // peak in the log's spectrum (`spectrum::broad_peak`), which gives its frequency and
+            // bandwidth roughly (a real peak is seldom the symmetric shape of the model); the shape is
+            // then fitted to the Allan curve on a grid around them (frequency within a bandwidth of
+            // the peak, bandwidth from half to three times the peak's), with the look-elsewhere cost
+            // of the grid, through the channel's output filter.
+            let shapes: Vec<(f64, f64)> = match current {
+                Some(TermParams::Resonance {
+                    frequency_hz,
+                    bandwidth_hz,
+                    ..
+                }) => vec![(frequency_hz, bandwidth_hz)],
+                _ => match peak {
+                    Some(p) => resonance_grid(p, dt_s),
+                    None => continue,
+                },
+            };
+            let filter = output_filter(model, ch);
+            let c0 = current.map(|c| c.c()).unwrap_or(0.0);
+            let fits: Vec<(LinearFit, Vec<f64>)> = shapes
+                .iter()
+                .map(|&shape| {
+                    let f = resonance_signature(filter.as_ref(), shape, tau, dt_s);
+                    (fit_linear(&data, &f, c0), f)
+                })
+                .collect();
+            let Some(jb) =
+                (0..fits.len()).min_by(|&a, &b| fits[a].0.chi2.total_cmp(&fits[b].0.chi2))
+            else {
+                continue;
+            };
+            let fit = fits[jb].0;
+            // Shape interval: the grid's shapes within the 95 % threshold (Birge-widened) of the best.
+            let scale = birge_scale(fit.chi2, k, m);
+            let near: Vec<(f64, f64)> = (0..fits.len())
+                .filter(|&j| fits[j].0.chi2 <= fit.chi2 + CHI2_2_95 * scale * scale)
+                .map(|j| shapes[j])
+                .collect();
+            let span = |g: fn(&(f64, f64)) -> f64| {
+                near.iter()
+                    .map(g)
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                        (a.min(v), b.max(v))
+                    })
+            };
+            res_shape = Some((span(|s| s.0), span(|s| s.1)));
+            let p = TermParams::Resonance {
+                sigma: fit.c.sqrt(),
+                frequency_hz: shapes[jb].0,
+                bandwidth_hz: shapes[jb].1,
+            };
+            let penalty = shape_search_penalty(shapes.len());
+            (fit, p, 0.0, 0.0, fits[jb].1.clone(), penalty)
         } else if effect == Effect::TemperatureBias {
             // The sign comes from the correlation with temperature (the Allan signature is even).
             let Some((temp_avar, sign, current_k)) = temp else {
@@ -191,6 +269,22 @@ pub(crate) fn trials(
             if l > h {
                 (lo, hi) = (TermParams::Level(h), TermParams::Level(l));
             }
+        }
+        if let (
+            Some(((f_lo, f_hi), (b_lo, b_hi))),
+            TermParams::Resonance {
+                frequency_hz: fl,
+                bandwidth_hz: bl,
+                ..
+            },
+            TermParams::Resonance {
+                frequency_hz: fh,
+                bandwidth_hz: bh,
+                ..
+            },
+        ) = (res_shape, &mut lo, &mut hi)
+        {
+            (*fl, *fh, *bl, *bh) = (f_lo, f_hi, b_lo, b_hi);
         }
         match (&mut lo, &mut hi) {
             (

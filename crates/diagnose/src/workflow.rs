@@ -195,6 +195,7 @@ pub fn diagnose_with_progress(
                     temp.as_ref()
                         .map(|(v, s)| (v.as_slice(), *s, setup.temp_coeff[c])),
                     ramp_slope[c],
+                    pre.peaks[c],
                 );
                 let data = FitData {
                     ln_meas: &ln_meas,
@@ -296,8 +297,18 @@ pub fn diagnose_with_progress(
         }
         rounds = round;
         progress(&format!("round {round}: re-simulating the corrected model"));
-        let sim = simulate(&sim_model, &setup, settings.seed, settings.seeds)?;
-        dirty = false;
+        // Only the channels changed in this round: each channel draws from its own streams, so its
+        // band is the same whichever others are generated. The drift needs every channel; a partial
+        // round leaves it to a full simulation after the loop.
+        let changed: [bool; 6] =
+            std::array::from_fn(|c| active[c] && pending.iter().any(|p| p.0 == c));
+        let partial = changed != active;
+        let round_setup = SimSetup {
+            active: changed,
+            ..setup.clone()
+        };
+        let sim = simulate(&sim_model, &round_setup, settings.seed, settings.seeds)?;
+        dirty = partial;
         for (c, changes, gap_before) in pending {
             let new_bands = {
                 let mut b = bands.clone();
@@ -345,7 +356,9 @@ pub fn diagnose_with_progress(
                 merge_refinements(&mut effects[c], first_new);
             }
         }
-        last_drift = sim.drift;
+        if !partial {
+            last_drift = sim.drift;
+        }
     }
     if dirty {
         last_drift = simulate(&sim_model, &setup, settings.seed, settings.seeds)?.drift;

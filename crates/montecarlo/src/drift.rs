@@ -293,6 +293,11 @@ pub fn law_terms(
                         tau_s: w.tau_s,
                         per_run: w.per_run,
                     },
+                    NoiseTerm::Resonance(r) => Source::Resonance {
+                        sigma: r.sigma,
+                        frequency_hz: r.frequency_hz,
+                        bandwidth_hz: r.bandwidth_hz,
+                    },
                     NoiseTerm::OutputFilter(_) => unreachable!("skipped above"),
                 };
                 terms.push(Term {

@@ -72,6 +72,14 @@ pub enum Source {
         phase: Option<f64>,
         sample_interval_s: f64,
     },
+    /// Stationary resonance (second-order Gauss-Markov) of std sigma, natural frequency and
+    /// half-power bandwidth (`noise::closed_form::resonance_kfold_variance`). A calibration leaves it
+    /// alone: it averages out over any window much longer than 1 / bandwidth.
+    Resonance {
+        sigma: f64,
+        frequency_hz: f64,
+        bandwidth_hz: f64,
+    },
     /// Warm-up transient `amplitude e^{-t/tau_s}` after turn-on; with `per_run` the amplitude is
     /// drawn per run from N(0, amplitude^2) (`noise::closed_form::transient_growth`).
     Transient {
@@ -178,6 +186,18 @@ fn moments(source: &Source, t_s: f64, how: Option<Integration>) -> Result<(f64, 
                 h,
             ),
             None => return Err("a sinusoid needs an integration"),
+        },
+        Source::Resonance {
+            sigma,
+            frequency_hz,
+            bandwidth_hz,
+        } => match how {
+            Some(h) => (
+                0.0,
+                cf::resonance_kfold_variance(*sigma, *frequency_hz, *bandwidth_hz, t_s, h.folds())
+                    .map_or(f64::NAN, |v| v * tilt_gain2(h)),
+            ),
+            None => return Err("a resonance needs an integration"),
         },
         Source::Transient {
             amplitude,

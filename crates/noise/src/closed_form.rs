@@ -7,6 +7,7 @@
 //! where sampling changes it, so tests can compare at any sample rate.
 
 use crate::units::STANDARD_GRAVITY_MPS2;
+use num_complex::Complex64;
 use std::f64::consts::{LN_2, PI};
 
 /// sqrt(2 ln2 / pi) = 0.6643: the Allan-deviation plateau of flicker noise per unit IEEE B (Hou 4.38-4.50).
@@ -569,6 +570,110 @@ pub fn gauss_markov_kfold_from_window_variance(
     sigma * sigma * tc_s.powi(2 * k) * v
 }
 
+/// A resonance (second-order Gauss-Markov process: white noise through a damped oscillator,
+/// x'' + 2 zeta w0 x' + w0^2 x = w(t)) of stationary std sigma, natural frequency f0 and half-power
+/// bandwidth B = 2 zeta f0 (so zeta = B / (2 f0) < 1), in the complex form its closed forms use:
+/// R(u) = sigma^2 e^{-zeta w0 |u|} (cos(wd u) + zeta/sqrt(1 - zeta^2) sin(wd |u|)), wd = w0 sqrt(1 - zeta^2)
+/// (Maybeck, Stochastic Models, Estimation and Control vol. 1 (1979), the second-order Gauss-Markov
+/// shaping filter; docs/real-effects.md), which is R(u) = sigma^2 Re[C e^{-s |u|}] with
+/// s = zeta w0 - i wd and C = 1 - i zeta/sqrt(1 - zeta^2). Every closed form of the first-order
+/// Gauss-Markov process (autocovariance sigma^2 e^{-|u|/T}) is analytic in 1/T, so the resonance's is
+/// Re[C x (that form at 1/T = s)]. Returns (C, s).
+pub fn resonance_exponent(f0_hz: f64, bandwidth_hz: f64) -> (Complex64, Complex64) {
+    let zeta = bandwidth_hz / (2.0 * f0_hz);
+    let w0 = 2.0 * PI * f0_hz;
+    let root = (1.0 - zeta * zeta).max(0.0).sqrt();
+    (
+        Complex64::new(1.0, -zeta / root),
+        Complex64::new(zeta * w0, -w0 * root),
+    )
+}
+
+/// Autocovariance of the resonance at lag `lag_s` (see [`resonance_exponent`]).
+pub fn resonance_autocovariance(sigma: f64, f0_hz: f64, bandwidth_hz: f64, lag_s: f64) -> f64 {
+    let (c, s) = resonance_exponent(f0_hz, bandwidth_hz);
+    sigma * sigma * (c * (-s * lag_s.abs()).exp()).re
+}
+
+/// Allan variance of the continuous resonance: Re[C sigma^2 g(tau s)] with g the first-order
+/// Gauss-Markov form of [`gauss_markov_avar`] per unit sigma, g(x) = (2/x) [1 - (3 - 4 e^{-x} + e^{-2x})/(2x)]
+/// (Hou 4.60 continued to complex 1/T; series x/3 ... below |x| = 1e-2, as there).
+pub fn resonance_avar(sigma: f64, f0_hz: f64, bandwidth_hz: f64, tau_s: f64) -> f64 {
+    let (c, s) = resonance_exponent(f0_hz, bandwidth_hz);
+    let x = s * tau_s;
+    let g = if x.norm() < 1e-2 {
+        x * 2.0
+            * (1.0 / 3.0 + x * (-0.25 + x * (7.0 / 60.0 + x * (-1.0 / 24.0 + x * 31.0 / 2520.0))))
+    } else {
+        (1.0 - (3.0 - (-x).exp() * 4.0 + (-x * 2.0).exp()) / (x * 2.0)) * 2.0 / x
+    };
+    sigma * sigma * (c * g).re
+}
+
+/// Exact Allan variance of the sampled resonance (the generator's exact discretisation at `dt_s`),
+/// averaged m = tau/dt samples at a time: Re[C sigma^2 (Var(S_m) - Cov(S_m, S'_m)) / m^2] with the
+/// sums of [`gauss_markov_avar_sampled`] at the complex ratio lambda = e^{-s dt} (geometric sums
+/// hold for any ratio of modulus below 1).
+pub fn resonance_avar_sampled(
+    sigma: f64,
+    f0_hz: f64,
+    bandwidth_hz: f64,
+    tau_s: f64,
+    dt_s: f64,
+) -> f64 {
+    let (c, s) = resonance_exponent(f0_hz, bandwidth_hz);
+    let m = (tau_s / dt_s).round().max(1.0);
+    sigma * sigma * (c * geometric_avar_unit((-s * dt_s).exp(), m)).re
+}
+
+/// (Var(S_m) - Cov(S_m, S'_m)) / m^2 for a sequence of autocovariance lambda^|j| (any complex ratio
+/// of modulus below 1): the sums of [`gauss_markov_avar_sampled`] without its random-walk limit.
+pub(crate) fn geometric_avar_unit(lambda: Complex64, m: f64) -> Complex64 {
+    let one = Complex64::new(1.0, 0.0);
+    let d = (one - lambda) * (one - lambda);
+    let lm = one - lambda.powf(m);
+    let var_sum = (lambda * ((one - lambda) * m - lm) * 2.0) / d + m;
+    let cov = lambda * lm * lm / d;
+    (var_sum - cov) / (m * m)
+}
+
+/// Variance of the k-fold integral (k = 1..=3) of the stationary resonance at time t:
+/// Re[C sigma^2 s^{-2k} V_k(t s)] with the V_k of [`gauss_markov_kfold_variance`] (same series below
+/// |x| = 0.5). `None` for k outside 1..=3.
+pub fn resonance_kfold_variance(
+    sigma: f64,
+    f0_hz: f64,
+    bandwidth_hz: f64,
+    t_s: f64,
+    k: i32,
+) -> Option<f64> {
+    if !(1..=3).contains(&k) {
+        return None;
+    }
+    let (c, s) = resonance_exponent(f0_hz, bandwidth_hz);
+    let x = s * t_s;
+    let v = if x.norm() < 0.5 {
+        let binom = |n: i32, j: i32| factorial(n) / (factorial(j) * factorial(n - j));
+        (2 * k..2 * k + 25)
+            .map(|n| {
+                let sign = if n % 2 == 0 { 1.0 } else { -1.0 };
+                x.powi(n) * (2.0 * sign * binom(n - 1, k - 1) / factorial(n))
+            })
+            .sum()
+    } else {
+        let e = (-x).exp();
+        match k {
+            1 => (x - 1.0 + e) * 2.0,
+            2 => x.powi(3) * (2.0 / 3.0) - x * x + 2.0 - (x + 1.0) * e * 2.0,
+            _ => {
+                x.powi(5) / 10.0 - x.powi(4) / 4.0 + x.powi(3) / 3.0 - 2.0
+                    + (x * 2.0 + x * x + 2.0) * e
+            }
+        }
+    };
+    Some(sigma * sigma * (c * v / s.powi(2 * k)).re)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -766,5 +871,97 @@ mod tests {
                 < 1e-12
         );
         assert!(gauss_markov_kfold_variance(sigma, tc, 7.0, 4).is_none());
+    }
+
+    /// Allan weights' autocorrelation A_w(k) for averages of m (docs/real-effects.md).
+    fn a_w(k: i64, m: i64) -> f64 {
+        let k = k.abs();
+        if k <= m {
+            (2 * m - 3 * k) as f64
+        } else if k < 2 * m {
+            -((2 * m - k) as f64)
+        } else {
+            0.0
+        }
+    }
+
+    /// The resonance's closed forms against brute force from its autocovariance: the sampled Allan
+    /// variance as the quadratic form (1/(2m^2)) sum A_w(k) R(k dt), the continuous one as the same
+    /// integral (midpoint rule, 2e5 points), and the k-fold integrals' variances as the double
+    /// integral of g(u) g(v) R(u - v), g(u) = (t-u)^(k-1)/(k-1)! (midpoint rule, 1200^2 points), on
+    /// both sides of the series/closed-form switch. The autocovariance itself is checked against the
+    /// damped-oscillator form written out (Maybeck vol. 1, second-order Gauss-Markov).
+    #[test]
+    fn resonance_closed_forms_match_brute_force() {
+        let (sigma, f0, bw) = (2e-3, 3.0, 0.8);
+        let zeta = bw / (2.0 * f0);
+        let w0 = TAU * f0;
+        let wd = w0 * (1.0 - zeta * zeta).sqrt();
+        let r = |u: f64| resonance_autocovariance(sigma, f0, bw, u);
+        for u in [0.0f64, 0.01, 0.137, 1.3, -0.4] {
+            let direct = sigma
+                * sigma
+                * (-zeta * w0 * u.abs()).exp()
+                * ((wd * u).cos() + zeta / (1.0 - zeta * zeta).sqrt() * (wd * u.abs()).sin());
+            assert!((r(u) - direct).abs() < 1e-15, "R({u})");
+        }
+        let dt = 0.01;
+        for m in [1i64, 2, 5, 17, 33, 100, 400] {
+            let brute: f64 = (-2 * m..=2 * m)
+                .map(|k| a_w(k, m) * r(k as f64 * dt))
+                .sum::<f64>()
+                / (2 * m * m) as f64;
+            let cf = resonance_avar_sampled(sigma, f0, bw, m as f64 * dt, dt);
+            assert!(
+                (cf / brute - 1.0).abs() < 1e-9,
+                "sampled m {m}: {cf} vs {brute}"
+            );
+        }
+        for tau in [0.003, 0.05, 0.17, 0.5, 2.0, 10.0] {
+            let n = 200_000;
+            let h = 4.0 * tau / n as f64;
+            let brute: f64 = (0..n)
+                .map(|i| {
+                    let u = -2.0 * tau + (i as f64 + 0.5) * h;
+                    let aw = if u.abs() <= tau {
+                        2.0 * tau - 3.0 * u.abs()
+                    } else {
+                        -(2.0 * tau - u.abs())
+                    };
+                    aw * r(u)
+                })
+                .sum::<f64>()
+                * h
+                / (2.0 * tau * tau);
+            let cf = resonance_avar(sigma, f0, bw, tau);
+            assert!(
+                (cf / brute - 1.0).abs() < 1e-6,
+                "continuous tau {tau}: {cf} vs {brute}"
+            );
+        }
+        // |s| = w0 = 18.85 /s: t = 0.02 s is on the series side, 0.03 s and beyond on the closed form.
+        for k in 1..=3 {
+            for t in [0.02, 0.03, 0.3, 2.0] {
+                let n = 1200;
+                let h = t / n as f64;
+                let fact = [1.0, 1.0, 2.0][k as usize - 1];
+                let g: Vec<f64> = (0..n)
+                    .map(|i| (t - (i as f64 + 0.5) * h).powi(k - 1) / fact)
+                    .collect();
+                let mut brute = 0.0;
+                for i in 0..n {
+                    for j in 0..n {
+                        brute += g[i] * g[j] * r((i as f64 - j as f64) * h);
+                    }
+                }
+                brute *= h * h;
+                let cf = resonance_kfold_variance(sigma, f0, bw, t, k).unwrap();
+                assert!(
+                    (cf / brute - 1.0).abs() < 1e-4,
+                    "k {k}, t {t}: {cf} vs {brute}"
+                );
+            }
+        }
+        assert!(resonance_kfold_variance(sigma, f0, bw, 1.0, 4).is_none());
     }
 }

@@ -50,6 +50,7 @@ pub enum Effect {
     Outliers,
     WarmupTransient,
     OutputFilter,
+    Resonance,
 }
 
 impl serde::Serialize for Effect {
@@ -59,7 +60,7 @@ impl serde::Serialize for Effect {
 }
 
 impl Effect {
-    pub const ALL: [Effect; 15] = [
+    pub const ALL: [Effect; 16] = [
         Effect::Quantization,
         Effect::WhiteNoise,
         Effect::BiasInstability,
@@ -75,6 +76,7 @@ impl Effect {
         Effect::Outliers,
         Effect::WarmupTransient,
         Effect::OutputFilter,
+        Effect::Resonance,
     ];
 
     /// The config / CLI / JSON name, e.g. `"white_noise"`.
@@ -95,6 +97,7 @@ impl Effect {
             Effect::Outliers => "outliers",
             Effect::WarmupTransient => "warmup_transient",
             Effect::OutputFilter => "output_filter",
+            Effect::Resonance => "resonance",
         }
     }
 
@@ -112,6 +115,7 @@ impl Effect {
                 | Effect::RateRandomWalk
                 | Effect::GaussMarkov
                 | Effect::Outliers
+                | Effect::Resonance
         )
     }
 
@@ -267,7 +271,7 @@ mod tests {
         assert!(f.allows(Sensor::Gyro, Effect::Quantization));
         assert_eq!(
             f.describe(),
-            "--only gyro.quantization,gyro.white_noise,gyro.bias_instability,gyro.rate_random_walk,gyro.rate_ramp,gyro.gauss_markov,gyro.sinusoidal,gyro.temperature_bias,gyro.constant_bias,gyro.turn_on_bias,gyro.scale_factor,gyro.misalignment,gyro.outliers,gyro.warmup_transient,gyro.output_filter --without gyro.white_noise"
+            "--only gyro.quantization,gyro.white_noise,gyro.bias_instability,gyro.rate_random_walk,gyro.rate_ramp,gyro.gauss_markov,gyro.sinusoidal,gyro.temperature_bias,gyro.constant_bias,gyro.turn_on_bias,gyro.scale_factor,gyro.misalignment,gyro.outliers,gyro.warmup_transient,gyro.output_filter,gyro.resonance --without gyro.white_noise"
         );
         assert!(TermFilter::all().is_all());
     }

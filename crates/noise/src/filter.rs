@@ -24,6 +24,7 @@
 //! peak (their sum then differs from 1 by less than 1e-15).
 
 use crate::model::{check, ModelError};
+use num_complex::Complex64;
 
 /// Which filter.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -405,23 +406,54 @@ impl FilteredAllan {
 
     /// First-order Gauss-Markov of stationary std `sigma` and correlation time `tc_s`.
     pub fn gauss_markov(&self, sigma: f64, tc_s: f64, tau_s: f64) -> f64 {
+        let dt = self.dt_s;
+        self.exponential(
+            Complex64::new(sigma * sigma, 0.0),
+            Complex64::new(1.0 / tc_s, 0.0),
+            tau_s,
+            |v, tau| {
+                crate::closed_form::gauss_markov_avar_sampled(v.re.max(0.0).sqrt(), tc_s, tau, dt)
+            },
+        )
+    }
+
+    /// Resonance (second-order Gauss-Markov) of std `sigma`, natural frequency `f0_hz` and
+    /// half-power bandwidth `bandwidth_hz` (autocovariance Re[sigma^2 C e^{-s|u|}],
+    /// [`crate::closed_form::resonance_exponent`]).
+    pub fn resonance(&self, sigma: f64, f0_hz: f64, bandwidth_hz: f64, tau_s: f64) -> f64 {
+        let (c, s) = crate::closed_form::resonance_exponent(f0_hz, bandwidth_hz);
+        let lambda_o = (-s * self.dt_s).exp();
+        self.exponential(c * sigma * sigma, s, tau_s, |v, tau| {
+            let m = (tau / self.dt_s).round().max(1.0);
+            (v * crate::closed_form::geometric_avar_unit(lambda_o, m)).re
+        })
+    }
+
+    /// A stationary input of autocovariance Re[coef e^{-s|u|}] (Re s > 0): the first-order
+    /// Gauss-Markov process (real s = 1/T) and the resonance. `far(v, tau)` is the Allan variance of
+    /// the sampled output-rate sequence of autocovariance Re[v lambda_o^|n|], lambda_o = e^{-s dt}.
+    fn exponential(
+        &self,
+        coef: Complex64,
+        s: Complex64,
+        tau_s: f64,
+        far: impl Fn(Complex64, f64) -> f64,
+    ) -> f64 {
         let l = self.len() as i64;
         let d = self.decimation;
-        let phi = (-self.dt_i / tc_s).exp();
-        // R_y(k), k = 0..L-1, directly.
-        let r_y: Vec<f64> = (0..l)
+        let phi = (-s * self.dt_i).exp();
+        // R_y(k), k = 0..L-1, directly (complex: the real part is the autocovariance).
+        let r_y: Vec<Complex64> = (0..l)
             .map(|k| {
-                sigma
-                    * sigma
-                    * (-(l - 1)..l)
-                        .map(|j| self.a_h(j) * phi.powi((k - j).abs() as i32))
-                        .sum::<f64>()
+                coef * (-(l - 1)..l)
+                    .map(|j| phi.powi((k - j).abs() as i32) * self.a_h(j))
+                    .sum::<Complex64>()
             })
             .collect();
         let n0 = self.n0();
-        let phi_o = (-self.dt_s / tc_s).exp();
+        let phi_o = (-s * self.dt_s).exp();
         // R_z(n): direct inside the span, geometric beyond (R_y(k) = R_y(L-1) phi^(k-L+1)).
-        let r_z = |n: usize| -> f64 {
+        let r_z = |n: usize| -> Complex64 {
             let k = n * d;
             if k < l as usize {
                 r_y[k]
@@ -430,23 +462,17 @@ impl FilteredAllan {
             }
         };
         let m = self.m(tau_s);
-        let span = (l - 1) as f64 * self.dt_i / tc_s;
+        let span = (l - 1) as f64 * self.dt_i * s.re;
         if span <= 2.0 {
-            // Far field: the Gauss-Markov of variance v (R_z(n) = v phi_o^n for n >= n0), in closed
-            // form, plus the correction inside the span.
+            // Far field: the output-rate process of autocovariance Re[v phi_o^n] for n >= n0, in
+            // closed form, plus the correction inside the span.
             let v = r_z(n0) / phi_o.powi(n0 as i32);
-            let far = crate::closed_form::gauss_markov_avar_sampled(
-                v.max(0.0).sqrt(),
-                tc_s,
-                tau_s,
-                self.dt_s,
-            );
-            far + Self::stationary_sum(m, n0, |n| r_z(n) - v * phi_o.powi(n as i32))
+            far(v, tau_s) + Self::stationary_sum(m, n0, |n| (r_z(n) - v * phi_o.powi(n as i32)).re)
         } else {
-            // Correlation time short against the span: R_z decays below 1e-18 of R_z(n0) within
-            // 42 T beyond it; summed directly.
-            let n1 = n0 + (42.0 * tc_s / self.dt_s).ceil() as usize + 1;
-            Self::stationary_sum(m, n1, r_z)
+            // Decay short against the span: R_z falls below 1e-18 of R_z(n0) within 42 / Re s
+            // beyond it; summed directly.
+            let n1 = n0 + (42.0 / (s.re * self.dt_s)).ceil() as usize + 1;
+            Self::stationary_sum(m, n1, |n| r_z(n).re)
         }
     }
 
@@ -539,6 +565,17 @@ mod tests {
                     let phi = (-dt_i / tc).exp();
                     let b = brute(&u, m, |k| 0.09 * phi.powi(k.abs() as i32));
                     close(fa.gauss_markov(0.3, tc, tau), b, &format!("GM T={tc}"));
+                }
+                // Resonance (second-order Gauss-Markov), narrow and broad, slow and fast.
+                for (f0, bw) in [(3.0, 0.5), (20.0, 1.5), (41.0, 30.0), (0.2, 0.01)] {
+                    let b = brute(&u, m, |k| {
+                        crate::closed_form::resonance_autocovariance(0.3, f0, bw, k as f64 * dt_i)
+                    });
+                    close(
+                        fa.resonance(0.3, f0, bw, tau),
+                        b,
+                        &format!("resonance {f0} Hz / {bw} Hz"),
+                    );
                 }
                 // Sinusoid of random phase.
                 for fr in [3.0, 41.0, 170.0] {

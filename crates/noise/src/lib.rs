@@ -27,7 +27,7 @@ pub use config::{is_noise_file_text, utf8_text, ConfigError, UnitStyle};
 pub use effect::{Effect, FilterError, Sensor, TermFilter};
 pub use filter::{FilterKind, Outliers, OutputFilter, WarmupTransient};
 pub use model::{
-    AxisModel, BiasInstability, Flicker, GaussMarkov, ModelError, SensorModel, Sinusoid,
+    AxisModel, BiasInstability, Flicker, GaussMarkov, ModelError, Resonance, SensorModel, Sinusoid,
     TemperatureProfile, Term, TriadModel, AXIS_NAMES,
 };
 pub use process::{ChannelErrors, ImuErrors, CHANNEL_NAMES};

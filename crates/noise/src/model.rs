@@ -243,6 +243,51 @@ impl Sinusoid {
     }
 }
 
+/// A resonance: a narrow-band random vibration, white noise through a damped oscillator (a
+/// second-order Gauss-Markov process). Stationary std `sigma`, natural frequency `frequency_hz`,
+/// half-power (-3 dB) bandwidth `bandwidth_hz` = 2 zeta f0 of its spectral peak; underdamped
+/// (bandwidth below twice the frequency). Closed forms in [`cf::resonance_exponent`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Resonance {
+    pub sigma: f64,
+    pub frequency_hz: f64,
+    pub bandwidth_hz: f64,
+}
+
+impl Resonance {
+    pub fn new(sigma: f64, frequency_hz: f64, bandwidth_hz: f64) -> Result<Resonance, ModelError> {
+        check("resonance sigma", sigma, false)?;
+        check("resonance frequency", frequency_hz, true)?;
+        check("resonance bandwidth", bandwidth_hz, true)?;
+        if bandwidth_hz >= 2.0 * frequency_hz {
+            return Err(ModelError {
+                what: "resonance bandwidth",
+                expected: "a bandwidth below twice the frequency (an underdamped resonance)",
+                found: bandwidth_hz,
+            });
+        }
+        Ok(Resonance {
+            sigma,
+            frequency_hz,
+            bandwidth_hz,
+        })
+    }
+
+    /// Damping ratio zeta = bandwidth / (2 frequency).
+    pub fn damping(&self) -> f64 {
+        self.bandwidth_hz / (2.0 * self.frequency_hz)
+    }
+
+    /// Allan variance, continuous (`dt_s` None) or of the sampled sequence.
+    pub fn avar(&self, tau_s: f64, dt_s: Option<f64>) -> f64 {
+        let (s, f, b) = (self.sigma, self.frequency_hz, self.bandwidth_hz);
+        match dt_s {
+            None => cf::resonance_avar(s, f, b, tau_s),
+            Some(dt) => cf::resonance_avar_sampled(s, f, b, tau_s, dt),
+        }
+    }
+}
+
 /// One term of an axis with its parameters (SI, as in [`AxisModel`]'s fields): the closed form of
 /// "an effect and its values", used from the config to the growth laws to diagnose.
 #[derive(Clone, Debug, PartialEq)]
@@ -262,6 +307,7 @@ pub enum Term {
     Outliers(Outliers),
     WarmupTransient(WarmupTransient),
     OutputFilter(OutputFilter),
+    Resonance(Resonance),
 }
 
 impl Term {
@@ -283,6 +329,7 @@ impl Term {
             Term::Outliers(_) => Effect::Outliers,
             Term::WarmupTransient(_) => Effect::WarmupTransient,
             Term::OutputFilter(_) => Effect::OutputFilter,
+            Term::Resonance(_) => Effect::Resonance,
         }
     }
 }
@@ -320,6 +367,8 @@ pub struct AxisModel {
     /// The sensor's digital output filter (and decimation), applied to every term but quantisation
     /// and outliers.
     pub output_filter: Option<OutputFilter>,
+    /// A narrow-band random vibration (second-order Gauss-Markov).
+    pub resonance: Option<Resonance>,
 }
 
 impl AxisModel {
@@ -362,6 +411,7 @@ impl AxisModel {
             self.outliers
                 .zip(dt_s)
                 .map(|(o, dt)| o.avar_sampled(tau_s, dt)),
+            self.resonance.map(|r| r.avar(tau_s, dt_s)),
         ];
         terms.into_iter().flatten().sum()
     }
@@ -390,6 +440,8 @@ impl AxisModel {
             self.sinusoidal
                 .map(|w| fa.sinusoid(w.amplitude, w.frequency_hz, tau_s)),
             self.outliers.map(|o| o.avar_sampled(tau_s, dt_s)),
+            self.resonance
+                .map(|r| fa.resonance(r.sigma, r.frequency_hz, r.bandwidth_hz, tau_s)),
         ];
         terms.into_iter().flatten().sum()
     }
@@ -430,6 +482,7 @@ impl AxisModel {
             Effect::Outliers => self.outliers.map(Term::Outliers),
             Effect::WarmupTransient => self.warmup_transient.map(Term::WarmupTransient),
             Effect::OutputFilter => self.output_filter.map(Term::OutputFilter),
+            Effect::Resonance => self.resonance.map(Term::Resonance),
         }
     }
 
@@ -451,6 +504,7 @@ impl AxisModel {
             Term::Outliers(o) => self.outliers = Some(o),
             Term::WarmupTransient(w) => self.warmup_transient = Some(w),
             Term::OutputFilter(f) => self.output_filter = Some(f),
+            Term::Resonance(r) => self.resonance = Some(r),
         }
     }
 
@@ -477,6 +531,7 @@ impl AxisModel {
             Effect::Outliers => self.outliers = None,
             Effect::WarmupTransient => self.warmup_transient = None,
             Effect::OutputFilter => self.output_filter = None,
+            Effect::Resonance => self.resonance = None,
         }
     }
 
@@ -506,6 +561,7 @@ impl AxisModel {
             sinusoidal: self.sinusoidal,
             outliers: self.outliers,
             output_filter: self.output_filter,
+            resonance: self.resonance,
             ..AxisModel::default()
         }
     }
@@ -772,6 +828,11 @@ mod tests {
             Term::OutputFilter(OutputFilter {
                 kind: crate::filter::FilterKind::Bartlett { taps: 8 },
                 decimation: 2,
+            }),
+            Term::Resonance(Resonance {
+                sigma: 7e-4,
+                frequency_hz: 20.0,
+                bandwidth_hz: 0.7,
             }),
         ];
         // One term per effect, in Effect order.

@@ -7,7 +7,7 @@ mod common;
 use common::*;
 use noise::closed_form::{self as cf, Integration};
 use noise::units::STANDARD_GRAVITY_MPS2;
-use noise::{AxisModel, BiasInstability, Flicker, GaussMarkov};
+use noise::{AxisModel, BiasInstability, Flicker, GaussMarkov, Resonance};
 
 const SEED: u64 = 77;
 const RUNS: u64 = 4000;
@@ -155,6 +155,57 @@ fn gauss_markov_starts_stationary_and_integrates_as_its_law() {
     let exact = |k| cf::gauss_markov_kfold_variance(sigma, tc, t, k).unwrap();
     assert_variance("Gauss-Markov twice", &twice, exact(2));
     assert_variance("Gauss-Markov thrice", &thrice, exact(3));
+}
+
+/// A resonance (2 Hz, bandwidth 0.5 Hz) starts stationary and its k-fold rectangle sums over 10 s
+/// have the variance of the exact quadratic form of the sampled process (weights c_j on sample j:
+/// dt, (n - j) dt^2, (n - j)(n - j + 1)/2 dt^3), which the continuous closed form
+/// (`cf::resonance_kfold_variance`) meets within the rectangle rule's O(pi f dt) = 6 %.
+#[test]
+fn resonance_starts_stationary_and_integrates_as_its_law() {
+    let (rate, sigma, f0, bw) = (100.0, 2e-3, 2.0, 0.5);
+    let axis = AxisModel {
+        resonance: Some(Resonance::new(sigma, f0, bw).unwrap()),
+        ..AxisModel::default()
+    };
+    let first: Vec<f64> = (0..RUNS)
+        .map(|run| gyro_x_series(&axis, rate, 1, SEED + 5, run)[0])
+        .collect();
+    assert_variance("resonance at t = 0", &first, sigma * sigma);
+    let n = 1000;
+    let dt = 1.0 / rate;
+    let t = n as f64 * dt;
+    let [once, twice, thrice] = integrals(&axis, rate, n);
+    let r: Vec<f64> = (0..n)
+        .map(|j| cf::resonance_autocovariance(sigma, f0, bw, j as f64 * dt))
+        .collect();
+    let quadratic = |c: &dyn Fn(usize) -> f64| -> f64 {
+        let c: Vec<f64> = (0..n).map(c).collect();
+        let mut v = 0.0;
+        for a in 0..n {
+            for b in 0..n {
+                v += c[a] * c[b] * r[a.abs_diff(b)];
+            }
+        }
+        v
+    };
+    let exact = [
+        quadratic(&|_| dt),
+        quadratic(&|j| (n - j) as f64 * dt * dt),
+        quadratic(&|j| ((n - j) * (n - j + 1)) as f64 / 2.0 * dt.powi(3)),
+    ];
+    for (k, (label, series)) in [("once", &once), ("twice", &twice), ("thrice", &thrice)]
+        .into_iter()
+        .enumerate()
+    {
+        assert_variance(&format!("resonance {label}"), series, exact[k]);
+        let law = cf::resonance_kfold_variance(sigma, f0, bw, t, k as i32 + 1).unwrap();
+        assert!(
+            (law / exact[k] - 1.0).abs() < 0.06,
+            "resonance {label}: closed form {law:.4e} vs sampled {:.4e}",
+            exact[k]
+        );
+    }
 }
 
 #[test]

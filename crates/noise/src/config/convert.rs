@@ -307,6 +307,7 @@ fn convert_axis(
         outliers: None,
         warmup_transient: None,
         output_filter: None,
+        resonance: None,
     };
     if let Some((g, key)) = pick!(gauss_markov) {
         m.gauss_markov = Some(GaussMarkov {
@@ -386,6 +387,26 @@ fn convert_axis(
                 w.per_run.unwrap_or(false),
             )
             .map_err(|e| ctx.invalid(&key, e.expected, e.to_string()))?,
+        );
+    }
+    if let Some((r, key)) = pick!(resonance) {
+        let bw_key = format!("{key}.bandwidth");
+        m.resonance = Some(
+            Resonance::new(
+                ctx.value(
+                    &format!("{key}.sigma"),
+                    &r.sigma,
+                    Quantity::Signal(sig),
+                    true,
+                )?,
+                ctx.positive(
+                    &format!("{key}.frequency"),
+                    &r.frequency,
+                    Quantity::Frequency,
+                )?,
+                ctx.positive(&bw_key, &r.bandwidth, Quantity::Frequency)?,
+            )
+            .map_err(|e| ctx.invalid_at(&bw_key, Some(&r.bandwidth), e.expected, e.to_string()))?,
         );
     }
     // Bias instability last: the "allan_minimum" convention needs the other terms.

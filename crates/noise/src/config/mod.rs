@@ -23,7 +23,10 @@
 //! - `outliers = { rate, size }`: `rate` in events per time (`"60 /h"`, `"2 /min"`, `"0.01 /s"`, or a
 //!   plain number per hour), `size` in the signal's unit;
 //! - `warmup_transient = { amplitude, time_constant, per_run? }` (`per_run`: amplitude drawn per run
-//!   from N(0, amplitude^2); default false).
+//!   from N(0, amplitude^2); default false);
+//! - `resonance = { sigma, frequency, bandwidth }`: a narrow-band random vibration (second-order
+//!   Gauss-Markov), stationary std `sigma`, natural `frequency`, half-power `bandwidth` (below twice
+//!   the frequency).
 //!
 //! `bias_instability` states its convention (docs/architecture.md, Units):
 //! - `{ value, convention = "ieee" }`: value is the IEEE coefficient B (Allan plateau 0.664 B);
@@ -146,7 +149,7 @@ pub fn utf8_text(bytes: Vec<u8>, file: &str) -> Result<String, ConfigError> {
 }
 
 /// An example of each value-with-unit key, for errors about a value of the wrong shape.
-const KEY_EXAMPLES: [(&str, &str); 13] = [
+const KEY_EXAMPLES: [(&str, &str); 14] = [
     ("quantization", "quantization = \"0.001 deg\""),
     (
         "white_noise",
@@ -177,6 +180,10 @@ const KEY_EXAMPLES: [(&str, &str); 13] = [
     (
         "warmup_transient",
         "warmup_transient = { amplitude = \"0.03 deg/s\", time_constant = \"600 s\", per_run = false }",
+    ),
+    (
+        "resonance",
+        "resonance = { sigma = \"0.5 mg\", frequency = \"10 Hz\", bandwidth = \"0.7 Hz\" }",
     ),
 ];
 

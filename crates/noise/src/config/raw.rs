@@ -58,6 +58,7 @@ pub(super) struct RawAxis {
     pub(super) output_filter: Option<RawOutputFilter>,
     pub(super) outliers: Option<RawOutliers>,
     pub(super) warmup_transient: Option<RawWarmupTransient>,
+    pub(super) resonance: Option<RawResonance>,
 }
 
 /// What `bias_instability` may be: a value with a unit (the Allan-deviation minimum, as spec
@@ -165,4 +166,12 @@ pub(super) struct RawWarmupTransient {
     pub(super) amplitude: Text,
     pub(super) time_constant: Text,
     pub(super) per_run: Option<bool>,
+}
+
+#[derive(Deserialize, Clone)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawResonance {
+    pub(super) sigma: Text,
+    pub(super) frequency: Text,
+    pub(super) bandwidth: Text,
 }

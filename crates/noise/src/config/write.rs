@@ -220,6 +220,15 @@ fn write_axis_with(
             w.per_run
         );
     }
+    if let Some(r) = a.resonance {
+        let _ = writeln!(
+            s,
+            "resonance = {{ sigma = \"{}\", frequency = \"{}\", bandwidth = \"{}\" }}",
+            format_si(r.sigma, Quantity::Signal(sig)),
+            format_si(r.frequency_hz, Quantity::Frequency),
+            format_si(r.bandwidth_hz, Quantity::Frequency)
+        );
+    }
     if let Some([m1, m2]) = a.misalignment {
         let _ = writeln!(
             s,
@@ -270,7 +279,9 @@ impl UnitStyle {
                         "rate_ramp" => Quantity::Ramp(sig),
                         "temperature_bias" => Quantity::PerDegree(sig),
                         "constant_bias" | "turn_on_bias" | "bias_instability" | "outliers"
-                        | "warmup_transient" | "output_filter" => Quantity::Signal(sig),
+                        | "warmup_transient" | "output_filter" | "resonance" => {
+                            Quantity::Signal(sig)
+                        }
                         "scale_factor" => Quantity::Ratio,
                         "misalignment" => {
                             if let Some(first) = v.as_array().and_then(|a| a.first()) {
@@ -289,7 +300,9 @@ impl UnitStyle {
                                         note(Quantity::Signal(sig), inner)
                                     }
                                     "time_constant" | "period" => note(Quantity::Time, inner),
-                                    "frequency" | "cutoff" => note(Quantity::Frequency, inner),
+                                    "frequency" | "cutoff" | "bandwidth" => {
+                                        note(Quantity::Frequency, inner)
+                                    }
                                     _ => {}
                                 }
                             }

@@ -1,0 +1,311 @@
+//! Welch spectrum of a channel and the broad spectral peak a resonance leaves in it.
+//!
+//! A resonance (a narrow-band random vibration, `noise::Resonance`) shows in the power spectral
+//! density as a peak several resolutions wide above a smooth background; a sinusoid shows as a line
+//! (the window's main lobe, about two resolutions); the white, flicker and random-walk terms are
+//! smooth power laws. The Allan curve blurs the peak's shape, so diagnose takes the resonance's
+//! frequency and bandwidth from the spectrum and only its level from the Allan fit.
+
+/// A broad peak of the spectrum.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpectralPeak {
+    /// Centre (excess-power weighted mean over the half-power region), Hz.
+    pub frequency_hz: f64,
+    /// Half-power (-3 dB) full width, corrected for the window's resolution, Hz.
+    pub bandwidth_hz: f64,
+    /// Peak power over the background (smoothed over three bins).
+    pub ratio: f64,
+    /// The raised region around it (the smoothed ratio above about 3 sigma of the background), Hz:
+    /// the spectrum has no line there, so a sinusoid is not offered inside it.
+    pub lo_hz: f64,
+    pub hi_hz: f64,
+}
+
+impl SpectralPeak {
+    /// Whether `f_hz` lies inside the peak's raised region.
+    pub fn covers(&self, f_hz: f64) -> bool {
+        (self.lo_hz..=self.hi_hz).contains(&f_hz)
+    }
+}
+
+/// In-place radix-2 FFT (iterative Cooley-Tukey); `re.len()` a power of two.
+fn fft(re: &mut [f64], im: &mut [f64]) {
+    let n = re.len();
+    let mut j = 0;
+    for i in 1..n {
+        let mut bit = n >> 1;
+        while j & bit != 0 {
+            j ^= bit;
+            bit >>= 1;
+        }
+        j |= bit;
+        if i < j {
+            re.swap(i, j);
+            im.swap(i, j);
+        }
+    }
+    let mut len = 2;
+    while len <= n {
+        let ang = -std::f64::consts::TAU / len as f64;
+        for start in (0..n).step_by(len) {
+            for k in 0..len / 2 {
+                let (s, c) = (ang * k as f64).sin_cos();
+                let (a, b) = (start + k, start + k + len / 2);
+                let (tr, ti) = (re[b] * c - im[b] * s, re[b] * s + im[b] * c);
+                re[b] = re[a] - tr;
+                im[b] = im[a] - ti;
+                re[a] += tr;
+                im[a] += ti;
+            }
+        }
+        len <<= 1;
+    }
+}
+
+/// Welch periodogram: segments of `seg` samples (a power of two), Hann window, each segment's mean
+/// removed, no overlap; the mean of |X_k|^2 over the segments for k = 0..seg/2 (unnormalised: only
+/// ratios are used). Returns the powers and the number of segments.
+pub fn welch(x: &[f64], seg: usize) -> (Vec<f64>, usize) {
+    let k = x.len() / seg;
+    let window: Vec<f64> = (0..seg)
+        .map(|n| 0.5 - 0.5 * (std::f64::consts::TAU * n as f64 / seg as f64).cos())
+        .collect();
+    let mut p = vec![0.0; seg / 2 + 1];
+    let (mut re, mut im) = (vec![0.0; seg], vec![0.0; seg]);
+    for s in 0..k {
+        let part = &x[s * seg..(s + 1) * seg];
+        let mean = part.iter().sum::<f64>() / seg as f64;
+        for i in 0..seg {
+            re[i] = (part[i] - mean) * window[i];
+            im[i] = 0.0;
+        }
+        fft(&mut re, &mut im);
+        for (i, pi) in p.iter_mut().enumerate() {
+            *pi += re[i] * re[i] + im[i] * im[i];
+        }
+    }
+    p.iter_mut().for_each(|v| *v /= k.max(1) as f64);
+    (p, k)
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// The strongest broad peak of `x`'s spectrum, if one stands out. Welch spectrum with segments of
+/// 4096 samples (a sixteenth of the log if shorter, a power of two, at least 256). Background at bin
+/// k: the median of 61 bins log-spaced over [k/2, 2 k] (symmetric in log frequency, so a power law
+/// is its own median), taken again without the bins the first pass found raised. A peak is a maximum of the 3-bin-smoothed ratio to the background that exceeds
+/// both 1.2 and 1 + 6/sqrt(3 K) (K segments: each Welch bin has relative spread 1/sqrt(K), so 6 sigma
+/// of a 3-bin mean, about 1e-9 one-sided per bin), whose excess power stays above half its top over at
+/// least 4 resolutions (a Hann-windowed line is about 2 wide: lines are left to the sinusoid), between
+/// 6 resolutions and 0.45 times the sample rate. Of the peaks found (up to 8, each masked before the
+/// next is sought), the one with the largest excess power.
+pub fn broad_peak(x: &[f64], dt_s: f64) -> Option<SpectralPeak> {
+    let seg = 4096usize.min((x.len() / 16).next_power_of_two() / 2).max(1);
+    if seg < 256 {
+        return None;
+    }
+    let (p, k) = welch(x, seg);
+    let df = 1.0 / (seg as f64 * dt_s);
+    let nb = p.len();
+    // Background: the median over a log-spaced window, twice; the second pass leaves out the bins
+    // the first found raised (a peak a few hertz wide would otherwise lift its own background).
+    let window = |i: usize| -> Vec<usize> {
+        (-30..=30)
+            .map(|j| {
+                let b = (i as f64 * 2f64.powf(f64::from(j) / 30.0)).round() as usize;
+                b.clamp(1, nb - 1)
+            })
+            .collect()
+    };
+    let background = |raised: &[bool]| -> Vec<f64> {
+        (0..nb)
+            .map(|i| {
+                if i < 2 {
+                    return f64::NAN;
+                }
+                let all = window(i);
+                let mut v: Vec<f64> = all.iter().filter(|&&b| !raised[b]).map(|&b| p[b]).collect();
+                if v.len() < 15 {
+                    v = all.iter().map(|&b| p[b]).collect();
+                }
+                median(&mut v)
+            })
+            .collect()
+    };
+    let bg1 = background(&vec![false; nb]);
+    let flag = 1.0 + 3.0 / (3.0 * k as f64).sqrt();
+    let raised: Vec<bool> = (0..nb)
+        .map(|i| {
+            i >= 2
+                && i + 1 < nb
+                && (i - 1..=i + 1).map(|b| p[b] / bg1[b]).sum::<f64>() / 3.0 > flag.max(1.1)
+        })
+        .collect();
+    let bg = background(&raised);
+    let ratio = |i: usize| -> f64 {
+        let r: f64 = (i - 1..=i + 1).map(|b| p[b] / bg[b]).sum::<f64>() / 3.0;
+        if r.is_finite() {
+            r
+        } else {
+            0.0
+        }
+    };
+    let lo = 6usize;
+    let hi = ((0.45 / dt_s) / df).floor() as usize;
+    if hi <= lo + 2 || hi + 1 >= nb {
+        return None;
+    }
+    let threshold = 1.2f64.max(1.0 + 6.0 / (3.0 * k as f64).sqrt());
+    let mut masked = vec![false; nb];
+    let mut best: Option<(f64, SpectralPeak)> = None;
+    for _ in 0..8 {
+        let Some(top) = (lo..=hi)
+            .filter(|&i| !masked[i])
+            .max_by(|&a, &b| ratio(a).total_cmp(&ratio(b)))
+        else {
+            break;
+        };
+        let r_top = ratio(top);
+        if r_top < threshold {
+            break;
+        }
+        // Half-power region of the excess (3-bin smoothed).
+        let excess = |i: usize| (ratio(i) - 1.0) * bg[i];
+        let half = 0.5 * excess(top);
+        let mut a = top;
+        while a > lo && excess(a - 1) > half {
+            a -= 1;
+        }
+        let mut b = top;
+        while b < hi && excess(b + 1) > half {
+            b += 1;
+        }
+        let width_bins = (b - a + 1) as f64;
+        // The whole raised region (the smoothed ratio above half the threshold's excess, about
+        // 3 sigma): a resonance's wings belong to it, and are masked with it rather than found
+        // as peaks of their own.
+        let floor = 1.0 + 0.5 * (threshold - 1.0);
+        let (mut a2, mut b2) = (a, b);
+        while a2 > lo && ratio(a2 - 1) > floor {
+            a2 -= 1;
+        }
+        while b2 < hi && ratio(b2 + 1) > floor {
+            b2 += 1;
+        }
+        for m in masked
+            .iter_mut()
+            .take((b2 + 2).min(nb - 1) + 1)
+            .skip(a2.saturating_sub(2))
+        {
+            *m = true;
+        }
+        if width_bins < 4.0 {
+            continue; // a line
+        }
+        let power: f64 = (a2..=b2).map(|i| (p[i] - bg[i]).max(0.0)).sum();
+        let (mut w, mut wf) = (0.0, 0.0);
+        for i in a..=b {
+            let e = (p[i] - bg[i]).max(0.0);
+            w += e;
+            wf += e * i as f64;
+        }
+        if w <= 0.0 {
+            continue;
+        }
+        // The smoothing (3 bins) and the Hann main lobe (3 dB width 1.44 bins) widen the peak.
+        let width = (width_bins * width_bins - 1.44f64.powi(2) - 1.0)
+            .max(1.0)
+            .sqrt()
+            * df;
+        let peak = SpectralPeak {
+            frequency_hz: wf / w * df,
+            bandwidth_hz: width,
+            ratio: r_top,
+            lo_hz: a2 as f64 * df,
+            hi_hz: b2 as f64 * df,
+        };
+        if best.as_ref().is_none_or(|(pw, _)| power > *pw) {
+            best = Some((power, peak));
+        }
+    }
+    best.map(|(_, p)| p)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+
+    fn normals(n: usize, seed: u64) -> Vec<f64> {
+        use rand_distr::{Distribution, StandardNormal};
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed);
+        (0..n).map(|_| StandardNormal.sample(&mut rng)).collect()
+    }
+
+    #[test]
+    fn fft_matches_direct_dft() {
+        let x = normals(64, 1);
+        let (mut re, mut im) = (x.clone(), vec![0.0; 64]);
+        fft(&mut re, &mut im);
+        for k in [0usize, 1, 7, 31, 32] {
+            let (mut a, mut b) = (0.0, 0.0);
+            for (n, v) in x.iter().enumerate() {
+                let w = -std::f64::consts::TAU * (k * n) as f64 / 64.0;
+                a += v * w.cos();
+                b += v * w.sin();
+            }
+            assert!(
+                (a - re[k]).abs() < 1e-9 && (b - im[k]).abs() < 1e-9,
+                "bin {k}"
+            );
+        }
+    }
+
+    /// A resonance (AR(2) with poles r e^{+-i theta}: a peak at f0 with -3 dB width
+    /// -ln(r^2) / (2 pi dt) = 0.6 Hz) in white noise is found at its frequency and width; white
+    /// noise, a random walk and a pure tone give no broad peak.
+    #[test]
+    fn broad_peaks_found_lines_and_power_laws_ignored() {
+        let dt = 0.01;
+        let n = 1 << 20;
+        let w = normals(n, 2);
+        let e = normals(n, 3);
+        let (f0, bw) = (12.0, 0.6);
+        let r = (-std::f64::consts::PI * bw * dt).exp();
+        let th = std::f64::consts::TAU * f0 * dt;
+        let (mut y1, mut y2) = (0.0, 0.0);
+        let x: Vec<f64> = (0..n)
+            .map(|k| {
+                let y = 2.0 * r * th.cos() * y1 - r * r * y2 + 0.05 * e[k];
+                y2 = y1;
+                y1 = y;
+                y + w[k]
+            })
+            .collect();
+        let p = broad_peak(&x, dt).expect("a resonance");
+        assert!((p.frequency_hz - f0).abs() < 0.05, "{p:?}");
+        assert!((p.bandwidth_hz / bw - 1.0).abs() < 0.25, "{p:?}");
+        assert_eq!(broad_peak(&w, dt), None);
+        let mut acc = 0.0;
+        let walk: Vec<f64> = w
+            .iter()
+            .map(|v| {
+                acc += 0.01 * v;
+                acc + v
+            })
+            .collect();
+        assert_eq!(broad_peak(&walk, dt), None);
+        let tone: Vec<f64> = (0..n)
+            .map(|k| w[k] + 0.3 * (std::f64::consts::TAU * 7.3 * k as f64 * dt).sin())
+            .collect();
+        assert_eq!(broad_peak(&tone, dt), None);
+    }
+}
