@@ -176,16 +176,34 @@ pub fn shape_grid(effect: Effect, tau_min_s: f64, tau_max_s: f64, dt_s: f64) -> 
 }
 
 /// The resonance shapes (frequency, bandwidth) tried around a broad spectral peak: frequency at the
-/// peak's plus {-1, -2/3, ..., +1} times its bandwidth, bandwidth at {1/2, 0.7, 1, 1.4, 2, 3} times
-/// the peak's; only underdamped shapes below the Nyquist frequency (42 at most).
+/// peak's plus {-1, -3/4, ..., +1} times its bandwidth, bandwidth at {0.15, 0.2, 0.3, 0.5, 0.7, 1, 1.4,
+/// 2, 3} times the peak's (the peak of a whole log is wider than the mode when its frequency wanders);
+/// only underdamped shapes below the Nyquist frequency (81 at most).
 pub fn resonance_grid(peak: crate::spectrum::SpectralPeak, dt_s: f64) -> Vec<(f64, f64)> {
     let nyquist = 0.5 / dt_s;
     let mut out = Vec::new();
-    for i in -3..=3 {
-        let f = peak.frequency_hz + f64::from(i) / 3.0 * peak.bandwidth_hz;
-        for s in [0.5, 0.7, 1.0, 1.4, 2.0, 3.0] {
+    for i in -4..=4 {
+        let f = peak.frequency_hz + f64::from(i) / 4.0 * peak.bandwidth_hz;
+        for s in [0.15, 0.2, 0.3, 0.5, 0.7, 1.0, 1.4, 2.0, 3.0] {
             let b = s * peak.bandwidth_hz;
             if f > 0.0 && f < nyquist && b < 2.0 * f {
+                out.push((f, b));
+            }
+        }
+    }
+    out
+}
+
+/// The shapes tried around a resonance the model has: its own, frequency moved by {-1/2, -1/4, 0, 1/4,
+/// 1/2} of its bandwidth, bandwidth at {0.7, 0.85, 1, 1.2, 1.4} times its own (25 at most).
+pub fn resonance_refinement((f0, bw): (f64, f64), dt_s: f64) -> Vec<(f64, f64)> {
+    let nyquist = 0.5 / dt_s;
+    let mut out = vec![(f0, bw)];
+    for i in -2..=2 {
+        let f = f0 + f64::from(i) / 4.0 * bw;
+        for s in [0.7, 0.85, 1.0, 1.2, 1.4] {
+            let b = s * bw;
+            if (i, s) != (0, 1.0) && f > 0.0 && f < nyquist && b < 2.0 * f {
                 out.push((f, b));
             }
         }

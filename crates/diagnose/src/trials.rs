@@ -1,9 +1,9 @@
 //! Step 3: every candidate effect fitted to one channel's gap.
 
 use crate::candidates::{
-    filter_grid, free_parameters, resonance_grid, resonance_signature, shape_grid,
-    shape_search_penalty, unit_family_signature, unit_signature, white_signature, TermParams,
-    CANDIDATES,
+    filter_grid, free_parameters, resonance_grid, resonance_refinement, resonance_signature,
+    shape_grid, shape_search_penalty, unit_family_signature, unit_signature, white_signature,
+    TermParams, CANDIDATES,
 };
 use crate::fit::predicted_ln_adev;
 use crate::fit::{
@@ -155,7 +155,8 @@ pub(crate) fn trials(
                 shape_search_penalty(shapes.len()),
             )
         } else if effect == Effect::Resonance {
-            // A resonance the model has keeps its shape (a wrong level). An absent one needs a broad
+            // A resonance the model has is refitted around its shape (the other terms it was fitted
+            // beside may have changed since: a filter, the white level). An absent one needs a broad
             // peak in the log's spectrum (`spectrum::broad_peak`), which gives its frequency and
             // bandwidth roughly (a real peak is seldom the symmetric shape of the model); the shape is
             // then fitted to the Allan curve on a grid around them (frequency within a bandwidth of
@@ -166,7 +167,7 @@ pub(crate) fn trials(
                     frequency_hz,
                     bandwidth_hz,
                     ..
-                }) => vec![(frequency_hz, bandwidth_hz)],
+                }) => resonance_refinement((frequency_hz, bandwidth_hz), dt_s),
                 _ => match peak {
                     Some(p) => resonance_grid(p, dt_s),
                     None => continue,
@@ -454,12 +455,14 @@ fn filter_trial(
         }
     }
     // Of the filters the data cannot tell apart (chi2 within 6 of the best, "not strong" evidence,
-    // Kass & Raftery 1995), the one with the smallest decimation: the simplest, and the cheapest to
-    // simulate.
+    // Kass & Raftery 1995; widened by the best fit's Birge ratio squared, as the intervals are, when
+    // the rest of the model leaves the fit overdispersed), the one with the smallest decimation: the
+    // simplest, and the cheapest to simulate.
     let best_chi2 = tried.iter().map(|t| t.0).fold(f64::INFINITY, f64::min);
+    let alike = 6.0 * birge_scale(best_chi2, free_parameters(Effect::OutputFilter), m).powi(2);
     let best = tried
         .into_iter()
-        .filter(|t| t.0 <= best_chi2 + 6.0)
+        .filter(|t| t.0 <= best_chi2 + alike)
         .min_by(|a, b| {
             a.1.filter
                 .decimation

@@ -305,6 +305,12 @@ pub fn diagnose_with_progress(
         let partial = changed != active;
         let round_setup = SimSetup {
             active: changed,
+            // A partial round's drift is not used (it needs every channel): not computed.
+            horizons_s: if partial {
+                Vec::new()
+            } else {
+                setup.horizons_s.clone()
+            },
             ..setup.clone()
         };
         let sim = simulate(&sim_model, &round_setup, settings.seed, settings.seeds)?;
