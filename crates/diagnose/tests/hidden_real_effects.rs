@@ -6,6 +6,9 @@
 //! of the initial one (only <= 1.5 when the effect was faint: see `faint`). Clean logs must
 //! name nothing.
 //!
+//! The resonance (a narrow-band random vibration) is not in the list: it is the term the
+//! ADIS16405 logs needed, and a candidate diagnose offers must be found blind like the others.
+//!
 //! Logs: 2^17 samples at 100 Hz (1311 s). Base model: white noise and flicker (the hidden-effect
 //! suite's base: gyro N = 1e-4 rad/s/sqrt(Hz), B = 2e-5 rad/s; accel N = 1e-3, B = 2e-4).
 
@@ -14,8 +17,8 @@ use diagnose::model_terms::channel_axis;
 use diagnose::simulate::{static_log, SimSetup};
 use diagnose::{diagnose, Diagnosis, LogInput, Settings};
 use noise::{
-    BiasInstability, FilterKind, Flicker, ImuErrors, Outliers, OutputFilter, SensorModel,
-    TemperatureProfile, Term, WarmupTransient,
+    BiasInstability, FilterKind, Flicker, ImuErrors, Outliers, OutputFilter, Resonance,
+    SensorModel, TemperatureProfile, Term, WarmupTransient,
 };
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -86,6 +89,19 @@ fn draw(kind: &str, ch: usize, rng: &mut Xoshiro256PlusPlus) -> Term {
         "warmup" | "cycling" => Term::TemperatureBias(
             log_uniform(rng, 0.3, 1.0) * sigma(ch) / 15.0 * if rng.gen() { 1.0 } else { -1.0 },
         ),
+        // A mode at 3..30 Hz with a half-power bandwidth of 3..15 % of its frequency and a standard
+        // deviation of 0.5..1.5 times the white noise's per sample.
+        "resonance" => {
+            let f0 = log_uniform(rng, 3.0, 30.0);
+            Term::Resonance(
+                Resonance::new(
+                    log_uniform(rng, 0.5, 1.5) * sigma(ch),
+                    f0,
+                    f0 * log_uniform(rng, 0.03, 0.15),
+                )
+                .unwrap(),
+            )
+        }
         _ => unreachable!(),
     }
 }
@@ -160,6 +176,19 @@ fn key_values(term: &Term, found: &diagnose::report::FoundEffect) -> Vec<(&'stat
             ("tau_s", w.tau_s, found.parameters["tau_s"]),
         ],
         Term::TemperatureBias(c) => vec![("coefficient", *c, found.parameters["coefficient"])],
+        Term::Resonance(r) => vec![
+            ("sigma", r.sigma, found.parameters["sigma"]),
+            (
+                "frequency_hz",
+                r.frequency_hz,
+                found.parameters["frequency_hz"],
+            ),
+            (
+                "bandwidth_hz",
+                r.bandwidth_hz,
+                found.parameters["bandwidth_hz"],
+            ),
+        ],
         _ => vec![],
     }
 }
@@ -295,6 +324,11 @@ fn hidden_outliers() {
 #[test]
 fn hidden_warmup_transient() {
     suite("transient", 2);
+}
+
+#[test]
+fn hidden_resonance() {
+    suite("resonance", 3);
 }
 
 #[test]
