@@ -28,40 +28,6 @@ impl SpectralPeak {
     }
 }
 
-/// In-place radix-2 FFT (iterative Cooley-Tukey); `re.len()` a power of two.
-fn fft(re: &mut [f64], im: &mut [f64]) {
-    let n = re.len();
-    let mut j = 0;
-    for i in 1..n {
-        let mut bit = n >> 1;
-        while j & bit != 0 {
-            j ^= bit;
-            bit >>= 1;
-        }
-        j |= bit;
-        if i < j {
-            re.swap(i, j);
-            im.swap(i, j);
-        }
-    }
-    let mut len = 2;
-    while len <= n {
-        let ang = -std::f64::consts::TAU / len as f64;
-        for start in (0..n).step_by(len) {
-            for k in 0..len / 2 {
-                let (s, c) = (ang * k as f64).sin_cos();
-                let (a, b) = (start + k, start + k + len / 2);
-                let (tr, ti) = (re[b] * c - im[b] * s, re[b] * s + im[b] * c);
-                re[b] = re[a] - tr;
-                im[b] = im[a] - ti;
-                re[a] += tr;
-                im[a] += ti;
-            }
-        }
-        len <<= 1;
-    }
-}
-
 /// Welch periodogram: segments of `seg` samples (a power of two), Hann window, each segment's mean
 /// removed, no overlap; the mean of |X_k|^2 over the segments for k = 0..seg/2 (unnormalised: only
 /// ratios are used). Returns the powers and the number of segments.
@@ -79,7 +45,7 @@ pub fn welch(x: &[f64], seg: usize) -> (Vec<f64>, usize) {
             re[i] = (part[i] - mean) * window[i];
             im[i] = 0.0;
         }
-        fft(&mut re, &mut im);
+        noise::fft::fft(&mut re, &mut im);
         for (i, pi) in p.iter_mut().enumerate() {
             *pi += re[i] * re[i] + im[i] * im[i];
         }
@@ -248,25 +214,6 @@ mod tests {
         use rand_distr::{Distribution, StandardNormal};
         let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed);
         (0..n).map(|_| StandardNormal.sample(&mut rng)).collect()
-    }
-
-    #[test]
-    fn fft_matches_direct_dft() {
-        let x = normals(64, 1);
-        let (mut re, mut im) = (x.clone(), vec![0.0; 64]);
-        fft(&mut re, &mut im);
-        for k in [0usize, 1, 7, 31, 32] {
-            let (mut a, mut b) = (0.0, 0.0);
-            for (n, v) in x.iter().enumerate() {
-                let w = -std::f64::consts::TAU * (k * n) as f64 / 64.0;
-                a += v * w.cos();
-                b += v * w.sin();
-            }
-            assert!(
-                (a - re[k]).abs() < 1e-9 && (b - im[k]).abs() < 1e-9,
-                "bin {k}"
-            );
-        }
     }
 
     /// A resonance (AR(2) with poles r e^{+-i theta}: a peak at f0 with -3 dB width

@@ -339,9 +339,16 @@ impl FilteredAllan {
     pub fn new(filter: &OutputFilter, dt_s: f64) -> FilteredAllan {
         let h = filter.impulse_response(dt_s);
         let l = h.len();
-        let a_h = (0..l)
-            .map(|d| (0..l - d).map(|i| h[i] * h[i + d]).sum())
-            .collect();
+        // The filter's autocorrelation A_h(d) = sum_i h_i h_{i+d}: directly for short responses,
+        // through the FFT for long ones (a low-pass far below the rate responds for thousands of
+        // samples, and every candidate filter of diagnose builds one).
+        let a_h = if l <= 256 {
+            (0..l)
+                .map(|d| (0..l - d).map(|i| h[i] * h[i + d]).sum())
+                .collect()
+        } else {
+            crate::fft::autocorrelation(&h)
+        };
         FilteredAllan {
             a_h,
             decimation: filter.decimation as usize,
@@ -442,13 +449,22 @@ impl FilteredAllan {
         let l = self.len() as i64;
         let d = self.decimation;
         let phi = (-s * self.dt_i).exp();
-        // R_y(k), k = 0..L-1, directly (complex: the real part is the autocovariance).
-        let r_y: Vec<Complex64> = (0..l)
-            .map(|k| {
-                coef * (-(l - 1)..l)
-                    .map(|j| phi.powi((k - j).abs() as i32) * self.a_h(j))
-                    .sum::<Complex64>()
-            })
+        // R_y(k) = coef sum_{|j| < L} A_h(j) phi^|k-j|, k = 0..L-1 (complex: the real part is the
+        // autocovariance), by the two one-sided recursions S1(k) = phi S1(k-1) + A_h(k) (j <= k)
+        // and S2(k) = phi (A_h(k+1) + S2(k+1)) (j > k): O(L) instead of O(L^2).
+        let span = (l - 1) as usize;
+        let mut s1 = vec![Complex64::new(0.0, 0.0); 2 * span + 1];
+        let mut acc = Complex64::new(0.0, 0.0);
+        for (i, v) in s1.iter_mut().enumerate() {
+            acc = acc * phi + self.a_h(i as i64 - span as i64);
+            *v = acc;
+        }
+        let mut s2 = vec![Complex64::new(0.0, 0.0); l as usize];
+        for k in (0..span).rev() {
+            s2[k] = phi * (s2[k + 1] + self.a_h(k as i64 + 1));
+        }
+        let r_y: Vec<Complex64> = (0..l as usize)
+            .map(|k| coef * (s1[k + span] + s2[k]))
             .collect();
         let n0 = self.n0();
         let phi_o = (-s * self.dt_s).exp();

@@ -16,6 +16,7 @@
 pub mod closed_form;
 mod config;
 mod effect;
+pub mod fft;
 pub mod filter;
 mod model;
 pub mod noise_file;
