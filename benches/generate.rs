@@ -96,6 +96,41 @@ fn bench(c: &mut Criterion) {
     group.bench_function("mtx_gyro_bartlett16_x8_18_taus", |b| {
         b.iter(|| black_box(axis.allan_variance_sampled_many(&taus, 0.01)))
     });
+    // A long response (first-order low-pass at 0.1 Hz, 10 Hz output: ~620 samples, the Samsung
+    // S5's filter), with a resonance: the FFT autocorrelation and the O(L) exponential sums.
+    let mut long = model.gyro.axes[0].clone();
+    long.output_filter =
+        Some(noise::OutputFilter::new(noise::FilterKind::LowPass1 { cutoff_hz: 0.1 }, 1).unwrap());
+    long.resonance = Some(noise::Resonance::new(1e-3, 2.0, 0.2).unwrap());
+    let taus10: Vec<f64> = (0..18).map(|j| 0.1 * f64::from(1u32 << j)).collect();
+    group.bench_function("mtx_gyro_lowpass1_0.1hz_resonance_18_taus", |b| {
+        b.iter(|| black_box(long.allan_variance_sampled_many(&taus10, 0.1)))
+    });
+    group.finish();
+
+    // The MTx model with a resonance on every axis (two normals per sample for the oscillator).
+    let mut group = c.benchmark_group("generate_mtx_resonance");
+    group.throughput(Throughput::Elements(SAMPLES));
+    group.sample_size(10);
+    let mut m = model.clone();
+    for s in noise::Sensor::ALL {
+        for a in &mut m.triad_mut(s).axes {
+            a.resonance = Some(noise::Resonance::new(1e-3, 20.0, 0.7).unwrap());
+        }
+    }
+    group.bench_function("fill_static_6_channels", |b| {
+        let mut out = vec![0.0; SAMPLES as usize];
+        b.iter_batched(
+            || ImuErrors::new(&m, 0.01, 1, 0),
+            |mut e| {
+                for (c, ch) in e.channels_mut().iter_mut().enumerate() {
+                    ch.fill_static(0, if c < 3 { &ideal_g } else { &ideal_a }, &mut out);
+                    black_box(&out);
+                }
+            },
+            BatchSize::LargeInput,
+        )
+    });
     group.finish();
 }
 

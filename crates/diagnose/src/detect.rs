@@ -86,7 +86,8 @@ fn neighbour_median(x: &[f64], k: usize, buf: &mut Vec<f64>) -> f64 {
 /// Robust outlier detection (a Hampel identifier with a global scale): each sample's displacement
 /// r_k from the median of the 7-sample window centred on it, scaled by the robust standard deviation
 /// of all displacements (1.4826 times their median absolute value); samples beyond
-/// [`spike_threshold`] are outliers. An isolated outlier barely moves its window's median.
+/// [`spike_threshold`] that also stand out from their two neighbours' mean (see below) are outliers.
+/// An isolated outlier barely moves its window's median.
 pub fn detect_spikes(x: &[f64]) -> Spikes {
     let n = x.len();
     let mut buf = Vec::with_capacity(2 * HALF_WINDOW);
@@ -105,11 +106,19 @@ pub fn detect_spikes(x: &[f64]) -> Spikes {
         sigma = (s / c.max(1) as f64).sqrt();
     }
     let threshold = spike_threshold(n);
+    // A spike also stands out from the channel's own short-term spread: at least 5 robust standard
+    // deviations of the channel less its centred 101-sample moving average. On white noise the
+    // window displacements' scale is about 0.9 of the channel's, so the threshold above (>= 10) is
+    // the stricter; on a smooth (filtered) channel the running median follows the signal closely,
+    // the displacements' scale collapses and their heavy tails would pass for spikes smaller than
+    // the noise itself.
+    let floor = 5.0 * high_passed_sigma(x, 50);
+    let isolated = |k: usize| r[k].abs() > floor;
     let mut indices = Vec::new();
     let mut excess = Vec::new();
     if sigma > 0.0 {
         for (k, &v) in r.iter().enumerate() {
-            if v.abs() > threshold * sigma {
+            if v.abs() > threshold * sigma && isolated(k) {
                 indices.push(k);
                 excess.push(v);
             }
@@ -121,6 +130,26 @@ pub fn detect_spikes(x: &[f64]) -> Spikes {
         sigma,
         threshold,
     }
+}
+
+/// Robust standard deviation (1.4826 x the median absolute deviation) of `x` less its centred moving
+/// average over 2 `half` + 1 samples (shorter at the ends).
+fn high_passed_sigma(x: &[f64], half: usize) -> f64 {
+    let n = x.len();
+    let mut prefix = Vec::with_capacity(n + 1);
+    prefix.push(0.0);
+    for v in x {
+        prefix.push(prefix.last().copied().unwrap_or(0.0) + v);
+    }
+    let mut hp: Vec<f64> = (0..n)
+        .map(|k| {
+            let (lo, hi) = (k.saturating_sub(half), (k + half + 1).min(n));
+            x[k] - (prefix[hi] - prefix[lo]) / (hi - lo) as f64
+        })
+        .collect();
+    let m = median(&mut hp.clone());
+    hp.iter_mut().for_each(|v| *v = (*v - m).abs());
+    1.4826 * median(&mut hp)
 }
 
 /// The series with each outlier replaced by the median of its neighbours.

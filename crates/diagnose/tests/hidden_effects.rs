@@ -330,6 +330,7 @@ fn check(trial: &Trial) -> Result<(), String> {
 }
 
 fn hidden_effect_test(effect: Effect, trials: u64) {
+    let trials = trials_override().unwrap_or(trials);
     let failures: Vec<String> = (0..trials)
         .filter_map(|t| check(&hidden_trial(effect, t)).err())
         .collect();
@@ -459,4 +460,10 @@ fn temperature_ramp_cannot_be_told_from_rate_ramp() {
 /// only the 1.5 bound is asked.
 fn faint(gap_initial: f64) -> bool {
     gap_initial < 4.5
+}
+
+/// `IMUDRIFT_HIDDEN_TRIALS=n`: run n trials per effect instead of the suite's default (a longer blind
+/// run before a release; the default keeps CI short).
+fn trials_override() -> Option<u64> {
+    std::env::var("IMUDRIFT_HIDDEN_TRIALS").ok()?.parse().ok()
 }

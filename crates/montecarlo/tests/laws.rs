@@ -302,6 +302,23 @@ fn sinusoid_alone_follows_its_law() {
 }
 
 #[test]
+fn resonance_alone_follows_its_law() {
+    // A resonance (1 Hz, half-power bandwidth 0.3 Hz) on every axis, 100 Hz, 20 s: the checkpoints
+    // span t from below the mode's period to 20 / (pi bandwidth) correlation times, where the
+    // angle's growth turns from t^2 to white-noise-like t. Law: the exact k-fold integrals
+    // (`noise::closed_form::resonance_kfold_variance`); the held samples differ from the continuous
+    // process by the sample-and-hold gain sinc^2(pi f dt), 1 - 3e-4 here.
+    let gyro = "[gyro.all]\nresonance = { sigma = \"0.1 deg/s\", frequency = \"1 Hz\", bandwidth = \"0.3 Hz\" }\n";
+    let r = simulate(gyro, CHECKS, 20.0, 100.0, RUNS);
+    let n = check("gyro.resonance", &r, &gyro_law_channels());
+    assert!(n >= 6 * 9, "only {n} checks");
+    let accel = "[accel.all]\nresonance = { sigma = \"0.05 m/s^2\", frequency = \"1 Hz\", bandwidth = \"0.3 Hz\" }\n";
+    let r = simulate(accel, CHECKS, 20.0, 100.0, RUNS);
+    let n = check("accel.resonance", &r, accel_law_channels());
+    assert!(n >= 6 * 8, "only {n} checks");
+}
+
+#[test]
 fn bias_calibrated_at_start_follows_its_law() {
     use Channel::*;
     // `terms.bias_calibrated_at_start`: each Gauss-Markov process referenced to its value at
