@@ -471,14 +471,17 @@ pub fn fit_transient(x: &[f64], dt_s: f64, floor: &NoiseLevels) -> Option<Transi
         t = next;
         tau_hi = t;
     }
-    let gt = detrend(&g);
+    // Remove the exponential itself (mean kept), not its detrended shape: the straight line it was
+    // fitted beside belongs to the data, and subtracting c (g - its line) would add c x that line,
+    // a spurious ramp of slope ~ c tau / T^2 that a long tau makes large enough to be named.
+    let gm = g.iter().sum::<f64>() / n as f64;
     Some(Transient {
         amplitude: c,
         tau_s: tau,
         tau_lo_s: tau_lo.min(tau),
         tau_hi_s: tau_hi.max(tau),
         z: z_score(c, sd),
-        corrected: x.iter().zip(&gt).map(|(xi, gi)| xi - c * gi).collect(),
+        corrected: x.iter().zip(&g).map(|(xi, gi)| xi - c * (gi - gm)).collect(),
     })
 }
 
