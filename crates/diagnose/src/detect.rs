@@ -481,7 +481,11 @@ pub fn fit_transient(x: &[f64], dt_s: f64, floor: &NoiseLevels) -> Option<Transi
         tau_lo_s: tau_lo.min(tau),
         tau_hi_s: tau_hi.max(tau),
         z: z_score(c, sd),
-        corrected: x.iter().zip(&g).map(|(xi, gi)| xi - c * (gi - gm)).collect(),
+        corrected: x
+            .iter()
+            .zip(&g)
+            .map(|(xi, gi)| xi - c * (gi - gm))
+            .collect(),
     })
 }
 

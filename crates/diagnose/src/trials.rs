@@ -175,16 +175,29 @@ pub(crate) fn trials(
             };
             let filter = output_filter(model, ch);
             let c0 = current.map(|c| c.c()).unwrap_or(0.0);
-            let fits: Vec<(LinearFit, Vec<f64>)> = shapes
-                .iter()
-                .map(|&shape| {
-                    let f = resonance_signature(filter.as_ref(), shape, tau, dt_s);
-                    (fit_linear(&data, &f, c0), f)
-                })
-                .collect();
-            let Some(jb) =
+            let fit_shape = |shape: (f64, f64)| {
+                let f = resonance_signature(filter.as_ref(), shape, tau, dt_s);
+                (fit_linear(&data, &f, c0), f)
+            };
+            let mut shapes = shapes;
+            let mut fits: Vec<(LinearFit, Vec<f64>)> =
+                shapes.iter().map(|&shape| fit_shape(shape)).collect();
+            let best_of = |fits: &[(LinearFit, Vec<f64>)]| {
                 (0..fits.len()).min_by(|&a, &b| fits[a].0.chi2.total_cmp(&fits[b].0.chi2))
-            else {
+            };
+            // Two refinements around the best (frequency in quarter bandwidths, bandwidth 0.7-1.4
+            // times): the grid's steps are coarse beside a narrow mode, and a frequency a fraction
+            // of a bandwidth off is otherwise made up by a wider bandwidth.
+            for _ in 0..2 {
+                let Some(jb) = best_of(&fits) else { break };
+                for shape in resonance_refinement(shapes[jb], dt_s) {
+                    if !shapes.contains(&shape) {
+                        fits.push(fit_shape(shape));
+                        shapes.push(shape);
+                    }
+                }
+            }
+            let Some(jb) = best_of(&fits) else {
                 continue;
             };
             let fit = fits[jb].0;
