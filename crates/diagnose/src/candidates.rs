@@ -194,16 +194,17 @@ pub fn resonance_grid(peak: crate::spectrum::SpectralPeak, dt_s: f64) -> Vec<(f6
     out
 }
 
-/// The shapes tried around a resonance the model has: its own, frequency moved by {-1/2, -1/4, 0, 1/4,
-/// 1/2} of its bandwidth, bandwidth at {0.7, 0.85, 1, 1.2, 1.4} times its own (25 at most).
-pub fn resonance_refinement((f0, bw): (f64, f64), dt_s: f64) -> Vec<(f64, f64)> {
+/// The shapes tried around a resonance shape (f0, bw): frequency moved by {-2, -1, 0, 1, 2} x
+/// `step` / 8 of the bandwidth, bandwidth at (1 + {-2, -1, 0, 1, 2} x `step` x 0.15) times its own
+/// (25 at most; `step` 2 gives quarter bandwidths and 0.4-1.6 times).
+pub fn resonance_refinement((f0, bw): (f64, f64), step: f64, dt_s: f64) -> Vec<(f64, f64)> {
     let nyquist = 0.5 / dt_s;
     let mut out = vec![(f0, bw)];
     for i in -2..=2 {
-        let f = f0 + f64::from(i) / 4.0 * bw;
-        for s in [0.7, 0.85, 1.0, 1.2, 1.4] {
-            let b = s * bw;
-            if (i, s) != (0, 1.0) && f > 0.0 && f < nyquist && b < 2.0 * f {
+        let f = f0 + f64::from(i) * step / 8.0 * bw;
+        for j in -2..=2 {
+            let b = bw * (1.0 + f64::from(j) * step * 0.15);
+            if (i, j) != (0, 0) && f > 0.0 && f < nyquist && b > 0.0 && b < 2.0 * f {
                 out.push((f, b));
             }
         }

@@ -523,6 +523,17 @@ fn local_spectrum(x: &[f64], dt_s: f64, f0_hz: f64, seg: usize, span: i32) -> Ve
         .collect()
 }
 
+/// May a sinusoid at `f0_hz` be named in `x`: there is a spectral line there ([`is_spectral_line`]),
+/// or the spectrum cannot tell (the frequency below 6 resolutions of the Welch segments, at or
+/// above the Nyquist frequency, or the log too short for segments).
+pub fn line_allowed(x: &[f64], dt_s: f64, f0_hz: f64) -> bool {
+    let seg = 4096.min(x.len() / 16);
+    if seg < 64 || !(f0_hz > 0.0) || f0_hz >= 0.5 / dt_s {
+        return true;
+    }
+    f0_hz < 6.0 / (seg as f64 * dt_s) || is_spectral_line(x, dt_s, f0_hz)
+}
+
 /// Is there a spectral line (a sinusoid) at `f0_hz` in `x`? A Welch spectrum (segments of 4096
 /// samples, or a sixteenth of the log if shorter, Hann window) must, at f0, exceed the median of the
 /// bins 6 to 20 resolutions away by a factor above both 2 and 1 + 6/sqrt(K) (K segments: the

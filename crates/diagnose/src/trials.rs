@@ -74,6 +74,7 @@ pub(crate) fn trials(
     temp: Option<(&[f64], f64, f64)>,
     ramp_slope: f64,
     peak: Option<crate::spectrum::SpectralPeak>,
+    line_allowed: &dyn Fn(f64) -> bool,
 ) -> Vec<Trial> {
     let ln_meas: Vec<f64> = measured.adev.iter().map(|a| a.ln()).collect();
     let data = FitData {
@@ -132,6 +133,11 @@ pub(crate) fn trials(
             let Some(ff) = fit_family(&data, &shapes, &sigs, &|_| c0) else {
                 continue;
             };
+            // A new sinusoid must sit on a spectral line where the spectrum can show one
+            // (`detect::line_allowed`): one that does not would only fill a gap as a stand-in.
+            if effect == Effect::Sinusoidal && current.is_none() && !line_allowed(ff.shape) {
+                continue;
+            }
             let j = shapes.iter().position(|&s| s == ff.shape).unwrap_or(0);
             let p = match effect {
                 Effect::GaussMarkov => TermParams::GaussMarkov {
@@ -167,7 +173,7 @@ pub(crate) fn trials(
                     frequency_hz,
                     bandwidth_hz,
                     ..
-                }) => resonance_refinement((frequency_hz, bandwidth_hz), dt_s),
+                }) => resonance_refinement((frequency_hz, bandwidth_hz), 1.0, dt_s),
                 _ => match peak {
                     Some(p) => resonance_grid(p, dt_s),
                     None => continue,
@@ -179,19 +185,38 @@ pub(crate) fn trials(
                 let f = resonance_signature(filter.as_ref(), shape, tau, dt_s);
                 (fit_linear(&data, &f, c0), f)
             };
-            let mut shapes = shapes;
+            // The bandwidth stays within what the spectrum allows: at least 0.15 times the broad
+            // peak's width (the grid's lowest; a mode much narrower than its peak is a line the
+            // spectrum does not show) and at most 3 times it.
+            let allowed = |b: f64| {
+                peak.is_none_or(|p| (0.149 * p.bandwidth_hz..=3.001 * p.bandwidth_hz).contains(&b))
+            };
+            // (The model's own shape is always refitted.)
+            let own = match current {
+                Some(TermParams::Resonance {
+                    frequency_hz,
+                    bandwidth_hz,
+                    ..
+                }) => Some((frequency_hz, bandwidth_hz)),
+                _ => None,
+            };
+            let mut shapes: Vec<(f64, f64)> = shapes
+                .into_iter()
+                .filter(|s| allowed(s.1) || Some(*s) == own)
+                .collect();
             let mut fits: Vec<(LinearFit, Vec<f64>)> =
                 shapes.iter().map(|&shape| fit_shape(shape)).collect();
             let best_of = |fits: &[(LinearFit, Vec<f64>)]| {
                 (0..fits.len()).min_by(|&a, &b| fits[a].0.chi2.total_cmp(&fits[b].0.chi2))
             };
-            // Two refinements around the best (frequency in quarter bandwidths, bandwidth 0.7-1.4
-            // times): the grid's steps are coarse beside a narrow mode, and a frequency a fraction
-            // of a bandwidth off is otherwise made up by a wider bandwidth.
-            for _ in 0..2 {
+            // Refinements around the best, each twice as fine (frequency in steps of 1/4, 1/8,
+            // 1/16 of the bandwidth, bandwidth in steps of 30 %, 15 %, 7.5 %): the grid's steps are
+            // coarse beside a narrow mode, the short taus are sensitive to the frequency, and a
+            // frequency a fraction of a bandwidth off is otherwise made up by a wider bandwidth.
+            for step in [2.0, 1.0, 0.5] {
                 let Some(jb) = best_of(&fits) else { break };
-                for shape in resonance_refinement(shapes[jb], dt_s) {
-                    if !shapes.contains(&shape) {
+                for shape in resonance_refinement(shapes[jb], step, dt_s) {
+                    if !shapes.contains(&shape) && allowed(shape.1) {
                         fits.push(fit_shape(shape));
                         shapes.push(shape);
                     }

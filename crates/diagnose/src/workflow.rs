@@ -196,6 +196,11 @@ pub fn diagnose_with_progress(
                         .map(|(v, s)| (v.as_slice(), *s, setup.temp_coeff[c])),
                     ramp_slope[c],
                     pre.peaks[c],
+                    &|f| {
+                        pre.channels[c]
+                            .as_deref()
+                            .is_none_or(|x| crate::detect::line_allowed(x, log.dt_s, f))
+                    },
                 );
                 let data = FitData {
                     ln_meas: &ln_meas,
