@@ -528,7 +528,7 @@ fn local_spectrum(x: &[f64], dt_s: f64, f0_hz: f64, seg: usize, span: i32) -> Ve
 /// above the Nyquist frequency, or the log too short for segments).
 pub fn line_allowed(x: &[f64], dt_s: f64, f0_hz: f64) -> bool {
     let seg = 4096.min(x.len() / 16);
-    if seg < 64 || !(f0_hz > 0.0) || f0_hz >= 0.5 / dt_s {
+    if seg < 64 || f0_hz.is_nan() || f0_hz <= 0.0 || f0_hz >= 0.5 / dt_s {
         return true;
     }
     f0_hz < 6.0 / (seg as f64 * dt_s) || is_spectral_line(x, dt_s, f0_hz)
