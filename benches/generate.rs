@@ -18,6 +18,23 @@ fn mtx() -> SensorModel {
     .expect("mtx.toml")
 }
 
+/// Generate every channel of a static level IMU, `SAMPLES` samples each, with `model`'s errors.
+fn fill_static_all(b: &mut criterion::Bencher, model: &SensorModel) {
+    let ideal_g = Vector3::zeros();
+    let ideal_a = Vector3::new(0.0, 0.0, -9.80665);
+    let mut out = vec![0.0; SAMPLES as usize];
+    b.iter_batched(
+        || ImuErrors::new(model, 0.01, 1, 0),
+        |mut e| {
+            for (c, ch) in e.channels_mut().iter_mut().enumerate() {
+                ch.fill_static(0, if c < 3 { &ideal_g } else { &ideal_a }, &mut out);
+                black_box(&out);
+            }
+        },
+        BatchSize::LargeInput,
+    )
+}
+
 fn bench(c: &mut Criterion) {
     let model = mtx();
     let ideal_g = Vector3::zeros();
@@ -37,17 +54,7 @@ fn bench(c: &mut Criterion) {
         )
     });
     group.bench_function("fill_static_6_channels", |b| {
-        let mut out = vec![0.0; SAMPLES as usize];
-        b.iter_batched(
-            || ImuErrors::new(&model, 0.01, 1, 0),
-            |mut e| {
-                for (c, ch) in e.channels_mut().iter_mut().enumerate() {
-                    ch.fill_static(0, if c < 3 { &ideal_g } else { &ideal_a }, &mut out);
-                    black_box(&out);
-                }
-            },
-            BatchSize::LargeInput,
-        )
+        fill_static_all(b, &model);
     });
     group.finish();
 
@@ -70,19 +77,7 @@ fn bench(c: &mut Criterion) {
                 a.output_filter = Some(noise::OutputFilter::new(kind, d).unwrap());
             }
         }
-        group.bench_function(name, |b| {
-            let mut out = vec![0.0; SAMPLES as usize];
-            b.iter_batched(
-                || ImuErrors::new(&m, 0.01, 1, 0),
-                |mut e| {
-                    for (c, ch) in e.channels_mut().iter_mut().enumerate() {
-                        ch.fill_static(0, if c < 3 { &ideal_g } else { &ideal_a }, &mut out);
-                        black_box(&out);
-                    }
-                },
-                BatchSize::LargeInput,
-            )
-        });
+        group.bench_function(name, |b| fill_static_all(b, &m));
     }
     group.finish();
 
@@ -119,17 +114,7 @@ fn bench(c: &mut Criterion) {
         }
     }
     group.bench_function("fill_static_6_channels", |b| {
-        let mut out = vec![0.0; SAMPLES as usize];
-        b.iter_batched(
-            || ImuErrors::new(&m, 0.01, 1, 0),
-            |mut e| {
-                for (c, ch) in e.channels_mut().iter_mut().enumerate() {
-                    ch.fill_static(0, if c < 3 { &ideal_g } else { &ideal_a }, &mut out);
-                    black_box(&out);
-                }
-            },
-            BatchSize::LargeInput,
-        )
+        fill_static_all(b, &m);
     });
     group.finish();
 }

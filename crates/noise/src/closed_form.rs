@@ -873,18 +873,6 @@ mod tests {
         assert!(gauss_markov_kfold_variance(sigma, tc, 7.0, 4).is_none());
     }
 
-    /// Allan weights' autocorrelation A_w(k) for averages of m (docs/real-effects.md).
-    fn a_w(k: i64, m: i64) -> f64 {
-        let k = k.abs();
-        if k <= m {
-            (2 * m - 3 * k) as f64
-        } else if k < 2 * m {
-            -((2 * m - k) as f64)
-        } else {
-            0.0
-        }
-    }
-
     /// The resonance's closed forms against brute force from its autocovariance: the sampled Allan
     /// variance as the quadratic form (1/(2m^2)) sum A_w(k) R(k dt), the continuous one as the same
     /// integral (midpoint rule, 2e5 points), and the k-fold integrals' variances as the double
@@ -908,7 +896,7 @@ mod tests {
         let dt = 0.01;
         for m in [1i64, 2, 5, 17, 33, 100, 400] {
             let brute: f64 = (-2 * m..=2 * m)
-                .map(|k| a_w(k, m) * r(k as f64 * dt))
+                .map(|k| crate::filter::allan_weight_acf(k, m) * r(k as f64 * dt))
                 .sum::<f64>()
                 / (2 * m * m) as f64;
             let cf = resonance_avar_sampled(sigma, f0, bw, m as f64 * dt, dt);

@@ -323,8 +323,8 @@ pub struct FilteredAllan {
     dt_i: f64,
 }
 
-/// A_w(k) of the Allan difference weights at averaging factor m.
-fn allan_weight_acf(k: i64, m: i64) -> f64 {
+/// A_w(k) of the Allan difference weights at averaging factor m (docs/real-effects.md).
+pub(crate) fn allan_weight_acf(k: i64, m: i64) -> f64 {
     let k = k.abs();
     if k <= m {
         (2 * m - 3 * k) as f64
