@@ -406,7 +406,18 @@ fn convert_axis(
                 )?,
                 ctx.positive(&bw_key, &r.bandwidth, Quantity::Frequency)?,
             )
-            .map_err(|e| ctx.invalid_at(&bw_key, Some(&r.bandwidth), e.expected, e.to_string()))?,
+            .map_err(|e| {
+                ctx.invalid_at(
+                    &bw_key,
+                    Some(&r.bandwidth),
+                    e.expected,
+                    format!(
+                        "\"{}\" with frequency \"{}\"",
+                        r.bandwidth.get_ref(),
+                        r.frequency.get_ref()
+                    ),
+                )
+            })?,
         );
     }
     // Bias instability last: the "allan_minimum" convention needs the other terms.

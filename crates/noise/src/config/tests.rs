@@ -80,6 +80,7 @@ sinusoidal = { amplitude = "1 mg", frequency = "2 Hz" }
 output_filter = { kind = "bartlett", taps = 8, decimation = 8 }
 outliers = { rate = "0.7 /min", size = "0.5 mg" }
 warmup_transient = { amplitude = "-2 mg", time_constant = "600 s" }
+resonance = { sigma = "0.5 mg", frequency = "10 Hz", bandwidth = "700 mHz" }
 "#;
     let m = SensorModel::from_toml_str(text, "full.toml").unwrap();
     let back = SensorModel::from_toml_str(&m.to_toml_string(), "written.toml").unwrap();
@@ -123,6 +124,10 @@ warmup_transient = { amplitude = "-2 mg", time_constant = "600 s" }
     );
     assert!((ay.outliers.unwrap().rate_per_hour / (0.013 * 3600.0) - 1.0).abs() < 1e-15);
     assert!((az.outliers.unwrap().rate_per_hour / 42.0 - 1.0).abs() < 1e-15);
+    let r = az.resonance.unwrap();
+    assert!((r.sigma / (0.5e-3 * crate::units::STANDARD_GRAVITY_MPS2) - 1.0).abs() < 1e-15);
+    assert_eq!(r.frequency_hz, 10.0);
+    assert!((r.bandwidth_hz / 0.7 - 1.0).abs() < 1e-15);
     assert!(
         (az.outliers.unwrap().size / (0.5e-3 * crate::units::STANDARD_GRAVITY_MPS2) - 1.0).abs()
             < 1e-15
@@ -314,6 +319,20 @@ fn bad_real_sensor_effects_name_the_key() {
     assert!(e.contains("line 3") && e.contains("size"), "{e}");
     let e = axis("outliers = { rate = 60, size = \"1 deg/s\" }");
     assert!(e.contains("outliers = { rate = \"60 /h\""), "{e}");
+    let e = axis("resonance = { sigma = \"1 deg/s\", frequency = \"2 Hz\", bandwidth = \"5 Hz\" }");
+    assert!(
+        e.contains("gyro.x.resonance.bandwidth")
+            && e.contains("below twice the frequency")
+            && e.contains("\"5 Hz\" with frequency \"2 Hz\""),
+        "{e}"
+    );
+    let e = axis("resonance = { sigma = \"1 deg/s\", frequency = \"0 Hz\", bandwidth = \"1 Hz\" }");
+    assert!(
+        e.contains("gyro.x.resonance.frequency") && e.contains("> 0"),
+        "{e}"
+    );
+    let e = axis("resonance = { sigma = \"1 deg/s\", frequency = \"2 Hz\" }");
+    assert!(e.contains("line 3") && e.contains("bandwidth"), "{e}");
     let e = axis("warmup_transient = { amplitude = \"1 deg/s\", time_constant = \"0 s\" }");
     assert!(
         e.contains("gyro.x.warmup_transient.time_constant") && e.contains("> 0"),
