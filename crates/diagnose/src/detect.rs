@@ -106,13 +106,13 @@ pub fn detect_spikes(x: &[f64]) -> Spikes {
         sigma = (s / c.max(1) as f64).sqrt();
     }
     let threshold = spike_threshold(n);
-    // A spike also stands out from the channel's own short-term spread: at least 5 robust standard
+    // A spike also stands out from the channel's own short-term spread: at least 8 robust standard
     // deviations of the channel less its centred 101-sample moving average. On white noise the
-    // window displacements' scale is about 0.9 of the channel's, so the threshold above (>= 10) is
-    // the stricter; on a smooth (filtered) channel the running median follows the signal closely,
-    // the displacements' scale collapses and their heavy tails would pass for spikes smaller than
-    // the noise itself.
-    let floor = 5.0 * high_passed_sigma(x, 50);
+    // window displacements' scale is about 0.9 of the channel's, so the threshold above (>= 10,
+    // about 9 of the channel's) is the stricter; on a smooth (filtered or held) channel the running
+    // median follows the signal closely, the displacements' scale collapses and their heavy tails
+    // would pass for spikes of a few of the channel's own standard deviations.
+    let floor = 8.0 * high_passed_sigma(x, 50);
     let isolated = |k: usize| r[k].abs() > floor;
     let mut indices = Vec::new();
     let mut excess = Vec::new();
