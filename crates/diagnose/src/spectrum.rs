@@ -3,8 +3,11 @@
 //! A resonance (a narrow-band random vibration, `noise::Resonance`) shows in the power spectral
 //! density as a peak several resolutions wide above a smooth background; a sinusoid shows as a line
 //! (the window's main lobe, about two resolutions); the white, flicker and random-walk terms are
-//! smooth power laws. The Allan curve blurs the peak's shape, so diagnose takes the resonance's
-//! frequency and bandwidth from the spectrum and only its level from the Allan fit.
+//! smooth power laws. diagnose offers a resonance only where such a peak stands out, searches its
+//! frequency and bandwidth around the peak's (`candidates::resonance_grid`) and keeps the bandwidth
+//! within 0.15-3 times the peak's width.
+
+use crate::detect::median;
 
 /// A broad peak of the spectrum.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -54,21 +57,11 @@ pub fn welch(x: &[f64], seg: usize) -> (Vec<f64>, usize) {
     (p, k)
 }
 
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
 /// The strongest broad peak of `x`'s spectrum, if one stands out. Welch spectrum with segments of
 /// 4096 samples (a sixteenth of the log if shorter, a power of two, at least 256). Background at bin
 /// k: the median of 61 bins log-spaced over [k/2, 2 k] (symmetric in log frequency, so a power law
-/// is its own median), taken again without the bins the first pass found raised. A peak is a maximum of the 3-bin-smoothed ratio to the background that exceeds
-/// both 1.2 and 1 + 6/sqrt(3 K) (K segments: each Welch bin has relative spread 1/sqrt(K), so 6 sigma
+/// is its own median), taken again without the bins the first pass found raised. A peak is a
+/// maximum of the 3-bin-smoothed ratio to the background that exceeds both 1.2 and 1 + 6/sqrt(3 K) (K segments: each Welch bin has relative spread 1/sqrt(K), so 6 sigma
 /// of a 3-bin mean, about 1e-9 one-sided per bin), whose excess power stays above half its top over at
 /// least 4 resolutions (a Hann-windowed line is about 2 wide: lines are left to the sinusoid), between
 /// 6 resolutions and 0.45 times the sample rate. Of the peaks found (up to 8, each masked before the
@@ -238,6 +231,8 @@ mod tests {
             })
             .collect();
         let p = broad_peak(&x, dt).expect("a resonance");
+        // Two resolutions (100 Hz / 4096 = 0.024 Hz) on the frequency; the width from ~25 bins of
+        // 256-segment averages (each bin's relative spread 1/16) within the 25 %.
         assert!((p.frequency_hz - f0).abs() < 0.05, "{p:?}");
         assert!((p.bandwidth_hz / bw - 1.0).abs() < 0.25, "{p:?}");
         assert_eq!(broad_peak(&w, dt), None);
