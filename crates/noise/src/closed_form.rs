@@ -951,5 +951,12 @@ mod tests {
             }
         }
         assert!(resonance_kfold_variance(sigma, f0, bw, 1.0, 4).is_none());
+        // Long after 1/bandwidth the angle grows like white noise of density sigma sqrt(B/pi)/f0
+        // (docs/model.md §4): the once-integrated variance over t is that density squared times t,
+        // less a constant of order sigma^2 / (zeta w0)^2, relative 1/(pi B t) = 2e-4 at t = 2000 s.
+        let t = 2000.0;
+        let white = (sigma * (bw / std::f64::consts::PI).sqrt() / f0).powi(2) * t;
+        let v = resonance_kfold_variance(sigma, f0, bw, t, 1).unwrap();
+        assert!((v / white - 1.0).abs() < 1e-3, "{v} vs {white}");
     }
 }

@@ -96,41 +96,32 @@ fn gauss_markov_matches_its_closed_form() {
 /// (bandwidth a twentieth of the frequency) and broad (four fifths of it), generated at 10 Hz,
 /// 100 Hz and 1 kHz: the sampled closed form (`cf::resonance_avar_sampled`) at taus below, at and
 /// far above the resonance period. EDF: the smaller of Greenhall's (white and random walk) and the
-/// time-bandwidth product of a narrow-band process, 2 B_s T with the statistical bandwidth of a
-/// single mode B_s = (pi/2) x its half-power bandwidth (Bendat & Piersol, Random Data, 4th ed.,
-/// §8.2.1 and eq. 8.52): the differences of a narrow-band process stay correlated over 1/B_s, which
-/// the power-law EDF does not know. The same EDF bounds the series' variance against sigma^2
-/// (stationary from the first sample).
+/// time-bandwidth product (`common::narrowband_edf`). The same EDF bounds the series' variance
+/// against sigma^2 (stationary from the first sample).
 #[test]
 fn resonance_matches_its_closed_form() {
-    let ms = [1usize, 2, 3, 5, 10, 100, 1000];
     for (f_rel, zeta2) in [(0.1, 0.05), (0.3, 0.8)] {
         for (i, &rate) in RATES_HZ.iter().enumerate() {
             let dt = 1.0 / rate;
             let f0 = f_rel * rate;
             let bw = zeta2 * f0;
-            let r = Resonance::new(2e-3, f0, bw).unwrap();
             let axis = AxisModel {
-                resonance: Some(r),
+                resonance: Some(Resonance::new(2e-3, f0, bw).unwrap()),
                 ..AxisModel::default()
             };
             let data = gyro_x_series(&axis, rate, N, SEED + 7, i as u64);
-            let duration = N as f64 * dt;
-            let time_bandwidth = 2.0 * std::f64::consts::FRAC_PI_2 * bw * duration;
-            let est = oavar(&data, dt, &ms);
-            for (&m, &v) in ms.iter().zip(&est) {
-                let tau = m as f64 * dt;
-                let t = axis.allan_variance_sampled(tau, dt);
-                let e = edf(&[0, -2], m, N).min(time_bandwidth);
-                let (lo, hi) = ratio_bounds(e);
-                let ratio = v / t;
-                assert!(
-                    ratio > lo && ratio < hi,
-                    "resonance {f0} Hz / {bw} Hz at {rate} Hz, m {m}: ratio {ratio:.4} outside [{lo:.4}, {hi:.4}] (edf {e:.0})"
-                );
-            }
+            let cap = narrowband_edf(bw, N as f64 * dt);
+            assert_avar_matches_capped(
+                &format!("resonance {f0} Hz, bandwidth {bw} Hz at {rate} Hz"),
+                &data,
+                dt,
+                &[1, 2, 3, 5, 10, 100, 1000],
+                &[0, -2],
+                cap,
+                |tau| axis.allan_variance_sampled(tau, dt),
+            );
             let v = data.iter().map(|x| x * x).sum::<f64>() / N as f64;
-            let (lo, hi) = ratio_bounds(time_bandwidth);
+            let (lo, hi) = ratio_bounds(cap);
             let ratio = v / (2e-3 * 2e-3);
             assert!(
                 ratio > lo && ratio < hi,
