@@ -565,6 +565,7 @@ pub fn is_spectral_line(x: &[f64], dt_s: f64, f0_hz: f64) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testutil::normals;
 
     #[test]
     fn normal_quantiles() {
@@ -689,13 +690,6 @@ mod tests {
         assert!((s.size() - 12.0).abs() < 1.0, "{}", s.size());
         let clean = remove_spikes(&x, &s);
         assert!(clean.iter().all(|v| v.abs() < 1.0));
-    }
-
-    fn normals(n: usize, seed: u64) -> Vec<f64> {
-        use rand::SeedableRng;
-        use rand_distr::{Distribution, StandardNormal};
-        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed);
-        (0..n).map(|_| StandardNormal.sample(&mut rng)).collect()
     }
 
     /// A smooth channel (white noise through two first-order low-passes, a = 0.9: about 10 samples

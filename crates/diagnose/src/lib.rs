@@ -20,6 +20,8 @@ pub mod protocol;
 pub mod report;
 pub mod simulate;
 pub mod spectrum;
+#[cfg(test)]
+mod testutil;
 mod trials;
 pub mod workflow;
 

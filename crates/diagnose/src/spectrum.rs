@@ -201,13 +201,7 @@ pub fn broad_peak(x: &[f64], dt_s: f64) -> Option<SpectralPeak> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rand::SeedableRng;
-
-    fn normals(n: usize, seed: u64) -> Vec<f64> {
-        use rand_distr::{Distribution, StandardNormal};
-        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed);
-        (0..n).map(|_| StandardNormal.sample(&mut rng)).collect()
-    }
+    use crate::testutil::normals;
 
     /// A resonance (AR(2) with poles r e^{+-i theta}: a peak at f0 with -3 dB width
     /// -ln(r^2) / (2 pi dt) = 0.6 Hz) in white noise is found at its frequency and width; white

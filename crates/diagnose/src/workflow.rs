@@ -151,6 +151,10 @@ pub fn diagnose_with_progress(
         }
     }
     let mut records: [Vec<CandidateRecord>; 6] = Default::default();
+    // Spectral-line checks by (channel, frequency): the same best sinusoid frequency recurs over the
+    // steps and rounds, and each check is a Welch DFT over the whole log.
+    let line_checks: std::cell::RefCell<std::collections::HashMap<(usize, u64), bool>> =
+        Default::default();
     let mut done: [bool; 6] = std::array::from_fn(|c| !active[c]);
     let mut rounds = 0;
 
@@ -197,9 +201,14 @@ pub fn diagnose_with_progress(
                     ramp_slope[c],
                     pre.peaks[c],
                     &|f| {
-                        pre.channels[c]
-                            .as_deref()
-                            .is_none_or(|x| crate::detect::line_allowed(x, log.dt_s, f))
+                        *line_checks
+                            .borrow_mut()
+                            .entry((c, f.to_bits()))
+                            .or_insert_with(|| {
+                                pre.channels[c]
+                                    .as_deref()
+                                    .is_none_or(|x| crate::detect::line_allowed(x, log.dt_s, f))
+                            })
                     },
                 );
                 let data = FitData {
