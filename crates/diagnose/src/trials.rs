@@ -165,19 +165,21 @@ pub(crate) fn trials(
             // beside may have changed since: a filter, the white level). An absent one needs a broad
             // peak in the log's spectrum (`spectrum::broad_peak`), which gives its frequency and
             // bandwidth roughly (a real peak is seldom the symmetric shape of the model); the shape is
-            // then fitted to the Allan curve on a grid around them (frequency within a bandwidth of
-            // the peak, bandwidth from half to three times the peak's), with the look-elsewhere cost
-            // of the grid, through the channel's output filter.
-            let shapes: Vec<(f64, f64)> = match current {
+            // then fitted to the Allan curve on a grid around them (frequency within a peak width,
+            // bandwidth 0.15-3 times the peak's), with the look-elsewhere cost of the shapes tried,
+            // through the channel's output filter.
+            let own = match current {
                 Some(TermParams::Resonance {
                     frequency_hz,
                     bandwidth_hz,
                     ..
-                }) => resonance_refinement((frequency_hz, bandwidth_hz), 1.0, dt_s),
-                _ => match peak {
-                    Some(p) => resonance_grid(p, dt_s),
-                    None => continue,
-                },
+                }) => Some((frequency_hz, bandwidth_hz)),
+                _ => None,
+            };
+            let shapes: Vec<(f64, f64)> = match (own, peak) {
+                (Some(shape), _) => resonance_refinement(shape, 1.0, dt_s),
+                (None, Some(p)) => resonance_grid(p, dt_s),
+                (None, None) => continue,
             };
             let filter = output_filter(model, ch);
             let c0 = current.map(|c| c.c()).unwrap_or(0.0);
@@ -192,14 +194,6 @@ pub(crate) fn trials(
                 peak.is_none_or(|p| (0.149 * p.bandwidth_hz..=3.001 * p.bandwidth_hz).contains(&b))
             };
             // (The model's own shape is always refitted.)
-            let own = match current {
-                Some(TermParams::Resonance {
-                    frequency_hz,
-                    bandwidth_hz,
-                    ..
-                }) => Some((frequency_hz, bandwidth_hz)),
-                _ => None,
-            };
             let mut shapes: Vec<(f64, f64)> = shapes
                 .into_iter()
                 .filter(|s| allowed(s.1) || Some(*s) == own)
