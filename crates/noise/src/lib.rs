@@ -13,6 +13,7 @@
 //! (0, 0, -g). Randomness: the RNG is passed in or derived from (seed, run) with [`stream_rng`];
 //! one named generator, [`ImuRng`] (Xoshiro256++), and one sub-stream per (run, channel, term).
 
+mod channel;
 pub mod closed_form;
 mod config;
 mod effect;
@@ -24,12 +25,13 @@ pub mod process;
 pub mod units;
 mod ziggurat;
 
+pub use channel::{Channel, ImuChannels, AXIS_NAMES};
 pub use config::{is_noise_file_text, utf8_text, ConfigError, UnitStyle};
 pub use effect::{Effect, FilterError, Sensor, TermFilter};
 pub use filter::{FilterKind, Outliers, OutputFilter, WarmupTransient};
 pub use model::{
     AxisModel, BiasInstability, Flicker, GaussMarkov, ModelError, Resonance, SensorModel, Sinusoid,
-    TemperatureProfile, Term, TriadModel, AXIS_NAMES,
+    TemperatureProfile, Term, TriadModel,
 };
 pub use process::{ChannelErrors, ImuErrors, CHANNEL_NAMES};
 

@@ -567,15 +567,11 @@ impl AxisModel {
     }
 }
 
-/// Three axes of one sensor kind.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriadModel {
     /// x, y, z.
     pub axes: [AxisModel; 3],
 }
-
-/// Axis names in order.
-pub const AXIS_NAMES: [&str; 3] = ["x", "y", "z"];
 
 /// Temperature over time (degC), driving `temperature_bias` and written as the log's `temp` column.
 #[derive(Clone, Debug, PartialEq)]

@@ -8,6 +8,7 @@ use crate::effect::Sensor;
 use crate::filter::{FilterKind, Outliers, OutputFilter, WarmupTransient, MAX_RESPONSE};
 use crate::model::*;
 use crate::units::{parse_quantity, unit_part, Quantity, Signal};
+use crate::AXIS_NAMES;
 
 /// Most Gauss-Markov components a flicker bias instability may have (20 decades at 5 per decade).
 const MAX_FLICKER_COMPONENTS: f64 = 100.0;

@@ -5,6 +5,7 @@ use crate::effect::Sensor;
 use crate::filter::FilterKind;
 use crate::model::*;
 use crate::units::{format_si, Quantity, Signal};
+use crate::AXIS_NAMES;
 use std::fmt::Write as _;
 
 impl SensorModel {
