@@ -6,7 +6,7 @@
 #
 # Covers: `simulate` of every shipped scenario (--json and --out), `allan` on ADIS16405 run 1
 # (--json and --out), `spec` of every shipped sensor (--json), `generate` (a short log), and
-# `diagnose` on ADIS16405 run 1 (--json and --out). The real logs are read from $IMUDRIFT_DATA.
+# `diagnose` on ADIS16405 run 1 (--json and --out), `drift` on ADIS16405 runs 1-2 (--json and --out). The real logs are read from $IMUDRIFT_DATA.
 # Human text on stderr is not compared (it holds progress and timings).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -19,7 +19,8 @@ if [ "$mode" = capture ]; then out=$ref; mkdir -p "$out"; else out=$(mktemp -d);
 run() { # name, then the command's arguments
   local name=$1; shift
   mkdir -p "$out/$name"
-  "$bin" "$@" --json --out "$out/$name/files" >"$out/$name/stdout.json" 2>/dev/null
+  "$bin" "$@" --json --out "$out/$name/files" >"$out/$name/stdout.json" 2>"$out/$name.stderr" || { echo "golden: $name failed:" >&2; cat "$out/$name.stderr" >&2; exit 1; }
+  rm -f "$out/$name.stderr"
 }
 for s in configs/scenarios/*.toml; do
   n=$(basename "$s" .toml)
@@ -34,6 +35,9 @@ mkdir -p "$out/generate"
 "$bin" generate configs/sensors/mtx.toml --duration 20 --rate 100 --seed 7 -o "$out/generate/mtx.csv" 2>/dev/null
 run diagnose-adis1 diagnose "$adis/adis16405_imu1.csv.gz" --model configs/sensors/adis16405.toml \
   --rate 100 --gyro-unit deg/s --accel-unit g --col "$cols" --horizons 60,3600
+run drift-adis12 drift "$adis/adis16405_imu1.csv.gz" "$adis/adis16405_imu2.csv.gz" \
+  --model configs/sensors/adis16405.toml --rate 100 --gyro-unit deg/s --accel-unit g --col "$cols" \
+  --horizons 60,600 --replicates 10 --calibration window:60 --init level:60
 if [ "$mode" = check ]; then
   if diff -r -x .imudrift.lock "$ref" "$out" >/dev/null; then
     echo "golden: every output byte-identical to $ref"
