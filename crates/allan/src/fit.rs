@@ -183,19 +183,7 @@ pub fn fit_ieee952_terms(points: &[AllanPoint], allowed: FitTerms) -> Fit {
         if chi2_at(0.0) <= 1.0 {
             break;
         }
-        let (mut lo, mut hi) = (0.0f64, 1.0f64);
-        while chi2_at(hi) > 1.0 && hi < 1e6 {
-            hi *= 4.0;
-        }
-        for _ in 0..60 {
-            let mid = 0.5 * (lo + hi);
-            if chi2_at(mid) > 1.0 {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        let f2 = 0.5 * (lo + hi);
+        let f2 = unit_chi2_variance(chi2_at);
         if (f2.sqrt() - model_error).abs() <= 1e-3 * f2.sqrt() {
             break;
         }
@@ -206,18 +194,7 @@ pub fn fit_ieee952_terms(points: &[AllanPoint], allowed: FitTerms) -> Fit {
     let dof = pts.len().saturating_sub(n_active).max(1);
     let inflate = (best.rss / dof as f64).max(1.0) * correlation_inflation(&pts);
     let reduced_chi2 = raw_reduced_chi2;
-    let mut terms: [Option<Term>; 5] = [None; 5];
-    for (j, t) in terms.iter_mut().enumerate() {
-        if best.active[j] && best.coef[j] > 0.0 {
-            let value = best.coef[j].sqrt();
-            let sigma_c = (best.cov[j][j] * inflate).sqrt();
-            // delta method: d sqrt(c) = dc / (2 sqrt c)
-            *t = Some(Term {
-                value,
-                sigma: sigma_c / (2.0 * value),
-            });
-        }
-    }
+    let terms = best.terms(inflate);
     Fit {
         q: terms[0],
         n: terms[1],
@@ -265,13 +242,79 @@ impl Solution {
             rss: f64::INFINITY,
         }
     }
+
+    /// The terms (square roots of the positive active coefficients) with their standard errors,
+    /// the covariance scaled by `inflate`.
+    fn terms(&self, inflate: f64) -> [Option<Term>; 5] {
+        let mut terms: [Option<Term>; 5] = [None; 5];
+        for (j, t) in terms.iter_mut().enumerate() {
+            if self.active[j] && self.coef[j] > 0.0 {
+                let value = self.coef[j].sqrt();
+                let sigma_c = (self.cov[j][j] * inflate).sqrt();
+                // delta method: d sqrt(c) = dc / (2 sqrt c)
+                *t = Some(Term {
+                    value,
+                    sigma: sigma_c / (2.0 * value),
+                });
+            }
+        }
+        terms
+    }
+}
+
+/// The model variance sum_j c_j g_j(tau) of one point.
+fn model(c: &[f64; 5], gi: &[f64; 5]) -> f64 {
+    gi.iter().zip(c).map(|(a, b)| a * b).sum()
+}
+
+/// The extra relative variance f^2 at which the reduced chi-square `chi2_at(f^2)` (decreasing in
+/// f^2) is 1: bracketed by quadrupling from 1 (up to 1e6), then 60 bisections.
+fn unit_chi2_variance(chi2_at: impl Fn(f64) -> f64) -> f64 {
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    while chi2_at(hi) > 1.0 && hi < 1e6 {
+        hi *= 4.0;
+    }
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if chi2_at(mid) > 1.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// Normal equations (J^T W J, J^T W r) of the log residuals r_i = ln y_i - ln m_i in the scaled
+/// variables u_j = c_j / coef_j of the active coefficients `idx` (relative steps).
+fn log_normal_equations(
+    g: &[[f64; 5]],
+    y: &[f64],
+    w: &[f64],
+    coef: &[f64; 5],
+    idx: &[usize],
+) -> (Vec<Vec<f64>>, Vec<f64>) {
+    let k = idx.len();
+    let mut jtj = vec![vec![0.0f64; k]; k];
+    let mut jtr = vec![0.0f64; k];
+    for ((gi, yi), wi) in g.iter().zip(y).zip(w) {
+        let m = model(coef, gi);
+        let r = yi.ln() - m.ln();
+        let jac: Vec<f64> = idx.iter().map(|&j| gi[j] * coef[j] / m).collect();
+        for a in 0..k {
+            jtr[a] += wi * jac[a] * r;
+            for b in 0..k {
+                jtj[a][b] += wi * jac[a] * jac[b];
+            }
+        }
+    }
+    (jtj, jtr)
 }
 
 /// Gauss–Newton on sum_i (ln y_i - ln m_i(c))^2 / var_ln_i over the active coefficients, with
 /// step halving; a coefficient driven to zero leaves the active set.
 fn refine_log(g: &[[f64; 5]], y: &[f64], var_ln: &[f64], start: Solution) -> Solution {
     let w: Vec<f64> = var_ln.iter().map(|v| 1.0 / v).collect();
-    let model = |c: &[f64; 5], gi: &[f64; 5]| -> f64 { gi.iter().zip(c).map(|(a, b)| a * b).sum() };
     let cost = |c: &[f64; 5]| -> f64 {
         g.iter()
             .zip(y)
@@ -300,19 +343,7 @@ fn refine_log(g: &[[f64; 5]], y: &[f64], var_ln: &[f64], start: Solution) -> Sol
             break;
         }
         // Normal equations in scaled variables u_j = c_j / coef_j (relative steps).
-        let mut jtj = vec![vec![0.0f64; k]; k];
-        let mut jtr = vec![0.0f64; k];
-        for ((gi, yi), wi) in g.iter().zip(y).zip(&w) {
-            let m = model(&coef, gi);
-            let r = yi.ln() - m.ln();
-            let jac: Vec<f64> = idx.iter().map(|&j| gi[j] * coef[j] / m).collect();
-            for a in 0..k {
-                jtr[a] += wi * jac[a] * r;
-                for b in 0..k {
-                    jtj[a][b] += wi * jac[a] * jac[b];
-                }
-            }
-        }
+        let (jtj, jtr) = log_normal_equations(g, y, &w, &coef, &idx);
         let Some(inv) = invert(&jtj) else { break };
         for a in 0..k {
             for b in 0..k {

@@ -2,7 +2,7 @@
 //! one cache-blocked pass), each compiled for SSE2, AVX2 and AVX-512 and chosen at run time.
 //! The only `unsafe` of the crate is here (calling a variant the CPU was checked to support).
 
-use crate::phase::compensated_sum;
+use crate::sum::{compensated_sum, pairwise_lanes};
 use crate::{edf, Estimator};
 
 /// `fn name(args) -> ret { body }`, compiled three times: as is, with AVX2 and with AVX-512F
@@ -291,9 +291,4 @@ fn block_third(x: &[f64], m: usize, start: usize, end: usize, acc: &mut [f64; 8]
         let v = d[k] - 3.0 * c[k] + 3.0 * b[k] - a[k];
         acc[k % 8] += v * v;
     }
-}
-
-#[inline(always)]
-pub(crate) fn pairwise_lanes(acc: &[f64; 8]) -> f64 {
-    ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]))
 }

@@ -39,11 +39,13 @@ mod analysis;
 mod kernels;
 mod phase;
 mod series;
+mod sum;
 
 pub use analysis::{analyse_rate, Analysis};
 pub use grid::TauGrid;
-pub use phase::{compensated_sum, rate_to_phase, rate_to_phase_in_place};
+pub use phase::{rate_to_phase, rate_to_phase_in_place};
 pub use series::Series;
+pub use sum::compensated_sum;
 
 use serde::{Deserialize, Serialize};
 

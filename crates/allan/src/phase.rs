@@ -1,7 +1,7 @@
 //! Rate samples to phase (integrated rate) with compensated summation, in parallel over fixed
 //! blocks so the result does not depend on the thread count.
 
-use crate::kernels::pairwise_lanes;
+use crate::sum::{pairwise_lanes, two_sum_acc};
 
 /// Phase (integrated rate) with x_0 = 0 and x_n = tau0 * sum_{k<n} (y_k - mean(y)),
 /// docs/model.md §2.1 and allantools `frequency2phase` (mean removed before the sum to keep the
@@ -79,28 +79,4 @@ pub fn rate_to_phase_in_place(mut buf: Vec<f64>, tau0_s: f64) -> Vec<f64> {
         });
     buf.push((sum + comp) * tau0_s);
     buf
-}
-
-/// sum += v with the exact rounding error added to comp (Knuth's TwoSum, branch-free).
-#[inline(always)]
-fn two_sum_acc(sum: &mut f64, comp: &mut f64, v: f64) {
-    let t = *sum + v;
-    let bv = t - *sum;
-    *comp += (*sum - (t - bv)) + (v - bv);
-    *sum = t;
-}
-
-/// Neumaier compensated sum.
-pub fn compensated_sum(values: impl Iterator<Item = f64>) -> f64 {
-    let (mut sum, mut comp) = (0.0f64, 0.0f64);
-    for v in values {
-        let t = sum + v;
-        if sum.abs() >= v.abs() {
-            comp += (sum - t) + v;
-        } else {
-            comp += (v - t) + sum;
-        }
-        sum = t;
-    }
-    sum + comp
 }
