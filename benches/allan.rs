@@ -11,19 +11,11 @@ const SAMPLES: usize = 4_320_000;
 
 /// White noise plus a slow random walk (SplitMix64 + Box-Muller; deterministic).
 fn channel() -> Vec<f64> {
-    let mut s = 20261121u64;
-    let mut uniform = || {
-        s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = s;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = testkit::SplitMix64::new(20261121);
     let mut walk = 0.0;
     (0..SAMPLES)
         .map(|_| {
-            let (u1, u2) = (uniform().max(1e-300), uniform());
-            let g = (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos();
+            let g = rng.normal();
             walk += 3e-7 * g;
             0.01 + 1e-2 * g + walk
         })

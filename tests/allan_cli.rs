@@ -13,17 +13,10 @@ fn imudrift() -> Command {
 /// A static gyro log in deg/s with a time column: white noise of known level (SplitMix64 +
 /// Box-Muller, deterministic).
 fn write_log(path: &Path, n: usize, gz: bool) {
-    let mut s = 7u64;
-    let mut u = || {
-        s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = s;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = testkit::SplitMix64::new(7);
     let mut text = String::from("# test log\n# gyro in deg/s\ntime_s,wx,temp\n");
     for k in 0..n {
-        let g = (-2.0 * u().max(1e-300).ln()).sqrt() * (2.0 * std::f64::consts::PI * u()).cos();
+        let g = rng.normal();
         text.push_str(&format!("{},{},{}\n", k as f64 * 0.01, 0.5 * g, 25.0));
     }
     let file = std::fs::File::create(path).unwrap();
@@ -154,9 +147,7 @@ fn adis16405_log_through_the_command() {
     // The real log, read by the command (gz, # comments, columns mapped, deg/s and g), against
     // allantools 2024.06 oadev on the same data (expected_allantools_oadev_imu1.csv), converted
     // to SI. Tolerance 1e-9 relative: both are double-precision evaluations of SP 1065 eq (11).
-    let Some(data) = allan::testdata::data_dir() else {
-        return;
-    };
+    let data = testkit::data_dir();
     let dir = data.join("adis16405_imudata");
     let o = imudrift()
         .args([

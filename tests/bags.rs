@@ -9,15 +9,8 @@ use std::path::Path;
 /// Deterministic samples at 200 Hz: white noise plus a slow random walk on every channel
 /// (SplitMix64), stamps from an epoch-like start so the integer nanoseconds matter.
 fn samples(n: usize) -> Vec<ImuSample> {
-    let mut s = 0x1234_5678_u64;
-    let mut next = || {
-        s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = s;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
+    let mut rng = testkit::SplitMix64::new(0x1234_5678);
+    let mut next = || rng.centred();
     let mut walk = [0.0f64; 6];
     (0..n)
         .map(|k| {

@@ -1,6 +1,6 @@
 //! Real data (issue 6): diagnose ADIS16405 run 1 with the datasheet model, then check the corrected model
 //! on runs 2 to 6, which the diagnosis did not see: on every run and channel the gap with the corrected
-//! model must be smaller than with the datasheet model. Data from `IMUDRIFT_DATA` (see allan::testdata).
+//! model must be smaller than with the datasheet model. Data from `IMUDRIFT_DATA` (see the testkit crate).
 
 use std::process::Command;
 
@@ -28,9 +28,7 @@ const COLUMNS: &str = "gx=gyro_x_dps,gy=gyro_y_dps,gz=gyro_z_dps,ax=acc_x_g,ay=a
     ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
 )]
 fn adis16405_run1_diagnosis_generalises_to_runs_2_to_6() {
-    let Some(dir) = allan::testdata::data_dir() else {
-        return;
-    };
+    let dir = testkit::data_dir();
     let run = |i: u32| {
         let p = dir.join(format!("adis16405_imudata/adis16405_imu{i}.csv.gz"));
         assert!(p.is_file(), "missing {}", p.display());

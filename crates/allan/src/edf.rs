@@ -502,7 +502,7 @@ fn rate_noise_id(y: &[f64], d_max: u32) -> Option<i32> {
 
 /// Riley 2004 eq (2): lag-1 autocorrelation about the mean.
 fn lag1_acf(x: &[f64]) -> f64 {
-    let mu = x.iter().sum::<f64>() / x.len() as f64;
+    let mu = stats::mean(x);
     let a: f64 = x.windows(2).map(|w| (w[0] - mu) * (w[1] - mu)).sum();
     let b: f64 = x.iter().map(|v| (v - mu) * (v - mu)).sum();
     a / b

@@ -33,7 +33,6 @@ pub mod edf;
 pub mod fit;
 mod grid;
 pub mod plan;
-pub mod testdata;
 
 mod analysis;
 mod kernels;

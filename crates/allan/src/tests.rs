@@ -5,17 +5,8 @@ use super::*;
 
 /// Deterministic pseudo-random series (SplitMix64 mapped to [-0.5, 0.5)).
 fn series(n: usize, seed: u64) -> Vec<f64> {
-    let mut s = seed;
-    (0..n)
-        .map(|_| {
-            s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = s;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^= z >> 31;
-            (z >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        })
-        .collect()
+    let mut g = testkit::SplitMix64::new(seed);
+    (0..n).map(|_| g.centred()).collect()
 }
 
 /// Direct textbook formulas (no phase, no running sums), O(N m) per tau.

@@ -10,7 +10,7 @@
 //! truth (two-sided normal false-positive rate 4.7e-4 per parameter, about 3e-3 per test run
 //! for the 6 parameters checked; the seeds are fixed, so a run is reproducible). The ignored
 //! test `calibration_many_seeds` checks over 20 seeds that the RMS of (estimate - truth)/sigma
-//! is close to 1 (run with --ignored; it takes ~15 s).
+//! is within the chi-square band of a calibration to 25 % (run with --ignored; ~15 s).
 
 use allan::fit::{fit_ieee952_terms, FitTerms};
 use allan::{deviation, DataKind, Estimator, TauGrid};
@@ -120,14 +120,24 @@ fn recovers_n_and_ramp() {
     check(&truth, [false, true, false, false, true], 0.01, 1 << 20, 2);
 }
 
+/// Over 20 seeds the stated sigmas are calibrated to within 25 % (the RMS of (estimate -
+/// truth)/sigma is 1.21 on this configuration, see `correlation_inflation` in fit.rs), and no term
+/// goes missing. The 4 z of one seed are correlated; counting only the 20 seeds as independent
+/// (the worst case), RMS^2 / s^2 follows chi2(20)/20, so with s in [0.8, 1.25] the RMS lies in
+/// [0.8 sqrt(chi2_0.0005(20)/20), 1.25 sqrt(chi2_0.9995(20)/20)] except with probability 1e-3
+/// per grid (two-sided false-positive rate).
 #[test]
-#[ignore]
+#[ignore = "long (~15 s): the calibration of the fit's sigmas over 20 seeds"]
 fn calibration_many_seeds() {
     let truth = TRUTH_QNBK;
+    let seeds = 10..30u64;
+    let dof = seeds.clone().count() as f64;
+    let lo = 0.8 * (allan::chi2::chi2_ppf(0.0005, dof) / dof).sqrt();
+    let hi = 1.25 * (allan::chi2::chi2_ppf(0.9995, dof) / dof).sqrt();
     for grid in [TauGrid::Octave, TauGrid::PerDecade(5)] {
         let mut zz = Vec::new();
         let mut none = 0;
-        for seed in 10..30 {
+        for seed in seeds.clone() {
             let y = generate(&truth, 0.01, 1 << 21, seed);
             let pts = deviation(&y, DataKind::Rate, 0.01, Estimator::Overlapping, &grid);
             let fit = fit_ieee952_terms(&pts, FitTerms([true, true, true, true, false]));
@@ -139,10 +149,11 @@ fn calibration_many_seeds() {
                 }
             }
         }
-        let rms = (zz.iter().map(|z| z * z).sum::<f64>() / zz.len() as f64).sqrt();
-        eprintln!(
-            "{grid:?}: z rms {rms:.2}, max {:.2}, missing {none}",
-            zz.iter().fold(0f64, |a, z| a.max(z.abs()))
+        let rms = stats::rms(&zz);
+        assert_eq!(none, 0, "{grid:?}: {none} terms missing");
+        assert!(
+            (lo..=hi).contains(&rms),
+            "{grid:?}: z rms {rms:.2} outside [{lo:.2}, {hi:.2}]"
         );
     }
 }

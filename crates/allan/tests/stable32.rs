@@ -7,7 +7,7 @@
 //! 5-digit print-out), and where the table gives them the confidence bounds, computed with the
 //! table's noise exponent alpha, within 1e-3 relative.
 
-use allan::{testdata, DataKind, EdfMethod, Estimator, Options, TauGrid};
+use allan::{DataKind, EdfMethod, Estimator, Options, TauGrid};
 use std::io::Read;
 use std::path::Path;
 
@@ -226,9 +226,7 @@ fn tables_in(dir: &Path, filter: impl Fn(&str) -> bool) -> Vec<std::path::PathBu
     ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
 )]
 fn phase_dat() {
-    let Some(dir) = testdata::data_dir() else {
-        return;
-    };
+    let dir = testkit::data_dir();
     let dir = dir.join("allantools/phasedat");
     let x = read_column(&dir.join("PHASE.DAT"));
     assert_eq!(x.len(), 1001);
@@ -245,9 +243,7 @@ fn phase_dat() {
     ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
 )]
 fn cs5071a() {
-    let Some(dir) = testdata::data_dir() else {
-        return;
-    };
+    let dir = testkit::data_dir();
     let dir = dir.join("allantools/Cs5071A");
     let x = read_column(&dir.join("5071A_phase.txt.gz"));
     assert_eq!(x.len(), 556_990);
@@ -264,9 +260,7 @@ fn cs5071a() {
     ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
 )]
 fn gps_1pps() {
-    let Some(dir) = testdata::data_dir() else {
-        return;
-    };
+    let dir = testkit::data_dir();
     let dir = dir.join("allantools/gps");
     let x = read_column(&dir.join("gps_1pps_phase_data.txt.gz"));
     let mut t = Tally::default();
@@ -282,9 +276,7 @@ fn gps_1pps() {
     ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
 )]
 fn keysight_noise_floor() {
-    let Some(dir) = testdata::data_dir() else {
-        return;
-    };
+    let dir = testkit::data_dir();
     let dir = dir.join("allantools/Keysight53230A_ti_noise_floor");
     let x = read_column(&dir.join("tic_phase.txt"));
     let mut t = Tally::default();
@@ -300,9 +292,7 @@ fn keysight_noise_floor() {
     ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
 )]
 fn pink_frequency() {
-    let Some(dir) = testdata::data_dir() else {
-        return;
-    };
+    let dir = testkit::data_dir();
     let dir = dir.join("allantools/pink_frequency");
     let y = read_column(&dir.join("pink_frequency.txt"));
     let mut t = Tally::default();
@@ -319,9 +309,7 @@ fn pink_frequency() {
     ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
 )]
 fn ocxo() {
-    let Some(dir) = testdata::data_dir() else {
-        return;
-    };
+    let dir = testkit::data_dir();
     let dir = dir.join("allantools/ocxo");
     let y: Vec<f64> = read_column(&dir.join("ocxo_frequency.txt"))
         .iter()
@@ -360,9 +348,7 @@ fn ocxo() {
     ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
 )]
 fn nbs14() {
-    let Some(dir) = testdata::data_dir() else {
-        return;
-    };
+    let dir = testkit::data_dir();
     let dir = dir.join("allantools/nbs14");
     let expected = read_text(&dir.join("expected_nbs14.txt"));
     let y = read_column(&dir.join("nbs14_1000_freq.txt"));
@@ -445,9 +431,7 @@ fn nbs14() {
 fn noise_id_matches_stable32_alpha() {
     // allantools test_ocxo.py::test_noise_id: the lag-1 ACF noise type (from frequency data)
     // equals Stable32's alpha column of the OCXO MDEV table wherever N/AF > 20.
-    let Some(dir) = testdata::data_dir() else {
-        return;
-    };
+    let dir = testkit::data_dir();
     let dir = dir.join("allantools/ocxo");
     let y: Vec<f64> = read_column(&dir.join("ocxo_frequency.txt"))
         .iter()

@@ -10,7 +10,7 @@
 //! or h. Statistics are of |error| over the runs.
 
 use crate::channels::Channel;
-use crate::stats::quantile_sorted;
+use ::stats::quantile;
 use serde::Serialize;
 
 /// Two-sided 95 % standard normal quantile (Monte Carlo interval of a statistic).
@@ -269,7 +269,7 @@ pub fn evaluate(req: &Requirement, values: &[f64], informed: bool) -> Requiremen
                 let half = Z_95 * (n as f64 * p * (1.0 - p)).sqrt();
                 let idx = |k: f64| abs[(k.round().max(0.0) as usize).min(n - 1)];
                 (
-                    Some(quantile_sorted(&abs, p)),
+                    Some(quantile(&abs, p)),
                     Some(idx(n as f64 * p - half - 1.0)),
                     Some(idx(n as f64 * p + half)),
                 )

@@ -149,15 +149,6 @@ impl Shard {
 mod tests {
     use super::*;
 
-    /// SplitMix64 (Steele, Lea & Flood 2014) keyed by run: an independent toy stream per run.
-    fn splitmix(state: &mut u64) -> f64 {
-        *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = *state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-
     /// A toy kernel with per-run streams: a random walk observed at checkpoints, and run 5 fails.
     struct Walk;
     impl RunKernel for Walk {
@@ -174,11 +165,12 @@ mod tests {
             if run == 7 {
                 panic!("boom");
             }
-            let mut rng = run.wrapping_mul(0xD1B5_4A32_D192_ED03);
+            // A SplitMix64 stream keyed by run: an independent toy stream per run.
+            let mut rng = testkit::SplitMix64::new(run.wrapping_mul(0xD1B5_4A32_D192_ED03));
             let mut x = 0.0;
             for cp in 0..3 {
                 for _ in 0..100 {
-                    x += splitmix(&mut rng) - 0.5;
+                    x += rng.centred();
                 }
                 out[cp * 2] = x;
                 out[cp * 2 + 1] = x.abs();

@@ -193,20 +193,9 @@ impl Moments {
     }
 }
 
-/// Quantile by linear interpolation between order statistics (Hyndman & Fan 1996 type 7,
-/// numpy's default) of an ascending slice.
-pub fn quantile_sorted(sorted: &[f64], p: f64) -> f64 {
-    match sorted.len() {
-        0 => f64::NAN,
-        1 => sorted[0],
-        n => {
-            let h = (n - 1) as f64 * p.clamp(0.0, 1.0);
-            let lo = h.floor() as usize;
-            let hi = (lo + 1).min(n - 1);
-            sorted[lo] + (h - lo as f64) * (sorted[hi] - sorted[lo])
-        }
-    }
-}
+/// The workspace's quantile of an ascending slice (Hyndman & Fan 1996 type 7, NaN when empty),
+/// under the name diagnose still imports it by.
+pub use ::stats::quantile as quantile_sorted;
 
 /// Summarise values given in run-index order.
 pub fn summarise(values: &[f64]) -> Summary {
@@ -231,9 +220,9 @@ pub fn summarise(values: &[f64]) -> Summary {
         } else {
             m.mean_sq.max(0.0).sqrt()
         },
-        p5: quantile_sorted(&sorted, 0.05),
-        p50: quantile_sorted(&sorted, 0.50),
-        p95: quantile_sorted(&sorted, 0.95),
+        p5: ::stats::quantile(&sorted, 0.05),
+        p50: ::stats::quantile(&sorted, 0.50),
+        p95: ::stats::quantile(&sorted, 0.95),
         se_mean_sq,
     }
 }
@@ -256,15 +245,6 @@ pub fn ratio_interval(s: &Summary, law_rms: f64, z: f64, rel_allowance: f64) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn quantiles_match_numpy_type7() {
-        // numpy.percentile([1, 2, 3, 4, 10], [5, 50, 95]) = [1.2, 3.0, 8.8]
-        let s = [1.0, 2.0, 3.0, 4.0, 10.0];
-        assert!((quantile_sorted(&s, 0.05) - 1.2).abs() < 1e-12);
-        assert_eq!(quantile_sorted(&s, 0.5), 3.0);
-        assert!((quantile_sorted(&s, 0.95) - 8.8).abs() < 1e-12);
-    }
 
     #[test]
     fn welford_matches_two_pass_and_chan_merge() {
