@@ -81,16 +81,29 @@ fn generated_logs_fall_inside_the_band_about_95_percent_of_the_time() {
         horizons_s: vec![10.0, 60.0],
         overlapping: false,
     };
-    for (h, inside, total) in coverage(40, 30_000, 0.02, &protocol, 100) {
+    assert_coverage(&coverage(40, 30_000, 0.02, &protocol, 100), 0.88..=0.99);
+}
+
+/// Print the inside fraction per horizon (the figures of docs/drift.md) and assert it is in
+/// `accepted`.
+fn assert_coverage(rows: &[(f64, usize, usize)], accepted: std::ops::RangeInclusive<f64>) {
+    for &(h, inside, total) in rows {
         let f = inside as f64 / total as f64;
         println!("{h} s: {inside}/{total} inside ({:.1} %)", 100.0 * f);
-        assert!((0.88..=0.99).contains(&f), "{h} s: {inside}/{total}");
+        assert!(accepted.contains(&f), "{h} s: {inside}/{total}");
     }
 }
 
+/// The accepted inside fraction of the two documented figures: 200 logs x 5 quantities = 1000
+/// trials per horizon at p = 0.95. The 5 quantities of one log are correlated, so the number of
+/// independent trials lies between 200 (one per log) and 1000. At the worst case of 200 the
+/// binomial standard deviation is 1.54 %: 0.90 is 3.25 of them below 95 % (false alarm 6e-4)
+/// and 0.99 is 2.6 above (5e-3); at 1000 independent trials (0.69 %) both are beyond 5.8.
+const FIGURE_ACCEPTED: std::ops::RangeInclusive<f64> = 0.90..=0.99;
+
 /// The figure in docs/drift.md: 200 seeds of a 1 h, 50 Hz log per horizon, with a window
-/// calibration and a levelled start. Run with `cargo test --release -p imudrift-diagnose --test
-/// drift_calibration -- --ignored --nocapture`.
+/// calibration and a levelled start; the inside fraction within [`FIGURE_ACCEPTED`]. Run with
+/// `cargo test --release -p imudrift-diagnose --test drift_calibration -- --ignored --nocapture`.
 #[test]
 #[ignore = "long: the documented calibration figure"]
 fn calibration_figure() {
@@ -100,25 +113,21 @@ fn calibration_figure() {
         horizons_s: vec![10.0, 60.0, 600.0],
         overlapping: false,
     };
-    for (h, inside, total) in coverage(200, 180_000, 0.02, &protocol, 100) {
-        println!(
-            "{h} s: {inside}/{total} inside ({:.1} %)",
-            100.0 * inside as f64 / total as f64
-        );
-    }
+    assert_coverage(
+        &coverage(200, 180_000, 0.02, &protocol, 100),
+        FIGURE_ACCEPTED,
+    );
 }
 
 /// Every default horizon, 1 h included: 200 seeds of a 4 h, 10 Hz log (four 1 h segments each),
-/// the default protocol. Run with `cargo test --release -p imudrift-diagnose --test
-/// drift_calibration -- --ignored --nocapture`.
+/// the default protocol; the inside fraction within [`FIGURE_ACCEPTED`]. Run with
+/// `cargo test --release -p imudrift-diagnose --test drift_calibration -- --ignored --nocapture`.
 #[test]
 #[ignore = "long: the documented calibration figure"]
 fn calibration_figure_every_default_horizon() {
     let protocol = Protocol::default();
-    for (h, inside, total) in coverage(200, 144_000, 0.1, &protocol, 100) {
-        println!(
-            "{h} s: {inside}/{total} inside ({:.1} %)",
-            100.0 * inside as f64 / total as f64
-        );
-    }
+    assert_coverage(
+        &coverage(200, 144_000, 0.1, &protocol, 100),
+        FIGURE_ACCEPTED,
+    );
 }

@@ -3,8 +3,8 @@
 //! with the base model. The effect must be named on exactly those channels, parameters within 25 %
 //! or inside their stated 95 % interval (as in `hidden_effects.rs`)
 //! (for a filter: its one-sided noise bandwidth), and the final gap at most 1.5 and at most a third
-//! of the initial one (only <= 1.5 when the effect was faint: see `faint`). Clean logs must
-//! name nothing.
+//! of the initial one (only <= 1.5 when the effect was faint: see `common::gap_closed`). Clean
+//! logs must name nothing.
 //!
 //! The resonance (a narrow-band random vibration) is not in the list: it is the term the
 //! ADIS16405 logs needed, and a candidate diagnose offers must be found blind like the others.
@@ -12,39 +12,20 @@
 //! Logs: 2^17 samples at 100 Hz (1311 s). Base model: white noise and flicker (the hidden-effect
 //! suite's base: gyro N = 1e-4 rad/s/sqrt(Hz), B = 2e-5 rad/s; accel N = 1e-3, B = 2e-4).
 
+mod common;
+use common::{base_model, format_z, gap_closed, log_uniform, parameter_ok, run_trials};
+use common::{GeneratedLog, DT_S, SEEDS};
 use diagnose::drift::CHANNELS;
 use diagnose::model_terms::channel_axis;
-use diagnose::simulate::{static_log, SimSetup};
-use diagnose::{diagnose, Diagnosis, LogInput, Settings};
+use diagnose::Diagnosis;
 use noise::{
-    BiasInstability, FilterKind, Flicker, ImuErrors, Outliers, OutputFilter, Resonance,
-    SensorModel, TemperatureProfile, Term, WarmupTransient,
+    FilterKind, Outliers, OutputFilter, Resonance, SensorModel, TemperatureProfile, Term,
+    WarmupTransient,
 };
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
-const DT_S: f64 = 0.01;
 const SAMPLES: usize = 1 << 17;
-const SEEDS: usize = 12;
-
-fn base_model() -> SensorModel {
-    let mut m = SensorModel {
-        name: "base".into(),
-        ..Default::default()
-    };
-    for ch in 0..6 {
-        let (n, b) = if ch < 3 { (1e-4, 2e-5) } else { (1e-3, 2e-4) };
-        let (sensor, axis) = channel_axis(ch);
-        let a = m.axis_mut(sensor, axis);
-        a.white_noise = Some(n);
-        a.bias_instability = Some(BiasInstability::Flicker(Flicker::with_b(b)));
-    }
-    m
-}
-
-fn log_uniform(rng: &mut Xoshiro256PlusPlus, lo: f64, hi: f64) -> f64 {
-    (rng.gen::<f64>() * (hi / lo).ln()).exp() * lo
-}
 
 /// White-noise standard deviation per sample of channel `ch` in the base model.
 fn sigma(ch: usize) -> f64 {
@@ -124,35 +105,12 @@ fn profile(kind: &str) -> Option<TemperatureProfile> {
     }
 }
 
+/// Generate a log from `model` (seed `seed`, run 0), with its temperature column where the
+/// temperature varies, and diagnose it with the base model.
 fn run(model: &SensorModel, seed: u64) -> Diagnosis {
-    let setup = SimSetup {
-        dt_s: DT_S,
-        samples: SAMPLES,
-        grid_m: vec![],
-        active: [true; 6],
-        horizons_s: vec![60.0],
-        temperature_c: None,
-        temp_coeff: [0.0; 6],
-    };
-    let log = static_log(model, &setup, seed, 0);
-    let temp: Vec<f64> = {
-        let errors = ImuErrors::new(model, DT_S, seed, 0);
-        (0..SAMPLES as u64)
-            .map(|k| errors.temperature_c(k))
-            .collect()
-    };
-    let varies = temp.iter().any(|&t| t != temp[0]);
-    let input = LogInput {
-        dt_s: DT_S,
-        channels: std::array::from_fn(|c| Some(log[c].as_slice())),
-        temperature_c: varies.then_some(temp.as_slice()),
-    };
-    let settings = Settings {
-        seeds: SEEDS,
-        horizons_s: vec![60.0],
-        ..Settings::default()
-    };
-    diagnose(&input, &base_model(), &settings).expect("diagnose runs")
+    let mut log = GeneratedLog::new(model, SAMPLES, seed, true);
+    log.temperature_c.take_if(|t| t.iter().all(|&x| x == t[0]));
+    log.diagnose(&base_model(true), SEEDS)
 }
 
 /// The parameter the test checks, truth and found.
@@ -195,7 +153,7 @@ fn key_values(term: &Term, found: &diagnose::report::FoundEffect) -> Vec<(&'stat
 
 fn trial(kind: &str, t: u64) -> Result<(), String> {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(0x5EA1 + 131 * t + kind.len() as u64 * 7919);
-    let mut model = base_model();
+    let mut model = base_model(true);
     if let Some(p) = profile(kind) {
         model.temperature = p;
         model.temperature_reference_c = 25.0;
@@ -248,14 +206,11 @@ fn trial(kind: &str, t: u64) -> Result<(), String> {
                         found.parameters_hi.get(key).copied().unwrap_or(v),
                     );
                     let (lo, hi) = (lo.min(hi), lo.max(hi));
-                    if (v / t - 1.0).abs() > 0.25 && !(lo <= t && t <= hi) {
+                    if !parameter_ok(t, v, lo, hi) {
                         problems.push(format!("{name}: {key} = {v:.4e}, truth {t:.4e}"));
                     }
                 }
-                let faint = faint(report.gap_initial);
-                if !(report.gap_final <= 1.5
-                    && (faint || report.gap_final <= report.gap_initial / 3.0))
-                {
+                if !gap_closed(report.gap_initial, report.gap_final) {
                     problems.push(format!(
                         "{name}: gap {:.2} -> {:.2}",
                         report.gap_initial, report.gap_final
@@ -268,12 +223,6 @@ fn trial(kind: &str, t: u64) -> Result<(), String> {
     if !problems.is_empty() && std::env::var_os("DIAGNOSE_DUMP").is_some() {
         for &c in &channels {
             let r = &result.channels[CHANNELS[c]];
-            let z = |v: &[f64]| {
-                v.iter()
-                    .map(|x| format!("{x:.1}"))
-                    .collect::<Vec<_>>()
-                    .join(" ")
-            };
             eprintln!(
                 "{}: effects {:?}\n  z0 {}\n  z1 {}",
                 CHANNELS[c],
@@ -286,8 +235,8 @@ fn trial(kind: &str, t: u64) -> Result<(), String> {
                         e.gap_after
                     ))
                     .collect::<Vec<_>>(),
-                z(&r.z_initial),
-                z(&r.z_final)
+                format_z(&r.z_initial),
+                format_z(&r.z_final)
             );
         }
     }
@@ -302,9 +251,7 @@ fn trial(kind: &str, t: u64) -> Result<(), String> {
 }
 
 fn suite(kind: &str, trials: u64) {
-    let trials = trials_override().unwrap_or(trials);
-    let failures: Vec<String> = (0..trials).filter_map(|t| trial(kind, t).err()).collect();
-    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    run_trials(trials, |t| trial(kind, t));
 }
 
 #[test]
@@ -347,7 +294,7 @@ fn clean_logs_with_a_temperature_column_name_nothing() {
     // Warm-up temperature recorded, no temperature effect: the slow flicker wander must not be taken
     // for one; 4 clean logs.
     for t in 0..4 {
-        let mut model = base_model();
+        let mut model = base_model(true);
         model.temperature = profile("warmup").unwrap();
         let r = run(&model, 9000 + t);
         for (name, rep) in &r.channels {
@@ -361,17 +308,4 @@ fn clean_logs_with_a_temperature_column_name_nothing() {
             );
         }
     }
-}
-
-/// An effect is faint when its initial gap is below 4.5: a third of it would then be below 1.5, the
-/// agreement level, and a correct model's gap itself scatters around 1 (RMS z over the taus), so
-/// only the 1.5 bound is asked.
-fn faint(gap_initial: f64) -> bool {
-    gap_initial < 4.5
-}
-
-/// `IMUDRIFT_HIDDEN_TRIALS=n`: run n trials per effect instead of the suite's default (a longer blind
-/// run before a release; the default keeps CI short).
-fn trials_override() -> Option<u64> {
-    std::env::var("IMUDRIFT_HIDDEN_TRIALS").ok()?.parse().ok()
 }
