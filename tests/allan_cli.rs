@@ -2,13 +2,11 @@
 //! outputs (table, JSON fields of docs/cli.md, CSV, SVG), errors with line numbers, and the
 //! command on the real ADIS16405 log against allantools' curve.
 
+mod common;
+use common::command;
+
 use std::io::Write;
 use std::path::Path;
-use std::process::Command;
-
-fn imudrift() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_imudrift"))
-}
 
 /// A static gyro log in deg/s with a time column: white noise of known level (SplitMix64 +
 /// Box-Muller, deterministic).
@@ -37,7 +35,7 @@ fn json_csv_svg_outputs_and_units() {
     let log = dir.path().join("log.csv.gz");
     write_log(&log, 200_000, true);
     let out = dir.path().join("out");
-    let o = imudrift()
+    let o = command()
         .args([
             "allan",
             log.to_str().unwrap(),
@@ -95,7 +93,7 @@ fn bad_row_is_reported_by_line_and_no_output_is_written() {
     let log = dir.path().join("bad.csv");
     std::fs::write(&log, "# c\ngx,gy\n1,2\n3,4\n5,x7\n").unwrap();
     let out = dir.path().join("out");
-    let o = imudrift()
+    let o = command()
         .args([
             "allan",
             log.to_str().unwrap(),
@@ -121,7 +119,7 @@ fn thread_count_does_not_change_results() {
     let log = dir.path().join("log.csv");
     write_log(&log, 100_000, false);
     let run = |threads: &str| {
-        let o = imudrift()
+        let o = command()
             .args([
                 "allan",
                 log.to_str().unwrap(),
@@ -149,7 +147,7 @@ fn adis16405_log_through_the_command() {
     // to SI. Tolerance 1e-9 relative: both are double-precision evaluations of SP 1065 eq (11).
     let data = testkit::data_dir();
     let dir = data.join("adis16405_imudata");
-    let o = imudrift()
+    let o = command()
         .args([
             "allan",
             dir.join("adis16405_imu1.csv.gz").to_str().unwrap(),

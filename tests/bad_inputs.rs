@@ -6,7 +6,7 @@ use std::path::Path;
 use std::process::Command;
 
 mod common;
-use common::{imudrift, ok, root};
+use common::{command, imudrift, ok, root};
 
 /// The command fails with exit status 1 and every `needle` in its message; nothing on stdout.
 fn refused(args: &[&str], needles: &[&str]) {
@@ -449,10 +449,9 @@ fn outputs_are_never_partial_mixed_or_left_behind() {
     let d = dir.path();
     // SIGTERM while a 60 h log (about 15 GB of text, many seconds) is being written.
     let log = d.join("big.csv");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_imudrift"))
+    let mut child = command()
         .args(["generate", "configs/sensors/mtx.toml", "--duration", "60h"])
         .args(["--rate", "100", "-o", log.to_str().unwrap()])
-        .current_dir(root())
         .stderr(std::process::Stdio::null())
         .spawn()
         .unwrap();
@@ -540,7 +539,7 @@ fn logs_larger_than_memory_are_refused_up_front() {
     gz.write_all(text.as_bytes()).unwrap();
     let gz = write(dir.path(), "big.csv.gz", &gz.finish().unwrap());
     // diagnose: the simulated logs of the same length would not fit (the log itself does).
-    let out = Command::new(env!("CARGO_BIN_EXE_imudrift"))
+    let out = command()
         .args([
             "diagnose",
             &plain,
@@ -550,13 +549,12 @@ fn logs_larger_than_memory_are_refused_up_front() {
             "2",
         ])
         .env("IMUDRIFT_MEMORY_LIMIT", "500000")
-        .current_dir(root())
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("simulating logs of 5000 samples"));
     // spec: a readback log of 1 day would not fit in 100 MB.
-    let out = Command::new(env!("CARGO_BIN_EXE_imudrift"))
+    let out = command()
         .args([
             "spec",
             "configs/sensors/mtx.toml",
@@ -564,16 +562,14 @@ fn logs_larger_than_memory_are_refused_up_front() {
             "86400",
         ])
         .env("IMUDRIFT_MEMORY_LIMIT", "100000000")
-        .current_dir(root())
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("readback log needs about"));
     for (path, needle) in [(&plain, "need about"), (&gz, "decompresses to more than")] {
-        let out = Command::new(env!("CARGO_BIN_EXE_imudrift"))
+        let out = command()
             .args(["allan", path])
             .env("IMUDRIFT_MEMORY_LIMIT", "60000")
-            .current_dir(root())
             .output()
             .unwrap();
         assert_eq!(out.status.code(), Some(1));

@@ -2,7 +2,8 @@
 //! on runs 2 to 6, which the diagnosis did not see: on every run and channel the gap with the corrected
 //! model must be smaller than with the datasheet model. Data from `IMUDRIFT_DATA` (see the testkit crate).
 
-use std::process::Command;
+mod common;
+use common::command;
 
 const RUNS_2_TO_6: [&str; 5] = [
     "adis16405_imu2",
@@ -40,7 +41,7 @@ fn adis16405_run1_diagnosis_generalises_to_runs_2_to_6() {
         "/configs/sensors/adis16405.toml"
     );
     // The default 16 seeds per band: the command docs/real-effects.md times and reports.
-    let out = Command::new(env!("CARGO_BIN_EXE_imudrift"))
+    let out = command()
         .arg("diagnose")
         .arg(run(1))
         .args([

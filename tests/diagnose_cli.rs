@@ -3,16 +3,14 @@
 //! docs/cli.md fields, `--out` writes the report, the corrected TOML (which loads back with the effect) and
 //! the plots; the output does not depend on the thread count; bad inputs give errors that name them.
 
+mod common;
+use common::command;
+
 use diagnose::model_terms::channel_axis;
 use diagnose::simulate::{static_log, SimSetup};
 use noise::SensorModel;
 use std::fmt::Write as _;
 use std::path::Path;
-use std::process::Command;
-
-fn imudrift() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_imudrift"))
-}
 
 const DT_S: f64 = 0.01;
 const SAMPLES: usize = 1 << 15;
@@ -58,7 +56,7 @@ fn write_log(dir: &Path) -> std::path::PathBuf {
 }
 
 fn run_json(log: &Path, model: &Path, threads: &str, out: Option<&Path>) -> String {
-    let mut cmd = imudrift();
+    let mut cmd = command();
     cmd.arg("diagnose")
         .arg(log)
         .arg("--model")
@@ -172,7 +170,7 @@ fn diagnose_errors_name_the_problem() {
     let log = dir.path().join("temp_only.csv");
     std::fs::write(&log, "t,temp\n0,20\n0.01,20\n0.02,20\n").unwrap();
     let missing = dir.path().join("nope.toml");
-    let out = imudrift()
+    let out = command()
         .args(["diagnose"])
         .arg(&log)
         .arg("--model")
@@ -181,7 +179,7 @@ fn diagnose_errors_name_the_problem() {
         .unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("nope.toml"));
-    let out = imudrift()
+    let out = command()
         .args(["diagnose"])
         .arg(&log)
         .arg("--model")
@@ -194,7 +192,7 @@ fn diagnose_errors_name_the_problem() {
         err.contains("no gyro or accelerometer") && err.contains("temp_only.csv"),
         "{err}"
     );
-    let out = imudrift()
+    let out = command()
         .args(["diagnose"])
         .arg(&log)
         .arg("--model")
@@ -209,7 +207,7 @@ fn diagnose_errors_name_the_problem() {
     let short: String = text.lines().take(1000).map(|l| format!("{l}\n")).collect();
     let short_path = dir.path().join("short.csv");
     std::fs::write(&short_path, short).unwrap();
-    let out = imudrift()
+    let out = command()
         .args(["diagnose"])
         .arg(&full)
         .arg("--model")

@@ -8,14 +8,14 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 mod common;
-use common::{ok, root};
+use common::{command, ok, root};
 
 fn mtx() -> PathBuf {
     root().join("configs/sensors/mtx.toml")
 }
 
 fn generate(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_imudrift"))
+    command()
         .arg("generate")
         .args(args)
         .output()

@@ -7,16 +7,18 @@
 //!
 //! Writes 601 MB into a temporary directory (removed afterwards); about 4 s in release.
 
+mod common;
+use common::command;
+
 use allan::{DataKind, Estimator, TauGrid};
 use std::io::BufRead;
-use std::process::Command;
 
 #[test]
 fn twelve_hour_csv_reads_back_table_4() {
     let dir = tempfile::tempdir().unwrap();
     let log = dir.path().join("mtx12h.csv");
     let cfg = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/sensors/mtx.toml");
-    let out = Command::new(env!("CARGO_BIN_EXE_imudrift"))
+    let out = command()
         .args([
             "generate",
             cfg.to_str().unwrap(),

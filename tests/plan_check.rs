@@ -16,15 +16,14 @@ use allan::plan::relative_uncertainty;
 use allan::{DataKind, Estimator, Options, TauGrid};
 use nalgebra::Vector3;
 use noise::{ImuErrors, SensorModel};
-use std::process::Command;
 
 mod common;
-use common::{ok, root};
+use common::{command, ok, root};
 
 const LOGS: u64 = 50;
 
 fn plan_json(sensor: &str, rate_hz: &str, uncertainty: &str) -> serde_json::Value {
-    let out = ok(Command::new(env!("CARGO_BIN_EXE_imudrift"))
+    let out = ok(command()
         .args([
             "plan",
             sensor,
@@ -34,7 +33,6 @@ fn plan_json(sensor: &str, rate_hz: &str, uncertainty: &str) -> serde_json::Valu
             uncertainty,
             "--json",
         ])
-        .current_dir(root())
         .output()
         .unwrap());
     serde_json::from_slice(&out.stdout).unwrap()
@@ -157,10 +155,9 @@ fn plan_refuses_what_it_cannot_answer() {
         (&["--duration", "1e300"][..], "--duration"),
         (&["--duration", "soon"][..], "--duration"),
     ] {
-        let out = Command::new(env!("CARGO_BIN_EXE_imudrift"))
+        let out = command()
             .args(["plan", "configs/sensors/mtx.toml"])
             .args(args)
-            .current_dir(root())
             .output()
             .unwrap();
         assert_eq!(out.status.code(), Some(1), "{args:?}");

@@ -2,10 +2,9 @@
 //! output files, errors naming file and key.
 
 use std::path::Path;
-use std::process::Command;
 
 mod common;
-use common::{imudrift, ok, root};
+use common::{command, imudrift, ok, root};
 
 const SCENARIO: &str = "configs/scenarios/mtx-static-60s.toml";
 
@@ -336,7 +335,7 @@ fn merged_shards_carry_the_ablation_table() {
 /// Progress reaches a log that is not a terminal: plain lines on stderr (never stdout).
 #[test]
 fn progress_lines_when_stderr_is_not_a_terminal() {
-    let out = ok(Command::new(env!("CARGO_BIN_EXE_imudrift"))
+    let out = ok(command()
         .args([
             "simulate",
             SCENARIO,
@@ -346,7 +345,6 @@ fn progress_lines_when_stderr_is_not_a_terminal() {
             "--json",
         ])
         .env("IMUDRIFT_PROGRESS_INTERVAL_S", "0")
-        .current_dir(root())
         .output()
         .unwrap());
     let err = String::from_utf8_lossy(&out.stderr);

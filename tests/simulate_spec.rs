@@ -4,15 +4,15 @@
 //! family-wise false-positive rate ~6 % for a fresh seed (10 seeds tried after the level was fixed:
 //! 9 cover all six values); the seed is fixed (1, the default), so the test is deterministic.
 
-use std::process::Command;
+mod common;
+use common::command;
 
 /// Run `imudrift spec ARGS... --json` in the workspace root; stdout on success.
 fn spec_json(args: &[&str]) -> Vec<u8> {
-    let out = Command::new(env!("CARGO_BIN_EXE_imudrift"))
+    let out = command()
         .arg("spec")
         .args(args)
         .arg("--json")
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
         .output()
         .unwrap();
     assert!(
@@ -86,12 +86,7 @@ fn spec_is_identical_for_any_thread_count() {
 
 /// Run `imudrift spec ARGS...` expecting failure; its stderr.
 fn spec_error(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_imudrift"))
-        .arg("spec")
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap();
+    let out = command().arg("spec").args(args).output().unwrap();
     assert!(!out.status.success(), "expected a failure for {args:?}");
     assert_eq!(
         out.status.code(),

@@ -1,7 +1,9 @@
 //! Helpers shared by the end-to-end tests of the `imudrift` binary.
 
+#![allow(dead_code)] // each test file uses a part
+
 use std::path::PathBuf;
-use std::process::Output;
+use std::process::{Command, Output};
 
 /// The workspace root (where `configs/` lives).
 pub fn root() -> PathBuf {
@@ -18,12 +20,14 @@ pub fn ok(out: Output) -> Output {
     out
 }
 
+/// The `imudrift` binary as a command to complete, run in the workspace root.
+pub fn command() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_imudrift"));
+    c.current_dir(root());
+    c
+}
+
 /// Run `imudrift ARGS...` in the workspace root.
-#[allow(dead_code)] // not every test file runs the binary this way
 pub fn imudrift(args: &[&str]) -> Output {
-    std::process::Command::new(env!("CARGO_BIN_EXE_imudrift"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("run imudrift")
+    command().args(args).output().expect("run imudrift")
 }
