@@ -5,8 +5,7 @@
 //! (`ChannelErrors::fill_static`, what `imudrift generate` runs in parallel).
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
-use nalgebra::Vector3;
-use noise::{ImuErrors, SensorModel};
+use noise::{Channel, ImuErrors, Sensor, SensorModel, StaticLevel};
 use std::hint::black_box;
 
 const SAMPLES: u64 = 100_000;
@@ -20,14 +19,13 @@ fn mtx() -> SensorModel {
 
 /// Generate every channel of a static level IMU, `SAMPLES` samples each, with `model`'s errors.
 fn fill_static_all(b: &mut criterion::Bencher, model: &SensorModel) {
-    let ideal_g = Vector3::zeros();
-    let ideal_a = Vector3::new(0.0, 0.0, -9.80665);
+    let ideal = StaticLevel::STANDARD.inputs();
     let mut out = vec![0.0; SAMPLES as usize];
     b.iter_batched(
         || ImuErrors::new(model, 0.01, 1, 0),
         |mut e| {
-            for (c, ch) in e.channels_mut().iter_mut().enumerate() {
-                ch.fill_static(0, if c < 3 { &ideal_g } else { &ideal_a }, &mut out);
+            for (c, ch) in Channel::ALL.into_iter().zip(e.channels_mut().iter_mut()) {
+                ch.fill_static(0, &ideal[c], &mut out);
                 black_box(&out);
             }
         },
@@ -37,8 +35,8 @@ fn fill_static_all(b: &mut criterion::Bencher, model: &SensorModel) {
 
 fn bench(c: &mut Criterion) {
     let model = mtx();
-    let ideal_g = Vector3::zeros();
-    let ideal_a = Vector3::new(0.0, 0.0, -9.80665);
+    let ideal_g = StaticLevel::STANDARD.triad(Sensor::Gyro);
+    let ideal_a = StaticLevel::STANDARD.triad(Sensor::Accel);
     let mut group = c.benchmark_group("generate_mtx");
     group.throughput(Throughput::Elements(SAMPLES));
     group.sample_size(20);

@@ -9,9 +9,7 @@
 use crate::cli::{check_rate_hz, parse_duration_s};
 use crate::output;
 use anyhow::{bail, Result};
-use nalgebra::Vector3;
-use noise::units::STANDARD_GRAVITY_MPS2;
-use noise::{ImuErrors, SensorModel, TermFilter, CHANNEL_NAMES};
+use noise::{Channel, ImuErrors, SensorModel, StaticLevel, TermFilter, CHANNEL_NAMES};
 use rayon::prelude::*;
 use std::io::Write;
 use std::path::PathBuf;
@@ -200,8 +198,7 @@ fn write_log(
     writeln!(w, "t,{},temp", CHANNEL_NAMES.join(","))?;
 
     let mut errors = ImuErrors::new(&plan.model, dt_s, args.seed, args.run);
-    let ideal_gyro = Vector3::zeros();
-    let ideal_accel = Vector3::new(0.0, 0.0, -STANDARD_GRAVITY_MPS2);
+    let ideal = StaticLevel::STANDARD.inputs();
     // A producer thread generates and formats block after block (both in parallel on the pool) while
     // this thread writes the previous one; at most two formatted blocks wait in the channel.
     // A block with a value that is not finite (a model whose values overflow) ends the log with
@@ -220,8 +217,7 @@ fn write_log(
                         .zip(block.par_iter_mut())
                         .enumerate()
                         .for_each(|(c, (channel, out))| {
-                            let ideal = if c < 3 { &ideal_gyro } else { &ideal_accel };
-                            channel.fill_static(k0, ideal, &mut out[..n]);
+                            channel.fill_static(k0, &ideal[Channel::ALL[c]], &mut out[..n]);
                         })
                 });
                 let bad = block.iter().enumerate().find_map(|(c, out)| {

@@ -14,7 +14,6 @@
 
 use allan::plan::relative_uncertainty;
 use allan::{DataKind, Estimator, Options, TauGrid};
-use nalgebra::Vector3;
 use noise::{ImuErrors, SensorModel};
 
 mod common;
@@ -41,12 +40,7 @@ fn plan_json(sensor: &str, rate_hz: &str, uncertainty: &str) -> serde_json::Valu
 /// Relative spread (sample std / mean) of the overlapping Allan deviation at m over `LOGS` static
 /// logs of `n` samples of channel `channel` (0..3 gyro, 3..6 accel).
 fn spread(model: &SensorModel, channel: usize, dt_s: f64, n: usize, m: usize) -> f64 {
-    let gravity = Vector3::new(0.0, 0.0, -noise::units::STANDARD_GRAVITY_MPS2);
-    let ideal = if channel < 3 {
-        Vector3::zeros()
-    } else {
-        gravity
-    };
+    let ideal = noise::StaticLevel::STANDARD.inputs()[noise::Channel::ALL[channel]];
     let devs: Vec<f64> = (0..LOGS)
         .map(|run| {
             let mut errors = ImuErrors::new(model, dt_s, 20261123, run);

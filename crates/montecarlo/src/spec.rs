@@ -7,8 +7,7 @@ use crate::experiment::{Experiment, Overrides};
 use crate::report::DriftReport;
 use crate::scenario::Scenario;
 use allan::{DataKind, Estimator, Options, TauGrid};
-use nalgebra::Vector3;
-use noise::{ImuErrors, SensorModel};
+use noise::{ImuErrors, Sensor, SensorModel, StaticLevel};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -75,7 +74,7 @@ pub fn gyro_readback(model: &SensorModel, seed: u64, duration_s: f64, rate_hz: f
     let dt_s = 1.0 / rate_hz;
     let n = (duration_s * rate_hz).round() as usize;
     let mut errors = ImuErrors::new(model, dt_s, seed, 0);
-    let still_gyro = Vector3::zeros();
+    let still_gyro = StaticLevel::STANDARD.triad(Sensor::Gyro);
     let opts = Options {
         confidence: READBACK_CONFIDENCE,
         ..Options::default()

@@ -22,6 +22,7 @@ pub mod filter;
 mod model;
 pub mod noise_file;
 pub mod process;
+mod static_level;
 pub mod units;
 mod ziggurat;
 
@@ -34,6 +35,7 @@ pub use model::{
     TemperatureProfile, Term, TriadModel,
 };
 pub use process::{ChannelErrors, ImuErrors, CHANNEL_NAMES};
+pub use static_level::StaticLevel;
 
 use rand::SeedableRng;
 

@@ -149,25 +149,26 @@ fn corrupt_and_channel_fill_give_the_same_bits() {
         &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/sensors/mtx.toml"),
     )
     .unwrap();
-    let ideal_g = Vector3::zeros();
-    let ideal_a = Vector3::new(0.0, 0.0, -9.80665);
+    let ideal = noise::StaticLevel::STANDARD.inputs();
     let mut a = ImuErrors::new(&model, 0.01, 42, 1);
     let mut b = a.clone();
     // 25 000 samples: the held flicker components (m = 10 .. 10 000 at 100 Hz) are updated within
     // them, and blocks of uneven lengths start and end between updates.
     const N: usize = 25_000;
     let mut cols = vec![vec![0.0; N]; 6];
-    for (c, (ch, col)) in b.channels_mut().iter_mut().zip(cols.iter_mut()).enumerate() {
+    for (c, (ch, col)) in noise::Channel::ALL
+        .into_iter()
+        .zip(b.channels_mut().iter_mut().zip(cols.iter_mut()))
+    {
         let mut k0 = 0;
         for len in [1, 7, 9_993, 3, 10_000, 4_996] {
-            let ideal = if c < 3 { &ideal_g } else { &ideal_a };
-            ch.fill_static(k0 as u64, ideal, &mut col[k0..k0 + len]);
+            ch.fill_static(k0 as u64, &ideal[c], &mut col[k0..k0 + len]);
             k0 += len;
         }
         assert_eq!(k0, N);
     }
     let rows: Vec<_> = (0..N as u64)
-        .map(|k| a.corrupt(k, &ideal_g, &ideal_a))
+        .map(|k| a.corrupt(k, &ideal[noise::Channel::Gx], &ideal[noise::Channel::Ax]))
         .collect();
     for (c, col) in cols.iter().enumerate() {
         for ((g, acc), v) in rows.iter().zip(col) {
