@@ -43,23 +43,6 @@ def is_test_cfg(attr):
     return len(attr) > 2 and attr[0] == "cfg" and "test" in attr
 
 
-def skip_item(toks, i):
-    """Index just past the item starting at toks[i] (ends at `;` or its closing `}` at depth 0)."""
-    depth = 0
-    while i < len(toks):
-        t = toks[i][0]
-        if t in "([{":
-            depth += 1
-        elif t in ")]}":
-            depth -= 1
-            if depth == 0 and t == "}":
-                return i + 1
-        elif t == ";" and depth == 0:
-            return i + 1
-        i += 1
-    return i
-
-
 def parse_use_tree(toks, i, prefix, out):
     """Parse one use tree at toks[i]; append full segment lists to out; return the next index."""
     segs = list(prefix)
@@ -106,16 +89,16 @@ def parse_file(crate, file, path, pending):
         cur = path + tuple(inline)
         if t == "#" and i + 1 < len(toks) and toks[i + 1][0] in "[!":
             j = i + 1 if toks[i + 1][0] == "[" else i + 2
-            end = skip_item(toks, j)
-            attr = [a for a, _ in toks[j + 1:end - 1]]
+            close = rust_source.matching_close(toks, j)
+            attr = [a for a, _ in toks[j + 1:close]]
             if toks[i + 1][0] == "[" and is_test_cfg(attr):
                 # Skip further attributes, then the item.
-                k = end
-                while k < len(toks) and toks[k][0] == "#":
-                    k = skip_item(toks, k + 1)
-                i = skip_item(toks, k)
+                k = close + 1
+                while k + 1 < len(toks) and toks[k][0] == "#" and toks[k + 1][0] == "[":
+                    k = rust_source.matching_close(toks, k + 1) + 1
+                i = rust_source.item_end(toks, k)
                 continue
-            i = end
+            i = close + 1
             continue
         if t == "{":
             depth += 1

@@ -31,7 +31,7 @@ def functions(path, tests):
         if t == "#" and not tests and i + 2 < len(toks) and toks[i + 1][0] == "[":
             attr = [a for a, _ in toks[i + 2:i + 8]]
             if attr[:1] == ["test"] or (attr[:1] == ["cfg"] and "test" in attr):
-                skip_to = _item_end(toks, i + 1)
+                skip_to = rust_source.item_end(toks, rust_source.matching_close(toks, i + 1) + 1)
             continue
         if t == "fn" and i + 1 < len(toks) and toks[i + 1][0].isidentifier():
             end = _body_end(toks, i)
@@ -40,60 +40,10 @@ def functions(path, tests):
     return found
 
 
-def _item_end(toks, i):
-    """Index past the item after the attribute starting at toks[i] (`[`)."""
-    d, j = 0, i
-    while j < len(toks):
-        t = toks[j][0]
-        if t == "[":
-            d += 1
-        elif t == "]":
-            d -= 1
-            if d == 0:
-                break
-        j += 1
-    d, j = 0, j + 1
-    while j < len(toks):
-        t = toks[j][0]
-        if t in "([{":
-            d += 1
-        elif t in ")]}":
-            d -= 1
-            if d == 0 and t == "}":
-                return j + 1
-        elif t == ";" and d == 0:
-            return j + 1
-        j += 1
-    return j
-
-
 def _body_end(toks, i):
     """Index of the closing brace of the body of the fn at toks[i], None for a declaration."""
-    d, j = 0, i + 1
-    while j < len(toks):
-        t = toks[j][0]
-        if t in "([":
-            d += 1
-        elif t in ")]":
-            d -= 1
-        elif t == ";" and d == 0:
-            return None
-        elif t == "{" and d == 0:
-            break
-        j += 1
-    else:
-        return None
-    d = 0
-    while j < len(toks):
-        t = toks[j][0]
-        if t == "{":
-            d += 1
-        elif t == "}":
-            d -= 1
-            if d == 0:
-                return j
-        j += 1
-    return None
+    end = rust_source.item_end(toks, i)
+    return end - 1 if toks[end - 1][0] == "}" else None
 
 
 def main():

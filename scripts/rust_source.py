@@ -7,6 +7,7 @@ punctuation with their line numbers; `crates(root)` lists the workspace's crates
 source roots (crates/*/src/lib.rs, and the binary package's src/lib.rs and src/main.rs).
 """
 
+import bisect
 import os
 import re
 
@@ -76,11 +77,42 @@ def tokens(stripped):
     for m in re.finditer("\n", stripped):
         line_starts.append(m.end())
     out = []
-    import bisect
-
     for m in TOKEN.finditer(stripped):
         out.append((m.group(0), bisect.bisect_right(line_starts, m.start())))
     return out
+
+
+def matching_close(toks, i):
+    """Index of the bracket that closes the one at toks[i] (`(`, `[` or `{`)."""
+    depth, j = 0, i
+    while j < len(toks):
+        t = toks[j][0]
+        if t in "([{":
+            depth += 1
+        elif t in ")]}":
+            depth -= 1
+            if depth == 0:
+                return j
+        j += 1
+    return j
+
+
+def item_end(toks, i):
+    """Index just past the item starting at toks[i]: after its `;`, or after the closing `}` of
+    its first block at bracket depth 0."""
+    j = i
+    while j < len(toks):
+        t = toks[j][0]
+        if t in "([{":
+            close = matching_close(toks, j)
+            if t == "{":
+                return close + 1
+            j = close + 1
+        elif t == ";":
+            return j + 1
+        else:
+            j += 1
+    return j
 
 
 def crates(root):

@@ -2,7 +2,7 @@
 //! one cache-blocked pass), each compiled for SSE2, AVX2 and AVX-512 and chosen at run time.
 //! The only `unsafe` of the crate is here (calling a variant the CPU was checked to support).
 
-use crate::sum::{compensated_sum, pairwise_lanes};
+use crate::sum::{compensated_sum, neumaier_acc, pairwise_lanes};
 use crate::{edf, Estimator};
 
 /// `fn name(args) -> ret { body }`, compiled three times: as is, with AVX2 and with AVX-512F
@@ -106,13 +106,7 @@ pub(crate) fn estimator_sum(x: &[f64], est: Estimator, m: usize) -> Option<(f64,
             let mut vc = 0.0f64;
             for j in 0..terms - 1 {
                 let inc = x[j + 3 * m] - 3.0 * x[j + 2 * m] + 3.0 * x[j + m] - x[j];
-                let t = v + inc;
-                if v.abs() >= inc.abs() {
-                    vc += (v - t) + inc;
-                } else {
-                    vc += (inc - t) + v;
-                }
-                v = t;
+                neumaier_acc(&mut v, &mut vc, inc);
                 let w = v + vc;
                 s += w * w;
             }

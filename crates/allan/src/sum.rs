@@ -16,17 +16,23 @@ pub(crate) fn two_sum_acc(sum: &mut f64, comp: &mut f64, v: f64) {
     *sum = t;
 }
 
+/// sum += v with the rounding error added to comp (Neumaier 1974: the larger addend's error).
+#[inline(always)]
+pub(crate) fn neumaier_acc(sum: &mut f64, comp: &mut f64, v: f64) {
+    let t = *sum + v;
+    if sum.abs() >= v.abs() {
+        *comp += (*sum - t) + v;
+    } else {
+        *comp += (v - t) + *sum;
+    }
+    *sum = t;
+}
+
 /// Neumaier compensated sum.
 pub fn compensated_sum(values: impl Iterator<Item = f64>) -> f64 {
     let (mut sum, mut comp) = (0.0f64, 0.0f64);
     for v in values {
-        let t = sum + v;
-        if sum.abs() >= v.abs() {
-            comp += (sum - t) + v;
-        } else {
-            comp += (v - t) + sum;
-        }
-        sum = t;
+        neumaier_acc(&mut sum, &mut comp, v);
     }
     sum + comp
 }
