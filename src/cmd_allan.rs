@@ -7,8 +7,8 @@ use crate::logio::{self, Log, LogArgs};
 use crate::output;
 use crate::plot::{Band, LogLogPlot, Series, PALETTE};
 use allan::fit::{Fit, TERM_NAMES};
-use allan::{AllanPoint, EdfMethod, Estimator, Options, TauGrid};
-use anyhow::{anyhow, bail, Result};
+use allan::{AllanPoint, Estimator, Options, TauGrid};
+use anyhow::{bail, Result};
 use noise::noise_file::AxisValue;
 use rayon::prelude::*;
 use serde_json::{json, Map, Value};
@@ -23,11 +23,11 @@ pub struct Args {
     #[command(flatten)]
     pub log_args: LogArgs,
     /// Estimator: adev (non-overlapping, Woodman eq 19), oadev, mdev, hdev, ohdev, totdev
-    #[arg(long, default_value = "oadev")]
-    pub estimator: String,
+    #[arg(long, value_enum, default_value = "oadev")]
+    pub estimator: crate::cli::EstimatorArg,
     /// Tau grid: octave, decade, all, N/decade, or a comma list of averaging factors m
-    #[arg(long, default_value = "octave")]
-    pub grid: String,
+    #[arg(long, default_value = "octave", value_parser = crate::cli::grid)]
+    pub grid: crate::cli::GridArg,
     /// Channels to analyse (default: every channel except temp)
     #[arg(long, value_delimiter = ',')]
     pub channels: Vec<String>,
@@ -35,8 +35,8 @@ pub struct Args {
     #[arg(long, default_value_t = allan::ONE_SIGMA_CI)]
     pub confidence: f64,
     /// EDF method: greenhall (noise identified per tau), simple (SP 1065 Table 5), none
-    #[arg(long, default_value = "greenhall")]
-    pub edf: String,
+    #[arg(long, value_enum, default_value = "greenhall")]
+    pub edf: crate::cli::EdfArg,
     /// Print one JSON document on stdout (human text on stderr)
     #[arg(long)]
     pub json: bool,
@@ -103,24 +103,9 @@ pub fn run(args: Args) -> Result<()> {
         .as_deref()
         .map(crate::output::prepare_dir)
         .transpose()?;
-    let est = Estimator::from_name(&args.estimator).ok_or_else(|| {
-        anyhow!(
-            "--estimator {:?}: expected one of adev, oadev, mdev, hdev, ohdev, totdev",
-            args.estimator
-        )
-    })?;
-    let grid = TauGrid::parse(&args.grid).ok_or_else(|| {
-        anyhow!(
-            "--grid {:?}: expected octave, decade, all, N/decade or a comma list of m values",
-            args.grid
-        )
-    })?;
-    let edf = match args.edf.as_str() {
-        "greenhall" => EdfMethod::Greenhall,
-        "simple" => EdfMethod::Simple,
-        "none" => EdfMethod::None,
-        other => bail!("--edf {other:?}: expected greenhall, simple or none"),
-    };
+    let est = args.estimator.0;
+    let grid = args.grid.grid.clone();
+    let edf = args.edf.into();
     if !(args.confidence > 0.0 && args.confidence < 1.0) {
         bail!(
             "--confidence {}: expected a level between 0 and 1",
@@ -206,7 +191,14 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
         }
     }
     let table = tables(&log, samples, &results, est);
-    let doc = json_document(&log, samples, &results, est, &args.grid, opts.confidence);
+    let doc = json_document(
+        &log,
+        samples,
+        &results,
+        est,
+        &args.grid.text,
+        opts.confidence,
+    );
     if args.json {
         eprint!("{table}");
         println!("{}", serde_json::to_string_pretty(&doc)?);

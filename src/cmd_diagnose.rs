@@ -34,15 +34,15 @@ pub struct Args {
     /// Add-and-resimulate rounds at most
     #[arg(long, default_value_t = 6)]
     pub rounds: usize,
-    /// Drift horizons in seconds (comma list)
-    #[arg(long, value_delimiter = ',', default_value = "60,3600")]
+    /// Drift horizons: a comma list of times, e.g. 60,3600 or 1min,1h (a bare number is seconds)
+    #[arg(long, value_delimiter = ',', default_value = "60,3600", value_parser = crate::cli::duration_s)]
     pub horizons: Vec<f64>,
     /// BIC improvement an effect needs to be named (> 10 is "very strong" evidence, Kass & Raftery
     /// 1995; 16 keeps false alarms near 1e-3 per clean 6-channel log)
     #[arg(long, default_value_t = 16.0)]
     pub min_delta_bic: f64,
-    /// Leave out taus below this (s), e.g. where the sensor's anti-alias filter shapes the curve
-    #[arg(long, default_value_t = 0.0, value_name = "S")]
+    /// Leave out taus below this time (a bare number is seconds), e.g. where the sensor's anti-alias filter shapes the curve
+    #[arg(long, default_value = "0", value_name = "TIME", value_parser = crate::cli::duration_or_zero_s)]
     pub tau_min: f64,
     /// Held-out logs (same rate, length and columns) to check the corrected model on: their gap with
     /// the original and with the corrected model (repeat or comma-separate)
@@ -88,15 +88,6 @@ pub fn run(args: Args) -> Result<()> {
     }
     if args.rounds > MAX_ROUNDS {
         bail!("--rounds {}: expected at most {MAX_ROUNDS}", args.rounds);
-    }
-    if let Some(h) = args.horizons.iter().find(|h| !(h.is_finite() && **h > 0.0)) {
-        bail!("--horizons: {h} is not a positive duration in seconds");
-    }
-    if !args.tau_min.is_finite() || args.tau_min < 0.0 {
-        bail!(
-            "--tau-min {}: expected a duration >= 0 in seconds",
-            args.tau_min
-        );
     }
     if !args.min_delta_bic.is_finite() || args.min_delta_bic < 0.0 {
         bail!(

@@ -54,14 +54,14 @@ pub struct Args {
     /// Worker threads (default: all cores); results are identical for any value
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Drift times, s [default: 60,600,3600, or only the requirements' times with --require]
-    #[arg(long, value_delimiter = ',')]
+    /// Drift times (a bare number is seconds, or 10min, 1h) [default: 60,600,3600, or only the requirements' times with --require]
+    #[arg(long, value_delimiter = ',', value_parser = crate::cli::duration_s)]
     pub times: Option<Vec<f64>>,
     /// Sample rate of the drift runs, Hz
     #[arg(long, default_value_t = 100.0)]
     pub rate: f64,
-    /// Length of the simulated readback log, s (Woodman: 12 h); implies --readback
-    #[arg(long)]
+    /// Length of the simulated readback log (a bare number is seconds; Woodman: 12 h); implies --readback
+    #[arg(long, value_parser = crate::cli::duration_s)]
     pub readback_duration: Option<f64>,
     /// Keep only these error terms
     #[arg(long, value_delimiter = ',')]
@@ -144,9 +144,6 @@ pub fn run(args: Args) -> Result<()> {
         None if !requirements.is_empty() => Vec::new(),
         None => DEFAULT_TIMES_S.to_vec(),
     };
-    if times.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
-        anyhow::bail!("--times: expected positive times in seconds, e.g. 60,600,3600");
-    }
     let rate = crate::cli::check_rate_hz("--rate", args.rate)?;
     if rate > MAX_RATE_HZ {
         anyhow::bail!("--rate: expected at most {MAX_RATE_HZ} Hz, found {rate}");
