@@ -1,7 +1,6 @@
 //! Pieces of command-line handling that several commands share.
 
 use anyhow::{bail, Result};
-use clap::builder::PossibleValue;
 use noise::units::{parse_quantity, Quantity};
 
 /// A time given on the command line, s: a bare number is seconds, otherwise a value with its unit
@@ -67,26 +66,18 @@ pub fn term_filter(only: Option<&[String]>, without: &[String]) -> Result<noise:
     )?)
 }
 
-/// `--estimator`: the allan crate's estimators by their short names (`Estimator::name`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct EstimatorArg(pub allan::Estimator);
-
-impl clap::ValueEnum for EstimatorArg {
-    fn value_variants<'a>() -> &'a [Self] {
-        use allan::Estimator as E;
-        &[
-            EstimatorArg(E::NonOverlapping),
-            EstimatorArg(E::Overlapping),
-            EstimatorArg(E::Modified),
-            EstimatorArg(E::Hadamard),
-            EstimatorArg(E::OverlappingHadamard),
-            EstimatorArg(E::Total),
-        ]
-    }
-
-    fn to_possible_value(&self) -> Option<PossibleValue> {
-        Some(PossibleValue::new(self.0.name()))
-    }
+/// The value parser of a flag whose values are the names of a library's enum (`all` every
+/// value, `name` its spelling): `--help` lists them and clap refuses any other.
+pub fn named<T: Copy + Send + Sync + 'static, const N: usize>(
+    all: [T; N],
+    name: fn(T) -> &'static str,
+) -> impl clap::builder::TypedValueParser<Value = T> {
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(all.map(name)).map(move |text| {
+        *all.iter()
+            .find(|&&v| name(v) == text)
+            .expect("clap accepts only the possible values")
+    })
 }
 
 /// `--edf`: how the equivalent degrees of freedom of each Allan point are found.

@@ -3,12 +3,13 @@
 //! Prints a table per channel; `--json` prints one JSON document on stdout (tables go to
 //! stderr); `--out DIR` writes allan.csv, allan.json and one SVG plot per channel.
 
-use crate::logio::{self, Log, LogArgs};
+use crate::log_input::{self, LogArgs};
 use crate::output;
 use crate::plot::{Band, LogLogPlot, Series, PALETTE};
 use allan::fit::{Fit, TERM_NAMES};
 use allan::{AllanPoint, Estimator, Options, TauGrid};
 use anyhow::{bail, Result};
+use logio::Log;
 use noise::noise_file::AxisValue;
 use rayon::prelude::*;
 use serde_json::{json, Map, Value};
@@ -23,8 +24,8 @@ pub struct Args {
     #[command(flatten)]
     pub log_args: LogArgs,
     /// Estimator: adev (non-overlapping, Woodman eq 19), oadev, mdev, hdev, ohdev, totdev
-    #[arg(long, value_enum, default_value = "oadev")]
-    pub estimator: crate::cli::EstimatorArg,
+    #[arg(long, default_value = "oadev", value_parser = crate::cli::named(Estimator::ALL, Estimator::name))]
+    pub estimator: Estimator,
     /// Tau grid: octave, decade, all, N/decade, or a comma list of averaging factors m
     #[arg(long, default_value = "octave", value_parser = crate::cli::grid)]
     pub grid: crate::cli::GridArg,
@@ -103,7 +104,7 @@ pub fn run(args: Args) -> Result<()> {
         .as_deref()
         .map(crate::output::prepare_dir)
         .transpose()?;
-    let est = args.estimator.0;
+    let est = args.estimator;
     let grid = args.grid.grid.clone();
     let edf = args.edf.into();
     if !(args.confidence > 0.0 && args.confidence < 1.0) {
@@ -131,8 +132,8 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
             );
         }
     };
-    let log = logio::read_log(&args.log, &args.log_args.options()?)?;
-    eprintln!("{}: {}", log.source, log.mapping_text());
+    let log = args.log_args.read(&args.log)?;
+    eprintln!("{}: {}", log.source, log_input::mapping_text(&log));
     stage("read + parse");
     let names: Vec<String> = if args.channels.is_empty() {
         log.order
@@ -433,6 +434,7 @@ fn json_document(
             }),
         );
     }
+    let (columns, skipped) = log_input::columns_json(log);
     json!({
         "source": log.source,
         "samples": samples,
@@ -440,8 +442,8 @@ fn json_document(
         "estimator": est.name(),
         "grid": grid,
         "confidence": confidence,
-        "columns": log.columns,
-        "skipped_columns": log.skipped,
+        "columns": columns,
+        "skipped_columns": skipped,
         "channels": channels,
     })
 }

@@ -2,7 +2,7 @@
 //! which effect is missing, the corrected model, and the gap before and after (docs/cli.md, "The
 //! diagnose workflow").
 
-use crate::logio::{self, LogArgs};
+use crate::log_input::{self, LogArgs};
 use crate::output::write_string;
 use crate::plot::{Band, LogLogPlot, Series};
 use anyhow::{anyhow, bail, Context, Result};
@@ -101,8 +101,8 @@ pub fn run(args: Args) -> Result<()> {
 
 fn run_inner(args: &Args) -> Result<()> {
     let model = SensorModel::load(&args.model)?;
-    let log = logio::read_log(&args.log, &args.log_args.options()?)?;
-    eprintln!("{}: {}", log.source, log.mapping_text());
+    let log = args.log_args.read(&args.log)?;
+    eprintln!("{}: {}", log.source, log_input::mapping_text(&log));
     let channels: [Option<&[f64]>; 6] =
         std::array::from_fn(|c| log.channels.get(CHANNELS[c]).map(Vec::as_slice));
     if channels.iter().all(Option::is_none) {
@@ -176,7 +176,7 @@ fn run_inner(args: &Args) -> Result<()> {
     );
     let mut checks = Vec::new();
     for path in &args.check {
-        let held = logio::read_log(path, &args.log_args.options()?)?;
+        let held = args.log_args.read(path)?;
         let input = LogInput {
             dt_s: held.dt_s(),
             channels: std::array::from_fn(|c| held.channels.get(CHANNELS[c]).map(Vec::as_slice)),
@@ -511,11 +511,9 @@ fn json_document(
         .collect();
     obj.insert("checks".into(), checks.into());
     obj.insert("log".into(), log.source.clone().into());
-    obj.insert("columns".into(), serde_json::to_value(&log.columns)?);
-    obj.insert(
-        "skipped_columns".into(),
-        serde_json::to_value(&log.skipped)?,
-    );
+    let (columns, skipped) = log_input::columns_json(log);
+    obj.insert("columns".into(), columns);
+    obj.insert("skipped_columns".into(), skipped);
     obj.insert("model".into(), model.display().to_string().into());
     obj.insert("corrected_model_toml".into(), corrected.into());
     serde_json::to_string_pretty(&v).context("cannot serialise the diagnosis")

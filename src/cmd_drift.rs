@@ -2,7 +2,7 @@
 //! the model predicts under one protocol, with intervals and a verdict (docs/drift.md,
 //! docs/cli.md for the JSON).
 
-use crate::logio::{self, LogArgs};
+use crate::log_input::{self, LogArgs};
 use crate::output::write_string;
 use crate::plot::{Band, LogLogPlot, Series};
 use anyhow::{anyhow, bail, Context, Result};
@@ -111,8 +111,8 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
     let opts = args.log_args.options()?;
     let mut logs = Vec::new();
     for path in &args.logs {
-        let log = logio::read_log(path, &opts)?;
-        eprintln!("{}: {}", log.source, log.mapping_text());
+        let log = log_input::read_log(path, &opts)?;
+        eprintln!("{}: {}", log.source, log_input::mapping_text(&log));
         logs.push(log);
     }
     let inputs: Vec<LogInput> = logs

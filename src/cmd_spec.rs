@@ -197,7 +197,7 @@ pub fn run(args: Args) -> Result<()> {
         // The three axes are generated and analysed at once: each holds its samples and their
         // integral (16 bytes a sample).
         let need = 3.0 * 16.0 * d * READBACK_RATE_HZ;
-        if let Some(available) = crate::logio::available_memory_bytes() {
+        if let Some(available) = logio::available_memory_bytes() {
             if need > available as f64 {
                 anyhow::bail!(
                     "--readback-duration: a {} readback log needs about {:.1} GiB and {:.1} GiB is available: use a shorter --readback-duration",
