@@ -486,32 +486,34 @@ pub fn map_header(
         let may_default =
             channel_from == Source::Setting(Setting::Columns) || name.trim() == channel;
         let (unit, to_si, unit_from) = match quantity {
-            Quantity::Gyro(_) => {
-                let from_name = match named {
-                    Some(NamedUnit::Gyro(u)) => Some((u.name(), u.to_si())),
-                    _ => None,
+            Quantity::Gyro(_) | Quantity::Accel(_) => {
+                let (sensor, from_name, option, setting, si_unit) = match quantity {
+                    Quantity::Gyro(_) => (
+                        Sensor::Gyro,
+                        match named {
+                            Some(NamedUnit::Gyro(u)) => Some((u.name(), u.to_si())),
+                            _ => None,
+                        },
+                        units.gyro.map(|u| (u.name(), u.to_si())),
+                        Setting::GyroUnit,
+                        "rad/s",
+                    ),
+                    _ => (
+                        Sensor::Accel,
+                        match named {
+                            Some(NamedUnit::Accel(u)) => Some((u.name(), u.to_si())),
+                            _ => None,
+                        },
+                        units.accel.map(|u| (u.name(), u.to_si())),
+                        Setting::AccelUnit,
+                        "m/s^2",
+                    ),
                 };
-                let option = units.gyro.map(|u| (u.name(), u.to_si()));
-                match stated_unit(name, from_name, option, Setting::GyroUnit)? {
+                match stated_unit(name, from_name, option, setting)? {
                     Some(u) => u,
-                    None if may_default => ("rad/s", 1.0, Source::Default),
+                    None if may_default => (si_unit, 1.0, Source::Default),
                     None => {
-                        missing_unit.push((name.clone(), Sensor::Gyro));
-                        ("", f64::NAN, Source::Default)
-                    }
-                }
-            }
-            Quantity::Accel(_) => {
-                let from_name = match named {
-                    Some(NamedUnit::Accel(u)) => Some((u.name(), u.to_si())),
-                    _ => None,
-                };
-                let option = units.accel.map(|u| (u.name(), u.to_si()));
-                match stated_unit(name, from_name, option, Setting::AccelUnit)? {
-                    Some(u) => u,
-                    None if may_default => ("m/s^2", 1.0, Source::Default),
-                    None => {
-                        missing_unit.push((name.clone(), Sensor::Accel));
+                        missing_unit.push((name.clone(), sensor));
                         ("", f64::NAN, Source::Default)
                     }
                 }
