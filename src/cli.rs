@@ -3,19 +3,26 @@
 use anyhow::{bail, Result};
 use noise::units::{parse_quantity, Quantity};
 
-/// A time given on the command line: a bare number is seconds, otherwise a value with its unit
-/// (`"60"`, `"90 s"`, `"5 min"`, `"12 h"`). `flag` names the option in the error.
-pub fn parse_duration_s(flag: &str, text: &str) -> Result<f64> {
+/// A time given on the command line, s: a bare number is seconds, otherwise a value with its unit
+/// (`"60"`, `"90 s"`, `"5 min"`, `"12 h"`); finite and > 0. The value parser of every duration
+/// flag (`--duration`, `--horizons`, `--times`, ...): clap names the flag in the error.
+pub fn duration_s(text: &str) -> std::result::Result<f64, String> {
+    let duration_s = duration_or_zero_s(text)?;
+    if duration_s == 0.0 {
+        return Err("expected a time > 0".into());
+    }
+    Ok(duration_s)
+}
+
+/// As [`duration_s`], zero allowed (a lower bound that may be absent, such as `--tau-min`).
+pub fn duration_or_zero_s(text: &str) -> std::result::Result<f64, String> {
     let duration_s = match text.trim().parse::<f64>() {
         Ok(v) => v,
-        Err(_) => parse_quantity(text, Quantity::Time).map_err(|e| {
-            anyhow::anyhow!(
-                "{flag}: expected seconds or a time such as \"12 h\" ({e}), found \"{text}\""
-            )
-        })?,
+        Err(_) => parse_quantity(text, Quantity::Time)
+            .map_err(|e| format!("expected seconds or a time such as \"12 h\" ({e})"))?,
     };
-    if !(duration_s.is_finite() && duration_s > 0.0) {
-        bail!("{flag}: expected a time > 0, found \"{text}\"");
+    if !(duration_s.is_finite() && duration_s >= 0.0) {
+        return Err("expected a time >= 0".into());
     }
     Ok(duration_s)
 }
@@ -57,4 +64,53 @@ pub fn term_filter(only: Option<&[String]>, without: &[String]) -> Result<noise:
         only.map(|v| v.join(",")).as_deref(),
         (!without.is_empty()).then(|| without.join(",")).as_deref(),
     )?)
+}
+
+/// The value parser of a flag whose values are the names of a library's enum (`all` every
+/// value, `name` its spelling): `--help` lists them and clap refuses any other.
+pub fn named<T: Copy + Send + Sync + 'static, const N: usize>(
+    all: [T; N],
+    name: fn(T) -> &'static str,
+) -> impl clap::builder::TypedValueParser<Value = T> {
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(all.map(name)).map(move |text| {
+        *all.iter()
+            .find(|&&v| name(v) == text)
+            .expect("clap accepts only the possible values")
+    })
+}
+
+/// `--edf`: how the equivalent degrees of freedom of each Allan point are found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum EdfArg {
+    Greenhall,
+    Simple,
+    None,
+}
+
+impl From<EdfArg> for allan::EdfMethod {
+    fn from(edf: EdfArg) -> allan::EdfMethod {
+        match edf {
+            EdfArg::Greenhall => allan::EdfMethod::Greenhall,
+            EdfArg::Simple => allan::EdfMethod::Simple,
+            EdfArg::None => allan::EdfMethod::None,
+        }
+    }
+}
+
+/// `--grid`: the tau grid, and its text as given (written into the JSON as typed).
+#[derive(Clone, Debug, PartialEq)]
+pub struct GridArg {
+    pub text: String,
+    pub grid: allan::TauGrid,
+}
+
+/// The value parser of `--grid`.
+pub fn grid(text: &str) -> std::result::Result<GridArg, String> {
+    let grid = allan::TauGrid::parse(text)
+        .ok_or("expected octave, decade, all, N/decade or a comma list of m values")?;
+    Ok(GridArg {
+        text: text.to_string(),
+        grid,
+    })
 }

@@ -3,12 +3,13 @@
 //! Prints a table per channel; `--json` prints one JSON document on stdout (tables go to
 //! stderr); `--out DIR` writes allan.csv, allan.json and one SVG plot per channel.
 
-use crate::logio::{self, Log, LogArgs};
+use crate::log_input::{self, LogArgs};
 use crate::output;
 use crate::plot::{Band, LogLogPlot, Series, PALETTE};
 use allan::fit::{Fit, TERM_NAMES};
-use allan::{AllanPoint, EdfMethod, Estimator, Options, TauGrid};
-use anyhow::{anyhow, bail, Result};
+use allan::{AllanPoint, Estimator, Options, TauGrid};
+use anyhow::{bail, Result};
+use logio::Log;
 use noise::noise_file::AxisValue;
 use rayon::prelude::*;
 use serde_json::{json, Map, Value};
@@ -23,11 +24,11 @@ pub struct Args {
     #[command(flatten)]
     pub log_args: LogArgs,
     /// Estimator: adev (non-overlapping, Woodman eq 19), oadev, mdev, hdev, ohdev, totdev
-    #[arg(long, default_value = "oadev")]
-    pub estimator: String,
+    #[arg(long, default_value = "oadev", value_parser = crate::cli::named(Estimator::ALL, Estimator::name))]
+    pub estimator: Estimator,
     /// Tau grid: octave, decade, all, N/decade, or a comma list of averaging factors m
-    #[arg(long, default_value = "octave")]
-    pub grid: String,
+    #[arg(long, default_value = "octave", value_parser = crate::cli::grid)]
+    pub grid: crate::cli::GridArg,
     /// Channels to analyse (default: every channel except temp)
     #[arg(long, value_delimiter = ',')]
     pub channels: Vec<String>,
@@ -35,8 +36,8 @@ pub struct Args {
     #[arg(long, default_value_t = allan::ONE_SIGMA_CI)]
     pub confidence: f64,
     /// EDF method: greenhall (noise identified per tau), simple (SP 1065 Table 5), none
-    #[arg(long, default_value = "greenhall")]
-    pub edf: String,
+    #[arg(long, value_enum, default_value = "greenhall")]
+    pub edf: crate::cli::EdfArg,
     /// Print one JSON document on stdout (human text on stderr)
     #[arg(long)]
     pub json: bool,
@@ -103,24 +104,9 @@ pub fn run(args: Args) -> Result<()> {
         .as_deref()
         .map(crate::output::prepare_dir)
         .transpose()?;
-    let est = Estimator::from_name(&args.estimator).ok_or_else(|| {
-        anyhow!(
-            "--estimator {:?}: expected one of adev, oadev, mdev, hdev, ohdev, totdev",
-            args.estimator
-        )
-    })?;
-    let grid = TauGrid::parse(&args.grid).ok_or_else(|| {
-        anyhow!(
-            "--grid {:?}: expected octave, decade, all, N/decade or a comma list of m values",
-            args.grid
-        )
-    })?;
-    let edf = match args.edf.as_str() {
-        "greenhall" => EdfMethod::Greenhall,
-        "simple" => EdfMethod::Simple,
-        "none" => EdfMethod::None,
-        other => bail!("--edf {other:?}: expected greenhall, simple or none"),
-    };
+    let est = args.estimator;
+    let grid = args.grid.grid.clone();
+    let edf = args.edf.into();
     if !(args.confidence > 0.0 && args.confidence < 1.0) {
         bail!(
             "--confidence {}: expected a level between 0 and 1",
@@ -146,8 +132,8 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
             );
         }
     };
-    let log = logio::read_log(&args.log, &args.log_args.options()?)?;
-    eprintln!("{}: {}", log.source, log.mapping_text());
+    let log = args.log_args.read(&args.log)?;
+    eprintln!("{}: {}", log.source, log_input::mapping_text(&log));
     stage("read + parse");
     let names: Vec<String> = if args.channels.is_empty() {
         log.order
@@ -206,7 +192,14 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
         }
     }
     let table = tables(&log, samples, &results, est);
-    let doc = json_document(&log, samples, &results, est, &args.grid, opts.confidence);
+    let doc = json_document(
+        &log,
+        samples,
+        &results,
+        est,
+        &args.grid.text,
+        opts.confidence,
+    );
     if args.json {
         eprint!("{table}");
         println!("{}", serde_json::to_string_pretty(&doc)?);
@@ -441,6 +434,7 @@ fn json_document(
             }),
         );
     }
+    let (columns, skipped) = log_input::columns_json(log);
     json!({
         "source": log.source,
         "samples": samples,
@@ -448,8 +442,8 @@ fn json_document(
         "estimator": est.name(),
         "grid": grid,
         "confidence": confidence,
-        "columns": log.columns,
-        "skipped_columns": log.skipped,
+        "columns": columns,
+        "skipped_columns": skipped,
         "channels": channels,
     })
 }

@@ -2,7 +2,7 @@
 //! which effect is missing, the corrected model, and the gap before and after (docs/cli.md, "The
 //! diagnose workflow").
 
-use crate::logio::{self, LogArgs};
+use crate::log_input::{self, LogArgs};
 use crate::output::write_string;
 use crate::plot::{Band, LogLogPlot, Series};
 use anyhow::{anyhow, bail, Context, Result};
@@ -34,15 +34,15 @@ pub struct Args {
     /// Add-and-resimulate rounds at most
     #[arg(long, default_value_t = 6)]
     pub rounds: usize,
-    /// Drift horizons in seconds (comma list)
-    #[arg(long, value_delimiter = ',', default_value = "60,3600")]
+    /// Drift horizons: a comma list of times, e.g. 60,3600 or 1min,1h (a bare number is seconds)
+    #[arg(long, value_delimiter = ',', default_value = "60,3600", value_parser = crate::cli::duration_s)]
     pub horizons: Vec<f64>,
     /// BIC improvement an effect needs to be named (> 10 is "very strong" evidence, Kass & Raftery
     /// 1995; 16 keeps false alarms near 1e-3 per clean 6-channel log)
     #[arg(long, default_value_t = 16.0)]
     pub min_delta_bic: f64,
-    /// Leave out taus below this (s), e.g. where the sensor's anti-alias filter shapes the curve
-    #[arg(long, default_value_t = 0.0, value_name = "S")]
+    /// Leave out taus below this time (a bare number is seconds), e.g. where the sensor's anti-alias filter shapes the curve
+    #[arg(long, default_value = "0", value_name = "TIME", value_parser = crate::cli::duration_or_zero_s)]
     pub tau_min: f64,
     /// Held-out logs (same rate, length and columns) to check the corrected model on: their gap with
     /// the original and with the corrected model (repeat or comma-separate)
@@ -89,15 +89,6 @@ pub fn run(args: Args) -> Result<()> {
     if args.rounds > MAX_ROUNDS {
         bail!("--rounds {}: expected at most {MAX_ROUNDS}", args.rounds);
     }
-    if let Some(h) = args.horizons.iter().find(|h| !(h.is_finite() && **h > 0.0)) {
-        bail!("--horizons: {h} is not a positive duration in seconds");
-    }
-    if !args.tau_min.is_finite() || args.tau_min < 0.0 {
-        bail!(
-            "--tau-min {}: expected a duration >= 0 in seconds",
-            args.tau_min
-        );
-    }
     if !args.min_delta_bic.is_finite() || args.min_delta_bic < 0.0 {
         bail!(
             "--min-delta-bic {}: expected a number >= 0",
@@ -110,8 +101,8 @@ pub fn run(args: Args) -> Result<()> {
 
 fn run_inner(args: &Args) -> Result<()> {
     let model = SensorModel::load(&args.model)?;
-    let log = logio::read_log(&args.log, &args.log_args.options()?)?;
-    eprintln!("{}: {}", log.source, log.mapping_text());
+    let log = args.log_args.read(&args.log)?;
+    eprintln!("{}: {}", log.source, log_input::mapping_text(&log));
     let channels: [Option<&[f64]>; 6] =
         std::array::from_fn(|c| log.channels.get(CHANNELS[c]).map(Vec::as_slice));
     if channels.iter().all(Option::is_none) {
@@ -185,7 +176,7 @@ fn run_inner(args: &Args) -> Result<()> {
     );
     let mut checks = Vec::new();
     for path in &args.check {
-        let held = logio::read_log(path, &args.log_args.options()?)?;
+        let held = args.log_args.read(path)?;
         let input = LogInput {
             dt_s: held.dt_s(),
             channels: std::array::from_fn(|c| held.channels.get(CHANNELS[c]).map(Vec::as_slice)),
@@ -520,11 +511,9 @@ fn json_document(
         .collect();
     obj.insert("checks".into(), checks.into());
     obj.insert("log".into(), log.source.clone().into());
-    obj.insert("columns".into(), serde_json::to_value(&log.columns)?);
-    obj.insert(
-        "skipped_columns".into(),
-        serde_json::to_value(&log.skipped)?,
-    );
+    let (columns, skipped) = log_input::columns_json(log);
+    obj.insert("columns".into(), columns);
+    obj.insert("skipped_columns".into(), skipped);
     obj.insert("model".into(), model.display().to_string().into());
     obj.insert("corrected_model_toml".into(), corrected.into());
     serde_json::to_string_pretty(&v).context("cannot serialise the diagnosis")

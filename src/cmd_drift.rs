@@ -2,7 +2,7 @@
 //! the model predicts under one protocol, with intervals and a verdict (docs/drift.md,
 //! docs/cli.md for the JSON).
 
-use crate::logio::{self, LogArgs};
+use crate::log_input::{self, LogArgs};
 use crate::output::write_string;
 use crate::plot::{Band, LogLogPlot, Series};
 use anyhow::{anyhow, bail, Context, Result};
@@ -25,14 +25,14 @@ pub struct Args {
     #[command(flatten)]
     pub log_args: LogArgs,
     /// Bias calibration before each segment: none, log-mean, or window:TIME (the mean over TIME before each segment)
-    #[arg(long, default_value = "log-mean", value_name = "HOW")]
-    pub calibration: String,
+    #[arg(long, default_value = "log-mean", value_name = "HOW", value_parser = calibration)]
+    pub calibration: Calibration,
     /// Initial attitude: perfect, or level:TIME (roll and pitch from the accelerometers over TIME before each segment)
-    #[arg(long, default_value = "perfect", value_name = "HOW")]
-    pub init: String,
+    #[arg(long, default_value = "perfect", value_name = "HOW", value_parser = initialisation)]
+    pub init: Initialisation,
     /// Horizons (segment lengths): a comma list of times, e.g. 10,60,10min,1h
-    #[arg(long, value_delimiter = ',', default_value = "10,60,600,3600")]
-    pub horizons: Vec<String>,
+    #[arg(long, value_delimiter = ',', default_value = "10,60,600,3600", value_parser = crate::cli::duration_s)]
+    pub horizons: Vec<f64>,
     /// Half-overlapping segments instead of consecutive ones
     #[arg(long)]
     pub overlap: bool,
@@ -53,42 +53,40 @@ pub struct Args {
     pub threads: Option<usize>,
 }
 
-fn parse_window(flag: &str, text: &str, prefix: &str) -> Result<Option<f64>> {
-    match text.strip_prefix(prefix) {
-        Some(t) => Ok(Some(crate::cli::parse_duration_s(flag, t)?)),
-        None => Ok(None),
+/// The value parser of `--calibration`: none, log-mean or window:TIME.
+fn calibration(text: &str) -> std::result::Result<Calibration, String> {
+    match text {
+        "none" => Ok(Calibration::None),
+        "log-mean" => Ok(Calibration::LogMean),
+        t => match t.strip_prefix("window:") {
+            Some(w) => Ok(Calibration::Window {
+                window_s: crate::cli::duration_s(w)?,
+            }),
+            None => Err("expected none, log-mean or window:TIME (e.g. window:60s)".into()),
+        },
     }
 }
 
-fn protocol(args: &Args) -> Result<Protocol> {
-    let calibration = match args.calibration.as_str() {
-        "none" => Calibration::None,
-        "log-mean" => Calibration::LogMean,
-        t => match parse_window("--calibration", t, "window:")? {
-            Some(w) => Calibration::Window { window_s: w },
-            None => bail!(
-                "--calibration {t:?}: expected none, log-mean or window:TIME (e.g. window:60s)"
-            ),
+/// The value parser of `--init`: perfect or level:TIME.
+fn initialisation(text: &str) -> std::result::Result<Initialisation, String> {
+    match text {
+        "perfect" => Ok(Initialisation::Perfect),
+        t => match t.strip_prefix("level:") {
+            Some(w) => Ok(Initialisation::Levelled {
+                window_s: crate::cli::duration_s(w)?,
+            }),
+            None => Err("expected perfect or level:TIME (e.g. level:10s)".into()),
         },
-    };
-    let initialisation = match args.init.as_str() {
-        "perfect" => Initialisation::Perfect,
-        t => match parse_window("--init", t, "level:")? {
-            Some(w) => Initialisation::Levelled { window_s: w },
-            None => bail!("--init {t:?}: expected perfect or level:TIME (e.g. level:10s)"),
-        },
-    };
-    let horizons_s = args
-        .horizons
-        .iter()
-        .map(|h| crate::cli::parse_duration_s("--horizons", h))
-        .collect::<Result<Vec<f64>>>()?;
-    Ok(Protocol {
-        calibration,
-        initialisation,
-        horizons_s,
+    }
+}
+
+fn protocol(args: &Args) -> Protocol {
+    Protocol {
+        calibration: args.calibration,
+        initialisation: args.init,
+        horizons_s: args.horizons.clone(),
         overlapping: args.overlap,
-    })
+    }
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -97,7 +95,7 @@ pub fn run(args: Args) -> Result<()> {
         .as_deref()
         .map(crate::output::prepare_dir)
         .transpose()?;
-    let protocol = protocol(&args)?;
+    let protocol = protocol(&args);
     if args.replicates < 10 || args.replicates > 100_000 {
         bail!(
             "--replicates {}: expected 10 to 100000 simulated experiments",
@@ -113,8 +111,8 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
     let opts = args.log_args.options()?;
     let mut logs = Vec::new();
     for path in &args.logs {
-        let log = logio::read_log(path, &opts)?;
-        eprintln!("{}: {}", log.source, log.mapping_text());
+        let log = log_input::read_log(path, &opts)?;
+        eprintln!("{}: {}", log.source, log_input::mapping_text(&log));
         logs.push(log);
     }
     let inputs: Vec<LogInput> = logs

@@ -6,7 +6,7 @@
 //! are generated in parallel and the bytes do not depend on the thread count. The file appears only
 //! when complete (src/output.rs).
 
-use crate::cli::{check_rate_hz, parse_duration_s};
+use crate::cli::check_rate_hz;
 use crate::output;
 use anyhow::{bail, Result};
 use noise::{Channel, ImuErrors, SensorModel, StaticLevel, TermFilter, CHANNEL_NAMES};
@@ -24,8 +24,8 @@ pub struct Args {
     /// Sensor config (TOML), e.g. configs/sensors/mtx.toml
     pub sensor: PathBuf,
     /// Log length: seconds, or a value with a unit ("12 h", "30 min")
-    #[arg(long)]
-    pub duration: String,
+    #[arg(long, value_parser = crate::cli::duration_s)]
+    pub duration: f64,
     /// Sample rate in Hz
     #[arg(long)]
     pub rate: f64,
@@ -70,11 +70,11 @@ fn plan(args: &Args) -> Result<Plan> {
     let model = SensorModel::load(&args.sensor)?;
     let filter = crate::cli::term_filter(args.only.as_deref(), &args.without)?;
     check_rate_hz("--rate", args.rate)?;
-    let duration_s = parse_duration_s("--duration", &args.duration)?;
+    let duration_s = args.duration;
     let samples = (duration_s * args.rate).round();
     if !(1.0..=1e12).contains(&samples) {
         bail!(
-            "--duration {} at --rate {} gives {samples} samples; expected 1 to 1e12",
+            "--duration {} s at --rate {} gives {samples} samples; expected 1 to 1e12",
             args.duration,
             args.rate
         );

@@ -2,7 +2,7 @@
 //! axis off its Allan deviation to a stated relative uncertainty, and what a given length
 //! resolves (the method and its sources: `allan::plan`).
 
-use crate::cli::{check_rate_hz, parse_duration_s};
+use crate::cli::check_rate_hz;
 use crate::fmt;
 use allan::plan::{plan_term, Curve, PlanTerm, TermPlan};
 use anyhow::{bail, Context, Result};
@@ -28,8 +28,8 @@ pub struct Args {
     #[arg(long, default_value = "10%")]
     pub uncertainty: String,
     /// Also say how well a log of this length reads each term: seconds or a time ("2 h")
-    #[arg(long)]
-    pub duration: Option<String>,
+    #[arg(long, value_parser = crate::cli::duration_s)]
+    pub duration: Option<f64>,
     /// Sample rate of the log, Hz
     #[arg(long, default_value_t = 100.0)]
     pub rate: f64,
@@ -110,11 +110,7 @@ pub fn run(args: Args) -> Result<()> {
     if !(MIN_RATE_HZ..=MAX_RATE_HZ).contains(&rate_hz) {
         bail!("--rate: expected {MIN_RATE_HZ} to {MAX_RATE_HZ} Hz, found {rate_hz}");
     }
-    let duration_s = args
-        .duration
-        .as_deref()
-        .map(|d| parse_duration_s("--duration", d))
-        .transpose()?;
+    let duration_s = args.duration;
     if let Some(d) = duration_s {
         if d > MAX_DURATION_S || d * rate_hz < 3.0 {
             bail!("--duration: expected at least 3 samples and at most {MAX_DURATION_S:e} s (about 300 years), found {d:e} s");

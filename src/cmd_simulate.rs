@@ -25,8 +25,8 @@ pub struct Args {
     /// --rate 100 Hz, --runs 500, --seed 1)
     pub scenario: PathBuf,
     /// Length of each run: seconds, or a time with its unit ("90 s", "5 min", "1 h"); overrides the scenario
-    #[arg(long)]
-    pub duration: Option<String>,
+    #[arg(long, value_parser = crate::cli::duration_s)]
+    pub duration: Option<f64>,
     /// Sample rate in Hz; overrides the scenario
     #[arg(long)]
     pub rate: Option<f64>,
@@ -71,7 +71,7 @@ pub fn run(args: Args) -> Result<()> {
         (Some(dir), Some(_)) => Some(crate::output::prepare_shared_dir(dir)?),
         (None, _) => None,
     };
-    let edits = ScenarioEdits::from_flags(args.duration.as_deref(), args.rate)?;
+    let edits = ScenarioEdits::from_flags(args.duration, args.rate)?;
     let (inputs, _) = read_inputs(&args.scenario, &edits)?;
     let overrides = Overrides {
         runs: args.runs,

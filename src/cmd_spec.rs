@@ -54,14 +54,14 @@ pub struct Args {
     /// Worker threads (default: all cores); results are identical for any value
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Drift times, s [default: 60,600,3600, or only the requirements' times with --require]
-    #[arg(long, value_delimiter = ',')]
+    /// Drift times (a bare number is seconds, or 10min, 1h) [default: 60,600,3600, or only the requirements' times with --require]
+    #[arg(long, value_delimiter = ',', value_parser = crate::cli::duration_s)]
     pub times: Option<Vec<f64>>,
     /// Sample rate of the drift runs, Hz
     #[arg(long, default_value_t = 100.0)]
     pub rate: f64,
-    /// Length of the simulated readback log, s (Woodman: 12 h); implies --readback
-    #[arg(long)]
+    /// Length of the simulated readback log (a bare number is seconds; Woodman: 12 h); implies --readback
+    #[arg(long, value_parser = crate::cli::duration_s)]
     pub readback_duration: Option<f64>,
     /// Keep only these error terms
     #[arg(long, value_delimiter = ',')]
@@ -133,150 +133,16 @@ pub fn run(args: Args) -> Result<()> {
         .as_deref()
         .map(crate::output::prepare_dir)
         .transpose()?;
-    let requirements = args
-        .require
-        .iter()
-        .map(|r| r.parse::<Requirement>())
-        .collect::<Result<Vec<_>, _>>()
-        .context("--require")?;
-    let mut times: Vec<f64> = match &args.times {
-        Some(t) => t.clone(),
-        None if !requirements.is_empty() => Vec::new(),
-        None => DEFAULT_TIMES_S.to_vec(),
-    };
-    if times.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
-        anyhow::bail!("--times: expected positive times in seconds, e.g. 60,600,3600");
-    }
-    let rate = crate::cli::check_rate_hz("--rate", args.rate)?;
-    if rate > MAX_RATE_HZ {
-        anyhow::bail!("--rate: expected at most {MAX_RATE_HZ} Hz, found {rate}");
-    }
-    times.extend(requirements.iter().map(|r| r.t_s));
-    // Drift is recorded at whole samples: each time is rounded to the nearest sample.
-    for t in &mut times {
-        let k = (*t * rate).round();
-        if k < 1.0 {
-            anyhow::bail!(
-                "--times / --require: {t} s is shorter than one sample at --rate {rate} Hz"
-            );
-        }
-        *t = k / rate;
-    }
-    times.sort_by(f64::total_cmp);
-    times.dedup();
-    if times.is_empty() {
-        anyhow::bail!("--times: expected positive times in seconds, e.g. 60,600,3600");
-    }
-    let runs = args.runs.unwrap_or(if requirements.is_empty() {
-        DEFAULT_RUNS
-    } else {
-        DEFAULT_RUNS_REQUIRE
-    });
-    if runs == 0 {
-        anyhow::bail!("--runs: expected an integer >= 1");
-    }
-    // Refuse work that would run for hours before starting it (about 1e7 steps/s per core).
-    let steps = runs as f64 * times.last().copied().unwrap_or(0.0) * rate;
-    if steps > MAX_STEPS_PER_SENSOR {
-        anyhow::bail!(
-            "{runs} runs of {} at {rate} Hz are {steps:.2e} mechanisation steps per sensor (limit {MAX_STEPS_PER_SENSOR:.0e}, about 3 h on 2 cores): use fewer --runs, a lower --rate or an earlier time",
-            crate::fmt::time(times.last().copied().unwrap_or(0.0))
-        );
-    }
-    let readback_duration = match args.readback_duration {
-        Some(d) => Some(d),
-        None => args.readback.then_some(READBACK_DURATION_S),
-    };
-    if let Some(d) = readback_duration {
-        if !(d.is_finite() && d * READBACK_RATE_HZ >= 1000.0) {
-            anyhow::bail!("--readback-duration: expected at least 10 s");
-        }
-        // 8 bytes per sample per axis; refuse before allocating what the machine cannot hold.
-        if d * READBACK_RATE_HZ > 2e9 {
-            anyhow::bail!(
-                "--readback-duration: {d:e} s at {READBACK_RATE_HZ} Hz is more than 2e9 samples (16 GB per axis); use at most 5.5e6 s (64 days)"
-            );
-        }
-        // The three axes are generated and analysed at once: each holds its samples and their
-        // integral (16 bytes a sample).
-        let need = 3.0 * 16.0 * d * READBACK_RATE_HZ;
-        if let Some(available) = crate::logio::available_memory_bytes() {
-            if need > available as f64 {
-                anyhow::bail!(
-                    "--readback-duration: a {} readback log needs about {:.1} GiB and {:.1} GiB is available: use a shorter --readback-duration",
-                    crate::fmt::time(d),
-                    need / (1u64 << 30) as f64,
-                    available as f64 / (1u64 << 30) as f64
-                );
-            }
-        }
-    }
+    let settings = Settings::from_args(&args)?;
     let filter = crate::cli::term_filter(args.only.as_deref(), &args.without)?;
     let pool = pool(args.threads)?;
     let mut sensors = Vec::new();
     for path in &args.sensors {
-        let model = SensorModel::load(path)
-            .map_err(|e| anyhow::anyhow!("{e}"))?
-            .filtered(&filter);
-        let exp = drift_experiment(&model, &times, rate, runs, args.seed)
-            .with_context(|| path.display().to_string())?;
-        check_memory(&exp, exp.runs)?;
-        let gyro = match readback_duration {
-            Some(d) => {
-                eprintln!(
-                    "{}: reading back a {}, {} Hz static log ...",
-                    model.name,
-                    fmt::time(d),
-                    READBACK_RATE_HZ
-                );
-                pool.install(|| gyro_readback(&model, args.seed, d, READBACK_RATE_HZ))
-            }
-            None => gyro_spec_values(&model, READBACK_RATE_HZ),
-        };
-        let batch = pool.install(|| execute(&exp, 0..exp.runs, &model.name));
-        if batch.matrix.runs() == 0 {
-            anyhow::bail!(
-                "{}: every one of the {runs} drift runs failed ({}); the model's values are probably far too large (check their units)",
-                path.display(),
-                batch
-                    .failures
-                    .first()
-                    .map_or("no run finished".to_string(), |f| f.message.clone())
-            );
-        }
-        let report = exp.report(&batch.matrix, &batch.failures);
-        for f in &batch.failures {
-            eprintln!(
-                "warning: {}: drift run {} failed: {}",
-                model.name, f.run, f.message
-            );
-        }
-        let checkpoint_times = exp.scenario.checkpoint_times_s();
-        let requirements = requirements
-            .iter()
-            .map(|req| {
-                let cp = checkpoint_times
-                    .iter()
-                    .position(|&t| (t - req.t_s).abs() <= 0.5 / rate)
-                    .context("a requirement's time is not a checkpoint")?;
-                let values = batch.matrix.series(cp, req.channel as usize);
-                Ok(evaluate(req, values, informs(&model, req.channel)))
-            })
-            .collect::<Result<Vec<_>>>()?;
-        sensors.push(SensorOut {
-            spec: SensorSpec {
-                name: model.name.clone(),
-                gyro,
-                drift: drift_rows(&report),
-                drift_runs: report.runs_ok,
-            },
-            model_notes: model_notes(&model),
-            requirements,
-        });
+        sensors.push(compare_sensor(path, &settings, &filter, &pool, args.seed)?);
     }
     let doc = SpecDoc {
         seed: args.seed,
-        readback_duration_s: readback_duration,
+        readback_duration_s: settings.readback_duration_s,
         readback_rate_hz: READBACK_RATE_HZ,
         readback_confidence: READBACK_CONFIDENCE,
         drift_rate_hz: args.rate,
@@ -292,57 +158,250 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(dir) = &args.out {
         let _set = crate::output::begin_set(dir)?;
         write_string(&dir.join("spec.json"), &text)?;
-        write_atomic(&dir.join("spec.csv"), |w| {
-            writeln!(w, "sensor,axis,arw_spec,arw_sim,arw_sim_lo,arw_sim_hi,bi_spec,bi_sim,bi_sim_lo,bi_sim_hi")?;
-            for s in &doc.sensors {
-                let (s, g) = (&s.spec, &s.spec.gyro);
-                for a in 0..3 {
-                    let f = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v:.6e}"));
-                    writeln!(
-                        w,
-                        "{},{},{},{},{},{},{},{},{},{}",
-                        crate::fmt::csv_text(&s.name),
-                        ["x", "y", "z"][a],
-                        f(g.arw_spec[a]),
-                        f(g.arw_sim[a]),
-                        f(g.arw_sim_lo[a]),
-                        f(g.arw_sim_hi[a]),
-                        f(g.bi_spec[a]),
-                        f(g.bi_sim[a]),
-                        f(g.bi_sim_lo[a]),
-                        f(g.bi_sim_hi[a])
-                    )?;
-                }
-            }
-            Ok(())
-        })
-        .context("spec.csv")?;
-        write_atomic(&dir.join("drift.csv"), |w| {
-            writeln!(w, "sensor,t_s,heading_rms_sim_rad,heading_rms_law_rad,horizontal_mean_sim_m,horizontal_mean_law_m,horizontal_rms_sim_m,horizontal_rms_law_m,horizontal_p95_sim_m")?;
-            for s in &doc.sensors {
-                let s = &s.spec;
-                for d in &s.drift {
-                    let f = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v:.6e}"));
-                    writeln!(
-                        w,
-                        "{},{},{:.6e},{},{:.6e},{},{:.6e},{},{:.6e}",
-                        crate::fmt::csv_text(&s.name),
-                        d.t_s,
-                        d.heading_rms_sim_rad,
-                        f(d.heading_rms_law_rad),
-                        d.horizontal_mean_sim_m,
-                        f(d.horizontal_mean_law_m),
-                        d.horizontal_rms_sim_m,
-                        f(d.horizontal_rms_law_m),
-                        d.horizontal_p95_sim_m
-                    )?;
-                }
-            }
-            Ok(())
-        })?;
+        write_spec_csv(dir, &doc)?;
+        write_drift_csv(dir, &doc)?;
         eprintln!("wrote {}/spec.json, spec.csv, drift.csv", dir.display());
     }
     Ok(())
+}
+
+/// The command's settings, checked before any work.
+struct Settings {
+    requirements: Vec<Requirement>,
+    /// Drift times (the requirements' included), rounded to whole samples, sorted, s.
+    times_s: Vec<f64>,
+    rate_hz: f64,
+    runs: u64,
+    /// Length of the readback log, s (`None`: spec values only).
+    readback_duration_s: Option<f64>,
+}
+
+impl Settings {
+    fn from_args(args: &Args) -> Result<Settings> {
+        let requirements = args
+            .require
+            .iter()
+            .map(|r| r.parse::<Requirement>())
+            .collect::<Result<Vec<_>, _>>()
+            .context("--require")?;
+        let mut times: Vec<f64> = match &args.times {
+            Some(t) => t.clone(),
+            None if !requirements.is_empty() => Vec::new(),
+            None => DEFAULT_TIMES_S.to_vec(),
+        };
+        let rate = crate::cli::check_rate_hz("--rate", args.rate)?;
+        if rate > MAX_RATE_HZ {
+            anyhow::bail!("--rate: expected at most {MAX_RATE_HZ} Hz, found {rate}");
+        }
+        times.extend(requirements.iter().map(|r| r.t_s));
+        // Drift is recorded at whole samples: each time is rounded to the nearest sample.
+        for t in &mut times {
+            let k = (*t * rate).round();
+            if k < 1.0 {
+                anyhow::bail!(
+                    "--times / --require: {t} s is shorter than one sample at --rate {rate} Hz"
+                );
+            }
+            *t = k / rate;
+        }
+        times.sort_by(f64::total_cmp);
+        times.dedup();
+        if times.is_empty() {
+            anyhow::bail!("--times: expected positive times in seconds, e.g. 60,600,3600");
+        }
+        let runs = args.runs.unwrap_or(if requirements.is_empty() {
+            DEFAULT_RUNS
+        } else {
+            DEFAULT_RUNS_REQUIRE
+        });
+        if runs == 0 {
+            anyhow::bail!("--runs: expected an integer >= 1");
+        }
+        // Refuse work that would run for hours before starting it (about 1e7 steps/s per core).
+        let steps = runs as f64 * times.last().copied().unwrap_or(0.0) * rate;
+        if steps > MAX_STEPS_PER_SENSOR {
+            anyhow::bail!(
+            "{runs} runs of {} at {rate} Hz are {steps:.2e} mechanisation steps per sensor (limit {MAX_STEPS_PER_SENSOR:.0e}, about 3 h on 2 cores): use fewer --runs, a lower --rate or an earlier time",
+            crate::fmt::time(times.last().copied().unwrap_or(0.0))
+        );
+        }
+        let readback_duration = match args.readback_duration {
+            Some(d) => Some(d),
+            None => args.readback.then_some(READBACK_DURATION_S),
+        };
+        if let Some(d) = readback_duration {
+            check_readback_duration(d)?;
+        }
+        Ok(Settings {
+            requirements,
+            times_s: times,
+            rate_hz: rate,
+            runs,
+            readback_duration_s: readback_duration,
+        })
+    }
+}
+
+/// A readback log of `d` s must be long enough to read, and fit in memory.
+fn check_readback_duration(d: f64) -> Result<()> {
+    if !(d.is_finite() && d * READBACK_RATE_HZ >= 1000.0) {
+        anyhow::bail!("--readback-duration: expected at least 10 s");
+    }
+    // 8 bytes per sample per axis; refuse before allocating what the machine cannot hold.
+    if d * READBACK_RATE_HZ > 2e9 {
+        anyhow::bail!(
+            "--readback-duration: {d:e} s at {READBACK_RATE_HZ} Hz is more than 2e9 samples (16 GB per axis); use at most 5.5e6 s (64 days)"
+        );
+    }
+    // The three axes are generated and analysed at once: each holds its samples and their
+    // integral (16 bytes a sample).
+    let need = 3.0 * 16.0 * d * READBACK_RATE_HZ;
+    if let Some(available) = logio::available_memory_bytes() {
+        if need > available as f64 {
+            anyhow::bail!(
+                "--readback-duration: a {} readback log needs about {:.1} GiB and {:.1} GiB is available: use a shorter --readback-duration",
+                crate::fmt::time(d),
+                need / (1u64 << 30) as f64,
+                available as f64 / (1u64 << 30) as f64
+            );
+        }
+    }
+    Ok(())
+}
+
+/// One sensor: its spec values (or read back from a simulated log), drift runs, requirements.
+fn compare_sensor(
+    path: &std::path::Path,
+    settings: &Settings,
+    filter: &noise::TermFilter,
+    pool: &rayon::ThreadPool,
+    seed: u64,
+) -> Result<SensorOut> {
+    let Settings {
+        requirements,
+        times_s: times,
+        rate_hz: rate,
+        runs,
+        readback_duration_s: readback_duration,
+    } = settings;
+    let (rate, runs, readback_duration) = (*rate, *runs, *readback_duration);
+    let model = SensorModel::load(path)
+        .map_err(|e| anyhow::anyhow!("{e}"))?
+        .filtered(filter);
+    let exp = drift_experiment(&model, times, rate, runs, seed)
+        .with_context(|| path.display().to_string())?;
+    check_memory(&exp, exp.runs)?;
+    let gyro = match readback_duration {
+        Some(d) => {
+            eprintln!(
+                "{}: reading back a {}, {} Hz static log ...",
+                model.name,
+                fmt::time(d),
+                READBACK_RATE_HZ
+            );
+            pool.install(|| gyro_readback(&model, seed, d, READBACK_RATE_HZ))
+        }
+        None => gyro_spec_values(&model, READBACK_RATE_HZ),
+    };
+    let batch = pool.install(|| execute(&exp, 0..exp.runs, &model.name));
+    if batch.matrix.runs() == 0 {
+        anyhow::bail!(
+            "{}: every one of the {runs} drift runs failed ({}); the model's values are probably far too large (check their units)",
+            path.display(),
+            batch
+                .failures
+                .first()
+                .map_or("no run finished".to_string(), |f| f.message.clone())
+        );
+    }
+    let report = exp.report(&batch.matrix, &batch.failures);
+    for f in &batch.failures {
+        eprintln!(
+            "warning: {}: drift run {} failed: {}",
+            model.name, f.run, f.message
+        );
+    }
+    let checkpoint_times = exp.scenario.checkpoint_times_s();
+    let requirements = requirements
+        .iter()
+        .map(|req| {
+            let cp = checkpoint_times
+                .iter()
+                .position(|&t| (t - req.t_s).abs() <= 0.5 / rate)
+                .context("a requirement's time is not a checkpoint")?;
+            let values = batch.matrix.series(cp, req.channel as usize);
+            Ok(evaluate(req, values, informs(&model, req.channel)))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(SensorOut {
+        spec: SensorSpec {
+            name: model.name.clone(),
+            gyro,
+            drift: drift_rows(&report),
+            drift_runs: report.runs_ok,
+        },
+        model_notes: model_notes(&model),
+        requirements,
+    })
+}
+
+/// spec.csv: the gyro spec values against the simulated readback, per axis.
+fn write_spec_csv(dir: &std::path::Path, doc: &SpecDoc) -> Result<()> {
+    write_atomic(&dir.join("spec.csv"), |w| {
+        writeln!(
+            w,
+            "sensor,axis,arw_spec,arw_sim,arw_sim_lo,arw_sim_hi,bi_spec,bi_sim,bi_sim_lo,bi_sim_hi"
+        )?;
+        for s in &doc.sensors {
+            let (s, g) = (&s.spec, &s.spec.gyro);
+            for a in 0..3 {
+                let f = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v:.6e}"));
+                writeln!(
+                    w,
+                    "{},{},{},{},{},{},{},{},{},{}",
+                    crate::fmt::csv_text(&s.name),
+                    ["x", "y", "z"][a],
+                    f(g.arw_spec[a]),
+                    f(g.arw_sim[a]),
+                    f(g.arw_sim_lo[a]),
+                    f(g.arw_sim_hi[a]),
+                    f(g.bi_spec[a]),
+                    f(g.bi_sim[a]),
+                    f(g.bi_sim_lo[a]),
+                    f(g.bi_sim_hi[a])
+                )?;
+            }
+        }
+        Ok(())
+    })
+    .context("spec.csv")
+}
+
+/// drift.csv: heading and horizontal drift, simulated and by the laws, per sensor and time.
+fn write_drift_csv(dir: &std::path::Path, doc: &SpecDoc) -> Result<()> {
+    write_atomic(&dir.join("drift.csv"), |w| {
+        writeln!(w, "sensor,t_s,heading_rms_sim_rad,heading_rms_law_rad,horizontal_mean_sim_m,horizontal_mean_law_m,horizontal_rms_sim_m,horizontal_rms_law_m,horizontal_p95_sim_m")?;
+        for s in &doc.sensors {
+            let s = &s.spec;
+            for d in &s.drift {
+                let f = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v:.6e}"));
+                writeln!(
+                    w,
+                    "{},{},{:.6e},{},{:.6e},{},{:.6e},{},{:.6e}",
+                    crate::fmt::csv_text(&s.name),
+                    d.t_s,
+                    d.heading_rms_sim_rad,
+                    f(d.heading_rms_law_rad),
+                    d.horizontal_mean_sim_m,
+                    f(d.horizontal_mean_law_m),
+                    d.horizontal_rms_sim_m,
+                    f(d.horizontal_rms_law_m),
+                    d.horizontal_p95_sim_m
+                )?;
+            }
+        }
+        Ok(())
+    })
 }
 
 fn table(doc: &SpecDoc) -> String {

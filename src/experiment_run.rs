@@ -28,11 +28,9 @@ pub struct ScenarioEdits {
 }
 
 impl ScenarioEdits {
-    pub fn from_flags(duration: Option<&str>, rate_hz: Option<f64>) -> Result<Self> {
+    pub fn from_flags(duration_s: Option<f64>, rate_hz: Option<f64>) -> Result<Self> {
         Ok(ScenarioEdits {
-            duration_s: duration
-                .map(|d| crate::cli::parse_duration_s("--duration", d))
-                .transpose()?,
+            duration_s,
             rate_hz: rate_hz
                 .map(|r| crate::cli::check_rate_hz("--rate", r))
                 .transpose()?,

@@ -2,21 +2,9 @@
 //! spec sheets use (deg rather than rad for attitude, deg/h and deg/sqrt(h) for gyro terms). JSON and CSV stay in SI; only human text uses these.
 
 /// `v` with `digits` significant digits as a plain decimal ("0.0259", "226.7", "1480"), falling
-/// back to scientific notation outside 1e-4 ..= 1e7. NaN prints as "NaN" (never as 0).
-pub fn sig(v: f64, digits: usize) -> String {
-    if !v.is_finite() {
-        return format!("{v}");
-    }
-    if v == 0.0 {
-        return "0".into();
-    }
-    let mag = v.abs().log10().floor() as i32;
-    if !(-4..7).contains(&mag) {
-        return format!("{:.*e}", digits.saturating_sub(1), v);
-    }
-    let decimals = (digits as i32 - 1 - mag).max(0) as usize;
-    format!("{v:.decimals$}")
-}
+/// back to scientific notation outside 1e-4 ..= 1e7 (one definition, shared with the log
+/// reader's messages).
+pub use logio::sig;
 
 /// `v` (in `unit`) in engineering notation with an SI prefix (femto to kilo) and 4 significant digits:
 /// `si(2.2667e2, "m")` = "226.7 m", `si(1.0224e-4, "m")` = "102.2 µm".

@@ -1,6 +1,6 @@
-//! The modules of the `imudrift` command (see `main.rs`), as a library so that the fuzz targets
-//! (`fuzz/`) and the property tests reach the same log reader, config loaders and shard checks the
-//! command uses. Not a stable API: the stable interfaces are the command line and its JSON.
+//! The modules of the `imudrift` command (see `main.rs`), compiled as a library too. Not a
+//! stable API: the stable interfaces are the command line and its JSON. (The log reader, which
+//! the fuzz targets and the property tests exercise, is its own crate, `crates/logio`.)
 
 pub mod cli;
 pub mod cmd_allan;
@@ -13,7 +13,7 @@ pub mod cmd_simulate;
 pub mod cmd_spec;
 pub mod experiment_run;
 pub mod fmt;
-pub mod logio;
+pub mod log_input;
 pub mod noise_out;
 pub mod output;
 pub mod plot;

@@ -7,6 +7,7 @@
 
 use imudrift::*;
 
+use clap::error::ErrorKind;
 use clap::{Parser, Subcommand};
 
 #[derive(Parser)]
@@ -41,7 +42,20 @@ enum Command {
 }
 
 fn main() -> std::process::ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            // A value a flag cannot take is an error like any other (status 1, docs/cli.md);
+            // help, version and usage errors (an unknown flag, a missing argument) keep clap's
+            // status.
+            let code = match e.kind() {
+                ErrorKind::InvalidValue | ErrorKind::ValueValidation => 1,
+                _ => e.exit_code(),
+            };
+            let _ = e.print();
+            return std::process::ExitCode::from(code as u8);
+        }
+    };
     output::clean_up_on_signals();
     let result = match cli.command {
         Command::Simulate(a) => cmd_simulate::run(a),

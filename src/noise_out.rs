@@ -6,6 +6,33 @@ use anyhow::{bail, Result};
 use noise::noise_file::{write_noise_file, AxisValue, Flavor, NoiseValues};
 use std::path::PathBuf;
 
+/// `--noise-format`: whose keys the noise file uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum NoiseFormat {
+    Kalibr,
+    Openvins,
+    VinsFusion,
+}
+
+impl NoiseFormat {
+    fn flavor(self) -> Flavor {
+        match self {
+            NoiseFormat::Kalibr => Flavor::Kalibr,
+            NoiseFormat::Openvins => Flavor::OpenVins,
+            NoiseFormat::VinsFusion => Flavor::VinsFusion,
+        }
+    }
+
+    /// As written on the command line.
+    fn name(self) -> &'static str {
+        match self {
+            NoiseFormat::Kalibr => "kalibr",
+            NoiseFormat::Openvins => "openvins",
+            NoiseFormat::VinsFusion => "vins-fusion",
+        }
+    }
+}
+
 /// The noise-file options, shared by `allan` and `diagnose`.
 #[derive(clap::Args, Clone, Debug)]
 pub struct NoiseFileArgs {
@@ -14,8 +41,8 @@ pub struct NoiseFileArgs {
     #[arg(long, value_name = "FILE")]
     pub kalibr: Option<PathBuf>,
     /// Keys of the noise file: kalibr (imu.yaml), openvins (kalibr_imu_chain.yaml), vins-fusion
-    #[arg(long, value_name = "FORMAT", default_value = "kalibr", value_parser = ["kalibr", "openvins", "vins-fusion"])]
-    pub noise_format: String,
+    #[arg(long, value_name = "FORMAT", value_enum, default_value = "kalibr")]
+    pub noise_format: NoiseFormat,
     /// Multiply the written values by this margin (e.g. 10 for the random walk is common in VIO
     /// tuning); the measured values stay in the file's comments
     #[arg(long, value_name = "FACTOR", default_value_t = 1.0)]
@@ -26,14 +53,6 @@ pub struct NoiseFileArgs {
 }
 
 impl NoiseFileArgs {
-    fn flavor(&self) -> Flavor {
-        match self.noise_format.as_str() {
-            "openvins" => Flavor::OpenVins,
-            "vins-fusion" => Flavor::VinsFusion,
-            _ => Flavor::Kalibr,
-        }
-    }
-
     /// Check the options before any work.
     pub fn check(&self) -> Result<()> {
         if !(self.inflate.is_finite() && self.inflate >= 1.0) {
@@ -92,12 +111,12 @@ impl NoiseFileArgs {
             update_rate_hz,
             origin: origin.to_string(),
         };
-        let text = write_noise_file(&values, self.flavor(), self.inflate);
+        let text = write_noise_file(&values, self.noise_format.flavor(), self.inflate);
         crate::output::write_string(path, &text)?;
         eprintln!(
             "wrote {} ({} keys{})",
             path.display(),
-            self.noise_format,
+            self.noise_format.name(),
             if self.inflate != 1.0 {
                 format!(", inflated x{}", self.inflate)
             } else {

@@ -98,12 +98,35 @@ impl LogLogPlot {
 
     /// Render to an SVG document. Non-positive and non-finite values are skipped.
     pub fn to_svg(&self) -> String {
-        let ok = |v: f64| v.is_finite() && v > 0.0;
+        let frame = self.frame();
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            r#"<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" viewBox="0 0 {W} {H}" font-family="sans-serif" font-size="12">"#
+        );
+        let _ = writeln!(s, r#"<rect width="{W}" height="{H}" fill="white"/>"#);
+        let _ = writeln!(
+            s,
+            r#"<text x="{}" y="28" text-anchor="middle" font-size="16">{}</text>"#,
+            W / 2.0,
+            esc(&self.title)
+        );
+        frame.write_grid(&mut s);
+        self.write_axes(&mut s, &frame);
+        self.write_bands(&mut s, &frame);
+        self.write_series(&mut s, &frame);
+        self.write_legend(&mut s, &frame);
+        s.push_str("</svg>\n");
+        s
+    }
+
+    /// The decades the plotted values span, on both axes.
+    fn frame(&self) -> Frame {
         let mut xs = Vec::new();
         let mut ys = Vec::new();
         for s in &self.series {
             for (&x, &y) in s.x.iter().zip(&s.y) {
-                if ok(x) && ok(y) {
+                if plottable(x) && plottable(y) {
                     xs.push(x);
                     ys.push(y);
                 }
@@ -111,7 +134,7 @@ impl LogLogPlot {
         }
         for b in &self.bands {
             for ((&x, &lo), &hi) in b.x.iter().zip(&b.lo).zip(&b.hi) {
-                if ok(x) && ok(lo) && ok(hi) {
+                if plottable(x) && plottable(lo) && plottable(hi) {
                     xs.extend([x, x]);
                     ys.extend([lo, hi]);
                 }
@@ -132,77 +155,19 @@ impl LogLogPlot {
         };
         let (x0, x1) = range(&xs);
         let (y0, y1) = range(&ys);
-        let pw = W - LEFT - RIGHT;
-        let ph = H - TOP - BOTTOM;
-        let px = |x: f64| LEFT + (x.log10() - x0) / (x1 - x0) * pw;
-        let py = |y: f64| TOP + ph - (y.log10() - y0) / (y1 - y0) * ph;
+        Frame {
+            x0,
+            x1,
+            y0,
+            y1,
+            pw: W - LEFT - RIGHT,
+            ph: H - TOP - BOTTOM,
+        }
+    }
 
-        let mut s = String::new();
-        let _ = writeln!(
-            s,
-            r#"<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" viewBox="0 0 {W} {H}" font-family="sans-serif" font-size="12">"#
-        );
-        let _ = writeln!(s, r#"<rect width="{W}" height="{H}" fill="white"/>"#);
-        let _ = writeln!(
-            s,
-            r#"<text x="{}" y="28" text-anchor="middle" font-size="16">{}</text>"#,
-            W / 2.0,
-            esc(&self.title)
-        );
-        // Grid: decades (solid) and 2..9 (light).
-        for d in (x0 as i64)..=(x1 as i64) {
-            for k in 1..10 {
-                let v = 10f64.powi(d as i32) * k as f64;
-                if v.log10() > x1 + 1e-9 {
-                    break;
-                }
-                let x = px(v);
-                let (c, w) = if k == 1 {
-                    ("#bbbbbb", 1.0)
-                } else {
-                    ("#eeeeee", 0.7)
-                };
-                let _ = writeln!(
-                    s,
-                    r#"<line x1="{x:.2}" y1="{TOP}" x2="{x:.2}" y2="{:.2}" stroke="{c}" stroke-width="{w}"/>"#,
-                    TOP + ph
-                );
-                if k == 1 {
-                    let _ = writeln!(
-                        s,
-                        r#"<text x="{x:.2}" y="{:.2}" text-anchor="middle">1e{d}</text>"#,
-                        TOP + ph + 18.0
-                    );
-                }
-            }
-        }
-        for d in (y0 as i64)..=(y1 as i64) {
-            for k in 1..10 {
-                let v = 10f64.powi(d as i32) * k as f64;
-                if v.log10() > y1 + 1e-9 {
-                    break;
-                }
-                let y = py(v);
-                let (c, w) = if k == 1 {
-                    ("#bbbbbb", 1.0)
-                } else {
-                    ("#eeeeee", 0.7)
-                };
-                let _ = writeln!(
-                    s,
-                    r#"<line x1="{LEFT}" y1="{y:.2}" x2="{:.2}" y2="{y:.2}" stroke="{c}" stroke-width="{w}"/>"#,
-                    LEFT + pw
-                );
-                if k == 1 {
-                    let _ = writeln!(
-                        s,
-                        r#"<text x="{:.2}" y="{:.2}" text-anchor="end">1e{d}</text>"#,
-                        LEFT - 8.0,
-                        y + 4.0
-                    );
-                }
-            }
-        }
+    /// The plot area's border and the axis labels.
+    fn write_axes(&self, s: &mut String, f: &Frame) {
+        let (pw, ph) = (f.pw, f.ph);
         let _ = writeln!(
             s,
             r#"<rect x="{LEFT}" y="{TOP}" width="{pw}" height="{ph}" fill="none" stroke="black"/>"#
@@ -221,12 +186,16 @@ impl LogLogPlot {
             TOP + ph / 2.0,
             esc(&self.y_label)
         );
+    }
+
+    /// Each band as a closed shaded path (upper edge left to right, lower edge back).
+    fn write_bands(&self, s: &mut String, f: &Frame) {
         for b in &self.bands {
             let pts: Vec<(f64, f64, f64)> =
                 b.x.iter()
                     .zip(&b.lo)
                     .zip(&b.hi)
-                    .filter(|((x, lo), hi)| ok(**x) && ok(**lo) && ok(**hi))
+                    .filter(|((x, lo), hi)| plottable(**x) && plottable(**lo) && plottable(**hi))
                     .map(|((x, lo), hi)| (*x, *lo, *hi))
                     .collect();
             if pts.is_empty() {
@@ -238,12 +207,12 @@ impl LogLogPlot {
                     d,
                     "{}{:.2},{:.2} ",
                     if i == 0 { "M" } else { "L" },
-                    px(*x),
-                    py(*hi)
+                    f.px(*x),
+                    f.py(*hi)
                 );
             }
             for (x, lo, _) in pts.iter().rev() {
-                let _ = write!(d, "L{:.2},{:.2} ", px(*x), py(*lo));
+                let _ = write!(d, "L{:.2},{:.2} ", f.px(*x), f.py(*lo));
             }
             let _ = writeln!(
                 s,
@@ -251,13 +220,17 @@ impl LogLogPlot {
                 b.color
             );
         }
+    }
+
+    /// Each series as a path, with markers if it has them.
+    fn write_series(&self, s: &mut String, f: &Frame) {
         for ser in &self.series {
             let pts: Vec<(f64, f64)> = ser
                 .x
                 .iter()
                 .zip(&ser.y)
-                .filter(|(x, y)| ok(**x) && ok(**y))
-                .map(|(x, y)| (px(*x), py(*y)))
+                .filter(|(x, y)| plottable(**x) && plottable(**y))
+                .map(|(x, y)| (f.px(*x), f.py(*y)))
                 .collect();
             if pts.is_empty() {
                 continue;
@@ -266,15 +239,11 @@ impl LogLogPlot {
             for (i, (x, y)) in pts.iter().enumerate() {
                 let _ = write!(d, "{}{x:.2},{y:.2} ", if i == 0 { "M" } else { "L" });
             }
-            let dash = if ser.dashed {
-                r#" stroke-dasharray="6,4""#
-            } else {
-                ""
-            };
             let _ = writeln!(
                 s,
-                r#"<path d="{d}" fill="none" stroke="{}" stroke-width="1.6"{dash}/>"#,
-                ser.color
+                r#"<path d="{d}" fill="none" stroke="{}" stroke-width="1.6"{}/>"#,
+                ser.color,
+                ser.dash_attribute()
             );
             if ser.markers {
                 for (x, y) in &pts {
@@ -286,64 +255,158 @@ impl LogLogPlot {
                 }
             }
         }
-        // Legend, top right.
+    }
+
+    /// The legend, top right: bands first, then series.
+    fn write_legend(&self, s: &mut String, f: &Frame) {
         let entries = self.bands.len() + self.series.len();
-        if entries > 0 {
-            let lw = 230.0;
-            let lx = LEFT + pw - lw - 8.0;
-            let ly = TOP + 8.0;
+        if entries == 0 {
+            return;
+        }
+        let lw = 230.0;
+        let lx = LEFT + f.pw - lw - 8.0;
+        let ly = TOP + 8.0;
+        let _ = writeln!(
+            s,
+            r##"<rect x="{lx:.2}" y="{ly:.2}" width="{lw}" height="{:.2}" fill="white" fill-opacity="0.85" stroke="#999999"/>"##,
+            entries as f64 * 18.0 + 8.0
+        );
+        let label = |s: &mut String, y: f64, name: &str| {
             let _ = writeln!(
                 s,
-                r##"<rect x="{lx:.2}" y="{ly:.2}" width="{lw}" height="{:.2}" fill="white" fill-opacity="0.85" stroke="#999999"/>"##,
-                entries as f64 * 18.0 + 8.0
+                r#"<text x="{:.2}" y="{:.2}">{}</text>"#,
+                lx + 40.0,
+                y + 1.0,
+                esc(name)
             );
-            let mut row = 0.0;
-            for b in &self.bands {
-                let y = ly + 14.0 + row * 18.0;
+        };
+        let mut row = 0.0;
+        for b in &self.bands {
+            let y = ly + 14.0 + row * 18.0;
+            let _ = writeln!(
+                s,
+                r#"<rect x="{:.2}" y="{:.2}" width="24" height="10" fill="{}" fill-opacity="0.3"/>"#,
+                lx + 8.0,
+                y - 8.0,
+                b.color
+            );
+            label(s, y, &b.name);
+            row += 1.0;
+        }
+        for ser in &self.series {
+            let y = ly + 14.0 + row * 18.0;
+            let _ = writeln!(
+                s,
+                r#"<line x1="{:.2}" y1="{:.2}" x2="{:.2}" y2="{:.2}" stroke="{}" stroke-width="2"{}/>"#,
+                lx + 8.0,
+                y - 3.0,
+                lx + 32.0,
+                y - 3.0,
+                ser.color,
+                ser.dash_attribute()
+            );
+            label(s, y, &ser.name);
+            row += 1.0;
+        }
+    }
+}
+
+impl Series {
+    /// The SVG attribute that dashes the line, if it is dashed.
+    fn dash_attribute(&self) -> &'static str {
+        if self.dashed {
+            r#" stroke-dasharray="6,4""#
+        } else {
+            ""
+        }
+    }
+}
+
+/// A value a log-log plot can show.
+fn plottable(v: f64) -> bool {
+    v.is_finite() && v > 0.0
+}
+
+/// The plot area: the decades shown (log10 of the ends) and its size in pixels.
+struct Frame {
+    x0: f64,
+    x1: f64,
+    y0: f64,
+    y1: f64,
+    pw: f64,
+    ph: f64,
+}
+
+impl Frame {
+    fn px(&self, x: f64) -> f64 {
+        LEFT + (x.log10() - self.x0) / (self.x1 - self.x0) * self.pw
+    }
+
+    fn py(&self, y: f64) -> f64 {
+        TOP + self.ph - (y.log10() - self.y0) / (self.y1 - self.y0) * self.ph
+    }
+
+    /// Grid lines at 1..9 times each decade (the decades solid and labelled, the rest light),
+    /// vertical ones first.
+    fn write_grid(&self, s: &mut String) {
+        for (d, k, v) in grid_values(self.x0, self.x1) {
+            let x = self.px(v);
+            let (c, w) = grid_stroke(k);
+            let _ = writeln!(
+                s,
+                r#"<line x1="{x:.2}" y1="{TOP}" x2="{x:.2}" y2="{:.2}" stroke="{c}" stroke-width="{w}"/>"#,
+                TOP + self.ph
+            );
+            if k == 1 {
                 let _ = writeln!(
                     s,
-                    r#"<rect x="{:.2}" y="{:.2}" width="24" height="10" fill="{}" fill-opacity="0.3"/>"#,
-                    lx + 8.0,
-                    y - 8.0,
-                    b.color
+                    r#"<text x="{x:.2}" y="{:.2}" text-anchor="middle">1e{d}</text>"#,
+                    TOP + self.ph + 18.0
                 );
-                let _ = writeln!(
-                    s,
-                    r#"<text x="{:.2}" y="{:.2}">{}</text>"#,
-                    lx + 40.0,
-                    y + 1.0,
-                    esc(&b.name)
-                );
-                row += 1.0;
-            }
-            for ser in &self.series {
-                let y = ly + 14.0 + row * 18.0;
-                let dash = if ser.dashed {
-                    r#" stroke-dasharray="6,4""#
-                } else {
-                    ""
-                };
-                let _ = writeln!(
-                    s,
-                    r#"<line x1="{:.2}" y1="{:.2}" x2="{:.2}" y2="{:.2}" stroke="{}" stroke-width="2"{dash}/>"#,
-                    lx + 8.0,
-                    y - 3.0,
-                    lx + 32.0,
-                    y - 3.0,
-                    ser.color
-                );
-                let _ = writeln!(
-                    s,
-                    r#"<text x="{:.2}" y="{:.2}">{}</text>"#,
-                    lx + 40.0,
-                    y + 1.0,
-                    esc(&ser.name)
-                );
-                row += 1.0;
             }
         }
-        s.push_str("</svg>\n");
-        s
+        for (d, k, v) in grid_values(self.y0, self.y1) {
+            let y = self.py(v);
+            let (c, w) = grid_stroke(k);
+            let _ = writeln!(
+                s,
+                r#"<line x1="{LEFT}" y1="{y:.2}" x2="{:.2}" y2="{y:.2}" stroke="{c}" stroke-width="{w}"/>"#,
+                LEFT + self.pw
+            );
+            if k == 1 {
+                let _ = writeln!(
+                    s,
+                    r#"<text x="{:.2}" y="{:.2}" text-anchor="end">1e{d}</text>"#,
+                    LEFT - 8.0,
+                    y + 4.0
+                );
+            }
+        }
+    }
+}
+
+/// (decade, multiple k = 1..9, value k 10^decade) of the grid lines from decade `lo` up to
+/// `hi` (log10).
+fn grid_values(lo: f64, hi: f64) -> Vec<(i64, u32, f64)> {
+    let mut out = Vec::new();
+    for d in (lo as i64)..=(hi as i64) {
+        for k in 1..10u32 {
+            let v = 10f64.powi(d as i32) * k as f64;
+            if v.log10() > hi + 1e-9 {
+                break;
+            }
+            out.push((d, k, v));
+        }
+    }
+    out
+}
+
+/// Colour and width of a grid line: decades darker.
+fn grid_stroke(k: u32) -> (&'static str, f64) {
+    if k == 1 {
+        ("#bbbbbb", 1.0)
+    } else {
+        ("#eeeeee", 0.7)
     }
 }
 

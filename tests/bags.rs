@@ -3,7 +3,7 @@
 
 mod common;
 use common::imudrift;
-use imudrift::logio::bag::{write_mcap, write_rosbag, ImuSample};
+use logio::bag::{write_mcap, write_rosbag, ImuSample};
 use std::path::Path;
 
 /// Deterministic samples at 200 Hz: white noise plus a slow random walk on every channel

@@ -152,7 +152,7 @@ fn channels_a_log_lacks_are_not_informed() {
 #[test]
 fn bad_protocols_are_refused_with_the_option_named() {
     for (flag, value, needle) in [
-        ("--calibration", "median", "--calibration \"median\""),
+        ("--calibration", "median", "'median' for '--calibration"),
         ("--init", "level:soon", "--init"),
         ("--horizons", "0", "--horizons"),
         ("--replicates", "3", "--replicates 3"),

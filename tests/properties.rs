@@ -4,7 +4,7 @@
 //! the same functions far longer with coverage guidance; this keeps the guarantee in CI without a
 //! nightly toolchain.) Cases per property: proptest's default 256, seeded deterministically.
 
-use imudrift::logio::{parse_log, ReadOptions};
+use logio::{parse_log, ReadOptions};
 use montecarlo::scenario::Scenario;
 use montecarlo::shard::ShardFile;
 use noise::units::{parse_quantity, Quantity, Signal};

@@ -1,6 +1,6 @@
-//! The CSV log reader (`imudrift::logio::parse_log`) on arbitrary bytes, with and without a rate.
+//! The CSV log reader (`logio::parse_log`, crates/logio) on arbitrary bytes, with and without a rate.
 #![no_main]
-use imudrift::logio::{parse_log, ReadOptions};
+use logio::{parse_log, ReadOptions};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

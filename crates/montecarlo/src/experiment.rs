@@ -110,7 +110,7 @@ impl Experiment {
             rate_hz: self.scenario.rate_hz,
             duration_s: self.scenario.duration_s,
             scheme: self.scenario.scheme.name().into(),
-            trajectory: format!("{:?}", self.scenario.trajectory_spec),
+            trajectory: self.scenario.trajectory_spec.clone(),
             only: self.only.clone(),
             without: self.without.clone(),
             checkpoint_steps: self.scenario.checkpoint_steps.clone(),

@@ -9,6 +9,7 @@ use crate::runner::RunFailure;
 use crate::stats::{ratio_interval, summarise, RunMatrix, Z_999};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
+use strapdown::spec::TrajectorySpec;
 
 /// Stated allowance for the law's own discretisation error, relative, times dt/t: the laws are
 /// continuous-time integrals while the mechanisation sums up to three nested rectangle or trapezoid
@@ -68,7 +69,9 @@ pub struct DriftReport {
     pub rate_hz: f64,
     pub duration_s: f64,
     pub scheme: String,
-    pub trajectory: String,
+    /// The scenario's trajectory as written, tagged by `kind`, units in the field names
+    /// (docs/cli.md).
+    pub trajectory: TrajectorySpec,
     /// The active error terms after `--only` / `--without` (docs/cli.md names).
     pub active_terms: Vec<String>,
     pub only: Option<Vec<String>>,
@@ -88,7 +91,7 @@ pub struct ReportMeta {
     pub rate_hz: f64,
     pub duration_s: f64,
     pub scheme: String,
-    pub trajectory: String,
+    pub trajectory: TrajectorySpec,
     pub only: Option<Vec<String>>,
     pub without: Vec<String>,
     pub checkpoint_steps: Vec<u64>,

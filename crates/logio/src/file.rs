@@ -1,6 +1,6 @@
 //! A file's bytes (mapped or read) and the memory check made before parsing them.
 
-use anyhow::{bail, Result};
+use crate::error::{LogError, Result};
 use std::io::Read;
 use std::path::Path;
 
@@ -8,13 +8,13 @@ use std::path::Path;
 /// for a 22 MB log that copy and the zeroing of its pages cost more than parsing half of it;
 /// pages are faulted in by the parsing threads, in parallel),
 /// else read into memory.
-pub(super) enum FileBytes {
+pub(crate) enum FileBytes {
     Mapped(memmap2::Mmap),
     Read(Vec<u8>),
 }
 
 impl FileBytes {
-    pub(super) fn open(path: &Path) -> std::io::Result<FileBytes> {
+    pub(crate) fn open(path: &Path) -> std::io::Result<FileBytes> {
         let file = std::fs::File::open(path)?;
         let meta = file.metadata()?;
         if cfg!(target_os = "linux") && meta.is_file() && meta.len() >= 1 << 20 {
@@ -44,7 +44,7 @@ impl std::ops::Deref for FileBytes {
 /// Ask Linux for transparent huge pages on a large buffer not yet written to (a hint: fewer
 /// page faults, and cheaper ones, when it is first filled; measured 13 ms of kernel time per
 /// 35 MB column with 4 KiB pages). Does nothing elsewhere, for small buffers, or if refused.
-pub(super) fn advise_huge_pages<T>(buf: &[T]) {
+pub(crate) fn advise_huge_pages<T>(buf: &[T]) {
     #[cfg(target_os = "linux")]
     {
         const HUGE: usize = 2 << 20;
@@ -66,7 +66,7 @@ pub(super) fn advise_huge_pages<T>(buf: &[T]) {
     }
 }
 
-pub(super) const GIB: f64 = (1u64 << 30) as f64;
+pub(crate) const GIB: f64 = (1u64 << 30) as f64;
 
 /// Memory the system can still give (Linux `MemAvailable`), bytes, or less when the environment
 /// variable `IMUDRIFT_MEMORY_LIMIT` (bytes) says so (a share of a shared machine); `None` when
@@ -90,7 +90,7 @@ pub fn available_memory_bytes() -> Option<u64> {
 
 /// Refuse a log whose parsed columns (8 bytes per value, and as much again for the analyses'
 /// working copies) would not fit in the memory available.
-pub(super) fn check_fits(bytes: &[u8], source: &str, available: Option<u64>) -> Result<()> {
+pub(crate) fn check_fits(bytes: &[u8], source: &str, available: Option<u64>) -> Result<()> {
     let Some(available) = available else {
         return Ok(());
     };
@@ -107,11 +107,12 @@ pub(super) fn check_fits(bytes: &[u8], source: &str, available: Option<u64>) -> 
     let cols = bytes[..first].iter().filter(|&&b| b == b',').count() as u64 + 1;
     let need = rows * cols * 16;
     if need > available {
-        bail!(
-            "{source}: {rows} rows x {cols} columns need about {:.1} GiB to analyse, and {:.1} GiB is available: split the log, or drop columns you do not need",
+        let problem = format!(
+            "{rows} rows x {cols} columns need about {:.1} GiB to analyse, and {:.1} GiB is available: split the log, or drop columns you do not need",
             need as f64 / GIB,
             available as f64 / GIB
         );
+        return Err(LogError::content(source, problem));
     }
     Ok(())
 }

@@ -8,7 +8,9 @@
 //! No guessing: a column whose name says neither a known quantity nor axis is skipped (and listed);
 //! a unit suffix that is not one of the known spellings makes the column skipped too.
 
-use super::units::{AccelUnit, GyroUnit, TimeUnit};
+use crate::error::{Problem, Setting, SettingNames};
+use crate::units::{AccelUnit, GyroUnit, TimeUnit};
+use noise::{Channel, Sensor};
 
 /// What a column holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -26,8 +28,8 @@ impl Quantity {
     pub fn channel(self) -> &'static str {
         match self {
             Quantity::Time => "t",
-            Quantity::Gyro(a) => noise::CHANNEL_NAMES[a],
-            Quantity::Accel(a) => noise::CHANNEL_NAMES[3 + a],
+            Quantity::Gyro(a) => Channel::new(Sensor::Gyro, a).name(),
+            Quantity::Accel(a) => Channel::new(Sensor::Accel, a).name(),
             Quantity::Temperature => "temp",
         }
     }
@@ -37,16 +39,10 @@ impl Quantity {
         match name {
             "t" => Some(Quantity::Time),
             "temp" => Some(Quantity::Temperature),
-            _ => noise::CHANNEL_NAMES
-                .iter()
-                .position(|&c| c == name)
-                .map(|i| {
-                    if i < 3 {
-                        Quantity::Gyro(i)
-                    } else {
-                        Quantity::Accel(i - 3)
-                    }
-                }),
+            _ => Channel::from_name(name).map(|c| match c.sensor() {
+                Sensor::Gyro => Quantity::Gyro(c.axis()),
+                Sensor::Accel => Quantity::Accel(c.axis()),
+            }),
         }
     }
 }
@@ -307,8 +303,36 @@ fn time_unit(u: &str) -> Option<TimeUnit> {
     }
 }
 
+/// Where a column's channel or unit came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Source {
+    /// The column's name.
+    Name,
+    /// A setting (the column mapping, a unit setting).
+    Setting(Setting),
+    /// The SI unit the canonical names and hand-mapped columns default to.
+    Default,
+    /// The fields of a sensor_msgs/Imu message.
+    ImuMessage,
+    /// ROS REP 103 (sensor_msgs/Imu is in SI units).
+    Rep103,
+}
+
+impl Source {
+    /// In words, a setting named by `names`.
+    pub fn render(self, names: SettingNames) -> &'static str {
+        match self {
+            Source::Name => "name",
+            Source::Setting(s) => names(s),
+            Source::Default => "default",
+            Source::ImuMessage => "sensor_msgs/Imu",
+            Source::Rep103 => "REP 103",
+        }
+    }
+}
+
 /// How a file column is used: its channel, the unit its values are in, and where that came from.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct ColumnUse {
     /// The file's column name.
     pub column: String,
@@ -316,24 +340,55 @@ pub struct ColumnUse {
     pub channel: &'static str,
     /// The unit of the file's values (converted to SI on reading).
     pub unit: &'static str,
-    /// How the channel was chosen: "name" (recognised) or "--col"; and the unit: "name",
-    /// an option (`--gyro-unit`, `--accel-unit`, `--time-unit`) or "default" (the SI unit the
-    /// canonical names and --col mappings default to).
-    pub channel_from: &'static str,
-    pub unit_from: &'static str,
+    /// How the channel was chosen: by name or by the column mapping.
+    pub channel_from: Source,
+    /// How the unit was: by name, a unit setting or the SI default.
+    pub unit_from: Source,
     /// Factor from the file's unit to SI.
-    #[serde(skip)]
     pub to_si: f64,
 }
 
 /// A column not used, and why.
-#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Skipped {
     pub column: String,
-    pub reason: String,
+    pub reason: SkipReason,
 }
 
-/// The units the command line gives.
+/// Why a column is not used.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum SkipReason {
+    /// Its name is none of the quantities the reader knows.
+    NotAQuantity,
+    /// A known quantity with a unit suffix the reader does not know.
+    UnknownUnit(String),
+    /// A second column for `channel`, which is read from `first`.
+    Duplicate {
+        channel: &'static str,
+        first: String,
+    },
+}
+
+impl Skipped {
+    /// The reason in words, settings named by `names`.
+    pub fn reason_text(&self, names: SettingNames) -> String {
+        let columns = names(Setting::Columns);
+        match &self.reason {
+            SkipReason::NotAQuantity => {
+                "not a quantity imudrift reads (time, gyro, accelerometer, temperature)".into()
+            }
+            SkipReason::UnknownUnit(u) => format!(
+                "unit `{u}` in the name is not one imudrift knows (map the column with {columns} and give the unit option)"
+            ),
+            SkipReason::Duplicate { channel, first } => format!(
+                "also {channel}, read from `{first}`; choose with {columns} {channel}={}",
+                self.column
+            ),
+        }
+    }
+}
+
+/// The units the reader is given for columns whose names do not state one.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct UnitOptions {
     pub gyro: Option<GyroUnit>,
@@ -341,34 +396,36 @@ pub struct UnitOptions {
     pub time: Option<TimeUnit>,
 }
 
-/// A column's unit (name, factor to SI, where it came from) as its name or the option `flag`
-/// states it; `None` when neither does. A name and an option that disagree are an error.
+/// A column's unit (name, factor to SI, where it came from) as its name or the unit `setting`
+/// states it; `None` when neither does. A name and a setting that disagree are an error.
 fn stated_unit(
     column: &str,
     from_name: Option<(&'static str, f64)>,
     option: Option<(&'static str, f64)>,
-    flag: &'static str,
-) -> Result<Option<(&'static str, f64, &'static str)>, String> {
+    setting: Setting,
+) -> Result<Option<(&'static str, f64, Source)>, Problem> {
     match (from_name, option) {
-        (Some(a), Some(b)) if a.0 != b.0 => Err(format!(
-            "column `{column}` says {} in its name but {flag} is {}; leave the option out or correct it",
-            a.0, b.0
-        )),
-        (Some(a), _) => Ok(Some((a.0, a.1, "name"))),
-        (None, Some(b)) => Ok(Some((b.0, b.1, flag))),
+        (Some(a), Some(b)) if a.0 != b.0 => Err(Problem::UnitConflict {
+            column: column.to_string(),
+            from_name: a.0,
+            setting,
+            given: b.0,
+        }),
+        (Some(a), _) => Ok(Some((a.0, a.1, Source::Name))),
+        (None, Some(b)) => Ok(Some((b.0, b.1, Source::Setting(setting)))),
         (None, None) => Ok(None),
     }
 }
 
 /// The channel and unit of every column of a header (`None` for a skipped one), and the skipped
-/// columns with their reasons. `explicit` are the `--col NAME=COLUMN` pairs (checked by the
-/// caller to name columns of the header). Errors: a unit the name and the option disagree on, a
-/// gyro or accelerometer column whose unit nothing states.
+/// columns with their reasons. `explicit` are the (channel, column) pairs of the column mapping
+/// (checked by the caller to name columns of the header). Errors: a unit the name and the
+/// setting disagree on, a gyro or accelerometer column whose unit nothing states.
 pub fn map_header(
     names: &[String],
     explicit: &[(String, String)],
     units: UnitOptions,
-) -> Result<(Vec<Option<ColumnUse>>, Vec<Skipped>), String> {
+) -> Result<(Vec<Option<ColumnUse>>, Vec<Skipped>), Problem> {
     let mut uses: Vec<Option<ColumnUse>> = vec![None; names.len()];
     let mut skipped = Vec::new();
     let mut taken: Vec<(&'static str, usize)> = Vec::new();
@@ -384,26 +441,24 @@ pub fn map_header(
             order.push((i, None));
         }
     }
-    let mut missing_unit: Vec<String> = Vec::new();
+    let mut missing_unit: Vec<(String, Sensor)> = Vec::new();
     for (i, forced) in order {
         let name = &names[i];
         let recognised = recognise(name);
         let (quantity, channel_from) = match (forced, &recognised) {
-            (Some(q), _) => (q, "--col"),
-            (None, Ok(r)) => (r.quantity, "name"),
+            (Some(q), _) => (q, Source::Setting(Setting::Columns)),
+            (None, Ok(r)) => (r.quantity, Source::Name),
             (None, Err(NotRecognised::Unknown)) => {
                 skipped.push(Skipped {
                     column: name.clone(),
-                    reason:
-                        "not a quantity imudrift reads (time, gyro, accelerometer, temperature)"
-                            .into(),
+                    reason: SkipReason::NotAQuantity,
                 });
                 continue;
             }
             (None, Err(NotRecognised::Unit(u))) => {
                 skipped.push(Skipped {
                     column: name.clone(),
-                    reason: format!("unit `{u}` in the name is not one imudrift knows (map the column with --col and give the unit option)"),
+                    reason: SkipReason::UnknownUnit(u.clone()),
                 });
                 continue;
             }
@@ -412,10 +467,10 @@ pub fn map_header(
         if let Some(&(_, j)) = taken.iter().find(|(c, _)| *c == channel) {
             skipped.push(Skipped {
                 column: name.clone(),
-                reason: format!(
-                    "also {channel}, read from `{}`; choose with --col {channel}={name}",
-                    names[j]
-                ),
+                reason: SkipReason::Duplicate {
+                    channel,
+                    first: names[j].clone(),
+                },
             });
             continue;
         }
@@ -428,35 +483,38 @@ pub fn map_header(
         };
         // Canonical names and explicit mappings default to SI (docs/cli.md); other recognised
         // names need their unit stated.
-        let may_default = channel_from == "--col" || name.trim() == channel;
+        let may_default =
+            channel_from == Source::Setting(Setting::Columns) || name.trim() == channel;
         let (unit, to_si, unit_from) = match quantity {
-            Quantity::Gyro(_) => {
-                let from_name = match named {
-                    Some(NamedUnit::Gyro(u)) => Some((u.name(), u.to_si())),
-                    _ => None,
+            Quantity::Gyro(_) | Quantity::Accel(_) => {
+                let (sensor, from_name, option, setting, si_unit) = match quantity {
+                    Quantity::Gyro(_) => (
+                        Sensor::Gyro,
+                        match named {
+                            Some(NamedUnit::Gyro(u)) => Some((u.name(), u.to_si())),
+                            _ => None,
+                        },
+                        units.gyro.map(|u| (u.name(), u.to_si())),
+                        Setting::GyroUnit,
+                        "rad/s",
+                    ),
+                    _ => (
+                        Sensor::Accel,
+                        match named {
+                            Some(NamedUnit::Accel(u)) => Some((u.name(), u.to_si())),
+                            _ => None,
+                        },
+                        units.accel.map(|u| (u.name(), u.to_si())),
+                        Setting::AccelUnit,
+                        "m/s^2",
+                    ),
                 };
-                let option = units.gyro.map(|u| (u.name(), u.to_si()));
-                match stated_unit(name, from_name, option, "--gyro-unit")? {
+                match stated_unit(name, from_name, option, setting)? {
                     Some(u) => u,
-                    None if may_default => ("rad/s", 1.0, "default"),
+                    None if may_default => (si_unit, 1.0, Source::Default),
                     None => {
-                        missing_unit.push(format!("`{name}` (gyro)"));
-                        ("", f64::NAN, "")
-                    }
-                }
-            }
-            Quantity::Accel(_) => {
-                let from_name = match named {
-                    Some(NamedUnit::Accel(u)) => Some((u.name(), u.to_si())),
-                    _ => None,
-                };
-                let option = units.accel.map(|u| (u.name(), u.to_si()));
-                match stated_unit(name, from_name, option, "--accel-unit")? {
-                    Some(u) => u,
-                    None if may_default => ("m/s^2", 1.0, "default"),
-                    None => {
-                        missing_unit.push(format!("`{name}` (accelerometer)"));
-                        ("", f64::NAN, "")
+                        missing_unit.push((name.clone(), sensor));
+                        ("", f64::NAN, Source::Default)
                     }
                 }
             }
@@ -466,13 +524,20 @@ pub fn map_header(
                     _ => None,
                 };
                 let option = units.time.map(|u| (u.name(), u.to_si()));
-                stated_unit(name, from_name, option, "--time-unit")?
-                    .unwrap_or(("s", 1.0, "default"))
+                stated_unit(name, from_name, option, Setting::TimeUnit)?.unwrap_or((
+                    "s",
+                    1.0,
+                    Source::Default,
+                ))
             }
             Quantity::Temperature => (
                 "degC",
                 1.0,
-                if named.is_some() { "name" } else { "default" },
+                if named.is_some() {
+                    Source::Name
+                } else {
+                    Source::Default
+                },
             ),
         };
         taken.push((channel, i));
@@ -486,18 +551,9 @@ pub fn map_header(
         });
     }
     if !missing_unit.is_empty() {
-        let mut options = Vec::new();
-        if missing_unit.iter().any(|m| m.ends_with("(gyro)")) {
-            options.push("--gyro-unit rad/s|deg/s|deg/h");
-        }
-        if missing_unit.iter().any(|m| m.ends_with("(accelerometer)")) {
-            options.push("--accel-unit m/s^2|g|mg");
-        }
-        return Err(format!(
-            "no unit in the name of {}: give {} (each applies to every such column)",
-            missing_unit.join(", "),
-            options.join(" and ")
-        ));
+        return Err(Problem::UnitMissing {
+            columns: missing_unit,
+        });
     }
     skipped.sort_by_key(|s| names.iter().position(|n| *n == s.column));
     Ok((uses, skipped))
@@ -573,6 +629,10 @@ mod tests {
         }
     }
 
+    fn text(p: Problem) -> String {
+        p.render(&Setting::name)
+    }
+
     fn header(names: &[&str]) -> Vec<String> {
         names.iter().map(|s| s.to_string()).collect()
     }
@@ -591,7 +651,10 @@ mod tests {
         let (uses, skipped) = map_header(&h, &[], UnitOptions::default()).unwrap();
         let got: Vec<_> = uses
             .iter()
-            .map(|u| u.as_ref().map(|u| (u.channel, u.unit, u.unit_from)))
+            .map(|u| {
+                u.as_ref()
+                    .map(|u| (u.channel, u.unit, u.unit_from.render(&Setting::name)))
+            })
             .collect();
         assert_eq!(
             got,
@@ -613,11 +676,11 @@ mod tests {
     #[test]
     fn units_must_be_stated_and_must_agree() {
         let h = header(&["gyro_x", "acc_x"]);
-        let e = map_header(&h, &[], UnitOptions::default()).unwrap_err();
+        let e = text(map_header(&h, &[], UnitOptions::default()).unwrap_err());
         assert!(
             e.contains("`gyro_x` (gyro)")
                 && e.contains("`acc_x` (accelerometer)")
-                && e.contains("--gyro-unit"),
+                && e.contains("units.gyro rad/s|deg/s|deg/h"),
             "{e}"
         );
         let units = UnitOptions {
@@ -626,29 +689,32 @@ mod tests {
             time: None,
         };
         let (uses, _) = map_header(&h, &[], units).unwrap();
-        assert_eq!(uses[0].as_ref().unwrap().unit_from, "--gyro-unit");
+        assert_eq!(
+            uses[0].as_ref().unwrap().unit_from,
+            Source::Setting(Setting::GyroUnit)
+        );
         assert_eq!(uses[1].as_ref().unwrap().unit, "g");
         let h = header(&["gyro_x_dps"]);
-        let e = map_header(&h, &[], units).unwrap_err();
+        let e = text(map_header(&h, &[], units).unwrap_err());
         assert!(
-            e.contains("deg/s") && e.contains("--gyro-unit is rad/s"),
+            e.contains("deg/s") && e.contains("units.gyro is rad/s"),
             "{e}"
         );
         let t = UnitOptions {
             time: Some(TimeUnit::S),
             ..UnitOptions::default()
         };
-        let e = map_header(&header(&["t_ms", "gx"]), &[], t).unwrap_err();
+        let e = text(map_header(&header(&["t_ms", "gx"]), &[], t).unwrap_err());
         assert!(
-            e.contains("`t_ms` says ms") && e.contains("--time-unit is s"),
+            e.contains("`t_ms` says ms") && e.contains("units.time is s"),
             "{e}"
         );
         let a = UnitOptions {
             accel: Some(AccelUnit::MPerS2),
             ..UnitOptions::default()
         };
-        let e = map_header(&header(&["acc_x_g"]), &[], a).unwrap_err();
-        assert!(e.contains("--accel-unit is m/s^2"), "{e}");
+        let e = text(map_header(&header(&["acc_x_g"]), &[], a).unwrap_err());
+        assert!(e.contains("units.accel is m/s^2"), "{e}");
     }
 
     #[test]
@@ -662,13 +728,18 @@ mod tests {
         assert_eq!(uses[0].as_ref().unwrap().channel, "gx");
         assert!(uses[1].is_none());
         assert!(
-            skipped[0].reason.contains("--col gx=gyro_meas_x"),
+            skipped[0]
+                .reason_text(&Setting::name)
+                .contains("columns gx=gyro_meas_x"),
             "{skipped:?}"
         );
         let explicit = [("gx".to_string(), "gyro_meas_x".to_string())];
         let (uses, skipped) = map_header(&h, &explicit, units).unwrap();
         assert!(uses[0].is_none());
-        assert_eq!(uses[1].as_ref().unwrap().channel_from, "--col");
+        assert_eq!(
+            uses[1].as_ref().unwrap().channel_from,
+            Source::Setting(Setting::Columns)
+        );
         assert_eq!(skipped[0].column, "gyro_out_x");
     }
 

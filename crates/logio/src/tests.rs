@@ -1,8 +1,8 @@
 //! Unit tests of the log reader.
 
-use super::csv::parse_chunk;
-use super::float::{fast_f64, number, swar_f64};
 use super::*;
+use crate::csv::parse_chunk;
+use crate::float::{fast_f64, number, swar_f64};
 
 fn opts() -> ReadOptions {
     ReadOptions::default()
@@ -41,7 +41,7 @@ fn reads_comments_units_and_mapping() {
     let auto = parse_log(text, "x.csv", &o).unwrap();
     assert_eq!(auto.channels, log.channels);
     assert!(auto
-        .mapping_text()
+        .mapping_text(&Setting::name)
         .contains("gyro_x_dps -> gx (deg/s, from the name)"));
 }
 
@@ -87,7 +87,7 @@ fn errors_name_file_line_and_column() {
     let e = parse_log(b"t,gx\n0,1\n0,2\n", "f.csv", &opts()).unwrap_err();
     assert!(format!("{e:#}").contains("f.csv:3: time"), "{e:#}");
     let e = parse_log(b"gx\n1\n2\n", "f.csv", &opts()).unwrap_err();
-    assert!(format!("{e:#}").contains("--rate"), "{e:#}");
+    assert!(format!("{e:#}").contains("rate_hz HZ"), "{e:#}");
 }
 
 #[test]
@@ -300,16 +300,16 @@ fn euroc_style_comment_header_with_units_in_brackets() {
         "8.1476917083333333".parse::<f64>().unwrap()
     );
     assert!(
-        log.mapping_text()
+        log.mapping_text(&Setting::name)
             .contains("timestamp [ns] -> t (ns, from the name)"),
         "{}",
-        log.mapping_text()
+        log.mapping_text(&Setting::name)
     );
     assert!(
-        log.mapping_text()
+        log.mapping_text(&Setting::name)
             .contains("w_RS_S_x [rad s^-1] -> gx (rad/s"),
         "{}",
-        log.mapping_text()
+        log.mapping_text(&Setting::name)
     );
 }
 
@@ -326,7 +326,7 @@ fn rostopic_csv_with_text_columns() {
     // angular_velocity.x has no unit in its name: the option is needed (REP 103 says rad/s, but
     // a CSV column is not a message).
     assert!(
-        log.contains("--gyro-unit") && log.contains("field.angular_velocity.x"),
+        log.contains("units.gyro") && log.contains("field.angular_velocity.x"),
         "{log}"
     );
     let o = ReadOptions {

@@ -1,20 +1,20 @@
 //! Units of the time, gyro and accelerometer columns and their factors to SI.
 
-use super::STANDARD_GRAVITY_MPS2;
+use crate::STANDARD_GRAVITY_MPS2;
 
-/// Gyro units accepted on the command line.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+/// Gyro units.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum GyroUnit {
-    #[value(name = "rad/s")]
     RadPerS,
-    #[value(name = "deg/s")]
     DegPerS,
-    #[value(name = "deg/h")]
     DegPerH,
 }
 
 impl GyroUnit {
-    /// As written on the command line and in outputs.
+    /// Every gyro unit.
+    pub const ALL: [GyroUnit; 3] = [GyroUnit::RadPerS, GyroUnit::DegPerS, GyroUnit::DegPerH];
+
+    /// As written in messages and outputs (and in the column mapping).
     pub fn name(self) -> &'static str {
         match self {
             GyroUnit::RadPerS => "rad/s",
@@ -23,7 +23,7 @@ impl GyroUnit {
         }
     }
 
-    pub(super) fn to_si(self) -> f64 {
+    pub(crate) fn to_si(self) -> f64 {
         match self {
             GyroUnit::RadPerS => 1.0,
             GyroUnit::DegPerS => std::f64::consts::PI / 180.0,
@@ -32,19 +32,19 @@ impl GyroUnit {
     }
 }
 
-/// Accelerometer units accepted on the command line.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+/// Accelerometer units.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum AccelUnit {
-    #[value(name = "m/s^2")]
     MPerS2,
-    #[value(name = "g")]
     G,
-    #[value(name = "mg")]
     MilliG,
 }
 
 impl AccelUnit {
-    /// As written on the command line and in outputs.
+    /// Every accelerometer unit.
+    pub const ALL: [AccelUnit; 3] = [AccelUnit::MPerS2, AccelUnit::G, AccelUnit::MilliG];
+
+    /// As written in messages and outputs (and in the column mapping).
     pub fn name(self) -> &'static str {
         match self {
             AccelUnit::MPerS2 => "m/s^2",
@@ -53,7 +53,7 @@ impl AccelUnit {
         }
     }
 
-    pub(super) fn to_si(self) -> f64 {
+    pub(crate) fn to_si(self) -> f64 {
         match self {
             AccelUnit::MPerS2 => 1.0,
             AccelUnit::G => STANDARD_GRAVITY_MPS2,
@@ -63,20 +63,19 @@ impl AccelUnit {
 }
 
 /// Units of the time column.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TimeUnit {
-    #[value(name = "s")]
     S,
-    #[value(name = "ms")]
     Ms,
-    #[value(name = "us")]
     Us,
-    #[value(name = "ns")]
     Ns,
 }
 
 impl TimeUnit {
-    /// As written on the command line and in outputs.
+    /// Every time unit (seconds first).
+    pub const ALL: [TimeUnit; 4] = [TimeUnit::S, TimeUnit::Ms, TimeUnit::Us, TimeUnit::Ns];
+
+    /// As written in messages and outputs (and in the column mapping).
     pub fn name(self) -> &'static str {
         match self {
             TimeUnit::S => "s",
@@ -86,7 +85,7 @@ impl TimeUnit {
         }
     }
 
-    pub(super) fn to_si(self) -> f64 {
+    pub(crate) fn to_si(self) -> f64 {
         match self {
             TimeUnit::S => 1.0,
             TimeUnit::Ms => 1e-3,

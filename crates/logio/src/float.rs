@@ -16,7 +16,7 @@ const POW10: [f64; 23] = [
 /// 17 significant digits of a double printed exactly). Returns (value, bytes used), or `None`
 /// when there is no number (no digits): same values as the standard parser.
 #[inline(always)]
-pub(super) fn fast_f64(s: &[u8]) -> Option<(f64, usize)> {
+pub(crate) fn fast_f64(s: &[u8]) -> Option<(f64, usize)> {
     let mut i = 0;
     let first = *s.first()?;
     let neg = first == b'-';
@@ -105,7 +105,7 @@ pub(super) fn fast_f64(s: &[u8]) -> Option<(f64, usize)> {
 /// [`fast_f64`]. The sign, the length and the position of the point are selected without
 /// branches: random signs and lengths would otherwise cost a mispredicted branch each.
 #[inline(always)]
-pub(super) fn swar_f64(s: &[u8]) -> Option<(f64, usize)> {
+pub(crate) fn swar_f64(s: &[u8]) -> Option<(f64, usize)> {
     let neg = *s.first()? == b'-';
     let start = usize::from(neg);
     let bytes: [u8; 8] = s.get(start..start + 8)?.try_into().ok()?;
@@ -148,6 +148,6 @@ pub(super) fn swar_f64(s: &[u8]) -> Option<(f64, usize)> {
 /// A number in the common formats, exactly as the standard parser reads it: [`swar_f64`], else
 /// [`fast_f64`]; `None` for the standard parser.
 #[inline(always)]
-pub(super) fn number(s: &[u8]) -> Option<(f64, usize)> {
+pub(crate) fn number(s: &[u8]) -> Option<(f64, usize)> {
     swar_f64(s).or_else(|| fast_f64(s))
 }

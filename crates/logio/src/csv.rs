@@ -2,11 +2,12 @@
 //! lines, a general path that names the line and column of anything wrong), the time column's
 //! checks and the units mapped to SI.
 
-use super::columns::map_header;
-use super::file::advise_huge_pages;
-use super::float::{fast_f64, number};
-use super::{Log, ReadOptions, ACCEL_CHANNELS, GYRO_CHANNELS};
-use anyhow::{anyhow, bail, Context, Result};
+use crate::columns::map_header;
+use crate::error::{At, LogError, Problem, Result};
+use crate::file::advise_huge_pages;
+use crate::float::{fast_f64, number};
+use crate::{Log, ReadOptions, MAX_LOG_RATE_HZ};
+use noise::Channel;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 
@@ -29,7 +30,7 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
     // A binary file (NUL bytes) or one without a line end for megabytes is not a CSV log: say so
     // before reading gigabytes into one "header".
     if bytes[pos..bytes.len().min(pos + 4096)].contains(&0) {
-        bail!("{source}: contains NUL bytes: not a CSV text file (expected a header such as `t,gx,gy,gz,ax,ay,az`)");
+        return Err(LogError::content(source, "contains NUL bytes: not a CSV text file (expected a header such as `t,gx,gy,gz,ax,ay,az`)"));
     }
     // Header: the first line that is neither blank nor a comment; or, when that line holds only
     // numbers, the comment line before it with as many fields (EuRoC and TUM-VI write their
@@ -38,15 +39,22 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
     let mut last_comment: Option<String> = None;
     let (header, header_line) = loop {
         if pos >= bytes.len() {
-            bail!("{source}: no header line (expected a CSV header such as `t,gx,gy,gz,ax,ay,az`)");
+            return Err(LogError::content(
+                source,
+                "no header line (expected a CSV header such as `t,gx,gy,gz,ax,ay,az`)",
+            ));
         }
         let end = memchr(b'\n', &bytes[pos..]).map_or(bytes.len(), |i| pos + i);
         line_no += 1;
         if end - pos > MAX_HEADER_BYTES {
-            bail!(
-                "{source}:{line_no}: a line of more than {} MiB before the header: not a CSV log",
-                MAX_HEADER_BYTES >> 20
-            );
+            return Err(LogError::content(
+                source,
+                format!(
+                    "a line of more than {} MiB before the header: not a CSV log",
+                    MAX_HEADER_BYTES >> 20
+                ),
+            )
+            .at_line(line_no));
         }
         let line = trim_ascii(&bytes[pos..end]);
         let line_start = pos;
@@ -58,8 +66,11 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
             continue;
         }
         if !line.is_empty() {
-            let text = std::str::from_utf8(line)
-                .with_context(|| format!("{source}:{line_no}: header is not UTF-8"))?;
+            let text = std::str::from_utf8(line).map_err(|e| {
+                LogError::content(source, "header is not UTF-8")
+                    .at_line(line_no)
+                    .caused_by(e)
+            })?;
             let fields = text.split(',').count();
             let numeric = text.split(',').all(|f| f.trim().parse::<f64>().is_ok());
             match last_comment {
@@ -73,27 +84,37 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
     };
     let names: Vec<String> = header.split(',').map(|s| s.trim().to_string()).collect();
     for (i, n) in names.iter().enumerate() {
-        if n.is_empty() {
-            bail!("{source}:{header_line}: column {} has an empty name", i + 1);
-        }
-        if names[..i].contains(n) {
-            bail!("{source}:{header_line}: column name {n:?} appears twice");
-        }
+        let problem = if n.is_empty() {
+            format!("column {} has an empty name", i + 1)
+        } else if names[..i].contains(n) {
+            format!("column name {n:?} appears twice")
+        } else {
+            continue;
+        };
+        return Err(LogError::content(source, problem).at_line(header_line));
     }
     for (canon, col) in &opts.columns {
         if !names.contains(col) {
-            bail!("{source}:{header_line}: --col {canon}={col}: no column {col:?} in the header (columns: {})", names.join(", "));
+            let problem = Problem::MappedColumnMissing {
+                channel: canon.clone(),
+                column: col.clone(),
+                header: names.clone(),
+            };
+            return Err(LogError::new(source, problem).at_line(header_line));
         }
     }
     // Which channel and unit each column holds (docs/cli.md, "Log columns").
     let (uses, skipped) = map_header(&names, &opts.columns, opts.units)
-        .map_err(|e| anyhow!("{source}:{header_line}: {e}"))?;
+        .map_err(|p| LogError::new(source, p).at_line(header_line))?;
     // Skipped columns may hold anything (a frame_id, a status word); they are not read.
     let skip: Vec<bool> = uses.iter().map(Option::is_none).collect();
     let columns = parse_body(bytes, pos, header_line, source, &names, &skip)?;
     let n_rows = columns.first().map_or(0, Vec::len);
     if n_rows < 2 {
-        bail!("{source}: {n_rows} data rows; at least 2 are needed");
+        return Err(LogError::content(
+            source,
+            format!("{n_rows} data rows; at least 2 are needed"),
+        ));
     }
     let mut channels = BTreeMap::new();
     let mut order = Vec::new();
@@ -112,16 +133,11 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
         }
         used.push(u);
     }
-    if !channels
-        .keys()
-        .any(|c| GYRO_CHANNELS.contains(&c.as_str()) || ACCEL_CHANNELS.contains(&c.as_str()))
-    {
-        bail!(
-            "{source}:{header_line}: no gyro or accelerometer column recognised among {}; name them like gyro_x_dps, gyr_x, wx, angular_velocity.x, acc_x_g, accel_x, linear_acceleration.x (unit suffixes dps, rad_s, g, mps2), or map them with --col gx=NAME",
-            names.join(", ")
-        );
+    if !channels.keys().any(|c| Channel::from_name(c).is_some()) {
+        let problem = Problem::NoImuColumn { header: names };
+        return Err(LogError::new(source, problem).at_line(header_line));
     }
-    let locate = |row: usize| format!("{source}:{}", line_of_row(bytes, pos, header_line, row));
+    let locate = |row: usize| At::Line(line_of_row(bytes, pos, header_line, row));
     let rate_hz = rate_of(t_s.as_deref(), opts.rate_hz, source, &locate)?;
     Ok(Log {
         source: source.to_string(),
@@ -137,31 +153,30 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
 
 /// Longest comment or header line accepted, bytes.
 const MAX_HEADER_BYTES: usize = 1 << 20;
-/// Relative difference allowed between `--rate` and the rate of the `t` column.
+/// Relative difference allowed between the rate setting and the rate of the `t` column.
 const RATE_TOLERANCE: f64 = 1e-3;
 /// Steps of `t` farther than this fraction from the median step are a gap (or a burst):
 /// timestamps jitter, but a missing sample doubles the step.
 const STEP_TOLERANCE: f64 = 0.5;
-/// Highest sample rate a log may have, Hz.
-pub(super) const MAX_LOG_RATE_HZ: f64 = 1e9;
-
-/// The log's sample rate from its times `t` (s) and `--rate`, after checking the times increase
-/// and are uniform. `locate(row)` names where data row `row` is ("file:line", "file: message k").
-pub(super) fn rate_of(
+/// The log's sample rate from its times `t` (s) and the rate setting, after checking the times
+/// increase and are uniform. `locate(row)` names where data row `row` is (a line, a message).
+pub(crate) fn rate_of(
     t: Option<&[f64]>,
     rate_hz: Option<f64>,
     source: &str,
-    locate: &dyn Fn(usize) -> String,
+    locate: &dyn Fn(usize) -> At,
 ) -> Result<f64> {
+    if let Some(rate_hz) = rate_hz.filter(|&r| !crate::valid_rate_hz(r)) {
+        return Err(LogError::new(source, Problem::BadRate { rate_hz }));
+    }
     if let Some(t) = t {
         for (k, w) in t.windows(2).enumerate() {
             if w[1] <= w[0] || !w[1].is_finite() {
-                bail!(
-                    "{}: time t = {} does not increase (previous {}); expected strictly increasing times in s",
-                    locate(k + 1),
-                    w[1],
-                    w[0]
+                let problem = format!(
+                    "time t = {} does not increase (previous {}); expected strictly increasing times in s",
+                    w[1], w[0]
                 );
+                return Err(LogError::content(source, problem).at(locate(k + 1)));
             }
         }
     }
@@ -171,11 +186,11 @@ pub(super) fn rate_of(
             check_uniform(t, source, locate)?;
             let from_t = (n - 1) as f64 / (t[n - 1] - t[0]);
             if ((from_t - r) / r).abs() > RATE_TOLERANCE {
-                bail!(
-                    "{source}: --rate {} Hz disagrees with the `t` column ({} Hz); give the rate the log was sampled at, or leave --rate out to use `t`",
-                    crate::fmt::sig(r, 6),
-                    crate::fmt::sig(from_t, 6)
-                );
+                let problem = Problem::RateDisagrees {
+                    rate_hz: r,
+                    from_t_hz: from_t,
+                };
+                return Err(LogError::new(source, problem));
             }
             r
         }
@@ -185,15 +200,13 @@ pub(super) fn rate_of(
             check_uniform(t, source, locate)?;
             (n - 1) as f64 / (t[n - 1] - t[0])
         }
-        (None, None) => bail!(
-            "{source}: no `t` column: give the sample rate with --rate HZ (or map a time column with --col t=NAME)"
-        ),
+        (None, None) => return Err(LogError::new(source, Problem::NoRate)),
     })
 }
 
 /// A uniformly sampled `t`: every step within [`STEP_TOLERANCE`] of the median step, and a rate
 /// that is a number. Analyses assume uniform sampling; a gap would silently change the rate.
-fn check_uniform(t: &[f64], source: &str, locate: &dyn Fn(usize) -> String) -> Result<()> {
+fn check_uniform(t: &[f64], source: &str, locate: &dyn Fn(usize) -> At) -> Result<()> {
     // The median by selection (linear time; a full sort of millions of steps costs 0.1 s).
     let median = {
         let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
@@ -201,21 +214,20 @@ fn check_uniform(t: &[f64], source: &str, locate: &dyn Fn(usize) -> String) -> R
         *steps.select_nth_unstable_by(mid, f64::total_cmp).1
     };
     if !(median.is_normal() && 1.0 / median <= MAX_LOG_RATE_HZ) {
-        bail!(
-            "{source}: the `t` column's median step is {median:e} s; expected a sample rate of at most {MAX_LOG_RATE_HZ:e} Hz (is `t` in seconds? --time-unit ms|us|ns says otherwise)"
-        );
+        let problem = Problem::TimeStepTooSmall { median_s: median };
+        return Err(LogError::new(source, problem));
     }
     if let Some(k) = t
         .windows(2)
         .position(|w| ((w[1] - w[0]) - median).abs() > STEP_TOLERANCE * median)
     {
-        bail!(
-            "{}: t steps from {} to {} s ({:.4} s) where the log's median step is {median:.4} s: a gap or irregular sampling; imudrift analyses uniformly sampled logs: cut the log at the gap, or resample it",
-            locate(k + 1),
+        let problem = format!(
+            "t steps from {} to {} s ({:.4} s) where the log's median step is {median:.4} s: a gap or irregular sampling; imudrift analyses uniformly sampled logs: cut the log at the gap, or resample it",
             t[k],
             t[k + 1],
             t[k + 1] - t[k]
         );
+        return Err(LogError::content(source, problem).at(locate(k + 1)));
     }
     Ok(())
 }
@@ -273,13 +285,18 @@ fn parse_body(
     let results: Vec<(usize, ChunkRows)> = bounds
         .par_windows(2)
         .zip(parts.par_iter_mut())
-        .map(|(w, part)| parse_chunk_into(&body[w[0]..w[1]], part, names, skip))
+        .map(|(w, part)| parse_chunk_into(&body[w[0]..w[1]], part, skip))
         .collect();
     // Errors in file order; then close the gaps left by comment and blank lines.
     let mut line_offset = header_line;
     for (lines, res) in &results {
-        if let Err((local, msg)) = res {
-            bail!("{source}:{}: {msg}", line_offset + local);
+        if let Err(bad) = res {
+            let mut e =
+                LogError::content(source, bad.problem.clone()).at_line(line_offset + bad.line);
+            if let Some(k) = bad.column {
+                e = e.in_column(&names[k]);
+            }
+            return Err(e);
         }
         line_offset += lines;
     }
@@ -298,8 +315,17 @@ fn parse_body(
     Ok(columns)
 }
 
-/// Rows parsed in one chunk, or (1-based line within the chunk, message).
-type ChunkRows = std::result::Result<usize, (usize, String)>;
+/// Rows parsed in one chunk, or what is wrong where.
+type ChunkRows = std::result::Result<usize, BadRow>;
+
+/// A row that cannot be read: its 1-based line within the chunk, the column (index) if the
+/// problem is in one, and the problem.
+#[derive(Debug)]
+struct BadRow {
+    line: usize,
+    column: Option<usize>,
+    problem: String,
+}
 
 /// Number of lines of a chunk (a last line without newline counts).
 fn lines_in(b: &[u8]) -> usize {
@@ -308,33 +334,36 @@ fn lines_in(b: &[u8]) -> usize {
 
 /// Test helper: parse a chunk into fresh columns.
 #[cfg(test)]
-pub(super) fn parse_chunk(
+pub(crate) fn parse_chunk(
     chunk: &[u8],
     n_cols: usize,
     names: &[String],
-) -> (usize, Result<Vec<Vec<f64>>>) {
+) -> (usize, std::result::Result<Vec<Vec<f64>>, String>) {
     let cap = lines_in(chunk);
     let mut cols: Vec<Vec<f64>> = (0..n_cols).map(|_| vec![0.0; cap]).collect();
     let mut out: Vec<&mut [f64]> = cols.iter_mut().map(|c| c.as_mut_slice()).collect();
-    let (lines, res) = parse_chunk_into(chunk, &mut out, names, &vec![false; n_cols]);
+    let (lines, res) = parse_chunk_into(chunk, &mut out, &vec![false; n_cols]);
     match res {
         Ok(rows) => {
             cols.iter_mut().for_each(|c| c.truncate(rows));
             (lines, Ok(cols))
         }
-        Err((l, m)) => (lines, Err(anyhow!("line {l}: {m}"))),
+        Err(bad) => {
+            let column = bad
+                .column
+                .map_or(String::new(), |k| format!("column {:?}: ", names[k]));
+            (
+                lines,
+                Err(format!("line {}: {column}{}", bad.line, bad.problem)),
+            )
+        }
     }
 }
 
 /// Parse one chunk into `out` (one slice per column, at least as long as the chunk has lines):
 /// (number of lines, rows written or error), in one scan over the bytes: plain lines by
 /// [`fast_line`], anything unusual field by field, through the standard parser if need be.
-fn parse_chunk_into(
-    chunk: &[u8],
-    out: &mut [&mut [f64]],
-    names: &[String],
-    skip: &[bool],
-) -> (usize, ChunkRows) {
+fn parse_chunk_into(chunk: &[u8], out: &mut [&mut [f64]], skip: &[bool]) -> (usize, ChunkRows) {
     let n_cols = out.len();
     let mut row = 0usize;
     let n = chunk.len();
@@ -402,9 +431,12 @@ fn parse_chunk_into(
                             .position(|&b| b == b',' || b == b'\n')
                             .map_or(n, |p| i + p);
                         let text = String::from_utf8_lossy(&chunk[i..end]).trim().to_string();
-                        let msg =
-                            format!("column {:?}: cannot read {text:?} as a number", names[k]);
-                        return (lines_in(chunk), Err((lines, msg)));
+                        let bad = BadRow {
+                            line: lines,
+                            column: Some(k),
+                            problem: format!("cannot read {text:?} as a number"),
+                        };
+                        return (lines_in(chunk), Err(bad));
                     }
                 }
             }
@@ -421,8 +453,12 @@ fn parse_chunk_into(
             break;
         }
         if k != n_cols {
-            let msg = format!("{k} fields, expected {n_cols} (as in the header)");
-            return (lines_in(chunk), Err((lines, msg)));
+            let bad = BadRow {
+                line: lines,
+                column: None,
+                problem: format!("{k} fields, expected {n_cols} (as in the header)"),
+            };
+            return (lines_in(chunk), Err(bad));
         }
         row += 1;
     }

@@ -1,31 +1,39 @@
-#![allow(dead_code)] // shared reader: parts are used by diagnose and simulate
-//! IMU log reader shared by `allan`, `diagnose` and `simulate`: CSV or gzip-compressed CSV,
-//! `#` comment lines, a header row, columns found by name, units mapped to SI.
+//! imudrift's IMU log reader: CSV or gzip-compressed CSV (`#` comment lines, a header row,
+//! columns found by name, units mapped to SI), ROS 1 bags and ROS 2 MCAP files (the
+//! `sensor_msgs/Imu` messages of one topic). Any front end (the `imudrift` command, a Python
+//! package) reads a log through [`read_log`] with plain [`ReadOptions`].
 //!
-//! Canonical columns (docs/cli.md): `t` (s), `gx gy gz` (rad/s), `ax ay az` (m/s^2), `temp` (degC).
-//! Other names are recognised with their unit suffixes (`columns.rs`: `gyro_x_dps`, `acc_x_g`,
-//! `angular_velocity.x`, `timestamp_ns`, ...); `--col gx=NAME` maps a column by hand;
-//! `--gyro-unit`, `--accel-unit`, `--time-unit` give units names do not state; `--rate HZ` gives
-//! the sample rate when there is no time column. Columns that are none of these are skipped and
-//! listed.
-//! Errors name the file, the line and the column, and say what was expected.
+//! Unlike the other library crates this one does file I/O: reading files is what it is for. It
+//! prints nothing.
+//!
+//! Units: every channel of a [`Log`] is SI (rad/s, m/s^2, s, degC). Canonical columns: `t` (s),
+//! `gx gy gz` (rad/s), `ax ay az` (m/s^2), `temp` (degC), in the sensor's own body frame as the
+//! log gives it (no frame is changed). Other names are recognised with their unit suffixes
+//! (`columns.rs`: `gyro_x_dps`, `acc_x_g`, `angular_velocity.x`, `timestamp_ns`, ...); the
+//! column mapping (`ReadOptions::columns`) maps a column by hand; the unit settings give units
+//! names do not state; the rate setting gives the sample rate when there is no time column.
+//! Columns that are none of these are skipped and listed.
+//!
+//! Errors ([`LogError`]) name the file, the line (or message) and the column, and say what was
+//! expected. They name the reader's settings ([`Setting`]), never a front end's flags: a front
+//! end renders them with its own names ([`LogError::render`]).
 
-mod args;
 pub mod bag;
 mod columns;
 mod csv;
+mod error;
 mod file;
 mod float;
 mod units;
 
-pub use args::LogArgs;
-pub use columns::{ColumnUse, Skipped, UnitOptions};
+pub use columns::{ColumnUse, SkipReason, Skipped, Source, UnitOptions};
 pub use csv::parse_log;
+pub use error::{sig, At, LogError, Problem, Result, Setting, SettingNames};
 pub use file::available_memory_bytes;
 pub use units::{AccelUnit, GyroUnit, TimeUnit};
 
-use anyhow::{bail, Context, Result};
 use file::{check_fits, FileBytes, GIB};
+use noise::{Channel, Sensor};
 use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::Path;
@@ -33,18 +41,14 @@ use std::path::Path;
 /// Standard gravity for `g` units (m/s^2): the noise crate's one definition.
 pub use noise::units::STANDARD_GRAVITY_MPS2;
 
-/// Canonical gyro channel names.
-pub const GYRO_CHANNELS: [&str; 3] = [
-    noise::CHANNEL_NAMES[0],
-    noise::CHANNEL_NAMES[1],
-    noise::CHANNEL_NAMES[2],
-];
-/// Canonical accelerometer channel names.
-pub const ACCEL_CHANNELS: [&str; 3] = [
-    noise::CHANNEL_NAMES[3],
-    noise::CHANNEL_NAMES[4],
-    noise::CHANNEL_NAMES[5],
-];
+/// Highest sample rate a log may have, Hz.
+pub const MAX_LOG_RATE_HZ: f64 = 1e9;
+
+/// Whether `rate_hz` is a sample rate a log can have (finite, above 0, at most
+/// [`MAX_LOG_RATE_HZ`]): the check of the rate setting, for front ends that validate early.
+pub fn valid_rate_hz(rate_hz: f64) -> bool {
+    rate_hz.is_finite() && rate_hz > 0.0 && rate_hz <= MAX_LOG_RATE_HZ
+}
 
 /// A log in SI units.
 #[derive(Clone, Debug)]
@@ -84,17 +88,20 @@ impl Log {
     }
 
     /// The column mapping in one line for people: `gyro_x_dps -> gx (deg/s, from the name)`, and
-    /// the skipped columns.
-    pub fn mapping_text(&self) -> String {
+    /// the skipped columns; settings named by `names`.
+    pub fn mapping_text(&self, names: SettingNames) -> String {
         let used: Vec<String> = self
             .columns
             .iter()
             .map(|c| {
+                let unit_from = c.unit_from.render(names);
                 let how = match (c.channel_from, c.unit_from) {
-                    ("--col", "name") => "--col, unit from the name".to_string(),
-                    ("--col", u) => format!("--col, unit {u}"),
-                    (_, "name") => "from the name".to_string(),
-                    (_, u) => format!("unit {u}"),
+                    (Source::Setting(s), Source::Name) => {
+                        format!("{}, unit from the name", names(s))
+                    }
+                    (Source::Setting(s), _) => format!("{}, unit {unit_from}", names(s)),
+                    (_, Source::Name) => "from the name".to_string(),
+                    (_, _) => format!("unit {unit_from}"),
                 };
                 format!("{} -> {} ({}, {how})", c.column, c.channel, c.unit)
             })
@@ -104,7 +111,7 @@ impl Log {
             let skipped: Vec<String> = self
                 .skipped
                 .iter()
-                .map(|k| format!("{} ({})", k.column, k.reason))
+                .map(|k| format!("{} ({})", k.column, k.reason_text(names)))
                 .collect();
             s.push_str(&format!("\nskipped: {}", skipped.join("; ")));
         }
@@ -113,26 +120,24 @@ impl Log {
 
     /// SI unit of a channel, for tables and plots.
     pub fn unit_of(name: &str) -> &'static str {
-        if GYRO_CHANNELS.contains(&name) {
-            "rad/s"
-        } else if ACCEL_CHANNELS.contains(&name) {
-            "m/s^2"
-        } else if name == "temp" {
-            "degC"
-        } else {
-            "1"
+        match Channel::from_name(name).map(Channel::sensor) {
+            Some(Sensor::Gyro) => "rad/s",
+            Some(Sensor::Accel) => "m/s^2",
+            None if name == "temp" => "degC",
+            None => "1",
         }
     }
 }
 
-/// Reader options.
+/// What the reader is told besides the file: the settings a log's names do not give.
 #[derive(Clone, Debug, Default)]
 pub struct ReadOptions {
+    /// Sample rate, Hz ([`valid_rate_hz`]): required when the log has no time column, checked
+    /// against it otherwise.
     pub rate_hz: Option<f64>,
-    /// Units the command line gives (each applies to every column of its kind whose name does
-    /// not state one).
+    /// Units of columns whose names do not state one (each applies to every column of its kind).
     pub units: UnitOptions,
-    /// (canonical name, file column) pairs.
+    /// (canonical name, file column) pairs: columns mapped by hand.
     pub columns: Vec<(String, String)>,
     /// The sensor_msgs/Imu topic of a bag or MCAP file (default: the only one).
     pub topic: Option<String>,
@@ -143,41 +148,41 @@ pub struct ReadOptions {
 fn read_bag(path: &Path, format: bag::Format, opts: &ReadOptions) -> Result<Log> {
     let source = path.display().to_string();
     if !opts.columns.is_empty() {
-        bail!("{source}: --col maps CSV columns; a bag's sensor_msgs/Imu fields are always angular_velocity and linear_acceleration");
+        return Err(LogError::new(&source, Problem::ColumnsInBag));
     }
     let units = opts.units;
     if units.gyro.is_some_and(|u| u != GyroUnit::RadPerS)
         || units.accel.is_some_and(|u| u != AccelUnit::MPerS2)
     {
-        bail!("{source}: sensor_msgs/Imu is in rad/s and m/s^2 (ROS REP 103); leave --gyro-unit and --accel-unit out");
+        return Err(LogError::new(&source, Problem::UnitsInBag));
     }
     let series = bag::read_imu(path, format, opts.topic.as_deref())?;
     let t = series.t_s();
     let topic = series.topic.clone();
-    let locate = |k: usize| format!("{source}: topic {topic} message {}", k + 1);
+    let locate = |k: usize| At::Message {
+        topic: topic.clone(),
+        index: k + 1,
+    };
     let rate_hz = csv::rate_of(Some(&t), opts.rate_hz, &source, &locate)?;
     let mut channels = BTreeMap::new();
     let mut order = Vec::new();
     let mut columns = Vec::new();
-    let [gx, gy, gz] = series.gyro;
-    let [ax, ay, az] = series.accel;
-    for (i, data) in [gx, gy, gz, ax, ay, az].into_iter().enumerate() {
-        let name = noise::CHANNEL_NAMES[i];
-        let field = if i < 3 {
-            "angular_velocity"
-        } else {
-            "linear_acceleration"
+    let bag::ImuSeries { gyro, accel, .. } = series;
+    for (channel, data) in Channel::ALL.into_iter().zip(gyro.into_iter().chain(accel)) {
+        let (field, unit) = match channel.sensor() {
+            Sensor::Gyro => ("angular_velocity", "rad/s"),
+            Sensor::Accel => ("linear_acceleration", "m/s^2"),
         };
         columns.push(ColumnUse {
-            column: format!("{topic} {field}.{}", ["x", "y", "z"][i % 3]),
-            channel: name,
-            unit: if i < 3 { "rad/s" } else { "m/s^2" },
-            channel_from: "sensor_msgs/Imu",
-            unit_from: "REP 103",
+            column: format!("{topic} {field}.{}", noise::AXIS_NAMES[channel.axis()]),
+            channel: channel.name(),
+            unit,
+            channel_from: Source::ImuMessage,
+            unit_from: Source::Rep103,
             to_si: 1.0,
         });
-        order.push(name.to_string());
-        channels.insert(name.to_string(), data);
+        order.push(channel.name().to_string());
+        channels.insert(channel.name().to_string(), data);
     }
     Ok(Log {
         source,
@@ -191,20 +196,22 @@ fn read_bag(path: &Path, format: bag::Format, opts: &ReadOptions) -> Result<Log>
     })
 }
 
-/// Read a log file: CSV, gzip-compressed CSV, a ROS 1 bag or a ROS 2 MCAP file.
+/// Read a log file: CSV, gzip-compressed CSV, a ROS 1 bag or a ROS 2 MCAP file (or a ROS 2 bag
+/// directory holding one MCAP file).
 pub fn read_log(path: &Path, opts: &ReadOptions) -> Result<Log> {
     // A ROS 2 bag is a directory (metadata.yaml and the storage file): read its one MCAP file.
     if path.is_dir() {
         return read_log(&bag::bag_directory_file(path)?, opts);
     }
     let source = path.display().to_string();
-    let raw = FileBytes::open(path).with_context(|| format!("cannot read {source}"))?;
+    let raw = FileBytes::open(path)
+        .map_err(|e| LogError::new(&source, Problem::Unreadable).caused_by(e))?;
     if let Some(format) = bag::format_of(&raw[..raw.len().min(16)]) {
         drop(raw);
         return read_bag(path, format, opts);
     }
     if opts.topic.is_some() {
-        bail!("{source}: --topic applies to ROS bags and MCAP files; this is a CSV log");
+        return Err(LogError::new(&source, Problem::TopicInCsv));
     }
     // What the machine can hold: a log and its parsed columns must fit, or the read is refused
     // before it starts rather than ending in an out-of-memory kill.
@@ -215,13 +222,14 @@ pub fn read_log(path: &Path, opts: &ReadOptions) -> Result<Log> {
         flate2::read::MultiGzDecoder::new(&raw[..])
             .take(limit)
             .read_to_end(&mut out)
-            .with_context(|| format!("{source}: not a valid gzip file"))?;
+            .map_err(|e| LogError::content(&source, "not a valid gzip file").caused_by(e))?;
         if out.len() as u64 == limit {
-            bail!(
-                "{source}: decompresses to more than {:.1} GiB, a third of the memory available ({:.1} GiB): split the log or analyse it on a larger machine",
+            let problem = format!(
+                "decompresses to more than {:.1} GiB, a third of the memory available ({:.1} GiB): split the log or analyse it on a larger machine",
                 limit as f64 / GIB,
                 available.unwrap_or(0) as f64 / GIB
             );
+            return Err(LogError::content(&source, problem));
         }
         check_fits(&out, &source, available)?;
         parse_log(&out, &source, opts)

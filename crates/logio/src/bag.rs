@@ -12,7 +12,7 @@
 //!   length including the NUL, bytes, NUL); every f64 aligned to 8 bytes counted from the end of
 //!   the encapsulation header; then the same fields as ROS 1.
 
-use anyhow::{anyhow, bail, Context, Result};
+use crate::error::{LogError, Problem, Result};
 use std::path::Path;
 
 /// The file formats recognised by their first bytes.
@@ -40,12 +40,10 @@ pub fn bag_directory_file(dir: &Path) -> Result<std::path::PathBuf> {
     let source = dir.display().to_string();
     let mut mcap = Vec::new();
     let mut db3 = false;
-    for entry in
-        std::fs::read_dir(dir).with_context(|| format!("cannot read the directory {source}"))?
-    {
-        let p = entry
-            .with_context(|| format!("cannot read the directory {source}"))?
-            .path();
+    let unreadable =
+        |e: std::io::Error| LogError::new(&source, Problem::UnreadableDirectory).caused_by(e);
+    for entry in std::fs::read_dir(dir).map_err(unreadable)? {
+        let p = entry.map_err(unreadable)?.path();
         match p.extension().and_then(|e| e.to_str()) {
             Some("mcap") => mcap.push(p),
             Some("db3") => db3 = true,
@@ -53,18 +51,17 @@ pub fn bag_directory_file(dir: &Path) -> Result<std::path::PathBuf> {
         }
     }
     mcap.sort();
-    match mcap.len() {
-        1 => Ok(mcap.remove(0)),
-        0 if db3 => bail!(
-            "{source}: a ROS 2 bag in sqlite3 storage (.db3); imudrift reads MCAP: convert it with `ros2 bag convert` (storage_id: mcap) or record with `-s mcap`"
-        ),
-        0 => bail!("{source}: a directory without a .mcap file; give a log file, a ROS 1 bag or a ROS 2 MCAP file"),
-        _ => bail!(
-            "{source}: a bag split into {} files ({}); give one of them (each is analysed on its own)",
+    let problem = match mcap.len() {
+        1 => return Ok(mcap.remove(0)),
+        0 if db3 => "a ROS 2 bag in sqlite3 storage (.db3); imudrift reads MCAP: convert it with `ros2 bag convert` (storage_id: mcap) or record with `-s mcap`".to_string(),
+        0 => "a directory without a .mcap file; give a log file, a ROS 1 bag or a ROS 2 MCAP file".to_string(),
+        _ => format!(
+            "a bag split into {} files ({}); give one of them (each is analysed on its own)",
             mcap.len(),
             mcap.iter().map(|p| p.file_name().unwrap_or_default().to_string_lossy().into_owned()).collect::<Vec<_>>().join(", ")
         ),
-    }
+    };
+    Err(LogError::content(&source, problem))
 }
 
 /// IMU samples of one topic, SI (rad/s, m/s^2), in stamp order.
@@ -120,15 +117,19 @@ pub fn read_imu(path: &Path, format: Format, topic: Option<&str>) -> Result<ImuS
     let mut series = match result {
         Ok(r) => r?,
         Err(_) => {
-            bail!("{source}: the file is damaged (its reader stopped); re-record or repair it")
+            return Err(LogError::content(
+                &source,
+                "the file is damaged (its reader stopped); re-record or repair it",
+            ))
         }
     };
     if series.t_ns.len() < 2 {
-        bail!(
-            "{source}: topic {} has {} sensor_msgs/Imu message(s); at least 2 are needed",
+        let problem = format!(
+            "topic {} has {} sensor_msgs/Imu message(s); at least 2 are needed",
             series.topic,
             series.t_ns.len()
         );
+        return Err(LogError::content(&source, problem));
     }
     sort_by_stamp(&mut series, &source)?;
     Ok(series)
@@ -143,13 +144,13 @@ fn sort_by_stamp(s: &mut ImuSeries, source: &str) -> Result<()> {
     idx.sort_by_key(|&i| s.t_ns[i]);
     for w in idx.windows(2) {
         if s.t_ns[w[0]] == s.t_ns[w[1]] {
-            bail!(
-                "{source}: topic {}: messages {} and {} have the same header.stamp ({} ns); expected one sample per stamp",
+            return Err(LogError::content(source, format!(
+                "topic {}: messages {} and {} have the same header.stamp ({} ns); expected one sample per stamp",
                 s.topic,
                 w[0].min(w[1]) + 1,
                 w[0].max(w[1]) + 1,
                 s.t_ns[w[0]]
-            );
+            )));
         }
     }
     let take = |v: &Vec<f64>| idx.iter().map(|&i| v[i]).collect::<Vec<f64>>();
@@ -166,7 +167,7 @@ fn choose_topic(
     source: &str,
     topics: &[(String, String)],
     asked: Option<&str>,
-    imu_type: &str,
+    imu_type: &'static str,
 ) -> Result<String> {
     let imu: Vec<&String> = topics
         .iter()
@@ -180,41 +181,34 @@ fn choose_topic(
             .collect::<Vec<_>>()
             .join(", ")
     };
-    match asked {
-        Some(t) => {
-            if imu.iter().any(|n| *n == t) {
-                Ok(t.to_string())
-            } else {
-                bail!(
-                    "{source}: --topic {t}: no {imu_type} topic of that name (topics: {})",
-                    listing()
-                )
-            }
-        }
-        None => match imu.as_slice() {
-            [one] => Ok(one.to_string()),
-            [] => bail!("{source}: no {imu_type} topic (topics: {})", listing()),
-            many => bail!(
-                "{source}: {} {imu_type} topics ({}): choose one with --topic",
-                many.len(),
-                many.iter()
-                    .map(|s| s.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
+    let problem = match asked {
+        Some(t) if imu.iter().any(|n| *n == t) => return Ok(t.to_string()),
+        Some(t) => Problem::NoSuchTopic {
+            topic: t.to_string(),
+            imu_type,
+            topics: listing(),
         },
-    }
+        None => match imu.as_slice() {
+            [one] => return Ok(one.to_string()),
+            [] => Problem::Content(format!("no {imu_type} topic (topics: {})", listing())),
+            many => Problem::SeveralTopics {
+                imu_type,
+                topics: many.iter().map(|s| s.to_string()).collect(),
+            },
+        },
+    };
+    Err(LogError::new(source, problem))
 }
 
 fn read_rosbag(path: &Path, source: &str, topic: Option<&str>) -> Result<ImuSeries> {
     use rosbag::{ChunkRecord, IndexRecord, MessageRecord, RosBag};
-    let bag = RosBag::new(path).map_err(|e| anyhow!("{source}: not a readable ROS 1 bag: {e}"))?;
+    let bad =
+        |what: &str, e: &dyn std::fmt::Display| LogError::content(source, format!("{what}: {e}"));
+    let bag = RosBag::new(path).map_err(|e| bad("not a readable ROS 1 bag", &e))?;
     // Connections (topic, type) from the index section.
     let mut conns: Vec<(u32, String, String)> = Vec::new();
     for r in bag.index_records() {
-        if let IndexRecord::Connection(c) =
-            r.map_err(|e| anyhow!("{source}: bad index record: {e}"))?
-        {
+        if let IndexRecord::Connection(c) = r.map_err(|e| bad("bad index record", &e))? {
             conns.push((c.id, c.topic.to_string(), c.tp.to_string()));
         }
     }
@@ -234,12 +228,12 @@ fn read_rosbag(path: &Path, source: &str, topic: Option<&str>) -> Result<ImuSeri
     };
     let mut k = 0usize;
     for r in bag.chunk_records() {
-        let r = r.map_err(|e| anyhow!("{source}: bad chunk record: {e}"))?;
+        let r = r.map_err(|e| bad("bad chunk record", &e))?;
         let ChunkRecord::Chunk(chunk) = r else {
             continue;
         };
         for m in chunk.messages() {
-            let m = m.map_err(|e| anyhow!("{source}: bad record in a chunk: {e}"))?;
+            let m = m.map_err(|e| bad("bad record in a chunk", &e))?;
             let MessageRecord::MessageData(d) = m else {
                 continue;
             };
@@ -248,10 +242,11 @@ fn read_rosbag(path: &Path, source: &str, topic: Option<&str>) -> Result<ImuSeri
             }
             k += 1;
             let s = decode_ros1(d.data).ok_or_else(|| {
-                anyhow!(
-                    "{source}: topic {}: message {k} is not a valid {ROS1_TYPE}",
+                let problem = format!(
+                    "topic {}: message {k} is not a valid {ROS1_TYPE}",
                     out.topic
-                )
+                );
+                LogError::content(source, problem)
             })?;
             out.push(s);
         }
@@ -263,11 +258,12 @@ fn read_mcap(path: &Path, source: &str, topic: Option<&str>) -> Result<ImuSeries
     use mcap::records::Record;
     use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
     use std::collections::BTreeMap;
-    let file = std::fs::File::open(path).with_context(|| format!("cannot read {source}"))?;
+    let file = std::fs::File::open(path)
+        .map_err(|e| LogError::new(source, Problem::Unreadable).caused_by(e))?;
     // SAFETY: a read-only private mapping of a regular file this process holds open; the bytes
     // are only read (the hazard of a concurrent truncation is the one every mmap reader accepts).
-    let map =
-        unsafe { memmap2::Mmap::map(&file) }.with_context(|| format!("cannot map {source}"))?;
+    let map = unsafe { memmap2::Mmap::map(&file) }
+        .map_err(|e| LogError::new(source, Problem::Unmappable).caused_by(e))?;
     // The crate's sans-io reader with a bound on record lengths: a damaged length field is an
     // error, not an attempt to allocate it (its MessageStream sets no bound). Chunk CRCs are
     // checked. Records in file order (mcap.dev/spec: schemas and channels before their use).
@@ -281,7 +277,9 @@ fn read_mcap(path: &Path, source: &str, topic: Option<&str>) -> Result<ImuSeries
     let mut channels: BTreeMap<u16, (String, String, String)> = BTreeMap::new();
     let mut samples: BTreeMap<u16, Vec<ImuSample>> = BTreeMap::new();
     let mut past_data_end = false;
-    let bad = |e: &dyn std::fmt::Display| anyhow!("{source}: not a readable MCAP file: {e}");
+    let bad = |e: &dyn std::fmt::Display| {
+        LogError::content(source, format!("not a readable MCAP file: {e}"))
+    };
     while let Some(event) = reader.next_event() {
         match event.map_err(|e| bad(&e))? {
             LinearReadEvent::ReadRequest(n) => {
@@ -309,23 +307,26 @@ fn read_mcap(path: &Path, source: &str, topic: Option<&str>) -> Result<ImuSeries
                     Record::Message { header, data } => {
                         let Some((topic, schema, encoding)) = channels.get(&header.channel_id)
                         else {
-                            bail!(
-                                "{source}: a message refers to channel {}, never defined",
+                            let problem = format!(
+                                "a message refers to channel {}, never defined",
                                 header.channel_id
                             );
+                            return Err(LogError::content(source, problem));
                         };
                         if schema != ROS2_TYPE {
                             continue;
                         }
                         let v = samples.entry(header.channel_id).or_default();
                         if encoding != "cdr" {
-                            bail!("{source}: topic {topic}: message encoding {encoding:?}; expected \"cdr\" (ROS 2)");
+                            let problem = format!("topic {topic}: message encoding {encoding:?}; expected \"cdr\" (ROS 2)");
+                            return Err(LogError::content(source, problem));
                         }
                         let s = decode_cdr(&data).ok_or_else(|| {
-                            anyhow!(
-                                "{source}: topic {topic}: message {} is not a valid {ROS2_TYPE}",
+                            let problem = format!(
+                                "topic {topic}: message {} is not a valid {ROS2_TYPE}",
                                 v.len() + 1
-                            )
+                            );
+                            LogError::content(source, problem)
                         })?;
                         v.push(s);
                     }
@@ -608,7 +609,10 @@ pub fn write_rosbag(path: &Path, topic: &str, samples: &[ImuSample]) -> std::io:
 /// Write samples as a ROS 2 MCAP file (`mcap` crate; schema `sensor_msgs/msg/Imu` in `ros2msg`,
 /// messages in `cdr`), as `ros2 bag record -s mcap` does, one channel per topic. For tests and
 /// benchmarks.
-pub fn write_mcap(path: &Path, topics: &[(&str, &[ImuSample])]) -> Result<()> {
+pub fn write_mcap(
+    path: &Path,
+    topics: &[(&str, &[ImuSample])],
+) -> std::result::Result<(), Box<dyn std::error::Error + Send + Sync>> {
     let file = std::io::BufWriter::new(std::fs::File::create(path)?);
     let mut w = mcap::Writer::new(file)?;
     let schema = w.add_schema(

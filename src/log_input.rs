@@ -1,0 +1,130 @@
+//! Reading logs for the commands: the reader's command-line options (shared by every command
+//! that reads a log), converted into the `logio` crate's plain settings, and the reader's errors
+//! and column mapping told with the flags that set them.
+
+use crate::cli::named;
+use anyhow::{anyhow, bail, Result};
+use logio::{AccelUnit, GyroUnit, Log, LogError, ReadOptions, Setting, TimeUnit};
+use std::path::Path;
+
+/// Command-line options of the log reader (flatten into a command's Args).
+#[derive(clap::Args, Clone, Debug)]
+pub struct LogArgs {
+    /// Sample rate in Hz (required when the log has no `t` column; overrides it otherwise)
+    #[arg(long, value_name = "HZ")]
+    pub rate: Option<f64>,
+    /// Unit of every gyro column whose name does not say it (`gyro_x_dps` does; `gx` defaults to rad/s)
+    #[arg(long, value_name = "UNIT", value_parser = named(GyroUnit::ALL, GyroUnit::name))]
+    pub gyro_unit: Option<GyroUnit>,
+    /// Unit of every accelerometer column whose name does not say it (`acc_x_g` does; `ax` defaults to m/s^2)
+    #[arg(long, value_name = "UNIT", value_parser = named(AccelUnit::ALL, AccelUnit::name))]
+    pub accel_unit: Option<AccelUnit>,
+    /// Unit of the time column when its name does not say it (`t_ms`, `timestamp_ns` do; default s)
+    #[arg(long, value_name = "UNIT", value_parser = named(TimeUnit::ALL, TimeUnit::name))]
+    pub time_unit: Option<TimeUnit>,
+    /// The sensor_msgs/Imu topic to read from a ROS bag or MCAP file (default: the only one)
+    #[arg(long, value_name = "TOPIC")]
+    pub topic: Option<String>,
+    /// Map a file column to a channel by hand, e.g. `--col gx=gyro_meas_x` (repeat or comma-separate); columns are otherwise recognised by name
+    #[arg(long = "col", value_name = "NAME=COLUMN", value_delimiter = ',')]
+    pub columns: Vec<String>,
+}
+
+/// The flag that sets each reader setting.
+pub fn flag(setting: Setting) -> &'static str {
+    match setting {
+        Setting::Rate => "--rate",
+        Setting::Columns => "--col",
+        Setting::GyroUnit => "--gyro-unit",
+        Setting::AccelUnit => "--accel-unit",
+        Setting::TimeUnit => "--time-unit",
+        Setting::Topic => "--topic",
+    }
+}
+
+impl LogArgs {
+    /// Validated reader settings.
+    pub fn options(&self) -> Result<ReadOptions> {
+        let mut map = Vec::new();
+        for c in &self.columns {
+            let (name, col) = c
+                .split_once('=')
+                .ok_or_else(|| anyhow!("--col {c:?}: expected NAME=COLUMN, e.g. gx=gyro_x_dps"))?;
+            let name = name.trim();
+            if !(name == "t" || name == "temp" || noise::Channel::from_name(name).is_some()) {
+                bail!("--col {c:?}: {name:?} is not one of t, gx, gy, gz, ax, ay, az, temp");
+            }
+            map.push((name.to_string(), col.trim().to_string()));
+        }
+        if let Some(rate_hz) = self.rate.filter(|&r| !logio::valid_rate_hz(r)) {
+            bail!(logio::Problem::BadRate { rate_hz }.render(&flag));
+        }
+        Ok(ReadOptions {
+            rate_hz: self.rate,
+            units: logio::UnitOptions {
+                gyro: self.gyro_unit,
+                accel: self.accel_unit,
+                time: self.time_unit,
+            },
+            columns: map,
+            topic: self.topic.clone(),
+        })
+    }
+
+    /// Read the log at `path` with these options.
+    pub fn read(&self, path: &Path) -> Result<Log> {
+        read_log(path, &self.options()?)
+    }
+}
+
+/// Read a log; a reader error is told with the flags that set what it names.
+pub fn read_log(path: &Path, opts: &ReadOptions) -> Result<Log> {
+    logio::read_log(path, opts).map_err(|e| anyhow::Error::new(WithFlags(e)))
+}
+
+/// A reader error shown with the command line's flags for the settings it names.
+#[derive(Debug)]
+struct WithFlags(LogError);
+
+impl std::fmt::Display for WithFlags {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0.render(&flag))
+    }
+}
+
+impl std::error::Error for WithFlags {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        std::error::Error::source(&self.0)
+    }
+}
+
+/// The column mapping in one line for people (`gyro_x_dps -> gx (deg/s, from the name)`).
+pub fn mapping_text(log: &Log) -> String {
+    log.mapping_text(&flag)
+}
+
+/// `columns[]` and `skipped_columns[]` of the JSON (docs/cli.md, "Log files").
+pub fn columns_json(log: &Log) -> (serde_json::Value, serde_json::Value) {
+    let columns = log
+        .columns
+        .iter()
+        .map(|c| {
+            serde_json::json!({
+                "column": c.column,
+                "channel": c.channel,
+                "unit": c.unit,
+                "channel_from": c.channel_from.render(&flag),
+                "unit_from": c.unit_from.render(&flag),
+            })
+        })
+        .collect();
+    let skipped = log
+        .skipped
+        .iter()
+        .map(|s| serde_json::json!({"column": s.column, "reason": s.reason_text(&flag)}))
+        .collect();
+    (
+        serde_json::Value::Array(columns),
+        serde_json::Value::Array(skipped),
+    )
+}
