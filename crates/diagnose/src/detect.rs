@@ -11,6 +11,7 @@
 //! for white noise, flicker (the noise crate's Gauss-Markov band) and rate random walk, with the
 //! levels fitted (IEEE 952, `allan::fit_ieee952`) to the Allan deviation of the regression's residual.
 
+use crate::stats::median;
 use allan::{DataKind, Estimator, TauGrid};
 use noise::Flicker;
 
@@ -35,21 +36,6 @@ impl Spikes {
     pub fn size(&self) -> f64 {
         let mut a: Vec<f64> = self.excess.iter().map(|e| e.abs()).collect();
         median(&mut a)
-    }
-}
-
-/// The median (NaN for an empty slice); reorders `v`.
-pub(crate) fn median(v: &mut [f64]) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    let n = v.len();
-    let (lower, &mut mid, _) = v.select_nth_unstable_by(n / 2, f64::total_cmp);
-    if n % 2 == 1 {
-        mid
-    } else {
-        let below = lower.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        0.5 * (below + mid)
     }
 }
 
@@ -929,6 +915,17 @@ pub fn preprocess(
         findings,
         peaks,
     }
+}
+
+/// [`preprocess`] of a log, each regression's noise floor from the sensor model's levels
+/// ([`model_levels`]).
+pub fn preprocess_log(log: &crate::input::LogInput, model: &noise::SensorModel) -> Preprocessed {
+    preprocess(
+        log.channels,
+        log.temperature_c,
+        log.dt_s,
+        &model_levels(model),
+    )
 }
 
 /// The noise levels of the sensor model's channels (white, flicker B, rate random walk K; a Woodman

@@ -7,7 +7,7 @@
 //! frequency and bandwidth around the peak's (`candidates::resonance_grid`) and keeps the bandwidth
 //! within 0.15-3 times the peak's width.
 
-use crate::detect::median;
+use crate::stats::median;
 
 /// A broad peak of the spectrum.
 #[derive(Clone, Copy, Debug, PartialEq)]
