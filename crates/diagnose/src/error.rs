@@ -1,5 +1,5 @@
 //! What can go wrong in diagnose: inputs the caller has to fix, or a failed simulation. An error
-//! about a setting names the [`Settings`](crate::Settings) field, never a front end's option.
+//! about a setting names the `Settings` field, never a front end's option.
 
 use crate::simulate::SimError;
 

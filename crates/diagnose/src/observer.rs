@@ -31,8 +31,8 @@ impl fmt::Display for Step {
     }
 }
 
-/// Told of progress by [`diagnose_observed`](crate::diagnose_observed) and
-/// [`check_drift`](crate::drift_check::check_drift). `()` observes nothing.
+/// Told of progress by `diagnose_observed` and `drift_check::check_drift`. `()` observes
+/// nothing.
 pub trait Observer: Sync {
     /// diagnose is about to run `step` (called on the caller's thread).
     fn step(&self, _step: Step) {}
