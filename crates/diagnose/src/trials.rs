@@ -1,4 +1,4 @@
-//! Step 3: every candidate effect fitted to one channel's gap.
+//! Step 4: every candidate effect fitted to one channel's gap.
 
 use crate::candidates::{
     filter_grid, free_parameters, resonance_grid, resonance_refinement, resonance_signature,
@@ -263,6 +263,9 @@ fn fit_resonance(
     })
 }
 
+/// Each shape's fit and signature.
+type ShapeFits = Vec<(LinearFit, Vec<f64>)>;
+
 /// The search over resonance shapes (frequency, bandwidth) of [`fit_resonance`].
 struct ResonanceSearch<'a> {
     data: &'a FitData<'a>,
@@ -296,12 +299,11 @@ impl ResonanceSearch<'_> {
     /// bandwidth in steps of 30 %, 15 %, 7.5 %): the grid's steps are coarse beside a narrow mode,
     /// the short taus are sensitive to the frequency, and a frequency a fraction of a bandwidth off
     /// is otherwise made up by a wider bandwidth.
-    #[allow(clippy::type_complexity)]
     fn run(
         &self,
         shapes: Vec<(f64, f64)>,
         own: Option<(f64, f64)>,
-    ) -> (Vec<(f64, f64)>, Vec<(LinearFit, Vec<f64>)>) {
+    ) -> (Vec<(f64, f64)>, ShapeFits) {
         let mut shapes: Vec<(f64, f64)> = shapes
             .into_iter()
             .filter(|s| self.allowed(s.1) || Some(*s) == own)

@@ -80,6 +80,14 @@ struct Start<'a> {
     observer: &'a dyn Observer,
 }
 
+/// Step 1's result: the common tau grid's averaging factors, and each channel's measurement on it,
+/// of the corrected log and of the raw one.
+struct Measurement {
+    grid_m: Vec<usize>,
+    corrected: ImuChannels<Option<Measured>>,
+    raw: ImuChannels<Option<Measured>>,
+}
+
 /// What the workflow knows about one channel so far.
 #[derive(Default)]
 struct ChannelState {
@@ -135,7 +143,11 @@ struct Run<'a> {
 impl<'a> Run<'a> {
     /// Steps 1 and 2: measure the log, simulate the model's band, and the gap before any change.
     fn start(s: Start<'a>, model: &SensorModel) -> Result<Run<'a>, DiagnoseError> {
-        let (grid_m, measured, measured_raw) = Self::measure(&s)?;
+        let Measurement {
+            grid_m,
+            corrected: measured,
+            raw: measured_raw,
+        } = Self::measure(&s)?;
         let setup = SimSetup {
             dt_s: s.log.dt_s,
             samples: s.samples,
@@ -179,25 +191,24 @@ impl<'a> Run<'a> {
 
     /// Step 1: measured Allan deviations with EDF (Greenhall, noise type by lag-1 ACF) on the octave
     /// grid, of the corrected log and of the raw one (for the gap before step 0's corrections).
-    #[allow(clippy::type_complexity)]
-    fn measure(
-        s: &Start,
-    ) -> Result<
-        (
-            Vec<usize>,
-            ImuChannels<Option<Measured>>,
-            ImuChannels<Option<Measured>>,
-        ),
-        DiagnoseError,
-    > {
+    fn measure(s: &Start) -> Result<Measurement, DiagnoseError> {
         s.observer.step(Step::Measure);
         let tau_min_s = s.settings.tau_min_s;
-        let (grid_m, measured) = measure(&s.log, tau_min_s);
-        let (_, measured_raw) = measure(&s.raw, tau_min_s);
-        if measured.values().iter().flatten().all(|m| m.idx.is_empty()) {
+        let (grid_m, corrected) = measure(&s.log, tau_min_s);
+        let (_, raw) = measure(&s.raw, tau_min_s);
+        if corrected
+            .values()
+            .iter()
+            .flatten()
+            .all(|m| m.idx.is_empty())
+        {
             return Err(DiagnoseError::NoTaus { tau_min_s });
         }
-        Ok((grid_m, measured, measured_raw))
+        Ok(Measurement {
+            grid_m,
+            corrected,
+            raw,
+        })
     }
 
     /// Step 2: the model's band (and drift), simulated.
@@ -307,7 +318,7 @@ impl<'a> Run<'a> {
         })
     }
 
-    /// Step 3: every candidate fitted to channel `c`'s gap against `band`.
+    /// Step 4: every candidate fitted to channel `c`'s gap against `band`.
     fn candidates(&self, c: Channel, curve: &Curve, band: &Band, g: &Gap) -> Vec<Trial> {
         let dt_s = self.log.dt_s;
         let line_allowed = |f: f64| {
