@@ -1,4 +1,4 @@
-//! The diagnose workflow (docs/diagnose.md, "The diagnose workflow", steps 0-6) as one [`Run`] whose
+//! The diagnose workflow (docs/diagnose.md, "The diagnose workflow", steps 0-6) as one `Run` whose
 //! methods are the steps, in the order [`diagnose_observed`] calls them: detect and measure, simulate
 //! the band, locate the gap, fit the candidates, accept the best, re-simulate, repeat; then the drift
 //! consequence and the report.
