@@ -8,7 +8,7 @@ use crate::plot::{Band, LogLogPlot, Series};
 use anyhow::{anyhow, bail, Context, Result};
 use diagnose::drift::CHANNELS;
 use diagnose::report::{ChannelReport, DriftRow, FoundEffect, HeldOutGap};
-use diagnose::{diagnose_with_progress, Diagnosis, LogInput, Settings};
+use diagnose::{diagnose_observed, DiagnoseError, Diagnosis, LogInput, Settings};
 use noise::noise_file::AxisValue;
 use noise::SensorModel;
 use std::collections::BTreeMap;
@@ -59,6 +59,25 @@ pub struct Args {
     pub threads: Option<usize>,
     #[command(flatten)]
     pub noise_file: crate::noise_out::NoiseFileArgs,
+}
+
+/// diagnose's steps as the stages of a progress display.
+struct Stages(crate::progress::Progress);
+
+impl diagnose::Observer for Stages {
+    fn step(&self, step: diagnose::Step) {
+        self.0.stage(&step.to_string());
+    }
+}
+
+/// A diagnose error, one about a setting named by the option that sets it.
+fn with_flags(e: DiagnoseError) -> anyhow::Error {
+    match e {
+        DiagnoseError::NoTaus { tau_min_s } => {
+            anyhow!("no Allan point at or above --tau-min {tau_min_s} s")
+        }
+        e => e.into(),
+    }
 }
 
 /// Most simulated logs per band and add-and-resimulate rounds a diagnose run may ask for.
@@ -162,11 +181,11 @@ fn run_inner(args: &Args) -> Result<()> {
         ..Settings::default()
     };
     let started = std::time::Instant::now();
-    let stages = crate::progress::Progress::stages("diagnose");
-    let progress = |what: &str| stages.stage(what);
-    let result = diagnose_with_progress(&input, &model, &settings, &progress);
-    stages.finish();
+    let stages = Stages(crate::progress::Progress::stages("diagnose"));
+    let result = diagnose_observed(&input, &model, &settings, &stages);
+    stages.0.finish();
     let result = result
+        .map_err(with_flags)
         .with_context(|| format!("diagnosing {} against {}", log.source, args.model.display()))?;
     let elapsed_s = started.elapsed().as_secs_f64();
     let corrected = corrected_model(&result, &model, &args.model);

@@ -7,12 +7,31 @@ use crate::output::write_string;
 use crate::plot::{Band, LogLogPlot, Series};
 use anyhow::{anyhow, bail, Context, Result};
 use diagnose::drift::CHANNELS;
-use diagnose::drift_check::{check_drift, CheckSettings, DriftCheck, Verdict};
+use diagnose::drift_check::{check_drift, CheckError, CheckSettings, DriftCheck, Verdict};
 use diagnose::protocol::{Calibration, Initialisation, Protocol, Quantity};
 use diagnose::LogInput;
 use noise::SensorModel;
 use std::fmt::Write as _;
 use std::path::PathBuf;
+
+/// The drift check's simulated logs on a progress bar.
+struct Simulated(crate::progress::Progress);
+
+impl diagnose::Observer for Simulated {
+    fn simulated(&self, done: usize, _total: usize) {
+        self.0.set(done as u64);
+    }
+}
+
+/// A drift-check error, one about a setting named by the option that sets it.
+fn with_flags(e: CheckError) -> anyhow::Error {
+    match e {
+        CheckError::Replicates(n) => anyhow!(
+            "--replicates {n}: at least 10 simulated experiments are needed for a 95 % band"
+        ),
+        e => anyhow!("{e}"),
+    }
+}
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -146,10 +165,14 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
     };
     let started = std::time::Instant::now();
     let total = (args.replicates * logs.len()) as u64;
-    let bar = crate::progress::Progress::new("simulating the model", "logs", total);
-    let result = check_drift(&inputs, &model, &settings, &|k, _| bar.set(k as u64));
-    bar.finish();
-    let result = result.map_err(|e| anyhow!("{e}")).with_context(|| {
+    let bar = Simulated(crate::progress::Progress::new(
+        "simulating the model",
+        "logs",
+        total,
+    ));
+    let result = check_drift(&inputs, &model, &settings, &bar);
+    bar.0.finish();
+    let result = result.map_err(with_flags).with_context(|| {
         format!(
             "checking the drift of {} log(s) against {}",
             logs.len(),

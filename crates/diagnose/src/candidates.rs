@@ -5,8 +5,11 @@
 use noise::closed_form as cf;
 use noise::{Effect, FilterKind, Flicker, OutputFilter};
 
-/// Effects diagnose can name (docs/diagnose.md list); the temperature bias only when the log has a temperature column.
-pub const CANDIDATES: [Effect; 9] = [
+/// Effects diagnose fits to the Allan gap (docs/diagnose.md list; the output filter is tried beside
+/// them). The temperature bias is not among them: it is regressed on the log's temperature column in
+/// the time domain (`detect`, step 0), where its phase is seen; its Allan signature alone cannot
+/// tell it from a slow bias wander.
+pub const CANDIDATES: [Effect; 8] = [
     Effect::Quantization,
     Effect::WhiteNoise,
     Effect::BiasInstability,
@@ -14,7 +17,6 @@ pub const CANDIDATES: [Effect; 9] = [
     Effect::RateRamp,
     Effect::GaussMarkov,
     Effect::Sinusoidal,
-    Effect::TemperatureBias,
     Effect::Resonance,
 ];
 

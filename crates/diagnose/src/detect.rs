@@ -11,6 +11,7 @@
 //! for white noise, flicker (the noise crate's Gauss-Markov band) and rate random walk, with the
 //! levels fitted (IEEE 952, `allan::fit_ieee952`) to the Allan deviation of the regression's residual.
 
+use crate::stats::median;
 use allan::{DataKind, Estimator, TauGrid};
 use noise::Flicker;
 
@@ -35,21 +36,6 @@ impl Spikes {
     pub fn size(&self) -> f64 {
         let mut a: Vec<f64> = self.excess.iter().map(|e| e.abs()).collect();
         median(&mut a)
-    }
-}
-
-/// The median (NaN for an empty slice); reorders `v`.
-pub(crate) fn median(v: &mut [f64]) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    let n = v.len();
-    let (lower, &mut mid, _) = v.select_nth_unstable_by(n / 2, f64::total_cmp);
-    if n % 2 == 1 {
-        mid
-    } else {
-        let below = lower.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        0.5 * (below + mid)
     }
 }
 
@@ -170,6 +156,17 @@ pub struct NoiseLevels {
     pub n: f64,
     pub b: f64,
     pub k: f64,
+}
+
+impl NoiseLevels {
+    /// Each level the larger of this one's and `floor`'s.
+    pub fn at_least(&self, floor: &NoiseLevels) -> NoiseLevels {
+        NoiseLevels {
+            n: self.n.max(floor.n),
+            b: self.b.max(floor.b),
+            k: self.k.max(floor.k),
+        }
+    }
 }
 
 /// White, flicker and random-walk levels of `x` from its octave Allan deviation (IEEE 952 fit).
@@ -300,12 +297,7 @@ pub struct Regression {
 /// each level the larger of the one fitted to the residual and `floor` (the sensor model's own).
 pub fn regression(x: &[f64], g: &[f64], dt_s: f64, floor: &NoiseLevels) -> Option<Regression> {
     let (c, w, resid) = regress(x, g)?;
-    let fitted = noise_levels(&resid, dt_s);
-    let levels = NoiseLevels {
-        n: fitted.n.max(floor.n),
-        b: fitted.b.max(floor.b),
-        k: fitted.k.max(floor.k),
-    };
+    let levels = noise_levels(&resid, dt_s).at_least(floor);
     let sd = coloured_variance(&w, dt_s, &levels).max(0.0).sqrt();
     let gm = g.iter().sum::<f64>() / g.len() as f64;
     let corrected = x.iter().zip(g).map(|(xi, gi)| xi - c * (gi - gm)).collect();
@@ -362,69 +354,12 @@ pub fn fit_transient(x: &[f64], dt_s: f64, floor: &NoiseLevels) -> Option<Transi
     if hi <= lo {
         return None;
     }
-    // The transient must stand out from a straight line (a rate ramp or a slow drift is not a
-    // transient): everything is fitted beside (1, k). Profile: the residual sum of squares at tau,
-    // RSS = S~xx - S~xg^2 / S~gg with x~ the detrended log and S~gg = S_gg - S_g^2/n - S_kg^2/S_kk,
-    // g_k = phi^k accumulated in one pass.
-    let xt = detrend(x);
-    let sxx: f64 = xt.iter().map(|v| v * v).sum();
-    let nf = n as f64;
-    let km = (nf - 1.0) / 2.0;
-    let skk = nf * (nf * nf - 1.0) / 12.0;
-    let rss_at = |tau: f64| -> Option<(f64, f64)> {
-        let phi = (-dt_s / tau).exp();
-        let (mut g, mut sg, mut sgg, mut skg, mut sxg) = (1.0, 0.0, 0.0, 0.0, 0.0);
-        for (k, &v) in xt.iter().enumerate() {
-            sg += g;
-            sgg += g * g;
-            skg += (k as f64 - km) * g;
-            sxg += g * v;
-            g *= phi;
-        }
-        let sgg_c = sgg - sg * sg / nf - skg * skg / skk;
-        if sgg_c <= 1e-12 * sgg {
-            return None;
-        }
-        Some((sxx - sxg * sxg / sgg_c, sxg / sgg_c))
-    };
-    let steps = 40;
-    let mut best: Option<(f64, f64)> = None;
-    for j in 0..=steps {
-        let tau = lo * (hi / lo).powf(j as f64 / steps as f64);
-        if let Some((rss, _)) = rss_at(tau) {
-            if best.is_none_or(|(b, _)| rss < b) {
-                best = Some((rss, tau));
-            }
-        }
-    }
-    let (_, tau0) = best?;
-    let step = (hi / lo).ln() / steps as f64;
-    let (mut a, mut b) = (
-        (tau0.ln() - step).max(lo.ln()),
-        (tau0.ln() + step).min(hi.ln()),
-    );
-    let gr = 0.5 * (5f64.sqrt() - 1.0);
-    for _ in 0..30 {
-        let x1 = b - gr * (b - a);
-        let x2 = a + gr * (b - a);
-        let f1 = rss_at(x1.exp()).map_or(f64::INFINITY, |v| v.0);
-        let f2 = rss_at(x2.exp()).map_or(f64::INFINITY, |v| v.0);
-        if f1 < f2 {
-            b = x2;
-        } else {
-            a = x1;
-        }
-    }
-    let tau = (0.5 * (a + b)).exp();
+    let profile = TransientProfile::new(x, dt_s);
+    let tau = profile.best_tau(lo, hi)?;
     let g: Vec<f64> = (0..n).map(|k| (-(k as f64) * dt_s / tau).exp()).collect();
     let (c, w, resid) = regress_detrended(x, &g)?;
     let rss_min: f64 = resid.iter().map(|v| v * v).sum();
-    let fitted = noise_levels(&resid, dt_s);
-    let levels = NoiseLevels {
-        n: fitted.n.max(floor.n),
-        b: fitted.b.max(floor.b),
-        k: fitted.k.max(floor.k),
-    };
+    let levels = noise_levels(&resid, dt_s).at_least(floor);
     let var_c = coloured_variance(&w, dt_s, &levels).max(0.0);
     let sd = var_c.sqrt();
     // Profile interval of tau: RSS(tau) <= RSS_min + 3.84 s^2 f, s^2 = RSS_min/(n - 3) the white
@@ -439,40 +374,7 @@ pub fn fit_transient(x: &[f64], dt_s: f64, floor: &NoiseLevels) -> Option<Transi
         1.0
     };
     let level = rss_min + 3.841_458_820_694_124 * s2 * f;
-    let crossing = |inside: f64, outside: f64| -> f64 {
-        let (mut i, mut o) = (inside.ln(), outside.ln());
-        for _ in 0..25 {
-            let mid = 0.5 * (i + o);
-            if rss_at(mid.exp()).is_some_and(|v| v.0 <= level) {
-                i = mid;
-            } else {
-                o = mid;
-            }
-        }
-        i.exp()
-    };
-    let mut tau_lo = lo;
-    let mut t = tau;
-    while t > lo {
-        let next = (t / 1.25).max(lo);
-        if rss_at(next).is_none_or(|v| v.0 > level) {
-            tau_lo = crossing(t, next);
-            break;
-        }
-        t = next;
-        tau_lo = t;
-    }
-    let mut tau_hi = hi;
-    let mut t = tau;
-    while t < hi {
-        let next = (t * 1.25).min(hi);
-        if rss_at(next).is_none_or(|v| v.0 > level) {
-            tau_hi = crossing(t, next);
-            break;
-        }
-        t = next;
-        tau_hi = t;
-    }
+    let (tau_lo, tau_hi) = profile.tau_interval(tau, level, (lo, hi));
     // Remove the exponential itself (mean kept), not its detrended shape: the straight line it was
     // fitted beside belongs to the data, and subtracting c (g - its line) would add c x that line,
     // a spurious ramp of slope ~ c tau / T^2 that a long tau makes large enough to be named.
@@ -489,6 +391,131 @@ pub fn fit_transient(x: &[f64], dt_s: f64, floor: &NoiseLevels) -> Option<Transi
             .map(|(xi, gi)| xi - c * (gi - gm))
             .collect(),
     })
+}
+
+/// The residual sum of squares of a transient fit as a function of its time constant. The
+/// transient must stand out from a straight line (a rate ramp or a slow drift is not a
+/// transient): everything is fitted beside (1, k). Profile: the residual sum of squares at tau,
+/// RSS = S~xx - S~xg^2 / S~gg with x~ the detrended log and S~gg = S_gg - S_g^2/n - S_kg^2/S_kk,
+/// g_k = phi^k accumulated in one pass.
+struct TransientProfile {
+    dt_s: f64,
+    /// The detrended log and its sum of squares.
+    xt: Vec<f64>,
+    sxx: f64,
+    /// n, the mean sample index and the index's centred sum of squares.
+    nf: f64,
+    km: f64,
+    skk: f64,
+}
+
+impl TransientProfile {
+    fn new(x: &[f64], dt_s: f64) -> TransientProfile {
+        let xt = detrend(x);
+        let sxx: f64 = xt.iter().map(|v| v * v).sum();
+        let nf = x.len() as f64;
+        TransientProfile {
+            dt_s,
+            xt,
+            sxx,
+            nf,
+            km: (nf - 1.0) / 2.0,
+            skk: nf * (nf * nf - 1.0) / 12.0,
+        }
+    }
+
+    /// (RSS, amplitude) at time constant `tau` (None where the exponential is a straight line).
+    fn rss_at(&self, tau: f64) -> Option<(f64, f64)> {
+        let (nf, km, skk) = (self.nf, self.km, self.skk);
+        let phi = (-self.dt_s / tau).exp();
+        let (mut g, mut sg, mut sgg, mut skg, mut sxg) = (1.0, 0.0, 0.0, 0.0, 0.0);
+        for (k, &v) in self.xt.iter().enumerate() {
+            sg += g;
+            sgg += g * g;
+            skg += (k as f64 - km) * g;
+            sxg += g * v;
+            g *= phi;
+        }
+        let sgg_c = sgg - sg * sg / nf - skg * skg / skk;
+        if sgg_c <= 1e-12 * sgg {
+            return None;
+        }
+        Some((self.sxx - sxg * sxg / sgg_c, sxg / sgg_c))
+    }
+
+    /// The time constant of least RSS in [lo, hi]: 41 log-spaced values, then golden section in
+    /// ln tau between the best one's neighbours.
+    fn best_tau(&self, lo: f64, hi: f64) -> Option<f64> {
+        let steps = 40;
+        let mut best: Option<(f64, f64)> = None;
+        for j in 0..=steps {
+            let tau = lo * (hi / lo).powf(j as f64 / steps as f64);
+            if let Some((rss, _)) = self.rss_at(tau) {
+                if best.is_none_or(|(b, _)| rss < b) {
+                    best = Some((rss, tau));
+                }
+            }
+        }
+        let (_, tau0) = best?;
+        let step = (hi / lo).ln() / steps as f64;
+        let (mut a, mut b) = (
+            (tau0.ln() - step).max(lo.ln()),
+            (tau0.ln() + step).min(hi.ln()),
+        );
+        let gr = 0.5 * (5f64.sqrt() - 1.0);
+        for _ in 0..30 {
+            let x1 = b - gr * (b - a);
+            let x2 = a + gr * (b - a);
+            let f1 = self.rss_at(x1.exp()).map_or(f64::INFINITY, |v| v.0);
+            let f2 = self.rss_at(x2.exp()).map_or(f64::INFINITY, |v| v.0);
+            if f1 < f2 {
+                b = x2;
+            } else {
+                a = x1;
+            }
+        }
+        Some((0.5 * (a + b)).exp())
+    }
+
+    /// The time constants around `tau` where the RSS reaches `level` (steps of 1.25, then
+    /// bisection in ln tau), within [lo, hi].
+    fn tau_interval(&self, tau: f64, level: f64, (lo, hi): (f64, f64)) -> (f64, f64) {
+        let crossing = |inside: f64, outside: f64| -> f64 {
+            let (mut i, mut o) = (inside.ln(), outside.ln());
+            for _ in 0..25 {
+                let mid = 0.5 * (i + o);
+                if self.rss_at(mid.exp()).is_some_and(|v| v.0 <= level) {
+                    i = mid;
+                } else {
+                    o = mid;
+                }
+            }
+            i.exp()
+        };
+        let mut tau_lo = lo;
+        let mut t = tau;
+        while t > lo {
+            let next = (t / 1.25).max(lo);
+            if self.rss_at(next).is_none_or(|v| v.0 > level) {
+                tau_lo = crossing(t, next);
+                break;
+            }
+            t = next;
+            tau_lo = t;
+        }
+        let mut tau_hi = hi;
+        let mut t = tau;
+        while t < hi {
+            let next = (t * 1.25).min(hi);
+            if self.rss_at(next).is_none_or(|v| v.0 > level) {
+                tau_hi = crossing(t, next);
+                break;
+            }
+            t = next;
+            tau_hi = t;
+        }
+        (tau_lo, tau_hi)
+    }
 }
 
 /// Power of `x` near frequency `f0_hz`, Welch-averaged over segments of `seg` samples (Hann
@@ -790,145 +817,199 @@ pub fn preprocess(
     floors: &[NoiseLevels; 6],
 ) -> Preprocessed {
     use rayon::prelude::*;
-    let hours = |n: usize| n as f64 * dt_s / 3600.0;
     // Channels in parallel (each result depends on its channel only).
-    #[allow(clippy::type_complexity)]
-    let per: Vec<(
-        Option<Vec<f64>>,
-        Vec<Finding>,
-        Option<crate::spectrum::SpectralPeak>,
-    )> = (0..6)
+    let per: Vec<Option<Detected>> = (0..6)
         .into_par_iter()
-        .map(|c| {
-            let mut found: Vec<Finding> = Vec::new();
-            let Some(raw) = channels[c] else {
-                return (None, found, None);
-            };
-            let n = raw.len();
-            let mut x = raw.to_vec();
-            let spikes = detect_spikes(&x);
-            let count = spikes.indices.len();
-            if count >= MIN_OUTLIERS && (count as f64) <= MAX_OUTLIER_FRACTION * n as f64 {
-                x = remove_spikes(&x, &spikes);
-                let rate = count as f64 / hours(n);
-                // Poisson 95 % bounds on the rate (normal approximation with continuity, count >= 3).
-                let (lo, hi) = (
-                    (count as f64 - 1.96 * (count as f64).sqrt()).max(0.0) / hours(n),
-                    (count as f64 + 1.96 * (count as f64).sqrt() + 1.0) / hours(n),
-                );
-                let size = spikes.size();
-                let n_without = noise_levels(&x, dt_s).n;
-                found.push(Finding {
-                    cannot_tell_from: vec![],
-                    term: noise::Term::Outliers(noise::Outliers {
-                        rate_per_hour: rate,
-                        size,
-                    }),
-                    parameters: vec![
-                        ("count", count as f64, count as f64, count as f64),
-                        ("rate_per_hour", rate, lo, hi),
-                        ("size", size, size, size),
-                        (
-                            "threshold_sigma",
-                            spikes.threshold,
-                            spikes.threshold,
-                            spikes.threshold,
-                        ),
-                        ("n_without", n_without, n_without, n_without),
-                    ],
-                    delta_bic: f64::INFINITY,
-                });
-            }
-            // An effect smaller than 1e-9 of the channel's magnitude is floating-point rounding of
-            // the log's values (text logs carry at most 17 significant digits, sensors 4 to 6).
-            let scale = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            let visible = |c: f64, g: &[f64]| {
-                let (lo, hi) = g
-                    .iter()
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-                        (a.min(v), b.max(v))
-                    });
-                (c * (hi - lo)).abs() > 1e-9 * scale
-            };
-            if let Some(t) = temperature_c {
-                if let Some(reg) = regression(&x, t, dt_s, &floors[c]) {
-                    if reg.z.abs() > TEMPERATURE_Z && visible(reg.coefficient, t) {
-                        let c1 = reg.coefficient;
-                        // Beside a straight line, is the temperature still needed? If not, its effect
-                        // cannot be told from a rate ramp (a temperature that rises steadily).
-                        let beside_line = regress_detrended(&x, t).map(|(cd, w, resid)| {
-                            let lv = noise_levels(&resid, dt_s);
-                            let fl = &floors[c];
-                            let lv = NoiseLevels {
-                                n: lv.n.max(fl.n),
-                                b: lv.b.max(fl.b),
-                                k: lv.k.max(fl.k),
-                            };
-                            cd / coloured_variance(&w, dt_s, &lv)
-                                .max(f64::MIN_POSITIVE)
-                                .sqrt()
-                        });
-                        let cannot_tell = beside_line.is_none_or(|z| z.abs() <= TEMPERATURE_Z);
-                        found.push(Finding {
-                            cannot_tell_from: if cannot_tell {
-                                vec![noise::Effect::RateRamp]
-                            } else {
-                                vec![]
-                            },
-                            term: noise::Term::TemperatureBias(c1),
-                            parameters: vec![(
-                                "coefficient",
-                                c1,
-                                c1 - 1.96 * reg.sd,
-                                c1 + 1.96 * reg.sd,
-                            )],
-                            delta_bic: reg.z * reg.z - (n as f64).ln(),
-                        });
-                        x = reg.corrected;
-                    }
-                }
-            }
-            if let Some(tr) = fit_transient(&x, dt_s, &floors[c]) {
-                if tr.z.abs() > TRANSIENT_Z && visible(tr.amplitude, &[0.0, 1.0]) {
-                    let sd = (tr.amplitude / tr.z).abs();
-                    found.push(Finding {
-                        cannot_tell_from: vec![],
-                        term: noise::Term::WarmupTransient(noise::WarmupTransient {
-                            amplitude: tr.amplitude,
-                            tau_s: tr.tau_s,
-                            per_run: false,
-                        }),
-                        parameters: vec![
-                            (
-                                "amplitude",
-                                tr.amplitude,
-                                tr.amplitude - 1.96 * sd,
-                                tr.amplitude + 1.96 * sd,
-                            ),
-                            ("tau_s", tr.tau_s, tr.tau_lo_s, tr.tau_hi_s),
-                        ],
-                        delta_bic: tr.z * tr.z - (n as f64).ln(),
-                    });
-                    x = tr.corrected;
-                }
-            }
-            let peak = crate::spectrum::broad_peak(&x, dt_s);
-            (Some(x), found, peak)
-        })
+        .map(|c| channels[c].map(|raw| detect_channel(raw, temperature_c, dt_s, &floors[c])))
         .collect();
-    let mut out: [Option<Vec<f64>>; 6] = Default::default();
-    let mut findings: [Vec<Finding>; 6] = Default::default();
-    let mut peaks: [Option<crate::spectrum::SpectralPeak>; 6] = Default::default();
-    for (c, (x, f, p)) in per.into_iter().enumerate() {
-        out[c] = x;
-        findings[c] = f;
-        peaks[c] = p;
+    let mut out = Preprocessed {
+        channels: Default::default(),
+        findings: Default::default(),
+        peaks: Default::default(),
+    };
+    for (c, d) in per.into_iter().enumerate() {
+        if let Some(d) = d {
+            out.channels[c] = Some(d.corrected);
+            out.findings[c] = d.findings;
+            out.peaks[c] = d.peak;
+        }
     }
-    Preprocessed {
-        channels: out,
+    out
+}
+
+/// What the detectors made of one channel.
+struct Detected {
+    corrected: Vec<f64>,
+    findings: Vec<Finding>,
+    peak: Option<crate::spectrum::SpectralPeak>,
+}
+
+/// The detectors of [`preprocess`] on one channel, each on what the one before left.
+fn detect_channel(
+    raw: &[f64],
+    temperature_c: Option<&[f64]>,
+    dt_s: f64,
+    floor: &NoiseLevels,
+) -> Detected {
+    let mut findings: Vec<Finding> = Vec::new();
+    let mut x = raw.to_vec();
+    if let Some((corrected, f)) = outlier_finding(&x, dt_s) {
+        x = corrected;
+        findings.push(f);
+    }
+    // An effect smaller than 1e-9 of the channel's magnitude is floating-point rounding of
+    // the log's values (text logs carry at most 17 significant digits, sensors 4 to 6).
+    let scale = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    if let Some(t) = temperature_c {
+        if let Some((corrected, f)) = temperature_finding(&x, t, dt_s, floor, scale) {
+            x = corrected;
+            findings.push(f);
+        }
+    }
+    if let Some((corrected, f)) = transient_finding(&x, dt_s, floor, scale) {
+        x = corrected;
+        findings.push(f);
+    }
+    let peak = crate::spectrum::broad_peak(&x, dt_s);
+    Detected {
+        corrected: x,
         findings,
-        peaks,
+        peak,
     }
+}
+
+/// Whether the change `c` times the regressor `g` (over its range) stands above the rounding of a
+/// channel of magnitude `scale`.
+fn visible(c: f64, g: &[f64], scale: f64) -> bool {
+    let (lo, hi) = g
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    (c * (hi - lo)).abs() > 1e-9 * scale
+}
+
+/// Outliers, when there are between [`MIN_OUTLIERS`] and [`MAX_OUTLIER_FRACTION`] of the samples:
+/// the channel with them replaced, and the finding.
+fn outlier_finding(x: &[f64], dt_s: f64) -> Option<(Vec<f64>, Finding)> {
+    let n = x.len();
+    let hours = |n: usize| n as f64 * dt_s / 3600.0;
+    let spikes = detect_spikes(x);
+    let count = spikes.indices.len();
+    if !(count >= MIN_OUTLIERS && (count as f64) <= MAX_OUTLIER_FRACTION * n as f64) {
+        return None;
+    }
+    let x = remove_spikes(x, &spikes);
+    let rate = count as f64 / hours(n);
+    // Poisson 95 % bounds on the rate (normal approximation with continuity, count >= 3).
+    let (lo, hi) = (
+        (count as f64 - 1.96 * (count as f64).sqrt()).max(0.0) / hours(n),
+        (count as f64 + 1.96 * (count as f64).sqrt() + 1.0) / hours(n),
+    );
+    let size = spikes.size();
+    let n_without = noise_levels(&x, dt_s).n;
+    let finding = Finding {
+        cannot_tell_from: vec![],
+        term: noise::Term::Outliers(noise::Outliers {
+            rate_per_hour: rate,
+            size,
+        }),
+        parameters: vec![
+            ("count", count as f64, count as f64, count as f64),
+            ("rate_per_hour", rate, lo, hi),
+            ("size", size, size, size),
+            (
+                "threshold_sigma",
+                spikes.threshold,
+                spikes.threshold,
+                spikes.threshold,
+            ),
+            ("n_without", n_without, n_without, n_without),
+        ],
+        delta_bic: f64::INFINITY,
+    };
+    Some((x, finding))
+}
+
+/// A temperature effect, when the regression on the temperature `t` is significant and visible:
+/// the channel with it subtracted, and the finding.
+fn temperature_finding(
+    x: &[f64],
+    t: &[f64],
+    dt_s: f64,
+    floor: &NoiseLevels,
+    scale: f64,
+) -> Option<(Vec<f64>, Finding)> {
+    let reg = regression(x, t, dt_s, floor)?;
+    if !(reg.z.abs() > TEMPERATURE_Z && visible(reg.coefficient, t, scale)) {
+        return None;
+    }
+    let c1 = reg.coefficient;
+    // Beside a straight line, is the temperature still needed? If not, its effect
+    // cannot be told from a rate ramp (a temperature that rises steadily).
+    let beside_line = regress_detrended(x, t).map(|(cd, w, resid)| {
+        let lv = noise_levels(&resid, dt_s).at_least(floor);
+        cd / coloured_variance(&w, dt_s, &lv)
+            .max(f64::MIN_POSITIVE)
+            .sqrt()
+    });
+    let cannot_tell = beside_line.is_none_or(|z| z.abs() <= TEMPERATURE_Z);
+    let finding = Finding {
+        cannot_tell_from: if cannot_tell {
+            vec![noise::Effect::RateRamp]
+        } else {
+            vec![]
+        },
+        term: noise::Term::TemperatureBias(c1),
+        parameters: vec![("coefficient", c1, c1 - 1.96 * reg.sd, c1 + 1.96 * reg.sd)],
+        delta_bic: reg.z * reg.z - (x.len() as f64).ln(),
+    };
+    Some((reg.corrected, finding))
+}
+
+/// A warm-up transient, when its fit is significant and visible: the channel with it subtracted,
+/// and the finding.
+fn transient_finding(
+    x: &[f64],
+    dt_s: f64,
+    floor: &NoiseLevels,
+    scale: f64,
+) -> Option<(Vec<f64>, Finding)> {
+    let tr = fit_transient(x, dt_s, floor)?;
+    if !(tr.z.abs() > TRANSIENT_Z && visible(tr.amplitude, &[0.0, 1.0], scale)) {
+        return None;
+    }
+    let sd = (tr.amplitude / tr.z).abs();
+    let finding = Finding {
+        cannot_tell_from: vec![],
+        term: noise::Term::WarmupTransient(noise::WarmupTransient {
+            amplitude: tr.amplitude,
+            tau_s: tr.tau_s,
+            per_run: false,
+        }),
+        parameters: vec![
+            (
+                "amplitude",
+                tr.amplitude,
+                tr.amplitude - 1.96 * sd,
+                tr.amplitude + 1.96 * sd,
+            ),
+            ("tau_s", tr.tau_s, tr.tau_lo_s, tr.tau_hi_s),
+        ],
+        delta_bic: tr.z * tr.z - (x.len() as f64).ln(),
+    };
+    Some((tr.corrected, finding))
+}
+
+/// [`preprocess`] of a log, each regression's noise floor from the sensor model's levels
+/// ([`model_levels`]).
+pub fn preprocess_log(log: &crate::input::LogInput, model: &noise::SensorModel) -> Preprocessed {
+    preprocess(
+        log.channels,
+        log.temperature_c,
+        log.dt_s,
+        &model_levels(model),
+    )
 }
 
 /// The noise levels of the sensor model's channels (white, flicker B, rate random walk K; a Woodman

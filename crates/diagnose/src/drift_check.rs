@@ -17,8 +17,9 @@
 //! measured RMS lies in the band, "above" or "below" otherwise, "not_informed" when a log lacks a
 //! channel the quantity comes from or no log is as long as the horizon.
 
-use crate::protocol::{all_segment_errors, Quantity, SegmentErrors};
-use crate::report::LogInput;
+use crate::input::LogInput;
+use crate::observer::Observer;
+use crate::protocol::{all_segment_errors, Protocol, Quantity, SegmentErrors};
 use crate::simulate::{static_log, SimSetup};
 use noise::SensorModel;
 use rayon::prelude::*;
@@ -28,7 +29,7 @@ use std::collections::BTreeMap;
 /// Settings of a drift check.
 #[derive(Clone, Debug)]
 pub struct CheckSettings {
-    pub protocol: crate::protocol::Protocol,
+    pub protocol: Protocol,
     /// Simulated experiments for the model's band.
     pub replicates: usize,
     pub seed: u64,
@@ -163,7 +164,7 @@ pub struct HorizonCheck {
 /// The whole check.
 #[derive(Clone, Debug, Serialize)]
 pub struct DriftCheck {
-    pub protocol: crate::protocol::Protocol,
+    pub protocol: Protocol,
     pub protocol_text: String,
     pub seed: u64,
     pub replicates: usize,
@@ -178,7 +179,8 @@ pub enum CheckError {
     NoLogs,
     #[error("the logs have different sample intervals ({0} s and {1} s); pool logs of one rate")]
     Rates(f64, f64),
-    #[error("--replicates {0}: at least 10 simulated experiments are needed for a 95 % band")]
+    /// The setting `replicates` is below 10.
+    #[error("replicates = {0}: at least 10 simulated experiments are needed for a 95 % band")]
     Replicates(usize),
     #[error("simulated log {run}: {quantity} is not finite")]
     NotFinite { run: u64, quantity: &'static str },
@@ -238,14 +240,44 @@ fn effective_count(per_log: &[&[f64]], overlapping: bool) -> f64 {
     (if overlapping { n_eff / 2.0 } else { n_eff }).max(1.0)
 }
 
-/// Check the measured logs' drift against the model's under `settings.protocol`. `progress` is
+/// Check the measured logs' drift against the model's under `settings.protocol`. `observer` is
 /// told the number of simulated logs done.
 pub fn check_drift(
     logs: &[LogInput],
     model_sensor: &SensorModel,
     settings: &CheckSettings,
-    progress: &(dyn Fn(usize, usize) + Sync),
+    observer: &dyn Observer,
 ) -> Result<DriftCheck, CheckError> {
+    let dt_s = check_inputs(logs, settings)?;
+    let p = &settings.protocol;
+    // Measured segments per horizon, per log (kept apart for the effective count).
+    let by_log: Vec<Vec<SegmentErrors>> = logs
+        .par_iter()
+        .map(|l| all_segment_errors(&l.channels, dt_s, p))
+        .collect();
+    let experiment = Experiment {
+        logs,
+        model: model_sensor,
+        settings,
+        simulated: simulate_experiments(logs, model_sensor, settings, dt_s, observer),
+    };
+    let mut horizons = Vec::new();
+    for (hi, &h) in p.horizons_s.iter().enumerate() {
+        let per_log: Vec<SegmentErrors> = by_log.iter().map(|l| l[hi].clone()).collect();
+        horizons.push(experiment.check_horizon(hi, h, &per_log)?);
+    }
+    Ok(DriftCheck {
+        protocol: p.clone(),
+        protocol_text: p.describe(),
+        seed: settings.seed,
+        replicates: settings.replicates,
+        logs: logs.len(),
+        horizons,
+    })
+}
+
+/// The logs' common sample interval, once the logs and the settings are checked.
+fn check_inputs(logs: &[LogInput], settings: &CheckSettings) -> Result<f64, CheckError> {
     let first = logs.first().ok_or(CheckError::NoLogs)?;
     for l in logs {
         if (l.dt_s - first.dt_s).abs() > 1e-9 * first.dt_s {
@@ -255,23 +287,23 @@ pub fn check_drift(
     if settings.replicates < 10 {
         return Err(CheckError::Replicates(settings.replicates));
     }
-    let p = &settings.protocol;
-    let dt = first.dt_s;
-    // Measured segments per horizon, per log (kept apart for the effective count).
-    let by_log: Vec<Vec<SegmentErrors>> = logs
-        .par_iter()
-        .map(|l| all_segment_errors(&l.channels, dt, p))
-        .collect();
-    let measured: Vec<Vec<SegmentErrors>> = (0..p.horizons_s.len())
-        .map(|h| by_log.iter().map(|l| l[h].clone()).collect())
-        .collect();
-    // Simulated experiments: replicate r, log l is montecarlo run r * logs + l of the seed.
+    Ok(first.dt_s)
+}
+
+/// The segment errors of every simulated experiment: replicate r, log l is montecarlo run
+/// r * logs + l of the seed, one simulated log as long as measured log l, with its channels.
+fn simulate_experiments(
+    logs: &[LogInput],
+    model: &SensorModel,
+    settings: &CheckSettings,
+    dt_s: f64,
+    observer: &dyn Observer,
+) -> Vec<Vec<SegmentErrors>> {
     let jobs: Vec<(usize, usize)> = (0..settings.replicates)
         .flat_map(|r| (0..logs.len()).map(move |l| (r, l)))
         .collect();
     let done = std::sync::atomic::AtomicUsize::new(0);
-    let simulated: Vec<Vec<SegmentErrors>> = jobs
-        .par_iter()
+    jobs.par_iter()
         .map(|&(r, l)| {
             let log = &logs[l];
             let samples = log
@@ -282,7 +314,7 @@ pub fn check_drift(
                 .min()
                 .unwrap_or(0);
             let setup = SimSetup {
-                dt_s: dt,
+                dt_s,
                 samples,
                 grid_m: Vec::new(),
                 active: std::array::from_fn(|c| log.channels[c].is_some()),
@@ -291,18 +323,34 @@ pub fn check_drift(
                 temp_coeff: [0.0; 6],
             };
             let run = (r * logs.len() + l) as u64;
-            let sim = static_log(model_sensor, &setup, settings.seed, run);
+            let sim = static_log(model, &setup, settings.seed, run);
             let chans: [Option<&[f64]>; 6] =
                 std::array::from_fn(|c| setup.active[c].then(|| sim[c].as_slice()));
-            let out = all_segment_errors(&chans, dt, p);
+            let out = all_segment_errors(&chans, dt_s, &settings.protocol);
             let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            progress(k, jobs.len());
+            observer.simulated(k, jobs.len());
             out
         })
-        .collect();
-    let mut horizons = Vec::new();
-    for (hi, &h) in p.horizons_s.iter().enumerate() {
-        let per_log = &measured[hi];
+        .collect()
+}
+
+/// The measured logs and the simulated experiments of one check.
+struct Experiment<'a> {
+    logs: &'a [LogInput<'a>],
+    model: &'a SensorModel,
+    settings: &'a CheckSettings,
+    /// Per simulated log (replicate-major), the segment errors per horizon.
+    simulated: Vec<Vec<SegmentErrors>>,
+}
+
+impl Experiment<'_> {
+    /// Horizon `hi` (`h` seconds): every quantity, from the measured logs' segments `per_log`.
+    fn check_horizon(
+        &self,
+        hi: usize,
+        h: f64,
+        per_log: &[SegmentErrors],
+    ) -> Result<HorizonCheck, CheckError> {
         let mut pooled = SegmentErrors {
             horizon_s: h,
             ..Default::default()
@@ -314,119 +362,139 @@ pub fn check_drift(
             let missing: Vec<&str> = q
                 .needs()
                 .iter()
-                .filter(|&&c| logs.iter().any(|l| l.channels[c].is_none()))
+                .filter(|&&c| self.logs.iter().any(|l| l.channels[c].is_none()))
                 .map(|&c| crate::drift::CHANNELS[c])
                 .collect();
-            if !missing.is_empty() || segments == 0 {
-                channels.insert(
-                    q.name(),
-                    QuantityCheck {
-                        measured: None,
-                        model: None,
-                        verdict: Verdict::NotInformed,
-                        ratio: None,
-                        likely_cause: None,
-                        note: Some(if missing.is_empty() {
-                            match p.lead_s() {
-                                w if w > 0.0 => {
-                                    format!("no log holds a {h} s segment after the {w} s window")
-                                }
-                                _ => format!("no log is {h} s long"),
-                            }
-                        } else {
-                            format!("the logs lack {}", missing.join(", "))
-                        }),
-                    },
-                );
-                continue;
-            }
-            let values = pooled.values(q);
-            let sorted = abs_sorted(values);
-            let r = rms(values);
-            let seqs: Vec<&[f64]> = per_log.iter().map(|s| s.values(q)).collect();
-            let n_eff = effective_count(&seqs, p.overlapping);
-            let lo_q = allan::chi2::chi2_ppf(0.975, n_eff);
-            let hi_q = allan::chi2::chi2_ppf(0.025, n_eff);
-            let mean = sorted.iter().sum::<f64>() / sorted.len() as f64;
-            let sd = (sorted.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>()
-                / (sorted.len().max(2) - 1) as f64)
-                .sqrt();
-            let half = 1.959_963_984_540_054 * sd / n_eff.sqrt();
-            let measured = Measured {
-                mean,
-                mean_lo: mean - half,
-                mean_hi: mean + half,
-                p50: quantile(&sorted, 0.5),
-                p95: quantile(&sorted, 0.95),
-                rms: r,
-                rms_lo: r * (n_eff / lo_q).sqrt(),
-                rms_hi: r * (n_eff / hi_q).sqrt(),
-                n_eff,
-            };
-            // The model: RMS of each replicate (its logs pooled), and all segments pooled.
-            let mut rep_rms = Vec::with_capacity(settings.replicates);
-            let mut all = Vec::new();
-            for rep in simulated.chunks(logs.len()) {
-                let mut v = Vec::new();
-                for s in rep {
-                    v.extend_from_slice(s[hi].values(q));
-                }
-                if let Some(bad) = v.iter().position(|x| !x.is_finite()) {
-                    return Err(CheckError::NotFinite {
-                        run: bad as u64,
-                        quantity: q.name(),
-                    });
-                }
-                rep_rms.push(rms(&v));
-                all.extend(v);
-            }
-            rep_rms.sort_by(f64::total_cmp);
-            // Distribution-free 95 % prediction interval from R exchangeable replicates: the
-            // order statistics X_(a) and X_(R+1-a) cover a new measurement with probability
-            // (R + 1 - 2a) / (R + 1) (e.g. Wilks 1941); a = 0.025 (R + 1), between order
-            // statistics by linear interpolation, makes it 95 % for any R (at least 1: the
-            // extremes, for R < 39).
-            let a = (0.025 * (rep_rms.len() + 1) as f64).max(1.0);
-            let all_sorted = abs_sorted(&all);
-            let model = Model {
-                mean: all_sorted.iter().sum::<f64>() / all_sorted.len() as f64,
-                p50: quantile(&all_sorted, 0.5),
-                p95: quantile(&all_sorted, 0.95),
-                rms: rms(&all),
-                band_lo: order_stat(&rep_rms, a),
-                band_hi: order_stat(&rep_rms, (rep_rms.len() + 1) as f64 - a),
-            };
-            let verdict = if r > model.band_hi {
-                Verdict::Above
-            } else if r < model.band_lo {
-                Verdict::Below
+            let check = if !missing.is_empty() || segments == 0 {
+                not_informed(&self.settings.protocol, h, &missing)
             } else {
-                Verdict::Inside
+                let measured =
+                    measured_stats(&pooled, per_log, q, self.settings.protocol.overlapping);
+                let model = self.model_stats(hi, q)?;
+                compare(q, h, measured, model, self.model)
             };
-            channels.insert(
-                q.name(),
-                QuantityCheck {
-                    measured: Some(measured),
-                    ratio: Some(r / model.rms),
-                    model: Some(model),
-                    verdict,
-                    note: None,
-                    likely_cause: likely_cause(q, h, verdict, model_sensor),
-                },
-            );
+            channels.insert(q.name(), check);
         }
-        horizons.push(HorizonCheck {
+        Ok(HorizonCheck {
             t_s: h,
             segments,
             channels,
-        });
+        })
     }
-    Ok(DriftCheck {
-        protocol: p.clone(),
-        protocol_text: p.describe(),
-        seed: settings.seed,
-        replicates: settings.replicates,
-        logs: logs.len(),
-        horizons,
-    })
+
+    /// The model's statistics of quantity `q` at horizon `hi`: the RMS of each replicate (its logs
+    /// pooled), and all segments pooled.
+    fn model_stats(&self, hi: usize, q: Quantity) -> Result<Model, CheckError> {
+        let mut rep_rms = Vec::with_capacity(self.settings.replicates);
+        let mut all = Vec::new();
+        for rep in self.simulated.chunks(self.logs.len()) {
+            let mut v = Vec::new();
+            for s in rep {
+                v.extend_from_slice(s[hi].values(q));
+            }
+            if let Some(bad) = v.iter().position(|x| !x.is_finite()) {
+                return Err(CheckError::NotFinite {
+                    run: bad as u64,
+                    quantity: q.name(),
+                });
+            }
+            rep_rms.push(rms(&v));
+            all.extend(v);
+        }
+        rep_rms.sort_by(f64::total_cmp);
+        // Distribution-free 95 % prediction interval from R exchangeable replicates: the
+        // order statistics X_(a) and X_(R+1-a) cover a new measurement with probability
+        // (R + 1 - 2a) / (R + 1) (e.g. Wilks 1941); a = 0.025 (R + 1), between order
+        // statistics by linear interpolation, makes it 95 % for any R (at least 1: the
+        // extremes, for R < 39).
+        let a = (0.025 * (rep_rms.len() + 1) as f64).max(1.0);
+        let all_sorted = abs_sorted(&all);
+        Ok(Model {
+            mean: all_sorted.iter().sum::<f64>() / all_sorted.len() as f64,
+            p50: quantile(&all_sorted, 0.5),
+            p95: quantile(&all_sorted, 0.95),
+            rms: rms(&all),
+            band_lo: order_stat(&rep_rms, a),
+            band_hi: order_stat(&rep_rms, (rep_rms.len() + 1) as f64 - a),
+        })
+    }
+}
+
+/// A quantity the logs cannot inform: they lack one of its channels (`missing`), or no log holds
+/// a segment of `h` seconds.
+fn not_informed(p: &Protocol, h: f64, missing: &[&str]) -> QuantityCheck {
+    QuantityCheck {
+        measured: None,
+        model: None,
+        verdict: Verdict::NotInformed,
+        ratio: None,
+        likely_cause: None,
+        note: Some(if missing.is_empty() {
+            match p.lead_s() {
+                w if w > 0.0 => format!("no log holds a {h} s segment after the {w} s window"),
+                _ => format!("no log is {h} s long"),
+            }
+        } else {
+            format!("the logs lack {}", missing.join(", "))
+        }),
+    }
+}
+
+/// The measured statistics of quantity `q` over the pooled segments, with intervals from the
+/// effective count of the logs' own segment sequences (`per_log`; module doc).
+fn measured_stats(
+    pooled: &SegmentErrors,
+    per_log: &[SegmentErrors],
+    q: Quantity,
+    overlapping: bool,
+) -> Measured {
+    let values = pooled.values(q);
+    let sorted = abs_sorted(values);
+    let r = rms(values);
+    let seqs: Vec<&[f64]> = per_log.iter().map(|s| s.values(q)).collect();
+    let n_eff = effective_count(&seqs, overlapping);
+    let lo_q = allan::chi2::chi2_ppf(0.975, n_eff);
+    let hi_q = allan::chi2::chi2_ppf(0.025, n_eff);
+    let mean = sorted.iter().sum::<f64>() / sorted.len() as f64;
+    let sd = (sorted.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>()
+        / (sorted.len().max(2) - 1) as f64)
+        .sqrt();
+    let half = 1.959_963_984_540_054 * sd / n_eff.sqrt();
+    Measured {
+        mean,
+        mean_lo: mean - half,
+        mean_hi: mean + half,
+        p50: quantile(&sorted, 0.5),
+        p95: quantile(&sorted, 0.95),
+        rms: r,
+        rms_lo: r * (n_eff / lo_q).sqrt(),
+        rms_hi: r * (n_eff / hi_q).sqrt(),
+        n_eff,
+    }
+}
+
+/// The measured RMS against the model's band: the verdict, and outside the band its likely cause.
+fn compare(
+    q: Quantity,
+    h: f64,
+    measured: Measured,
+    model: Model,
+    model_sensor: &SensorModel,
+) -> QuantityCheck {
+    let r = measured.rms;
+    let verdict = if r > model.band_hi {
+        Verdict::Above
+    } else if r < model.band_lo {
+        Verdict::Below
+    } else {
+        Verdict::Inside
+    };
+    QuantityCheck {
+        measured: Some(measured),
+        ratio: Some(r / model.rms),
+        model: Some(model),
+        verdict,
+        note: None,
+        likely_cause: likely_cause(q, h, verdict, model_sensor),
+    }
 }

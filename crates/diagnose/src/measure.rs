@@ -1,10 +1,9 @@
-//! Step 1 of the workflow: the measured Allan deviations on the common grid, and the checks of
-//! the log's shape.
+//! Step 1 of the workflow: the measured Allan deviations on the common grid.
 
-use crate::drift::CHANNELS;
 use crate::gap::{Band, Curve};
-use crate::report::*;
+use crate::input::LogInput;
 use allan::{DataKind, Estimator, TauGrid};
+use noise::ImuChannels;
 
 /// One channel's measurement on the common grid: indices into the grid it has valid points at.
 pub(crate) struct Measured {
@@ -16,7 +15,10 @@ pub(crate) struct Measured {
 
 /// Measured Allan deviations of every channel in the log on the octave grid, and the grid's averaging
 /// factors. Points without a positive deviation and EDF, or below `tau_min_s`, are left out.
-pub(crate) fn measure(log: &LogInput, tau_min_s: f64) -> (Vec<usize>, [Option<Measured>; 6]) {
+pub(crate) fn measure(
+    log: &LogInput,
+    tau_min_s: f64,
+) -> (Vec<usize>, ImuChannels<Option<Measured>>) {
     let mut grid_m: Vec<usize> = Vec::new();
     let mut points: [Vec<allan::AllanPoint>; 6] = Default::default();
     for c in 0..6 {
@@ -33,7 +35,8 @@ pub(crate) fn measure(log: &LogInput, tau_min_s: f64) -> (Vec<usize>, [Option<Me
             }
         }
     }
-    let measured = std::array::from_fn(|c| {
+    let measured = ImuChannels::from_fn(|ch| {
+        let c = ch.index();
         log.channels[c]?;
         let mut idx = Vec::new();
         let (mut tau, mut adev, mut edf, mut lo, mut hi) = (vec![], vec![], vec![], vec![], vec![]);
@@ -63,41 +66,6 @@ pub(crate) fn measure(log: &LogInput, tau_min_s: f64) -> (Vec<usize>, [Option<Me
         })
     });
     (grid_m, measured)
-}
-
-/// Check the log's shape; returns the number of samples.
-pub(crate) fn validate(log: &LogInput) -> Result<usize, DiagnoseError> {
-    if !(log.dt_s > 0.0 && log.dt_s.is_finite()) {
-        return Err(DiagnoseError::BadInterval(log.dt_s));
-    }
-    let first = (0..6)
-        .find(|&c| log.channels[c].is_some())
-        .ok_or(DiagnoseError::NoChannels)?;
-    let samples = log.channels[first].map(|c| c.len()).unwrap_or(0);
-    for c in 0..6 {
-        if let Some(s) = log.channels[c] {
-            if s.len() != samples {
-                return Err(DiagnoseError::Length {
-                    channel: CHANNELS[c],
-                    got: s.len(),
-                    first: CHANNELS[first],
-                    expected: samples,
-                });
-            }
-        }
-    }
-    if samples < 64 {
-        return Err(DiagnoseError::TooShort { samples });
-    }
-    if let Some(t) = log.temperature_c {
-        if t.len() != samples {
-            return Err(DiagnoseError::TemperatureLength {
-                got: t.len(),
-                expected: samples,
-            });
-        }
-    }
-    Ok(samples)
 }
 
 /// Restrict a band to a channel's valid grid indices.

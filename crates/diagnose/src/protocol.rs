@@ -11,7 +11,7 @@
 //! from rest with the project's mechanisation (`strapdown`, `Accurate` scheme) and its error
 //! against the static truth read at the end (`strapdown::nav_error`).
 
-use crate::drift::G_MPS2;
+use noise::units::STANDARD_GRAVITY_MPS2 as G_MPS2;
 use serde::Serialize;
 use strapdown::{nav_error, Attitude, BodyVector, NavState, Scheme, Strapdown};
 

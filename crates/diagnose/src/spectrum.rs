@@ -7,7 +7,7 @@
 //! frequency and bandwidth around the peak's (`candidates::resonance_grid`) and keeps the bandwidth
 //! within 0.15-3 times the peak's width.
 
-use crate::detect::median;
+use crate::stats::median;
 
 /// A broad peak of the spectrum.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -74,49 +74,7 @@ pub fn broad_peak(x: &[f64], dt_s: f64) -> Option<SpectralPeak> {
     let (p, k) = welch(x, seg);
     let df = 1.0 / (seg as f64 * dt_s);
     let nb = p.len();
-    // Background: the median over a log-spaced window, twice; the second pass leaves out the bins
-    // the first found raised (a peak a few hertz wide would otherwise lift its own background).
-    let window = |i: usize| -> Vec<usize> {
-        (-30..=30)
-            .map(|j| {
-                let b = (i as f64 * 2f64.powf(f64::from(j) / 30.0)).round() as usize;
-                b.clamp(1, nb - 1)
-            })
-            .collect()
-    };
-    let background = |raised: &[bool]| -> Vec<f64> {
-        (0..nb)
-            .map(|i| {
-                if i < 2 {
-                    return f64::NAN;
-                }
-                let all = window(i);
-                let mut v: Vec<f64> = all.iter().filter(|&&b| !raised[b]).map(|&b| p[b]).collect();
-                if v.len() < 15 {
-                    v = all.iter().map(|&b| p[b]).collect();
-                }
-                median(&mut v)
-            })
-            .collect()
-    };
-    let bg1 = background(&vec![false; nb]);
-    let flag = 1.0 + 3.0 / (3.0 * k as f64).sqrt();
-    let raised: Vec<bool> = (0..nb)
-        .map(|i| {
-            i >= 2
-                && i + 1 < nb
-                && (i - 1..=i + 1).map(|b| p[b] / bg1[b]).sum::<f64>() / 3.0 > flag.max(1.1)
-        })
-        .collect();
-    let bg = background(&raised);
-    let ratio = |i: usize| -> f64 {
-        let r: f64 = (i - 1..=i + 1).map(|b| p[b] / bg[b]).sum::<f64>() / 3.0;
-        if r.is_finite() {
-            r
-        } else {
-            0.0
-        }
-    };
+    let spectrum = Spectrum::new(p, k);
     let lo = 6usize;
     let hi = ((0.45 / dt_s) / df).floor() as usize;
     if hi <= lo + 2 || hi + 1 >= nb {
@@ -128,16 +86,80 @@ pub fn broad_peak(x: &[f64], dt_s: f64) -> Option<SpectralPeak> {
     for _ in 0..8 {
         let Some(top) = (lo..=hi)
             .filter(|&i| !masked[i])
-            .max_by(|&a, &b| ratio(a).total_cmp(&ratio(b)))
+            .max_by(|&a, &b| spectrum.ratio(a).total_cmp(&spectrum.ratio(b)))
         else {
             break;
         };
-        let r_top = ratio(top);
+        let r_top = spectrum.ratio(top);
         if r_top < threshold {
             break;
         }
-        // Half-power region of the excess (3-bin smoothed).
-        let excess = |i: usize| (ratio(i) - 1.0) * bg[i];
+        let region = spectrum.region(top, (lo, hi), threshold);
+        for m in masked
+            .iter_mut()
+            .take((region.b2 + 2).min(nb - 1) + 1)
+            .skip(region.a2.saturating_sub(2))
+        {
+            *m = true;
+        }
+        if let Some((power, peak)) = spectrum.peak(&region, r_top, df) {
+            if best.as_ref().is_none_or(|(pw, _)| power > *pw) {
+                best = Some((power, peak));
+            }
+        }
+    }
+    best.map(|(_, p)| p)
+}
+
+/// A Welch spectrum with its background.
+struct Spectrum {
+    p: Vec<f64>,
+    bg: Vec<f64>,
+}
+
+/// The bins around a peak's top: its half-power region [a, b] and the whole raised region
+/// [a2, b2].
+struct Region {
+    a: usize,
+    b: usize,
+    a2: usize,
+    b2: usize,
+}
+
+impl Spectrum {
+    /// Background: the median over a log-spaced window, twice; the second pass leaves out the bins
+    /// the first found raised (a peak a few hertz wide would otherwise lift its own background).
+    fn new(p: Vec<f64>, k: usize) -> Spectrum {
+        let nb = p.len();
+        let bg1 = background(&p, &vec![false; nb]);
+        let flag = 1.0 + 3.0 / (3.0 * k as f64).sqrt();
+        let raised: Vec<bool> = (0..nb)
+            .map(|i| {
+                i >= 2
+                    && i + 1 < nb
+                    && (i - 1..=i + 1).map(|b| p[b] / bg1[b]).sum::<f64>() / 3.0 > flag.max(1.1)
+            })
+            .collect();
+        let bg = background(&p, &raised);
+        Spectrum { p, bg }
+    }
+
+    /// The ratio of power to background at bin `i`, smoothed over three bins (0 where undefined).
+    fn ratio(&self, i: usize) -> f64 {
+        let r: f64 = (i - 1..=i + 1).map(|b| self.p[b] / self.bg[b]).sum::<f64>() / 3.0;
+        if r.is_finite() {
+            r
+        } else {
+            0.0
+        }
+    }
+
+    /// The regions of the peak at bin `top` within [lo, hi]: where its excess power (3-bin
+    /// smoothed) stays above half its top, and where the smoothed ratio stays above half the
+    /// threshold's excess (about 3 sigma: a resonance's wings belong to it, and are masked with it
+    /// rather than found as peaks of their own).
+    fn region(&self, top: usize, (lo, hi): (usize, usize), threshold: f64) -> Region {
+        let excess = |i: usize| (self.ratio(i) - 1.0) * self.bg[i];
         let half = 0.5 * excess(top);
         let mut a = top;
         while a > lo && excess(a - 1) > half {
@@ -147,27 +169,25 @@ pub fn broad_peak(x: &[f64], dt_s: f64) -> Option<SpectralPeak> {
         while b < hi && excess(b + 1) > half {
             b += 1;
         }
-        let width_bins = (b - a + 1) as f64;
-        // The whole raised region (the smoothed ratio above half the threshold's excess, about
-        // 3 sigma): a resonance's wings belong to it, and are masked with it rather than found
-        // as peaks of their own.
         let floor = 1.0 + 0.5 * (threshold - 1.0);
         let (mut a2, mut b2) = (a, b);
-        while a2 > lo && ratio(a2 - 1) > floor {
+        while a2 > lo && self.ratio(a2 - 1) > floor {
             a2 -= 1;
         }
-        while b2 < hi && ratio(b2 + 1) > floor {
+        while b2 < hi && self.ratio(b2 + 1) > floor {
             b2 += 1;
         }
-        for m in masked
-            .iter_mut()
-            .take((b2 + 2).min(nb - 1) + 1)
-            .skip(a2.saturating_sub(2))
-        {
-            *m = true;
-        }
+        Region { a, b, a2, b2 }
+    }
+
+    /// The peak of `region` (top ratio `r_top`) with its excess power, unless it is a line (under
+    /// 4 bins wide) or has no excess; bins are `df` wide.
+    fn peak(&self, region: &Region, r_top: f64, df: f64) -> Option<(f64, SpectralPeak)> {
+        let (p, bg) = (&self.p, &self.bg);
+        let Region { a, b, a2, b2 } = *region;
+        let width_bins = (b - a + 1) as f64;
         if width_bins < 4.0 {
-            continue; // a line
+            return None; // a line
         }
         let power: f64 = (a2..=b2).map(|i| (p[i] - bg[i]).max(0.0)).sum();
         let (mut w, mut wf) = (0.0, 0.0);
@@ -177,7 +197,7 @@ pub fn broad_peak(x: &[f64], dt_s: f64) -> Option<SpectralPeak> {
             wf += e * i as f64;
         }
         if w <= 0.0 {
-            continue;
+            return None;
         }
         // The smoothing (3 bins) and the Hann main lobe (3 dB width 1.44 bins) widen the peak.
         let width = (width_bins * width_bins - 1.44f64.powi(2) - 1.0)
@@ -191,11 +211,35 @@ pub fn broad_peak(x: &[f64], dt_s: f64) -> Option<SpectralPeak> {
             lo_hz: a2 as f64 * df,
             hi_hz: b2 as f64 * df,
         };
-        if best.as_ref().is_none_or(|(pw, _)| power > *pw) {
-            best = Some((power, peak));
-        }
+        Some((power, peak))
     }
-    best.map(|(_, p)| p)
+}
+
+/// The median of `p` over 61 bins log-spaced over [i/2, 2 i] at every bin i >= 2, leaving out the
+/// `raised` bins unless fewer than 15 remain (NaN below bin 2).
+fn background(p: &[f64], raised: &[bool]) -> Vec<f64> {
+    let nb = p.len();
+    let window = |i: usize| -> Vec<usize> {
+        (-30..=30)
+            .map(|j| {
+                let b = (i as f64 * 2f64.powf(f64::from(j) / 30.0)).round() as usize;
+                b.clamp(1, nb - 1)
+            })
+            .collect()
+    };
+    (0..nb)
+        .map(|i| {
+            if i < 2 {
+                return f64::NAN;
+            }
+            let all = window(i);
+            let mut v: Vec<f64> = all.iter().filter(|&&b| !raised[b]).map(|&b| p[b]).collect();
+            if v.len() < 15 {
+                v = all.iter().map(|&b| p[b]).collect();
+            }
+            median(&mut v)
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -1,4 +1,4 @@
-//! Step 3: every candidate effect fitted to one channel's gap.
+//! Step 4: every candidate effect fitted to one channel's gap.
 
 use crate::candidates::{
     filter_grid, free_parameters, resonance_grid, resonance_refinement, resonance_signature,
@@ -14,11 +14,26 @@ use crate::gap::{Band, Curve, Gap};
 use crate::model_terms::{
     flicker_band, has_random_walk_bias_instability, output_filter, term_level,
 };
-use noise::{Effect, FilterKind, OutputFilter, SensorModel};
+use crate::spectrum::SpectralPeak;
+use noise::{Channel, Effect, FilterKind, OutputFilter, SensorModel};
 use std::collections::BTreeMap;
 
-/// A channel changed in this round: (channel, [(effect, previous level)], gap at the round's start).
-pub(crate) type Pending = (usize, Vec<(Effect, Option<TermParams>)>, f64);
+/// What one channel's candidates are fitted to: its model, measurement, band and gap, and what the
+/// log's spectrum says.
+pub(crate) struct ChannelFit<'a> {
+    pub(crate) model: &'a SensorModel,
+    pub(crate) channel: Channel,
+    pub(crate) measured: &'a Curve,
+    pub(crate) band: &'a Band,
+    pub(crate) gap: &'a Gap,
+    pub(crate) dt_s: f64,
+    /// Least-squares slope of the log against time (a rate ramp's level).
+    pub(crate) ramp_slope: f64,
+    /// The log's broad spectral peak: where a resonance is searched and no sinusoid is offered.
+    pub(crate) peak: Option<SpectralPeak>,
+    /// Whether a new sinusoid at a frequency would sit on a spectral line (`detect::line_allowed`).
+    pub(crate) line_allowed: &'a dyn Fn(f64) -> bool,
+}
 
 /// A fitted candidate before selection.
 pub(crate) struct Trial {
@@ -31,6 +46,31 @@ pub(crate) struct Trial {
     pub(crate) aic: f64,
     /// (c - c0) f(tau): the change of the band's Allan variance.
     pub(crate) delta_avar: Vec<f64>,
+}
+
+/// One candidate's fit, before its interval.
+struct Fitted {
+    fit: LinearFit,
+    params: TermParams,
+    /// The 95 % interval of a searched shape.
+    shape: ShapeInterval,
+    /// The candidate's Allan variance per unit squared level at each tau, f(tau).
+    signature: Vec<f64>,
+    /// Look-elsewhere cost of the shapes tried (chi2 scale).
+    penalty: f64,
+}
+
+/// The interval of a shape chosen by search.
+enum ShapeInterval {
+    /// No shape searched (a level, or a shape kept from the model).
+    None,
+    /// A Gauss-Markov correlation time or a sinusoid frequency.
+    Scalar(f64, f64),
+    /// A resonance's frequency and bandwidth.
+    Resonance {
+        frequency_hz: (f64, f64),
+        bandwidth_hz: (f64, f64),
+    },
 }
 
 pub(crate) fn sqrt_params(p: TermParams, c: f64) -> TermParams {
@@ -62,249 +102,324 @@ pub(crate) fn sqrt_params(p: TermParams, c: f64) -> TermParams {
     }
 }
 
-/// Fit every candidate to one channel; the trials are in CANDIDATES order.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn trials(
-    model: &SensorModel,
-    ch: usize,
-    measured: &Curve,
-    band: &Band,
-    g: &Gap,
-    dt_s: f64,
-    temp: Option<(&[f64], f64, f64)>,
-    ramp_slope: f64,
-    peak: Option<crate::spectrum::SpectralPeak>,
-    line_allowed: &dyn Fn(f64) -> bool,
-) -> Vec<Trial> {
-    let ln_meas: Vec<f64> = measured.adev.iter().map(|a| a.ln()).collect();
+/// Fit every candidate to one channel; the trials are in CANDIDATES order, the output filter last.
+pub(crate) fn trials(input: &ChannelFit) -> Vec<Trial> {
+    let ln_meas: Vec<f64> = input.measured.adev.iter().map(|a| a.ln()).collect();
     let data = FitData {
         ln_meas: &ln_meas,
-        ln_band: &band.ln_mean,
-        avar_band: &band.avar_mean,
-        s: &g.s,
+        ln_band: &input.band.ln_mean,
+        avar_band: &input.band.avar_mean,
+        s: &input.gap.s,
     };
-    let m = ln_meas.len();
-    let tau = &measured.tau_s;
+    let ch = input.channel.index();
     let mut out = Vec::new();
     for effect in CANDIDATES {
         // A Woodman random-walk bias instability occupies the axis's one bias-instability slot; a flicker
         // candidate would replace it, so it is not offered (its level shows as a rate random walk).
-        if effect == Effect::BiasInstability && has_random_walk_bias_instability(model, ch) {
+        if effect == Effect::BiasInstability && has_random_walk_bias_instability(input.model, ch) {
             continue;
         }
-        let k = free_parameters(effect);
-        let current = term_level(model, ch, effect);
-        // A resonance's (frequency, bandwidth) interval, when its shape was searched.
-        let mut res_shape: Option<((f64, f64), (f64, f64))> = None;
-        // Signature(s) of this candidate.
-        let shaped = matches!(effect, Effect::GaussMarkov | Effect::Sinusoidal);
-        let (fit, params, shape_lo, shape_hi, f, penalty): (
-            LinearFit,
-            TermParams,
-            f64,
-            f64,
-            Vec<f64>,
-            f64,
-        ) = if shaped {
-            // A term the model has keeps its shape (a wrong level); an absent one is searched over shapes.
-            // A sinusoid is not offered inside a broad spectral peak: the spectrum shows the power
-            // there spread over many resolutions, not a line (the resonance candidate describes it).
-            let shapes = match current.and_then(|c| c.shape()) {
-                Some(s) => vec![s],
-                None => {
-                    let mut g = shape_grid(effect, tau[0], tau[m - 1], dt_s);
-                    if effect == Effect::Sinusoidal {
-                        if let Some(p) = peak {
-                            g.retain(|&f| !p.covers(f));
-                        }
-                    }
-                    g
-                }
-            };
-            let sigs: Vec<Vec<f64>> = shapes
-                .iter()
-                .map(|&s| {
-                    tau.iter()
-                        .map(|&t| unit_family_signature(effect, s, t, dt_s))
-                        .collect()
-                })
-                .collect();
-            let c0 = current.map(|c| c.c()).unwrap_or(0.0);
-            let Some(ff) = fit_family(&data, &shapes, &sigs, &|_| c0) else {
-                continue;
-            };
-            // A new sinusoid must sit on a spectral line where the spectrum can show one
-            // (`detect::line_allowed`): one that does not would only fill a gap as a stand-in.
-            if effect == Effect::Sinusoidal && current.is_none() && !line_allowed(ff.shape) {
-                continue;
-            }
-            let j = shapes.iter().position(|&s| s == ff.shape).unwrap_or(0);
-            let p = match effect {
-                Effect::GaussMarkov => TermParams::GaussMarkov {
-                    sigma: ff.fit.c.sqrt(),
-                    tau_s: ff.shape,
-                },
-                _ => TermParams::Sinusoid {
-                    amplitude: ff.fit.c.sqrt(),
-                    frequency_hz: ff.shape,
-                },
-            };
-            // Shape interval at the 95 % threshold widened by this fit's Birge ratio.
-            let scale = birge_scale(ff.fit.chi2, k, m);
-            let (shape_lo, shape_hi) = ff.shape_interval(CHI2_1_95 * scale * scale);
-            (
-                ff.fit,
-                p,
-                shape_lo,
-                shape_hi,
-                sigs[j].clone(),
-                shape_search_penalty(shapes.len()),
-            )
-        } else if effect == Effect::Resonance {
-            // A resonance the model has is refitted around its shape (the other terms it was fitted
-            // beside may have changed since: a filter, the white level). An absent one needs a broad
-            // peak in the log's spectrum (`spectrum::broad_peak`), which gives its frequency and
-            // bandwidth roughly (a real peak is seldom the symmetric shape of the model); the shape is
-            // then fitted to the Allan curve on a grid around them (frequency within a peak width,
-            // bandwidth 0.15-3 times the peak's), with the look-elsewhere cost of the shapes tried,
-            // through the channel's output filter.
-            let own = match current {
-                Some(TermParams::Resonance {
-                    frequency_hz,
-                    bandwidth_hz,
-                    ..
-                }) => Some((frequency_hz, bandwidth_hz)),
-                _ => None,
-            };
-            let shapes: Vec<(f64, f64)> = match (own, peak) {
-                (Some(shape), _) => resonance_refinement(shape, 1.0, dt_s),
-                (None, Some(p)) => resonance_grid(p, dt_s),
-                (None, None) => continue,
-            };
-            let filter = output_filter(model, ch);
-            let c0 = current.map(|c| c.c()).unwrap_or(0.0);
-            let fit_shape = |shape: (f64, f64)| {
-                let f = resonance_signature(filter.as_ref(), shape, tau, dt_s);
-                (fit_linear(&data, &f, c0), f)
-            };
-            // The bandwidth stays within what the spectrum allows: at least 0.15 times the broad
-            // peak's width (the grid's lowest; a mode much narrower than its peak is a line the
-            // spectrum does not show) and at most 3 times it.
-            let allowed = |b: f64| {
-                peak.is_none_or(|p| (0.149 * p.bandwidth_hz..=3.001 * p.bandwidth_hz).contains(&b))
-            };
-            // (The model's own shape is always refitted.)
-            let mut shapes: Vec<(f64, f64)> = shapes
-                .into_iter()
-                .filter(|s| allowed(s.1) || Some(*s) == own)
-                .collect();
-            let mut fits: Vec<(LinearFit, Vec<f64>)> =
-                shapes.iter().map(|&shape| fit_shape(shape)).collect();
-            let best_of = |fits: &[(LinearFit, Vec<f64>)]| {
-                (0..fits.len()).min_by(|&a, &b| fits[a].0.chi2.total_cmp(&fits[b].0.chi2))
-            };
-            // Refinements around the best, each twice as fine (frequency in steps of 1/4, 1/8,
-            // 1/16 of the bandwidth, bandwidth in steps of 30 %, 15 %, 7.5 %): the grid's steps are
-            // coarse beside a narrow mode, the short taus are sensitive to the frequency, and a
-            // frequency a fraction of a bandwidth off is otherwise made up by a wider bandwidth.
-            for step in [2.0, 1.0, 0.5] {
-                let Some(jb) = best_of(&fits) else { break };
-                for shape in resonance_refinement(shapes[jb], step, dt_s) {
-                    if !shapes.contains(&shape) && allowed(shape.1) {
-                        fits.push(fit_shape(shape));
-                        shapes.push(shape);
-                    }
+        let current = term_level(input.model, ch, effect);
+        let fitted = match effect {
+            Effect::GaussMarkov | Effect::Sinusoidal => fit_shaped(input, &data, effect, current),
+            Effect::Resonance => fit_resonance(input, &data, current),
+            _ => Some(fit_level(input, &data, effect, current)),
+        };
+        if let Some(fitted) = fitted {
+            out.push(trial(&data, effect, current, fitted));
+        }
+    }
+    out.extend(filter_trial(input, &data));
+    out
+}
+
+/// A Gauss-Markov process or a sinusoid. A term the model has keeps its shape (a wrong level); an
+/// absent one is searched over shapes. A sinusoid is not offered inside a broad spectral peak: the
+/// spectrum shows the power there spread over many resolutions, not a line (the resonance
+/// candidate describes it).
+fn fit_shaped(
+    input: &ChannelFit,
+    data: &FitData,
+    effect: Effect,
+    current: Option<TermParams>,
+) -> Option<Fitted> {
+    let (tau, dt_s) = (&input.measured.tau_s, input.dt_s);
+    let m = tau.len();
+    let shapes = match current.and_then(|c| c.shape()) {
+        Some(s) => vec![s],
+        None => {
+            let mut g = shape_grid(effect, tau[0], tau[m - 1], dt_s);
+            if effect == Effect::Sinusoidal {
+                if let Some(p) = input.peak {
+                    g.retain(|&f| !p.covers(f));
                 }
             }
-            let Some(jb) = best_of(&fits) else {
-                continue;
+            g
+        }
+    };
+    let sigs: Vec<Vec<f64>> = shapes
+        .iter()
+        .map(|&s| {
+            tau.iter()
+                .map(|&t| unit_family_signature(effect, s, t, dt_s))
+                .collect()
+        })
+        .collect();
+    let c0 = current.map(|c| c.c()).unwrap_or(0.0);
+    let ff = fit_family(data, &shapes, &sigs, &|_| c0)?;
+    // A new sinusoid must sit on a spectral line where the spectrum can show one
+    // (`detect::line_allowed`): one that does not would only fill a gap as a stand-in.
+    if effect == Effect::Sinusoidal && current.is_none() && !(input.line_allowed)(ff.shape) {
+        return None;
+    }
+    let j = shapes.iter().position(|&s| s == ff.shape).unwrap_or(0);
+    let params = match effect {
+        Effect::GaussMarkov => TermParams::GaussMarkov {
+            sigma: ff.fit.c.sqrt(),
+            tau_s: ff.shape,
+        },
+        _ => TermParams::Sinusoid {
+            amplitude: ff.fit.c.sqrt(),
+            frequency_hz: ff.shape,
+        },
+    };
+    // Shape interval at the 95 % threshold widened by this fit's Birge ratio.
+    let scale = birge_scale(ff.fit.chi2, free_parameters(effect), m);
+    let (shape_lo, shape_hi) = ff.shape_interval(CHI2_1_95 * scale * scale);
+    Some(Fitted {
+        fit: ff.fit,
+        params,
+        shape: ShapeInterval::Scalar(shape_lo, shape_hi),
+        signature: sigs[j].clone(),
+        penalty: shape_search_penalty(shapes.len()),
+    })
+}
+
+/// A resonance. One the model has is refitted around its shape (the other terms it was fitted
+/// beside may have changed since: a filter, the white level). An absent one needs a broad peak in
+/// the log's spectrum (`spectrum::broad_peak`), which gives its frequency and bandwidth roughly (a
+/// real peak is seldom the symmetric shape of the model); the shape is then fitted to the Allan
+/// curve on a grid around them (frequency within a peak width, bandwidth 0.15-3 times the peak's),
+/// with the look-elsewhere cost of the shapes tried, through the channel's output filter.
+fn fit_resonance(
+    input: &ChannelFit,
+    data: &FitData,
+    current: Option<TermParams>,
+) -> Option<Fitted> {
+    let own = match current {
+        Some(TermParams::Resonance {
+            frequency_hz,
+            bandwidth_hz,
+            ..
+        }) => Some((frequency_hz, bandwidth_hz)),
+        _ => None,
+    };
+    let shapes: Vec<(f64, f64)> = match (own, input.peak) {
+        (Some(shape), _) => resonance_refinement(shape, 1.0, input.dt_s),
+        (None, Some(p)) => resonance_grid(p, input.dt_s),
+        (None, None) => return None,
+    };
+    let search = ResonanceSearch {
+        data,
+        tau: &input.measured.tau_s,
+        dt_s: input.dt_s,
+        filter: output_filter(input.model, input.channel.index()),
+        c0: current.map(|c| c.c()).unwrap_or(0.0),
+        peak: input.peak,
+    };
+    let (shapes, fits) = search.run(shapes, own);
+    let jb = ResonanceSearch::best_of(&fits)?;
+    let fit = fits[jb].0;
+    // Shape interval: the grid's shapes within the 95 % threshold (Birge-widened) of the best.
+    let scale = birge_scale(
+        fit.chi2,
+        free_parameters(Effect::Resonance),
+        search.tau.len(),
+    );
+    let near: Vec<(f64, f64)> = (0..fits.len())
+        .filter(|&j| fits[j].0.chi2 <= fit.chi2 + CHI2_2_95 * scale * scale)
+        .map(|j| shapes[j])
+        .collect();
+    let span = |g: fn(&(f64, f64)) -> f64| {
+        near.iter()
+            .map(g)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                (a.min(v), b.max(v))
+            })
+    };
+    Some(Fitted {
+        fit,
+        params: TermParams::Resonance {
+            sigma: fit.c.sqrt(),
+            frequency_hz: shapes[jb].0,
+            bandwidth_hz: shapes[jb].1,
+        },
+        shape: ShapeInterval::Resonance {
+            frequency_hz: span(|s| s.0),
+            bandwidth_hz: span(|s| s.1),
+        },
+        signature: fits[jb].1.clone(),
+        penalty: shape_search_penalty(shapes.len()),
+    })
+}
+
+/// Each shape's fit and signature.
+type ShapeFits = Vec<(LinearFit, Vec<f64>)>;
+
+/// The search over resonance shapes (frequency, bandwidth) of [`fit_resonance`].
+struct ResonanceSearch<'a> {
+    data: &'a FitData<'a>,
+    tau: &'a [f64],
+    dt_s: f64,
+    filter: Option<OutputFilter>,
+    c0: f64,
+    peak: Option<SpectralPeak>,
+}
+
+impl ResonanceSearch<'_> {
+    fn fit_shape(&self, shape: (f64, f64)) -> (LinearFit, Vec<f64>) {
+        let f = resonance_signature(self.filter.as_ref(), shape, self.tau, self.dt_s);
+        (fit_linear(self.data, &f, self.c0), f)
+    }
+
+    /// The bandwidth stays within what the spectrum allows: at least 0.15 times the broad peak's
+    /// width (the grid's lowest; a mode much narrower than its peak is a line the spectrum does not
+    /// show) and at most 3 times it.
+    fn allowed(&self, b: f64) -> bool {
+        self.peak
+            .is_none_or(|p| (0.149 * p.bandwidth_hz..=3.001 * p.bandwidth_hz).contains(&b))
+    }
+
+    fn best_of(fits: &[(LinearFit, Vec<f64>)]) -> Option<usize> {
+        (0..fits.len()).min_by(|&a, &b| fits[a].0.chi2.total_cmp(&fits[b].0.chi2))
+    }
+
+    /// Every shape tried with its fit. The model's own shape is always refitted. Refinements around
+    /// the best, each twice as fine (frequency in steps of 1/4, 1/8, 1/16 of the bandwidth,
+    /// bandwidth in steps of 30 %, 15 %, 7.5 %): the grid's steps are coarse beside a narrow mode,
+    /// the short taus are sensitive to the frequency, and a frequency a fraction of a bandwidth off
+    /// is otherwise made up by a wider bandwidth.
+    fn run(
+        &self,
+        shapes: Vec<(f64, f64)>,
+        own: Option<(f64, f64)>,
+    ) -> (Vec<(f64, f64)>, ShapeFits) {
+        let mut shapes: Vec<(f64, f64)> = shapes
+            .into_iter()
+            .filter(|s| self.allowed(s.1) || Some(*s) == own)
+            .collect();
+        let mut fits: Vec<(LinearFit, Vec<f64>)> =
+            shapes.iter().map(|&shape| self.fit_shape(shape)).collect();
+        for step in [2.0, 1.0, 0.5] {
+            let Some(jb) = Self::best_of(&fits) else {
+                break;
             };
-            let fit = fits[jb].0;
-            // Shape interval: the grid's shapes within the 95 % threshold (Birge-widened) of the best.
-            let scale = birge_scale(fit.chi2, k, m);
-            let near: Vec<(f64, f64)> = (0..fits.len())
-                .filter(|&j| fits[j].0.chi2 <= fit.chi2 + CHI2_2_95 * scale * scale)
-                .map(|j| shapes[j])
-                .collect();
-            let span = |g: fn(&(f64, f64)) -> f64| {
-                near.iter()
-                    .map(g)
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-                        (a.min(v), b.max(v))
-                    })
-            };
-            res_shape = Some((span(|s| s.0), span(|s| s.1)));
-            let p = TermParams::Resonance {
-                sigma: fit.c.sqrt(),
-                frequency_hz: shapes[jb].0,
-                bandwidth_hz: shapes[jb].1,
-            };
-            let penalty = shape_search_penalty(shapes.len());
-            (fit, p, 0.0, 0.0, fits[jb].1.clone(), penalty)
-        } else if effect == Effect::TemperatureBias {
-            // The sign comes from the correlation with temperature (the Allan signature is even).
-            let Some((temp_avar, sign, current_k)) = temp else {
-                continue;
-            };
-            let f: Vec<f64> = temp_avar.to_vec();
-            let fit = fit_linear(&data, &f, current_k * current_k);
-            (
-                fit,
-                TermParams::Level(fit.c.sqrt() * sign),
-                0.0,
-                0.0,
-                f,
-                0.0,
-            )
-        } else {
-            let flicker = flicker_band(model, ch);
-            let f: Vec<f64> = if effect == Effect::WhiteNoise {
-                white_signature(output_filter(model, ch).as_ref(), tau, dt_s)
-            } else {
-                tau.iter()
-                    .map(|&t| unit_signature(effect, t, dt_s, &flicker))
-                    .collect()
-            };
-            let c0 = current.map(|c| c.c()).unwrap_or(0.0);
-            let fit = fit_linear(&data, &f, c0);
-            if effect == Effect::RateRamp {
-                // A ramp is deterministic: its level is the least-squares slope of the log (the ML
-                // estimate of a ramp in white noise), not a free Allan parameter. A long-tau rise that is
-                // really a random walk then fits as a ramp only if the log does drift that way, which the
-                // last two or three Allan points (a handful of EDF) cannot tell.
-                let c = ramp_slope * ramp_slope;
-                let ramp = LinearFit {
-                    c,
-                    chi2: data.chi2(&f, c - c0),
-                    ..fit
-                };
-                (ramp, TermParams::Level(ramp_slope), 0.0, 0.0, f, 0.0)
-            } else {
-                (fit, TermParams::Level(fit.c.sqrt()), 0.0, 0.0, f, 0.0)
-            }
-        };
-        let c0 = match (effect, temp) {
-            (Effect::TemperatureBias, Some((_, _, k))) => k * k,
-            _ => current.map(|c| c.c()).unwrap_or(0.0),
-        };
-        // 95 % interval widened by the Birge ratio of this fit.
-        let scale = birge_scale(fit.chi2, k, m);
-        // (For the ramp: the profile interval of the Allan fit alone, around its own optimum.)
-        let allan_fit = if effect == Effect::RateRamp {
-            fit_linear(&data, &f, c0)
-        } else {
-            fit
-        };
-        let (c_lo, c_hi) = linear_interval(&data, &f, c0, &allan_fit, CHI2_1_95 * scale * scale);
-        let mut lo = sqrt_params(params, c_lo);
-        let mut hi = sqrt_params(params, c_hi);
-        if let (TermParams::Level(l), TermParams::Level(h)) = (lo, hi) {
-            if l > h {
-                (lo, hi) = (TermParams::Level(h), TermParams::Level(l));
+            for shape in resonance_refinement(shapes[jb], step, self.dt_s) {
+                if !shapes.contains(&shape) && self.allowed(shape.1) {
+                    fits.push(self.fit_shape(shape));
+                    shapes.push(shape);
+                }
             }
         }
-        if let (
-            Some(((f_lo, f_hi), (b_lo, b_hi))),
+        (shapes, fits)
+    }
+}
+
+/// A one-level term (quantisation, white noise, flicker, rate random walk, rate ramp).
+fn fit_level(
+    input: &ChannelFit,
+    data: &FitData,
+    effect: Effect,
+    current: Option<TermParams>,
+) -> Fitted {
+    let (tau, dt_s) = (&input.measured.tau_s, input.dt_s);
+    let ch = input.channel.index();
+    let f: Vec<f64> = if effect == Effect::WhiteNoise {
+        white_signature(output_filter(input.model, ch).as_ref(), tau, dt_s)
+    } else {
+        let flicker = flicker_band(input.model, ch);
+        tau.iter()
+            .map(|&t| unit_signature(effect, t, dt_s, &flicker))
+            .collect()
+    };
+    let c0 = current.map(|c| c.c()).unwrap_or(0.0);
+    let fit = fit_linear(data, &f, c0);
+    let (fit, params) = if effect == Effect::RateRamp {
+        // A ramp is deterministic: its level is the least-squares slope of the log (the ML
+        // estimate of a ramp in white noise), not a free Allan parameter. A long-tau rise that is
+        // really a random walk then fits as a ramp only if the log does drift that way, which the
+        // last two or three Allan points (a handful of EDF) cannot tell.
+        let c = input.ramp_slope * input.ramp_slope;
+        let ramp = LinearFit {
+            c,
+            chi2: data.chi2(&f, c - c0),
+            ..fit
+        };
+        (ramp, TermParams::Level(input.ramp_slope))
+    } else {
+        (fit, TermParams::Level(fit.c.sqrt()))
+    };
+    Fitted {
+        fit,
+        params,
+        shape: ShapeInterval::None,
+        signature: f,
+        penalty: 0.0,
+    }
+}
+
+/// A fitted candidate with its 95 % interval (widened by the Birge ratio of its fit) and
+/// information criteria.
+fn trial(data: &FitData, effect: Effect, current: Option<TermParams>, fitted: Fitted) -> Trial {
+    let Fitted {
+        fit,
+        params,
+        shape,
+        signature: f,
+        penalty,
+    } = fitted;
+    let (k, m) = (free_parameters(effect), data.ln_meas.len());
+    let c0 = current.map(|c| c.c()).unwrap_or(0.0);
+    let scale = birge_scale(fit.chi2, k, m);
+    // (For the ramp: the profile interval of the Allan fit alone, around its own optimum.)
+    let allan_fit = if effect == Effect::RateRamp {
+        fit_linear(data, &f, c0)
+    } else {
+        fit
+    };
+    let (c_lo, c_hi) = linear_interval(data, &f, c0, &allan_fit, CHI2_1_95 * scale * scale);
+    let (lo, hi) = bounds(params, (c_lo, c_hi), &shape);
+    Trial {
+        effect,
+        params,
+        lo,
+        hi,
+        model: current,
+        bic: bic(fit.chi2, k, m) + penalty,
+        aic: aic(fit.chi2, k) + penalty,
+        delta_avar: f.iter().map(|v| (fit.c - c0) * v).collect(),
+    }
+}
+
+/// The parameters at the ends of the level interval (c_lo, c_hi), with the shape's own interval.
+fn bounds(
+    params: TermParams,
+    (c_lo, c_hi): (f64, f64),
+    shape: &ShapeInterval,
+) -> (TermParams, TermParams) {
+    let mut lo = sqrt_params(params, c_lo);
+    let mut hi = sqrt_params(params, c_hi);
+    if let (TermParams::Level(l), TermParams::Level(h)) = (lo, hi) {
+        if l > h {
+            (lo, hi) = (TermParams::Level(h), TermParams::Level(l));
+        }
+    }
+    match (shape, &mut lo, &mut hi) {
+        (
+            ShapeInterval::Resonance {
+                frequency_hz: (f_lo, f_hi),
+                bandwidth_hz: (b_lo, b_hi),
+            },
             TermParams::Resonance {
                 frequency_hz: fl,
                 bandwidth_hz: bl,
@@ -315,94 +430,133 @@ pub(crate) fn trials(
                 bandwidth_hz: bh,
                 ..
             },
-        ) = (res_shape, &mut lo, &mut hi)
-        {
-            (*fl, *fh, *bl, *bh) = (f_lo, f_hi, b_lo, b_hi);
-        }
-        match (&mut lo, &mut hi) {
-            (
-                TermParams::GaussMarkov { tau_s: a, .. },
-                TermParams::GaussMarkov { tau_s: b, .. },
-            )
-            | (
-                TermParams::Sinusoid {
-                    frequency_hz: a, ..
-                },
-                TermParams::Sinusoid {
-                    frequency_hz: b, ..
-                },
-            ) => {
-                *a = shape_lo;
-                *b = shape_hi;
-            }
-            _ => {}
-        }
-        out.push(Trial {
-            effect,
-            params,
-            lo,
-            hi,
-            model: if effect == Effect::TemperatureBias {
-                None
-            } else {
-                current
+        ) => (*fl, *fh, *bl, *bh) = (*f_lo, *f_hi, *b_lo, *b_hi),
+        (
+            ShapeInterval::Scalar(s_lo, s_hi),
+            TermParams::GaussMarkov { tau_s: a, .. },
+            TermParams::GaussMarkov { tau_s: b, .. },
+        )
+        | (
+            ShapeInterval::Scalar(s_lo, s_hi),
+            TermParams::Sinusoid {
+                frequency_hz: a, ..
             },
-            bic: bic(fit.chi2, k, m) + penalty,
-            aic: aic(fit.chi2, k) + penalty,
-            delta_avar: f.iter().map(|v| (fit.c - c0) * v).collect(),
-        });
+            TermParams::Sinusoid {
+                frequency_hz: b, ..
+            },
+        ) => (*a, *b) = (*s_lo, *s_hi),
+        _ => {}
     }
-    if let Some(t) = filter_trial(model, ch, &data, tau, dt_s) {
-        out.push(t);
-    }
-    out
+    (lo, hi)
 }
 
 /// The output-filter candidate: every filter of [`filter_grid`] with the white-noise level refitted
 /// through it (the filter reshapes the white noise, the term it visibly changes; the other terms'
 /// filtering is left to the re-simulation, which applies the filter to all of them). The change of
 /// the band is c fw_F(tau) - c0 fw(tau), fw the model's current white signature, fw_F the one through F.
-fn filter_trial(
-    model: &SensorModel,
-    ch: usize,
-    data: &FitData,
-    tau: &[f64],
-    dt_s: f64,
-) -> Option<Trial> {
-    let m = tau.len();
-    let current = output_filter(model, ch);
-    let c0 = term_level(model, ch, Effect::WhiteNoise).map_or(0.0, |p| p.c());
-    let fw_cur = white_signature(current.as_ref(), tau, dt_s);
-    // The band scaled by closed-form ratios, not shifted by closed-form differences: a filter can
-    // take the short-tau variance down 30-fold, and subtracting the unfiltered white noise from a
-    // simulated band would leave its seed-to-seed error 30 times larger relative to what remains.
-    // g = band / closed form of the current model, so band + c0 (fw_F - fw) g =
-    // g (closed form - c0 fw + c0 fw_F): the band's relative error carried, not amplified.
-    let (sensor, axis) = crate::model_terms::channel_axis(ch);
-    let cf_old = model
-        .axis(sensor, axis)
-        .allan_variance_sampled_many(tau, dt_s);
-    let g: Vec<f64> = (0..m)
-        .map(|i| {
-            if cf_old[i] > 0.0 {
-                data.avar_band[i] / cf_old[i]
-            } else {
-                1.0
-            }
-        })
-        .collect();
-    let grid = filter_grid(dt_s);
+fn filter_trial(input: &ChannelFit, data: &FitData) -> Option<Trial> {
+    let search = FilterSearch::new(input, data);
+    let grid = filter_grid(input.dt_s);
     let penalty = shape_search_penalty(grid.len());
-    let try_filter = |filter: OutputFilter| -> Option<(f64, OutputFilterFit)> {
-        if Some(filter) == current || filter.check_rate(dt_s).is_err() {
+    let mut tried: Vec<(f64, OutputFilterFit)> = grid
+        .into_iter()
+        .filter_map(|f| search.try_filter(f))
+        .collect();
+    search.refine(&mut tried);
+    let (chi2, b) = search.simplest(tried)?;
+    let (k, m) = (free_parameters(Effect::OutputFilter), search.tau.len());
+    let scale = birge_scale(chi2, k, m);
+    let lo = (b.fit.c_lo / (scale * scale).max(1.0)).min(b.fit.c);
+    let hi = b.fit.c_hi * (scale * scale).max(1.0);
+    let p = |c: f64| TermParams::Filter {
+        filter: b.filter,
+        n: c.max(0.0).sqrt(),
+    };
+    Some(Trial {
+        effect: Effect::OutputFilter,
+        params: p(b.fit.c),
+        lo: p(lo),
+        hi: p(hi),
+        model: search.current.map(|filter| TermParams::Filter {
+            filter,
+            n: search.c0.sqrt(),
+        }),
+        bic: bic(chi2, k, m) + penalty,
+        aic: aic(chi2, k) + penalty,
+        delta_avar: b.delta,
+    })
+}
+
+struct OutputFilterFit {
+    filter: OutputFilter,
+    fit: LinearFit,
+    delta: Vec<f64>,
+}
+
+/// The search over output filters of [`filter_trial`].
+struct FilterSearch<'a> {
+    data: &'a FitData<'a>,
+    tau: &'a [f64],
+    dt_s: f64,
+    /// The channel's filter and white-noise level (squared) now, and its white signature.
+    current: Option<OutputFilter>,
+    c0: f64,
+    fw_cur: Vec<f64>,
+    /// The band over the current model's closed form at each tau (1 where that is 0).
+    g: Vec<f64>,
+}
+
+impl<'a> FilterSearch<'a> {
+    fn new(input: &'a ChannelFit, data: &'a FitData<'a>) -> FilterSearch<'a> {
+        let (tau, dt_s) = (input.measured.tau_s.as_slice(), input.dt_s);
+        let ch = input.channel.index();
+        let current = output_filter(input.model, ch);
+        let c0 = term_level(input.model, ch, Effect::WhiteNoise).map_or(0.0, |p| p.c());
+        let fw_cur = white_signature(current.as_ref(), tau, dt_s);
+        // The band scaled by closed-form ratios, not shifted by closed-form differences: a filter can
+        // take the short-tau variance down 30-fold, and subtracting the unfiltered white noise from a
+        // simulated band would leave its seed-to-seed error 30 times larger relative to what remains.
+        // g = band / closed form of the current model, so band + c0 (fw_F - fw) g =
+        // g (closed form - c0 fw + c0 fw_F): the band's relative error carried, not amplified.
+        let cf_old = input
+            .model
+            .axis(input.channel.sensor(), input.channel.axis())
+            .allan_variance_sampled_many(tau, dt_s);
+        let g: Vec<f64> = (0..tau.len())
+            .map(|i| {
+                if cf_old[i] > 0.0 {
+                    data.avar_band[i] / cf_old[i]
+                } else {
+                    1.0
+                }
+            })
+            .collect();
+        FilterSearch {
+            data,
+            tau,
+            dt_s,
+            current,
+            c0,
+            fw_cur,
+            g,
+        }
+    }
+
+    /// The white level refitted through `filter` (None for the current filter, or one the rate
+    /// does not allow): its chi2 and fit.
+    fn try_filter(&self, filter: OutputFilter) -> Option<(f64, OutputFilterFit)> {
+        if Some(filter) == self.current || filter.check_rate(self.dt_s).is_err() {
             return None;
         }
-        let fw: Vec<f64> = white_signature(Some(&filter), tau, dt_s)
+        let (m, data, g, c0) = (self.tau.len(), self.data, &self.g, self.c0);
+        let fw: Vec<f64> = white_signature(Some(&filter), self.tau, self.dt_s)
             .iter()
-            .zip(&g)
+            .zip(g)
             .map(|(f, g)| f * g)
             .collect();
-        let shift: Vec<f64> = (0..m).map(|i| c0 * (fw[i] - fw_cur[i] * g[i])).collect();
+        let shift: Vec<f64> = (0..m)
+            .map(|i| c0 * (fw[i] - self.fw_cur[i] * g[i]))
+            .collect();
         let ln_band: Vec<f64> = (0..m)
             .map(|i| predicted_ln_adev(data.ln_band[i], data.avar_band[i], shift[i]))
             .collect();
@@ -417,118 +571,104 @@ fn filter_trial(
         };
         let fit = fit_linear(&shifted, &fw, c0);
         let delta = (0..m)
-            .map(|i| fit.c * fw[i] - c0 * fw_cur[i] * g[i])
+            .map(|i| fit.c * fw[i] - c0 * self.fw_cur[i] * g[i])
             .collect();
         Some((fit.chi2, OutputFilterFit { filter, fit, delta }))
-    };
-    let mut tried: Vec<(f64, OutputFilterFit)> = grid.into_iter().filter_map(try_filter).collect();
-    // Refine around the best of each kind and decimation: every tap count within 30 %, or the
-    // cutoff by golden section in ln f between its grid neighbours (a factor 1.63 either side).
-    let mut seeds: Vec<OutputFilter> = Vec::new();
-    for t in &tried {
-        let same = |f: &OutputFilter| {
-            f.decimation == t.1.filter.decimation
-                && std::mem::discriminant(&f.kind) == std::mem::discriminant(&t.1.filter.kind)
-        };
-        let best_of_family = tried
-            .iter()
-            .filter(|u| same(&u.1.filter))
-            .min_by(|a, b| a.0.total_cmp(&b.0))
-            .map(|u| u.1.filter);
-        if best_of_family == Some(t.1.filter) && !seeds.contains(&t.1.filter) {
-            seeds.push(t.1.filter);
-        }
     }
-    for f in seeds {
-        match f.kind {
-            FilterKind::MovingAverage { taps } | FilterKind::Bartlett { taps } => {
-                let lo = ((f64::from(taps) / 1.3).floor() as u32).max(2);
-                let hi = (f64::from(taps) * 1.3).ceil() as u32;
-                for l in lo..=hi {
-                    let kind = match f.kind {
-                        FilterKind::MovingAverage { .. } => FilterKind::MovingAverage { taps: l },
-                        _ => FilterKind::Bartlett { taps: l },
-                    };
-                    if let Ok(g) = OutputFilter::new(kind, f.decimation) {
-                        if !tried.iter().any(|u| u.1.filter == g) {
-                            tried.extend(try_filter(g));
-                        }
-                    }
-                }
-            }
-            FilterKind::LowPass1 { cutoff_hz } | FilterKind::LowPass2 { cutoff_hz } => {
-                let with = |fc: f64| {
-                    let kind = match f.kind {
-                        FilterKind::LowPass1 { .. } => FilterKind::LowPass1 { cutoff_hz: fc },
-                        _ => FilterKind::LowPass2 { cutoff_hz: fc },
-                    };
-                    OutputFilter::new(kind, f.decimation).ok()
-                };
-                let chi = |ln_fc: f64| {
-                    with(ln_fc.exp())
-                        .and_then(try_filter)
-                        .map_or(f64::INFINITY, |u| u.0)
-                };
-                let step = (0.4f64 / 0.005).ln() / 9.0;
-                let (mut a, mut b) = (cutoff_hz.ln() - step, cutoff_hz.ln() + step);
-                let g = 0.5 * (5f64.sqrt() - 1.0);
-                for _ in 0..25 {
-                    let (x1, x2) = (b - g * (b - a), a + g * (b - a));
-                    if chi(x1) < chi(x2) {
-                        b = x2;
-                    } else {
-                        a = x1;
-                    }
-                }
-                if let Some(u) = with((0.5 * (a + b)).exp()).and_then(try_filter) {
-                    tried.push(u);
-                }
-            }
-        }
-    }
-    // Of the filters the data cannot tell apart (chi2 within 6 of the best, "not strong" evidence,
-    // Kass & Raftery 1995; widened by the best fit's Birge ratio squared, as the intervals are, when
-    // the rest of the model leaves the fit overdispersed), the one with the smallest decimation: the
-    // simplest, and the cheapest to simulate.
-    let best_chi2 = tried.iter().map(|t| t.0).fold(f64::INFINITY, f64::min);
-    let alike = 6.0 * birge_scale(best_chi2, free_parameters(Effect::OutputFilter), m).powi(2);
-    let best = tried
-        .into_iter()
-        .filter(|t| t.0 <= best_chi2 + alike)
-        .min_by(|a, b| {
-            a.1.filter
-                .decimation
-                .cmp(&b.1.filter.decimation)
-                .then(a.0.total_cmp(&b.0))
-        });
-    let (chi2, b) = best?;
-    let k = free_parameters(Effect::OutputFilter);
-    let scale = birge_scale(chi2, k, m);
-    let lo = (b.fit.c_lo / (scale * scale).max(1.0)).min(b.fit.c);
-    let hi = b.fit.c_hi * (scale * scale).max(1.0);
-    let p = |c: f64| TermParams::Filter {
-        filter: b.filter,
-        n: c.max(0.0).sqrt(),
-    };
-    Some(Trial {
-        effect: Effect::OutputFilter,
-        params: p(b.fit.c),
-        lo: p(lo),
-        hi: p(hi),
-        model: current.map(|filter| TermParams::Filter {
-            filter,
-            n: c0.sqrt(),
-        }),
-        bic: bic(chi2, k, m) + penalty,
-        aic: aic(chi2, k) + penalty,
-        delta_avar: b.delta,
-    })
-}
 
-struct OutputFilterFit {
-    filter: OutputFilter,
-    fit: LinearFit,
-    delta: Vec<f64>,
+    /// Refine around the best of each kind and decimation: every tap count within 30 %, or the
+    /// cutoff by golden section in ln f between its grid neighbours (a factor 1.63 either side).
+    fn refine(&self, tried: &mut Vec<(f64, OutputFilterFit)>) {
+        let mut seeds: Vec<OutputFilter> = Vec::new();
+        for t in tried.iter() {
+            let same = |f: &OutputFilter| {
+                f.decimation == t.1.filter.decimation
+                    && std::mem::discriminant(&f.kind) == std::mem::discriminant(&t.1.filter.kind)
+            };
+            let best_of_family = tried
+                .iter()
+                .filter(|u| same(&u.1.filter))
+                .min_by(|a, b| a.0.total_cmp(&b.0))
+                .map(|u| u.1.filter);
+            if best_of_family == Some(t.1.filter) && !seeds.contains(&t.1.filter) {
+                seeds.push(t.1.filter);
+            }
+        }
+        for f in seeds {
+            match f.kind {
+                FilterKind::MovingAverage { taps } | FilterKind::Bartlett { taps } => {
+                    self.refine_taps(f, taps, tried)
+                }
+                FilterKind::LowPass1 { cutoff_hz } | FilterKind::LowPass2 { cutoff_hz } => {
+                    tried.extend(self.refine_cutoff(f, cutoff_hz))
+                }
+            }
+        }
+    }
+
+    /// Every tap count within 30 % of `taps` not tried yet.
+    fn refine_taps(&self, f: OutputFilter, taps: u32, tried: &mut Vec<(f64, OutputFilterFit)>) {
+        let lo = ((f64::from(taps) / 1.3).floor() as u32).max(2);
+        let hi = (f64::from(taps) * 1.3).ceil() as u32;
+        for l in lo..=hi {
+            let kind = match f.kind {
+                FilterKind::MovingAverage { .. } => FilterKind::MovingAverage { taps: l },
+                _ => FilterKind::Bartlett { taps: l },
+            };
+            if let Ok(g) = OutputFilter::new(kind, f.decimation) {
+                if !tried.iter().any(|u| u.1.filter == g) {
+                    tried.extend(self.try_filter(g));
+                }
+            }
+        }
+    }
+
+    /// The cutoff by golden section in ln f within one grid step either side of `cutoff_hz`.
+    fn refine_cutoff(&self, f: OutputFilter, cutoff_hz: f64) -> Option<(f64, OutputFilterFit)> {
+        let with = |fc: f64| {
+            let kind = match f.kind {
+                FilterKind::LowPass1 { .. } => FilterKind::LowPass1 { cutoff_hz: fc },
+                _ => FilterKind::LowPass2 { cutoff_hz: fc },
+            };
+            OutputFilter::new(kind, f.decimation).ok()
+        };
+        let chi = |ln_fc: f64| {
+            with(ln_fc.exp())
+                .and_then(|f| self.try_filter(f))
+                .map_or(f64::INFINITY, |u| u.0)
+        };
+        let step = (0.4f64 / 0.005).ln() / 9.0;
+        let (mut a, mut b) = (cutoff_hz.ln() - step, cutoff_hz.ln() + step);
+        let g = 0.5 * (5f64.sqrt() - 1.0);
+        for _ in 0..25 {
+            let (x1, x2) = (b - g * (b - a), a + g * (b - a));
+            if chi(x1) < chi(x2) {
+                b = x2;
+            } else {
+                a = x1;
+            }
+        }
+        with((0.5 * (a + b)).exp()).and_then(|f| self.try_filter(f))
+    }
+
+    /// Of the filters the data cannot tell apart (chi2 within 6 of the best, "not strong" evidence,
+    /// Kass & Raftery 1995; widened by the best fit's Birge ratio squared, as the intervals are, when
+    /// the rest of the model leaves the fit overdispersed), the one with the smallest decimation: the
+    /// simplest, and the cheapest to simulate.
+    fn simplest(&self, tried: Vec<(f64, OutputFilterFit)>) -> Option<(f64, OutputFilterFit)> {
+        let m = self.tau.len();
+        let best_chi2 = tried.iter().map(|t| t.0).fold(f64::INFINITY, f64::min);
+        let alike = 6.0 * birge_scale(best_chi2, free_parameters(Effect::OutputFilter), m).powi(2);
+        tried
+            .into_iter()
+            .filter(|t| t.0 <= best_chi2 + alike)
+            .min_by(|a, b| {
+                a.1.filter
+                    .decimation
+                    .cmp(&b.1.filter.decimation)
+                    .then(a.0.total_cmp(&b.0))
+            })
+    }
 }
 
 pub(crate) fn named_map(effect: Effect, p: &TermParams) -> BTreeMap<String, f64> {

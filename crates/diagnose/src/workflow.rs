@@ -1,17 +1,31 @@
-//! The diagnose loop (docs/diagnose.md, "The diagnose workflow", steps 1-6): measure, simulate, locate the gap,
-//! name and fit the missing effect, add it, re-simulate, repeat; then the drift consequence.
+//! The diagnose workflow (docs/diagnose.md, "The diagnose workflow", steps 0-6) as one `Run` whose
+//! methods are the steps, in the order [`diagnose_observed`] calls them: detect and measure, simulate
+//! the band, locate the gap, fit the candidates, accept the best, re-simulate, repeat; then the drift
+//! consequence and the report.
 
 use crate::candidates::TermParams;
-use crate::drift::{segment_drift, CHANNELS};
+use crate::detect::Preprocessed;
+use crate::drift::{segment_drift, SegmentDrift};
+use crate::error::DiagnoseError;
+use crate::findings::{
+    channel_curves, found_by_detector, found_by_fit, mark_stand_ins, merge_refinements,
+    rejected_record, trial_records, verdict, Choice,
+};
 use crate::fit::{bic, predicted_ln_adev, FitData};
-use crate::gap::{gap, Band, Gap};
-use crate::measure::*;
-use crate::model_terms::{set_term, term_level};
-use crate::report::*;
-use crate::simulate::{adev_at, simulate, SimResult, SimSetup};
-use crate::trials::*;
-use noise::{Effect, SensorModel};
-use std::collections::BTreeMap;
+use crate::gap::{gap, Band, Curve, Gap};
+use crate::input::LogInput;
+use crate::measure::{measure, restrict, Measured};
+use crate::model_terms::{clear_term, set_term, term_level};
+use crate::observer::{Observer, Step};
+use crate::report::{CandidateRecord, ChannelReport, Diagnosis, DriftRow, FoundEffect};
+use crate::settings::Settings;
+use crate::simulate::{simulate, SimResult, SimSetup};
+use crate::trials::{trials, ChannelFit, Trial};
+use noise::{Channel, Effect, ImuChannels, SensorModel};
+use std::cell::RefCell;
+use std::collections::{BTreeMap, HashMap};
+
+pub use crate::findings::STAND_IN_GAP;
 
 /// Run the diagnose workflow on a measured log against a sensor model.
 pub fn diagnose(
@@ -19,303 +33,386 @@ pub fn diagnose(
     model: &SensorModel,
     settings: &Settings,
 ) -> Result<Diagnosis, DiagnoseError> {
-    diagnose_with_progress(log, model, settings, &|_| {})
+    diagnose_observed(log, model, settings, &())
 }
 
-/// [`diagnose`], telling `progress` what it is doing before each long step (for a progress display).
-pub fn diagnose_with_progress(
+/// [`diagnose`], telling `observer` about each long step before it starts (for a progress display).
+pub fn diagnose_observed(
     log: &LogInput,
     model: &SensorModel,
     settings: &Settings,
-    progress: &dyn Fn(&str),
+    observer: &dyn Observer,
 ) -> Result<Diagnosis, DiagnoseError> {
-    let samples = validate(log)?;
-    progress("looking for outliers, temperature effects and a warm-up transient");
-    let active: [bool; 6] = std::array::from_fn(|c| log.channels[c].is_some());
-    let raw_log = log;
+    let samples = log.validate()?;
     // Step 0: time-domain detectors (`detect`); the Allan analysis sees the corrected channels.
-    let pre = crate::detect::preprocess(
-        log.channels,
-        log.temperature_c,
-        log.dt_s,
-        &crate::detect::model_levels(model),
-    );
-    let corrected = LogInput {
-        dt_s: log.dt_s,
-        channels: std::array::from_fn(|c| pre.channels[c].as_deref()),
-        temperature_c: log.temperature_c,
-    };
-    let log = &corrected;
-
-    // Step 1: measured Allan deviations with EDF (Greenhall, noise type by lag-1 ACF) on the octave grid.
-    progress("measuring the log's Allan deviations");
-    let (grid_m, measured) = measure(log, settings.tau_min_s);
-    let (_, measured_raw) = measure(raw_log, settings.tau_min_s);
-    if measured.iter().flatten().all(|m| m.idx.is_empty()) {
-        return Err(DiagnoseError::NoTaus {
-            tau_min_s: settings.tau_min_s,
-        });
-    }
-
-    // Temperature signature per grid point and the sign of each channel's correlation with temperature.
-    let temp_avar: Option<Vec<f64>> = log.temperature_c.map(|t| {
-        adev_at(t, log.dt_s, &grid_m)
-            .iter()
-            .map(|a| a * a)
-            .collect()
-    });
-    let temp_sign: [f64; 6] = std::array::from_fn(|c| match (log.channels[c], log.temperature_c) {
-        (Some(x), Some(t)) => {
-            let (mx, mt) = (mean(x), mean(t));
-            let cov: f64 = x.iter().zip(t).map(|(a, b)| (a - mx) * (b - mt)).sum();
-            if cov < 0.0 {
-                -1.0
-            } else {
-                1.0
-            }
-        }
-        _ => 1.0,
-    });
-
-    // Least-squares slope of each channel against time (the rate-ramp level, see `trials`).
-    let ramp_slope: [f64; 6] =
-        std::array::from_fn(|c| log.channels[c].map_or(0.0, |x| slope(x, log.dt_s)));
-
-    // Step 2: the model's band.
-    let mut setup = SimSetup {
-        dt_s: log.dt_s,
+    observer.step(Step::Detect);
+    let pre = crate::detect::preprocess_log(log, model);
+    let start = Start {
+        raw: *log,
+        log: log.with_channels(&pre.channels),
+        pre: &pre,
         samples,
-        grid_m: grid_m.clone(),
-        active,
-        horizons_s: settings.horizons_s.clone(),
-        temperature_c: log.temperature_c,
-        temp_coeff: [0.0; 6],
+        settings,
+        observer,
     };
-    let mut sim_model = model.clone();
-    let mut out_model = model.clone();
-    progress("simulating the model's band");
-    let sim0: SimResult = simulate(&sim_model, &setup, settings.seed, settings.seeds)?;
-    let mut bands: [Option<Band>; 6] = sim0.bands.clone();
-    let mut last_drift = sim0.drift.clone();
-    let mut dirty = false;
-
-    let gap_of = |c: usize, bands: &[Option<Band>; 6]| -> Option<(Band, Gap)> {
-        let m = measured[c].as_ref()?;
-        let b = restrict(bands[c].as_ref()?, &m.idx);
-        let g = gap(&m.curve, &b);
-        Some((b, g))
-    };
-    let gap_raw = |c: usize| -> Option<(Band, Gap)> {
-        let m = measured_raw[c].as_ref()?;
-        let b = restrict(bands[c].as_ref()?, &m.idx);
-        let g = gap(&m.curve, &b);
-        Some((b, g))
-    };
-    let initial: [Option<(Band, Gap)>; 6] = std::array::from_fn(gap_raw);
-    let mut effects: [Vec<FoundEffect>; 6] = Default::default();
-    for c in 0..6 {
-        let (Some((_, g0)), Some((_, g1))) = (initial[c].as_ref(), gap_of(c, &bands)) else {
-            continue;
-        };
-        for f in &pre.findings[c] {
-            let effect = f.term.effect();
-            let map = |j: usize| -> BTreeMap<String, f64> {
-                f.parameters
-                    .iter()
-                    .map(|p| (p.0.to_string(), [p.1, p.2, p.3][j]))
-                    .collect()
-            };
-            let (sensor, axis) = crate::model_terms::channel_axis(c);
-            let had = out_model.axis(sensor, axis).term(effect).is_some();
-            out_model.axis_mut(sensor, axis).set_term(f.term.clone());
-            effects[c].push(FoundEffect {
-                effect,
-                parameters: map(0).into(),
-                parameters_lo: map(1),
-                parameters_hi: map(2),
-                kind: if had {
-                    FindingKind::WrongLevel
-                } else {
-                    FindingKind::Missing
-                },
-                model_parameters: None,
-                gap_before: g0.rms,
-                gap_predicted: g1.rms,
-                gap_after: g1.rms,
-                delta_bic: f.delta_bic,
-                cannot_tell_from: f.cannot_tell_from.clone(),
-                round: 0,
-                refinements: 0,
-                stand_in: false,
-            });
-        }
-    }
-    let mut records: [Vec<CandidateRecord>; 6] = Default::default();
-    // Spectral-line checks by (channel, frequency): the same best sinusoid frequency recurs over the
-    // steps and rounds, and each check is a Welch DFT over the whole log.
-    let line_checks: std::cell::RefCell<std::collections::HashMap<(usize, u64), bool>> =
-        Default::default();
-    let mut done: [bool; 6] = std::array::from_fn(|c| !active[c]);
-    let mut rounds = 0;
-
-    // Steps 3-5: name, add, re-simulate, until nothing significant remains. Within a round a channel
-    // takes up to `effects_per_round` effects by forward selection on the closed-form prediction (so a
-    // short-tau disagreement with huge z does not hold back a long-tau one for many rounds); the round's
-    // re-simulation then checks them together.
+    let mut run = Run::start(start, model)?;
+    run.time_domain_findings();
+    // Steps 3-5: name, add, re-simulate, until nothing significant remains.
     for round in 1..=settings.max_rounds {
-        let mut pending: Vec<Pending> = Vec::new();
-        for c in 0..6 {
-            if done[c] {
-                continue;
-            }
-            let Some((band, g)) = gap_of(c, &bands) else {
-                done[c] = true;
-                continue;
-            };
-            let m = measured[c].as_ref().expect("active channel is measured");
-            if g.disagreements.is_empty() {
-                done[c] = true;
-                continue;
-            }
-            // The temperature is regressed in the time domain (step 0), where its phase is seen;
-            // its Allan signature alone cannot tell it from a slow bias wander.
-            let temp: Option<(Vec<f64>, f64)> = None;
-            let _ = (&temp_avar, &temp_sign);
-            let ln_meas: Vec<f64> = m.curve.adev.iter().map(|a| a.ln()).collect();
-            let mut predicted = band.clone();
-            let mut g_pred = g.clone();
-            let mut changes: Vec<(Effect, Option<TermParams>)> = Vec::new();
-            for _step in 0..settings.effects_per_round {
-                if g_pred.disagreements.is_empty() {
-                    break;
-                }
-                let ts = trials(
-                    &sim_model,
-                    c,
-                    &m.curve,
-                    &predicted,
-                    &g_pred,
-                    log.dt_s,
-                    temp.as_ref()
-                        .map(|(v, s)| (v.as_slice(), *s, setup.temp_coeff[c])),
-                    ramp_slope[c],
-                    pre.peaks[c],
-                    &|f| {
-                        *line_checks
-                            .borrow_mut()
-                            .entry((c, f.to_bits()))
-                            .or_insert_with(|| {
-                                pre.channels[c]
-                                    .as_deref()
-                                    .is_none_or(|x| crate::detect::line_allowed(x, log.dt_s, f))
-                            })
-                    },
-                );
-                let data = FitData {
-                    ln_meas: &ln_meas,
-                    ln_band: &predicted.ln_mean,
-                    avar_band: &predicted.avar_mean,
-                    s: &g_pred.s,
-                };
-                let base_bic = bic(data.chi2_base(), 0, ln_meas.len());
-                for t in &ts {
-                    records[c].push(CandidateRecord {
-                        round,
-                        effect: Candidate {
-                            effect: t.effect,
-                            rejected: false,
-                        },
-                        delta_bic: base_bic - t.bic,
-                        delta_aic: data.chi2_base() - t.aic,
-                        parameters: named_map(t.effect, &t.params),
-                    });
-                }
-                let Some(mut best) = ts.iter().min_by(|a, b| a.bic.total_cmp(&b.bic)) else {
-                    break;
-                };
-                // Occam: re-levelling an effect already named on this channel is preferred to naming
-                // another one unless the other is better by the ambiguity margin.
-                if let Some(refine) = ts
-                    .iter()
-                    .filter(|t| effects[c].iter().any(|e| e.effect == t.effect))
-                    .min_by(|a, b| a.bic.total_cmp(&b.bic))
-                {
-                    if refine.bic - best.bic < settings.ambiguity_delta_bic {
-                        best = refine;
-                    }
-                }
-                let delta = base_bic - best.bic;
-                if delta < settings.min_delta_bic {
-                    break;
-                }
-                let cannot_tell_from: Vec<Effect> = ts
-                    .iter()
-                    .filter(|t| {
-                        t.effect != best.effect && t.bic - best.bic < settings.ambiguity_delta_bic
-                    })
-                    .map(|t| t.effect)
-                    .collect();
-                if best.effect == Effect::OutputFilter {
-                    // The filter is fitted with the white-noise level: undoing it restores both.
-                    changes.push((
-                        Effect::WhiteNoise,
-                        term_level(&sim_model, c, Effect::WhiteNoise),
-                    ));
-                }
-                let previous = if best.effect == Effect::TemperatureBias {
-                    (setup.temp_coeff[c] != 0.0).then_some(TermParams::Level(setup.temp_coeff[c]))
-                } else {
-                    term_level(&sim_model, c, best.effect)
-                };
-                if best.effect == Effect::TemperatureBias {
-                    if let TermParams::Level(k) = best.params {
-                        setup.temp_coeff[c] = k;
-                    }
-                } else {
-                    set_term(&mut sim_model, c, best.effect, &best.params);
-                }
-                set_term(&mut out_model, c, best.effect, &best.params);
-                // The closed-form prediction of the band with this change, for the next step.
-                predicted = shifted_band(&predicted, &best.delta_avar);
-                g_pred = gap(&m.curve, &predicted);
-                effects[c].push(FoundEffect {
-                    effect: best.effect,
-                    parameters: parameters_of(best.effect, &best.params, log.dt_s),
-                    parameters_lo: bounds_of(best.effect, &best.lo, log.dt_s),
-                    parameters_hi: bounds_of(best.effect, &best.hi, log.dt_s),
-                    kind: if best.model.is_some() {
-                        FindingKind::WrongLevel
-                    } else {
-                        FindingKind::Missing
-                    },
-                    model_parameters: best.model.map(|p| named_map(best.effect, &p)),
-                    gap_before: g.rms,
-                    gap_predicted: g_pred.rms,
-                    gap_after: f64::NAN,
-                    delta_bic: delta,
-                    cannot_tell_from,
-                    round,
-                    refinements: 0,
-                    stand_in: false,
-                });
-                changes.push((best.effect, previous));
-            }
-            if changes.is_empty() {
-                done[c] = true;
-            } else {
-                pending.push((c, changes, g.rms));
-            }
-        }
+        let pending = run.name_effects(round);
         if pending.is_empty() {
             break;
         }
-        rounds = round;
-        progress(&format!("round {round}: re-simulating the corrected model"));
-        // Only the channels changed in this round: each channel draws from its own streams, so its
-        // band is the same whichever others are generated. The drift needs every channel; a partial
-        // round leaves it to a full simulation after the loop.
+        run.resimulate(round, pending)?;
+    }
+    run.settle_drift()?;
+    Ok(run.report())
+}
+
+/// What a run starts from: the log as measured, the log after step 0's corrections, the detectors'
+/// findings, and how to work.
+struct Start<'a> {
+    raw: LogInput<'a>,
+    log: LogInput<'a>,
+    pre: &'a Preprocessed,
+    samples: usize,
+    settings: &'a Settings,
+    observer: &'a dyn Observer,
+}
+
+/// Step 1's result: the common tau grid's averaging factors, and each channel's measurement on it,
+/// of the corrected log and of the raw one.
+struct Measurement {
+    grid_m: Vec<usize>,
+    corrected: ImuChannels<Option<Measured>>,
+    raw: ImuChannels<Option<Measured>>,
+}
+
+/// What the workflow knows about one channel so far.
+#[derive(Default)]
+struct ChannelState {
+    /// The gap of the raw log (before step 0's corrections) against the original model's band.
+    initial: Option<(Band, Gap)>,
+    /// The effects named so far, in the order found.
+    effects: Vec<FoundEffect>,
+    /// Every candidate weighed, every round.
+    records: Vec<CandidateRecord>,
+    /// Nothing more to name: no disagreement left, no candidate good enough, or a round rejected.
+    done: bool,
+}
+
+/// A channel changed in this round: the changes in the order made (each effect with its level
+/// before, to undo them) and the channel's gap at the round's start.
+struct Pending {
+    channel: Channel,
+    changes: Vec<(Effect, Option<TermParams>)>,
+    gap_before: f64,
+}
+
+/// One diagnosis in progress.
+struct Run<'a> {
+    settings: &'a Settings,
+    observer: &'a dyn Observer,
+    /// The corrected log the Allan steps see.
+    log: LogInput<'a>,
+    pre: &'a Preprocessed,
+    samples: usize,
+    /// Averaging factors of the common tau grid, and each channel's measurement on it.
+    grid_m: Vec<usize>,
+    measured: ImuChannels<Option<Measured>>,
+    /// Least-squares slope of each corrected channel against time (the rate-ramp level, see `trials`).
+    ramp_slope: ImuChannels<f64>,
+    setup: SimSetup<'a>,
+    /// The model simulated (step 0's terms left out: their effects are removed from the log) and the
+    /// corrected model reported (with them).
+    sim_model: SensorModel,
+    out_model: SensorModel,
+    /// The original model's simulation (its bands and drift).
+    sim0: SimResult,
+    /// The current model's band per channel, and its drift (stale while `dirty`).
+    bands: [Option<Band>; 6],
+    last_drift: Vec<SegmentDrift>,
+    dirty: bool,
+    channels: ImuChannels<ChannelState>,
+    /// Spectral-line checks by (channel, frequency): the same best sinusoid frequency recurs over the
+    /// steps and rounds, and each check is a Welch DFT over the whole log.
+    line_checks: RefCell<HashMap<(Channel, u64), bool>>,
+    rounds: usize,
+}
+
+impl<'a> Run<'a> {
+    /// Steps 1 and 2: measure the log, simulate the model's band, and the gap before any change.
+    fn start(s: Start<'a>, model: &SensorModel) -> Result<Run<'a>, DiagnoseError> {
+        let Measurement {
+            grid_m,
+            corrected: measured,
+            raw: measured_raw,
+        } = Self::measure(&s)?;
+        let setup = SimSetup {
+            dt_s: s.log.dt_s,
+            samples: s.samples,
+            grid_m: grid_m.clone(),
+            active: std::array::from_fn(|c| s.raw.channels[c].is_some()),
+            horizons_s: s.settings.horizons_s.clone(),
+            temperature_c: s.log.temperature_c,
+            temp_coeff: [0.0; 6],
+        };
+        let sim0 = Self::band(model, &setup, s.settings, s.observer)?;
+        let log = s.log;
+        let mut run = Run {
+            settings: s.settings,
+            observer: s.observer,
+            log,
+            pre: s.pre,
+            samples: s.samples,
+            grid_m,
+            measured,
+            ramp_slope: ImuChannels::from_fn(|c| {
+                log.channels[c.index()].map_or(0.0, |x| crate::stats::slope(x, log.dt_s))
+            }),
+            sim_model: model.clone(),
+            out_model: model.clone(),
+            bands: sim0.bands.clone(),
+            last_drift: sim0.drift.clone(),
+            sim0,
+            dirty: false,
+            channels: ImuChannels::default(),
+            line_checks: RefCell::default(),
+            rounds: 0,
+            setup,
+        };
+        for c in Channel::ALL {
+            let band = run.bands[c.index()].as_ref();
+            run.channels[c].initial = Self::gap_of(measured_raw[c].as_ref(), band);
+            run.channels[c].done = !run.setup.active[c.index()];
+        }
+        Ok(run)
+    }
+
+    /// Step 1: measured Allan deviations with EDF (Greenhall, noise type by lag-1 ACF) on the octave
+    /// grid, of the corrected log and of the raw one (for the gap before step 0's corrections).
+    fn measure(s: &Start) -> Result<Measurement, DiagnoseError> {
+        s.observer.step(Step::Measure);
+        let tau_min_s = s.settings.tau_min_s;
+        let (grid_m, corrected) = measure(&s.log, tau_min_s);
+        let (_, raw) = measure(&s.raw, tau_min_s);
+        if corrected
+            .values()
+            .iter()
+            .flatten()
+            .all(|m| m.idx.is_empty())
+        {
+            return Err(DiagnoseError::NoTaus { tau_min_s });
+        }
+        Ok(Measurement {
+            grid_m,
+            corrected,
+            raw,
+        })
+    }
+
+    /// Step 2: the model's band (and drift), simulated.
+    fn band(
+        model: &SensorModel,
+        setup: &SimSetup,
+        settings: &Settings,
+        observer: &dyn Observer,
+    ) -> Result<SimResult, DiagnoseError> {
+        observer.step(Step::Band);
+        Ok(simulate(model, setup, settings.seed, settings.seeds)?)
+    }
+
+    /// Step 3: the gap of a measurement against a band on the measurement's own taus.
+    fn gap_of(measured: Option<&Measured>, band: Option<&Band>) -> Option<(Band, Gap)> {
+        let m = measured?;
+        let b = restrict(band?, &m.idx);
+        let g = gap(&m.curve, &b);
+        Some((b, g))
+    }
+
+    /// Step 3 for channel `c` against the current model's band.
+    fn gap(&self, c: Channel) -> Option<(Band, Gap)> {
+        Self::gap_of(self.measured[c].as_ref(), self.bands[c.index()].as_ref())
+    }
+
+    /// Round 0: the time-domain detectors' findings enter the corrected model (their effects are
+    /// already removed from the log the Allan rounds see).
+    fn time_domain_findings(&mut self) {
+        for c in Channel::ALL {
+            let (Some((_, g0)), Some((_, g1))) = (self.channels[c].initial.as_ref(), self.gap(c))
+            else {
+                continue;
+            };
+            let (gap_before, gap_after) = (g0.rms, g1.rms);
+            for f in &self.pre.findings[c.index()] {
+                let axis = self.out_model.axis_mut(c.sensor(), c.axis());
+                let had = axis.term(f.term.effect()).is_some();
+                axis.set_term(f.term.clone());
+                let found = found_by_detector(f, had, gap_before, gap_after);
+                self.channels[c].effects.push(found);
+            }
+        }
+    }
+
+    /// Steps 3 and 4 of one round on every channel not done; the channels changed.
+    fn name_effects(&mut self, round: usize) -> Vec<Pending> {
+        let mut pending = Vec::new();
+        for c in Channel::ALL {
+            if self.channels[c].done {
+                continue;
+            }
+            match self.channel_round(c, round) {
+                Some(p) => pending.push(p),
+                None => self.channels[c].done = true,
+            }
+        }
+        pending
+    }
+
+    /// One round on channel `c`: up to `effects_per_round` effects by forward selection on the
+    /// closed-form prediction (so a short-tau disagreement with huge z does not hold back a long-tau
+    /// one for many rounds); the round's re-simulation then checks them together. None when the
+    /// channel has nothing (more) to name.
+    fn channel_round(&mut self, c: Channel, round: usize) -> Option<Pending> {
+        let (band, g) = self.gap(c)?;
+        if g.disagreements.is_empty() {
+            return None;
+        }
+        let curve = self.measured[c]
+            .as_ref()
+            .expect("active channel is measured")
+            .curve
+            .clone();
+        let ln_meas: Vec<f64> = curve.adev.iter().map(|a| a.ln()).collect();
+        let mut predicted = band;
+        let mut g_pred = g.clone();
+        let mut changes = Vec::new();
+        for _step in 0..self.settings.effects_per_round {
+            if g_pred.disagreements.is_empty() {
+                break;
+            }
+            let ts = self.candidates(c, &curve, &predicted, &g_pred);
+            let data = FitData {
+                ln_meas: &ln_meas,
+                ln_band: &predicted.ln_mean,
+                avar_band: &predicted.avar_mean,
+                s: &g_pred.s,
+            };
+            let base_bic = bic(data.chi2_base(), 0, ln_meas.len());
+            let records = trial_records(round, &ts, base_bic, data.chi2_base());
+            self.channels[c].records.extend(records);
+            let Some(choice) = self.select(c, &ts, base_bic) else {
+                break;
+            };
+            changes.extend(self.accept(c, choice.trial));
+            // The closed-form prediction of the band with this change, for the next step.
+            predicted = shifted_band(&predicted, &choice.trial.delta_avar);
+            g_pred = gap(&curve, &predicted);
+            let found = found_by_fit(choice, round, g.rms, g_pred.rms, self.log.dt_s);
+            self.channels[c].effects.push(found);
+        }
+        (!changes.is_empty()).then_some(Pending {
+            channel: c,
+            changes,
+            gap_before: g.rms,
+        })
+    }
+
+    /// Step 4: every candidate fitted to channel `c`'s gap against `band`.
+    fn candidates(&self, c: Channel, curve: &Curve, band: &Band, g: &Gap) -> Vec<Trial> {
+        let dt_s = self.log.dt_s;
+        let line_allowed = |f: f64| {
+            *self
+                .line_checks
+                .borrow_mut()
+                .entry((c, f.to_bits()))
+                .or_insert_with(|| {
+                    self.pre.channels[c.index()]
+                        .as_deref()
+                        .is_none_or(|x| crate::detect::line_allowed(x, dt_s, f))
+                })
+        };
+        trials(&ChannelFit {
+            model: &self.sim_model,
+            channel: c,
+            measured: curve,
+            band,
+            gap: g,
+            dt_s,
+            ramp_slope: self.ramp_slope[c],
+            peak: self.pre.peaks[c.index()],
+            line_allowed: &line_allowed,
+        })
+    }
+
+    /// Step 4: the candidate to name, if any improves BIC by `min_delta_bic`.
+    fn select<'t>(&self, c: Channel, ts: &'t [Trial], base_bic: f64) -> Option<Choice<'t>> {
+        let settings = self.settings;
+        let mut best = ts.iter().min_by(|a, b| a.bic.total_cmp(&b.bic))?;
+        // Occam: re-levelling an effect already named on this channel is preferred to naming
+        // another one unless the other is better by the ambiguity margin.
+        let named = &self.channels[c].effects;
+        if let Some(refine) = ts
+            .iter()
+            .filter(|t| named.iter().any(|e| e.effect == t.effect))
+            .min_by(|a, b| a.bic.total_cmp(&b.bic))
+        {
+            if refine.bic - best.bic < settings.ambiguity_delta_bic {
+                best = refine;
+            }
+        }
+        let delta_bic = base_bic - best.bic;
+        if delta_bic < settings.min_delta_bic {
+            return None;
+        }
+        let cannot_tell_from = ts
+            .iter()
+            .filter(|t| t.effect != best.effect && t.bic - best.bic < settings.ambiguity_delta_bic)
+            .map(|t| t.effect)
+            .collect();
+        Some(Choice {
+            trial: best,
+            delta_bic,
+            cannot_tell_from,
+        })
+    }
+
+    /// Step 4: put the chosen term into both models; the changes made, each with the level before.
+    fn accept(&mut self, c: Channel, best: &Trial) -> Vec<(Effect, Option<TermParams>)> {
+        let ch = c.index();
+        let mut changes = Vec::new();
+        if best.effect == Effect::OutputFilter {
+            // The filter is fitted with the white-noise level: undoing it restores both.
+            let white = term_level(&self.sim_model, ch, Effect::WhiteNoise);
+            changes.push((Effect::WhiteNoise, white));
+        }
+        let previous = term_level(&self.sim_model, ch, best.effect);
+        set_term(&mut self.sim_model, ch, best.effect, &best.params);
+        set_term(&mut self.out_model, ch, best.effect, &best.params);
+        changes.push((best.effect, previous));
+        changes
+    }
+
+    /// Undo one change of [`Run::accept`] in both models.
+    fn undo(&mut self, c: Channel, effect: Effect, previous: Option<TermParams>) {
+        for model in [&mut self.sim_model, &mut self.out_model] {
+            match previous {
+                Some(p) => set_term(model, c.index(), effect, &p),
+                None => clear_term(model, c.index(), effect),
+            }
+        }
+    }
+
+    /// Step 5: simulate the corrected model and keep each changed channel's round only if its gap
+    /// shrank. Only the channels changed in this round are simulated: each channel draws from its own
+    /// streams, so its band is the same whichever others are generated. The drift needs every
+    /// channel; a partial round leaves it to a full simulation after the loop.
+    fn resimulate(&mut self, round: usize, pending: Vec<Pending>) -> Result<(), DiagnoseError> {
+        self.rounds = round;
+        self.observer.step(Step::Resimulate { round });
+        let active = self.setup.active;
         let changed: [bool; 6] =
-            std::array::from_fn(|c| active[c] && pending.iter().any(|p| p.0 == c));
+            std::array::from_fn(|c| active[c] && pending.iter().any(|p| p.channel.index() == c));
         let partial = changed != active;
         let round_setup = SimSetup {
             active: changed,
@@ -323,205 +420,133 @@ pub fn diagnose_with_progress(
             horizons_s: if partial {
                 Vec::new()
             } else {
-                setup.horizons_s.clone()
+                self.setup.horizons_s.clone()
             },
-            ..setup.clone()
+            ..self.setup.clone()
         };
-        let sim = simulate(&sim_model, &round_setup, settings.seed, settings.seeds)?;
-        dirty = partial;
-        for (c, changes, gap_before) in pending {
-            let new_bands = {
-                let mut b = bands.clone();
-                b[c] = sim.bands[c].clone();
-                b
-            };
-            let after = gap_of(c, &new_bands)
-                .map(|(_, g)| g.rms)
-                .unwrap_or(f64::NAN);
-            let first_new = effects[c]
-                .iter()
-                .position(|e| e.round == round)
-                .unwrap_or(effects[c].len());
-            for found in &mut effects[c][first_new..] {
-                found.gap_after = after;
-            }
-            if after.is_nan() || after >= gap_before {
-                // The re-simulated model is no closer: undo this round's changes and stop here.
-                for rejected in effects[c].drain(first_new..) {
-                    records[c].push(CandidateRecord {
-                        round,
-                        effect: Candidate {
-                            effect: rejected.effect,
-                            rejected: true,
-                        },
-                        delta_bic: rejected.delta_bic,
-                        delta_aic: f64::NAN,
-                        parameters: rejected.parameters.values,
-                    });
-                }
-                for (effect, previous) in changes.into_iter().rev() {
-                    restore(
-                        &mut sim_model,
-                        &mut out_model,
-                        &mut setup,
-                        c,
-                        effect,
-                        previous,
-                    );
-                }
-                done[c] = true;
-                dirty = true;
-            } else {
-                bands[c] = sim.bands[c].clone();
-                merge_refinements(&mut effects[c], first_new);
-            }
+        let settings = self.settings;
+        let sim = simulate(&self.sim_model, &round_setup, settings.seed, settings.seeds)?;
+        self.dirty = partial;
+        for p in pending {
+            let band = sim.bands[p.channel.index()].clone();
+            self.keep_or_undo(round, p, band);
         }
         if !partial {
-            last_drift = sim.drift;
+            self.last_drift = sim.drift;
         }
-    }
-    if dirty {
-        last_drift = simulate(&sim_model, &setup, settings.seed, settings.seeds)?.drift;
+        Ok(())
     }
 
-    // Step 6: drift consequence, measured log segments vs model before vs model after.
-    let gyro_accel: [Option<&[f64]>; 6] = log.channels;
-    let drift = settings
-        .horizons_s
-        .iter()
-        .enumerate()
-        .map(|(h, &horizon)| DriftRow {
-            horizon_s: horizon,
-            measured: segment_drift(&gyro_accel, log.dt_s, horizon).summary(),
-            model_initial: sim0.drift[h].summary(),
-            model_final: last_drift[h].summary(),
-        })
-        .collect();
-
-    let mut channels = BTreeMap::new();
-    for c in 0..6 {
-        let (Some(m), Some((b0, g0)), Some((b1, g1))) =
-            (measured[c].as_ref(), initial[c].clone(), gap_of(c, &bands))
-        else {
-            continue;
-        };
-        // Shaped terms fitted where the model still disagrees are stand-ins, not physical findings.
-        // A sinusoid whose frequency carries a spectral line in the log is a physical tone (a
-        // vibration, an interference), not a stand-in.
-        if g1.rms > STAND_IN_GAP {
-            for e in &mut effects[c] {
-                e.stand_in = match e.effect {
-                    Effect::GaussMarkov => true,
-                    Effect::Sinusoidal => !e.parameters.get("frequency_hz").is_some_and(|&f| {
-                        log.channels[c]
-                            .is_some_and(|x| crate::detect::is_spectral_line(x, log.dt_s, f))
-                    }),
-                    _ => false,
-                };
-            }
-        }
-        let verdict = verdict(&g1, &effects[c]);
-        channels.insert(
-            CHANNELS[c].to_string(),
-            ChannelReport {
-                gap_initial: g0.rms,
-                gap_final: g1.rms,
-                effects: std::mem::take(&mut effects[c]),
-                z_initial: g0.z,
-                z_final: g1.z.clone(),
-                disagreements_initial: g0.disagreements,
-                disagreements_final: g1.disagreements,
-                verdict,
-                candidates: std::mem::take(&mut records[c]),
-                curves: ChannelCurves {
-                    tau_s: m.curve.tau_s.clone(),
-                    adev: m.curve.adev.clone(),
-                    adev_lo: m.lo.clone(),
-                    adev_hi: m.hi.clone(),
-                    edf: m.curve.edf.clone(),
-                    band_initial: BandView {
-                        centre: b0.centre(),
-                        lo: b0.adev_lo.clone(),
-                        hi: b0.adev_hi.clone(),
-                    },
-                    band_final: BandView {
-                        centre: b1.centre(),
-                        lo: b1.adev_lo,
-                        hi: b1.adev_hi,
-                    },
-                },
-            },
-        );
-    }
-    Ok(Diagnosis {
-        seed: settings.seed,
-        seeds: settings.seeds,
-        rounds,
-        dt_s: log.dt_s,
-        samples,
-        channels,
-        drift,
-        tau_min_s: settings.tau_min_s,
-        model_final: out_model,
-        grid_m,
-        bands_initial: sim0.bands,
-        bands_final: bands,
-    })
-}
-
-fn restore(
-    sim_model: &mut SensorModel,
-    out_model: &mut SensorModel,
-    setup: &mut SimSetup,
-    c: usize,
-    effect: Effect,
-    previous: Option<TermParams>,
-) {
-    if effect == Effect::TemperatureBias {
-        match previous {
-            Some(TermParams::Level(k)) => {
-                setup.temp_coeff[c] = k;
-                set_term(out_model, c, effect, &TermParams::Level(k));
-            }
-            _ => {
-                setup.temp_coeff[c] = 0.0;
-                crate::model_terms::clear_term(out_model, c, effect);
-            }
-        }
-        return;
-    }
-    for model in [sim_model, out_model] {
-        match previous {
-            Some(p) => set_term(model, c, effect, &p),
-            None => crate::model_terms::clear_term(model, c, effect),
-        }
-    }
-}
-
-/// A later round that changes the level of an effect already named on the channel refines that finding
-/// rather than naming a second one: the earlier entry takes the new parameters and the new gap after,
-/// and keeps its kind, model parameters and gap before (the same holds for a second change of one
-/// effect within a round). `first_new` is where this round's entries start.
-fn merge_refinements(effects: &mut Vec<FoundEffect>, first_new: usize) {
-    let mut i = first_new;
-    while i < effects.len() {
-        match effects[..i]
+    /// Step 5 for one channel: its re-simulated `band` is kept if the gap shrank; otherwise the
+    /// round's changes are undone (recorded as rejected) and the channel is done.
+    fn keep_or_undo(&mut self, round: usize, p: Pending, band: Option<Band>) {
+        let c = p.channel;
+        let after = Self::gap_of(self.measured[c].as_ref(), band.as_ref())
+            .map(|(_, g)| g.rms)
+            .unwrap_or(f64::NAN);
+        let state = &mut self.channels[c];
+        let first_new = state
+            .effects
             .iter()
-            .position(|e| e.effect == effects[i].effect)
-        {
-            Some(j) => {
-                let last = effects.remove(i);
-                let first = &mut effects[j];
-                first.parameters = last.parameters;
-                first.parameters_lo = last.parameters_lo;
-                first.parameters_hi = last.parameters_hi;
-                first.gap_predicted = last.gap_predicted;
-                first.gap_after = last.gap_after;
-                first.delta_bic += last.delta_bic;
-                first.cannot_tell_from = last.cannot_tell_from;
-                first.refinements += 1;
+            .position(|e| e.round == round)
+            .unwrap_or(state.effects.len());
+        for found in &mut state.effects[first_new..] {
+            found.gap_after = after;
+        }
+        if !(after.is_nan() || after >= p.gap_before) {
+            self.bands[c.index()] = band;
+            merge_refinements(&mut state.effects, first_new);
+            return;
+        }
+        // The re-simulated model is no closer: undo this round's changes and stop here.
+        let rejected: Vec<CandidateRecord> = state
+            .effects
+            .drain(first_new..)
+            .map(|e| rejected_record(round, e))
+            .collect();
+        state.records.extend(rejected);
+        state.done = true;
+        for (effect, previous) in p.changes.into_iter().rev() {
+            self.undo(c, effect, previous);
+        }
+        self.dirty = true;
+    }
+
+    /// After the rounds: the corrected model's drift, simulated again when the last full
+    /// simulation is stale (a partial or rejected round).
+    fn settle_drift(&mut self) -> Result<(), DiagnoseError> {
+        if self.dirty {
+            let settings = self.settings;
+            let sim = simulate(&self.sim_model, &self.setup, settings.seed, settings.seeds)?;
+            self.last_drift = sim.drift;
+        }
+        Ok(())
+    }
+
+    /// Step 6: drift consequence, measured log segments vs model before vs model after.
+    fn drift(&self) -> Vec<DriftRow> {
+        self.settings
+            .horizons_s
+            .iter()
+            .enumerate()
+            .map(|(h, &horizon)| DriftRow {
+                horizon_s: horizon,
+                measured: segment_drift(&self.log.channels, self.log.dt_s, horizon).summary(),
+                model_initial: self.sim0.drift[h].summary(),
+                model_final: self.last_drift[h].summary(),
+            })
+            .collect()
+    }
+
+    /// What diagnose says about channel `c` (None when it is not measured).
+    fn channel_report(&mut self, c: Channel) -> Option<ChannelReport> {
+        let (b1, g1) = self.gap(c)?;
+        let m = self.measured[c].as_ref()?;
+        let (b0, g0) = self.channels[c].initial.clone()?;
+        let state = &mut self.channels[c];
+        if g1.rms > STAND_IN_GAP {
+            mark_stand_ins(
+                &mut state.effects,
+                self.log.channels[c.index()],
+                self.log.dt_s,
+            );
+        }
+        Some(ChannelReport {
+            gap_initial: g0.rms,
+            gap_final: g1.rms,
+            verdict: verdict(&g1, &state.effects),
+            effects: std::mem::take(&mut state.effects),
+            z_initial: g0.z,
+            z_final: g1.z.clone(),
+            disagreements_initial: g0.disagreements,
+            disagreements_final: g1.disagreements,
+            candidates: std::mem::take(&mut state.records),
+            curves: channel_curves(m, &b0, b1),
+        })
+    }
+
+    /// The diagnosis.
+    fn report(mut self) -> Diagnosis {
+        let drift = self.drift();
+        let mut channels = BTreeMap::new();
+        for c in Channel::ALL {
+            if let Some(r) = self.channel_report(c) {
+                channels.insert(c.name().to_string(), r);
             }
-            None => i += 1,
+        }
+        Diagnosis {
+            seed: self.settings.seed,
+            seeds: self.settings.seeds,
+            rounds: self.rounds,
+            dt_s: self.log.dt_s,
+            samples: self.samples,
+            channels,
+            drift,
+            tau_min_s: self.settings.tau_min_s,
+            model_final: self.out_model,
+            grid_m: self.grid_m,
+            bands_initial: self.sim0.bands,
+            bands_final: self.bands,
         }
     }
 }
@@ -542,89 +567,4 @@ fn shifted_band(band: &Band, delta_avar: &[f64]) -> Band {
         out.adev_hi[i] = band.adev_hi[i] * factor;
     }
     out
-}
-
-/// Above this final gap (RMS z) a channel's fitted Gauss-Markov terms, and sinusoids without a
-/// spectral line in the log (`detect::is_spectral_line`), are called stand-ins: the hidden-effect
-/// tests close a physical effect's gap to below 1.5.
-pub const STAND_IN_GAP: f64 = 1.5;
-
-fn verdict(g: &Gap, effects: &[FoundEffect]) -> String {
-    let named = if effects.is_empty() {
-        "no effect named".to_string()
-    } else {
-        effects
-            .iter()
-            .map(|e| {
-                if e.stand_in {
-                    format!("{} (stand-in)", e.effect.name())
-                } else {
-                    e.effect.name().to_string()
-                }
-            })
-            .collect::<Vec<_>>()
-            .join(" + ")
-    };
-    if effects.iter().any(|e| e.stand_in) && !g.disagreements.is_empty() {
-        return format!(
-            "{named}; no physical candidate explains the remaining gap, the terms marked stand-in only fill it"
-        );
-    }
-    if g.disagreements.is_empty() {
-        format!("model agrees with the measurement ({named}); no tau with |z| > 3")
-    } else {
-        let ranges: Vec<String> = g
-            .disagreements
-            .iter()
-            .map(|d| {
-                format!(
-                    "{:.4}-{:.4} s (max |z| {:.1})",
-                    d.tau_lo_s, d.tau_hi_s, d.max_abs_z
-                )
-            })
-            .collect();
-        format!(
-            "{named}; still disagreeing at {} and no candidate improves BIC enough to explain it",
-            ranges.join(", ")
-        )
-    }
-}
-
-/// Ordinary least-squares slope of x_k against t_k = k dt: sum (t - t_mean)(x - x_mean) / sum (t - t_mean)^2.
-fn slope(x: &[f64], dt_s: f64) -> f64 {
-    let n = x.len() as f64;
-    let t_mean = (n - 1.0) / 2.0 * dt_s;
-    let x_mean = mean(x);
-    let (mut sxy, mut sxx) = (0.0, 0.0);
-    for (k, &v) in x.iter().enumerate() {
-        let dt = k as f64 * dt_s - t_mean;
-        sxy += dt * (v - x_mean);
-        sxx += dt * dt;
-    }
-    if sxx > 0.0 {
-        sxy / sxx
-    } else {
-        0.0
-    }
-}
-
-fn mean(x: &[f64]) -> f64 {
-    x.iter().sum::<f64>() / x.len().max(1) as f64
-}
-
-/// A bound of a fitted term's parameters; a filter's noise bandwidth is a property of the chosen
-/// filter (its bound is itself: the filter's shape is selected, not interval-estimated).
-fn bounds_of(effect: Effect, params: &TermParams, dt_s: f64) -> BTreeMap<String, f64> {
-    parameters_of(effect, params, dt_s).values
-}
-
-/// The JSON parameters of a fitted term (an output filter's kind and one-sided noise bandwidth added).
-fn parameters_of(effect: Effect, params: &TermParams, dt_s: f64) -> Parameters {
-    let mut p: Parameters = named_map(effect, params).into();
-    if let TermParams::Filter { filter, .. } = params {
-        p.kind = Some(filter.kind.name());
-        p.values
-            .insert("noise_bandwidth_hz".into(), filter.noise_bandwidth_hz(dt_s));
-    }
-    p
 }

@@ -54,7 +54,7 @@ fn coverage(
             replicates,
             seed: 7 + s,
         };
-        let check = check_drift(&[input], &model, &settings, &|_, _| {}).unwrap();
+        let check = check_drift(&[input], &model, &settings, &()).unwrap();
         for (h, c) in check.horizons.iter().zip(counts.iter_mut()) {
             for q in h.channels.values() {
                 assert_ne!(q.verdict, Verdict::NotInformed);

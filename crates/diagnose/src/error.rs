@@ -1,0 +1,38 @@
+//! What can go wrong in diagnose: inputs the caller has to fix, or a failed simulation. An error
+//! about a setting names the `Settings` field, never a front end's option.
+
+use crate::simulate::SimError;
+
+/// Errors of the workflow.
+#[derive(Debug, thiserror::Error)]
+pub enum DiagnoseError {
+    #[error("the log has no gyro or accelerometer channel (expected columns gx gy gz ax ay az)")]
+    NoChannels,
+    #[error("channel {channel} has {got} samples, channel {first} has {expected}: all channels must have the same length")]
+    Length {
+        channel: &'static str,
+        got: usize,
+        first: &'static str,
+        expected: usize,
+    },
+    #[error(
+        "the log is too short for an Allan analysis ({samples} samples; at least 64 are needed)"
+    )]
+    TooShort { samples: usize },
+    #[error("sample interval must be positive and finite, got {0} s")]
+    BadInterval(f64),
+    #[error("the temperature column has {got} samples, the log {expected}")]
+    TemperatureLength { got: usize, expected: usize },
+    /// The setting `tau_min_s` leaves no Allan point.
+    #[error("no Allan point at or above tau_min_s = {tau_min_s} s")]
+    NoTaus { tau_min_s: f64 },
+    #[error("a log checked against the diagnosis must have its rate and length: got {samples} samples at {dt_s} s, expected {expected_samples} at {expected_dt_s} s")]
+    CheckShape {
+        samples: usize,
+        dt_s: f64,
+        expected_samples: usize,
+        expected_dt_s: f64,
+    },
+    #[error(transparent)]
+    Simulation(#[from] SimError),
+}

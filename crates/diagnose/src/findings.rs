@@ -1,0 +1,254 @@
+//! How the workflow's findings are written into the report: a named effect from a detector or a
+//! fitted candidate, the candidates weighed, refinements of an effect named before, stand-ins, and
+//! the channel's verdict.
+
+use crate::candidates::TermParams;
+use crate::detect::Finding;
+use crate::gap::{Band, Gap};
+use crate::measure::Measured;
+use crate::report::{
+    BandView, Candidate, CandidateRecord, ChannelCurves, FindingKind, FoundEffect, Parameters,
+};
+use crate::trials::{named_map, Trial};
+use noise::Effect;
+use std::collections::BTreeMap;
+
+/// Above this final gap (RMS z) a channel's fitted Gauss-Markov terms, and sinusoids without a
+/// spectral line in the log (`detect::is_spectral_line`), are called stand-ins: the hidden-effect
+/// tests close a physical effect's gap to below 1.5.
+pub const STAND_IN_GAP: f64 = 1.5;
+
+/// The candidate chosen in one step: its trial, its BIC gain over the unchanged model and the
+/// candidates the data cannot tell from it.
+pub(crate) struct Choice<'t> {
+    pub(crate) trial: &'t Trial,
+    pub(crate) delta_bic: f64,
+    pub(crate) cannot_tell_from: Vec<Effect>,
+}
+
+/// A time-domain detector's finding (round 0); `had`: the model has the term at another level.
+pub(crate) fn found_by_detector(
+    f: &Finding,
+    had: bool,
+    gap_before: f64,
+    gap_after: f64,
+) -> FoundEffect {
+    let map = |j: usize| -> BTreeMap<String, f64> {
+        f.parameters
+            .iter()
+            .map(|p| (p.0.to_string(), [p.1, p.2, p.3][j]))
+            .collect()
+    };
+    FoundEffect {
+        effect: f.term.effect(),
+        parameters: map(0).into(),
+        parameters_lo: map(1),
+        parameters_hi: map(2),
+        kind: if had {
+            FindingKind::WrongLevel
+        } else {
+            FindingKind::Missing
+        },
+        model_parameters: None,
+        gap_before,
+        gap_predicted: gap_after,
+        gap_after,
+        delta_bic: f.delta_bic,
+        cannot_tell_from: f.cannot_tell_from.clone(),
+        round: 0,
+        refinements: 0,
+        stand_in: false,
+    }
+}
+
+/// A fitted candidate named in `round`; its gap after is known once the round is re-simulated.
+pub(crate) fn found_by_fit(
+    choice: Choice,
+    round: usize,
+    gap_before: f64,
+    gap_predicted: f64,
+    dt_s: f64,
+) -> FoundEffect {
+    let best = choice.trial;
+    FoundEffect {
+        effect: best.effect,
+        parameters: parameters_of(best.effect, &best.params, dt_s),
+        parameters_lo: bounds_of(best.effect, &best.lo, dt_s),
+        parameters_hi: bounds_of(best.effect, &best.hi, dt_s),
+        kind: if best.model.is_some() {
+            FindingKind::WrongLevel
+        } else {
+            FindingKind::Missing
+        },
+        model_parameters: best.model.map(|p| named_map(best.effect, &p)),
+        gap_before,
+        gap_predicted,
+        gap_after: f64::NAN,
+        delta_bic: choice.delta_bic,
+        cannot_tell_from: choice.cannot_tell_from,
+        round,
+        refinements: 0,
+        stand_in: false,
+    }
+}
+
+/// The records of the candidates weighed in one step (BIC and AIC gains over the unchanged model,
+/// whose BIC is `base_bic` and chi2 `chi2_base`).
+pub(crate) fn trial_records(
+    round: usize,
+    trials: &[Trial],
+    base_bic: f64,
+    chi2_base: f64,
+) -> Vec<CandidateRecord> {
+    trials
+        .iter()
+        .map(|t| CandidateRecord {
+            round,
+            effect: Candidate {
+                effect: t.effect,
+                rejected: false,
+            },
+            delta_bic: base_bic - t.bic,
+            delta_aic: chi2_base - t.aic,
+            parameters: named_map(t.effect, &t.params),
+        })
+        .collect()
+}
+
+/// The record of an effect named in `round` and rejected on re-simulation.
+pub(crate) fn rejected_record(round: usize, rejected: FoundEffect) -> CandidateRecord {
+    CandidateRecord {
+        round,
+        effect: Candidate {
+            effect: rejected.effect,
+            rejected: true,
+        },
+        delta_bic: rejected.delta_bic,
+        delta_aic: f64::NAN,
+        parameters: rejected.parameters.values,
+    }
+}
+
+/// A later round that changes the level of an effect already named on the channel refines that finding
+/// rather than naming a second one: the earlier entry takes the new parameters and the new gap after,
+/// and keeps its kind, model parameters and gap before (the same holds for a second change of one
+/// effect within a round). `first_new` is where this round's entries start.
+pub(crate) fn merge_refinements(effects: &mut Vec<FoundEffect>, first_new: usize) {
+    let mut i = first_new;
+    while i < effects.len() {
+        match effects[..i]
+            .iter()
+            .position(|e| e.effect == effects[i].effect)
+        {
+            Some(j) => {
+                let last = effects.remove(i);
+                let first = &mut effects[j];
+                first.parameters = last.parameters;
+                first.parameters_lo = last.parameters_lo;
+                first.parameters_hi = last.parameters_hi;
+                first.gap_predicted = last.gap_predicted;
+                first.gap_after = last.gap_after;
+                first.delta_bic += last.delta_bic;
+                first.cannot_tell_from = last.cannot_tell_from;
+                first.refinements += 1;
+            }
+            None => i += 1,
+        }
+    }
+}
+
+/// Shaped terms fitted where the model still disagrees are stand-ins, not physical findings. A
+/// sinusoid whose frequency carries a spectral line in the channel `x` is a physical tone (a
+/// vibration, an interference), not a stand-in.
+pub(crate) fn mark_stand_ins(effects: &mut [FoundEffect], x: Option<&[f64]>, dt_s: f64) {
+    for e in effects {
+        e.stand_in = match e.effect {
+            Effect::GaussMarkov => true,
+            Effect::Sinusoidal => !e
+                .parameters
+                .get("frequency_hz")
+                .is_some_and(|&f| x.is_some_and(|x| crate::detect::is_spectral_line(x, dt_s, f))),
+            _ => false,
+        };
+    }
+}
+
+/// One sentence on a channel: agrees, or what remains unexplained.
+pub(crate) fn verdict(g: &Gap, effects: &[FoundEffect]) -> String {
+    let named = if effects.is_empty() {
+        "no effect named".to_string()
+    } else {
+        effects
+            .iter()
+            .map(|e| {
+                if e.stand_in {
+                    format!("{} (stand-in)", e.effect.name())
+                } else {
+                    e.effect.name().to_string()
+                }
+            })
+            .collect::<Vec<_>>()
+            .join(" + ")
+    };
+    if effects.iter().any(|e| e.stand_in) && !g.disagreements.is_empty() {
+        return format!(
+            "{named}; no physical candidate explains the remaining gap, the terms marked stand-in only fill it"
+        );
+    }
+    if g.disagreements.is_empty() {
+        format!("model agrees with the measurement ({named}); no tau with |z| > 3")
+    } else {
+        let ranges: Vec<String> = g
+            .disagreements
+            .iter()
+            .map(|d| {
+                format!(
+                    "{:.4}-{:.4} s (max |z| {:.1})",
+                    d.tau_lo_s, d.tau_hi_s, d.max_abs_z
+                )
+            })
+            .collect();
+        format!(
+            "{named}; still disagreeing at {} and no candidate improves BIC enough to explain it",
+            ranges.join(", ")
+        )
+    }
+}
+
+/// A channel's curves for plots: measured with its interval, the band before and after.
+pub(crate) fn channel_curves(m: &Measured, initial: &Band, last: Band) -> ChannelCurves {
+    ChannelCurves {
+        tau_s: m.curve.tau_s.clone(),
+        adev: m.curve.adev.clone(),
+        adev_lo: m.lo.clone(),
+        adev_hi: m.hi.clone(),
+        edf: m.curve.edf.clone(),
+        band_initial: BandView {
+            centre: initial.centre(),
+            lo: initial.adev_lo.clone(),
+            hi: initial.adev_hi.clone(),
+        },
+        band_final: BandView {
+            centre: last.centre(),
+            lo: last.adev_lo,
+            hi: last.adev_hi,
+        },
+    }
+}
+
+/// A bound of a fitted term's parameters; a filter's noise bandwidth is a property of the chosen
+/// filter (its bound is itself: the filter's shape is selected, not interval-estimated).
+fn bounds_of(effect: Effect, params: &TermParams, dt_s: f64) -> BTreeMap<String, f64> {
+    parameters_of(effect, params, dt_s).values
+}
+
+/// The JSON parameters of a fitted term (an output filter's kind and one-sided noise bandwidth added).
+fn parameters_of(effect: Effect, params: &TermParams, dt_s: f64) -> Parameters {
+    let mut p: Parameters = named_map(effect, params).into();
+    if let TermParams::Filter { filter, .. } = params {
+        p.kind = Some(filter.kind.name());
+        p.values
+            .insert("noise_bandwidth_hz".into(), filter.noise_bandwidth_hz(dt_s));
+    }
+    p
+}

@@ -1,0 +1,58 @@
+//! What diagnose reads: the measured log, and the checks of its shape.
+
+use crate::drift::CHANNELS;
+use crate::error::DiagnoseError;
+
+/// The measured log, SI, channels in the order gx gy gz ax ay az (None: not in the log).
+#[derive(Clone, Copy, Debug)]
+pub struct LogInput<'a> {
+    pub dt_s: f64,
+    pub channels: [Option<&'a [f64]>; 6],
+    pub temperature_c: Option<&'a [f64]>,
+}
+
+impl<'a> LogInput<'a> {
+    /// The same log with other channel series (e.g. the detectors' corrected ones, see `detect`).
+    pub fn with_channels(&self, channels: &'a [Option<Vec<f64>>; 6]) -> LogInput<'a> {
+        LogInput {
+            dt_s: self.dt_s,
+            channels: std::array::from_fn(|c| channels[c].as_deref()),
+            temperature_c: self.temperature_c,
+        }
+    }
+
+    /// Check the log's shape; returns the number of samples.
+    pub fn validate(&self) -> Result<usize, DiagnoseError> {
+        if !(self.dt_s > 0.0 && self.dt_s.is_finite()) {
+            return Err(DiagnoseError::BadInterval(self.dt_s));
+        }
+        let first = (0..6)
+            .find(|&c| self.channels[c].is_some())
+            .ok_or(DiagnoseError::NoChannels)?;
+        let samples = self.channels[first].map(|c| c.len()).unwrap_or(0);
+        for c in 0..6 {
+            if let Some(s) = self.channels[c] {
+                if s.len() != samples {
+                    return Err(DiagnoseError::Length {
+                        channel: CHANNELS[c],
+                        got: s.len(),
+                        first: CHANNELS[first],
+                        expected: samples,
+                    });
+                }
+            }
+        }
+        if samples < 64 {
+            return Err(DiagnoseError::TooShort { samples });
+        }
+        if let Some(t) = self.temperature_c {
+            if t.len() != samples {
+                return Err(DiagnoseError::TemperatureLength {
+                    got: t.len(),
+                    expected: samples,
+                });
+            }
+        }
+        Ok(samples)
+    }
+}
