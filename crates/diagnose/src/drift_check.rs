@@ -111,11 +111,7 @@ fn likely_cause(
     verdict: Verdict,
     model: &SensorModel,
 ) -> Option<String> {
-    let chans: Vec<&str> = q
-        .needs()
-        .iter()
-        .map(|&c| crate::drift::CHANNELS[c])
-        .collect();
+    let chans: Vec<&str> = q.needs().iter().map(|c| c.name()).collect();
     let list = chans.join(", ");
     let short = horizon_s <= 60.0;
     match verdict {
@@ -130,11 +126,10 @@ fn likely_cause(
                 .needs()
                 .iter()
                 .filter(|&&c| {
-                    let (sensor, axis) = crate::model_terms::channel_axis(c);
-                    let a = model.axis(sensor, axis);
+                    let a = model.axis(c.sensor(), c.axis());
                     a.sinusoidal.is_some() || a.gauss_markov.is_some()
                 })
-                .map(|&c| crate::drift::CHANNELS[c])
+                .map(|c| c.name())
                 .collect();
             Some(if stand_ins.is_empty() {
                 format!(
@@ -362,8 +357,8 @@ impl Experiment<'_> {
             let missing: Vec<&str> = q
                 .needs()
                 .iter()
-                .filter(|&&c| self.logs.iter().any(|l| l.channels[c].is_none()))
-                .map(|&c| crate::drift::CHANNELS[c])
+                .filter(|&&c| self.logs.iter().any(|l| l.channels[c.index()].is_none()))
+                .map(|c| c.name())
                 .collect();
             let check = if !missing.is_empty() || segments == 0 {
                 not_informed(&self.settings.protocol, h, &missing)
