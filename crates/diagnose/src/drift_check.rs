@@ -181,19 +181,6 @@ pub enum CheckError {
     NotFinite { run: u64, quantity: &'static str },
 }
 
-fn quantile(sorted: &[f64], p: f64) -> f64 {
-    if sorted.is_empty() {
-        return f64::NAN;
-    }
-    let x = p * (sorted.len() - 1) as f64;
-    let (i, f) = (x.floor() as usize, x - x.floor());
-    if i + 1 < sorted.len() {
-        sorted[i] * (1.0 - f) + sorted[i + 1] * f
-    } else {
-        sorted[i]
-    }
-}
-
 /// The order statistic of 1-based fractional rank `a` (linear between neighbours, clamped).
 fn order_stat(sorted: &[f64], a: f64) -> f64 {
     let a = a.clamp(1.0, sorted.len() as f64);
@@ -210,10 +197,6 @@ fn abs_sorted(v: &[f64]) -> Vec<f64> {
     let mut a: Vec<f64> = v.iter().map(|x| x.abs()).collect();
     a.sort_by(f64::total_cmp);
     a
-}
-
-fn rms(v: &[f64]) -> f64 {
-    (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
 }
 
 /// The AR(1) effective count of segments (module doc), over the logs' own segment sequences.
@@ -393,7 +376,7 @@ impl Experiment<'_> {
                     quantity: q.name(),
                 });
             }
-            rep_rms.push(rms(&v));
+            rep_rms.push(stats::rms(&v));
             all.extend(v);
         }
         rep_rms.sort_by(f64::total_cmp);
@@ -406,9 +389,9 @@ impl Experiment<'_> {
         let all_sorted = abs_sorted(&all);
         Ok(Model {
             mean: all_sorted.iter().sum::<f64>() / all_sorted.len() as f64,
-            p50: quantile(&all_sorted, 0.5),
-            p95: quantile(&all_sorted, 0.95),
-            rms: rms(&all),
+            p50: stats::quantile(&all_sorted, 0.5),
+            p95: stats::quantile(&all_sorted, 0.95),
+            rms: stats::rms(&all),
             band_lo: order_stat(&rep_rms, a),
             band_hi: order_stat(&rep_rms, (rep_rms.len() + 1) as f64 - a),
         })
@@ -445,7 +428,7 @@ fn measured_stats(
 ) -> Measured {
     let values = pooled.values(q);
     let sorted = abs_sorted(values);
-    let r = rms(values);
+    let r = stats::rms(values);
     let seqs: Vec<&[f64]> = per_log.iter().map(|s| s.values(q)).collect();
     let n_eff = effective_count(&seqs, overlapping);
     let lo_q = allan::chi2::chi2_ppf(0.975, n_eff);
@@ -459,8 +442,8 @@ fn measured_stats(
         mean,
         mean_lo: mean - half,
         mean_hi: mean + half,
-        p50: quantile(&sorted, 0.5),
-        p95: quantile(&sorted, 0.95),
+        p50: stats::quantile(&sorted, 0.5),
+        p95: stats::quantile(&sorted, 0.95),
         rms: r,
         rms_lo: r * (n_eff / lo_q).sqrt(),
         rms_hi: r * (n_eff / hi_q).sqrt(),
