@@ -8,7 +8,7 @@ use crate::plot::{Band, LogLogPlot, Series};
 use anyhow::{anyhow, bail, Context, Result};
 use diagnose::drift::CHANNELS;
 use diagnose::report::{ChannelReport, DriftRow, FoundEffect, HeldOutGap};
-use diagnose::{diagnose_observed, DiagnoseError, Diagnosis, LogInput, Settings};
+use diagnose::{diagnose_runs, DiagnoseError, Diagnosis, LogInput, Settings};
 use noise::noise_file::AxisValue;
 use noise::SensorModel;
 use std::collections::BTreeMap;
@@ -18,8 +18,10 @@ use std::path::{Path, PathBuf};
 #[derive(clap::Args)]
 pub struct Args {
     /// Measured static log: CSV or gzip-compressed CSV with a header (`#` lines are comments;
-    /// columns recognised by name, docs/cli.md), a ROS 1 bag or a ROS 2 MCAP file
-    pub log: PathBuf,
+    /// columns recognised by name, docs/cli.md), a ROS 1 bag or a ROS 2 MCAP file. Several logs:
+    /// runs of one sensor (same rate and columns) fitted together (docs/diagnose.md, "Several runs")
+    #[arg(required = true, value_name = "LOG")]
+    pub logs: Vec<PathBuf>,
     /// Sensor model TOML to check against the log
     #[arg(long, value_name = "SENSOR.toml")]
     pub model: PathBuf,
@@ -76,6 +78,10 @@ fn with_flags(e: DiagnoseError) -> anyhow::Error {
         DiagnoseError::NoTaus { tau_min_s } => {
             anyhow!("no Allan point at or above --tau-min {tau_min_s} s")
         }
+        DiagnoseError::SeedsForRuns { seeds, runs } => anyhow!(
+            "--seeds {seeds} for {runs} logs: a band pooled over {runs} runs needs more simulated logs than runs (e.g. --seeds {})",
+            (runs + 1).max(16)
+        ),
         e => e.into(),
     }
 }
@@ -118,10 +124,9 @@ pub fn run(args: Args) -> Result<()> {
     pool.install(|| run_inner(&args))
 }
 
-fn run_inner(args: &Args) -> Result<()> {
-    let model = SensorModel::load(&args.model)?;
-    let log = args.log_args.read(&args.log)?;
-    eprintln!("{}: {}", log.source, log_input::mapping_text(&log));
+/// The channels of a log as diagnose reads them, once checked: a log without a gyro or
+/// accelerometer channel, or with a constant one, is refused.
+fn log_channels(log: &logio::Log) -> Result<LogInput<'_>> {
     let channels: [Option<&[f64]>; 6] =
         std::array::from_fn(|c| log.channels.get(CHANNELS[c]).map(Vec::as_slice));
     if channels.iter().all(Option::is_none) {
@@ -130,21 +135,6 @@ fn run_inner(args: &Args) -> Result<()> {
             log.source,
             log.order.join(", ")
         );
-    }
-    // Each worker holds a simulated six-channel log of the same length (and its phase): refuse a
-    // log whose simulation would not fit rather than be killed for memory halfway.
-    let need = rayon::current_num_threads() as u64 * 6 * log.len() as u64 * 16;
-    if let Some(available) = logio::available_memory_bytes() {
-        if need > available {
-            bail!(
-                "{}: simulating logs of {} samples on {} threads needs about {:.1} GiB and {:.1} GiB is available: use fewer --threads or a shorter log",
-                log.source,
-                log.len(),
-                rayon::current_num_threads(),
-                need as f64 / (1u64 << 30) as f64,
-                available as f64 / (1u64 << 30) as f64
-            );
-        }
     }
     // A constant channel has no Allan curve: comparing it with the model would say nothing.
     for (name, data) in CHANNELS.iter().zip(&channels) {
@@ -158,11 +148,45 @@ fn run_inner(args: &Args) -> Result<()> {
             }
         }
     }
-    let input = LogInput {
+    Ok(LogInput {
         dt_s: log.dt_s(),
         channels,
         temperature_c: log.channels.get("temp").map(Vec::as_slice),
-    };
+    })
+}
+
+fn run_inner(args: &Args) -> Result<()> {
+    let model = SensorModel::load(&args.model)?;
+    let mut logs = Vec::with_capacity(args.logs.len());
+    for path in &args.logs {
+        let log = args.log_args.read(path)?;
+        eprintln!("{}: {}", log.source, log_input::mapping_text(&log));
+        logs.push(log);
+    }
+    let log = &logs[0];
+    let sources = logs
+        .iter()
+        .map(|l| l.source.as_str())
+        .collect::<Vec<_>>()
+        .join(", ");
+    // Each worker holds a simulated six-channel log of the longest run's length (and its phase):
+    // refuse logs whose simulation would not fit rather than be killed for memory halfway.
+    let longest = logs.iter().map(logio::Log::len).max().unwrap_or(0);
+    let need = rayon::current_num_threads() as u64 * 6 * longest as u64 * 16;
+    if let Some(available) = logio::available_memory_bytes() {
+        if need > available {
+            bail!(
+                "{}: simulating logs of {} samples on {} threads needs about {:.1} GiB and {:.1} GiB is available: use fewer --threads or a shorter log",
+                log.source,
+                longest,
+                rayon::current_num_threads(),
+                need as f64 / (1u64 << 30) as f64,
+                available as f64 / (1u64 << 30) as f64
+            );
+        }
+    }
+    let inputs: Vec<LogInput> = logs.iter().map(log_channels).collect::<Result<_>>()?;
+    let input = inputs[0];
     // An output filter in the model must fit the log's rate.
     noise::ImuErrors::check_rate(&model, input.dt_s).map_err(|e| {
         anyhow::anyhow!(
@@ -182,17 +206,14 @@ fn run_inner(args: &Args) -> Result<()> {
     };
     let started = std::time::Instant::now();
     let stages = Stages(crate::progress::Progress::stages("diagnose"));
-    let result = diagnose_observed(&input, &model, &settings, &stages);
+    let result = diagnose_runs(&inputs, &model, &settings, &stages);
     stages.0.finish();
     let result = result
         .map_err(with_flags)
-        .with_context(|| format!("diagnosing {} against {}", log.source, args.model.display()))?;
+        .with_context(|| format!("diagnosing {sources} against {}", args.model.display()))?;
     let elapsed_s = started.elapsed().as_secs_f64();
     let corrected = corrected_model(&result, &model, &args.model);
-    eprint!(
-        "{}",
-        text_report(&result, &log.source, &args.model, elapsed_s)
-    );
+    eprint!("{}", text_report(&result, &sources, &args.model, elapsed_s));
     let mut checks = Vec::new();
     for path in &args.check {
         let held = args.log_args.read(path)?;
@@ -209,7 +230,7 @@ fn run_inner(args: &Args) -> Result<()> {
     if !checks.is_empty() {
         eprint!("{}", checks_text(&checks));
     }
-    let doc = json_document(&result, &log, &args.model, &corrected, &checks)?;
+    let doc = json_document(&result, &logs, &args.model, &corrected, &checks)?;
     let per_channel: [Option<(AxisValue, AxisValue)>; 6] = noise::Channel::ALL.map(|c| {
         result
             .channels
@@ -222,7 +243,7 @@ fn run_inner(args: &Args) -> Result<()> {
         log.rate_hz,
         &format!(
             "the model `imudrift diagnose` corrected on {} (from {})",
-            log.source,
+            sources,
             args.model.display()
         ),
         log.topic.as_deref(),
@@ -238,12 +259,12 @@ fn run_inner(args: &Args) -> Result<()> {
         for (name, report) in &result.channels {
             write_string(
                 &dir.join(format!("diagnose_{name}.svg")),
-                &plot(name, report),
+                &plot(name, report, &result),
             )?;
         }
         write_string(
             &dir.join("report.md"),
-            &markdown_report(&result, &log.source, &args.model, &toml_name, &checks),
+            &markdown_report(&result, &sources, &args.model, &toml_name, &checks),
         )?;
         eprintln!(
             "wrote {} (report.md, diagnose.json, {toml_name}, diagnose_<channel>.svg)",
@@ -421,6 +442,7 @@ fn text_report(result: &Diagnosis, log: &str, model: &Path, elapsed_s: f64) -> S
             );
         }
     }
+    s.push_str(&runs_text(result));
     let _ = writeln!(
         s,
         "drift (RMS over segments; bias removed by the log mean): heading, horizontal position"
@@ -443,6 +465,39 @@ fn text_report(result: &Diagnosis, log: &str, model: &Path, elapsed_s: f64) -> S
             s,
             "n/a: the log cannot inform it (heading needs gz; horizontal position needs gx, gy, ax, ay); `imudrift drift` compares every quantity a log informs"
         );
+    }
+    s
+}
+
+/// Each run's gap per channel (several runs): against one log of the original model, and of the
+/// corrected model.
+fn runs_text(result: &Diagnosis) -> String {
+    let mut s = String::new();
+    if result.runs.is_empty() {
+        return s;
+    }
+    let _ = writeln!(
+        s,
+        "runs (pooled above): each run's gap against one log of the original model -> of the corrected model"
+    );
+    for (i, run) in result.runs.iter().enumerate() {
+        let cells: Vec<String> = run
+            .channels
+            .iter()
+            .map(|(ch, c)| format!("{ch} {:.2} -> {:.2}", c.gap_initial, c.gap_final))
+            .collect();
+        let _ = writeln!(
+            s,
+            "  run {} ({} samples): {}",
+            i + 1,
+            run.samples,
+            cells.join(", ")
+        );
+        for (ch, found) in &run.findings {
+            for e in found {
+                let _ = writeln!(s, "       {ch}: {} {}", e.effect, params_text(e, ch));
+            }
+        }
     }
     s
 }
@@ -511,7 +566,7 @@ fn model_noise_values(result: &Diagnosis, c: noise::Channel) -> Option<(AxisValu
 
 fn json_document(
     result: &Diagnosis,
-    log: &logio::Log,
+    logs: &[logio::Log],
     model: &Path,
     corrected: &str,
     checks: &Checks,
@@ -525,6 +580,15 @@ fn json_document(
         .map(|(log, gaps)| serde_json::json!({ "log": log, "channels": gaps }))
         .collect();
     obj.insert("checks".into(), checks.into());
+    // Several runs: each run's entry names its log (`log` is the first run's, as for one log).
+    if let Some(runs) = obj.get_mut("runs").and_then(|r| r.as_array_mut()) {
+        for (run, log) in runs.iter_mut().zip(logs) {
+            if let Some(run) = run.as_object_mut() {
+                run.insert("log".into(), log.source.clone().into());
+            }
+        }
+    }
+    let log = &logs[0];
     obj.insert("log".into(), log.source.clone().into());
     let (columns, skipped) = log_input::columns_json(log);
     obj.insert("columns".into(), columns);
@@ -585,6 +649,44 @@ fn markdown_report(
             r.verdict
         );
     }
+    if !result.runs.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n## Runs\n\nThe logs are runs of one sensor fitted together: the table above is of their pooled Allan variances. Each run's gap against one log of the original model -> of the corrected model, and what the time-domain detectors found in it.\n"
+        );
+        let _ = writeln!(s, "| run | samples | {} | found |", CHANNELS.join(" | "));
+        let _ = writeln!(s, "|---|---|{}---|", "---|".repeat(CHANNELS.len()));
+        for (i, run) in result.runs.iter().enumerate() {
+            let cells: Vec<String> = CHANNELS
+                .iter()
+                .map(|ch| {
+                    run.channels.get(*ch).map_or("-".into(), |c| {
+                        format!("{:.2} -> {:.2}", c.gap_initial, c.gap_final)
+                    })
+                })
+                .collect();
+            let found: Vec<String> = run
+                .findings
+                .iter()
+                .flat_map(|(ch, f)| {
+                    f.iter()
+                        .map(move |e| format!("{ch}: {} {}", e.effect, params_text(e, ch)))
+                })
+                .collect();
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {} |",
+                i + 1,
+                run.samples,
+                cells.join(" | "),
+                if found.is_empty() {
+                    "-".into()
+                } else {
+                    found.join("<br>")
+                }
+            );
+        }
+    }
     if !checks.is_empty() {
         let _ = writeln!(
             s,
@@ -643,9 +745,51 @@ fn markdown_report(
     s
 }
 
-fn plot(name: &str, r: &ChannelReport) -> String {
+fn plot(name: &str, r: &ChannelReport, result: &Diagnosis) -> String {
     let c = &r.curves;
     let unit = logio::Log::unit_of(name);
+    let pooled = !result.runs.is_empty();
+    let mut series = vec![
+        Series::new(
+            if pooled {
+                "measured, pooled"
+            } else {
+                "measured"
+            },
+            c.tau_s.clone(),
+            c.adev.clone(),
+            "#000000",
+        ),
+        Series::dashed(
+            "model before",
+            c.tau_s.clone(),
+            c.band_initial.centre.clone(),
+            "#d62728",
+        ),
+        Series::dashed(
+            "model after",
+            c.tau_s.clone(),
+            c.band_final.centre.clone(),
+            "#1f77b4",
+        ),
+    ];
+    // Several runs: each run's own curve beside the pooled one.
+    const RUN_COLOURS: [&str; 6] = [
+        "#8c564b", "#e377c2", "#bcbd22", "#17becf", "#9467bd", "#ff7f0e",
+    ];
+    for (i, run) in result.runs.iter().enumerate() {
+        if let Some(rc) = run.channels.get(name) {
+            series.push(Series {
+                markers: false,
+                ..Series::new(
+                    &format!("run {}", i + 1),
+                    rc.tau_s.clone(),
+                    rc.adev.clone(),
+                    RUN_COLOURS[i % RUN_COLOURS.len()],
+                )
+            });
+        }
+    }
     LogLogPlot {
         title: format!(
             "{name}: measured vs model band (gap {:.2} -> {:.2})",
@@ -653,21 +797,7 @@ fn plot(name: &str, r: &ChannelReport) -> String {
         ),
         x_label: "tau (s)".into(),
         y_label: format!("Allan deviation ({unit})"),
-        series: vec![
-            Series::new("measured", c.tau_s.clone(), c.adev.clone(), "#000000"),
-            Series::dashed(
-                "model before",
-                c.tau_s.clone(),
-                c.band_initial.centre.clone(),
-                "#d62728",
-            ),
-            Series::dashed(
-                "model after",
-                c.tau_s.clone(),
-                c.band_final.centre.clone(),
-                "#1f77b4",
-            ),
-        ],
+        series,
         bands: vec![
             Band {
                 name: "measured 1-sigma".into(),

@@ -518,75 +518,15 @@ impl TransientProfile {
     }
 }
 
-/// Power of `x` near frequency `f0_hz`, Welch-averaged over segments of `seg` samples (Hann
-/// window), at f0 + j df for j = -span..=span, df = 1 / (seg dt). Each value is a direct DFT at that
-/// frequency (Goertzel-style rotation), so f0 need not lie on a bin.
-fn local_spectrum(x: &[f64], dt_s: f64, f0_hz: f64, seg: usize, span: i32) -> Vec<f64> {
-    let k = x.len() / seg;
-    let df = 1.0 / (seg as f64 * dt_s);
-    let window: Vec<f64> = (0..seg)
-        .map(|n| 0.5 - 0.5 * (std::f64::consts::TAU * n as f64 / seg as f64).cos())
-        .collect();
-    (-span..=span)
-        .map(|j| {
-            let w = std::f64::consts::TAU * (f0_hz + f64::from(j) * df) * dt_s;
-            let (c1, s1) = (w.cos(), w.sin());
-            let mut total = 0.0;
-            for s in 0..k {
-                let seg_x = &x[s * seg..(s + 1) * seg];
-                let mean = seg_x.iter().sum::<f64>() / seg as f64;
-                let (mut re, mut im) = (0.0, 0.0);
-                let (mut c, mut sn) = (1.0, 0.0);
-                for (v, wn) in seg_x.iter().zip(&window) {
-                    let a = (v - mean) * wn;
-                    re += a * c;
-                    im -= a * sn;
-                    let c2 = c * c1 - sn * s1;
-                    sn = sn * c1 + c * s1;
-                    c = c2;
-                }
-                total += re * re + im * im;
-            }
-            total / k.max(1) as f64
-        })
-        .collect()
-}
-
-/// May a sinusoid at `f0_hz` be named in `x`: there is a spectral line there ([`is_spectral_line`]),
-/// or the spectrum cannot tell (the frequency below 6 resolutions of the Welch segments, at or
-/// above the Nyquist frequency, or the log too short for segments).
+/// May a sinusoid at `f0_hz` be named in `x` ([`crate::spectrum::line_allowed_runs`] of one log).
 pub fn line_allowed(x: &[f64], dt_s: f64, f0_hz: f64) -> bool {
-    let seg = 4096.min(x.len() / 16);
-    if seg < 64 || f0_hz.is_nan() || f0_hz <= 0.0 || f0_hz >= 0.5 / dt_s {
-        return true;
-    }
-    f0_hz < 6.0 / (seg as f64 * dt_s) || is_spectral_line(x, dt_s, f0_hz)
+    crate::spectrum::line_allowed_runs(&[x], dt_s, f0_hz)
 }
 
-/// Is there a spectral line (a sinusoid) at `f0_hz` in `x`? A Welch spectrum (segments of 4096
-/// samples, or a sixteenth of the log if shorter, Hann window) must, at f0, exceed the median of the
-/// bins 6 to 20 resolutions away by a factor above both 2 and 1 + 6/sqrt(K) (K segments: the
-/// relative spread of a K-segment average is 1/sqrt(K), so 6 sigma), and fall to a quarter of its
-/// peak 4 resolutions away (a Hann-windowed line leaks over +-2 bins; a broad narrow-band process
-/// does not fall off). Used to tell a physical tone from a sinusoid fitted as a stand-in.
+/// Is there a spectral line at `f0_hz` in `x` ([`crate::spectrum::is_spectral_line_runs`] of one
+/// log).
 pub fn is_spectral_line(x: &[f64], dt_s: f64, f0_hz: f64) -> bool {
-    let seg = 4096.min(x.len() / 16);
-    if seg < 64 || f0_hz.is_nan() || f0_hz <= 0.0 || f0_hz >= 0.5 / dt_s {
-        return false;
-    }
-    let df = 1.0 / (seg as f64 * dt_s);
-    if f0_hz < 6.0 * df {
-        return false;
-    }
-    let k = (x.len() / seg) as f64;
-    let span = 20;
-    let p = local_spectrum(x, dt_s, f0_hz, seg, span);
-    let at = |j: i32| p[(j + span) as usize];
-    let peak = (-1..=1).map(at).fold(0.0, f64::max);
-    let mut side: Vec<f64> = (6..=span).flat_map(|j| [at(j), at(-j)]).collect();
-    let background = median(&mut side);
-    let far = at(4).max(at(-4));
-    background > 0.0 && peak > background * 2f64.max(1.0 + 6.0 / k.sqrt()) && far < 0.25 * peak
+    crate::spectrum::is_spectral_line_runs(&[x], dt_s, f0_hz)
 }
 
 #[cfg(test)]

@@ -26,13 +26,30 @@ pub enum DiagnoseError {
     /// The setting `tau_min_s` leaves no Allan point.
     #[error("no Allan point at or above tau_min_s = {tau_min_s} s")]
     NoTaus { tau_min_s: f64 },
-    #[error("a log checked against the diagnosis must have its rate and length: got {samples} samples at {dt_s} s, expected {expected_samples} at {expected_dt_s} s")]
+    #[error("a log checked against the diagnosis must have its rate and length (those of a diagnosed run): got {samples} samples at {dt_s} s, expected {expected_samples} at {expected_dt_s} s")]
     CheckShape {
         samples: usize,
         dt_s: f64,
         expected_samples: usize,
         expected_dt_s: f64,
     },
+    #[error("run {run} is sampled every {dt_s} s, run 1 every {first_dt_s} s: runs pooled in one diagnosis must share their rate")]
+    RunRate {
+        run: usize,
+        dt_s: f64,
+        first_dt_s: f64,
+    },
+    #[error("run {run} has the channels {channels}, run 1 has {first}: runs pooled in one diagnosis must have the same channels")]
+    RunChannels {
+        run: usize,
+        channels: String,
+        first: String,
+    },
+    /// The setting `seeds` is not above the number of runs pooled.
+    #[error("seeds = {seeds} simulated logs for {runs} runs: a pooled band needs more simulated logs than runs")]
+    SeedsForRuns { seeds: usize, runs: usize },
+    #[error("no log to diagnose")]
+    NoRuns,
     #[error(transparent)]
     Simulation(#[from] SimError),
 }

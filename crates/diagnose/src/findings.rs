@@ -158,16 +158,16 @@ pub(crate) fn merge_refinements(effects: &mut Vec<FoundEffect>, first_new: usize
 }
 
 /// Shaped terms fitted where the model still disagrees are stand-ins, not physical findings. A
-/// sinusoid whose frequency carries a spectral line in the channel `x` is a physical tone (a
-/// vibration, an interference), not a stand-in.
-pub(crate) fn mark_stand_ins(effects: &mut [FoundEffect], x: Option<&[f64]>, dt_s: f64) {
+/// sinusoid whose frequency carries a spectral line in the channel is a physical tone (a
+/// vibration, an interference), not a stand-in. `xs`: the channel in every run (empty: not measured).
+pub(crate) fn mark_stand_ins(effects: &mut [FoundEffect], xs: &[&[f64]], dt_s: f64) {
     for e in effects {
         e.stand_in = match e.effect {
             Effect::GaussMarkov => true,
             Effect::Sinusoidal => !e
                 .parameters
                 .get("frequency_hz")
-                .is_some_and(|&f| x.is_some_and(|x| crate::detect::is_spectral_line(x, dt_s, f))),
+                .is_some_and(|&f| crate::spectrum::is_spectral_line_runs(xs, dt_s, f)),
             _ => false,
         };
     }

@@ -4,7 +4,7 @@
 //! the simulated seeds (so the small-EDF bias of ln adev, E[ln chi2_v / v] < 0, is the same on both
 //! sides and cancels); s combines the sampling error of the measured point, from its equivalent
 //! degrees of freedom (or the band's seed spread where that is larger), with the error of the band
-//! centre (seed spread / sqrt(seeds)).
+//! centre (seed spread / sqrt(independent simulated logs)).
 
 use montecarlo::stats::quantile_sorted;
 use serde::Serialize;
@@ -34,6 +34,9 @@ pub struct Band {
     pub adev_lo: Vec<f64>,
     pub adev_hi: Vec<f64>,
     pub seeds: usize,
+    /// Independent simulated logs behind the centre: `seeds`, or fewer when each replicate pools
+    /// several simulated logs that other replicates share (`simulate`, pooled runs).
+    pub centre_logs: f64,
 }
 
 impl Band {
@@ -71,6 +74,7 @@ impl Band {
             adev_lo,
             adev_hi,
             seeds: s_count,
+            centre_logs: s_count as f64,
         }
     }
 
@@ -141,7 +145,7 @@ pub fn standard_errors(measured: &Curve, band: &Band) -> Vec<f64> {
         .zip(&band.ln_sd)
         .map(|(&edf, &sd)| {
             let s_meas = ln_adev_se(edf).max(sd);
-            (s_meas * s_meas + sd * sd / band.seeds.max(1) as f64).sqrt()
+            (s_meas * s_meas + sd * sd / band.centre_logs.max(1.0)).sqrt()
         })
         .collect()
 }

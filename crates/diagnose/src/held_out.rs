@@ -9,19 +9,22 @@ use crate::report::{Diagnosis, HeldOutGap};
 use std::collections::BTreeMap;
 
 impl Diagnosis {
-    /// The gap of another log of the same rate and length (data the diagnosis did not see) against the
-    /// original model's band and the corrected model's band, per channel.
+    /// The gap of another log of the same rate and length as a diagnosed run (data the diagnosis did
+    /// not see) against the original model's band and the corrected model's band of one log, per
+    /// channel.
     pub fn check(&self, log: &LogInput) -> Result<BTreeMap<String, HeldOutGap>, DiagnoseError> {
         let samples = log.validate()?;
         let shape_error = || DiagnoseError::CheckShape {
             samples,
             dt_s: log.dt_s,
-            expected_samples: self.samples,
+            expected_samples: self.log_bands.first().map_or(0, |b| b.samples),
             expected_dt_s: self.dt_s,
         };
-        if samples != self.samples || (log.dt_s - self.dt_s).abs() > 1e-12 * self.dt_s {
+        let bands = self.log_bands.iter().find(|b| b.samples == samples);
+        let Some(bands) = bands.filter(|_| (log.dt_s - self.dt_s).abs() <= 1e-12 * self.dt_s)
+        else {
             return Err(shape_error());
-        }
+        };
         // The same time-domain corrections as the diagnosed log (outliers, temperature, transient).
         let pre = crate::detect::preprocess_log(log, &self.model_final);
         let corrected = log.with_channels(&pre.channels);
@@ -30,8 +33,8 @@ impl Diagnosis {
         for (c, m) in measured.iter() {
             let (Some(m), Some(b0), Some(b1)) = (
                 m.as_ref(),
-                self.bands_initial[c.index()].as_ref(),
-                self.bands_final[c.index()].as_ref(),
+                bands.initial[c.index()].as_ref(),
+                bands.corrected[c.index()].as_ref(),
             ) else {
                 continue;
             };

@@ -56,3 +56,35 @@ impl<'a> LogInput<'a> {
         Ok(samples)
     }
 }
+
+/// Check several runs of one sensor (docs/diagnose.md, "Several runs"): each log's shape, one
+/// rate and one set of channels; returns each run's number of samples.
+pub fn validate_runs(logs: &[LogInput]) -> Result<Vec<usize>, DiagnoseError> {
+    let first = logs.first().ok_or(DiagnoseError::NoRuns)?;
+    let names = |l: &LogInput| {
+        (0..6)
+            .filter(|&c| l.channels[c].is_some())
+            .map(|c| CHANNELS[c])
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let mut samples = Vec::with_capacity(logs.len());
+    for (r, log) in logs.iter().enumerate() {
+        samples.push(log.validate()?);
+        if (log.dt_s - first.dt_s).abs() > 1e-9 * first.dt_s {
+            return Err(DiagnoseError::RunRate {
+                run: r + 1,
+                dt_s: log.dt_s,
+                first_dt_s: first.dt_s,
+            });
+        }
+        if names(log) != names(first) {
+            return Err(DiagnoseError::RunChannels {
+                run: r + 1,
+                channels: names(log),
+                first: names(first),
+            });
+        }
+    }
+    Ok(samples)
+}

@@ -1,11 +1,19 @@
-//! Step 1 of the workflow: the measured Allan deviations on the common grid.
+//! Step 1 of the workflow: the measured Allan deviations on the common grid, of one log or pooled
+//! over several runs of one sensor (docs/diagnose.md, "Several runs").
+//!
+//! Pooling: at each tau the runs' overlapping Allan variances are averaged with weights equal to
+//! their numbers of overlapping terms (the pooled estimator is then the overlapping estimator of
+//! all the runs' difference terms together, NIST SP 1065 eq (14) summed over runs), and their
+//! equivalent degrees of freedom add up (independent runs: the pooled chi-squared variable is the
+//! sum of the runs', SP 1065 §5.2). A point only one run has is that run's point unchanged.
 
 use crate::gap::{Band, Curve};
 use crate::input::LogInput;
-use allan::{DataKind, Estimator, TauGrid};
+use allan::{AllanPoint, DataKind, Estimator, TauGrid};
 use noise::ImuChannels;
 
 /// One channel's measurement on the common grid: indices into the grid it has valid points at.
+#[derive(Clone, Debug)]
 pub(crate) struct Measured {
     pub(crate) idx: Vec<usize>,
     pub(crate) curve: Curve,
@@ -13,59 +21,149 @@ pub(crate) struct Measured {
     pub(crate) hi: Vec<f64>,
 }
 
-/// Measured Allan deviations of every channel in the log on the octave grid, and the grid's averaging
-/// factors. Points without a positive deviation and EDF, or below `tau_min_s`, are left out.
-pub(crate) fn measure(
-    log: &LogInput,
-    tau_min_s: f64,
-) -> (Vec<usize>, ImuChannels<Option<Measured>>) {
-    let mut grid_m: Vec<usize> = Vec::new();
-    let mut points: [Vec<allan::AllanPoint>; 6] = Default::default();
-    for c in 0..6 {
-        if let Some(s) = log.channels[c] {
-            points[c] = allan::deviation(
+/// The measurement of one or several runs: the grid's averaging factors, the pooled curve of
+/// every channel, each run's own curve, and the weight of each run in the pooled Allan variance
+/// per channel, grid index and run (its overlapping terms, 0 where it has no valid point): the
+/// band pools its simulated runs with the same weights.
+pub(crate) struct Runs {
+    pub(crate) grid_m: Vec<usize>,
+    pub(crate) pooled: ImuChannels<Option<Measured>>,
+    pub(crate) runs: Vec<ImuChannels<Option<Measured>>>,
+    pub(crate) weights: [Vec<Vec<f64>>; 6],
+}
+
+/// Every channel's overlapping Allan points of a log on the octave grid (Greenhall EDF).
+fn points(log: &LogInput) -> [Vec<AllanPoint>; 6] {
+    std::array::from_fn(|c| {
+        log.channels[c].map_or_else(Vec::new, |s| {
+            allan::deviation(
                 s,
                 DataKind::Rate,
                 log.dt_s,
                 Estimator::Overlapping,
                 &TauGrid::Octave,
+            )
+        })
+    })
+}
+
+fn valid(p: &AllanPoint) -> bool {
+    p.dev > 0.0 && p.dev.is_finite() && p.edf > 0.0 && p.edf.is_finite()
+}
+
+/// The pooled point of the runs' valid points at one averaging factor (module doc).
+fn pool_point(points: &[&AllanPoint]) -> AllanPoint {
+    if let [one] = points {
+        return (*one).clone();
+    }
+    let w: f64 = points.iter().map(|p| p.n_terms as f64).sum();
+    let avar = points
+        .iter()
+        .map(|p| p.n_terms as f64 * p.dev * p.dev)
+        .sum::<f64>()
+        / w;
+    let edf: f64 = points.iter().map(|p| p.edf).sum();
+    let dev = avar.sqrt();
+    let (lo, hi) = allan::chi2::confidence_interval(dev, edf, allan::ONE_SIGMA_CI);
+    AllanPoint {
+        dev,
+        edf,
+        lo,
+        hi,
+        n_terms: points.iter().map(|p| p.n_terms).sum(),
+        bins: points.iter().map(|p| p.bins).sum(),
+        ..points[0].clone()
+    }
+}
+
+/// A channel's curve from its points on the grid, leaving out invalid points and taus below
+/// `tau_min_s`.
+fn curve_of(points: &[AllanPoint], grid_m: &[usize], tau_min_s: f64) -> Measured {
+    let mut idx = Vec::new();
+    let (mut tau, mut adev, mut edf, mut lo, mut hi) = (vec![], vec![], vec![], vec![], vec![]);
+    for p in points {
+        let Some(i) = grid_m.iter().position(|&m| m == p.m) else {
+            continue;
+        };
+        if valid(p) && p.tau_s >= tau_min_s {
+            idx.push(i);
+            tau.push(p.tau_s);
+            adev.push(p.dev);
+            edf.push(p.edf);
+            lo.push(p.lo);
+            hi.push(p.hi);
+        }
+    }
+    Measured {
+        idx,
+        curve: Curve {
+            tau_s: tau,
+            adev,
+            edf,
+        },
+        lo,
+        hi,
+    }
+}
+
+/// Measured Allan deviations of every channel of one log on the octave grid, and the grid's
+/// averaging factors. Points without a positive deviation and EDF, or below `tau_min_s`, are left out.
+pub(crate) fn measure(
+    log: &LogInput,
+    tau_min_s: f64,
+) -> (Vec<usize>, ImuChannels<Option<Measured>>) {
+    let r = measure_runs(std::slice::from_ref(log), tau_min_s);
+    (r.grid_m, r.pooled)
+}
+
+/// [`measure`] of several runs of one sensor (same rate and channels): the grid is the longest
+/// run's, the pooled curve as in the module doc.
+pub(crate) fn measure_runs(logs: &[LogInput], tau_min_s: f64) -> Runs {
+    use rayon::prelude::*;
+    let per_run: Vec<[Vec<AllanPoint>; 6]> = logs.par_iter().map(points).collect();
+    let longest = (0..per_run.len())
+        .max_by_key(|&r| (per_run[r].iter().map(Vec::len).max(), std::cmp::Reverse(r)))
+        .unwrap_or(0);
+    let grid_m: Vec<usize> = per_run
+        .get(longest)
+        .and_then(|p| p.iter().find(|v| !v.is_empty()))
+        .map(|v| v.iter().map(|p| p.m).collect())
+        .unwrap_or_default();
+    let mut weights: [Vec<Vec<f64>>; 6] = Default::default();
+    let mut pooled_points: [Vec<AllanPoint>; 6] = Default::default();
+    for c in 0..6 {
+        if logs.first().is_none_or(|l| l.channels[c].is_none()) {
+            continue;
+        }
+        for &m in &grid_m {
+            let at: Vec<Option<&AllanPoint>> = per_run
+                .iter()
+                .map(|p| p[c].iter().find(|p| p.m == m).filter(|p| valid(p)))
+                .collect();
+            weights[c].push(
+                at.iter()
+                    .map(|p| p.map_or(0.0, |p| p.n_terms as f64))
+                    .collect(),
             );
-            if grid_m.is_empty() {
-                grid_m = points[c].iter().map(|p| p.m).collect();
+            let present: Vec<&AllanPoint> = at.into_iter().flatten().collect();
+            if !present.is_empty() {
+                pooled_points[c].push(pool_point(&present));
             }
         }
     }
-    let measured = ImuChannels::from_fn(|ch| {
-        let c = ch.index();
-        log.channels[c]?;
-        let mut idx = Vec::new();
-        let (mut tau, mut adev, mut edf, mut lo, mut hi) = (vec![], vec![], vec![], vec![], vec![]);
-        for p in &points[c] {
-            let Some(i) = grid_m.iter().position(|&m| m == p.m) else {
-                continue;
-            };
-            let valid = p.dev > 0.0 && p.dev.is_finite() && p.edf > 0.0 && p.edf.is_finite();
-            if valid && p.tau_s >= tau_min_s {
-                idx.push(i);
-                tau.push(p.tau_s);
-                adev.push(p.dev);
-                edf.push(p.edf);
-                lo.push(p.lo);
-                hi.push(p.hi);
-            }
-        }
-        Some(Measured {
-            idx,
-            curve: Curve {
-                tau_s: tau,
-                adev,
-                edf,
-            },
-            lo,
-            hi,
-        })
-    });
-    (grid_m, measured)
+    let channel = |points: &[Vec<AllanPoint>; 6], c: noise::Channel| {
+        logs.first()?.channels[c.index()]?;
+        Some(curve_of(&points[c.index()], &grid_m, tau_min_s))
+    };
+    Runs {
+        pooled: ImuChannels::from_fn(|c| channel(&pooled_points, c)),
+        runs: per_run
+            .iter()
+            .map(|p| ImuChannels::from_fn(|c| channel(p, c)))
+            .collect(),
+        weights,
+        grid_m,
+    }
 }
 
 /// Restrict a band to a channel's valid grid indices.
@@ -79,5 +177,6 @@ pub(crate) fn restrict(band: &Band, idx: &[usize]) -> Band {
         adev_lo: pick(&band.adev_lo),
         adev_hi: pick(&band.adev_hi),
         seeds: band.seeds,
+        centre_logs: band.centre_logs,
     }
 }

@@ -184,19 +184,50 @@ pub struct Diagnosis {
     pub samples: usize,
     pub channels: BTreeMap<String, ChannelReport>,
     pub drift: Vec<DriftRow>,
+    /// Several runs pooled: each run's curves, gaps and step-0 findings, in input order (absent
+    /// for one log; docs/cli.md).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub runs: Vec<RunReport>,
     /// Shortest tau analysed, s.
     pub tau_min_s: f64,
     /// The corrected model (written as TOML by the CLI).
     #[serde(skip)]
     pub model_final: SensorModel,
-    /// Averaging factors of the tau grid and the bands of the original and corrected models (for
-    /// checking held-out logs).
+    /// Averaging factors of the tau grid and the bands of one log of the original and corrected
+    /// models at each run length (for checking held-out logs).
     #[serde(skip)]
     pub grid_m: Vec<usize>,
     #[serde(skip)]
-    pub bands_initial: [Option<Band>; 6],
-    #[serde(skip)]
-    pub bands_final: [Option<Band>; 6],
+    pub log_bands: Vec<LogBands>,
+}
+
+/// The bands of one log of a given length, of the original and of the corrected model.
+#[derive(Clone, Debug)]
+pub struct LogBands {
+    pub samples: usize,
+    pub initial: [Option<Band>; 6],
+    pub corrected: [Option<Band>; 6],
+}
+
+/// One run of several pooled: its own curve per channel (after step 0's corrections), its gap
+/// against one log of the original model (before the corrections) and of the corrected model, and
+/// what step 0 found in it (the gaps of a finding are the run's before and after its corrections,
+/// against the original model).
+#[derive(Clone, Debug, Serialize)]
+pub struct RunReport {
+    pub samples: usize,
+    pub channels: BTreeMap<String, RunChannel>,
+    pub findings: BTreeMap<String, Vec<FoundEffect>>,
+}
+
+/// One run's channel.
+#[derive(Clone, Debug, Serialize)]
+pub struct RunChannel {
+    pub tau_s: Vec<f64>,
+    pub adev: Vec<f64>,
+    pub edf: Vec<f64>,
+    pub gap_initial: f64,
+    pub gap_final: f64,
 }
 
 /// Gap of a held-out log against the model before and after diagnosis.

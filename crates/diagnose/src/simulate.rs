@@ -33,7 +33,10 @@ pub struct SimSetup<'a> {
 /// Bands of the active channels and the segment drifts of all seeds (merged in seed order).
 #[derive(Clone, Debug)]
 pub struct SimResult {
+    /// The band of the measurement (pooled over the runs of a `RunPlan`).
     pub bands: [Option<Band>; 6],
+    /// The band of one log at each distinct run length (for a held-out log, or one run).
+    pub log_bands: Vec<(usize, [Option<Band>; 6])>,
     pub drift: Vec<SegmentDrift>,
 }
 
@@ -45,18 +48,59 @@ pub struct SimError {
     pub message: String,
 }
 
+/// The runs a band pools (docs/diagnose.md, "Several runs"): each run's length, and per channel,
+/// grid index and run the run's weight in the pooled Allan variance (`measure`: its overlapping
+/// terms, 0 where it has no valid point). One run: the band of one log.
+#[derive(Clone, Debug)]
+pub struct RunPlan {
+    pub samples: Vec<usize>,
+    pub weights: [Vec<Vec<f64>>; 6],
+}
+
+impl RunPlan {
+    /// One log of `samples` samples.
+    pub fn single(samples: usize) -> RunPlan {
+        RunPlan {
+            samples: vec![samples],
+            weights: Default::default(),
+        }
+    }
+
+    /// The distinct run lengths, ascending, and each run's index into them.
+    fn lengths(&self) -> (Vec<usize>, Vec<usize>) {
+        let mut distinct = self.samples.clone();
+        distinct.sort_unstable();
+        distinct.dedup();
+        let of_run = self
+            .samples
+            .iter()
+            .map(|n| distinct.iter().position(|d| d == n).unwrap_or(0))
+            .collect();
+        (distinct, of_run)
+    }
+}
+
 struct Kernel<'a> {
     model: &'a SensorModel,
     setup: &'a SimSetup<'a>,
     seed: u64,
-    /// Segments per horizon (fixed by the log length).
-    segments: Vec<usize>,
+    /// The distinct run lengths each simulated log is measured at (its prefixes).
+    lengths: Vec<usize>,
+    /// Segments per length and horizon.
+    segments: Vec<Vec<usize>>,
 }
 
 impl Kernel<'_> {
     fn taus(&self) -> usize {
         self.setup.grid_m.len()
     }
+}
+
+/// Whole segments of `horizon_s` in a log of `samples` samples.
+fn segment_count(samples: usize, horizon_s: f64, dt_s: f64) -> usize {
+    samples
+        .checked_div((horizon_s / dt_s).round() as usize)
+        .unwrap_or(0)
 }
 
 /// Generate the static log of run `run`: channels gx gy gz ax ay az, SI (inactive channels empty).
@@ -114,36 +158,48 @@ pub fn adev_at(series: &[f64], dt_s: f64, grid_m: &[usize]) -> Vec<f64> {
 
 impl RunKernel for Kernel<'_> {
     fn checkpoints(&self) -> usize {
-        self.taus() + self.segments.iter().sum::<usize>()
+        self.taus() * self.lengths.len() + self.segments.iter().flatten().sum::<usize>()
     }
     fn channels(&self) -> usize {
         6
     }
+    /// Rows: the Allan deviations at each length (taus in grid order), then per length and
+    /// horizon the segment drifts (heading, horizontal position).
     fn run(&self, run: u64, out: &mut [f64]) -> Result<(), montecarlo::runner::RunError> {
         let log = static_log(self.model, self.setup, self.seed, run);
         let m = self.taus();
-        for ch in 0..6 {
-            let adev = if self.setup.active[ch] {
-                adev_at(&log[ch], self.setup.dt_s, &self.setup.grid_m)
-            } else {
-                vec![0.0; m]
-            };
-            for (i, a) in adev.into_iter().enumerate() {
-                out[i * 6 + ch] = a;
+        let longest = self.setup.samples;
+        for (d, &n) in self.lengths.iter().enumerate() {
+            for ch in 0..6 {
+                let adev = if self.setup.active[ch] {
+                    adev_at(&log[ch][..n], self.setup.dt_s, &self.setup.grid_m)
+                } else {
+                    vec![0.0; m]
+                };
+                for (i, a) in adev.into_iter().enumerate() {
+                    // A shorter run has no point at the longest taus (its weight there is 0).
+                    out[(d * m + i) * 6 + ch] = if n < longest && !a.is_finite() {
+                        0.0
+                    } else {
+                        a
+                    };
+                }
             }
         }
-        let chans: [Option<&[f64]>; 6] =
-            std::array::from_fn(|c| self.setup.active[c].then_some(log[c].as_slice()));
-        let mut row = m;
-        for (h, &horizon) in self.setup.horizons_s.iter().enumerate() {
-            let d = segment_drift(&chans, self.setup.dt_s, horizon);
-            for s in 0..self.segments[h] {
-                out[row * 6] = d.heading_rad[s];
-                out[row * 6 + 1] = d.horizontal_m[s];
-                for c in 2..6 {
-                    out[row * 6 + c] = 0.0;
+        let mut row = m * self.lengths.len();
+        for (d, &n) in self.lengths.iter().enumerate() {
+            let chans: [Option<&[f64]>; 6] =
+                std::array::from_fn(|c| self.setup.active[c].then(|| &log[c][..n]));
+            for (h, &horizon) in self.setup.horizons_s.iter().enumerate() {
+                let s = segment_drift(&chans, self.setup.dt_s, horizon);
+                for j in 0..self.segments[d][h] {
+                    out[row * 6] = s.heading_rad[j];
+                    out[row * 6 + 1] = s.horizontal_m[j];
+                    for c in 2..6 {
+                        out[row * 6 + c] = 0.0;
+                    }
+                    row += 1;
                 }
-                row += 1;
             }
         }
         Ok(())
@@ -158,20 +214,40 @@ pub fn simulate(
     seed: u64,
     seeds: usize,
 ) -> Result<SimResult, SimError> {
-    let segments: Vec<usize> = setup
-        .horizons_s
+    simulate_runs(model, setup, &RunPlan::single(setup.samples), seed, seeds)
+}
+
+/// [`simulate`] for a measurement pooled over the runs of `plan` (`setup.samples` the longest).
+/// Each simulated log is measured at every run length (its prefix of that length: the generators
+/// are causal, so a prefix is a log of that length). Replicate s pools, for run r, simulated log
+/// (s + r) mod seeds at run r's length, with the measurement's weights: every replicate is
+/// distributed exactly as the pooled measurement, and the logs are shared, not simulated once per
+/// run. The sharing correlates the replicates: their sample variance is low by (seeds - runs) /
+/// (seeds - 1) (each log in `runs` replicates: mean correlation (runs - 1) / (seeds - 1)), which
+/// the band's spread is corrected for, and its centre rests on seeds / runs independent logs.
+pub fn simulate_runs(
+    model: &SensorModel,
+    setup: &SimSetup,
+    plan: &RunPlan,
+    seed: u64,
+    seeds: usize,
+) -> Result<SimResult, SimError> {
+    let (lengths, of_run) = plan.lengths();
+    let segments: Vec<Vec<usize>> = lengths
         .iter()
-        .map(|&h| {
+        .map(|&n| {
             setup
-                .samples
-                .checked_div((h / setup.dt_s).round() as usize)
-                .unwrap_or(0)
+                .horizons_s
+                .iter()
+                .map(|&h| segment_count(n, h, setup.dt_s))
+                .collect()
         })
         .collect();
     let kernel = Kernel {
         model,
         setup,
         seed,
+        lengths: lengths.clone(),
         segments: segments.clone(),
     };
     let batch = run_range(&kernel, 0..seeds as u64, &|_| {});
@@ -187,29 +263,92 @@ pub fn simulate(
         .iter()
         .map(|&m| m as f64 * setup.dt_s)
         .collect();
-    let bands: [Option<Band>; 6] = std::array::from_fn(|ch| {
-        setup.active[ch].then(|| {
-            let per_seed: Vec<Vec<f64>> = (0..seeds)
-                .map(|s| (0..taus.len()).map(|i| mx.series(i, ch)[s]).collect())
-                .collect();
-            Band::from_seeds(&taus, &per_seed)
+    let m = taus.len();
+    // adev[d][ch][s][i]: simulated log s measured at length d.
+    let adev: Vec<[Vec<Vec<f64>>; 6]> = (0..lengths.len())
+        .map(|d| {
+            std::array::from_fn(|ch| {
+                (0..seeds)
+                    .map(|s| (0..m).map(|i| mx.series(d * m + i, ch)[s]).collect())
+                    .collect()
+            })
         })
-    });
-    let mut drift = Vec::new();
-    let mut row = taus.len();
-    for (h, &horizon) in setup.horizons_s.iter().enumerate() {
-        let mut d = SegmentDrift {
-            horizon_s: horizon,
+        .collect();
+    let log_bands: Vec<[Option<Band>; 6]> = adev
+        .iter()
+        .map(|a| {
+            std::array::from_fn(|ch| setup.active[ch].then(|| Band::from_seeds(&taus, &a[ch])))
+        })
+        .collect();
+    let bands = if plan.samples.len() == 1 {
+        log_bands[0].clone()
+    } else {
+        std::array::from_fn(|ch| {
+            setup.active[ch].then(|| pooled_band(&taus, &adev, plan, &of_run, ch))
+        })
+    };
+    let mut drift: Vec<SegmentDrift> = setup
+        .horizons_s
+        .iter()
+        .map(|&h| SegmentDrift {
+            horizon_s: h,
             ..Default::default()
-        };
-        for s in 0..seeds {
-            for j in 0..segments[h] {
-                d.heading_rad.push(mx.series(row + j, 0)[s]);
-                d.horizontal_m.push(mx.series(row + j, 1)[s]);
+        })
+        .collect();
+    // The pooled model drift: simulated log s at the length of run s mod runs (the runs' mix of
+    // lengths), in seed order.
+    for s in 0..seeds {
+        let d = of_run[s % of_run.len()];
+        let mut row = m * lengths.len() + segments[..d].iter().flatten().sum::<usize>();
+        for (h, dr) in drift.iter_mut().enumerate() {
+            for j in 0..segments[d][h] {
+                dr.heading_rad.push(mx.series(row + j, 0)[s]);
+                dr.horizontal_m.push(mx.series(row + j, 1)[s]);
             }
+            row += segments[d][h];
         }
-        row += segments[h];
-        drift.push(d);
     }
-    Ok(SimResult { bands, drift })
+    Ok(SimResult {
+        bands,
+        log_bands: lengths.into_iter().zip(log_bands).collect(),
+        drift,
+    })
+}
+
+/// The pooled band of channel `ch` (see [`simulate_runs`]).
+fn pooled_band(
+    taus: &[f64],
+    adev: &[[Vec<Vec<f64>>; 6]],
+    plan: &RunPlan,
+    of_run: &[usize],
+    ch: usize,
+) -> Band {
+    let seeds = adev[0][ch].len();
+    let runs = plan.samples.len();
+    let per_replicate: Vec<Vec<f64>> = (0..seeds)
+        .map(|s| {
+            (0..taus.len())
+                .map(|i| {
+                    let (mut num, mut den) = (0.0, 0.0);
+                    for r in 0..runs {
+                        let w = plan.weights[ch].get(i).map_or(0.0, |w| w[r]);
+                        let a = adev[of_run[r]][ch][(s + r) % seeds][i];
+                        num += w * a * a;
+                        den += w;
+                    }
+                    (num / den).sqrt()
+                })
+                .collect()
+        })
+        .collect();
+    let mut band = Band::from_seeds(taus, &per_replicate);
+    let widen = ((seeds as f64 - 1.0) / (seeds as f64 - runs as f64)).sqrt();
+    for i in 0..taus.len() {
+        band.ln_sd[i] *= widen;
+        let centre = band.ln_mean[i];
+        band.adev_lo[i] = (centre + widen * (band.adev_lo[i].ln() - centre)).exp();
+        band.adev_hi[i] = (centre + widen * (band.adev_hi[i].ln() - centre)).exp();
+    }
+    band.centre_logs = seeds as f64 / runs as f64;
+    band
 }

@@ -35,26 +35,49 @@ impl SpectralPeak {
 /// removed, no overlap; the mean of |X_k|^2 over the segments for k = 0..seg/2 (unnormalised: only
 /// ratios are used). Returns the powers and the number of segments.
 pub fn welch(x: &[f64], seg: usize) -> (Vec<f64>, usize) {
-    let k = x.len() / seg;
-    let window: Vec<f64> = (0..seg)
-        .map(|n| 0.5 - 0.5 * (std::f64::consts::TAU * n as f64 / seg as f64).cos())
-        .collect();
+    welch_runs(&[x], seg)
+}
+
+/// [`welch`] over the segments of several runs of one sensor together (each run cut on its own).
+pub fn welch_runs(xs: &[&[f64]], seg: usize) -> (Vec<f64>, usize) {
+    let window = hann(seg);
     let mut p = vec![0.0; seg / 2 + 1];
     let (mut re, mut im) = (vec![0.0; seg], vec![0.0; seg]);
-    for s in 0..k {
-        let part = &x[s * seg..(s + 1) * seg];
-        let mean = part.iter().sum::<f64>() / seg as f64;
-        for i in 0..seg {
-            re[i] = (part[i] - mean) * window[i];
-            im[i] = 0.0;
-        }
-        noise::fft::fft(&mut re, &mut im);
-        for (i, pi) in p.iter_mut().enumerate() {
-            *pi += re[i] * re[i] + im[i] * im[i];
+    let mut k = 0;
+    for x in xs {
+        for part in x.chunks_exact(seg) {
+            let mean = part.iter().sum::<f64>() / seg as f64;
+            for i in 0..seg {
+                re[i] = (part[i] - mean) * window[i];
+                im[i] = 0.0;
+            }
+            noise::fft::fft(&mut re, &mut im);
+            for (i, pi) in p.iter_mut().enumerate() {
+                *pi += re[i] * re[i] + im[i] * im[i];
+            }
+            k += 1;
         }
     }
     p.iter_mut().for_each(|v| *v /= k.max(1) as f64);
     (p, k)
+}
+
+/// The Hann window of `seg` samples (periodic form).
+fn hann(seg: usize) -> Vec<f64> {
+    (0..seg)
+        .map(|n| 0.5 - 0.5 * (std::f64::consts::TAU * n as f64 / seg as f64).cos())
+        .collect()
+}
+
+/// The Welch segment length of the spectra here: 4096 samples, or a sixteenth of the shortest run
+/// if shorter (a power of two for the FFT when `pow2`).
+fn segment_length(xs: &[&[f64]], pow2: bool) -> usize {
+    let n = xs.iter().map(|x| x.len()).min().unwrap_or(0);
+    if pow2 {
+        4096usize.min((n / 16).next_power_of_two() / 2).max(1)
+    } else {
+        4096.min(n / 16)
+    }
 }
 
 /// The strongest broad peak of `x`'s spectrum, if one stands out. Welch spectrum with segments of
@@ -67,11 +90,16 @@ pub fn welch(x: &[f64], seg: usize) -> (Vec<f64>, usize) {
 /// 6 resolutions and 0.45 times the sample rate. Of the peaks found (up to 8, each masked before the
 /// next is sought), the one with the largest excess power.
 pub fn broad_peak(x: &[f64], dt_s: f64) -> Option<SpectralPeak> {
-    let seg = 4096usize.min((x.len() / 16).next_power_of_two() / 2).max(1);
+    broad_peak_runs(&[x], dt_s)
+}
+
+/// [`broad_peak`] of the Welch spectrum over several runs' segments together.
+pub fn broad_peak_runs(xs: &[&[f64]], dt_s: f64) -> Option<SpectralPeak> {
+    let seg = segment_length(xs, true);
     if seg < 256 {
         return None;
     }
-    let (p, k) = welch(x, seg);
+    let (p, k) = welch_runs(xs, seg);
     let df = 1.0 / (seg as f64 * dt_s);
     let nb = p.len();
     let spectrum = Spectrum::new(p, k);
@@ -109,6 +137,75 @@ pub fn broad_peak(x: &[f64], dt_s: f64) -> Option<SpectralPeak> {
         }
     }
     best.map(|(_, p)| p)
+}
+
+/// Power of the runs `xs` near frequency `f0_hz`, Welch-averaged over segments of `seg` samples (Hann
+/// window), at f0 + j df for j = -span..=span, df = 1 / (seg dt). Each value is a direct DFT at that
+/// frequency (Goertzel-style rotation), so f0 need not lie on a bin.
+fn local_spectrum(xs: &[&[f64]], dt_s: f64, f0_hz: f64, seg: usize, span: i32) -> Vec<f64> {
+    let k: usize = xs.iter().map(|x| x.len() / seg).sum();
+    let df = 1.0 / (seg as f64 * dt_s);
+    let window = hann(seg);
+    (-span..=span)
+        .map(|j| {
+            let w = std::f64::consts::TAU * (f0_hz + f64::from(j) * df) * dt_s;
+            let (c1, s1) = (w.cos(), w.sin());
+            let mut total = 0.0;
+            for seg_x in xs.iter().flat_map(|x| x.chunks_exact(seg)) {
+                let mean = seg_x.iter().sum::<f64>() / seg as f64;
+                let (mut re, mut im) = (0.0, 0.0);
+                let (mut c, mut sn) = (1.0, 0.0);
+                for (v, wn) in seg_x.iter().zip(&window) {
+                    let a = (v - mean) * wn;
+                    re += a * c;
+                    im -= a * sn;
+                    let c2 = c * c1 - sn * s1;
+                    sn = sn * c1 + c * s1;
+                    c = c2;
+                }
+                total += re * re + im * im;
+            }
+            total / k.max(1) as f64
+        })
+        .collect()
+}
+
+/// May a sinusoid at `f0_hz` be named in the runs `xs`: there is a spectral line there
+/// ([`is_spectral_line_runs`]),
+/// or the spectrum cannot tell (the frequency below 6 resolutions of the Welch segments, at or
+/// above the Nyquist frequency, or the log too short for segments).
+pub fn line_allowed_runs(xs: &[&[f64]], dt_s: f64, f0_hz: f64) -> bool {
+    let seg = segment_length(xs, false);
+    if seg < 64 || f0_hz.is_nan() || f0_hz <= 0.0 || f0_hz >= 0.5 / dt_s {
+        return true;
+    }
+    f0_hz < 6.0 / (seg as f64 * dt_s) || is_spectral_line_runs(xs, dt_s, f0_hz)
+}
+
+/// Is there a spectral line (a sinusoid) at `f0_hz` in the runs `xs`? A Welch spectrum (segments
+/// of 4096 samples, or a sixteenth of the shortest run if shorter, Hann window) must, at f0, exceed the median of the
+/// bins 6 to 20 resolutions away by a factor above both 2 and 1 + 6/sqrt(K) (K segments: the
+/// relative spread of a K-segment average is 1/sqrt(K), so 6 sigma), and fall to a quarter of its
+/// peak 4 resolutions away (a Hann-windowed line leaks over +-2 bins; a broad narrow-band process
+/// does not fall off). Used to tell a physical tone from a sinusoid fitted as a stand-in.
+pub fn is_spectral_line_runs(xs: &[&[f64]], dt_s: f64, f0_hz: f64) -> bool {
+    let seg = segment_length(xs, false);
+    if seg < 64 || f0_hz.is_nan() || f0_hz <= 0.0 || f0_hz >= 0.5 / dt_s {
+        return false;
+    }
+    let df = 1.0 / (seg as f64 * dt_s);
+    if f0_hz < 6.0 * df {
+        return false;
+    }
+    let k = xs.iter().map(|x| x.len() / seg).sum::<usize>() as f64;
+    let span = 20;
+    let p = local_spectrum(xs, dt_s, f0_hz, seg, span);
+    let at = |j: i32| p[(j + span) as usize];
+    let peak = (-1..=1).map(at).fold(0.0, f64::max);
+    let mut side: Vec<f64> = (6..=span).flat_map(|j| [at(j), at(-j)]).collect();
+    let background = median(&mut side);
+    let far = at(4).max(at(-4));
+    background > 0.0 && peak > background * 2f64.max(1.0 + 6.0 / k.sqrt()) && far < 0.25 * peak
 }
 
 /// A Welch spectrum with its background.

@@ -13,13 +13,17 @@ use crate::findings::{
 };
 use crate::fit::{bic, predicted_ln_adev, FitData};
 use crate::gap::{gap, Band, Curve, Gap};
-use crate::input::LogInput;
-use crate::measure::{measure, restrict, Measured};
+use crate::input::{validate_runs, LogInput};
+use crate::measure::{measure_runs, restrict, Measured, Runs};
 use crate::model_terms::{clear_term, set_term, term_level};
 use crate::observer::{Observer, Step};
-use crate::report::{CandidateRecord, ChannelReport, Diagnosis, DriftRow, FoundEffect};
+use crate::report::{
+    CandidateRecord, ChannelReport, Diagnosis, DriftRow, FoundEffect, LogBands, RunChannel,
+    RunReport,
+};
 use crate::settings::Settings;
-use crate::simulate::{simulate, SimResult, SimSetup};
+use crate::simulate::{simulate_runs, RunPlan, SimResult, SimSetup};
+use crate::spectrum::SpectralPeak;
 use crate::trials::{trials, ChannelFit, Trial};
 use noise::{Channel, Effect, ImuChannels, SensorModel};
 use std::cell::RefCell;
@@ -43,13 +47,39 @@ pub fn diagnose_observed(
     settings: &Settings,
     observer: &dyn Observer,
 ) -> Result<Diagnosis, DiagnoseError> {
-    let samples = log.validate()?;
-    // Step 0: time-domain detectors (`detect`); the Allan analysis sees the corrected channels.
+    diagnose_runs(std::slice::from_ref(log), model, settings, observer)
+}
+
+/// [`diagnose_observed`] of several runs of one sensor (same rate and channels) fitted together
+/// (docs/diagnose.md, "Several runs"): step 0 on each run, the Allan variances pooled, the band
+/// pooled the same way over simulated runs of the runs' lengths. One run is [`diagnose_observed`].
+pub fn diagnose_runs(
+    logs: &[LogInput],
+    model: &SensorModel,
+    settings: &Settings,
+    observer: &dyn Observer,
+) -> Result<Diagnosis, DiagnoseError> {
+    let samples = validate_runs(logs)?;
+    if logs.len() > 1 && settings.seeds <= logs.len() {
+        return Err(DiagnoseError::SeedsForRuns {
+            seeds: settings.seeds,
+            runs: logs.len(),
+        });
+    }
+    // Step 0: time-domain detectors (`detect`) on each run; the Allan analysis sees the corrected
+    // channels.
     observer.step(Step::Detect);
-    let pre = crate::detect::preprocess_log(log, model);
+    let pre: Vec<Preprocessed> = logs
+        .iter()
+        .map(|l| crate::detect::preprocess_log(l, model))
+        .collect();
     let start = Start {
-        raw: *log,
-        log: log.with_channels(&pre.channels),
+        raw: logs.to_vec(),
+        logs: logs
+            .iter()
+            .zip(&pre)
+            .map(|(l, p)| l.with_channels(&p.channels))
+            .collect(),
         pre: &pre,
         samples,
         settings,
@@ -69,23 +99,22 @@ pub fn diagnose_observed(
     Ok(run.report())
 }
 
-/// What a run starts from: the log as measured, the log after step 0's corrections, the detectors'
-/// findings, and how to work.
+/// What a run starts from: the logs (runs) as measured, the logs after step 0's corrections, the
+/// detectors' findings, and how to work.
 struct Start<'a> {
-    raw: LogInput<'a>,
-    log: LogInput<'a>,
-    pre: &'a Preprocessed,
-    samples: usize,
+    raw: Vec<LogInput<'a>>,
+    logs: Vec<LogInput<'a>>,
+    pre: &'a [Preprocessed],
+    samples: Vec<usize>,
     settings: &'a Settings,
     observer: &'a dyn Observer,
 }
 
-/// Step 1's result: the common tau grid's averaging factors, and each channel's measurement on it,
-/// of the corrected log and of the raw one.
+/// Step 1's result: the common tau grid's averaging factors, and each channel's measurement on it
+/// (pooled over the runs, and per run), of the corrected logs and of the raw ones.
 struct Measurement {
-    grid_m: Vec<usize>,
-    corrected: ImuChannels<Option<Measured>>,
-    raw: ImuChannels<Option<Measured>>,
+    corrected: Runs,
+    raw: Runs,
 }
 
 /// What the workflow knows about one channel so far.
@@ -113,24 +142,32 @@ struct Pending {
 struct Run<'a> {
     settings: &'a Settings,
     observer: &'a dyn Observer,
-    /// The corrected log the Allan steps see.
-    log: LogInput<'a>,
-    pre: &'a Preprocessed,
-    samples: usize,
-    /// Averaging factors of the common tau grid, and each channel's measurement on it.
+    /// The corrected logs (runs) the Allan steps see.
+    logs: Vec<LogInput<'a>>,
+    pre: &'a [Preprocessed],
+    samples: Vec<usize>,
+    /// Averaging factors of the common tau grid, and each channel's measurement on it (pooled).
     grid_m: Vec<usize>,
     measured: ImuChannels<Option<Measured>>,
+    /// Each run's own measurement, corrected and raw (several runs only).
+    run_measured: Vec<ImuChannels<Option<Measured>>>,
+    run_raw: Vec<ImuChannels<Option<Measured>>>,
     /// Least-squares slope of each corrected channel against time (the rate-ramp level, see `trials`).
     ramp_slope: ImuChannels<f64>,
+    /// The broad spectral peak of each channel (over all runs' segments).
+    peaks: [Option<SpectralPeak>; 6],
     setup: SimSetup<'a>,
+    plan: RunPlan,
     /// The model simulated (step 0's terms left out: their effects are removed from the log) and the
     /// corrected model reported (with them).
     sim_model: SensorModel,
     out_model: SensorModel,
     /// The original model's simulation (its bands and drift).
     sim0: SimResult,
-    /// The current model's band per channel, and its drift (stale while `dirty`).
+    /// The current model's band per channel (pooled, and of one log at each run length), and its
+    /// drift (stale while `dirty`).
     bands: [Option<Band>; 6],
+    log_bands: Vec<(usize, [Option<Band>; 6])>,
     last_drift: Vec<SegmentDrift>,
     dirty: bool,
     channels: ImuChannels<ChannelState>,
@@ -141,38 +178,56 @@ struct Run<'a> {
 }
 
 impl<'a> Run<'a> {
-    /// Steps 1 and 2: measure the log, simulate the model's band, and the gap before any change.
+    /// Steps 1 and 2: measure the logs, simulate the model's band, and the gap before any change.
     fn start(s: Start<'a>, model: &SensorModel) -> Result<Run<'a>, DiagnoseError> {
-        let Measurement {
-            grid_m,
-            corrected: measured,
-            raw: measured_raw,
-        } = Self::measure(&s)?;
+        let Measurement { corrected, raw } = Self::measure(&s)?;
+        let first = s.logs[0];
+        let plan = RunPlan {
+            samples: s.samples.clone(),
+            weights: corrected.weights.clone(),
+        };
         let setup = SimSetup {
-            dt_s: s.log.dt_s,
-            samples: s.samples,
-            grid_m: grid_m.clone(),
-            active: std::array::from_fn(|c| s.raw.channels[c].is_some()),
+            dt_s: first.dt_s,
+            samples: s.samples.iter().copied().max().unwrap_or(0),
+            grid_m: corrected.grid_m.clone(),
+            active: std::array::from_fn(|c| first.channels[c].is_some()),
             horizons_s: s.settings.horizons_s.clone(),
-            temperature_c: s.log.temperature_c,
+            temperature_c: if s.logs.len() == 1 {
+                first.temperature_c
+            } else {
+                None
+            },
             temp_coeff: [0.0; 6],
         };
-        let sim0 = Self::band(model, &setup, s.settings, s.observer)?;
-        let log = s.log;
+        let sim0 = Self::band(model, &setup, &plan, s.settings, s.observer)?;
+        let logs = s.logs;
+        let peaks = if logs.len() == 1 {
+            s.pre[0].peaks
+        } else {
+            std::array::from_fn(|c| {
+                let xs: Vec<&[f64]> = logs.iter().filter_map(|l| l.channels[c]).collect();
+                (!xs.is_empty())
+                    .then(|| crate::spectrum::broad_peak_runs(&xs, first.dt_s))
+                    .flatten()
+            })
+        };
+        let several = logs.len() > 1;
         let mut run = Run {
             settings: s.settings,
             observer: s.observer,
-            log,
             pre: s.pre,
             samples: s.samples,
-            grid_m,
-            measured,
-            ramp_slope: ImuChannels::from_fn(|c| {
-                log.channels[c.index()].map_or(0.0, |x| crate::stats::slope(x, log.dt_s))
-            }),
+            grid_m: corrected.grid_m,
+            measured: corrected.pooled,
+            run_measured: if several { corrected.runs } else { Vec::new() },
+            run_raw: if several { raw.runs } else { Vec::new() },
+            ramp_slope: ImuChannels::from_fn(|c| crate::runs::ramp_slope(&logs, c.index())),
+            peaks,
+            logs,
             sim_model: model.clone(),
             out_model: model.clone(),
             bands: sim0.bands.clone(),
+            log_bands: sim0.log_bands.clone(),
             last_drift: sim0.drift.clone(),
             sim0,
             dirty: false,
@@ -180,23 +235,26 @@ impl<'a> Run<'a> {
             line_checks: RefCell::default(),
             rounds: 0,
             setup,
+            plan,
         };
         for c in Channel::ALL {
             let band = run.bands[c.index()].as_ref();
-            run.channels[c].initial = Self::gap_of(measured_raw[c].as_ref(), band);
+            run.channels[c].initial = Self::gap_of(raw.pooled[c].as_ref(), band);
             run.channels[c].done = !run.setup.active[c.index()];
         }
         Ok(run)
     }
 
     /// Step 1: measured Allan deviations with EDF (Greenhall, noise type by lag-1 ACF) on the octave
-    /// grid, of the corrected log and of the raw one (for the gap before step 0's corrections).
+    /// grid, of the corrected logs and of the raw ones (for the gap before step 0's corrections),
+    /// pooled over the runs.
     fn measure(s: &Start) -> Result<Measurement, DiagnoseError> {
         s.observer.step(Step::Measure);
         let tau_min_s = s.settings.tau_min_s;
-        let (grid_m, corrected) = measure(&s.log, tau_min_s);
-        let (_, raw) = measure(&s.raw, tau_min_s);
+        let corrected = measure_runs(&s.logs, tau_min_s);
+        let raw = measure_runs(&s.raw, tau_min_s);
         if corrected
+            .pooled
             .values()
             .iter()
             .flatten()
@@ -204,22 +262,25 @@ impl<'a> Run<'a> {
         {
             return Err(DiagnoseError::NoTaus { tau_min_s });
         }
-        Ok(Measurement {
-            grid_m,
-            corrected,
-            raw,
-        })
+        Ok(Measurement { corrected, raw })
     }
 
     /// Step 2: the model's band (and drift), simulated.
     fn band(
         model: &SensorModel,
         setup: &SimSetup,
+        plan: &RunPlan,
         settings: &Settings,
         observer: &dyn Observer,
     ) -> Result<SimResult, DiagnoseError> {
         observer.step(Step::Band);
-        Ok(simulate(model, setup, settings.seed, settings.seeds)?)
+        Ok(simulate_runs(
+            model,
+            setup,
+            plan,
+            settings.seed,
+            settings.seeds,
+        )?)
     }
 
     /// Step 3: the gap of a measurement against a band on the measurement's own taus.
@@ -244,7 +305,12 @@ impl<'a> Run<'a> {
                 continue;
             };
             let (gap_before, gap_after) = (g0.rms, g1.rms);
-            for f in &self.pre.findings[c.index()] {
+            let per_run: Vec<&[crate::detect::Finding]> = self
+                .pre
+                .iter()
+                .map(|p| p.findings[c.index()].as_slice())
+                .collect();
+            for f in &crate::runs::pooled_findings(&per_run, &self.hours()) {
                 let axis = self.out_model.axis_mut(c.sensor(), c.axis());
                 let had = axis.term(f.term.effect()).is_some();
                 axis.set_term(f.term.clone());
@@ -308,7 +374,7 @@ impl<'a> Run<'a> {
             // The closed-form prediction of the band with this change, for the next step.
             predicted = shifted_band(&predicted, &choice.trial.delta_avar);
             g_pred = gap(&curve, &predicted);
-            let found = found_by_fit(choice, round, g.rms, g_pred.rms, self.log.dt_s);
+            let found = found_by_fit(choice, round, g.rms, g_pred.rms, self.dt_s());
             self.channels[c].effects.push(found);
         }
         (!changes.is_empty()).then_some(Pending {
@@ -320,16 +386,15 @@ impl<'a> Run<'a> {
 
     /// Step 4: every candidate fitted to channel `c`'s gap against `band`.
     fn candidates(&self, c: Channel, curve: &Curve, band: &Band, g: &Gap) -> Vec<Trial> {
-        let dt_s = self.log.dt_s;
+        let dt_s = self.dt_s();
+        let xs = self.series(c);
         let line_allowed = |f: f64| {
             *self
                 .line_checks
                 .borrow_mut()
                 .entry((c, f.to_bits()))
                 .or_insert_with(|| {
-                    self.pre.channels[c.index()]
-                        .as_deref()
-                        .is_none_or(|x| crate::detect::line_allowed(x, dt_s, f))
+                    xs.is_empty() || crate::spectrum::line_allowed_runs(&xs, dt_s, f)
                 })
         };
         trials(&ChannelFit {
@@ -340,7 +405,7 @@ impl<'a> Run<'a> {
             gap: g,
             dt_s,
             ramp_slope: self.ramp_slope[c],
-            peak: self.pre.peaks[c.index()],
+            peak: self.peaks[c.index()],
             line_allowed: &line_allowed,
         })
     }
@@ -425,11 +490,16 @@ impl<'a> Run<'a> {
             ..self.setup.clone()
         };
         let settings = self.settings;
-        let sim = simulate(&self.sim_model, &round_setup, settings.seed, settings.seeds)?;
+        let sim = simulate_runs(
+            &self.sim_model,
+            &round_setup,
+            &self.plan,
+            settings.seed,
+            settings.seeds,
+        )?;
         self.dirty = partial;
         for p in pending {
-            let band = sim.bands[p.channel.index()].clone();
-            self.keep_or_undo(round, p, band);
+            self.keep_or_undo(round, p, &sim);
         }
         if !partial {
             self.last_drift = sim.drift;
@@ -439,8 +509,9 @@ impl<'a> Run<'a> {
 
     /// Step 5 for one channel: its re-simulated `band` is kept if the gap shrank; otherwise the
     /// round's changes are undone (recorded as rejected) and the channel is done.
-    fn keep_or_undo(&mut self, round: usize, p: Pending, band: Option<Band>) {
+    fn keep_or_undo(&mut self, round: usize, p: Pending, sim: &SimResult) {
         let c = p.channel;
+        let band = sim.bands[c.index()].clone();
         let after = Self::gap_of(self.measured[c].as_ref(), band.as_ref())
             .map(|(_, g)| g.rms)
             .unwrap_or(f64::NAN);
@@ -455,6 +526,9 @@ impl<'a> Run<'a> {
         }
         if !(after.is_nan() || after >= p.gap_before) {
             self.bands[c.index()] = band;
+            for (mine, new) in self.log_bands.iter_mut().zip(&sim.log_bands) {
+                mine.1[c.index()] = new.1[c.index()].clone();
+            }
             merge_refinements(&mut state.effects, first_new);
             return;
         }
@@ -477,7 +551,13 @@ impl<'a> Run<'a> {
     fn settle_drift(&mut self) -> Result<(), DiagnoseError> {
         if self.dirty {
             let settings = self.settings;
-            let sim = simulate(&self.sim_model, &self.setup, settings.seed, settings.seeds)?;
+            let sim = simulate_runs(
+                &self.sim_model,
+                &self.setup,
+                &self.plan,
+                settings.seed,
+                settings.seeds,
+            )?;
             self.last_drift = sim.drift;
         }
         Ok(())
@@ -491,7 +571,7 @@ impl<'a> Run<'a> {
             .enumerate()
             .map(|(h, &horizon)| DriftRow {
                 horizon_s: horizon,
-                measured: segment_drift(&self.log.channels, self.log.dt_s, horizon).summary(),
+                measured: self.measured_drift(horizon).summary(),
                 model_initial: self.sim0.drift[h].summary(),
                 model_final: self.last_drift[h].summary(),
             })
@@ -503,13 +583,10 @@ impl<'a> Run<'a> {
         let (b1, g1) = self.gap(c)?;
         let m = self.measured[c].as_ref()?;
         let (b0, g0) = self.channels[c].initial.clone()?;
+        let (xs, dt_s) = (self.series(c), self.dt_s());
         let state = &mut self.channels[c];
         if g1.rms > STAND_IN_GAP {
-            mark_stand_ins(
-                &mut state.effects,
-                self.log.channels[c.index()],
-                self.log.dt_s,
-            );
+            mark_stand_ins(&mut state.effects, &xs, dt_s);
         }
         Some(ChannelReport {
             gap_initial: g0.rms,
@@ -525,29 +602,136 @@ impl<'a> Run<'a> {
         })
     }
 
+    /// Each run's curves, gaps and step-0 findings (several runs only; the pooled findings are
+    /// the channels').
+    fn run_reports(&self) -> Vec<RunReport> {
+        let band_at = |bands: &[(usize, [Option<Band>; 6])], n: usize, c: Channel| {
+            bands
+                .iter()
+                .find(|b| b.0 == n)
+                .and_then(|b| b.1[c.index()].clone())
+        };
+        (0..self.run_measured.len())
+            .map(|r| {
+                let n = self.samples[r];
+                let mut channels = BTreeMap::new();
+                let mut findings = BTreeMap::new();
+                for c in Channel::ALL {
+                    let (Some(m), Some(raw)) = (
+                        self.run_measured[r][c].as_ref(),
+                        self.run_raw[r][c].as_ref(),
+                    ) else {
+                        continue;
+                    };
+                    let b0 = band_at(&self.sim0.log_bands, n, c);
+                    let b1 = band_at(&self.log_bands, n, c);
+                    let rms = |m: &Measured, b: &Option<Band>| {
+                        Self::gap_of(Some(m), b.as_ref()).map_or(f64::NAN, |g| g.1.rms)
+                    };
+                    let (g0, g_corr, g1) = (rms(raw, &b0), rms(m, &b0), rms(m, &b1));
+                    let found: Vec<FoundEffect> = self.pre[r].findings[c.index()]
+                        .iter()
+                        .map(|f| {
+                            let had = self.channels[c].effects.iter().any(|e| {
+                                e.round == 0
+                                    && e.effect == f.term.effect()
+                                    && e.kind == crate::report::FindingKind::WrongLevel
+                            });
+                            found_by_detector(f, had, g0, g_corr)
+                        })
+                        .collect();
+                    if !found.is_empty() {
+                        findings.insert(c.name().to_string(), found);
+                    }
+                    channels.insert(
+                        c.name().to_string(),
+                        RunChannel {
+                            tau_s: m.curve.tau_s.clone(),
+                            adev: m.curve.adev.clone(),
+                            edf: m.curve.edf.clone(),
+                            gap_initial: g0,
+                            gap_final: g1,
+                        },
+                    );
+                }
+                RunReport {
+                    samples: n,
+                    channels,
+                    findings,
+                }
+            })
+            .collect()
+    }
+
     /// The diagnosis.
     fn report(mut self) -> Diagnosis {
         let drift = self.drift();
+        let runs = self.run_reports();
         let mut channels = BTreeMap::new();
         for c in Channel::ALL {
             if let Some(r) = self.channel_report(c) {
                 channels.insert(c.name().to_string(), r);
             }
         }
+        let log_bands = self
+            .sim0
+            .log_bands
+            .iter()
+            .zip(self.log_bands)
+            .map(|(b0, b1)| LogBands {
+                samples: b0.0,
+                initial: b0.1.clone(),
+                corrected: b1.1,
+            })
+            .collect();
         Diagnosis {
             seed: self.settings.seed,
             seeds: self.settings.seeds,
             rounds: self.rounds,
-            dt_s: self.log.dt_s,
-            samples: self.samples,
+            dt_s: self.logs[0].dt_s,
+            samples: self.samples.iter().sum(),
             channels,
             drift,
+            runs,
             tau_min_s: self.settings.tau_min_s,
             model_final: self.out_model,
             grid_m: self.grid_m,
-            bands_initial: self.sim0.bands,
-            bands_final: self.bands,
+            log_bands,
         }
+    }
+
+    /// The sample interval of the logs.
+    fn dt_s(&self) -> f64 {
+        self.logs[0].dt_s
+    }
+
+    /// Each run's length, hours.
+    fn hours(&self) -> Vec<f64> {
+        self.samples
+            .iter()
+            .map(|&n| n as f64 * self.dt_s() / 3600.0)
+            .collect()
+    }
+
+    /// Channel `c` of every corrected run (empty when not measured).
+    fn series(&self, c: Channel) -> Vec<&'a [f64]> {
+        self.logs
+            .iter()
+            .filter_map(|l| l.channels[c.index()])
+            .collect()
+    }
+
+    /// The measured segment drifts of one horizon, every run's segments in run order (each run
+    /// calibrated by its own mean).
+    fn measured_drift(&self, horizon_s: f64) -> SegmentDrift {
+        let mut all = SegmentDrift {
+            horizon_s,
+            ..Default::default()
+        };
+        for l in &self.logs {
+            all.extend(&segment_drift(&l.channels, l.dt_s, horizon_s));
+        }
+        all
     }
 }
 
