@@ -188,7 +188,11 @@ fn run_inner(args: &Args) -> Result<()> {
         .map_err(with_flags)
         .with_context(|| format!("diagnosing {} against {}", log.source, args.model.display()))?;
     let elapsed_s = started.elapsed().as_secs_f64();
-    let corrected = corrected_model(&result, &model, &args.model);
+    // The data the levels were fitted on, for `drift`'s parametric bootstrap (docs/drift.md).
+    let mut corrected = corrected_model(&result, &model, &args.model);
+    if let Some(f) = diagnose::fitted_on::FittedOn::from_logs(&[input], settings.tau_min_s) {
+        corrected.push_str(&f.to_toml());
+    }
     eprint!(
         "{}",
         text_report(&result, &log.source, &args.model, elapsed_s)
