@@ -426,6 +426,50 @@ pub fn draw_models(
     Ok(Draws { models, spread })
 }
 
+/// Rounds of [`fit_levels`]: each refits with the weights of the previous round's levels.
+const FIT_ROUNDS: usize = 3;
+
+/// The drawn levels (module doc) of `model` refitted jointly to `logs` by the bootstrap's own
+/// estimator (weighted non-negative least squares of the Allan variances on the octave grid from
+/// `tau_min_s`), iteratively reweighted: the weights of each round are those of the previous
+/// round's levels. A level refitted to 0 is removed; a term the model lacks is not added (that
+/// is `diagnose`'s part). With the data it was fitted on, for [`draw_models`]; None when the logs
+/// have no common channel.
+pub fn fit_levels(
+    model: &SensorModel,
+    logs: &[crate::input::LogInput],
+    tau_min_s: f64,
+) -> Option<(SensorModel, FittedOn)> {
+    let fitted = FittedOn::from_logs(logs, tau_min_s)?;
+    let mut current = model.clone();
+    for _ in 0..FIT_ROUNDS {
+        let fits: Vec<ChannelFit> = (0..6)
+            .filter_map(|ch| ChannelFit::new(&current, ch, &fitted))
+            .filter(|f| f.terms.len() <= MAX_TERMS)
+            .collect();
+        let s: Vec<Vec<f64>> = fits
+            .iter()
+            .map(|f| {
+                let avar: Vec<Vec<f64>> = logs
+                    .iter()
+                    .enumerate()
+                    .map(|(t, l)| {
+                        let x = l.channels[f.ch].unwrap_or(&[]);
+                        let ms = &f.grid_m[..f.held[t]];
+                        adev_at(x, fitted.sample_interval_s, ms)
+                            .iter()
+                            .map(|a| a * a)
+                            .collect()
+                    })
+                    .collect();
+                f.refit(&avar)
+            })
+            .collect();
+        current = drawn_model(&current, &fits, &s);
+    }
+    Some((current, fitted))
+}
+
 /// The model with every drawn level's square multiplied by its multiplier `s[channel][term]`.
 fn drawn_model(model: &SensorModel, fits: &[ChannelFit], s: &[Vec<f64>]) -> SensorModel {
     let mut out = model.clone();
