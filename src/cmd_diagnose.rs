@@ -188,11 +188,8 @@ fn run_inner(args: &Args) -> Result<()> {
         .map_err(with_flags)
         .with_context(|| format!("diagnosing {} against {}", log.source, args.model.display()))?;
     let elapsed_s = started.elapsed().as_secs_f64();
-    // The data the levels were fitted on, for `drift`'s parametric bootstrap (docs/drift.md).
-    let mut corrected = corrected_model(&result, &model, &args.model);
-    if let Some(f) = diagnose::fitted_on::FittedOn::from_logs(&[input], settings.tau_min_s) {
-        corrected.push_str(&f.to_toml());
-    }
+    let fitted_on = diagnose::fitted_on::FittedOn::from_logs(&[input], settings.tau_min_s);
+    let corrected = corrected_model(&result, &model, &args.model, fitted_on.as_ref());
     eprint!(
         "{}",
         text_report(&result, &log.source, &args.model, elapsed_s)
@@ -263,8 +260,14 @@ fn file_stem(path: &Path) -> String {
         .unwrap_or_else(|| "sensor".into())
 }
 
-/// The corrected model as TOML, with a header saying where it came from.
-fn corrected_model(result: &Diagnosis, model: &SensorModel, model_path: &Path) -> String {
+/// The corrected model as TOML, with a header saying where it came from and, at the end, the
+/// data its levels were fitted on (for `drift`'s parametric bootstrap, docs/drift.md).
+fn corrected_model(
+    result: &Diagnosis,
+    model: &SensorModel,
+    model_path: &Path,
+    fitted_on: Option<&diagnose::fitted_on::FittedOn>,
+) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -299,6 +302,9 @@ fn corrected_model(result: &Diagnosis, model: &SensorModel, model_path: &Path) -
         .map(|text| noise::UnitStyle::from_config_text(&text))
         .unwrap_or_default();
     out.push_str(&result.model_final.to_toml_string_styled(&style));
+    if let Some(f) = fitted_on {
+        out.push_str(&f.to_toml());
+    }
     out
 }
 
