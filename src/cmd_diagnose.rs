@@ -212,7 +212,8 @@ fn run_inner(args: &Args) -> Result<()> {
         .map_err(with_flags)
         .with_context(|| format!("diagnosing {sources} against {}", args.model.display()))?;
     let elapsed_s = started.elapsed().as_secs_f64();
-    let corrected = corrected_model(&result, &model, &args.model);
+    let fitted_on = diagnose::fitted_on::FittedOn::from_logs(&inputs, settings.tau_min_s);
+    let corrected = corrected_model(&result, &model, &args.model, fitted_on.as_ref());
     eprint!("{}", text_report(&result, &sources, &args.model, elapsed_s));
     let mut checks = Vec::new();
     for path in &args.check {
@@ -280,8 +281,14 @@ fn file_stem(path: &Path) -> String {
         .unwrap_or_else(|| "sensor".into())
 }
 
-/// The corrected model as TOML, with a header saying where it came from.
-fn corrected_model(result: &Diagnosis, model: &SensorModel, model_path: &Path) -> String {
+/// The corrected model as TOML, with a header saying where it came from and, at the end, the
+/// data its levels were fitted on (for `drift`'s parametric bootstrap, docs/drift.md).
+fn corrected_model(
+    result: &Diagnosis,
+    model: &SensorModel,
+    model_path: &Path,
+    fitted_on: Option<&diagnose::fitted_on::FittedOn>,
+) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -316,6 +323,9 @@ fn corrected_model(result: &Diagnosis, model: &SensorModel, model_path: &Path) -
         .map(|text| noise::UnitStyle::from_config_text(&text))
         .unwrap_or_default();
     out.push_str(&result.model_final.to_toml_string_styled(&style));
+    if let Some(f) = fitted_on {
+        out.push_str(&f.to_toml());
+    }
     out
 }
 

@@ -16,7 +16,14 @@
 //! a = 0.025 (R + 1), coverage (R + 1 - 2a) / (R + 1) = 95 %). The verdict is "inside" when the
 //! measured RMS lies in the band, "above" or "below" otherwise, "not_informed" when a log lacks a
 //! channel the quantity comes from or no log is as long as the horizon.
+//!
+//! Parameter uncertainty: a model that records the data it was fitted on (`FittedOn`) gives each
+//! replicate its own levels, drawn by the parametric bootstrap of `bootstrap` (docs/drift.md,
+//! "Parameter uncertainty"), so that the band holds the fit's uncertainty too; a model that does
+//! not (a datasheet) is taken as exact and every replicate simulates it as it is.
 
+use crate::bootstrap::{draw_models, BootstrapError, ParameterSpread};
+use crate::fitted_on::FittedOn;
 use crate::input::LogInput;
 use crate::observer::Observer;
 use crate::protocol::{all_segment_errors, Protocol, Quantity, SegmentErrors};
@@ -164,6 +171,9 @@ pub struct DriftCheck {
     pub seed: u64,
     pub replicates: usize,
     pub logs: usize,
+    /// How the model's levels were drawn per replicate; absent when they are taken as exact.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub parameters: Option<ParameterSpread>,
     pub horizons: Vec<HorizonCheck>,
 }
 
@@ -179,6 +189,8 @@ pub enum CheckError {
     Replicates(usize),
     #[error("simulated log {run}: {quantity} is not finite")]
     NotFinite { run: u64, quantity: &'static str },
+    #[error("drawing the model's levels: {0}")]
+    Bootstrap(#[from] BootstrapError),
 }
 
 /// The order statistic of 1-based fractional rank `a` (linear between neighbours, clamped).
@@ -218,11 +230,25 @@ fn effective_count(per_log: &[&[f64]], overlapping: bool) -> f64 {
     (if overlapping { n_eff / 2.0 } else { n_eff }).max(1.0)
 }
 
-/// Check the measured logs' drift against the model's under `settings.protocol`. `observer` is
-/// told the number of simulated logs done.
+/// Check the measured logs' drift against the model's under `settings.protocol`, the model's
+/// levels taken as exact. `observer` is told the number of simulated logs done.
 pub fn check_drift(
     logs: &[LogInput],
     model_sensor: &SensorModel,
+    settings: &CheckSettings,
+    observer: &dyn Observer,
+) -> Result<DriftCheck, CheckError> {
+    check_drift_fitted(logs, model_sensor, None, settings, observer)
+}
+
+/// [`check_drift`] for a model fitted on `fitted_on` (None: taken as exact): each replicate draws
+/// its levels by the parametric bootstrap (module doc). Its logs like the fitted ones are the runs
+/// after the replicates' own (`replicates` x `logs`) of the seed; `observer` counts both, of
+/// [`simulated_logs`] in all.
+pub fn check_drift_fitted(
+    logs: &[LogInput],
+    model_sensor: &SensorModel,
+    fitted_on: Option<&FittedOn>,
     settings: &CheckSettings,
     observer: &dyn Observer,
 ) -> Result<DriftCheck, CheckError> {
@@ -233,11 +259,24 @@ pub fn check_drift(
         .par_iter()
         .map(|l| all_segment_errors(&l.channels, dt_s, p))
         .collect();
+    let progress = Progress {
+        done: std::sync::atomic::AtomicUsize::new(0),
+        total: simulated_logs(logs.len(), fitted_on, settings.replicates),
+        observer,
+    };
+    let draws = fitted_on
+        .map(|f| {
+            let first_run = (settings.replicates * logs.len()) as u64;
+            let runs = (settings.seed, first_run, settings.replicates);
+            draw_models(model_sensor, f, runs, &|| progress.tick())
+        })
+        .transpose()?;
+    let model_of = |r: usize| draws.as_ref().map_or(model_sensor, |d| &d.models[r]);
     let experiment = Experiment {
         logs,
         model: model_sensor,
         settings,
-        simulated: simulate_experiments(logs, model_sensor, settings, dt_s, observer),
+        simulated: simulate_experiments(logs, &model_of, settings, dt_s, &progress),
     };
     let mut horizons = Vec::new();
     for (hi, &h) in p.horizons_s.iter().enumerate() {
@@ -250,8 +289,29 @@ pub fn check_drift(
         seed: settings.seed,
         replicates: settings.replicates,
         logs: logs.len(),
+        parameters: draws.map(|d| d.spread),
         horizons,
     })
+}
+
+/// The logs a drift check simulates: `replicates` experiments of `logs` logs, and with a fitted
+/// model as many times its fitted logs.
+pub fn simulated_logs(logs: usize, fitted_on: Option<&FittedOn>, replicates: usize) -> usize {
+    replicates * (logs + fitted_on.map_or(0, |f| f.samples.len()))
+}
+
+/// Simulated logs counted for the observer, from worker threads.
+struct Progress<'a> {
+    done: std::sync::atomic::AtomicUsize,
+    total: usize,
+    observer: &'a dyn Observer,
+}
+
+impl Progress<'_> {
+    fn tick(&self) {
+        let k = self.done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        self.observer.simulated(k, self.total);
+    }
 }
 
 /// The logs' common sample interval, once the logs and the settings are checked.
@@ -269,18 +329,18 @@ fn check_inputs(logs: &[LogInput], settings: &CheckSettings) -> Result<f64, Chec
 }
 
 /// The segment errors of every simulated experiment: replicate r, log l is montecarlo run
-/// r * logs + l of the seed, one simulated log as long as measured log l, with its channels.
-fn simulate_experiments(
+/// r * logs + l of the seed, one simulated log of replicate r's model (`model_of(r)`) as long as
+/// measured log l, with its channels.
+fn simulate_experiments<'m>(
     logs: &[LogInput],
-    model: &SensorModel,
+    model_of: &(dyn Fn(usize) -> &'m SensorModel + Sync),
     settings: &CheckSettings,
     dt_s: f64,
-    observer: &dyn Observer,
+    progress: &Progress,
 ) -> Vec<Vec<SegmentErrors>> {
     let jobs: Vec<(usize, usize)> = (0..settings.replicates)
         .flat_map(|r| (0..logs.len()).map(move |l| (r, l)))
         .collect();
-    let done = std::sync::atomic::AtomicUsize::new(0);
     jobs.par_iter()
         .map(|&(r, l)| {
             let log = &logs[l];
@@ -301,12 +361,11 @@ fn simulate_experiments(
                 temp_coeff: [0.0; 6],
             };
             let run = (r * logs.len() + l) as u64;
-            let sim = static_log(model, &setup, settings.seed, run);
+            let sim = static_log(model_of(r), &setup, settings.seed, run);
             let chans: [Option<&[f64]>; 6] =
                 std::array::from_fn(|c| setup.active[c].then(|| sim[c].as_slice()));
             let out = all_segment_errors(&chans, dt_s, &settings.protocol);
-            let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            observer.simulated(k, jobs.len());
+            progress.tick();
             out
         })
         .collect()
