@@ -34,11 +34,11 @@
 //! keeps its value and is reported as not informed.
 
 use crate::candidates::TermParams;
-use crate::drift::CHANNELS;
 use crate::fitted_on::FittedOn;
-use crate::model_terms::{channel_axis, clear_term, set_term, term_level};
+use crate::model_terms::{clear_term, set_term, term_level};
 use crate::simulate::{adev_at, static_log, SimSetup};
 use allan::{EdfMethod, Estimator};
+use noise::Channel;
 use noise::{AxisModel, Effect, SensorModel};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -101,7 +101,7 @@ pub enum BootstrapError {
 
 /// One channel's refit: its drawn terms, the grid and the fixed parts of the least squares.
 struct ChannelFit {
-    ch: usize,
+    ch: Channel,
     terms: Vec<(Effect, TermParams)>,
     /// Octave averaging factors of the longest log from `tau_min_s`, and per log how many of them
     /// it holds (a log of n samples holds m <= n / 4, the overlapping estimator's Stable32 limit).
@@ -138,13 +138,13 @@ fn edf_at(mu: f64, m: usize, n: usize) -> f64 {
 
 impl ChannelFit {
     /// The refit of channel `ch` of `model` on data like `fitted` (None: nothing to draw there).
-    fn new(model: &SensorModel, ch: usize, fitted: &FittedOn) -> Option<ChannelFit> {
+    fn new(model: &SensorModel, ch: Channel, fitted: &FittedOn) -> Option<ChannelFit> {
         let terms: Vec<(Effect, TermParams)> = DRAWN
             .iter()
             .filter_map(|&e| term_level(model, ch, e).map(|p| (e, p)))
             .filter(|(_, p)| p.c() > 0.0)
             .collect();
-        if terms.is_empty() || !fitted.channels[ch] {
+        if terms.is_empty() || !fitted.channels[ch.index()] {
             return None;
         }
         let dt = fitted.sample_interval_s;
@@ -162,7 +162,7 @@ impl ChannelFit {
             .map(|&n| grid_m.iter().filter(|&&m| m <= n / 4).count())
             .collect();
         let taus: Vec<f64> = grid_m.iter().map(|&m| m as f64 * dt).collect();
-        let (sensor, axis) = channel_axis(ch);
+        let (sensor, axis) = (ch.sensor(), ch.axis());
         let axis = model.axis(sensor, axis);
         let total = axis.allan_variance_sampled_many(&taus, dt);
         let columns: Vec<Vec<f64>> = terms
@@ -278,7 +278,7 @@ fn nnls_small(rows: &[Vec<f64>], y: &[f64], k: usize) -> Vec<f64> {
             continue;
         };
         let x = chol.solve(&(g.transpose() * &yv));
-        if x.iter().any(|&v| !(v >= 0.0)) {
+        if x.iter().any(|&v| v.is_nan() || v < 0.0) {
             continue;
         }
         let sse = (&g * &x - &yv).norm_squared();
@@ -343,7 +343,7 @@ fn simulate_fitted_logs(
                 dt_s: fitted.sample_interval_s,
                 samples: fitted.samples[t],
                 grid_m: Vec::new(),
-                active: std::array::from_fn(|c| fits.iter().any(|f| f.ch == c)),
+                active: std::array::from_fn(|c| fits.iter().any(|f| f.ch.index() == c)),
                 horizons_s: Vec::new(),
                 temperature_c: None,
                 temp_coeff: [0.0; 6],
@@ -354,7 +354,7 @@ fn simulate_fitted_logs(
                 .iter()
                 .map(|f| {
                     let ms = &f.grid_m[..f.held[t]];
-                    adev_at(&log[f.ch], fitted.sample_interval_s, ms)
+                    adev_at(&log[f.ch.index()], fitted.sample_interval_s, ms)
                         .iter()
                         .map(|a| a * a)
                         .collect()
@@ -389,12 +389,13 @@ pub fn draw_models(
 ) -> Result<Draws, BootstrapError> {
     noise::ImuErrors::check_rate(model, fitted.sample_interval_s)
         .map_err(|e| BootstrapError::Rate(e.to_string()))?;
-    let fits: Vec<ChannelFit> = (0..6)
+    let fits: Vec<ChannelFit> = Channel::ALL
+        .into_iter()
         .filter_map(|ch| ChannelFit::new(model, ch, fitted))
         .collect();
     if let Some(f) = fits.iter().find(|f| f.terms.len() > MAX_TERMS) {
         return Err(BootstrapError::TooManyTerms {
-            channel: CHANNELS[f.ch],
+            channel: f.ch.name(),
             terms: f.terms.len(),
         });
     }
@@ -443,7 +444,8 @@ pub fn fit_levels(
     let fitted = FittedOn::from_logs(logs, tau_min_s)?;
     let mut current = model.clone();
     for _ in 0..FIT_ROUNDS {
-        let fits: Vec<ChannelFit> = (0..6)
+        let fits: Vec<ChannelFit> = Channel::ALL
+            .into_iter()
             .filter_map(|ch| ChannelFit::new(&current, ch, &fitted))
             .filter(|f| f.terms.len() <= MAX_TERMS)
             .collect();
@@ -454,7 +456,7 @@ pub fn fit_levels(
                     .iter()
                     .enumerate()
                     .map(|(t, l)| {
-                        let x = l.channels[f.ch].unwrap_or(&[]);
+                        let x = l.channels[f.ch.index()].unwrap_or(&[]);
                         let ms = &f.grid_m[..f.held[t]];
                         adev_at(x, fitted.sample_interval_s, ms)
                             .iter()
@@ -513,7 +515,7 @@ fn spread(
                 }
             })
             .collect();
-        levels.insert(CHANNELS[f.ch], rows);
+        levels.insert(f.ch.name(), rows);
     }
     ParameterSpread {
         method: "parametric_bootstrap",
