@@ -6,7 +6,8 @@ use crate::columns::map_header;
 use crate::error::{At, LogError, Problem, Result};
 use crate::file::advise_huge_pages;
 use crate::float::{fast_f64, number};
-use crate::{Log, ReadOptions, MAX_LOG_RATE_HZ};
+use crate::limits::{valid_rate_hz, MAX_LOG_RATE_HZ};
+use crate::log::{Log, ReadOptions};
 use noise::Channel;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -166,7 +167,7 @@ pub(crate) fn rate_of(
     source: &str,
     locate: &dyn Fn(usize) -> At,
 ) -> Result<f64> {
-    if let Some(rate_hz) = rate_hz.filter(|&r| !crate::valid_rate_hz(r)) {
+    if let Some(rate_hz) = rate_hz.filter(|&r| !valid_rate_hz(r)) {
         return Err(LogError::new(source, Problem::BadRate { rate_hz }));
     }
     if let Some(t) = t {
