@@ -212,7 +212,8 @@ fn run_inner(args: &Args) -> Result<()> {
         .map_err(with_flags)
         .with_context(|| format!("diagnosing {sources} against {}", args.model.display()))?;
     let elapsed_s = started.elapsed().as_secs_f64();
-    let corrected = corrected_model(&result, &model, &args.model);
+    let fitted_on = diagnose::fitted_on::FittedOn::from_logs(&inputs, settings.tau_min_s);
+    let corrected = corrected_model(&result, &model, &args.model, fitted_on.as_ref());
     eprint!("{}", text_report(&result, &sources, &args.model, elapsed_s));
     let mut checks = Vec::new();
     for path in &args.check {
@@ -231,10 +232,10 @@ fn run_inner(args: &Args) -> Result<()> {
         eprint!("{}", checks_text(&checks));
     }
     let doc = json_document(&result, &logs, &args.model, &corrected, &checks)?;
-    let per_channel: [Option<(AxisValue, AxisValue)>; 6] = std::array::from_fn(|c| {
+    let per_channel: [Option<(AxisValue, AxisValue)>; 6] = noise::Channel::ALL.map(|c| {
         result
             .channels
-            .contains_key(CHANNELS[c])
+            .contains_key(c.name())
             .then(|| model_noise_values(&result, c))
             .flatten()
     });
@@ -280,8 +281,14 @@ fn file_stem(path: &Path) -> String {
         .unwrap_or_else(|| "sensor".into())
 }
 
-/// The corrected model as TOML, with a header saying where it came from.
-fn corrected_model(result: &Diagnosis, model: &SensorModel, model_path: &Path) -> String {
+/// The corrected model as TOML, with a header saying where it came from and, at the end, the
+/// data its levels were fitted on (for `drift`'s parametric bootstrap, docs/drift.md).
+fn corrected_model(
+    result: &Diagnosis,
+    model: &SensorModel,
+    model_path: &Path,
+    fitted_on: Option<&diagnose::fitted_on::FittedOn>,
+) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -316,6 +323,9 @@ fn corrected_model(result: &Diagnosis, model: &SensorModel, model_path: &Path) -
         .map(|text| noise::UnitStyle::from_config_text(&text))
         .unwrap_or_default();
     out.push_str(&result.model_final.to_toml_string_styled(&style));
+    if let Some(f) = fitted_on {
+        out.push_str(&f.to_toml());
+    }
     out
 }
 
@@ -323,11 +333,8 @@ fn corrected_model(result: &Diagnosis, model: &SensorModel, model_path: &Path) -
 /// An effect's parameters: SI with their interval, and for the IEEE 952 coefficients also in the
 /// units spec sheets use (deg/sqrt(h), deg/h, ug ...) for a channel `ch` (gx.. gyro, ax.. accel).
 fn params_text(e: &FoundEffect, ch: &str) -> String {
-    let units = crate::fmt::allan_units(if ch.starts_with('g') {
-        "rad/s"
-    } else {
-        "m/s^2"
-    });
+    let gyro = noise::Channel::from_name(ch).is_some_and(noise::Channel::is_gyro);
+    let units = crate::fmt::allan_units(if gyro { "rad/s" } else { "m/s^2" });
     let values = e
         .parameters
         .iter()
@@ -364,7 +371,7 @@ fn params_text(e: &FoundEffect, ch: &str) -> String {
 fn informed(result: &Diagnosis, q: diagnose::protocol::Quantity) -> bool {
     q.needs()
         .iter()
-        .all(|&c| result.channels.contains_key(CHANNELS[c]))
+        .all(|c| result.channels.contains_key(c.name()))
 }
 
 fn drift_line(d: &DriftRow, heading: bool, horizontal: bool) -> String {
@@ -537,9 +544,8 @@ fn checks_text(checks: &Checks) -> String {
 /// white noise N, and its rate random walk K or, where it has none, the largest random walk its
 /// Allan curve allows over the log's averaging times (the +1/2 line touching the model's curve,
 /// which covers its bias instability there).
-fn model_noise_values(result: &Diagnosis, c: usize) -> Option<(AxisValue, AxisValue)> {
-    let (sensor, axis) = diagnose::model_terms::channel_axis(c);
-    let a = result.model_final.axis(sensor, axis);
+fn model_noise_values(result: &Diagnosis, c: noise::Channel) -> Option<(AxisValue, AxisValue)> {
+    let a = result.model_final.axis(c.sensor(), c.axis());
     let n = AxisValue {
         value: a.white_noise?,
         how: "corrected model".into(),

@@ -7,7 +7,10 @@ use crate::output::write_string;
 use crate::plot::{Band, LogLogPlot, Series};
 use anyhow::{anyhow, bail, Context, Result};
 use diagnose::drift::CHANNELS;
-use diagnose::drift_check::{check_drift, CheckError, CheckSettings, DriftCheck, Verdict};
+use diagnose::drift_check::{
+    check_drift_fitted, simulated_logs, CheckError, CheckSettings, DriftCheck, Verdict,
+};
+use diagnose::fitted_on::FittedOn;
 use diagnose::protocol::{Calibration, Initialisation, Protocol, Quantity};
 use diagnose::LogInput;
 use noise::SensorModel;
@@ -58,6 +61,10 @@ pub struct Args {
     /// Simulated experiments for the model's 95 % band (each: one simulated log per measured log)
     #[arg(long, default_value_t = 40)]
     pub replicates: usize,
+    /// Take the model's levels as exact even when it records the data they were fitted on (its
+    /// [fitted_on] table, written by `diagnose`): no parametric bootstrap
+    #[arg(long)]
+    pub exact_parameters: bool,
     /// Master seed of the simulated logs (written into the outputs)
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -125,8 +132,21 @@ pub fn run(args: Args) -> Result<()> {
     pool.install(|| run_inner(&args, protocol))
 }
 
+/// The data the model's levels were fitted on, from its `[fitted_on]` table (None for a noise
+/// file, a model without the table, or with `--exact-parameters`).
+fn fitted_on(args: &Args) -> Result<Option<FittedOn>> {
+    let name = args.model.display().to_string();
+    let text = std::fs::read(&args.model).with_context(|| format!("cannot read {name}"))?;
+    let text = noise::utf8_text(text, &name)?;
+    if args.exact_parameters || noise::is_noise_file_text(&text, &name) {
+        return Ok(None);
+    }
+    FittedOn::from_model_text(&text).with_context(|| format!("{name}"))
+}
+
 fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
     let model = SensorModel::load(&args.model)?;
+    let fitted = fitted_on(args)?;
     let opts = args.log_args.options()?;
     let mut logs = Vec::new();
     for path in &args.logs {
@@ -164,13 +184,13 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
         seed: args.seed,
     };
     let started = std::time::Instant::now();
-    let total = (args.replicates * logs.len()) as u64;
+    let total = simulated_logs(logs.len(), fitted.as_ref(), args.replicates) as u64;
     let bar = Simulated(crate::progress::Progress::new(
         "simulating the model",
         "logs",
         total,
     ));
-    let result = check_drift(&inputs, &model, &settings, &bar);
+    let result = check_drift_fitted(&inputs, &model, fitted.as_ref(), &settings, &bar);
     bar.0.finish();
     let result = result.map_err(with_flags).with_context(|| {
         format!(
@@ -182,6 +202,7 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
     let elapsed_s = started.elapsed().as_secs_f64();
     let sources: Vec<String> = logs.iter().map(|l| l.source.clone()).collect();
     eprint!("{}", text(&result, &sources, &args.model, elapsed_s));
+    eprint!("{}", parameters_text(&result, args.exact_parameters));
     let mut doc = serde_json::to_value(&result).context("cannot serialise the drift check")?;
     if let Some(o) = doc.as_object_mut() {
         o.insert("logs".into(), sources.clone().into());
@@ -267,6 +288,51 @@ fn text(r: &DriftCheck, logs: &[String], model: &std::path::Path, elapsed_s: f64
         for c in causes {
             let _ = writeln!(s, "  {c}");
         }
+    }
+    s
+}
+
+/// How the model's levels entered the band: exact, or drawn (each level's spread).
+fn parameters_text(r: &DriftCheck, exact_flag: bool) -> String {
+    let Some(p) = &r.parameters else {
+        return format!(
+            "model levels: taken as exact ({}); the band holds the spread of the data only\n",
+            if exact_flag {
+                "--exact-parameters"
+            } else {
+                "the model records no data it was fitted on"
+            }
+        );
+    };
+    let f = &p.fitted_on;
+    let mut s = format!(
+        "model levels: drawn per simulated experiment by a parametric bootstrap on data like the {} log(s) of {} at {} Hz they were fitted on (docs/drift.md); 95 % of the draws:\n",
+        f.samples.len(),
+        crate::fmt::time(f.duration_s()),
+        crate::fmt::sig(1.0 / f.sample_interval_s, 4)
+    );
+    for (ch, levels) in &p.levels {
+        let parts: Vec<String> = levels
+            .iter()
+            .map(|l| {
+                let range = if l.informed {
+                    format!(
+                        "[{}, {}]",
+                        crate::fmt::sig(l.p2_5, 3),
+                        crate::fmt::sig(l.p97_5, 3)
+                    )
+                } else {
+                    "(not informed: kept)".into()
+                };
+                format!(
+                    "{} {} {} {range}",
+                    l.effect,
+                    l.parameter,
+                    crate::fmt::sig(l.model, 3)
+                )
+            })
+            .collect();
+        let _ = writeln!(s, "  {ch}: {}", parts.join("; "));
     }
     s
 }

@@ -6,7 +6,6 @@
 mod common;
 use common::command;
 
-use diagnose::model_terms::channel_axis;
 use diagnose::simulate::{static_log, SimSetup};
 use noise::SensorModel;
 use std::fmt::Write as _;
@@ -30,7 +29,7 @@ white_noise = "0.001 m/s^2/sqrt(Hz)"
 /// Write the log (t, gx..az) generated from the base model plus the hidden effect.
 fn write_log(dir: &Path) -> std::path::PathBuf {
     let mut truth = SensorModel::from_toml_str(BASE_TOML, "base.toml").expect("base model parses");
-    let (sensor, axis) = channel_axis(0);
+    let (sensor, axis) = (noise::Channel::Gx.sensor(), noise::Channel::Gx.axis());
     truth.axis_mut(sensor, axis).rate_random_walk = Some(K_HIDDEN);
     let setup = SimSetup {
         dt_s: DT_S,

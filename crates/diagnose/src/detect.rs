@@ -962,9 +962,8 @@ pub fn preprocess_log(log: &crate::input::LogInput, model: &noise::SensorModel) 
 /// The noise levels of the sensor model's channels (white, flicker B, rate random walk K; a Woodman
 /// bias random walk counts as K), the floor of the regressions' coloured-noise levels.
 pub fn model_levels(model: &noise::SensorModel) -> [NoiseLevels; 6] {
-    std::array::from_fn(|c| {
-        let (sensor, axis) = crate::model_terms::channel_axis(c);
-        let a = model.axis(sensor, axis);
+    noise::Channel::ALL.map(|c| {
+        let a = model.axis(c.sensor(), c.axis());
         let (b, k_bi) = match &a.bias_instability {
             Some(noise::BiasInstability::Flicker(f)) => (f.b, 0.0),
             Some(noise::BiasInstability::RandomWalk {

@@ -36,18 +36,11 @@ pub struct DriftSummary {
 
 impl SegmentDrift {
     pub fn summary(&self) -> DriftSummary {
-        let rms = |v: &[f64]| {
-            if v.is_empty() {
-                f64::NAN
-            } else {
-                (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
-            }
-        };
         DriftSummary {
             horizon_s: self.horizon_s,
             segments: self.heading_rad.len(),
-            heading_rms_rad: rms(&self.heading_rad),
-            horizontal_rms_m: rms(&self.horizontal_m),
+            heading_rms_rad: stats::rms(&self.heading_rad),
+            horizontal_rms_m: stats::rms(&self.horizontal_m),
         }
     }
 

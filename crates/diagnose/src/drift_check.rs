@@ -16,7 +16,14 @@
 //! a = 0.025 (R + 1), coverage (R + 1 - 2a) / (R + 1) = 95 %). The verdict is "inside" when the
 //! measured RMS lies in the band, "above" or "below" otherwise, "not_informed" when a log lacks a
 //! channel the quantity comes from or no log is as long as the horizon.
+//!
+//! Parameter uncertainty: a model that records the data it was fitted on (`FittedOn`) gives each
+//! replicate its own levels, drawn by the parametric bootstrap of `bootstrap` (docs/drift.md,
+//! "Parameter uncertainty"), so that the band holds the fit's uncertainty too; a model that does
+//! not (a datasheet) is taken as exact and every replicate simulates it as it is.
 
+use crate::bootstrap::{draw_models, BootstrapError, ParameterSpread};
+use crate::fitted_on::FittedOn;
 use crate::input::LogInput;
 use crate::observer::Observer;
 use crate::protocol::{all_segment_errors, Protocol, Quantity, SegmentErrors};
@@ -111,11 +118,7 @@ fn likely_cause(
     verdict: Verdict,
     model: &SensorModel,
 ) -> Option<String> {
-    let chans: Vec<&str> = q
-        .needs()
-        .iter()
-        .map(|&c| crate::drift::CHANNELS[c])
-        .collect();
+    let chans: Vec<&str> = q.needs().iter().map(|c| c.name()).collect();
     let list = chans.join(", ");
     let short = horizon_s <= 60.0;
     match verdict {
@@ -130,11 +133,10 @@ fn likely_cause(
                 .needs()
                 .iter()
                 .filter(|&&c| {
-                    let (sensor, axis) = crate::model_terms::channel_axis(c);
-                    let a = model.axis(sensor, axis);
+                    let a = model.axis(c.sensor(), c.axis());
                     a.sinusoidal.is_some() || a.gauss_markov.is_some()
                 })
-                .map(|&c| crate::drift::CHANNELS[c])
+                .map(|c| c.name())
                 .collect();
             Some(if stand_ins.is_empty() {
                 format!(
@@ -169,6 +171,9 @@ pub struct DriftCheck {
     pub seed: u64,
     pub replicates: usize,
     pub logs: usize,
+    /// How the model's levels were drawn per replicate; absent when they are taken as exact.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub parameters: Option<ParameterSpread>,
     pub horizons: Vec<HorizonCheck>,
 }
 
@@ -184,19 +189,8 @@ pub enum CheckError {
     Replicates(usize),
     #[error("simulated log {run}: {quantity} is not finite")]
     NotFinite { run: u64, quantity: &'static str },
-}
-
-fn quantile(sorted: &[f64], p: f64) -> f64 {
-    if sorted.is_empty() {
-        return f64::NAN;
-    }
-    let x = p * (sorted.len() - 1) as f64;
-    let (i, f) = (x.floor() as usize, x - x.floor());
-    if i + 1 < sorted.len() {
-        sorted[i] * (1.0 - f) + sorted[i + 1] * f
-    } else {
-        sorted[i]
-    }
+    #[error("drawing the model's levels: {0}")]
+    Bootstrap(#[from] BootstrapError),
 }
 
 /// The order statistic of 1-based fractional rank `a` (linear between neighbours, clamped).
@@ -215,10 +209,6 @@ fn abs_sorted(v: &[f64]) -> Vec<f64> {
     let mut a: Vec<f64> = v.iter().map(|x| x.abs()).collect();
     a.sort_by(f64::total_cmp);
     a
-}
-
-fn rms(v: &[f64]) -> f64 {
-    (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
 }
 
 /// The AR(1) effective count of segments (module doc), over the logs' own segment sequences.
@@ -240,11 +230,25 @@ fn effective_count(per_log: &[&[f64]], overlapping: bool) -> f64 {
     (if overlapping { n_eff / 2.0 } else { n_eff }).max(1.0)
 }
 
-/// Check the measured logs' drift against the model's under `settings.protocol`. `observer` is
-/// told the number of simulated logs done.
+/// Check the measured logs' drift against the model's under `settings.protocol`, the model's
+/// levels taken as exact. `observer` is told the number of simulated logs done.
 pub fn check_drift(
     logs: &[LogInput],
     model_sensor: &SensorModel,
+    settings: &CheckSettings,
+    observer: &dyn Observer,
+) -> Result<DriftCheck, CheckError> {
+    check_drift_fitted(logs, model_sensor, None, settings, observer)
+}
+
+/// [`check_drift`] for a model fitted on `fitted_on` (None: taken as exact): each replicate draws
+/// its levels by the parametric bootstrap (module doc). Its logs like the fitted ones are the runs
+/// after the replicates' own (`replicates` x `logs`) of the seed; `observer` counts both, of
+/// [`simulated_logs`] in all.
+pub fn check_drift_fitted(
+    logs: &[LogInput],
+    model_sensor: &SensorModel,
+    fitted_on: Option<&FittedOn>,
     settings: &CheckSettings,
     observer: &dyn Observer,
 ) -> Result<DriftCheck, CheckError> {
@@ -255,11 +259,24 @@ pub fn check_drift(
         .par_iter()
         .map(|l| all_segment_errors(&l.channels, dt_s, p))
         .collect();
+    let progress = Progress {
+        done: std::sync::atomic::AtomicUsize::new(0),
+        total: simulated_logs(logs.len(), fitted_on, settings.replicates),
+        observer,
+    };
+    let draws = fitted_on
+        .map(|f| {
+            let first_run = (settings.replicates * logs.len()) as u64;
+            let runs = (settings.seed, first_run, settings.replicates);
+            draw_models(model_sensor, f, runs, &|| progress.tick())
+        })
+        .transpose()?;
+    let model_of = |r: usize| draws.as_ref().map_or(model_sensor, |d| &d.models[r]);
     let experiment = Experiment {
         logs,
         model: model_sensor,
         settings,
-        simulated: simulate_experiments(logs, model_sensor, settings, dt_s, observer),
+        simulated: simulate_experiments(logs, &model_of, settings, dt_s, &progress),
     };
     let mut horizons = Vec::new();
     for (hi, &h) in p.horizons_s.iter().enumerate() {
@@ -272,8 +289,29 @@ pub fn check_drift(
         seed: settings.seed,
         replicates: settings.replicates,
         logs: logs.len(),
+        parameters: draws.map(|d| d.spread),
         horizons,
     })
+}
+
+/// The logs a drift check simulates: `replicates` experiments of `logs` logs, and with a fitted
+/// model as many times its fitted logs.
+pub fn simulated_logs(logs: usize, fitted_on: Option<&FittedOn>, replicates: usize) -> usize {
+    replicates * (logs + fitted_on.map_or(0, |f| f.samples.len()))
+}
+
+/// Simulated logs counted for the observer, from worker threads.
+struct Progress<'a> {
+    done: std::sync::atomic::AtomicUsize,
+    total: usize,
+    observer: &'a dyn Observer,
+}
+
+impl Progress<'_> {
+    fn tick(&self) {
+        let k = self.done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        self.observer.simulated(k, self.total);
+    }
 }
 
 /// The logs' common sample interval, once the logs and the settings are checked.
@@ -291,18 +329,18 @@ fn check_inputs(logs: &[LogInput], settings: &CheckSettings) -> Result<f64, Chec
 }
 
 /// The segment errors of every simulated experiment: replicate r, log l is montecarlo run
-/// r * logs + l of the seed, one simulated log as long as measured log l, with its channels.
-fn simulate_experiments(
+/// r * logs + l of the seed, one simulated log of replicate r's model (`model_of(r)`) as long as
+/// measured log l, with its channels.
+fn simulate_experiments<'m>(
     logs: &[LogInput],
-    model: &SensorModel,
+    model_of: &(dyn Fn(usize) -> &'m SensorModel + Sync),
     settings: &CheckSettings,
     dt_s: f64,
-    observer: &dyn Observer,
+    progress: &Progress,
 ) -> Vec<Vec<SegmentErrors>> {
     let jobs: Vec<(usize, usize)> = (0..settings.replicates)
         .flat_map(|r| (0..logs.len()).map(move |l| (r, l)))
         .collect();
-    let done = std::sync::atomic::AtomicUsize::new(0);
     jobs.par_iter()
         .map(|&(r, l)| {
             let log = &logs[l];
@@ -323,12 +361,11 @@ fn simulate_experiments(
                 temp_coeff: [0.0; 6],
             };
             let run = (r * logs.len() + l) as u64;
-            let sim = static_log(model, &setup, settings.seed, run);
+            let sim = static_log(model_of(r), &setup, settings.seed, run);
             let chans: [Option<&[f64]>; 6] =
                 std::array::from_fn(|c| setup.active[c].then(|| sim[c].as_slice()));
             let out = all_segment_errors(&chans, dt_s, &settings.protocol);
-            let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            observer.simulated(k, jobs.len());
+            progress.tick();
             out
         })
         .collect()
@@ -362,8 +399,8 @@ impl Experiment<'_> {
             let missing: Vec<&str> = q
                 .needs()
                 .iter()
-                .filter(|&&c| self.logs.iter().any(|l| l.channels[c].is_none()))
-                .map(|&c| crate::drift::CHANNELS[c])
+                .filter(|&&c| self.logs.iter().any(|l| l.channels[c.index()].is_none()))
+                .map(|c| c.name())
                 .collect();
             let check = if !missing.is_empty() || segments == 0 {
                 not_informed(&self.settings.protocol, h, &missing)
@@ -398,7 +435,7 @@ impl Experiment<'_> {
                     quantity: q.name(),
                 });
             }
-            rep_rms.push(rms(&v));
+            rep_rms.push(stats::rms(&v));
             all.extend(v);
         }
         rep_rms.sort_by(f64::total_cmp);
@@ -411,9 +448,9 @@ impl Experiment<'_> {
         let all_sorted = abs_sorted(&all);
         Ok(Model {
             mean: all_sorted.iter().sum::<f64>() / all_sorted.len() as f64,
-            p50: quantile(&all_sorted, 0.5),
-            p95: quantile(&all_sorted, 0.95),
-            rms: rms(&all),
+            p50: stats::quantile(&all_sorted, 0.5),
+            p95: stats::quantile(&all_sorted, 0.95),
+            rms: stats::rms(&all),
             band_lo: order_stat(&rep_rms, a),
             band_hi: order_stat(&rep_rms, (rep_rms.len() + 1) as f64 - a),
         })
@@ -450,7 +487,7 @@ fn measured_stats(
 ) -> Measured {
     let values = pooled.values(q);
     let sorted = abs_sorted(values);
-    let r = rms(values);
+    let r = stats::rms(values);
     let seqs: Vec<&[f64]> = per_log.iter().map(|s| s.values(q)).collect();
     let n_eff = effective_count(&seqs, overlapping);
     let lo_q = allan::chi2::chi2_ppf(0.975, n_eff);
@@ -464,8 +501,8 @@ fn measured_stats(
         mean,
         mean_lo: mean - half,
         mean_hi: mean + half,
-        p50: quantile(&sorted, 0.5),
-        p95: quantile(&sorted, 0.95),
+        p50: stats::quantile(&sorted, 0.5),
+        p95: stats::quantile(&sorted, 0.95),
         rms: r,
         rms_lo: r * (n_eff / lo_q).sqrt(),
         rms_hi: r * (n_eff / hi_q).sqrt(),

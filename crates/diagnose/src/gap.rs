@@ -161,12 +161,14 @@ pub fn z_scores(measured: &Curve, ln_model: &[f64], s: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-/// RMS of a set of z-scores (0 for an empty set).
+/// RMS of a set of z-scores; a channel with no tau to judge has no gap (0, not the NaN of
+/// `stats::rms` on an empty set).
 pub fn rms(z: &[f64]) -> f64 {
     if z.is_empty() {
-        return 0.0;
+        0.0
+    } else {
+        stats::rms(z)
     }
-    (z.iter().map(|v| v * v).sum::<f64>() / z.len() as f64).sqrt()
 }
 
 /// Contiguous runs of |z| > DISAGREEMENT_Z with one sign.

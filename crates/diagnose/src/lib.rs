@@ -8,6 +8,7 @@
 // Per-tau and per-channel arrays are indexed in parallel; index loops say that more plainly.
 #![allow(clippy::needless_range_loop)]
 
+pub mod bootstrap;
 pub mod candidates;
 pub mod detect;
 pub mod drift;
@@ -15,6 +16,7 @@ pub mod drift_check;
 pub mod error;
 mod findings;
 pub mod fit;
+pub mod fitted_on;
 pub mod gap;
 mod held_out;
 pub mod input;

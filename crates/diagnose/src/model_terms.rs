@@ -1,21 +1,12 @@
 //! Reading and changing one term of one channel of a `SensorModel` in diagnose's parameterisation.
 
 use crate::candidates::TermParams;
-use noise::{BiasInstability, Effect, Flicker, GaussMarkov, Sensor, SensorModel, Sinusoid, Term};
-
-/// Channel index (gx gy gz ax ay az) to (sensor, axis).
-pub fn channel_axis(ch: usize) -> (Sensor, usize) {
-    if ch < 3 {
-        (Sensor::Gyro, ch)
-    } else {
-        (Sensor::Accel, ch - 3)
-    }
-}
+use noise::{BiasInstability, Channel, Effect, Flicker, GaussMarkov, SensorModel, Sinusoid, Term};
 
 /// The level the model has for `effect` on channel `ch` (None when absent, or when the term is not in a
 /// form diagnose fits: a Woodman random-walk bias instability is read as absent flicker).
-pub fn term_level(model: &SensorModel, ch: usize, effect: Effect) -> Option<TermParams> {
-    let (sensor, axis) = channel_axis(ch);
+pub fn term_level(model: &SensorModel, ch: Channel, effect: Effect) -> Option<TermParams> {
+    let (sensor, axis) = (ch.sensor(), ch.axis());
     Some(match model.axis(sensor, axis).term(effect)? {
         Term::Quantization(v)
         | Term::WhiteNoise(v)
@@ -45,14 +36,14 @@ pub fn term_level(model: &SensorModel, ch: usize, effect: Effect) -> Option<Term
 }
 
 /// The output filter channel `ch` has, if any.
-pub fn output_filter(model: &SensorModel, ch: usize) -> Option<noise::OutputFilter> {
-    let (sensor, axis) = channel_axis(ch);
+pub fn output_filter(model: &SensorModel, ch: Channel) -> Option<noise::OutputFilter> {
+    let (sensor, axis) = (ch.sensor(), ch.axis());
     model.axis(sensor, axis).output_filter
 }
 
 /// Does channel `ch` model its bias instability as Woodman's random walk (TR-696 eq 9)?
-pub fn has_random_walk_bias_instability(model: &SensorModel, ch: usize) -> bool {
-    let (sensor, axis) = channel_axis(ch);
+pub fn has_random_walk_bias_instability(model: &SensorModel, ch: Channel) -> bool {
+    let (sensor, axis) = (ch.sensor(), ch.axis());
     matches!(
         model.axis(sensor, axis).bias_instability,
         Some(BiasInstability::RandomWalk { .. })
@@ -60,8 +51,8 @@ pub fn has_random_walk_bias_instability(model: &SensorModel, ch: usize) -> bool 
 }
 
 /// The flicker band the model uses on channel `ch` (its own, or the noise crate's default).
-pub fn flicker_band(model: &SensorModel, ch: usize) -> Flicker {
-    let (sensor, axis) = channel_axis(ch);
+pub fn flicker_band(model: &SensorModel, ch: Channel) -> Flicker {
+    let (sensor, axis) = (ch.sensor(), ch.axis());
     match &model.axis(sensor, axis).bias_instability {
         Some(BiasInstability::Flicker(f)) => Flicker {
             b: 1.0,
@@ -73,9 +64,9 @@ pub fn flicker_band(model: &SensorModel, ch: usize) -> Flicker {
 
 /// Set `effect` on channel `ch` to `params` (adding it if absent); parameters that do not fit the
 /// effect change nothing.
-pub fn set_term(model: &mut SensorModel, ch: usize, effect: Effect, params: &TermParams) {
+pub fn set_term(model: &mut SensorModel, ch: Channel, effect: Effect, params: &TermParams) {
     let band = flicker_band(model, ch);
-    let (sensor, axis) = channel_axis(ch);
+    let (sensor, axis) = (ch.sensor(), ch.axis());
     let a = model.axis_mut(sensor, axis);
     let term = match (effect, *params) {
         (Effect::Quantization, TermParams::Level(v)) => Term::Quantization(v),
@@ -121,7 +112,7 @@ pub fn set_term(model: &mut SensorModel, ch: usize, effect: Effect, params: &Ter
 }
 
 /// Remove `effect` from channel `ch`.
-pub fn clear_term(model: &mut SensorModel, ch: usize, effect: Effect) {
-    let (sensor, axis) = channel_axis(ch);
+pub fn clear_term(model: &mut SensorModel, ch: Channel, effect: Effect) {
+    let (sensor, axis) = (ch.sensor(), ch.axis());
     model.axis_mut(sensor, axis).remove(effect);
 }

@@ -12,6 +12,7 @@
 //! against the static truth read at the end (`strapdown::nav_error`).
 
 use noise::units::STANDARD_GRAVITY_MPS2 as G_MPS2;
+use noise::Channel;
 use serde::Serialize;
 use strapdown::{nav_error, Attitude, BodyVector, NavState, Scheme, Strapdown};
 
@@ -183,12 +184,13 @@ impl Quantity {
     /// static, level log (docs/model.md §1: heading from gz; roll from gx, pitch from gy;
     /// horizontal velocity and position from ax, ay and the tilt from gx, gy): a log without
     /// one of them cannot inform it.
-    pub fn needs(self) -> &'static [usize] {
+    pub fn needs(self) -> &'static [Channel] {
+        use Channel::{Ax, Ay, Gx, Gy, Gz};
         match self {
-            Quantity::Heading => &[2],
-            Quantity::Roll => &[0],
-            Quantity::Pitch => &[1],
-            Quantity::PosHorizontal | Quantity::VelHorizontal => &[0, 1, 3, 4],
+            Quantity::Heading => &[Gz],
+            Quantity::Roll => &[Gx],
+            Quantity::Pitch => &[Gy],
+            Quantity::PosHorizontal | Quantity::VelHorizontal => &[Gx, Gy, Ax, Ay],
         }
     }
 }

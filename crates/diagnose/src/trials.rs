@@ -113,7 +113,7 @@ pub(crate) fn trials(input: &ChannelFit) -> Vec<Trial> {
         avar_band: &input.band.avar_mean,
         s: &input.gap.s,
     };
-    let ch = input.channel.index();
+    let ch = input.channel;
     let mut out = Vec::new();
     for effect in CANDIDATES {
         // A Woodman random-walk bias instability occupies the axis's one bias-instability slot; a flicker
@@ -265,7 +265,7 @@ fn fit_resonance(
         data,
         tau: &input.measured.tau_s,
         dt_s: input.dt_s,
-        filter: output_filter(input.model, input.channel.index()),
+        filter: output_filter(input.model, input.channel),
         c0: current.map(|c| c.c()).unwrap_or(0.0),
         peak: input.peak,
     };
@@ -375,7 +375,7 @@ fn fit_level(
     current: Option<TermParams>,
 ) -> Fitted {
     let (tau, dt_s) = (&input.measured.tau_s, input.dt_s);
-    let ch = input.channel.index();
+    let ch = input.channel;
     let f: Vec<f64> = if effect == Effect::WhiteNoise {
         white_signature(output_filter(input.model, ch).as_ref(), tau, dt_s)
     } else {
@@ -551,7 +551,7 @@ struct FilterSearch<'a> {
 impl<'a> FilterSearch<'a> {
     fn new(input: &'a ChannelFit, data: &'a FitData<'a>) -> FilterSearch<'a> {
         let (tau, dt_s) = (input.measured.tau_s.as_slice(), input.dt_s);
-        let ch = input.channel.index();
+        let ch = input.channel;
         let current = output_filter(input.model, ch);
         let c0 = term_level(input.model, ch, Effect::WhiteNoise).map_or(0.0, |p| p.c());
         let fw_cur = white_signature(current.as_ref(), tau, dt_s);

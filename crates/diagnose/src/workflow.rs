@@ -437,7 +437,7 @@ impl<'a> Run<'a> {
 
     /// Step 4: put the chosen term into both models; the changes made, each with the level before.
     fn accept(&mut self, c: Channel, best: &Trial) -> Vec<(Effect, Option<TermParams>)> {
-        let ch = c.index();
+        let ch = c;
         let mut changes = Vec::new();
         if best.effect == Effect::OutputFilter {
             // The filter is fitted with the white-noise level: undoing it restores both.
@@ -455,8 +455,8 @@ impl<'a> Run<'a> {
     fn undo(&mut self, c: Channel, effect: Effect, previous: Option<TermParams>) {
         for model in [&mut self.sim_model, &mut self.out_model] {
             match previous {
-                Some(p) => set_term(model, c.index(), effect, &p),
-                None => clear_term(model, c.index(), effect),
+                Some(p) => set_term(model, c, effect, &p),
+                None => clear_term(model, c, effect),
             }
         }
     }

@@ -59,3 +59,75 @@ fn band_is_bit_identical_for_1_2_and_3_threads() {
     assert_eq!(one, bits(&run(2)));
     assert_eq!(one, bits(&run(3)));
 }
+
+/// The drift check with the levels drawn by the parametric bootstrap: the JSON of the whole check
+/// (every band, every drawn level's spread) is the same text for 1, 2 and 3 threads; serde_json
+/// writes every f64 in its shortest exact form, so equal text is equal bits.
+#[test]
+fn bootstrapped_drift_check_is_identical_for_1_2_and_3_threads() {
+    use diagnose::drift_check::{check_drift_fitted, CheckSettings};
+    use diagnose::fitted_on::FittedOn;
+    use diagnose::protocol::Protocol;
+    let model = SensorModel::from_toml_str(
+        r#"
+name = "det"
+[gyro.all]
+white_noise = "0.3 deg/sqrt(h)"
+bias_instability = "5 deg/h"
+rate_random_walk = "3 deg/h/sqrt(h)"
+[accel.all]
+white_noise = "60 ug/sqrt(Hz)"
+bias_instability = "30 ug"
+"#,
+        "det.toml",
+    )
+    .unwrap();
+    let setup = SimSetup {
+        dt_s: 0.1,
+        samples: 6_000,
+        grid_m: Vec::new(),
+        active: [true; 6],
+        horizons_s: Vec::new(),
+        temperature_c: None,
+        temp_coeff: [0.0; 6],
+    };
+    let logs: Vec<[Vec<f64>; 6]> = (0..2)
+        .map(|run| diagnose::simulate::static_log(&model, &setup, 99, run))
+        .collect();
+    let inputs: Vec<diagnose::LogInput> = logs
+        .iter()
+        .map(|l| diagnose::LogInput {
+            dt_s: 0.1,
+            channels: std::array::from_fn(|c| Some(l[c].as_slice())),
+            temperature_c: None,
+        })
+        .collect();
+    let fitted = FittedOn {
+        sample_interval_s: 0.1,
+        samples: vec![4_000, 3_000],
+        channels: [true; 6],
+        tau_min_s: 0.0,
+    };
+    let settings = CheckSettings {
+        protocol: Protocol {
+            horizons_s: vec![10.0, 60.0],
+            ..Protocol::default()
+        },
+        replicates: 12,
+        seed: 3,
+    };
+    let json = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                let c = check_drift_fitted(&inputs, &model, Some(&fitted), &settings, &()).unwrap();
+                assert!(c.parameters.is_some());
+                serde_json::to_string(&c).unwrap()
+            })
+    };
+    let one = json(1);
+    assert_eq!(one, json(2));
+    assert_eq!(one, json(3));
+}

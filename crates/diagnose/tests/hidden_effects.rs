@@ -16,19 +16,18 @@ mod common;
 use common::{base_model, format_z, gap_closed, log_uniform, parameter_ok, run_trials};
 use common::{GeneratedLog, DT_S, SEEDS};
 use diagnose::candidates::TermParams;
-use diagnose::drift::CHANNELS;
-use diagnose::model_terms::{channel_axis, set_term};
+use diagnose::model_terms::set_term;
 use diagnose::simulate::adev_at;
 use diagnose::{Diagnosis, Settings};
-use noise::{Effect, SensorModel, TemperatureProfile};
+use noise::{Channel, Effect, SensorModel, TemperatureProfile};
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
 const SAMPLES: usize = 1 << 16;
 
 /// Base model Allan variance at tau (closed form of the generator).
-fn base_avar(model: &SensorModel, ch: usize, tau_s: f64) -> f64 {
-    let (sensor, axis) = channel_axis(ch);
+fn base_avar(model: &SensorModel, ch: Channel, tau_s: f64) -> f64 {
+    let (sensor, axis) = (ch.sensor(), ch.axis());
     model.axis(sensor, axis).allan_variance_sampled(tau_s, DT_S)
 }
 
@@ -45,8 +44,13 @@ fn cycling() -> TemperatureProfile {
 
 /// Draw the hidden effect's parameters for channel `ch` on top of `base`. Where a term "crosses the base
 /// at tau_c", its Allan variance equals the base model's there and exceeds it beyond.
-fn draw(effect: Effect, base: &SensorModel, ch: usize, rng: &mut Xoshiro256PlusPlus) -> TermParams {
-    let (sensor, axis) = channel_axis(ch);
+fn draw(
+    effect: Effect,
+    base: &SensorModel,
+    ch: Channel,
+    rng: &mut Xoshiro256PlusPlus,
+) -> TermParams {
+    let (sensor, axis) = (ch.sensor(), ch.axis());
     let a = base.axis(sensor, axis);
     let n = a.white_noise.unwrap();
     match effect {
@@ -120,7 +124,7 @@ fn draw(effect: Effect, base: &SensorModel, ch: usize, rng: &mut Xoshiro256PlusP
 
 struct Trial {
     effect: Effect,
-    channels: Vec<usize>,
+    channels: Vec<Channel>,
     truth: Vec<TermParams>,
     result: Diagnosis,
 }
@@ -153,10 +157,11 @@ fn hidden_trial(effect: Effect, trial: u64) -> Trial {
     // One or two channels, chosen at random.
     let pool = 6;
     let first = rng.gen_range(0..pool);
-    let mut channels = vec![first];
+    let to_channel = |i: usize| Channel::ALL[i];
+    let mut channels = vec![to_channel(first)];
     if rng.gen::<bool>() {
         let second = (first + rng.gen_range(1..pool)) % pool;
-        channels.push(second);
+        channels.push(to_channel(second));
     }
     channels.sort_unstable();
     let truth: Vec<TermParams> = channels
@@ -177,8 +182,9 @@ fn hidden_trial(effect: Effect, trial: u64) -> Trial {
 
 fn check(trial: &Trial) -> Result<(), String> {
     let mut problems = Vec::new();
-    for (c, name) in CHANNELS.iter().enumerate() {
-        let report = &trial.result.channels[*name];
+    for c in Channel::ALL {
+        let name = c.name();
+        let report = &trial.result.channels[name];
         let named: Vec<&str> = report.effects.iter().map(|e| e.effect.name()).collect();
         match trial.channels.iter().position(|&h| h == c) {
             None => {
@@ -239,10 +245,10 @@ fn check(trial: &Trial) -> Result<(), String> {
     // DIAGNOSE_DUMP=1: on a failure, also print the found effects and the z-scores before and after.
     if !problems.is_empty() && std::env::var_os("DIAGNOSE_DUMP").is_some() {
         for &c in &trial.channels {
-            let r = &trial.result.channels[CHANNELS[c]];
+            let r = &trial.result.channels[c.name()];
             eprintln!(
                 "{}: truth {:?}\n  effects {:?}\n  z0 {}\n  z1 {}",
-                CHANNELS[c],
+                c.name(),
                 trial.truth,
                 r.effects
                     .iter()
@@ -356,7 +362,7 @@ fn temperature_ramp_cannot_be_told_from_rate_ramp() {
     model.temperature_reference_c = 25.0;
     set_term(
         &mut model,
-        1,
+        Channel::Gy,
         Effect::TemperatureBias,
         &TermParams::Level(5e-5),
     );

@@ -15,11 +15,9 @@
 mod common;
 use common::{base_model, format_z, gap_closed, log_uniform, parameter_ok, run_trials};
 use common::{GeneratedLog, DT_S, SEEDS};
-use diagnose::drift::CHANNELS;
-use diagnose::model_terms::channel_axis;
 use diagnose::Diagnosis;
 use noise::{
-    FilterKind, Outliers, OutputFilter, Resonance, SensorModel, TemperatureProfile, Term,
+    Channel, FilterKind, Outliers, OutputFilter, Resonance, SensorModel, TemperatureProfile, Term,
     WarmupTransient,
 };
 use rand::{Rng, SeedableRng};
@@ -28,12 +26,12 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 const SAMPLES: usize = 1 << 17;
 
 /// White-noise standard deviation per sample of channel `ch` in the base model.
-fn sigma(ch: usize) -> f64 {
-    (if ch < 3 { 1e-4 } else { 1e-3 }) / DT_S.sqrt()
+fn sigma(ch: Channel) -> f64 {
+    (if ch.is_gyro() { 1e-4 } else { 1e-3 }) / DT_S.sqrt()
 }
 
 /// The hidden term for channel `ch`, drawn in the stated ranges.
-fn draw(kind: &str, ch: usize, rng: &mut Xoshiro256PlusPlus) -> Term {
+fn draw(kind: &str, ch: Channel, rng: &mut Xoshiro256PlusPlus) -> Term {
     match kind {
         // Moving average of 3..8 taps at the output rate.
         "moving_average" => Term::OutputFilter(
@@ -164,16 +162,17 @@ fn trial(kind: &str, t: u64) -> Result<(), String> {
         channels.push((first + rng.gen_range(1..6)) % 6);
     }
     let mut truth = Vec::new();
-    for &c in &channels {
+    for c in channels.iter().map(|&i| Channel::ALL[i]) {
         let term = draw(kind, c, &mut rng);
-        let (sensor, axis) = channel_axis(c);
+        let (sensor, axis) = (c.sensor(), c.axis());
         model.axis_mut(sensor, axis).set_term(term.clone());
         truth.push((c, term));
     }
     let result = run(&model, 4000 + t);
     let mut problems = Vec::new();
-    for (c, name) in CHANNELS.iter().enumerate() {
-        let report = &result.channels[*name];
+    for c in Channel::ALL {
+        let name = c.name();
+        let report = &result.channels[name];
         let named: Vec<&str> = report.effects.iter().map(|e| e.effect.name()).collect();
         match truth.iter().find(|(h, _)| *h == c) {
             None => {
@@ -221,11 +220,11 @@ fn trial(kind: &str, t: u64) -> Result<(), String> {
     }
     // DIAGNOSE_DUMP=1: on a failure, print each hidden channel's effects and z before and after.
     if !problems.is_empty() && std::env::var_os("DIAGNOSE_DUMP").is_some() {
-        for &c in &channels {
-            let r = &result.channels[CHANNELS[c]];
+        for c in channels.iter().map(|&i| Channel::ALL[i]) {
+            let r = &result.channels[c.name()];
             eprintln!(
                 "{}: effects {:?}\n  z0 {}\n  z1 {}",
-                CHANNELS[c],
+                c.name(),
                 r.effects
                     .iter()
                     .map(|e| (

@@ -4,10 +4,9 @@
 
 #![allow(dead_code)] // each suite uses a part
 
-use diagnose::model_terms::channel_axis;
 use diagnose::simulate::{static_log, SimSetup};
 use diagnose::{diagnose, Diagnosis, LogInput, Settings};
-use noise::{BiasInstability, Flicker, ImuErrors, SensorModel};
+use noise::{BiasInstability, Channel, Flicker, ImuErrors, SensorModel};
 use rand::Rng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 
@@ -25,9 +24,13 @@ pub fn base_model(with_flicker: bool) -> SensorModel {
         name: "base".into(),
         ..Default::default()
     };
-    for ch in 0..6 {
-        let (n, b) = if ch < 3 { (1e-4, 2e-5) } else { (1e-3, 2e-4) };
-        let (sensor, axis) = channel_axis(ch);
+    for ch in Channel::ALL {
+        let (n, b) = if ch.is_gyro() {
+            (1e-4, 2e-5)
+        } else {
+            (1e-3, 2e-4)
+        };
+        let (sensor, axis) = (ch.sensor(), ch.axis());
         let a = m.axis_mut(sensor, axis);
         a.white_noise = Some(n);
         if with_flicker {

@@ -10,6 +10,10 @@ pub(super) struct RawSensor {
     pub(super) temperature: Option<RawTemperature>,
     pub(super) gyro: Option<RawTriad>,
     pub(super) accel: Option<RawTriad>,
+    /// What a fitted model's levels were estimated from (`imudrift diagnose` writes it): read by
+    /// the diagnose crate (`diagnose::fitted_on`), not a part of the error model.
+    #[allow(dead_code)]
+    pub(super) fitted_on: Option<serde::de::IgnoredAny>,
 }
 
 /// A config value with its place in the file.

@@ -1,0 +1,551 @@
+//! The uncertainty of a fitted model's levels, by a parametric bootstrap (docs/drift.md,
+//! "Parameter uncertainty").
+//!
+//! A model fitted on finite logs (`FittedOn`) would have come out otherwise on other logs of the
+//! same sensor. Replicate r of a drift check therefore simulates its experiment not with the fitted
+//! levels but with levels drawn from their sampling distribution, estimated by the parametric
+//! bootstrap (Efron & Tibshirani 1993, "An Introduction to the Bootstrap", §6.5): logs like the
+//! fitted ones (same sample interval, lengths and channels) simulated from the fitted model, their
+//! Allan variances on the octave grid from `tau_min_s`, and the levels refitted. Drawing each
+//! replicate's parameters from the bootstrap distribution and its data from those parameters is
+//! the bootstrap predictive distribution (Harris 1989, "Predictive fit for natural exponential
+//! families", Biometrika 76, 675-684), so the band of the replicates' statistic holds the spread of
+//! the data and of the fit.
+//!
+//! The refit, per channel: the Allan variance is the sum of the terms' (IEEE 952 Annex C; docs/model.md
+//! §2), each linear in its squared level, so with the terms' exact sampled Allan variances b_j(tau) at
+//! the fitted levels and the rest r(tau) held, the multipliers s_j >= 0 of the squared levels minimise
+//! sum_i w_i (avar_i - r_i - sum_j s_j b_ij)^2, the weighted non-negative least squares of Lawson &
+//! Hanson (1974, ch. 23). The weights are the inverse variances of the Allan variance estimates,
+//! w_i = nu_i / (2 A_i^2) (the estimate is A_i chi2(nu_i)/nu_i, NIST SP 1065 §5.2), A_i the fitted
+//! model's Allan variance and nu_i Greenhall's EDF for the noise type of its local slope
+//! (mu = -alpha - 1, SP 1065 Table 2); several logs are pooled with weights nu (their EDFs add).
+//! The weights fix only the estimator's efficiency: it is linear in the Allan variances, which are
+//! unbiased, so it is unbiased but where s_j is clamped at 0. The draws are centred on the fitted
+//! levels by dividing each multiplier by its bootstrap mean (the multiplicative form of the
+//! bootstrap bias correction, Efron & Tibshirani §10.2), so that a closed form that does not match
+//! the generator exactly or the clamp moves no level.
+//!
+//! Drawn: the stochastic levels (quantisation, white noise, flicker bias instability, rate random
+//! walk, Gauss-Markov sigma, sinusoid amplitude, resonance sigma) of the fitted channels. Held as
+//! fitted: shapes (Gauss-Markov times, frequencies, output filters), deterministic and per-run terms
+//! (biases, ramp, temperature, scale factor, misalignment), Woodman's random-walk bias instability
+//! and every term of a channel the logs did not have. A level no refit sees (every multiplier 0)
+//! keeps its value and is reported as not informed.
+
+use crate::candidates::TermParams;
+use crate::fitted_on::FittedOn;
+use crate::model_terms::{clear_term, set_term, term_level};
+use crate::simulate::{adev_at, static_log, SimSetup};
+use allan::{EdfMethod, Estimator};
+use noise::Channel;
+use noise::{AxisModel, Effect, SensorModel};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// The effects whose level is drawn (module doc).
+const DRAWN: [Effect; 7] = [
+    Effect::Quantization,
+    Effect::WhiteNoise,
+    Effect::BiasInstability,
+    Effect::RateRandomWalk,
+    Effect::GaussMarkov,
+    Effect::Sinusoidal,
+    Effect::Resonance,
+];
+
+/// Most levels refitted together on one channel (the refit tries every subset of them).
+const MAX_TERMS: usize = 10;
+
+/// The models of the replicates and how their levels spread.
+#[derive(Clone, Debug)]
+pub struct Draws {
+    /// One model per replicate.
+    pub models: Vec<SensorModel>,
+    pub spread: ParameterSpread,
+}
+
+/// How the levels were drawn and how far they spread (the JSON `parameters` of a drift check).
+#[derive(Clone, Debug, Serialize)]
+pub struct ParameterSpread {
+    /// "parametric_bootstrap".
+    pub method: &'static str,
+    pub fitted_on: FittedOn,
+    /// Per channel, each drawn level.
+    pub levels: BTreeMap<&'static str, Vec<LevelSpread>>,
+}
+
+/// One drawn level: the model's value and the 2.5, 50 and 97.5 % quantiles of the draws (SI).
+#[derive(Clone, Debug, Serialize)]
+pub struct LevelSpread {
+    pub effect: Effect,
+    /// The parameter's JSON name (n, b, k, q, sigma, amplitude).
+    pub parameter: &'static str,
+    pub model: f64,
+    pub p2_5: f64,
+    pub p50: f64,
+    pub p97_5: f64,
+    /// False when no refit saw the term: its level is kept as fitted.
+    pub informed: bool,
+}
+
+/// Errors of the bootstrap.
+#[derive(Debug, thiserror::Error)]
+pub enum BootstrapError {
+    #[error("the model's output filter does not fit the fitted logs' rate: {0}")]
+    Rate(String),
+    #[error("channel {channel} has {terms} levels to refit; at most {MAX_TERMS} are supported")]
+    TooManyTerms { channel: &'static str, terms: usize },
+}
+
+/// One channel's refit: its drawn terms, the grid and the fixed parts of the least squares.
+struct ChannelFit {
+    ch: Channel,
+    terms: Vec<(Effect, TermParams)>,
+    /// Octave averaging factors of the longest log from `tau_min_s`, and per log how many of them
+    /// it holds (a log of n samples holds m <= n / 4, the overlapping estimator's Stable32 limit).
+    grid_m: Vec<usize>,
+    held: Vec<usize>,
+    /// Per tau: the terms' Allan variances at the fitted levels, the rest of the model's, and the
+    /// least-squares weight of one unit of EDF (1 / (2 A^2)).
+    basis: Vec<Vec<f64>>,
+    rest: Vec<f64>,
+    weight_per_edf: Vec<f64>,
+    /// Per log, per tau: the EDF.
+    edf: Vec<Vec<f64>>,
+}
+
+/// The EDF of the overlapping Allan variance at factor `m` of a log of `n` samples, for noise of
+/// Allan-variance slope `mu` (alpha = -mu - 1, SP 1065 Table 2, rounded and clamped to the
+/// power-law range; Greenhall & Riley 2004 through `allan::edf`).
+fn edf_at(mu: f64, m: usize, n: usize) -> f64 {
+    let alpha = (-mu - 1.0).round().clamp(-2.0, 2.0) as i32;
+    let nu = allan::edf::edf_for(
+        Estimator::Overlapping,
+        EdfMethod::Greenhall,
+        alpha,
+        m,
+        n + 1,
+        0,
+    );
+    if nu.is_finite() && nu > 0.0 {
+        nu
+    } else {
+        allan::edf::simple(n + 1, m, alpha)
+    }
+}
+
+impl ChannelFit {
+    /// The refit of channel `ch` of `model` on data like `fitted` (None: nothing to draw there).
+    fn new(model: &SensorModel, ch: Channel, fitted: &FittedOn) -> Option<ChannelFit> {
+        let terms: Vec<(Effect, TermParams)> = DRAWN
+            .iter()
+            .filter_map(|&e| term_level(model, ch, e).map(|p| (e, p)))
+            .filter(|(_, p)| p.c() > 0.0)
+            .collect();
+        if terms.is_empty() || !fitted.channels[ch.index()] {
+            return None;
+        }
+        let dt = fitted.sample_interval_s;
+        let n_max = *fitted.samples.iter().max()?;
+        let grid_m: Vec<usize> = std::iter::successors(Some(1usize), |m| m.checked_mul(2))
+            .take_while(|&m| m <= n_max / 4)
+            .filter(|&m| m as f64 * dt >= fitted.tau_min_s * (1.0 - 1e-9))
+            .collect();
+        if grid_m.is_empty() {
+            return None;
+        }
+        let held = fitted
+            .samples
+            .iter()
+            .map(|&n| grid_m.iter().filter(|&&m| m <= n / 4).count())
+            .collect();
+        let taus: Vec<f64> = grid_m.iter().map(|&m| m as f64 * dt).collect();
+        let (sensor, axis) = (ch.sensor(), ch.axis());
+        let axis = model.axis(sensor, axis);
+        let total = axis.allan_variance_sampled_many(&taus, dt);
+        let columns: Vec<Vec<f64>> = terms
+            .iter()
+            .map(|(e, _)| {
+                let mut only = AxisModel {
+                    output_filter: axis.output_filter,
+                    ..AxisModel::default()
+                };
+                if let Some(t) = axis.term(*e) {
+                    only.set_term(t);
+                }
+                only.allan_variance_sampled_many(&taus, dt)
+            })
+            .collect();
+        let basis: Vec<Vec<f64>> = (0..taus.len())
+            .map(|i| columns.iter().map(|c| c[i]).collect())
+            .collect();
+        let rest = (0..taus.len())
+            .map(|i| total[i] - basis[i].iter().sum::<f64>())
+            .collect();
+        let weight_per_edf = total
+            .iter()
+            .map(|&a| {
+                if a > 0.0 && a.is_finite() {
+                    0.5 / (a * a)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let edf = fitted
+            .samples
+            .iter()
+            .map(|&n| {
+                (0..taus.len())
+                    .map(|i| edf_at(local_slope(&taus, &total, i), grid_m[i], n))
+                    .collect()
+            })
+            .collect();
+        Some(ChannelFit {
+            ch,
+            terms,
+            grid_m,
+            held,
+            basis,
+            rest,
+            weight_per_edf,
+            edf,
+        })
+    }
+
+    /// The multipliers of the squared levels refitted to the Allan variances `avar[log][tau]`
+    /// (NaN where a log has no value), pooled over the logs with EDF weights.
+    fn refit(&self, avar: &[Vec<f64>]) -> Vec<f64> {
+        let mut rows = Vec::new();
+        let mut rhs = Vec::new();
+        for i in 0..self.grid_m.len() {
+            let (mut sum, mut nu) = (0.0, 0.0);
+            for (l, a) in avar.iter().enumerate() {
+                if i < a.len() && a[i].is_finite() {
+                    sum += self.edf[l][i] * a[i];
+                    nu += self.edf[l][i];
+                }
+            }
+            let w = (nu * self.weight_per_edf[i]).sqrt();
+            if nu > 0.0 && w > 0.0 && w.is_finite() {
+                rows.push(self.basis[i].iter().map(|b| w * b).collect::<Vec<f64>>());
+                rhs.push(w * (sum / nu - self.rest[i]));
+            }
+        }
+        nnls_small(&rows, &rhs, self.terms.len())
+    }
+}
+
+/// d ln A / d ln tau at grid point `i` (central between the neighbours, one-sided at the ends).
+fn local_slope(taus: &[f64], avar: &[f64], i: usize) -> f64 {
+    if taus.len() < 2 {
+        return -1.0;
+    }
+    let (a, b) = (i.saturating_sub(1), (i + 1).min(taus.len() - 1));
+    let mu = (avar[b] / avar[a]).ln() / (taus[b] / taus[a]).ln();
+    if mu.is_finite() {
+        mu
+    } else {
+        -1.0
+    }
+}
+
+/// Non-negative least squares, min |G x - y|^2 subject to x >= 0, for a few columns (`rows` of G):
+/// the best non-negative unconstrained least-squares solution over every subset of the columns
+/// (the NNLS solution is the least-squares solution on its own support, Lawson & Hanson 1974,
+/// ch. 23, so it is among them). Columns are scaled to unit norm for the normal equations; a
+/// subset whose normal matrix is not positive definite is skipped.
+fn nnls_small(rows: &[Vec<f64>], y: &[f64], k: usize) -> Vec<f64> {
+    let norms: Vec<f64> = (0..k)
+        .map(|j| rows.iter().map(|r| r[j] * r[j]).sum::<f64>().sqrt())
+        .collect();
+    let usable: Vec<usize> = (0..k)
+        .filter(|&j| norms[j] > 0.0 && norms[j].is_finite())
+        .collect();
+    let mut best = vec![0.0; k];
+    let mut best_sse: f64 = y.iter().map(|v| v * v).sum();
+    for mask in 1u32..(1u32 << usable.len()) {
+        let cols: Vec<usize> = (0..usable.len())
+            .filter(|&b| mask & (1 << b) != 0)
+            .map(|b| usable[b])
+            .collect();
+        let p = cols.len();
+        let g = nalgebra::DMatrix::from_fn(rows.len(), p, |i, j| rows[i][cols[j]] / norms[cols[j]]);
+        let yv = nalgebra::DVector::from_column_slice(y);
+        let Some(chol) = (g.transpose() * &g).cholesky() else {
+            continue;
+        };
+        let x = chol.solve(&(g.transpose() * &yv));
+        if x.iter().any(|&v| v.is_nan() || v < 0.0) {
+            continue;
+        }
+        let sse = (&g * &x - &yv).norm_squared();
+        if sse < best_sse {
+            best_sse = sse;
+            best = vec![0.0; k];
+            for (j, &c) in cols.iter().enumerate() {
+                best[c] = x[j] / norms[c];
+            }
+        }
+    }
+    best
+}
+
+/// `params` with its squared level multiplied by `s`.
+fn scaled(params: TermParams, s: f64) -> TermParams {
+    let f = s.max(0.0).sqrt();
+    match params {
+        TermParams::Level(v) => TermParams::Level(v * f),
+        TermParams::GaussMarkov { sigma, tau_s } => TermParams::GaussMarkov {
+            sigma: sigma * f,
+            tau_s,
+        },
+        TermParams::Sinusoid {
+            amplitude,
+            frequency_hz,
+        } => TermParams::Sinusoid {
+            amplitude: amplitude * f,
+            frequency_hz,
+        },
+        TermParams::Resonance {
+            sigma,
+            frequency_hz,
+            bandwidth_hz,
+        } => TermParams::Resonance {
+            sigma: sigma * f,
+            frequency_hz,
+            bandwidth_hz,
+        },
+        TermParams::Filter { filter, n } => TermParams::Filter { filter, n: n * f },
+    }
+}
+
+/// Simulated logs like the fitted ones: replicate r, log t is run `first_run + r T + t` of `seed`
+/// (T logs). Per replicate, per fitted channel (in `fits` order), per log: the Allan variances on
+/// the channel's grid. `tick` is called once per simulated log.
+fn simulate_fitted_logs(
+    model: &SensorModel,
+    fitted: &FittedOn,
+    fits: &[ChannelFit],
+    (seed, first_run, replicates): (u64, u64, usize),
+    tick: &(dyn Fn() + Sync),
+) -> Vec<Vec<Vec<Vec<f64>>>> {
+    let logs = fitted.samples.len();
+    let jobs: Vec<(usize, usize)> = (0..replicates)
+        .flat_map(|r| (0..logs).map(move |t| (r, t)))
+        .collect();
+    let per_job: Vec<Vec<Vec<f64>>> = jobs
+        .par_iter()
+        .map(|&(r, t)| {
+            let setup = SimSetup {
+                dt_s: fitted.sample_interval_s,
+                samples: fitted.samples[t],
+                grid_m: Vec::new(),
+                active: std::array::from_fn(|c| fits.iter().any(|f| f.ch.index() == c)),
+                horizons_s: Vec::new(),
+                temperature_c: None,
+                temp_coeff: [0.0; 6],
+            };
+            let run = first_run + (r * logs + t) as u64;
+            let log = static_log(model, &setup, seed, run);
+            let out = fits
+                .iter()
+                .map(|f| {
+                    let ms = &f.grid_m[..f.held[t]];
+                    adev_at(&log[f.ch.index()], fitted.sample_interval_s, ms)
+                        .iter()
+                        .map(|a| a * a)
+                        .collect()
+                })
+                .collect();
+            tick();
+            out
+        })
+        .collect();
+    // Regroup as [replicate][channel][log].
+    (0..replicates)
+        .map(|r| {
+            (0..fits.len())
+                .map(|k| {
+                    (0..logs)
+                        .map(|t| per_job[r * logs + t][k].clone())
+                        .collect()
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Draw each replicate's levels (module doc). Replicate r's logs like the fitted ones are runs
+/// `first_run + r T + t` (t < T, the fitted logs) of `seed`: the caller keeps them apart from its
+/// own runs. `tick` is called once per simulated log (`replicates` times the fitted logs).
+pub fn draw_models(
+    model: &SensorModel,
+    fitted: &FittedOn,
+    (seed, first_run, replicates): (u64, u64, usize),
+    tick: &(dyn Fn() + Sync),
+) -> Result<Draws, BootstrapError> {
+    noise::ImuErrors::check_rate(model, fitted.sample_interval_s)
+        .map_err(|e| BootstrapError::Rate(e.to_string()))?;
+    let fits: Vec<ChannelFit> = Channel::ALL
+        .into_iter()
+        .filter_map(|ch| ChannelFit::new(model, ch, fitted))
+        .collect();
+    if let Some(f) = fits.iter().find(|f| f.terms.len() > MAX_TERMS) {
+        return Err(BootstrapError::TooManyTerms {
+            channel: f.ch.name(),
+            terms: f.terms.len(),
+        });
+    }
+    let avar = simulate_fitted_logs(model, fitted, &fits, (seed, first_run, replicates), tick);
+    // Multipliers [replicate][channel][term], then centred on 1 by their bootstrap mean.
+    let mut s: Vec<Vec<Vec<f64>>> = avar
+        .par_iter()
+        .map(|per_channel| {
+            fits.iter()
+                .zip(per_channel)
+                .map(|(f, a)| f.refit(a))
+                .collect()
+        })
+        .collect();
+    let mut informed: Vec<Vec<bool>> = Vec::new();
+    for (k, f) in fits.iter().enumerate() {
+        let mut row = Vec::new();
+        for j in 0..f.terms.len() {
+            let mean = s.iter().map(|r| r[k][j]).sum::<f64>() / replicates.max(1) as f64;
+            row.push(mean > 0.0);
+            for r in s.iter_mut() {
+                r[k][j] = if mean > 0.0 { r[k][j] / mean } else { 1.0 };
+            }
+        }
+        informed.push(row);
+    }
+    let models = s.iter().map(|r| drawn_model(model, &fits, r)).collect();
+    let spread = spread(fitted, &fits, &s, &informed);
+    Ok(Draws { models, spread })
+}
+
+/// Rounds of [`fit_levels`]: each refits with the weights of the previous round's levels.
+const FIT_ROUNDS: usize = 3;
+
+/// The drawn levels (module doc) of `model` refitted jointly to `logs` by the bootstrap's own
+/// estimator (weighted non-negative least squares of the Allan variances on the octave grid from
+/// `tau_min_s`), iteratively reweighted: the weights of each round are those of the previous
+/// round's levels. A level refitted to 0 is removed; a term the model lacks is not added (that
+/// is `diagnose`'s part). With the data it was fitted on, for [`draw_models`]; None when the logs
+/// have no common channel.
+pub fn fit_levels(
+    model: &SensorModel,
+    logs: &[crate::input::LogInput],
+    tau_min_s: f64,
+) -> Option<(SensorModel, FittedOn)> {
+    let fitted = FittedOn::from_logs(logs, tau_min_s)?;
+    let mut current = model.clone();
+    for _ in 0..FIT_ROUNDS {
+        let fits: Vec<ChannelFit> = Channel::ALL
+            .into_iter()
+            .filter_map(|ch| ChannelFit::new(&current, ch, &fitted))
+            .filter(|f| f.terms.len() <= MAX_TERMS)
+            .collect();
+        let s: Vec<Vec<f64>> = fits
+            .iter()
+            .map(|f| {
+                let avar: Vec<Vec<f64>> = logs
+                    .iter()
+                    .enumerate()
+                    .map(|(t, l)| {
+                        let x = l.channels[f.ch.index()].unwrap_or(&[]);
+                        let ms = &f.grid_m[..f.held[t]];
+                        adev_at(x, fitted.sample_interval_s, ms)
+                            .iter()
+                            .map(|a| a * a)
+                            .collect()
+                    })
+                    .collect();
+                f.refit(&avar)
+            })
+            .collect();
+        current = drawn_model(&current, &fits, &s);
+    }
+    Some((current, fitted))
+}
+
+/// The model with every drawn level's square multiplied by its multiplier `s[channel][term]`.
+fn drawn_model(model: &SensorModel, fits: &[ChannelFit], s: &[Vec<f64>]) -> SensorModel {
+    let mut out = model.clone();
+    for (f, mult) in fits.iter().zip(s) {
+        for (&(effect, params), &m) in f.terms.iter().zip(mult) {
+            if m > 0.0 {
+                set_term(&mut out, f.ch, effect, &scaled(params, m));
+            } else {
+                clear_term(&mut out, f.ch, effect);
+            }
+        }
+    }
+    out
+}
+
+/// The spread of every drawn level over the replicates.
+fn spread(
+    fitted: &FittedOn,
+    fits: &[ChannelFit],
+    s: &[Vec<Vec<f64>>],
+    informed: &[Vec<bool>],
+) -> ParameterSpread {
+    let mut levels = BTreeMap::new();
+    for (k, f) in fits.iter().enumerate() {
+        let rows = f
+            .terms
+            .iter()
+            .enumerate()
+            .map(|(j, &(effect, params))| {
+                let (parameter, model) = params.named(effect)[0];
+                let mut v: Vec<f64> = s.iter().map(|r| model * r[k][j].sqrt()).collect();
+                v.sort_by(f64::total_cmp);
+                LevelSpread {
+                    effect,
+                    parameter,
+                    model,
+                    p2_5: stats::quantile(&v, 0.025),
+                    p50: stats::quantile(&v, 0.5),
+                    p97_5: stats::quantile(&v, 0.975),
+                    informed: informed[k][j],
+                }
+            })
+            .collect();
+        levels.insert(f.ch.name(), rows);
+    }
+    ParameterSpread {
+        method: "parametric_bootstrap",
+        fitted_on: fitted.clone(),
+        levels,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// NNLS against a brute-force check: an exact non-negative solution is found, and a column
+    /// whose unconstrained coefficient is negative is set to 0 with the others refitted.
+    #[test]
+    fn nnls_finds_the_constrained_optimum() {
+        let cols = [[1.0, 1.0, 1.0, 1.0], [1.0, 2.0, 3.0, 4.0]];
+        let rows: Vec<Vec<f64>> = (0..4).map(|i| vec![cols[0][i], cols[1][i]]).collect();
+        let y: Vec<f64> = (0..4)
+            .map(|i| 2.0 * cols[0][i] + 0.5 * cols[1][i])
+            .collect();
+        let x = nnls_small(&rows, &y, 2);
+        assert!(
+            (x[0] - 2.0).abs() < 1e-12 && (x[1] - 0.5).abs() < 1e-12,
+            "{x:?}"
+        );
+        // y = 5 - t: the unconstrained slope is negative, so x1 = 0 and x0 = mean(y) = 2.5.
+        let y: Vec<f64> = (0..4).map(|i| 5.0 - cols[1][i]).collect();
+        let x = nnls_small(&rows, &y, 2);
+        assert_eq!(x[1], 0.0);
+        assert!((x[0] - 2.5).abs() < 1e-12, "{x:?}");
+    }
+}

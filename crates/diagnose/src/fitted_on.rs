@@ -1,0 +1,241 @@
+//! What a fitted model's levels were estimated from: the `[fitted_on]` table `imudrift diagnose`
+//! writes at the end of the model it corrects (docs/drift.md, "Parameter uncertainty").
+//!
+//! A model fitted from finite logs is uncertain, and by how much depends on the data it was fitted
+//! on: the logs' sample interval and lengths, the channels they had and the shortest averaging
+//! time used. With those, `drift` re-creates logs like them from the model, refits the levels and
+//! so draws each simulated experiment's levels from their sampling distribution (`bootstrap`).
+//! A model without the table (a datasheet) is taken as exact.
+//!
+//! ```toml
+//! [fitted_on]
+//! sample_interval_s = 0.01
+//! samples = [1000000]
+//! channels = ["gx", "gy", "gz", "ax", "ay", "az"]
+//! tau_min_s = 0.0
+//! ```
+//!
+//! The table is read here, not in the noise crate (which only skips it): it describes data, not
+//! the error model.
+
+use crate::drift::CHANNELS;
+use crate::input::LogInput;
+use serde::{Deserialize, Serialize, Serializer};
+use std::fmt::Write as _;
+
+/// The data a model's levels were fitted on (validated).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FittedOn {
+    /// Sample interval of the logs, s.
+    pub sample_interval_s: f64,
+    /// Samples of each log.
+    pub samples: Vec<usize>,
+    /// Which of gx gy gz ax ay az every log had.
+    #[serde(serialize_with = "channel_names")]
+    pub channels: [bool; 6],
+    /// Shortest averaging time the fit used, s.
+    pub tau_min_s: f64,
+}
+
+fn channel_names<S: Serializer>(channels: &[bool; 6], s: S) -> Result<S::Ok, S::Error> {
+    s.collect_seq((0..6).filter(|&c| channels[c]).map(|c| CHANNELS[c]))
+}
+
+/// The table as written.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawFittedOn {
+    sample_interval_s: f64,
+    samples: Vec<i64>,
+    channels: Vec<String>,
+    tau_min_s: f64,
+}
+
+/// A `[fitted_on]` table that cannot be used; the message names the key and what was expected.
+#[derive(Debug, thiserror::Error)]
+pub enum FittedOnError {
+    #[error("[fitted_on]: {0}")]
+    Syntax(String),
+    #[error("[fitted_on] {key} = {value}: expected {expected}")]
+    Value {
+        key: &'static str,
+        value: String,
+        expected: &'static str,
+    },
+}
+
+/// Shortest log an Allan analysis accepts (as `LogInput::validate`).
+const MIN_SAMPLES: i64 = 64;
+
+impl TryFrom<RawFittedOn> for FittedOn {
+    type Error = FittedOnError;
+
+    fn try_from(raw: RawFittedOn) -> Result<FittedOn, FittedOnError> {
+        let bad = |key, value: String, expected| FittedOnError::Value {
+            key,
+            value,
+            expected,
+        };
+        let dt = raw.sample_interval_s;
+        if !(dt > 0.0 && dt.is_finite()) {
+            return Err(bad(
+                "sample_interval_s",
+                dt.to_string(),
+                "a positive time in seconds",
+            ));
+        }
+        if raw.samples.is_empty() || raw.samples.iter().any(|&n| n < MIN_SAMPLES) {
+            return Err(bad(
+                "samples",
+                format!("{:?}", raw.samples),
+                "one sample count of at least 64 per log",
+            ));
+        }
+        let mut channels = [false; 6];
+        for name in &raw.channels {
+            let c = CHANNELS.iter().position(|c| c == name).ok_or_else(|| {
+                bad(
+                    "channels",
+                    format!("{:?}", raw.channels),
+                    "channel names among gx gy gz ax ay az",
+                )
+            })?;
+            channels[c] = true;
+        }
+        if !channels.contains(&true) {
+            return Err(bad(
+                "channels",
+                "[]".into(),
+                "at least one of gx gy gz ax ay az",
+            ));
+        }
+        if !(raw.tau_min_s >= 0.0 && raw.tau_min_s.is_finite()) {
+            return Err(bad(
+                "tau_min_s",
+                raw.tau_min_s.to_string(),
+                "a time in seconds, 0 or more",
+            ));
+        }
+        Ok(FittedOn {
+            sample_interval_s: dt,
+            samples: raw.samples.iter().map(|&n| n as usize).collect(),
+            channels,
+            tau_min_s: raw.tau_min_s,
+        })
+    }
+}
+
+/// The whole model document, of which only `[fitted_on]` is read here.
+#[derive(Deserialize)]
+struct Document {
+    fitted_on: Option<toml::Value>,
+}
+
+impl FittedOn {
+    /// The data of `logs` (one sample interval: the first log's), the channels every log has.
+    pub fn from_logs(logs: &[LogInput], tau_min_s: f64) -> Option<FittedOn> {
+        let first = logs.first()?;
+        let samples = logs
+            .iter()
+            .map(|l| l.channels.iter().flatten().map(|c| c.len()).min())
+            .collect::<Option<Vec<usize>>>()?;
+        Some(FittedOn {
+            sample_interval_s: first.dt_s,
+            samples,
+            channels: std::array::from_fn(|c| logs.iter().all(|l| l.channels[c].is_some())),
+            tau_min_s,
+        })
+    }
+
+    /// The `[fitted_on]` table of a model's TOML text, if it has one.
+    pub fn from_model_text(text: &str) -> Result<Option<FittedOn>, FittedOnError> {
+        let doc: Document =
+            toml::from_str(text).map_err(|e| FittedOnError::Syntax(e.message().to_string()))?;
+        let Some(table) = doc.fitted_on else {
+            return Ok(None);
+        };
+        let raw: RawFittedOn = table
+            .try_into()
+            .map_err(|e: toml::de::Error| FittedOnError::Syntax(e.message().to_string()))?;
+        FittedOn::try_from(raw).map(Some)
+    }
+
+    /// The table as TOML, to append to a model's text: it starts with an empty line and the
+    /// `[fitted_on]` header (what a reader that wants the model alone cuts at), numbers in their
+    /// shortest exact form.
+    pub fn to_toml(&self) -> String {
+        let mut s = String::from("\n[fitted_on]\n");
+        s.push_str(
+            "# The data the levels above were fitted on: `imudrift drift` draws each simulated\n\
+             # experiment's levels from their sampling distribution on data like this (a parametric\n\
+             # bootstrap, docs/drift.md). Delete this table to take the levels as exact.\n",
+        );
+        let _ = writeln!(s, "sample_interval_s = {:?}", self.sample_interval_s);
+        let samples: Vec<String> = self.samples.iter().map(|n| n.to_string()).collect();
+        let _ = writeln!(s, "samples = [{}]", samples.join(", "));
+        let names: Vec<String> = (0..6)
+            .filter(|&c| self.channels[c])
+            .map(|c| format!("\"{}\"", CHANNELS[c]))
+            .collect();
+        let _ = writeln!(s, "channels = [{}]", names.join(", "));
+        let _ = writeln!(s, "tau_min_s = {:?}", self.tau_min_s);
+        s
+    }
+
+    /// Total duration of the logs, s.
+    pub fn duration_s(&self) -> f64 {
+        self.samples.iter().sum::<usize>() as f64 * self.sample_interval_s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn example() -> FittedOn {
+        FittedOn {
+            sample_interval_s: 0.01,
+            samples: vec![1_000_000, 999_999],
+            channels: [true, true, true, false, false, true],
+            tau_min_s: 0.04,
+        }
+    }
+
+    /// Written and read back exactly, after a model's text (which the table does not disturb).
+    #[test]
+    fn round_trip() {
+        let f = example();
+        let text = format!(
+            "name = \"x\"\n[gyro.all]\nwhite_noise = \"0.1 deg/sqrt(h)\"\n{}",
+            f.to_toml()
+        );
+        assert_eq!(FittedOn::from_model_text(&text).unwrap(), Some(f));
+        let model = noise::SensorModel::from_toml_str(&text, "test").unwrap();
+        assert!(model.axis(noise::Sensor::Gyro, 0).white_noise.is_some());
+        assert_eq!(FittedOn::from_model_text("name = \"x\"\n").unwrap(), None);
+    }
+
+    /// A bad value is an error naming its key.
+    #[test]
+    fn bad_values_name_their_key() {
+        let base = example().to_toml();
+        for (from, to, key) in [
+            (
+                "sample_interval_s = 0.01",
+                "sample_interval_s = -1.0",
+                "sample_interval_s",
+            ),
+            ("samples = [1000000, 999999]", "samples = [10]", "samples"),
+            ("\"az\"", "\"bz\"", "channels"),
+            ("tau_min_s = 0.04", "tau_min_s = -0.5", "tau_min_s"),
+        ] {
+            let text = base.replace(from, to);
+            let e = FittedOn::from_model_text(&text).unwrap_err().to_string();
+            assert!(e.contains(key), "{e}");
+        }
+        let e = FittedOn::from_model_text(&base.replace("tau_min_s", "tau_minimum_s"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("tau_minimum_s"), "{e}");
+    }
+}

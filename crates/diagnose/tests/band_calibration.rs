@@ -1,0 +1,307 @@
+//! End-to-end calibration of the drift band with the fit's uncertainty (docs/drift.md,
+//! "Parameter uncertainty"): logs generated from a known model are diagnosed from a wrong
+//! starting model, and the drift of held-out logs of the same known model must fall inside the
+//! diagnosed model's 95 % band (levels drawn by the parametric bootstrap) about 95 % of the time.
+//! The same check with the diagnosed levels taken as exact is counted beside it.
+//!
+//! Each seed s: one training log (master seed 2 000 000 + s), `held_out` held-out logs (master
+//! seed 3 000 000 + s, runs 0..), `diagnose` from `START` (band seed 11 + s), the drift check of
+//! the held-out logs pooled against the diagnosed model with 39 replicates (seed 5 + s; with 39 the
+//! band is the smallest and largest replicate, 95 % by Wilks' rule).
+//!
+//! Heading, roll and pitch come from the independent channels gz, gx and gy (fitted, simulated and
+//! measured independently), so per horizon they are 3 independent Bernoulli trials per seed:
+//! the count inside is asserted against the binomial distribution of 3 x seeds trials at
+//! p = 0.95 (`binomial_acceptance`). Position and velocity depend on the same channels as roll and
+//! pitch; they are counted and printed, not asserted.
+
+use diagnose::bootstrap::fit_levels;
+use diagnose::drift_check::{check_drift_fitted, CheckSettings, DriftCheck, Verdict};
+use diagnose::fitted_on::FittedOn;
+use diagnose::protocol::Protocol;
+use diagnose::simulate::{static_log, SimSetup};
+use diagnose::{diagnose, LogInput, Settings};
+use noise::SensorModel;
+use rayon::prelude::*;
+
+/// The known model: gyro white noise, flicker bias instability and rate random walk (white meets
+/// the flicker plateau at about 30 s); accelerometer white noise and flicker.
+const TRUTH: &str = r#"
+name = "truth"
+[gyro.all]
+white_noise = "0.3 deg/sqrt(h)"
+bias_instability = "5 deg/h"
+rate_random_walk = "3 deg/h/sqrt(h)"
+turn_on_bias = "50 deg/h"
+[accel.all]
+white_noise = "60 ug/sqrt(Hz)"
+bias_instability = "30 ug"
+turn_on_bias = "2 mg"
+"#;
+
+/// Where the fit starts: the truth's terms at wrong levels (white noise twice the truth's, bias
+/// instability 0.4 times, gyro rate random walk a third): a datasheet wrong in every level.
+const START: &str = r#"
+name = "start"
+[gyro.all]
+white_noise = "0.6 deg/sqrt(h)"
+bias_instability = "2 deg/h"
+rate_random_walk = "1 deg/h/sqrt(h)"
+turn_on_bias = "50 deg/h"
+[accel.all]
+white_noise = "120 ug/sqrt(Hz)"
+bias_instability = "12 ug"
+turn_on_bias = "2 mg"
+"#;
+
+/// Quantities asserted (independent channels) and all of them.
+const ATTITUDE: [&str; 3] = ["heading_rad", "roll_rad", "pitch_rad"];
+
+/// How the training log is fitted.
+#[derive(Clone, Copy)]
+enum Fit {
+    /// The levels of `START`'s terms refitted jointly (`bootstrap::fit_levels`, the bootstrap's own
+    /// estimator): the band's method checked on a fit of the kind it assumes.
+    Levels,
+    /// The whole `diagnose` workflow from `START` (its own choice of terms).
+    Diagnose,
+}
+
+/// One experiment's shape.
+struct Design {
+    fit: Fit,
+    /// Also check with the levels taken as exact (the contrast in docs/drift.md).
+    compare_exact: bool,
+    seeds: u64,
+    dt_s: f64,
+    train_samples: usize,
+    held_out: usize,
+    held_samples: usize,
+    protocol: Protocol,
+}
+
+/// Per horizon: (horizon, attitude inside with bootstrap, attitude inside exact, all five inside
+/// with bootstrap, all five inside exact, attitude trials, all trials).
+type Row = (f64, usize, usize, usize, usize, usize, usize);
+
+fn log_of(model: &SensorModel, dt_s: f64, samples: usize, seed: u64, run: u64) -> [Vec<f64>; 6] {
+    let setup = SimSetup {
+        dt_s,
+        samples,
+        grid_m: Vec::new(),
+        active: [true; 6],
+        horizons_s: Vec::new(),
+        temperature_c: None,
+        temp_coeff: [0.0; 6],
+    };
+    static_log(model, &setup, seed, run)
+}
+
+fn input(dt_s: f64, log: &[Vec<f64>; 6]) -> LogInput<'_> {
+    LogInput {
+        dt_s,
+        channels: std::array::from_fn(|c| Some(log[c].as_slice())),
+        temperature_c: None,
+    }
+}
+
+/// One seed: the drift checks of the held-out logs against the diagnosed model, with its levels
+/// drawn and taken as exact.
+fn one_seed(d: &Design, s: u64) -> (DriftCheck, Option<DriftCheck>) {
+    let truth = SensorModel::from_toml_str(TRUTH, "truth.toml").unwrap();
+    let start = SensorModel::from_toml_str(START, "start.toml").unwrap();
+    let train = log_of(&truth, d.dt_s, d.train_samples, 2_000_000 + s, 0);
+    let train_input = input(d.dt_s, &train);
+    let (model, fitted) = match d.fit {
+        Fit::Levels => fit_levels(&start, &[train_input], 0.0).unwrap(),
+        Fit::Diagnose => {
+            let settings = Settings {
+                seed: 11 + s,
+                horizons_s: Vec::new(),
+                ..Settings::default()
+            };
+            let diagnosis = diagnose(&train_input, &start, &settings).unwrap();
+            let fitted = FittedOn::from_logs(&[train_input], settings.tau_min_s).unwrap();
+            (diagnosis.model_final, fitted)
+        }
+    };
+    let held: Vec<[Vec<f64>; 6]> = (0..d.held_out as u64)
+        .map(|l| log_of(&truth, d.dt_s, d.held_samples, 3_000_000 + s, l))
+        .collect();
+    let inputs: Vec<LogInput> = held.iter().map(|h| input(d.dt_s, h)).collect();
+    let check = CheckSettings {
+        protocol: d.protocol.clone(),
+        replicates: 39,
+        seed: 5 + s,
+    };
+    let drawn = check_drift_fitted(&inputs, &model, Some(&fitted), &check, &()).unwrap();
+    let exact = d
+        .compare_exact
+        .then(|| check_drift_fitted(&inputs, &model, None, &check, &()).unwrap());
+    (drawn, exact)
+}
+
+fn coverage(d: &Design) -> Vec<Row> {
+    let checks: Vec<(DriftCheck, Option<DriftCheck>)> = (0..d.seeds)
+        .into_par_iter()
+        .map(|s| one_seed(d, s))
+        .collect();
+    let mut rows: Vec<Row> = d
+        .protocol
+        .horizons_s
+        .iter()
+        .map(|&h| (h, 0, 0, 0, 0, 0, 0))
+        .collect();
+    for (drawn, exact) in &checks {
+        for (hi, row) in rows.iter_mut().enumerate() {
+            for (name, q) in &drawn.horizons[hi].channels {
+                assert_ne!(q.verdict, Verdict::NotInformed, "{name}");
+                let a = ATTITUDE.contains(name);
+                let inside_drawn = q.verdict == Verdict::Inside;
+                let inside_exact = exact
+                    .as_ref()
+                    .is_some_and(|e| e.horizons[hi].channels[name].verdict == Verdict::Inside);
+                row.1 += usize::from(a && inside_drawn);
+                row.2 += usize::from(a && inside_exact);
+                row.3 += usize::from(inside_drawn);
+                row.4 += usize::from(inside_exact);
+                row.5 += usize::from(a);
+                row.6 += 1;
+            }
+        }
+    }
+    for &(h, ad, ae, d5, e5, na, n5) in &rows {
+        let pct = |k: usize, n: usize| 100.0 * k as f64 / n as f64;
+        println!(
+            "{h} s: attitude {ad}/{na} ({:.1} %) drawn, {ae}/{na} ({:.1} %) exact; all five {d5}/{n5} ({:.1} %) drawn, {e5}/{n5} ({:.1} %) exact",
+            pct(ad, na),
+            pct(ae, na),
+            pct(d5, n5),
+            pct(e5, n5)
+        );
+    }
+    rows
+}
+
+/// The accepted counts of n Bernoulli trials at p = 0.95: the largest [lo, hi] with
+/// P(K < lo) <= alpha / 2 and P(K > hi) <= alpha / 2 under the binomial distribution (exact pmf,
+/// by the recurrence pmf(k + 1) = pmf(k) (n - k) / (k + 1) p / (1 - p)).
+fn binomial_acceptance(n: usize, alpha: f64) -> (usize, usize) {
+    let p: f64 = 0.95;
+    let mut pmf = vec![0.0; n + 1];
+    pmf[0] = (1.0 - p).powi(n as i32);
+    for k in 0..n {
+        pmf[k + 1] = pmf[k] * (n - k) as f64 / (k + 1) as f64 * p / (1.0 - p);
+    }
+    let mut lo = 0;
+    let mut tail = 0.0;
+    while tail + pmf[lo] <= alpha / 2.0 {
+        tail += pmf[lo];
+        lo += 1;
+    }
+    let mut hi = n;
+    let mut tail = 0.0;
+    while tail + pmf[hi] <= alpha / 2.0 {
+        tail += pmf[hi];
+        hi -= 1;
+    }
+    (lo, hi)
+}
+
+/// False-alarm rate of each assertion (two-sided, per horizon).
+const ALPHA: f64 = 1e-3;
+
+fn assert_calibrated(rows: &[Row]) {
+    for &(h, inside, _, _, _, n, _) in rows {
+        let (lo, hi) = binomial_acceptance(n, ALPHA);
+        assert!(
+            (lo..=hi).contains(&inside),
+            "{h} s: {inside}/{n} attitude verdicts inside, accepted {lo}..={hi}"
+        );
+    }
+}
+
+/// The CI version: 40 seeds, a 2 h training log and three 2 h held-out logs at 10 Hz, horizons
+/// 60 s and 10 min; 120 attitude trials per horizon, accepted 106..=120 at ALPHA.
+#[test]
+fn held_out_drift_falls_inside_the_band_with_the_fit_uncertainty() {
+    let design = Design {
+        fit: Fit::Levels,
+        compare_exact: false,
+        seeds: std::env::var("BAND_SEEDS").map_or(40, |v| v.parse().unwrap()),
+        dt_s: 0.1,
+        train_samples: 72_000,
+        held_out: 3,
+        held_samples: 72_000,
+        protocol: Protocol {
+            horizons_s: vec![60.0, 600.0],
+            ..Protocol::default()
+        },
+    };
+    assert_calibrated(&coverage(&design));
+}
+
+/// The documented figure (docs/drift.md): 200 seeds, the same logs, horizons 10 s, 60 s, 10 min
+/// and 1 h. Run with `cargo test --release -p imudrift-diagnose --test band_calibration --
+/// --ignored --nocapture`.
+#[test]
+#[ignore = "long: the documented calibration figure"]
+fn calibration_figure() {
+    let design = Design {
+        fit: Fit::Levels,
+        compare_exact: true,
+        seeds: std::env::var("BAND_SEEDS").map_or(200, |v| v.parse().unwrap()),
+        dt_s: 0.1,
+        train_samples: 72_000,
+        held_out: 3,
+        held_samples: 72_000,
+        protocol: Protocol {
+            horizons_s: vec![10.0, 60.0, 600.0, 3600.0],
+            ..Protocol::default()
+        },
+    };
+    assert_calibrated(&coverage(&design));
+}
+
+#[test]
+fn binomial_acceptance_matches_a_direct_sum() {
+    // n = 120, p = 0.95: P(K > 119) = 0.95^120 = 2.1e-3 > 5e-4, so hi = 120; the lower bound
+    // leaves at most 5e-4 below it.
+    let (lo, hi) = binomial_acceptance(120, ALPHA);
+    assert_eq!(hi, 120);
+    let pmf = |k: u64| {
+        let mut c = 1.0f64;
+        for i in 0..k {
+            c *= (120 - i) as f64 / (i + 1) as f64;
+        }
+        c * 0.95f64.powi(k as i32) * 0.05f64.powi(120 - k as i32)
+    };
+    let below: f64 = (0..lo as u64).map(pmf).sum();
+    assert!(
+        below <= ALPHA / 2.0 && below + pmf(lo as u64) > ALPHA / 2.0,
+        "{lo} {below}"
+    );
+}
+
+/// The same with `diagnose`'s whole workflow as the fit (its own choice of terms from `START`):
+/// printed for docs/drift.md, not asserted (the band can hold the levels' uncertainty, not a
+/// wrong choice of terms). Run with `cargo test --release -p imudrift-diagnose --test
+/// band_calibration diagnosed -- --ignored --nocapture`.
+#[test]
+#[ignore = "long: a figure for docs/drift.md"]
+fn diagnosed_coverage_figure() {
+    let design = Design {
+        fit: Fit::Diagnose,
+        compare_exact: true,
+        seeds: std::env::var("BAND_SEEDS").map_or(40, |v| v.parse().unwrap()),
+        dt_s: 0.1,
+        train_samples: 72_000,
+        held_out: 3,
+        held_samples: 72_000,
+        protocol: Protocol {
+            horizons_s: vec![60.0, 600.0],
+            ..Protocol::default()
+        },
+    };
+    coverage(&design);
+}
