@@ -608,6 +608,51 @@ fn json_document(
     serde_json::to_string_pretty(&v).context("cannot serialise the diagnosis")
 }
 
+/// The runs' section of report.md (several runs): each run's gaps and step-0 findings.
+fn runs_markdown(result: &Diagnosis) -> String {
+    let mut s = String::new();
+    if result.runs.is_empty() {
+        return s;
+    }
+    let _ = writeln!(
+        s,
+        "\n## Runs\n\nThe logs are runs of one sensor fitted together: the table above is of their pooled Allan variances. Each run's gap against one log of the original model -> of the corrected model, and what the time-domain detectors found in it.\n"
+    );
+    let _ = writeln!(s, "| run | samples | {} | found |", CHANNELS.join(" | "));
+    let _ = writeln!(s, "|---|---|{}---|", "---|".repeat(CHANNELS.len()));
+    for (i, run) in result.runs.iter().enumerate() {
+        let cells: Vec<String> = CHANNELS
+            .iter()
+            .map(|ch| {
+                run.channels.get(*ch).map_or("-".into(), |c| {
+                    format!("{:.2} -> {:.2}", c.gap_initial, c.gap_final)
+                })
+            })
+            .collect();
+        let found: Vec<String> = run
+            .findings
+            .iter()
+            .flat_map(|(ch, f)| {
+                f.iter()
+                    .map(move |e| format!("{ch}: {} {}", e.effect, params_text(e, ch)))
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} |",
+            i + 1,
+            run.samples,
+            cells.join(" | "),
+            if found.is_empty() {
+                "-".into()
+            } else {
+                found.join("<br>")
+            }
+        );
+    }
+    s
+}
+
 fn markdown_report(
     result: &Diagnosis,
     log: &str,
@@ -659,44 +704,7 @@ fn markdown_report(
             r.verdict
         );
     }
-    if !result.runs.is_empty() {
-        let _ = writeln!(
-            s,
-            "\n## Runs\n\nThe logs are runs of one sensor fitted together: the table above is of their pooled Allan variances. Each run's gap against one log of the original model -> of the corrected model, and what the time-domain detectors found in it.\n"
-        );
-        let _ = writeln!(s, "| run | samples | {} | found |", CHANNELS.join(" | "));
-        let _ = writeln!(s, "|---|---|{}---|", "---|".repeat(CHANNELS.len()));
-        for (i, run) in result.runs.iter().enumerate() {
-            let cells: Vec<String> = CHANNELS
-                .iter()
-                .map(|ch| {
-                    run.channels.get(*ch).map_or("-".into(), |c| {
-                        format!("{:.2} -> {:.2}", c.gap_initial, c.gap_final)
-                    })
-                })
-                .collect();
-            let found: Vec<String> = run
-                .findings
-                .iter()
-                .flat_map(|(ch, f)| {
-                    f.iter()
-                        .map(move |e| format!("{ch}: {} {}", e.effect, params_text(e, ch)))
-                })
-                .collect();
-            let _ = writeln!(
-                s,
-                "| {} | {} | {} | {} |",
-                i + 1,
-                run.samples,
-                cells.join(" | "),
-                if found.is_empty() {
-                    "-".into()
-                } else {
-                    found.join("<br>")
-                }
-            );
-        }
-    }
+    s.push_str(&runs_markdown(result));
     if !checks.is_empty() {
         let _ = writeln!(
             s,

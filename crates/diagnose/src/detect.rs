@@ -737,6 +737,8 @@ pub struct Preprocessed {
     pub findings: [Vec<Finding>; 6],
     /// The broad spectral peak of each corrected channel (a resonance's frequency and bandwidth).
     pub peaks: [Option<crate::spectrum::SpectralPeak>; 6],
+    /// The spectral lines of each corrected channel (`spectrum::spectral_lines_runs`), Hz.
+    pub lines: [Vec<f64>; 6],
 }
 
 /// At least this many outliers are needed to name them (the threshold admits 0.01 false ones per log).
@@ -766,12 +768,14 @@ pub fn preprocess(
         channels: Default::default(),
         findings: Default::default(),
         peaks: Default::default(),
+        lines: Default::default(),
     };
     for (c, d) in per.into_iter().enumerate() {
         if let Some(d) = d {
             out.channels[c] = Some(d.corrected);
             out.findings[c] = d.findings;
             out.peaks[c] = d.peak;
+            out.lines[c] = d.lines;
         }
     }
     out
@@ -782,6 +786,7 @@ struct Detected {
     corrected: Vec<f64>,
     findings: Vec<Finding>,
     peak: Option<crate::spectrum::SpectralPeak>,
+    lines: Vec<f64>,
 }
 
 /// The detectors of [`preprocess`] on one channel, each on what the one before left.
@@ -811,10 +816,12 @@ fn detect_channel(
         findings.push(f);
     }
     let peak = crate::spectrum::broad_peak(&x, dt_s);
+    let lines = crate::spectrum::spectral_lines_runs(&[&x], dt_s);
     Detected {
         corrected: x,
         findings,
         peak,
+        lines,
     }
 }
 

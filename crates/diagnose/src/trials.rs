@@ -31,8 +31,10 @@ pub(crate) struct ChannelFit<'a> {
     pub(crate) ramp_slope: f64,
     /// The log's broad spectral peak: where a resonance is searched and no sinusoid is offered.
     pub(crate) peak: Option<SpectralPeak>,
-    /// Whether a new sinusoid at a frequency would sit on a spectral line (`detect::line_allowed`).
-    pub(crate) line_allowed: &'a dyn Fn(f64) -> bool,
+    /// The log's spectral lines (`spectrum::spectral_lines_runs`), Hz, and the resolution below 6
+    /// times which its spectrum cannot show one (None: too short for a spectrum).
+    pub(crate) lines: &'a [f64],
+    pub(crate) line_resolution_hz: Option<f64>,
 }
 
 /// A fitted candidate before selection.
@@ -134,9 +136,8 @@ pub(crate) fn trials(input: &ChannelFit) -> Vec<Trial> {
 }
 
 /// A Gauss-Markov process or a sinusoid. A term the model has keeps its shape (a wrong level); an
-/// absent one is searched over shapes. A sinusoid is not offered inside a broad spectral peak: the
-/// spectrum shows the power there spread over many resolutions, not a line (the resonance
-/// candidate describes it).
+/// absent one is searched over shapes. A new sinusoid takes its frequency from a line of the log's
+/// spectrum where the spectrum resolves one (`sinusoid_shapes`).
 fn fit_shaped(
     input: &ChannelFit,
     data: &FitData,
@@ -145,16 +146,13 @@ fn fit_shaped(
 ) -> Option<Fitted> {
     let (tau, dt_s) = (&input.measured.tau_s, input.dt_s);
     let m = tau.len();
-    let shapes = match current.and_then(|c| c.shape()) {
-        Some(s) => vec![s],
+    let (shapes, penalty, from_lines) = match current.and_then(|c| c.shape()) {
+        Some(s) => (vec![s], 0.0, false),
+        None if effect == Effect::Sinusoidal => sinusoid_shapes(input, data)?,
         None => {
-            let mut g = shape_grid(effect, tau[0], tau[m - 1], dt_s);
-            if effect == Effect::Sinusoidal {
-                if let Some(p) = input.peak {
-                    g.retain(|&f| !p.covers(f));
-                }
-            }
-            g
+            let g = shape_grid(effect, tau[0], tau[m - 1], dt_s);
+            let penalty = shape_search_penalty(g.len());
+            (g, penalty, false)
         }
     };
     let sigs: Vec<Vec<f64>> = shapes
@@ -167,11 +165,6 @@ fn fit_shaped(
         .collect();
     let c0 = current.map(|c| c.c()).unwrap_or(0.0);
     let ff = fit_family(data, &shapes, &sigs, &|_| c0)?;
-    // A new sinusoid must sit on a spectral line where the spectrum can show one
-    // (`detect::line_allowed`): one that does not would only fill a gap as a stand-in.
-    if effect == Effect::Sinusoidal && current.is_none() && !(input.line_allowed)(ff.shape) {
-        return None;
-    }
     let j = shapes.iter().position(|&s| s == ff.shape).unwrap_or(0);
     let params = match effect {
         Effect::GaussMarkov => TermParams::GaussMarkov {
@@ -183,16 +176,65 @@ fn fit_shaped(
             frequency_hz: ff.shape,
         },
     };
-    // Shape interval at the 95 % threshold widened by this fit's Birge ratio.
+    // Shape interval at the 95 % threshold widened by this fit's Birge ratio; a line's frequency
+    // is the spectrum's, known to half its resolution.
     let scale = birge_scale(ff.fit.chi2, free_parameters(effect), m);
-    let (shape_lo, shape_hi) = ff.shape_interval(CHI2_1_95 * scale * scale);
+    let (shape_lo, shape_hi) = match (from_lines, input.line_resolution_hz) {
+        (true, Some(df)) => (ff.shape - 0.5 * df, ff.shape + 0.5 * df),
+        _ => ff.shape_interval(CHI2_1_95 * scale * scale),
+    };
     Some(Fitted {
         fit: ff.fit,
         params,
         shape: ShapeInterval::Scalar(shape_lo, shape_hi),
         signature: sigs[j].clone(),
-        penalty: shape_search_penalty(shapes.len()),
+        penalty,
     })
+}
+
+/// The frequencies a new sinusoid is tried at, the look-elsewhere cost of the choice, and whether
+/// they are the spectrum's lines. Where the log's spectrum resolves a line (from 6 of its
+/// resolutions up), a tone is a line of the spectrum: its frequency is the line's
+/// (`spectrum::spectral_lines_runs`), only the amplitude is fitted, at a cost of 2 ln of the
+/// number of lines chosen from. Below that the Allan grid is searched (`shape_grid`, with its own
+/// cost); no line and nothing below the resolution: no sinusoid. Neither inside a broad spectral
+/// peak: the spectrum shows the power there spread over many resolutions, not a line (the
+/// resonance candidate describes it).
+fn sinusoid_shapes(input: &ChannelFit, data: &FitData) -> Option<(Vec<f64>, f64, bool)> {
+    let (tau, dt_s) = (&input.measured.tau_s, input.dt_s);
+    let outside_peak = |f: &f64| input.peak.is_none_or(|p| !p.covers(*f));
+    let lines: Vec<f64> = input.lines.iter().copied().filter(outside_peak).collect();
+    let mut grid = shape_grid(Effect::Sinusoidal, tau[0], tau[tau.len() - 1], dt_s);
+    grid.retain(outside_peak);
+    if let Some(df) = input.line_resolution_hz {
+        grid.retain(|&f| f < 6.0 * df);
+    }
+    // The grid below the resolution and the lines are two searches: the better by BIC is offered.
+    let line_cost = shape_search_penalty(lines.len());
+    let grid_cost = shape_search_penalty(grid.len());
+    match (lines.is_empty(), grid.is_empty()) {
+        (true, true) => None,
+        (false, true) => Some((lines, line_cost, true)),
+        (true, false) => Some((grid, grid_cost, false)),
+        (false, false) => {
+            let best = |shapes: &[f64]| {
+                let sigs: Vec<Vec<f64>> = shapes
+                    .iter()
+                    .map(|&f| {
+                        tau.iter()
+                            .map(|&t| unit_family_signature(Effect::Sinusoidal, f, t, dt_s))
+                            .collect()
+                    })
+                    .collect();
+                fit_family(data, shapes, &sigs, &|_| 0.0).map_or(f64::INFINITY, |f| f.fit.chi2)
+            };
+            if best(&lines) + line_cost <= best(&grid) + grid_cost {
+                Some((lines, line_cost, true))
+            } else {
+                Some((grid, grid_cost, false))
+            }
+        }
+    }
 }
 
 /// A resonance. One the model has is refitted around its shape (the other terms it was fitted

@@ -26,8 +26,7 @@ use crate::simulate::{simulate_runs, RunPlan, SimResult, SimSetup};
 use crate::spectrum::SpectralPeak;
 use crate::trials::{trials, ChannelFit, Trial};
 use noise::{Channel, Effect, ImuChannels, SensorModel};
-use std::cell::RefCell;
-use std::collections::{BTreeMap, HashMap};
+use std::collections::BTreeMap;
 
 pub use crate::findings::STAND_IN_GAP;
 
@@ -154,8 +153,9 @@ struct Run<'a> {
     run_raw: Vec<ImuChannels<Option<Measured>>>,
     /// Least-squares slope of each corrected channel against time (the rate-ramp level, see `trials`).
     ramp_slope: ImuChannels<f64>,
-    /// The broad spectral peak of each channel (over all runs' segments).
+    /// The broad spectral peak and the spectral lines of each channel (over all runs' segments).
     peaks: [Option<SpectralPeak>; 6],
+    lines: [Vec<f64>; 6],
     setup: SimSetup<'a>,
     plan: RunPlan,
     /// The model simulated (step 0's terms left out: their effects are removed from the log) and the
@@ -171,9 +171,6 @@ struct Run<'a> {
     last_drift: Vec<SegmentDrift>,
     dirty: bool,
     channels: ImuChannels<ChannelState>,
-    /// Spectral-line checks by (channel, frequency): the same best sinusoid frequency recurs over the
-    /// steps and rounds, and each check is a Welch DFT over the whole log.
-    line_checks: RefCell<HashMap<(Channel, u64), bool>>,
     rounds: usize,
 }
 
@@ -201,15 +198,20 @@ impl<'a> Run<'a> {
         };
         let sim0 = Self::band(model, &setup, &plan, s.settings, s.observer)?;
         let logs = s.logs;
-        let peaks = if logs.len() == 1 {
-            s.pre[0].peaks
+        let (peaks, lines) = if logs.len() == 1 {
+            (s.pre[0].peaks, s.pre[0].lines.clone())
         } else {
-            std::array::from_fn(|c| {
-                let xs: Vec<&[f64]> = logs.iter().filter_map(|l| l.channels[c]).collect();
-                (!xs.is_empty())
-                    .then(|| crate::spectrum::broad_peak_runs(&xs, first.dt_s))
-                    .flatten()
-            })
+            let xs =
+                |c: usize| -> Vec<&[f64]> { logs.iter().filter_map(|l| l.channels[c]).collect() };
+            (
+                std::array::from_fn(|c| {
+                    let xs = xs(c);
+                    (!xs.is_empty())
+                        .then(|| crate::spectrum::broad_peak_runs(&xs, first.dt_s))
+                        .flatten()
+                }),
+                std::array::from_fn(|c| crate::spectrum::spectral_lines_runs(&xs(c), first.dt_s)),
+            )
         };
         let several = logs.len() > 1;
         let mut run = Run {
@@ -223,6 +225,7 @@ impl<'a> Run<'a> {
             run_raw: if several { raw.runs } else { Vec::new() },
             ramp_slope: ImuChannels::from_fn(|c| crate::runs::ramp_slope(&logs, c.index())),
             peaks,
+            lines,
             logs,
             sim_model: model.clone(),
             out_model: model.clone(),
@@ -232,7 +235,6 @@ impl<'a> Run<'a> {
             sim0,
             dirty: false,
             channels: ImuChannels::default(),
-            line_checks: RefCell::default(),
             rounds: 0,
             setup,
             plan,
@@ -387,16 +389,6 @@ impl<'a> Run<'a> {
     /// Step 4: every candidate fitted to channel `c`'s gap against `band`.
     fn candidates(&self, c: Channel, curve: &Curve, band: &Band, g: &Gap) -> Vec<Trial> {
         let dt_s = self.dt_s();
-        let xs = self.series(c);
-        let line_allowed = |f: f64| {
-            *self
-                .line_checks
-                .borrow_mut()
-                .entry((c, f.to_bits()))
-                .or_insert_with(|| {
-                    xs.is_empty() || crate::spectrum::line_allowed_runs(&xs, dt_s, f)
-                })
-        };
         trials(&ChannelFit {
             model: &self.sim_model,
             channel: c,
@@ -406,7 +398,8 @@ impl<'a> Run<'a> {
             dt_s,
             ramp_slope: self.ramp_slope[c],
             peak: self.peaks[c.index()],
-            line_allowed: &line_allowed,
+            lines: &self.lines[c.index()],
+            line_resolution_hz: crate::spectrum::line_resolution_hz(&self.series(c), dt_s),
         })
     }
 
