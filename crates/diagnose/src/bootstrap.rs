@@ -278,7 +278,7 @@ fn nnls_small(rows: &[Vec<f64>], y: &[f64], k: usize) -> Vec<f64> {
             continue;
         };
         let x = chol.solve(&(g.transpose() * &yv));
-        if x.iter().any(|&v| !(v >= 0.0)) {
+        if x.iter().any(|&v| v.is_nan() || v < 0.0) {
             continue;
         }
         let sse = (&g * &x - &yv).norm_squared();
