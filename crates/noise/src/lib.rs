@@ -20,22 +20,30 @@ mod effect;
 pub mod fft;
 pub mod filter;
 mod model;
+mod model_error;
 pub mod noise_file;
 pub mod process;
 mod static_level;
+mod temperature;
+pub mod terms;
 pub mod units;
 mod ziggurat;
 
 pub use channel::{Channel, ImuChannels, AXIS_NAMES};
 pub use config::{is_noise_file_text, utf8_text, ConfigError, UnitStyle};
 pub use effect::{Effect, FilterError, Sensor, TermFilter};
-pub use filter::{FilterKind, Outliers, OutputFilter, WarmupTransient};
-pub use model::{
-    AxisModel, BiasInstability, Flicker, GaussMarkov, ModelError, Resonance, SensorModel, Sinusoid,
-    TemperatureProfile, Term, TriadModel,
-};
+pub use model::{AxisModel, SensorModel, Term, TriadModel};
+pub use model_error::ModelError;
 pub use process::{ChannelErrors, ImuErrors, CHANNEL_NAMES};
 pub use static_level::StaticLevel;
+pub use temperature::TemperatureProfile;
+pub use terms::bias_instability::{BiasInstability, Flicker};
+pub use terms::gauss_markov::GaussMarkov;
+pub use terms::outliers::Outliers;
+pub use terms::output_filter::{FilterKind, OutputFilter, MAX_RESPONSE};
+pub use terms::resonance::Resonance;
+pub use terms::sinusoidal::Sinusoid;
+pub use terms::warmup_transient::WarmupTransient;
 
 use rand::SeedableRng;
 

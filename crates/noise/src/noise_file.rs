@@ -13,7 +13,8 @@
 //! values. One value per sensor: these tools take no per-axis values, so the largest of the three
 //! axes is written (the worst axis, stated in the file) and each axis is given in a comment.
 
-use crate::model::{AxisModel, SensorModel, TemperatureProfile, TriadModel};
+use crate::model::{AxisModel, SensorModel, TriadModel};
+use crate::temperature::TemperatureProfile;
 use std::fmt::Write as _;
 
 /// Which tool's keys.

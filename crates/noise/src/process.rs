@@ -3,7 +3,9 @@
 //! The discrete processes take their RNG as an argument; `ChannelErrors` pairs each with its sub-stream.
 
 use crate::effect::{Effect, Sensor};
-use crate::model::{BiasInstability, SensorModel, TemperatureProfile};
+use crate::model::SensorModel;
+use crate::temperature::TemperatureProfile;
+use crate::terms::bias_instability::BiasInstability;
 use crate::{calibration_rng, term_rng, ImuRng};
 use nalgebra::Vector3;
 use rand::Rng;
@@ -313,7 +315,11 @@ pub struct Resonator {
 }
 
 impl Resonator {
-    pub fn new<R: Rng + ?Sized>(r: &crate::model::Resonance, dt_s: f64, rng: &mut R) -> Resonator {
+    pub fn new<R: Rng + ?Sized>(
+        r: &crate::terms::resonance::Resonance,
+        dt_s: f64,
+        rng: &mut R,
+    ) -> Resonator {
         let w0 = std::f64::consts::TAU * r.frequency_hz;
         let zeta = r.damping();
         let a = zeta * w0;
@@ -778,7 +784,7 @@ struct FilterState {
 }
 
 impl FilterState {
-    fn new(f: &crate::filter::OutputFilter, dt_s: f64) -> FilterState {
+    fn new(f: &crate::terms::output_filter::OutputFilter, dt_s: f64) -> FilterState {
         let h = f.impulse_response(dt_s);
         let iir = f.recursion(dt_s).map(|(b, a)| {
             let (nb, na) = (b.len(), a.len());
@@ -893,7 +899,7 @@ impl OutlierState {
 }
 
 /// A model that cannot run at a sample rate: an axis whose output filter does not fit the rate
-/// ([`crate::filter::OutputFilter::check_rate`]).
+/// ([`crate::OutputFilter::check_rate`]).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[error("{axis}.output_filter at {rate_hz} Hz output, decimation {decimation} ({internal_hz} Hz internal): {error}")]
 pub struct RateError {
@@ -902,7 +908,7 @@ pub struct RateError {
     pub rate_hz: f64,
     pub decimation: u32,
     pub internal_hz: f64,
-    pub error: crate::model::ModelError,
+    pub error: crate::model_error::ModelError,
 }
 
 /// Per-run error state of a whole IMU: six channels (gx gy gz ax ay az).
@@ -915,7 +921,7 @@ pub struct ImuErrors {
 
 impl ImuErrors {
     /// Can `model` run at sample interval `dt_s`? Every output filter's cutoff must lie below its
-    /// internal Nyquist frequency and its response fit [`crate::filter::MAX_RESPONSE`] internal
+    /// internal Nyquist frequency and its response fit [`crate::MAX_RESPONSE`] internal
     /// samples. Check before [`ImuErrors::new`]: a filter that fails gives meaningless values.
     pub fn check_rate(model: &SensorModel, dt_s: f64) -> Result<(), RateError> {
         for sensor in Sensor::ALL {

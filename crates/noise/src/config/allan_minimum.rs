@@ -3,6 +3,7 @@
 
 use crate::closed_form as cf;
 use crate::model::*;
+use crate::terms::bias_instability::{BiasInstability, Flicker};
 
 /// Log-spaced averaging times inside the flicker band's plateau, [30 tau_min, tau_max / 30], where the
 /// component sum is within 1.3 % of 0.664 B (`Flicker::per_decade`); nearer the band edges it falls off

@@ -2,11 +2,18 @@
 //! file, line, key and what was expected.
 
 use super::allan_minimum::solve_b_for_minimum;
+use super::error::ConfigError;
 use super::raw::*;
-use super::ConfigError;
 use crate::effect::Sensor;
-use crate::filter::{FilterKind, Outliers, OutputFilter, WarmupTransient, MAX_RESPONSE};
 use crate::model::*;
+use crate::temperature::TemperatureProfile;
+use crate::terms::bias_instability::{BiasInstability, Flicker};
+use crate::terms::gauss_markov::GaussMarkov;
+use crate::terms::outliers::Outliers;
+use crate::terms::output_filter::{FilterKind, OutputFilter, MAX_RESPONSE};
+use crate::terms::resonance::Resonance;
+use crate::terms::sinusoidal::Sinusoid;
+use crate::terms::warmup_transient::WarmupTransient;
 use crate::units::{parse_quantity, unit_part, Quantity, Signal};
 use crate::AXIS_NAMES;
 

@@ -3,7 +3,11 @@
 use super::allan_minimum::model_adev_minimum;
 use super::*;
 use crate::closed_form as cf;
-use crate::filter::{FilterKind, Outliers, OutputFilter, WarmupTransient};
+use crate::temperature::TemperatureProfile;
+use crate::terms::bias_instability::BiasInstability;
+use crate::terms::outliers::Outliers;
+use crate::terms::output_filter::{FilterKind, OutputFilter};
+use crate::terms::warmup_transient::WarmupTransient;
 
 const BASIC: &str = r#"
 name = "test"

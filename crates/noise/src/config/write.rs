@@ -2,8 +2,10 @@
 
 use super::signal_of;
 use crate::effect::Sensor;
-use crate::filter::FilterKind;
 use crate::model::*;
+use crate::temperature::TemperatureProfile;
+use crate::terms::bias_instability::BiasInstability;
+use crate::terms::output_filter::FilterKind;
 use crate::units::{format_si, Quantity, Signal};
 use crate::AXIS_NAMES;
 use std::fmt::Write as _;
