@@ -486,10 +486,13 @@ fn model_noise_values(result: &Diagnosis, c: usize) -> Option<(AxisValue, AxisVa
     let (sensor, axis) = diagnose::model_terms::channel_axis(c);
     let a = result.model_final.axis(sensor, axis);
     let n = AxisValue {
-        value: a.white_noise?,
+        value: a.get::<noise::WhiteNoise>()?.density(),
         how: "corrected model".into(),
     };
-    let k = match a.rate_random_walk {
+    let k = match a
+        .get::<noise::RateRandomWalk>()
+        .map(noise::RateRandomWalk::density)
+    {
         Some(k) => AxisValue {
             value: k,
             how: "corrected model".into(),

@@ -132,7 +132,7 @@ fn likely_cause(
                 .filter(|&&c| {
                     let (sensor, axis) = crate::model_terms::channel_axis(c);
                     let a = model.axis(sensor, axis);
-                    a.sinusoidal.is_some() || a.gauss_markov.is_some()
+                    a.has(noise::Effect::Sinusoidal) || a.has(noise::Effect::GaussMarkov)
                 })
                 .map(|&c| crate::drift::CHANNELS[c])
                 .collect();

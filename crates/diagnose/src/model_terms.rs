@@ -1,7 +1,10 @@
 //! Reading and changing one term of one channel of a `SensorModel` in diagnose's parameterisation.
 
 use crate::candidates::TermParams;
-use noise::{BiasInstability, Effect, Flicker, GaussMarkov, Sensor, SensorModel, Sinusoid, Term};
+use noise::{
+    BiasInstability, Effect, Flicker, GaussMarkov, OutputFilter, Quantization, RateRamp,
+    RateRandomWalk, Sensor, SensorModel, Sinusoid, TemperatureBias, Term, WhiteNoise,
+};
 
 /// Channel index (gx gy gz ax ay az) to (sensor, axis).
 pub fn channel_axis(ch: usize) -> (Sensor, usize) {
@@ -16,12 +19,12 @@ pub fn channel_axis(ch: usize) -> (Sensor, usize) {
 /// form diagnose fits: a Woodman random-walk bias instability is read as absent flicker).
 pub fn term_level(model: &SensorModel, ch: usize, effect: Effect) -> Option<TermParams> {
     let (sensor, axis) = channel_axis(ch);
-    Some(match model.axis(sensor, axis).term(effect)? {
-        Term::Quantization(v)
-        | Term::WhiteNoise(v)
-        | Term::RateRandomWalk(v)
-        | Term::RateRamp(v)
-        | Term::TemperatureBias(v) => TermParams::Level(v),
+    Some(match model.axis(sensor, axis).term(effect)?.clone() {
+        Term::Quantization(q) => TermParams::Level(q.coefficient()),
+        Term::WhiteNoise(n) => TermParams::Level(n.density()),
+        Term::RateRandomWalk(k) => TermParams::Level(k.density()),
+        Term::RateRamp(r) => TermParams::Level(r.rate()),
+        Term::TemperatureBias(c) => TermParams::Level(c.per_degree()),
         Term::BiasInstability(BiasInstability::Flicker(f)) => TermParams::Level(f.b),
         Term::GaussMarkov(g) => TermParams::GaussMarkov {
             sigma: g.sigma,
@@ -38,7 +41,10 @@ pub fn term_level(model: &SensorModel, ch: usize, effect: Effect) -> Option<Term
         },
         Term::OutputFilter(filter) => TermParams::Filter {
             filter,
-            n: model.axis(sensor, axis).white_noise.unwrap_or(0.0),
+            n: model
+                .axis(sensor, axis)
+                .get::<WhiteNoise>()
+                .map_or(0.0, WhiteNoise::density),
         },
         _ => return None,
     })
@@ -47,14 +53,14 @@ pub fn term_level(model: &SensorModel, ch: usize, effect: Effect) -> Option<Term
 /// The output filter channel `ch` has, if any.
 pub fn output_filter(model: &SensorModel, ch: usize) -> Option<noise::OutputFilter> {
     let (sensor, axis) = channel_axis(ch);
-    model.axis(sensor, axis).output_filter
+    model.axis(sensor, axis).get::<OutputFilter>().copied()
 }
 
 /// Does channel `ch` model its bias instability as Woodman's random walk (TR-696 eq 9)?
 pub fn has_random_walk_bias_instability(model: &SensorModel, ch: usize) -> bool {
     let (sensor, axis) = channel_axis(ch);
     matches!(
-        model.axis(sensor, axis).bias_instability,
+        model.axis(sensor, axis).get::<BiasInstability>(),
         Some(BiasInstability::RandomWalk { .. })
     )
 }
@@ -62,7 +68,7 @@ pub fn has_random_walk_bias_instability(model: &SensorModel, ch: usize) -> bool 
 /// The flicker band the model uses on channel `ch` (its own, or the noise crate's default).
 pub fn flicker_band(model: &SensorModel, ch: usize) -> Flicker {
     let (sensor, axis) = channel_axis(ch);
-    match &model.axis(sensor, axis).bias_instability {
+    match model.axis(sensor, axis).get::<BiasInstability>() {
         Some(BiasInstability::Flicker(f)) => Flicker {
             b: 1.0,
             ..f.clone()
@@ -77,15 +83,42 @@ pub fn set_term(model: &mut SensorModel, ch: usize, effect: Effect, params: &Ter
     let band = flicker_band(model, ch);
     let (sensor, axis) = channel_axis(ch);
     let a = model.axis_mut(sensor, axis);
+    // A value the term's constructor refuses changes nothing, as a mismatched effect.
+    let level = |v: f64, term: fn(f64) -> Option<Term>| term(v);
     let term = match (effect, *params) {
-        (Effect::Quantization, TermParams::Level(v)) => Term::Quantization(v),
-        (Effect::WhiteNoise, TermParams::Level(v)) => Term::WhiteNoise(v),
+        (Effect::Quantization, TermParams::Level(v)) => {
+            match level(v, |v| Some(Quantization::new(v).ok()?.into())) {
+                Some(t) => t,
+                None => return,
+            }
+        }
+        (Effect::WhiteNoise, TermParams::Level(v)) => {
+            match level(v, |v| Some(WhiteNoise::new(v).ok()?.into())) {
+                Some(t) => t,
+                None => return,
+            }
+        }
         (Effect::BiasInstability, TermParams::Level(v)) => {
             Term::BiasInstability(BiasInstability::Flicker(Flicker { b: v, ..band }))
         }
-        (Effect::RateRandomWalk, TermParams::Level(v)) => Term::RateRandomWalk(v),
-        (Effect::RateRamp, TermParams::Level(v)) => Term::RateRamp(v),
-        (Effect::TemperatureBias, TermParams::Level(v)) => Term::TemperatureBias(v),
+        (Effect::RateRandomWalk, TermParams::Level(v)) => {
+            match level(v, |v| Some(RateRandomWalk::new(v).ok()?.into())) {
+                Some(t) => t,
+                None => return,
+            }
+        }
+        (Effect::RateRamp, TermParams::Level(v)) => {
+            match level(v, |v| Some(RateRamp::new(v).ok()?.into())) {
+                Some(t) => t,
+                None => return,
+            }
+        }
+        (Effect::TemperatureBias, TermParams::Level(v)) => {
+            match level(v, |v| Some(TemperatureBias::new(v).ok()?.into())) {
+                Some(t) => t,
+                None => return,
+            }
+        }
         (Effect::GaussMarkov, TermParams::GaussMarkov { sigma, tau_s }) => {
             Term::GaussMarkov(GaussMarkov { sigma, tau_s })
         }
@@ -98,7 +131,7 @@ pub fn set_term(model: &mut SensorModel, ch: usize, effect: Effect, params: &Ter
         ) => Term::Sinusoidal(Sinusoid {
             amplitude,
             frequency_hz,
-            phase_rad: a.sinusoidal.and_then(|s| s.phase_rad),
+            phase_rad: a.get::<Sinusoid>().and_then(|s| s.phase_rad),
         }),
         (
             Effect::Resonance,
@@ -112,7 +145,8 @@ pub fn set_term(model: &mut SensorModel, ch: usize, effect: Effect, params: &Ter
             Err(_) => return,
         },
         (Effect::OutputFilter, TermParams::Filter { filter, n }) => {
-            a.white_noise = Some(n);
+            let Ok(n) = WhiteNoise::new(n) else { return };
+            a.set_term(n);
             Term::OutputFilter(filter)
         }
         _ => return,

@@ -48,7 +48,10 @@ fn cycling() -> TemperatureProfile {
 fn draw(effect: Effect, base: &SensorModel, ch: usize, rng: &mut Xoshiro256PlusPlus) -> TermParams {
     let (sensor, axis) = channel_axis(ch);
     let a = base.axis(sensor, axis);
-    let n = a.white_noise.unwrap();
+    let n = a
+        .get::<noise::WhiteNoise>()
+        .map(noise::WhiteNoise::density)
+        .unwrap();
     match effect {
         // Integrated-output quantisation with LSB = Q sqrt(12) of 0.85..1 times the per-sample noise of
         // the integral, N sqrt(dt): gyro LSB 8.5e-6..1e-5 rad (as a rate, 0.05..0.06 deg/s at 100 Hz, like

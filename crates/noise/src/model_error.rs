@@ -26,3 +26,16 @@ pub(crate) fn check(what: &'static str, value: f64, positive: bool) -> Result<f6
         })
     }
 }
+
+/// `value` if finite (any sign), else the error naming `what`.
+pub(crate) fn check_finite(what: &'static str, value: f64) -> Result<f64, ModelError> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(ModelError {
+            what,
+            expected: "a finite value",
+            found: value,
+        })
+    }
+}

@@ -7,7 +7,7 @@
 use diagnose::model_terms::channel_axis;
 use diagnose::simulate::{static_log, SimSetup};
 use diagnose::{diagnose, Diagnosis, LogInput, Settings};
-use noise::{BiasInstability, Flicker, ImuErrors, SensorModel};
+use noise::{BiasInstability, Flicker, ImuErrors, SensorModel, WhiteNoise};
 use rand::Rng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 
@@ -29,9 +29,9 @@ pub fn base_model(with_flicker: bool) -> SensorModel {
         let (n, b) = if ch < 3 { (1e-4, 2e-5) } else { (1e-3, 2e-4) };
         let (sensor, axis) = channel_axis(ch);
         let a = m.axis_mut(sensor, axis);
-        a.white_noise = Some(n);
+        a.set_term(WhiteNoise::new(n).unwrap());
         if with_flicker {
-            a.bias_instability = Some(BiasInstability::Flicker(Flicker::with_b(b)));
+            a.set_term(BiasInstability::Flicker(Flicker::with_b(b)));
         }
     }
     m

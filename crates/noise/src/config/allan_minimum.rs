@@ -34,7 +34,7 @@ pub(super) fn solve_b_for_minimum(
 ) -> Result<f64, f64> {
     let min_with = |b: f64| {
         let mut axis = others.clone();
-        axis.bias_instability = Some(BiasInstability::Flicker(flicker(b)));
+        axis.set_term(BiasInstability::Flicker(flicker(b)));
         model_adev_minimum(&axis, &flicker(b)).0
     };
     let floor = min_with(0.0);

@@ -1,6 +1,7 @@
 //! Bias instability: flicker (1/f) noise as IEEE 952 defines it, realised as a band of Gauss-Markov
 //! processes, or Woodman's bias random walk (TR-696 §3.2.3).
 
+use super::term::{ErrorTerm, TermKind};
 use crate::closed_form as cf;
 use crate::filter::FilteredAllan;
 use crate::model_error::{check, ModelError};
@@ -133,7 +134,7 @@ impl BiasInstability {
     }
 
     /// Continuous (`dt_s` None) or sampled.
-    pub(crate) fn avar_at(&self, tau_s: f64, dt_s: Option<f64>) -> f64 {
+    fn avar_at(&self, tau_s: f64, dt_s: Option<f64>) -> f64 {
         match self {
             BiasInstability::Flicker(f) => f.avar_at(tau_s, dt_s),
             BiasInstability::RandomWalk {
@@ -146,10 +147,20 @@ impl BiasInstability {
             ),
         }
     }
+}
 
-    /// Exact Allan variance behind the output filter `fa` (each flicker component, or the walk).
-    pub fn avar_filtered(&self, tau_s: f64, fa: &FilteredAllan) -> f64 {
-        match self {
+impl ErrorTerm for BiasInstability {
+    fn allan_variance(&self, tau_s: f64) -> Option<f64> {
+        Some(self.avar(tau_s))
+    }
+
+    fn allan_variance_sampled(&self, tau_s: f64, dt_s: f64) -> Option<f64> {
+        Some(self.avar_sampled(tau_s, dt_s))
+    }
+
+    /// Each flicker component, or the walk, behind the filter.
+    fn allan_variance_filtered(&self, tau_s: f64, _dt_s: f64, fa: &FilteredAllan) -> Option<f64> {
+        Some(match self {
             BiasInstability::Flicker(f) => f
                 .components()
                 .iter()
@@ -159,8 +170,13 @@ impl BiasInstability {
                 stability,
                 period_s,
             } => fa.random_walk(cf::woodman_bias_random_walk(*stability, *period_s), tau_s),
-        }
+        })
     }
+}
+
+impl TermKind for BiasInstability {
+    const STOCHASTIC: bool = true;
+    const SHOWS_IN_STATIC_LOG: bool = true;
 }
 
 #[cfg(test)]

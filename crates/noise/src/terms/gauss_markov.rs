@@ -1,5 +1,6 @@
 //! A first-order Gauss-Markov bias (docs/model.md §2, §3).
 
+use super::term::{ErrorTerm, TermKind};
 use crate::closed_form as cf;
 use crate::filter::FilteredAllan;
 use crate::model_error::{check, ModelError};
@@ -18,14 +19,26 @@ impl GaussMarkov {
             tau_s: check("Gauss-Markov correlation time", tau_s, true)?,
         })
     }
+}
 
-    /// Allan variance, continuous (`dt_s` None, Hou 4.60) or of the sampled sequence.
-    pub fn avar(&self, tau_s: f64, dt_s: Option<f64>) -> f64 {
-        cf::gauss_markov_avar_at(self.sigma, self.tau_s, tau_s, dt_s)
+impl ErrorTerm for GaussMarkov {
+    /// Hou 4.60 (docs/model.md §2).
+    fn allan_variance(&self, tau_s: f64) -> Option<f64> {
+        Some(cf::gauss_markov_avar(self.sigma, self.tau_s, tau_s))
     }
 
-    /// Exact Allan variance behind the output filter `fa`.
-    pub fn avar_filtered(&self, tau_s: f64, fa: &FilteredAllan) -> f64 {
-        fa.gauss_markov(self.sigma, self.tau_s, tau_s)
+    fn allan_variance_sampled(&self, tau_s: f64, dt_s: f64) -> Option<f64> {
+        Some(cf::gauss_markov_avar_sampled(
+            self.sigma, self.tau_s, tau_s, dt_s,
+        ))
     }
+
+    fn allan_variance_filtered(&self, tau_s: f64, _dt_s: f64, fa: &FilteredAllan) -> Option<f64> {
+        Some(fa.gauss_markov(self.sigma, self.tau_s, tau_s))
+    }
+}
+
+impl TermKind for GaussMarkov {
+    const STOCHASTIC: bool = true;
+    const SHOWS_IN_STATIC_LOG: bool = true;
 }

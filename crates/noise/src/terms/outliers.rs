@@ -1,5 +1,6 @@
 //! Isolated outliers (spikes) on the output register.
 
+use super::term::{ErrorTerm, TermKind};
 use crate::model_error::{check, ModelError};
 
 /// Isolated outliers: single output samples displaced by `size` (rad/s or m/s^2) with a random sign,
@@ -29,4 +30,16 @@ impl Outliers {
         let m = (tau_s / dt_s).round().max(1.0);
         self.probability(dt_s) * self.size * self.size / m
     }
+}
+
+impl ErrorTerm for Outliers {
+    /// White noise of variance p size^2 per output sample (no continuous form: p needs dt).
+    fn allan_variance_sampled(&self, tau_s: f64, dt_s: f64) -> Option<f64> {
+        Some(self.avar_sampled(tau_s, dt_s))
+    }
+}
+
+impl TermKind for Outliers {
+    const STOCHASTIC: bool = true;
+    const SHOWS_IN_STATIC_LOG: bool = true;
 }

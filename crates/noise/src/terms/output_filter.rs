@@ -22,6 +22,7 @@
 //! The infinite responses are truncated where the remaining tail is below 1e-17 of the response's
 //! peak (their sum then differs from 1 by less than 1e-15).
 
+use super::term::{ErrorTerm, TermKind};
 use crate::model_error::{check, ModelError};
 
 /// Which filter.
@@ -230,4 +231,13 @@ fn iir_response(b: &[f64], a: &[f64], limit: usize) -> Vec<f64> {
         }
     }
     h
+}
+
+/// The filter adds no error of its own; it changes the other terms' Allan variances
+/// (`crate::filter::FilteredAllan`, used by `AxisModel`).
+impl ErrorTerm for OutputFilter {}
+
+impl TermKind for OutputFilter {
+    const STOCHASTIC: bool = false;
+    const SHOWS_IN_STATIC_LOG: bool = true;
 }

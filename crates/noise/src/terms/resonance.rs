@@ -1,5 +1,6 @@
 //! A resonance: a narrow-band random vibration (second-order Gauss-Markov process).
 
+use super::term::{ErrorTerm, TermKind};
 use crate::closed_form as cf;
 use crate::filter::FilteredAllan;
 use crate::model_error::{check, ModelError};
@@ -38,18 +39,26 @@ impl Resonance {
     pub fn damping(&self) -> f64 {
         self.bandwidth_hz / (2.0 * self.frequency_hz)
     }
+}
 
-    /// Allan variance, continuous (`dt_s` None) or of the sampled sequence.
-    pub fn avar(&self, tau_s: f64, dt_s: Option<f64>) -> f64 {
+impl ErrorTerm for Resonance {
+    /// [`cf::resonance_avar`].
+    fn allan_variance(&self, tau_s: f64) -> Option<f64> {
         let (s, f, b) = (self.sigma, self.frequency_hz, self.bandwidth_hz);
-        match dt_s {
-            None => cf::resonance_avar(s, f, b, tau_s),
-            Some(dt) => cf::resonance_avar_sampled(s, f, b, tau_s, dt),
-        }
+        Some(cf::resonance_avar(s, f, b, tau_s))
     }
 
-    /// Exact Allan variance behind the output filter `fa`.
-    pub fn avar_filtered(&self, tau_s: f64, fa: &FilteredAllan) -> f64 {
-        fa.resonance(self.sigma, self.frequency_hz, self.bandwidth_hz, tau_s)
+    fn allan_variance_sampled(&self, tau_s: f64, dt_s: f64) -> Option<f64> {
+        let (s, f, b) = (self.sigma, self.frequency_hz, self.bandwidth_hz);
+        Some(cf::resonance_avar_sampled(s, f, b, tau_s, dt_s))
     }
+
+    fn allan_variance_filtered(&self, tau_s: f64, _dt_s: f64, fa: &FilteredAllan) -> Option<f64> {
+        Some(fa.resonance(self.sigma, self.frequency_hz, self.bandwidth_hz, tau_s))
+    }
+}
+
+impl TermKind for Resonance {
+    const STOCHASTIC: bool = true;
+    const SHOWS_IN_STATIC_LOG: bool = true;
 }

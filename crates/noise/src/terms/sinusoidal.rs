@@ -1,5 +1,6 @@
 //! A sinusoidal error (docs/model.md §2: Hou 4.64 for its Allan variance).
 
+use super::term::{ErrorTerm, TermKind};
 use crate::closed_form as cf;
 use crate::filter::FilteredAllan;
 use crate::model_error::{check, ModelError};
@@ -36,17 +37,29 @@ impl Sinusoid {
             phase_rad,
         })
     }
+}
 
-    /// Phase-averaged Allan variance, continuous (`dt_s` None, Hou 4.64) or of the sampled sequence.
-    pub fn avar(&self, tau_s: f64, dt_s: Option<f64>) -> f64 {
-        match dt_s {
-            None => cf::sinusoid_avar(self.amplitude, self.frequency_hz, tau_s),
-            Some(dt) => cf::sinusoid_avar_sampled(self.amplitude, self.frequency_hz, tau_s, dt),
-        }
+impl ErrorTerm for Sinusoid {
+    /// Phase averaged (Hou 4.64).
+    fn allan_variance(&self, tau_s: f64) -> Option<f64> {
+        Some(cf::sinusoid_avar(self.amplitude, self.frequency_hz, tau_s))
     }
 
-    /// Exact Allan variance behind the output filter `fa`.
-    pub fn avar_filtered(&self, tau_s: f64, fa: &FilteredAllan) -> f64 {
-        fa.sinusoid(self.amplitude, self.frequency_hz, tau_s)
+    fn allan_variance_sampled(&self, tau_s: f64, dt_s: f64) -> Option<f64> {
+        Some(cf::sinusoid_avar_sampled(
+            self.amplitude,
+            self.frequency_hz,
+            tau_s,
+            dt_s,
+        ))
     }
+
+    fn allan_variance_filtered(&self, tau_s: f64, _dt_s: f64, fa: &FilteredAllan) -> Option<f64> {
+        Some(fa.sinusoid(self.amplitude, self.frequency_hz, tau_s))
+    }
+}
+
+impl TermKind for Sinusoid {
+    const STOCHASTIC: bool = false;
+    const SHOWS_IN_STATIC_LOG: bool = true;
 }

@@ -1,5 +1,6 @@
 //! The turn-on warm-up transient of the bias.
 
+use super::term::{ErrorTerm, TermKind};
 use crate::model_error::{check, ModelError};
 
 /// Bias settling after turn-on: `amplitude` e^{-t / tau_s}, with `amplitude` fixed, or, when
@@ -26,4 +27,11 @@ impl WarmupTransient {
             per_run,
         })
     }
+}
+
+impl ErrorTerm for WarmupTransient {}
+
+impl TermKind for WarmupTransient {
+    const STOCHASTIC: bool = false;
+    const SHOWS_IN_STATIC_LOG: bool = false;
 }
