@@ -168,12 +168,12 @@ impl ChannelFit {
         let columns: Vec<Vec<f64>> = terms
             .iter()
             .map(|(e, _)| {
-                let mut only = AxisModel {
-                    output_filter: axis.output_filter,
-                    ..AxisModel::default()
-                };
+                let mut only = AxisModel::default();
+                if let Some(f) = axis.get::<noise::OutputFilter>() {
+                    only.set_term(*f);
+                }
                 if let Some(t) = axis.term(*e) {
-                    only.set_term(t);
+                    only.set_term(t.clone());
                 }
                 only.allan_variance_sampled_many(&taus, dt)
             })

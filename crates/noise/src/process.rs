@@ -3,7 +3,24 @@
 //! The discrete processes take their RNG as an argument; `ChannelErrors` pairs each with its sub-stream.
 
 use crate::effect::{Effect, Sensor};
-use crate::model::{BiasInstability, SensorModel, TemperatureProfile};
+use crate::model::SensorModel;
+use crate::temperature::TemperatureProfile;
+use crate::terms::bias_instability::BiasInstability;
+use crate::terms::constant_bias::ConstantBias;
+use crate::terms::gauss_markov::GaussMarkov;
+use crate::terms::misalignment::Misalignment;
+use crate::terms::outliers::Outliers;
+use crate::terms::output_filter::OutputFilter;
+use crate::terms::quantization::Quantization;
+use crate::terms::rate_ramp::RateRamp;
+use crate::terms::rate_random_walk::RateRandomWalk;
+use crate::terms::resonance::Resonance;
+use crate::terms::scale_factor::ScaleFactor;
+use crate::terms::sinusoidal::Sinusoid;
+use crate::terms::temperature_bias::TemperatureBias;
+use crate::terms::turn_on_bias::TurnOnBias;
+use crate::terms::warmup_transient::WarmupTransient;
+use crate::terms::white_noise::WhiteNoise as WhiteNoiseTerm;
 use crate::{calibration_rng, term_rng, ImuRng};
 use nalgebra::Vector3;
 use rand::Rng;
@@ -39,13 +56,13 @@ fn draws<'a>(rng: &mut ImuRng, scratch: &'a mut Vec<f64>, n: usize) -> &'a [f64]
 /// White noise of density N sampled every dt: n_k = (N / sqrt(dt)) w_k (docs/model.md §3; Kalibr
 /// sigma_d = sigma / sqrt(dt); Woodman sigma = N / sqrt(dt)).
 #[derive(Clone, Copy, Debug)]
-pub struct WhiteNoise {
+pub struct WhiteNoiseSampler {
     sd: f64,
 }
 
-impl WhiteNoise {
-    pub fn new(n: f64, dt_s: f64) -> WhiteNoise {
-        WhiteNoise {
+impl WhiteNoiseSampler {
+    pub fn new(n: f64, dt_s: f64) -> WhiteNoiseSampler {
+        WhiteNoiseSampler {
             sd: n / dt_s.sqrt(),
         }
     }
@@ -313,7 +330,11 @@ pub struct Resonator {
 }
 
 impl Resonator {
-    pub fn new<R: Rng + ?Sized>(r: &crate::model::Resonance, dt_s: f64, rng: &mut R) -> Resonator {
+    pub fn new<R: Rng + ?Sized>(
+        r: &crate::terms::resonance::Resonance,
+        dt_s: f64,
+        rng: &mut R,
+    ) -> Resonator {
         let w0 = std::f64::consts::TAU * r.frequency_hz;
         let zeta = r.damping();
         let a = zeta * w0;
@@ -428,7 +449,7 @@ pub struct ChannelErrors {
     row: [f64; 3],
     /// Constant bias plus this run's turn-on bias draw.
     bias: f64,
-    white: Option<(WhiteNoise, ImuRng)>,
+    white: Option<(WhiteNoiseSampler, ImuRng)>,
     flicker: Option<(GaussMarkovBank, ImuRng)>,
     bias_random_walk: Option<(RandomWalk, ImuRng)>,
     rate_random_walk: Option<(RandomWalk, ImuRng)>,
@@ -471,25 +492,27 @@ impl ChannelErrors {
         let rng = |effect: Effect| term_rng(seed, run, channel as u64, effect);
         // The raw processes run at the filter's internal interval.
         let dt_out = dt_s;
-        let filter = axis.output_filter.map(|f| FilterState::new(&f, dt_out));
-        let dt_s = axis.output_filter.map_or(dt_s, |f| f.internal_dt(dt_out));
+        let output_filter = axis.get::<OutputFilter>().copied();
+        let filter = output_filter.map(|f| FilterState::new(&f, dt_out));
+        let dt_s = output_filter.map_or(dt_s, |f| f.internal_dt(dt_out));
 
         let mut row = [0.0; 3];
-        row[axis_index] = 1.0 + axis.scale_factor.unwrap_or(0.0);
-        if let Some(m) = axis.misalignment {
+        row[axis_index] = 1.0 + axis.get::<ScaleFactor>().map_or(0.0, ScaleFactor::ratio);
+        if let Some(m) = axis.get::<Misalignment>().map(Misalignment::angles_rad) {
             let others: Vec<usize> = (0..3).filter(|&j| j != axis_index).collect();
             row[others[0]] = m[0];
             row[others[1]] = m[1];
         }
         let turn_on = axis
-            .turn_on_bias
+            .get::<TurnOnBias>()
+            .map(TurnOnBias::sigma)
             .map_or(0.0, |s| s * normal(&mut rng(Effect::TurnOnBias)));
         // Each process with its own sub-stream; initial states come from that stream first.
         let bank = |components: &[(f64, f64)], effect: Effect| {
             let mut r = rng(effect);
             (GaussMarkovBank::multirate(components, dt_s, &mut r), r)
         };
-        let (flicker, bias_random_walk) = match &axis.bias_instability {
+        let (flicker, bias_random_walk) = match axis.get::<BiasInstability>() {
             Some(BiasInstability::Flicker(f)) => {
                 (Some(bank(&f.components(), Effect::BiasInstability)), None)
             }
@@ -506,13 +529,13 @@ impl ChannelErrors {
             ),
             None => (None, None),
         };
-        let sinusoid = axis.sinusoidal.map(|s| {
+        let sinusoid = axis.get::<Sinusoid>().map(|s| {
             let phase = s
                 .phase_rad
                 .unwrap_or_else(|| rng(Effect::Sinusoidal).gen_range(0.0..std::f64::consts::TAU));
             (s.amplitude, std::f64::consts::TAU * s.frequency_hz, phase)
         });
-        let transient = axis.warmup_transient.map(|w| {
+        let transient = axis.get::<WarmupTransient>().map(|w| {
             let a = if w.per_run {
                 w.amplitude * normal(&mut rng(Effect::WarmupTransient))
             } else {
@@ -521,7 +544,7 @@ impl ChannelErrors {
             (a, w.tau_s)
         });
         let outliers = axis
-            .outliers
+            .get::<Outliers>()
             .map(|o| OutlierState::new(o.probability(dt_out), o.size, rng(Effect::Outliers)));
         ChannelErrors {
             dt_s: dt_out,
@@ -530,26 +553,28 @@ impl ChannelErrors {
             filter,
             outliers,
             row,
-            bias: axis.constant_bias.unwrap_or(0.0) + turn_on,
+            bias: axis.get::<ConstantBias>().map_or(0.0, ConstantBias::bias) + turn_on,
             white: axis
-                .white_noise
-                .map(|n| (WhiteNoise::new(n, dt_s), rng(Effect::WhiteNoise))),
+                .get::<WhiteNoiseTerm>()
+                .map(WhiteNoiseTerm::density)
+                .map(|n| (WhiteNoiseSampler::new(n, dt_s), rng(Effect::WhiteNoise))),
             flicker,
             bias_random_walk,
             rate_random_walk: axis
-                .rate_random_walk
+                .get::<RateRandomWalk>()
+                .map(RateRandomWalk::density)
                 .map(|k| (RandomWalk::new(k, dt_s), rng(Effect::RateRandomWalk))),
-            ramp: axis.rate_ramp.unwrap_or(0.0),
+            ramp: axis.get::<RateRamp>().map_or(0.0, RateRamp::rate),
             gauss_markov: axis
-                .gauss_markov
+                .get::<GaussMarkov>()
                 .map(|g| bank(&[(g.tau_s, g.sigma)], Effect::GaussMarkov)),
-            resonance: axis.resonance.map(|r| {
+            resonance: axis.get::<Resonance>().map(|r| {
                 let mut g = rng(Effect::Resonance);
-                (Resonator::new(&r, dt_s, &mut g), g)
+                (Resonator::new(r, dt_s, &mut g), g)
             }),
-            sinusoid: sinusoid.filter(|_| axis.output_filter.is_none()),
+            sinusoid: sinusoid.filter(|_| output_filter.is_none()),
             sinusoid_out: sinusoid.and_then(|(a, w, p)| {
-                let f = axis.output_filter?;
+                let f = output_filter?;
                 let (mut re, mut im) = (0.0, 0.0);
                 for (j, h) in f.impulse_response(dt_out).iter().enumerate() {
                     let arg = w * j as f64 * dt_s;
@@ -559,10 +584,12 @@ impl ChannelErrors {
                 Some((a * re.hypot(im), w, p + im.atan2(re)))
             }),
             temperature: axis
-                .temperature_bias
+                .get::<TemperatureBias>()
+                .map(TemperatureBias::per_degree)
                 .map(|c| (c, model.temperature.clone(), model.temperature_reference_c)),
             quantizer: axis
-                .quantization
+                .get::<Quantization>()
+                .map(Quantization::coefficient)
                 .map(|q| Quantizer::new(q, &mut rng(Effect::Quantization))),
             scratch: Vec::new(),
             #[cfg(debug_assertions)]
@@ -778,7 +805,7 @@ struct FilterState {
 }
 
 impl FilterState {
-    fn new(f: &crate::filter::OutputFilter, dt_s: f64) -> FilterState {
+    fn new(f: &crate::terms::output_filter::OutputFilter, dt_s: f64) -> FilterState {
         let h = f.impulse_response(dt_s);
         let iir = f.recursion(dt_s).map(|(b, a)| {
             let (nb, na) = (b.len(), a.len());
@@ -893,7 +920,7 @@ impl OutlierState {
 }
 
 /// A model that cannot run at a sample rate: an axis whose output filter does not fit the rate
-/// ([`crate::filter::OutputFilter::check_rate`]).
+/// ([`crate::OutputFilter::check_rate`]).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[error("{axis}.output_filter at {rate_hz} Hz output, decimation {decimation} ({internal_hz} Hz internal): {error}")]
 pub struct RateError {
@@ -902,7 +929,7 @@ pub struct RateError {
     pub rate_hz: f64,
     pub decimation: u32,
     pub internal_hz: f64,
-    pub error: crate::model::ModelError,
+    pub error: crate::model_error::ModelError,
 }
 
 /// Per-run error state of a whole IMU: six channels (gx gy gz ax ay az).
@@ -915,12 +942,12 @@ pub struct ImuErrors {
 
 impl ImuErrors {
     /// Can `model` run at sample interval `dt_s`? Every output filter's cutoff must lie below its
-    /// internal Nyquist frequency and its response fit [`crate::filter::MAX_RESPONSE`] internal
+    /// internal Nyquist frequency and its response fit [`crate::MAX_RESPONSE`] internal
     /// samples. Check before [`ImuErrors::new`]: a filter that fails gives meaningless values.
     pub fn check_rate(model: &SensorModel, dt_s: f64) -> Result<(), RateError> {
         for sensor in Sensor::ALL {
             for (axis, name) in model.triad(sensor).axes.iter().zip(crate::AXIS_NAMES) {
-                if let Some(f) = &axis.output_filter {
+                if let Some(f) = axis.get::<OutputFilter>() {
                     f.check_rate(dt_s).map_err(|error| RateError {
                         axis: format!("{}.{name}", sensor.name()),
                         rate_hz: 1.0 / dt_s,
