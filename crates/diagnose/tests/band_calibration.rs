@@ -312,30 +312,3 @@ fn diagnosed_coverage_figure() {
     };
     coverage(&design);
 }
-
-/// What `fit_levels` makes of the training logs (printed, for the docs): per seed the gyro z levels
-/// against the truth's. Run with `--ignored --nocapture`.
-#[test]
-#[ignore = "diagnostic print"]
-fn fitted_levels_print() {
-    let truth = SensorModel::from_toml_str(TRUTH, "truth.toml").unwrap();
-    let start = SensorModel::from_toml_str(START, "start.toml").unwrap();
-    let t = truth.axis(noise::Sensor::Gyro, 2);
-    println!(
-        "truth: n {:?} b {:?} k {:?}",
-        t.white_noise,
-        t.bias_instability.as_ref().map(|b| b.avar(1e3).sqrt()),
-        t.rate_random_walk
-    );
-    for s in 0..20 {
-        let train = log_of(&truth, 0.1, 72_000, 2_000_000 + s, 0);
-        let (m, _) = fit_levels(&start, &[input(0.1, &train)], 0.0).unwrap();
-        let a = m.axis(noise::Sensor::Gyro, 2);
-        println!(
-            "seed {s}: n {:?} b(adev 1000 s) {:?} k {:?}",
-            a.white_noise,
-            a.bias_instability.as_ref().map(|b| b.avar(1e3).sqrt()),
-            a.rate_random_walk
-        );
-    }
-}
