@@ -16,6 +16,7 @@
 mod channel;
 pub mod closed_form;
 mod config;
+mod discrete;
 mod effect;
 pub mod fft;
 pub mod filter;

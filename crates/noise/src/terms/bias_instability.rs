@@ -1,10 +1,14 @@
 //! Bias instability: flicker (1/f) noise as IEEE 952 defines it, realised as a band of Gauss-Markov
 //! processes, or Woodman's bias random walk (TR-696 §3.2.3).
 
-use super::term::{ErrorTerm, TermKind};
+use super::gauss_markov::BankGenerator;
+use super::rate_random_walk::RandomWalkGenerator;
+use super::term::{ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind};
 use crate::closed_form as cf;
+use crate::discrete::RandomWalk;
 use crate::filter::FilteredAllan;
 use crate::model_error::{check, ModelError};
+use crate::ImuRng;
 
 /// Flicker (1/f) bias instability of IEEE coefficient B, generated as a sum of log-spaced
 /// Gauss-Markov processes with correlation times spanning `[tau_min_s, tau_max_s]`
@@ -177,6 +181,59 @@ impl ErrorTerm for BiasInstability {
 impl TermKind for BiasInstability {
     const STOCHASTIC: bool = true;
     const SHOWS_IN_STATIC_LOG: bool = true;
+    type Generator = BiasInstabilityGenerator;
+
+    fn generator(&self, cx: &GenContext, rng: &dyn Fn() -> ImuRng) -> BiasInstabilityGenerator {
+        match self {
+            BiasInstability::Flicker(f) => BiasInstabilityGenerator::Flicker(BankGenerator::new(
+                &f.components(),
+                cx.dt_raw_s,
+                rng(),
+            )),
+            // Woodman eq 9 / AirSim: K = BS / sqrt(T_BS), so BS·sqrt(dt/T_BS) per step.
+            BiasInstability::RandomWalk {
+                stability,
+                period_s,
+            } => BiasInstabilityGenerator::RandomWalk(RandomWalkGenerator {
+                walk: RandomWalk::new(stability / period_s.sqrt(), cx.dt_raw_s),
+                rng: rng(),
+            }),
+        }
+    }
+}
+
+/// Flicker's band of Gauss-Markov processes, or Woodman's random walk.
+#[derive(Clone, Debug)]
+pub enum BiasInstabilityGenerator {
+    Flicker(BankGenerator),
+    RandomWalk(RandomWalkGenerator),
+}
+
+impl Generate for BiasInstabilityGenerator {
+    fn stage(&self) -> Stage {
+        Stage::Raw
+    }
+
+    #[inline]
+    fn add_raw(&mut self, clock: RawClock, out: &mut [f64], scratch: &mut Vec<f64>) {
+        match self {
+            BiasInstabilityGenerator::Flicker(g) => g.add_raw(clock, out, scratch),
+            BiasInstabilityGenerator::RandomWalk(g) => g.add_raw(clock, out, scratch),
+        }
+    }
+
+    /// The flicker band is referenced; a random walk already starts at 0.
+    fn calibrate_start(&mut self) {
+        if let BiasInstabilityGenerator::Flicker(g) = self {
+            g.calibrate_start();
+        }
+    }
+
+    fn calibrate_window(&mut self, window_s: f64, rng: &dyn Fn() -> ImuRng) {
+        if let BiasInstabilityGenerator::Flicker(g) = self {
+            g.calibrate_window(window_s, rng);
+        }
+    }
 }
 
 #[cfg(test)]

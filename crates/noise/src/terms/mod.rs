@@ -24,7 +24,7 @@ pub mod turn_on_bias;
 pub mod warmup_transient;
 pub mod white_noise;
 
-pub use term::{ErrorTerm, TermKind};
+pub use term::{ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind};
 
 /// Writes, from the table of rows `Variant => file::Type`, the [`Effect`] enum (the row order is
 /// `Effect::ALL`; the file's name is the effect's name and config key), the [`Term`] enum and
@@ -92,6 +92,68 @@ macro_rules! registry {
                     $(Term::$effect(t) => t,)+
                 }
             }
+
+            /// This run's generator of the term ([`TermKind::generator`]).
+            pub fn generator(&self, cx: &GenContext, rng: &dyn Fn() -> crate::ImuRng) -> Generator {
+                match self {
+                    $(Term::$effect(t) => Generator::$effect(t.generator(cx, rng)),)+
+                }
+            }
+        }
+
+        /// The per-run generator of one term: a closed enum, so the per-sample calls are static.
+        #[derive(Clone, Debug)]
+        pub enum Generator {
+            $($effect(<$file::$ty as TermKind>::Generator),)+
+        }
+
+        impl Generate for Generator {
+            fn stage(&self) -> Stage {
+                match self {
+                    $(Generator::$effect(g) => g.stage(),)+
+                }
+            }
+
+            fn input(&self, row: &mut [f64; 3], bias: &mut f64) {
+                match self {
+                    $(Generator::$effect(g) => g.input(row, bias),)+
+                }
+            }
+
+            #[inline]
+            fn add_raw(&mut self, clock: RawClock, out: &mut [f64], scratch: &mut Vec<f64>) {
+                match self {
+                    $(Generator::$effect(g) => g.add_raw(clock, out, scratch),)+
+                }
+            }
+
+            #[inline]
+            fn output(&mut self, k0: u64, dt_s: f64, out: &mut [f64]) {
+                match self {
+                    $(Generator::$effect(g) => g.output(k0, dt_s, out),)+
+                }
+            }
+
+            fn calibrate_start(&mut self) {
+                match self {
+                    $(Generator::$effect(g) => g.calibrate_start(),)+
+                }
+            }
+
+            fn calibrate_window(&mut self, window_s: f64, rng: &dyn Fn() -> crate::ImuRng) {
+                match self {
+                    $(Generator::$effect(g) => g.calibrate_window(window_s, rng),)+
+                }
+            }
+        }
+
+        impl Generator {
+            /// Which effect it generates.
+            pub fn effect(&self) -> Effect {
+                match self {
+                    $(Generator::$effect(_) => Effect::$effect,)+
+                }
+            }
         }
 
         /// A [`TermKind`] listed in the registry: which effect it is and how it sits in a
@@ -157,3 +219,38 @@ registry! {
     /// A narrow-band random vibration (second-order Gauss-Markov).
     Resonance => resonance::Resonance,
 }
+
+/// The order a channel's terms act in within each [`Stage`] (`ChannelErrors`): the input terms, then
+/// the raw ones in the order they are added (changing it changes the last bits of every output),
+/// then those on the output register (after the filter: the filtered sinusoid, the outliers, the
+/// quantiser).
+pub const GENERATION_ORDER: [Effect; Effect::COUNT] = [
+    Effect::ConstantBias,
+    Effect::TurnOnBias,
+    Effect::ScaleFactor,
+    Effect::Misalignment,
+    Effect::WhiteNoise,
+    Effect::BiasInstability,
+    Effect::RateRandomWalk,
+    Effect::RateRamp,
+    Effect::GaussMarkov,
+    Effect::Resonance,
+    Effect::Sinusoidal,
+    Effect::TemperatureBias,
+    Effect::WarmupTransient,
+    Effect::Outliers,
+    Effect::Quantization,
+    Effect::OutputFilter,
+];
+
+/// Every effect once in [`GENERATION_ORDER`] (checked when the crate compiles).
+const _: () = {
+    let mut seen = [false; Effect::COUNT];
+    let mut i = 0;
+    while i < Effect::COUNT {
+        let e = GENERATION_ORDER[i] as usize;
+        assert!(!seen[e], "an effect twice in GENERATION_ORDER");
+        seen[e] = true;
+        i += 1;
+    }
+};

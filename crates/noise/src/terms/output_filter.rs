@@ -22,8 +22,9 @@
 //! The infinite responses are truncated where the remaining tail is below 1e-17 of the response's
 //! peak (their sum then differs from 1 by less than 1e-15).
 
-use super::term::{ErrorTerm, TermKind};
+use super::term::{ErrorTerm, GenContext, NoGenerator, TermKind};
 use crate::model_error::{check, ModelError};
+use crate::ImuRng;
 
 /// Which filter.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -240,4 +241,117 @@ impl ErrorTerm for OutputFilter {}
 impl TermKind for OutputFilter {
     const STOCHASTIC: bool = false;
     const SHOWS_IN_STATIC_LOG: bool = true;
+    type Generator = NoGenerator;
+
+    /// The channel runs the filter itself ([`FilterState`]): it sets the interval of every other
+    /// term's raw samples.
+    fn generator(&self, _cx: &GenContext, _rng: &dyn Fn() -> ImuRng) -> NoGenerator {
+        NoGenerator
+    }
+}
+
+/// An IIR recursion: coefficients (b, a) and the input and output histories (newest first).
+#[derive(Clone, Debug)]
+struct IirState {
+    b: Vec<f64>,
+    a: Vec<f64>,
+    xs: Vec<f64>,
+    ys: Vec<f64>,
+}
+
+/// The output filter's running state: the raw history it needs and where the raw stream stands.
+#[derive(Clone, Debug)]
+pub(crate) struct FilterState {
+    /// Impulse response (FIR kinds; for the IIR kinds only its length sets the pre-roll).
+    h: Vec<f64>,
+    /// The IIR kinds' recursion and histories.
+    iir: Option<IirState>,
+    pub(crate) decimation: usize,
+    /// Raw samples before the one output 0 is read at: the response's length - 1, so the filter's
+    /// history is full (FIR) or settled to 1e-17 (IIR) at t = 0.
+    pub(crate) preroll: usize,
+    /// Raw samples produced so far.
+    pub(crate) raw_done: u64,
+    /// The last `h.len() - 1` raw samples (FIR), oldest first.
+    history: Vec<f64>,
+    /// Scratch for one block's raw samples.
+    pub(crate) raw: Vec<f64>,
+}
+
+impl FilterState {
+    pub(crate) fn new(f: &OutputFilter, dt_s: f64) -> FilterState {
+        let h = f.impulse_response(dt_s);
+        let iir = f.recursion(dt_s).map(|(b, a)| {
+            let (nb, na) = (b.len(), a.len());
+            IirState {
+                b,
+                a,
+                xs: vec![0.0; nb],
+                ys: vec![0.0; na],
+            }
+        });
+        FilterState {
+            preroll: h.len() - 1,
+            h,
+            iir,
+            decimation: f.decimation as usize,
+            raw_done: 0,
+            history: Vec::new(),
+            raw: Vec::new(),
+        }
+    }
+
+    /// Filter the raw samples `start ..` in `raw`, writing the output samples k0 .. into `out`.
+    /// The impulse response (internal samples, unit DC gain).
+    pub(crate) fn response(&self) -> &[f64] {
+        &self.h
+    }
+
+    pub(crate) fn filter(&mut self, start: u64, raw: &[f64], k0: u64, out: &mut [f64]) {
+        let (d, pre) = (self.decimation as u64, self.preroll as u64);
+        let is_output = |r: u64| r >= pre && (r - pre).is_multiple_of(d);
+        let slot = |r: u64| ((r - pre) / d - k0) as usize;
+        if let Some(IirState { b, a, xs, ys }) = &mut self.iir {
+            for (j, &x) in raw.iter().enumerate() {
+                xs.rotate_right(1);
+                xs[0] = x;
+                let mut y: f64 = b.iter().zip(xs.iter()).map(|(b, x)| b * x).sum();
+                for i in 1..a.len() {
+                    y -= a[i] * ys[i - 1];
+                }
+                ys.rotate_right(1);
+                ys[0] = y;
+                let r = start + j as u64;
+                if is_output(r) {
+                    out[slot(r)] = y;
+                }
+            }
+        } else {
+            // y_r = sum_i h_i x_{r-i}, only at the raw indices that are read out.
+            let l = self.h.len();
+            let hist = self.history.len();
+            let mut joined = std::mem::take(&mut self.history);
+            joined.extend_from_slice(raw);
+            let first = start.max(pre);
+            let mut r = if is_output(first) {
+                first
+            } else {
+                pre + (first - pre).div_ceil(d) * d
+            };
+            let end = start + raw.len() as u64;
+            while r < end {
+                // Position of raw sample r in `joined`.
+                let p = (r - start) as usize + hist;
+                let mut y = 0.0;
+                for (i, hi) in self.h.iter().enumerate() {
+                    y += hi * joined[p - i];
+                }
+                out[slot(r)] = y;
+                r += d;
+            }
+            let keep = (l - 1).min(joined.len());
+            self.history = joined[joined.len() - keep..].to_vec();
+        }
+        self.raw_done = start + raw.len() as u64;
+    }
 }

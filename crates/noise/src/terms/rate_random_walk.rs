@@ -1,9 +1,11 @@
 //! Rate random walk (docs/model.md §2, §3).
 
-use super::term::{ErrorTerm, TermKind};
+use super::term::{ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind};
 use crate::closed_form as cf;
+use crate::discrete::RandomWalk;
 use crate::filter::FilteredAllan;
 use crate::model_error::{check, ModelError};
+use crate::ImuRng;
 
 /// Rate random walk K (rad/s/sqrt(s), m/s^2/sqrt(s)).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -43,4 +45,30 @@ impl ErrorTerm for RateRandomWalk {
 impl TermKind for RateRandomWalk {
     const STOCHASTIC: bool = true;
     const SHOWS_IN_STATIC_LOG: bool = true;
+    type Generator = RandomWalkGenerator;
+
+    fn generator(&self, cx: &GenContext, rng: &dyn Fn() -> ImuRng) -> RandomWalkGenerator {
+        RandomWalkGenerator {
+            walk: RandomWalk::new(self.density, cx.dt_raw_s),
+            rng: rng(),
+        }
+    }
+}
+
+/// A random walk with its stream (also Woodman's bias random walk, `bias_instability`).
+#[derive(Clone, Debug)]
+pub struct RandomWalkGenerator {
+    pub(crate) walk: RandomWalk,
+    pub(crate) rng: ImuRng,
+}
+
+impl Generate for RandomWalkGenerator {
+    fn stage(&self) -> Stage {
+        Stage::Raw
+    }
+
+    #[inline]
+    fn add_raw(&mut self, _clock: RawClock, out: &mut [f64], scratch: &mut Vec<f64>) {
+        self.walk.add_block(&mut self.rng, out, scratch);
+    }
 }
