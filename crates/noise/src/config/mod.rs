@@ -13,20 +13,10 @@
 //! [gyro.x]
 //! bias_instability = { value = "0.010 deg/s", convention = "allan_minimum" }
 //! ```
-//! Axis keys: `quantization`, `white_noise`, `bias_instability` (a table), `rate_random_walk`,
-//! `rate_ramp`, `gauss_markov = { sigma, time_constant }`, `sinusoidal = { amplitude, frequency, phase? }`,
-//! `temperature_bias`, `constant_bias`, `turn_on_bias`, `scale_factor`, `misalignment = [a, b]`,
-//! and the real-sensor effects of [`crate::filter`]:
-//! - `output_filter = { kind, taps | cutoff, decimation? }`: kind `"moving_average"` or `"bartlett"`
-//!   with `taps` (an integer, 1 to 8192), `"lowpass1"` or `"lowpass2"` with `cutoff` (a frequency);
-//!   `decimation` (integer >= 1, default 1) internal samples per output sample;
-//! - `outliers = { rate, size }`: `rate` in events per time (`"60 /h"`, `"2 /min"`, `"0.01 /s"`, or a
-//!   plain number per hour), `size` in the signal's unit;
-//! - `warmup_transient = { amplitude, time_constant, per_run? }` (`per_run`: amplitude drawn per run
-//!   from N(0, amplitude^2); default false);
-//! - `resonance = { sigma, frequency, bandwidth }`: a narrow-band random vibration (second-order
-//!   Gauss-Markov), stationary std `sigma`, natural `frequency`, half-power `bandwidth` (below twice
-//!   the frequency).
+//! Axis keys: the name of each effect ([`crate::Effect::name`]), read by its own type
+//! (`terms/<effect>.rs`, [`crate::TermKind::from_raw`], which documents the key's form; the keys
+//! and their units are listed in docs/model.md §2, §2.2). An axis table with another key is an
+//! error naming the keys there are.
 //!
 //! `bias_instability` states its convention (docs/architecture.md, Units):
 //! - `{ value, convention = "ieee" }`: value is the IEEE coefficient B (Allan plateau 0.664 B);
@@ -38,21 +28,22 @@
 //!
 //! Flicker options: `band = ["0.1 s", "1e5 s"]` (correlation times), `per_decade = 1`.
 
-mod allan_minimum;
 mod convert;
-mod error;
+pub(crate) mod error;
 mod raw;
+pub(crate) mod read;
 mod write;
 
 pub use error::ConfigError;
 pub use write::UnitStyle;
 
-pub(crate) use convert::signal_of;
+pub(crate) use read::signal_of;
 
 use crate::effect::Sensor;
 use crate::model::*;
-use convert::{convert_temperature, convert_triad, Ctx};
+use convert::{convert_temperature, convert_triad};
 use raw::RawSensor;
+use read::Ctx;
 use std::path::Path;
 
 impl SensorModel {
@@ -123,45 +114,6 @@ pub fn utf8_text(bytes: Vec<u8>, file: &str) -> Result<String, ConfigError> {
     })
 }
 
-/// An example of each value-with-unit key, for errors about a value of the wrong shape.
-const KEY_EXAMPLES: [(&str, &str); 14] = [
-    ("quantization", "quantization = \"0.001 deg\""),
-    (
-        "white_noise",
-        "white_noise = \"0.05 deg/s/sqrt(Hz)\" (gyro) or \"40 ug/sqrt(Hz)\" (accelerometer)",
-    ),
-    (
-        "rate_random_walk",
-        "rate_random_walk = \"0.5 deg/h/sqrt(h)\"",
-    ),
-    ("rate_ramp", "rate_ramp = \"0.01 deg/h/h\""),
-    ("temperature_bias", "temperature_bias = \"0.01 deg/s/degC\""),
-    (
-        "constant_bias",
-        "constant_bias = \"0.1 deg/s\" (gyro) or \"2 mg\" (accelerometer)",
-    ),
-    ("turn_on_bias", "turn_on_bias = \"3 deg/s\""),
-    ("scale_factor", "scale_factor = \"0.1 %\""),
-    ("misalignment", "misalignment = [\"0.1 deg\", \"0.1 deg\"]"),
-    ("name", "name = \"My IMU\""),
-    (
-        "output_filter",
-        "output_filter = { kind = \"lowpass2\", cutoff = \"25 Hz\", decimation = 4 } or { kind = \"bartlett\", taps = 8 }",
-    ),
-    (
-        "outliers",
-        "outliers = { rate = \"60 /h\", size = \"1 deg/s\" }",
-    ),
-    (
-        "warmup_transient",
-        "warmup_transient = { amplitude = \"0.03 deg/s\", time_constant = \"600 s\", per_run = false }",
-    ),
-    (
-        "resonance",
-        "resonance = { sigma = \"0.5 mg\", frequency = \"10 Hz\", bandwidth = \"0.7 Hz\" }",
-    ),
-];
-
 /// A TOML error about a value of the wrong shape, with the accepted form and an example added:
 /// numbers need their unit, so a bare number is the commonest mistake.
 fn with_shape_hint(message: &str) -> String {
@@ -183,12 +135,12 @@ fn with_shape_hint(message: &str) -> String {
         .and_then(|rest| rest.split('=').next())
         .map(|k| k.trim().trim_matches('"'))
         .unwrap_or("");
-    let example = KEY_EXAMPLES
-        .iter()
-        .find(|(k, _)| *k == key)
-        .map_or("e.g. \"0.05 deg/s\"".to_string(), |(_, e)| {
-            format!("e.g. {e}")
-        });
+    // An axis key's example comes from its term (`TermKind::EXAMPLE`).
+    let example = match key {
+        "name" => Some("name = \"My IMU\""),
+        _ => crate::terms::Effect::from_name(key).and_then(|e| e.example()),
+    }
+    .map_or("e.g. \"0.05 deg/s\"".to_string(), |e| format!("e.g. {e}"));
     format!(
         "{message}\n  values carry their unit in a string, as spec sheets write them: {example}"
     )

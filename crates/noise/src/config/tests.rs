@@ -1,9 +1,9 @@
 //! Unit tests of the sensor config.
 
-use super::allan_minimum::model_adev_minimum;
 use super::*;
 use crate::closed_form as cf;
 use crate::temperature::TemperatureProfile;
+use crate::terms::bias_instability::model_adev_minimum;
 use crate::terms::bias_instability::BiasInstability;
 use crate::terms::outliers::Outliers;
 use crate::terms::output_filter::{FilterKind, OutputFilter};

@@ -4,22 +4,7 @@ use super::signal_of;
 use crate::effect::Sensor;
 use crate::model::*;
 use crate::temperature::TemperatureProfile;
-use crate::terms::bias_instability::BiasInstability;
-use crate::terms::constant_bias::ConstantBias;
-use crate::terms::gauss_markov::GaussMarkov;
-use crate::terms::misalignment::Misalignment;
-use crate::terms::outliers::Outliers;
-use crate::terms::output_filter::{FilterKind, OutputFilter};
-use crate::terms::quantization::Quantization;
-use crate::terms::rate_ramp::RateRamp;
-use crate::terms::rate_random_walk::RateRandomWalk;
-use crate::terms::resonance::Resonance;
-use crate::terms::scale_factor::ScaleFactor;
-use crate::terms::sinusoidal::Sinusoid;
-use crate::terms::temperature_bias::TemperatureBias;
-use crate::terms::turn_on_bias::TurnOnBias;
-use crate::terms::warmup_transient::WarmupTransient;
-use crate::terms::white_noise::WhiteNoise;
+use crate::terms::{Effect, WriteContext, WRITE_ORDER};
 use crate::units::{format_si, Quantity, Signal};
 use crate::AXIS_NAMES;
 use std::fmt::Write as _;
@@ -124,8 +109,8 @@ fn write_axis(s: &mut String, a: &AxisModel, sig: Signal) {
     write_axis_with(s, a, sig, &format_si, &|v| format!("{v:?}"));
 }
 
-/// The keys of one axis, each value written by `format_si` (value, quantity) -> "value unit",
-/// plain numbers (the outlier rate per hour) by `number`.
+/// The keys of one axis in [`WRITE_ORDER`], each value written by its term with `format_si`
+/// (value, quantity) -> "value unit", plain numbers (the outlier rate per hour) by `number`.
 fn write_axis_with(
     s: &mut String,
     a: &AxisModel,
@@ -133,126 +118,16 @@ fn write_axis_with(
     format_si: &dyn Fn(f64, Quantity) -> String,
     number: &dyn Fn(f64) -> String,
 ) {
-    let mut line = |key: &str, v: f64, q: Quantity| {
-        let _ = writeln!(s, "{key} = \"{}\"", format_si(v, q));
+    let cx = WriteContext {
+        sig,
+        format: format_si,
+        number,
     };
-    if let Some(v) = a.get::<Quantization>().map(Quantization::coefficient) {
-        line("quantization", v, Quantity::Integrated(sig));
-    }
-    if let Some(v) = a.get::<WhiteNoise>().map(WhiteNoise::density) {
-        line("white_noise", v, Quantity::NoiseDensity(sig));
-    }
-    if let Some(v) = a.get::<RateRandomWalk>().map(RateRandomWalk::density) {
-        line("rate_random_walk", v, Quantity::RandomWalk(sig));
-    }
-    if let Some(v) = a.get::<RateRamp>().map(RateRamp::rate) {
-        line("rate_ramp", v, Quantity::Ramp(sig));
-    }
-    if let Some(v) = a.get::<TemperatureBias>().map(TemperatureBias::per_degree) {
-        line("temperature_bias", v, Quantity::PerDegree(sig));
-    }
-    if let Some(v) = a.get::<ConstantBias>().map(ConstantBias::bias) {
-        line("constant_bias", v, Quantity::Signal(sig));
-    }
-    if let Some(v) = a.get::<TurnOnBias>().map(TurnOnBias::sigma) {
-        line("turn_on_bias", v, Quantity::Signal(sig));
-    }
-    if let Some(v) = a.get::<ScaleFactor>().map(ScaleFactor::ratio) {
-        line("scale_factor", v, Quantity::Ratio);
-    }
-    match a.get::<BiasInstability>() {
-        Some(BiasInstability::Flicker(f)) => {
-            let _ = writeln!(
-                s,
-                "bias_instability = {{ value = \"{}\", convention = \"ieee\", band = [\"{}\", \"{}\"], per_decade = {} }}",
-                format_si(f.b, Quantity::Signal(sig)),
-                format_si(f.tau_min_s, Quantity::Time),
-                format_si(f.tau_max_s, Quantity::Time),
-                f.per_decade
-            );
+    for effect in WRITE_ORDER {
+        if let Some(term) = a.term(effect) {
+            let value = term.as_error_term().config_value(&cx);
+            let _ = writeln!(s, "{} = {value}", effect.name());
         }
-        Some(BiasInstability::RandomWalk {
-            stability,
-            period_s,
-        }) => {
-            let _ = writeln!(
-                s,
-                "bias_instability = {{ model = \"random_walk\", stability = \"{}\", period = \"{}\" }}",
-                format_si(*stability, Quantity::Signal(sig)),
-                format_si(*period_s, Quantity::Time)
-            );
-        }
-        None => {}
-    }
-    if let Some(g) = a.get::<GaussMarkov>() {
-        let _ = writeln!(
-            s,
-            "gauss_markov = {{ sigma = \"{}\", time_constant = \"{}\" }}",
-            format_si(g.sigma, Quantity::Signal(sig)),
-            format_si(g.tau_s, Quantity::Time)
-        );
-    }
-    if let Some(w) = a.get::<Sinusoid>() {
-        let phase = w
-            .phase_rad
-            .map(|p| format!(", phase = \"{}\"", format_si(p, Quantity::Angle)))
-            .unwrap_or_default();
-        let _ = writeln!(
-            s,
-            "sinusoidal = {{ amplitude = \"{}\", frequency = \"{}\"{phase} }}",
-            format_si(w.amplitude, Quantity::Signal(sig)),
-            format_si(w.frequency_hz, Quantity::Frequency)
-        );
-    }
-    if let Some(f) = a.get::<OutputFilter>() {
-        let parameter = match f.kind {
-            FilterKind::MovingAverage { taps } | FilterKind::Bartlett { taps } => {
-                format!("taps = {taps}")
-            }
-            FilterKind::LowPass1 { cutoff_hz } | FilterKind::LowPass2 { cutoff_hz } => {
-                format!("cutoff = \"{}\"", format_si(cutoff_hz, Quantity::Frequency))
-            }
-        };
-        let _ = writeln!(
-            s,
-            "output_filter = {{ kind = \"{}\", {parameter}, decimation = {} }}",
-            f.kind.name(),
-            f.decimation
-        );
-    }
-    if let Some(o) = a.get::<Outliers>() {
-        let _ = writeln!(
-            s,
-            "outliers = {{ rate = \"{} /h\", size = \"{}\" }}",
-            number(o.rate_per_hour),
-            format_si(o.size, Quantity::Signal(sig))
-        );
-    }
-    if let Some(w) = a.get::<WarmupTransient>() {
-        let _ = writeln!(
-            s,
-            "warmup_transient = {{ amplitude = \"{}\", time_constant = \"{}\", per_run = {} }}",
-            format_si(w.amplitude, Quantity::Signal(sig)),
-            format_si(w.tau_s, Quantity::Time),
-            w.per_run
-        );
-    }
-    if let Some(r) = a.get::<Resonance>() {
-        let _ = writeln!(
-            s,
-            "resonance = {{ sigma = \"{}\", frequency = \"{}\", bandwidth = \"{}\" }}",
-            format_si(r.sigma, Quantity::Signal(sig)),
-            format_si(r.frequency_hz, Quantity::Frequency),
-            format_si(r.bandwidth_hz, Quantity::Frequency)
-        );
-    }
-    if let Some([m1, m2]) = a.get::<Misalignment>().map(Misalignment::angles_rad) {
-        let _ = writeln!(
-            s,
-            "misalignment = [\"{}\", \"{}\"]",
-            format_si(m1, Quantity::Angle),
-            format_si(m2, Quantity::Angle)
-        );
     }
 }
 
@@ -289,41 +164,8 @@ impl UnitStyle {
             };
             for axis in tables.values().filter_map(|v| v.as_table()) {
                 for (key, v) in axis {
-                    let q = match key.as_str() {
-                        "quantization" => Quantity::Integrated(sig),
-                        "white_noise" => Quantity::NoiseDensity(sig),
-                        "rate_random_walk" => Quantity::RandomWalk(sig),
-                        "rate_ramp" => Quantity::Ramp(sig),
-                        "temperature_bias" => Quantity::PerDegree(sig),
-                        "constant_bias" | "turn_on_bias" | "bias_instability" | "outliers"
-                        | "warmup_transient" | "output_filter" | "resonance" => {
-                            Quantity::Signal(sig)
-                        }
-                        "scale_factor" => Quantity::Ratio,
-                        "misalignment" => {
-                            if let Some(first) = v.as_array().and_then(|a| a.first()) {
-                                note(Quantity::Angle, first);
-                            }
-                            continue;
-                        }
-                        _ => continue,
-                    };
-                    match v.as_table() {
-                        None => note(q, v),
-                        Some(t) => {
-                            for (k, inner) in t {
-                                match k.as_str() {
-                                    "value" | "sigma" | "amplitude" | "stability" | "size" => {
-                                        note(Quantity::Signal(sig), inner)
-                                    }
-                                    "time_constant" | "period" => note(Quantity::Time, inner),
-                                    "frequency" | "cutoff" | "bandwidth" => {
-                                        note(Quantity::Frequency, inner)
-                                    }
-                                    _ => {}
-                                }
-                            }
-                        }
+                    if let Some(effect) = Effect::from_name(key) {
+                        effect.note_units(v, sig, &mut note);
                     }
                 }
             }

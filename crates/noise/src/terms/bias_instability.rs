@@ -3,11 +3,17 @@
 
 use super::gauss_markov::BankGenerator;
 use super::rate_random_walk::RandomWalkGenerator;
-use super::term::{ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind};
+use super::term::{
+    note_value_units, ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind, WriteContext,
+};
 use crate::closed_form as cf;
+use crate::config::error::ConfigError;
+use crate::config::read::{in_units_of, ReadContext, Text};
 use crate::discrete::RandomWalk;
 use crate::filter::FilteredAllan;
+use crate::model::AxisModel;
 use crate::model_error::{check, ModelError};
+use crate::units::{Quantity, Signal};
 use crate::ImuRng;
 
 /// Flicker (1/f) bias instability of IEEE coefficient B, generated as a sum of log-spaced
@@ -153,6 +159,308 @@ impl BiasInstability {
     }
 }
 
+// The `allan_minimum` convention: the IEEE coefficient B solved (bisection) so that the closed-form
+// Allan deviation of the whole axis model has the stated minimum over the flicker plateau.
+
+/// Log-spaced averaging times inside the flicker band's plateau, [30 tau_min, tau_max / 30], where the
+/// component sum is within 1.3 % of 0.664 B (`Flicker::per_decade`); nearer the band edges it falls off
+/// (0.55 B at 2 tau_min), which would make a curve without a rising term take its minimum there.
+fn plateau_taus(f: &Flicker) -> Vec<f64> {
+    let lo = 30.0 * f.tau_min_s;
+    let hi = (f.tau_max_s / 30.0).max(lo);
+    let n = ((hi / lo).log10() * 40.0).ceil().max(1.0) as usize;
+    (0..=n)
+        .map(|i| lo * (hi / lo).powf(i as f64 / n as f64))
+        .collect()
+}
+
+/// Minimum over the plateau taus of the total closed-form Allan deviation.
+pub(crate) fn model_adev_minimum(axis: &AxisModel, band: &Flicker) -> (f64, f64) {
+    plateau_taus(band)
+        .into_iter()
+        .map(|tau| (axis.allan_variance(tau).sqrt(), tau))
+        .fold((f64::INFINITY, 0.0), |a, b| if b.0 < a.0 { b } else { a })
+}
+
+/// B such that the axis' total Allan-deviation minimum equals `target`. Err(floor) when the other
+/// terms alone already exceed it. The minimum grows monotonically with B, so bisection converges.
+fn solve_b_for_minimum(
+    target: f64,
+    others: &AxisModel,
+    flicker: &dyn Fn(f64) -> Flicker,
+) -> Result<f64, f64> {
+    let min_with = |b: f64| {
+        let mut axis = others.clone();
+        axis.set_term(BiasInstability::Flicker(flicker(b)));
+        model_adev_minimum(&axis, &flicker(b)).0
+    };
+    let floor = min_with(0.0);
+    if floor >= target {
+        return Err(floor);
+    }
+    let (mut lo, mut hi) = (0.0, 2.0 * target / cf::FLICKER_PLATEAU_PER_B);
+    while min_with(hi) < target {
+        hi *= 2.0;
+    }
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if min_with(mid) < target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Ok(0.5 * (lo + hi))
+}
+
+/// Most Gauss-Markov components a flicker bias instability may have (20 decades at 5 per decade).
+const MAX_FLICKER_COMPONENTS: f64 = 100.0;
+
+/// What `bias_instability` may be: a value with a unit (the Allan-deviation minimum, as spec
+/// sheets quote "in-run bias stability") or the table form with its convention stated.
+#[derive(Clone)]
+pub enum RawBiasField {
+    Plain(String),
+    Table(Box<RawBiasInstability>),
+}
+
+/// The accepted forms, for error messages.
+const BIAS_INSTABILITY_FORMS: &str = "a value with a unit, e.g. bias_instability = \"10 deg/h\" (the Allan-deviation minimum, as spec sheets quote in-run bias stability), or a table: { value = \"10 deg/h\", convention = \"allan_minimum\" | \"ieee\" }, or { model = \"random_walk\", stability = \"36 ug\", period = \"800 s\" }";
+
+impl<'de> serde::Deserialize<'de> for RawBiasField {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = RawBiasField;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str(BIAS_INSTABILITY_FORMS)
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<RawBiasField, E> {
+                Ok(RawBiasField::Plain(v.to_string()))
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> Result<RawBiasField, A::Error> {
+                <RawBiasInstability as serde::Deserialize>::deserialize(
+                    serde::de::value::MapAccessDeserializer::new(map),
+                )
+                .map(|t| RawBiasField::Table(Box::new(t)))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+impl RawBiasField {
+    /// The table form; a plain value becomes `{ value, convention = "allan_minimum" }` with the
+    /// value's place in the file.
+    fn table(field: &toml::Spanned<RawBiasField>) -> RawBiasInstability {
+        match field.get_ref() {
+            RawBiasField::Table(t) => (**t).clone(),
+            RawBiasField::Plain(v) => RawBiasInstability {
+                model: None,
+                value: Some(toml::Spanned::new(field.span(), v.clone())),
+                convention: Some(toml::Spanned::new(field.span(), "allan_minimum".into())),
+                band: None,
+                per_decade: None,
+                stability: None,
+                period: None,
+            },
+        }
+    }
+}
+
+/// The table form of `bias_instability` as written.
+#[derive(serde::Deserialize, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct RawBiasInstability {
+    model: Option<Text>,
+    value: Option<Text>,
+    convention: Option<Text>,
+    band: Option<Vec<Text>>,
+    per_decade: Option<i64>,
+    stability: Option<Text>,
+    period: Option<Text>,
+}
+
+/// `{ model = "random_walk", stability, period }`: Woodman's bias random walk (eq 9).
+fn read_random_walk(
+    raw: &RawBiasInstability,
+    cx: &ReadContext,
+) -> Result<BiasInstability, ConfigError> {
+    for (name, present, at) in [
+        ("value", raw.value.is_some(), raw.value.as_ref()),
+        (
+            "convention",
+            raw.convention.is_some(),
+            raw.convention.as_ref(),
+        ),
+        (
+            "band",
+            raw.band.is_some(),
+            raw.band.as_ref().and_then(|b| b.first()),
+        ),
+        ("per_decade", raw.per_decade.is_some(), None),
+    ] {
+        if present {
+            return Err(cx.ctx.invalid_at(
+                &cx.sub(name),
+                at,
+                "only `stability` and `period` for model \"random_walk\"",
+                "an extra key",
+            ));
+        }
+    }
+    let need = |name: &str, v: &Option<Text>| {
+        v.clone().ok_or_else(|| {
+            cx.ctx.invalid(
+                &cx.sub(name),
+                "a value (model \"random_walk\" needs stability and period)",
+                "nothing",
+            )
+        })
+    };
+    let stability = cx.ctx.value(
+        &cx.sub("stability"),
+        &need("stability", &raw.stability)?,
+        Quantity::Signal(cx.sig),
+        true,
+    )?;
+    let period_s = cx.ctx.positive(
+        &cx.sub("period"),
+        &need("period", &raw.period)?,
+        Quantity::Time,
+    )?;
+    Ok(BiasInstability::RandomWalk {
+        stability,
+        period_s,
+    })
+}
+
+/// `{ value, convention, band?, per_decade? }`: flicker with B stated (`"ieee"`) or solved from the
+/// axis' Allan minimum (`"allan_minimum"`).
+fn read_flicker(
+    raw: &RawBiasInstability,
+    cx: &ReadContext,
+) -> Result<BiasInstability, ConfigError> {
+    for (name, at) in [("stability", &raw.stability), ("period", &raw.period)] {
+        if let Some(at) = at {
+            return Err(cx.ctx.invalid_at(
+                &cx.sub(name),
+                Some(at),
+                "no `stability`/`period` for a flicker bias instability (use model = \"random_walk\" for Woodman's bias random walk)",
+                "an extra key",
+            ));
+        }
+    }
+    let value_text = raw.value.as_ref().ok_or_else(|| {
+        cx.ctx.invalid(
+            &cx.sub("value"),
+            "the bias instability value, e.g. \"0.010 deg/s\"",
+            "nothing",
+        )
+    })?;
+    let value = cx
+        .ctx
+        .value(&cx.sub("value"), value_text, Quantity::Signal(cx.sig), true)?;
+    let (tau_min_s, tau_max_s, per_decade) = flicker_band(raw, cx)?;
+    let flicker = |b: f64| Flicker {
+        b,
+        tau_min_s,
+        tau_max_s,
+        per_decade,
+    };
+    let b = match raw.convention.as_ref().map(|c| c.get_ref().as_str()) {
+        Some("ieee") => value,
+        Some("allan_minimum") => solve_b_for_minimum(value, cx.others, &flicker).map_err(|floor| {
+            cx.ctx.invalid_at(
+                &cx.sub("value"),
+                Some(value_text),
+                format!(
+                    "an Allan minimum above what the other terms of the axis already give ({} over the flicker band's plateau; widen `band`)",
+                    in_units_of(floor, value_text.get_ref(), Quantity::Signal(cx.sig))
+                ),
+                format!("\"{}\"", value_text.get_ref()),
+            )
+        })?,
+        Some(other) => {
+            return Err(cx.ctx.invalid_at(
+                &cx.sub("convention"),
+                raw.convention.as_ref(),
+                "\"ieee\" (value is B, Allan plateau 0.664 B) or \"allan_minimum\" (value is the Allan-deviation minimum, as Woodman reports it)",
+                format!("\"{other}\""),
+            ))
+        }
+        None => {
+            return Err(cx.ctx.invalid(
+                &cx.sub("convention"),
+                "a stated convention: \"ieee\" (value is B, plateau 0.664 B) or \"allan_minimum\" (value is the Allan-deviation minimum)",
+                "nothing",
+            ))
+        }
+    };
+    Ok(BiasInstability::Flicker(flicker(b)))
+}
+
+/// The flicker band and its density: `band = [shortest, longest]` correlation times (default
+/// 0.1 s .. 1e5 s) and `per_decade` (default 1), at most [`MAX_FLICKER_COMPONENTS`] components.
+fn flicker_band(
+    raw: &RawBiasInstability,
+    cx: &ReadContext,
+) -> Result<(f64, f64, u32), ConfigError> {
+    let (tau_min_s, tau_max_s) = match &raw.band {
+        None => (Flicker::DEFAULT_TAU_MIN_S, Flicker::DEFAULT_TAU_MAX_S),
+        Some(b) if b.len() == 2 => (
+            cx.ctx
+                .positive(&format!("{}[0]", cx.sub("band")), &b[0], Quantity::Time)?,
+            cx.ctx
+                .positive(&format!("{}[1]", cx.sub("band")), &b[1], Quantity::Time)?,
+        ),
+        Some(b) => {
+            return Err(cx.ctx.invalid_at(
+                &cx.sub("band"),
+                b.first(),
+                "two correlation times [shortest, longest], e.g. [\"0.1 s\", \"1e5 s\"]",
+                format!("{} values", b.len()),
+            ))
+        }
+    };
+    if tau_max_s <= tau_min_s {
+        return Err(cx.ctx.invalid_at(
+            &cx.sub("band"),
+            raw.band.as_ref().and_then(|b| b.first()),
+            "the longest time after the shortest",
+            format!("{tau_min_s} s .. {tau_max_s} s"),
+        ));
+    }
+    let per_decade = match raw.per_decade {
+        None => Flicker::DEFAULT_PER_DECADE,
+        Some(n) if (1..=20).contains(&n) => n as u32,
+        Some(n) => {
+            return Err(cx.ctx.invalid(
+                &cx.sub("per_decade"),
+                "an integer from 1 to 20",
+                n.to_string(),
+            ))
+        }
+    };
+    // One Gauss-Markov component per 1/per_decade decade of the band: bound their number,
+    // which sets the cost of every sample.
+    let components = (tau_max_s / tau_min_s).log10() * f64::from(per_decade);
+    if components.is_nan() || components > MAX_FLICKER_COMPONENTS {
+        return Err(cx.ctx.invalid_at(
+            &cx.sub("band"),
+            raw.band.as_ref().and_then(|b| b.first()),
+            format!(
+                "a band and per_decade giving at most {MAX_FLICKER_COMPONENTS} components (decades x per_decade), e.g. [\"0.1 s\", \"1e5 s\"] with per_decade = 1"
+            ),
+            format!("{components:.3e} components"),
+        ));
+    }
+    Ok((tau_min_s, tau_max_s, per_decade))
+}
+
 impl ErrorTerm for BiasInstability {
     fn allan_variance(&self, tau_s: f64) -> Option<f64> {
         Some(self.avar(tau_s))
@@ -160,6 +468,28 @@ impl ErrorTerm for BiasInstability {
 
     fn allan_variance_sampled(&self, tau_s: f64, dt_s: f64) -> Option<f64> {
         Some(self.avar_sampled(tau_s, dt_s))
+    }
+
+    /// `{ value, convention = "ieee", band, per_decade }` (B itself, so it reads back bit for bit),
+    /// or the random walk's table.
+    fn config_value(&self, cx: &WriteContext) -> String {
+        match self {
+            BiasInstability::Flicker(f) => format!(
+                "{{ value = {}, convention = \"ieee\", band = [{}, {}], per_decade = {} }}",
+                cx.quoted(f.b, Quantity::Signal(cx.sig)),
+                cx.quoted(f.tau_min_s, Quantity::Time),
+                cx.quoted(f.tau_max_s, Quantity::Time),
+                f.per_decade
+            ),
+            BiasInstability::RandomWalk {
+                stability,
+                period_s,
+            } => format!(
+                "{{ model = \"random_walk\", stability = {}, period = {} }}",
+                cx.quoted(*stability, Quantity::Signal(cx.sig)),
+                cx.quoted(*period_s, Quantity::Time)
+            ),
+        }
     }
 
     /// Each flicker component, or the walk, behind the filter.
@@ -181,6 +511,37 @@ impl ErrorTerm for BiasInstability {
 impl TermKind for BiasInstability {
     const STOCHASTIC: bool = true;
     const SHOWS_IN_STATIC_LOG: bool = true;
+    /// A plain value, or a table ([`RawBiasInstability`]).
+    type Raw = toml::Spanned<RawBiasField>;
+    /// The `allan_minimum` convention solves B against the axis' other terms.
+    const READS_OTHER_TERMS: bool = true;
+
+    /// Flicker (`model` absent or `"flicker"`) or Woodman's random walk (`model = "random_walk"`).
+    fn from_raw(
+        field: &toml::Spanned<RawBiasField>,
+        cx: &ReadContext,
+    ) -> Result<BiasInstability, ConfigError> {
+        let raw = RawBiasField::table(field);
+        match raw
+            .model
+            .as_ref()
+            .map_or("flicker", |m| m.get_ref().as_str())
+        {
+            "random_walk" => read_random_walk(&raw, cx),
+            "flicker" => read_flicker(&raw, cx),
+            other => Err(cx.ctx.invalid(
+                &cx.sub("model"),
+                "\"flicker\" (default) or \"random_walk\" (Woodman's bias random walk)",
+                format!("\"{other}\""),
+            )),
+        }
+    }
+
+    /// A plain value is the Allan minimum, of the signal.
+    fn note_units(value: &toml::Value, sig: Signal, note: &mut dyn FnMut(Quantity, &toml::Value)) {
+        note_value_units(value, Quantity::Signal(sig), sig, note);
+    }
+
     type Generator = BiasInstabilityGenerator;
 
     fn generator(&self, cx: &GenContext, rng: &dyn Fn() -> ImuRng) -> BiasInstabilityGenerator {

@@ -1,7 +1,12 @@
 //! A constant bias (Woodman §3.2.1).
 
-use super::term::{ErrorTerm, GenContext, Generate, Stage, TermKind};
+use super::term::{
+    note_value_units, ErrorTerm, GenContext, Generate, Stage, TermKind, WriteContext,
+};
+use crate::config::error::ConfigError;
+use crate::config::read::{ReadContext, Text};
 use crate::model_error::{check_finite, ModelError};
+use crate::units::{Quantity, Signal};
 use crate::ImuRng;
 
 /// Constant bias (rad/s, m/s^2), signed.
@@ -24,11 +29,28 @@ impl ConstantBias {
     }
 }
 
-impl ErrorTerm for ConstantBias {}
+impl ErrorTerm for ConstantBias {
+    fn config_value(&self, cx: &WriteContext) -> String {
+        cx.quoted(self.bias, Quantity::Signal(cx.sig))
+    }
+}
 
 impl TermKind for ConstantBias {
     const STOCHASTIC: bool = false;
     const SHOWS_IN_STATIC_LOG: bool = false;
+    type Raw = Text;
+    const EXAMPLE: Option<&'static str> =
+        Some("constant_bias = \"0.1 deg/s\" (gyro) or \"2 mg\" (accelerometer)");
+
+    fn from_raw(raw: &Text, cx: &ReadContext) -> Result<ConstantBias, ConfigError> {
+        let value = cx.value(raw, Quantity::Signal(cx.sig), false)?;
+        ConstantBias::new(value).map_err(|e| cx.refused(&cx.key, e))
+    }
+
+    fn note_units(value: &toml::Value, sig: Signal, note: &mut dyn FnMut(Quantity, &toml::Value)) {
+        note_value_units(value, Quantity::Signal(sig), sig, note);
+    }
+
     type Generator = ConstantBiasGenerator;
 
     fn generator(&self, _cx: &GenContext, _rng: &dyn Fn() -> ImuRng) -> ConstantBiasGenerator {

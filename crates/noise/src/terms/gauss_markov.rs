@@ -1,10 +1,13 @@
 //! A first-order Gauss-Markov bias (docs/model.md §2, §3).
 
-use super::term::{ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind};
+use super::term::{ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind, WriteContext};
 use crate::closed_form as cf;
+use crate::config::error::ConfigError;
+use crate::config::read::{ReadContext, Text};
 use crate::discrete::GaussMarkovBank;
 use crate::filter::FilteredAllan;
 use crate::model_error::{check, ModelError};
+use crate::units::{Quantity, Signal};
 use crate::ImuRng;
 
 /// First-order Gauss-Markov bias: stationary std `sigma`, correlation time `tau_s`.
@@ -23,6 +26,14 @@ impl GaussMarkov {
     }
 }
 
+/// `gauss_markov = { sigma, time_constant }` as written.
+#[derive(serde::Deserialize, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct RawGaussMarkov {
+    sigma: Text,
+    time_constant: Text,
+}
+
 impl ErrorTerm for GaussMarkov {
     /// Hou 4.60 (docs/model.md §2).
     fn allan_variance(&self, tau_s: f64) -> Option<f64> {
@@ -38,11 +49,35 @@ impl ErrorTerm for GaussMarkov {
     fn allan_variance_filtered(&self, tau_s: f64, _dt_s: f64, fa: &FilteredAllan) -> Option<f64> {
         Some(fa.gauss_markov(self.sigma, self.tau_s, tau_s))
     }
+
+    fn config_value(&self, cx: &WriteContext) -> String {
+        format!(
+            "{{ sigma = {}, time_constant = {} }}",
+            cx.quoted(self.sigma, Quantity::Signal(cx.sig)),
+            cx.quoted(self.tau_s, Quantity::Time)
+        )
+    }
 }
 
 impl TermKind for GaussMarkov {
     const STOCHASTIC: bool = true;
     const SHOWS_IN_STATIC_LOG: bool = true;
+    type Raw = RawGaussMarkov;
+
+    fn from_raw(raw: &RawGaussMarkov, cx: &ReadContext) -> Result<GaussMarkov, ConfigError> {
+        let sigma = cx.sub_value("sigma", &raw.sigma, Quantity::Signal(cx.sig), true)?;
+        let tau_s = cx.sub_positive("time_constant", &raw.time_constant, Quantity::Time)?;
+        GaussMarkov::new(sigma, tau_s).map_err(|e| cx.refused(&cx.key, e))
+    }
+
+    /// None: a written config has never taken its units from this table.
+    fn note_units(
+        _value: &toml::Value,
+        _sig: Signal,
+        _note: &mut dyn FnMut(Quantity, &toml::Value),
+    ) {
+    }
+
     type Generator = BankGenerator;
 
     /// A bank of one, its initial state drawn from the term's stream.

@@ -1,7 +1,10 @@
 //! Misalignment: the sensitivity of an axis to the two other axes (Woodman §3.2.5).
 
-use super::term::{ErrorTerm, GenContext, Generate, Stage, TermKind};
+use super::term::{ErrorTerm, GenContext, Generate, Stage, TermKind, WriteContext};
+use crate::config::error::ConfigError;
+use crate::config::read::{ReadContext, Text};
 use crate::model_error::{check_finite, ModelError};
+use crate::units::{Quantity, Signal};
 use crate::ImuRng;
 
 /// Misalignment (rad): sensitivity of this axis to the two other axes, in axis order
@@ -25,11 +28,48 @@ impl Misalignment {
     }
 }
 
-impl ErrorTerm for Misalignment {}
+impl ErrorTerm for Misalignment {
+    fn config_value(&self, cx: &WriteContext) -> String {
+        let [a, b] = self.angles_rad;
+        format!(
+            "[{}, {}]",
+            cx.quoted(a, Quantity::Angle),
+            cx.quoted(b, Quantity::Angle)
+        )
+    }
+}
 
 impl TermKind for Misalignment {
     const STOCHASTIC: bool = false;
     const SHOWS_IN_STATIC_LOG: bool = false;
+    /// Two angles, `misalignment = [a, b]`.
+    type Raw = Vec<Text>;
+    const EXAMPLE: Option<&'static str> = Some("misalignment = [\"0.1 deg\", \"0.1 deg\"]");
+
+    fn from_raw(list: &Vec<Text>, cx: &ReadContext) -> Result<Misalignment, ConfigError> {
+        if list.len() != 2 {
+            return Err(cx.ctx.invalid_at(
+                &cx.key,
+                list.first(),
+                "two angles: the sensitivity to the other two axes in x, y, z order",
+                format!("{} values", list.len()),
+            ));
+        }
+        let angle = |i: usize| {
+            let key = format!("{}[{i}]", cx.key);
+            cx.ctx.value(&key, &list[i], Quantity::Angle, false)
+        };
+        let angles = [angle(0)?, angle(1)?];
+        Misalignment::new(angles).map_err(|e| cx.refused(&cx.key, e))
+    }
+
+    /// The unit of the first angle.
+    fn note_units(value: &toml::Value, _sig: Signal, note: &mut dyn FnMut(Quantity, &toml::Value)) {
+        if let Some(first) = value.as_array().and_then(|a| a.first()) {
+            note(Quantity::Angle, first);
+        }
+    }
+
     type Generator = MisalignmentGenerator;
 
     fn generator(&self, cx: &GenContext, _rng: &dyn Fn() -> ImuRng) -> MisalignmentGenerator {

@@ -24,7 +24,7 @@ pub mod turn_on_bias;
 pub mod warmup_transient;
 pub mod white_noise;
 
-pub use term::{ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind};
+pub use term::{ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind, WriteContext};
 
 /// Writes, from the table of rows `Variant => file::Type`, the [`Effect`] enum (the row order is
 /// `Effect::ALL`; the file's name is the effect's name and config key), the [`Term`] enum and
@@ -67,6 +67,62 @@ macro_rules! registry {
             pub fn shows_in_static_log(self) -> bool {
                 match self {
                     $(Effect::$effect => <$file::$ty as TermKind>::SHOWS_IN_STATIC_LOG,)+
+                }
+            }
+
+            /// Is its key read after the axis' other terms ([`TermKind::READS_OTHER_TERMS`])?
+            pub(crate) fn reads_other_terms(self) -> bool {
+                match self {
+                    $(Effect::$effect => <$file::$ty as TermKind>::READS_OTHER_TERMS,)+
+                }
+            }
+
+            /// An example of its config key, for messages ([`TermKind::EXAMPLE`]).
+            pub(crate) fn example(self) -> Option<&'static str> {
+                match self {
+                    $(Effect::$effect => <$file::$ty as TermKind>::EXAMPLE,)+
+                }
+            }
+
+            /// Tell `note` the units its key's value is written in ([`TermKind::note_units`]).
+            pub(crate) fn note_units(
+                self,
+                value: &toml::Value,
+                sig: crate::units::Signal,
+                note: &mut dyn FnMut(crate::units::Quantity, &toml::Value),
+            ) {
+                match self {
+                    $(Effect::$effect => <$file::$ty as TermKind>::note_units(value, sig, note),)+
+                }
+            }
+        }
+
+        /// An axis table of a sensor TOML as written: each effect's key (its name) with the value
+        /// its type reads ([`TermKind::Raw`]).
+        #[derive(serde::Deserialize, Default, Clone)]
+        #[serde(deny_unknown_fields)]
+        pub(crate) struct RawAxis {
+            $($file: Option<<$file::$ty as TermKind>::Raw>,)+
+        }
+
+        impl RawAxis {
+            /// Does the table set `effect`'s key?
+            pub(crate) fn has(&self, effect: Effect) -> bool {
+                match effect {
+                    $(Effect::$effect => self.$file.is_some(),)+
+                }
+            }
+
+            /// `effect`'s term read from its key ([`TermKind::from_raw`]), if the table sets it.
+            pub(crate) fn read(
+                &self,
+                effect: Effect,
+                cx: &crate::config::read::ReadContext,
+            ) -> Option<Result<Term, crate::config::error::ConfigError>> {
+                match effect {
+                    $(Effect::$effect => self.$file.as_ref().map(|raw| {
+                        <$file::$ty as TermKind>::from_raw(raw, cx).map(Term::$effect)
+                    }),)+
                 }
             }
         }
@@ -243,14 +299,41 @@ pub const GENERATION_ORDER: [Effect; Effect::COUNT] = [
     Effect::OutputFilter,
 ];
 
-/// Every effect once in [`GENERATION_ORDER`] (checked when the crate compiles).
-const _: () = {
+/// The order a sensor TOML writes an axis' keys in: the plain values, then the tables, the
+/// misalignment last (the order written configs have always had).
+pub const WRITE_ORDER: [Effect; Effect::COUNT] = [
+    Effect::Quantization,
+    Effect::WhiteNoise,
+    Effect::RateRandomWalk,
+    Effect::RateRamp,
+    Effect::TemperatureBias,
+    Effect::ConstantBias,
+    Effect::TurnOnBias,
+    Effect::ScaleFactor,
+    Effect::BiasInstability,
+    Effect::GaussMarkov,
+    Effect::Sinusoidal,
+    Effect::OutputFilter,
+    Effect::Outliers,
+    Effect::WarmupTransient,
+    Effect::Resonance,
+    Effect::Misalignment,
+];
+
+/// Does `order` hold every effect once? (Checked for both orders when the crate compiles.)
+const fn is_permutation(order: &[Effect; Effect::COUNT]) -> bool {
     let mut seen = [false; Effect::COUNT];
     let mut i = 0;
     while i < Effect::COUNT {
-        let e = GENERATION_ORDER[i] as usize;
-        assert!(!seen[e], "an effect twice in GENERATION_ORDER");
+        let e = order[i] as usize;
+        if seen[e] {
+            return false;
+        }
         seen[e] = true;
         i += 1;
     }
-};
+    true
+}
+
+const _: () = assert!(is_permutation(&GENERATION_ORDER), "GENERATION_ORDER");
+const _: () = assert!(is_permutation(&WRITE_ORDER), "WRITE_ORDER");

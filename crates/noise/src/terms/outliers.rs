@@ -1,7 +1,12 @@
 //! Isolated outliers (spikes) on the output register.
 
-use super::term::{ErrorTerm, GenContext, Generate, Stage, TermKind};
+use super::term::{
+    note_value_units, ErrorTerm, GenContext, Generate, Stage, TermKind, WriteContext,
+};
+use crate::config::error::ConfigError;
+use crate::config::read::{ReadContext, Text};
 use crate::model_error::{check, ModelError};
+use crate::units::{Quantity, Signal};
 use crate::ImuRng;
 use rand::Rng;
 
@@ -34,16 +39,54 @@ impl Outliers {
     }
 }
 
+/// `outliers = { rate, size }` as written.
+#[derive(serde::Deserialize, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct RawOutliers {
+    rate: Text,
+    size: Text,
+}
+
 impl ErrorTerm for Outliers {
     /// White noise of variance p size^2 per output sample (no continuous form: p needs dt).
     fn allan_variance_sampled(&self, tau_s: f64, dt_s: f64) -> Option<f64> {
         Some(self.avar_sampled(tau_s, dt_s))
+    }
+
+    fn config_value(&self, cx: &WriteContext) -> String {
+        format!(
+            "{{ rate = \"{} /h\", size = {} }}",
+            (cx.number)(self.rate_per_hour),
+            cx.quoted(self.size, Quantity::Signal(cx.sig))
+        )
     }
 }
 
 impl TermKind for Outliers {
     const STOCHASTIC: bool = true;
     const SHOWS_IN_STATIC_LOG: bool = true;
+    type Raw = RawOutliers;
+    const EXAMPLE: Option<&'static str> =
+        Some("outliers = { rate = \"60 /h\", size = \"1 deg/s\" }");
+
+    /// `rate` in events per time (`"60 /h"`, `"2 /min"`, `"0.01 /s"`, or a plain number per hour),
+    /// `size` in the signal's unit.
+    fn from_raw(raw: &RawOutliers, cx: &ReadContext) -> Result<Outliers, ConfigError> {
+        let rate = cx.ctx.per_hour(&cx.sub("rate"), &raw.rate)?;
+        let size_key = cx.sub("size");
+        let size = cx
+            .ctx
+            .value(&size_key, &raw.size, Quantity::Signal(cx.sig), true)?;
+        Outliers::new(rate, size).map_err(|e| {
+            cx.ctx
+                .invalid_at(&size_key, Some(&raw.size), e.expected, e.to_string())
+        })
+    }
+
+    fn note_units(value: &toml::Value, sig: Signal, note: &mut dyn FnMut(Quantity, &toml::Value)) {
+        note_value_units(value, Quantity::Signal(sig), sig, note);
+    }
+
     type Generator = OutlierState;
 
     /// One outlier per output sample with probability p (at the output interval).

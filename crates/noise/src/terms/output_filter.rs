@@ -22,8 +22,11 @@
 //! The infinite responses are truncated where the remaining tail is below 1e-17 of the response's
 //! peak (their sum then differs from 1 by less than 1e-15).
 
-use super::term::{ErrorTerm, GenContext, NoGenerator, TermKind};
+use super::term::{note_value_units, ErrorTerm, GenContext, NoGenerator, TermKind, WriteContext};
+use crate::config::error::ConfigError;
+use crate::config::read::{Integer, ReadContext, Text};
 use crate::model_error::{check, ModelError};
+use crate::units::{Quantity, Signal};
 use crate::ImuRng;
 
 /// Which filter.
@@ -234,13 +237,136 @@ fn iir_response(b: &[f64], a: &[f64], limit: usize) -> Vec<f64> {
     h
 }
 
+/// `output_filter = { kind, taps | cutoff, decimation? }` as written.
+#[derive(serde::Deserialize, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct RawOutputFilter {
+    kind: Text,
+    taps: Option<Integer>,
+    cutoff: Option<Text>,
+    decimation: Option<Integer>,
+}
+
 /// The filter adds no error of its own; it changes the other terms' Allan variances
 /// (`crate::filter::FilteredAllan`, used by `AxisModel`).
-impl ErrorTerm for OutputFilter {}
+impl ErrorTerm for OutputFilter {
+    fn config_value(&self, cx: &WriteContext) -> String {
+        let parameter = match self.kind {
+            FilterKind::MovingAverage { taps } | FilterKind::Bartlett { taps } => {
+                format!("taps = {taps}")
+            }
+            FilterKind::LowPass1 { cutoff_hz } | FilterKind::LowPass2 { cutoff_hz } => {
+                format!("cutoff = {}", cx.quoted(cutoff_hz, Quantity::Frequency))
+            }
+        };
+        format!(
+            "{{ kind = \"{}\", {parameter}, decimation = {} }}",
+            self.kind.name(),
+            self.decimation
+        )
+    }
+}
 
 impl TermKind for OutputFilter {
     const STOCHASTIC: bool = false;
     const SHOWS_IN_STATIC_LOG: bool = true;
+    type Raw = RawOutputFilter;
+    const EXAMPLE: Option<&'static str> = Some("output_filter = { kind = \"lowpass2\", cutoff = \"25 Hz\", decimation = 4 } or { kind = \"bartlett\", taps = 8 }");
+
+    /// Kind `"moving_average"` or `"bartlett"` with `taps` (an integer, 1 to 8192), `"lowpass1"` or
+    /// `"lowpass2"` with `cutoff` (a frequency); `decimation` (integer >= 1, default 1) internal
+    /// samples per output sample. The kind's own parameter and no other.
+    fn from_raw(raw: &RawOutputFilter, cx: &ReadContext) -> Result<OutputFilter, ConfigError> {
+        let sub = |name: &str| cx.sub(name);
+        let ctx = cx.ctx;
+        // An integer's place in the file, for `invalid_at`.
+        let at = |i: &Integer| Text::new(i.span(), i.get_ref().to_string());
+        let kind = raw.kind.get_ref().as_str();
+        let fir = match kind {
+        "moving_average" | "bartlett" => true,
+        "lowpass1" | "lowpass2" => false,
+        other => {
+            return Err(ctx.invalid_at(
+                &sub("kind"),
+                Some(&raw.kind),
+                "one of \"moving_average\", \"bartlett\" (with taps), \"lowpass1\", \"lowpass2\" (with cutoff)",
+                format!("\"{other}\""),
+            ))
+        }
+    };
+        let (needs, extra) = if fir {
+            ("taps", raw.cutoff.clone().map(|c| ("cutoff", c)))
+        } else {
+            ("cutoff", raw.taps.as_ref().map(|t| ("taps", at(t))))
+        };
+        if let Some((name, text)) = extra {
+            return Err(ctx.invalid_at(
+                &sub(name),
+                Some(&text),
+                format!("only `{needs}` and `decimation` for kind \"{kind}\""),
+                "an extra key",
+            ));
+        }
+        let kind = if fir {
+            let t = raw.taps.as_ref().ok_or_else(|| {
+                ctx.invalid(
+                    &sub("taps"),
+                    format!("the number of taps for kind \"{kind}\", an integer such as taps = 8"),
+                    "nothing",
+                )
+            })?;
+            let taps = u32::try_from(*t.get_ref())
+                .ok()
+                .filter(|&n| n >= 1 && n as usize <= MAX_RESPONSE)
+                .ok_or_else(|| {
+                    ctx.invalid_at(
+                        &sub("taps"),
+                        Some(&at(t)),
+                        format!("an integer from 1 to {MAX_RESPONSE}"),
+                        t.get_ref().to_string(),
+                    )
+                })?;
+            if kind == "moving_average" {
+                FilterKind::MovingAverage { taps }
+            } else {
+                FilterKind::Bartlett { taps }
+            }
+        } else {
+            let c = raw.cutoff.as_ref().ok_or_else(|| {
+                ctx.invalid(
+                    &sub("cutoff"),
+                    format!("the cutoff frequency for kind \"{kind}\", e.g. cutoff = \"25 Hz\""),
+                    "nothing",
+                )
+            })?;
+            let cutoff_hz = ctx.positive(&sub("cutoff"), c, Quantity::Frequency)?;
+            if kind == "lowpass1" {
+                FilterKind::LowPass1 { cutoff_hz }
+            } else {
+                FilterKind::LowPass2 { cutoff_hz }
+            }
+        };
+        let decimation = match &raw.decimation {
+            None => 1,
+            Some(d) => u32::try_from(*d.get_ref())
+                .ok()
+                .filter(|&n| n >= 1)
+                .ok_or_else(|| {
+                    ctx.invalid_at(
+                    &sub("decimation"),
+                    Some(&at(d)),
+                    "a whole number >= 1 (internal samples per output sample; 1: no decimation)",
+                    d.get_ref().to_string(),
+                )
+                })?,
+        };
+        OutputFilter::new(kind, decimation).map_err(|e| cx.refused(&cx.key, e))
+    }
+
+    fn note_units(value: &toml::Value, sig: Signal, note: &mut dyn FnMut(Quantity, &toml::Value)) {
+        note_value_units(value, Quantity::Signal(sig), sig, note);
+    }
+
     type Generator = NoGenerator;
 
     /// The channel runs the filter itself ([`FilterState`]): it sets the interval of every other

@@ -1,8 +1,13 @@
 //! Quantisation of the integrated output (docs/model.md §2: the tau^-1 slope of the Allan deviation).
 
-use super::term::{ErrorTerm, GenContext, Generate, Stage, TermKind};
+use super::term::{
+    note_value_units, ErrorTerm, GenContext, Generate, Stage, TermKind, WriteContext,
+};
 use crate::closed_form as cf;
+use crate::config::error::ConfigError;
+use crate::config::read::{ReadContext, Text};
 use crate::model_error::{check, ModelError};
+use crate::units::{Quantity, Signal};
 use crate::ImuRng;
 use rand::Rng;
 
@@ -33,11 +38,27 @@ impl ErrorTerm for Quantization {
     fn allan_variance(&self, tau_s: f64) -> Option<f64> {
         Some(cf::quantization_avar(self.q, tau_s))
     }
+
+    fn config_value(&self, cx: &WriteContext) -> String {
+        cx.quoted(self.q, Quantity::Integrated(cx.sig))
+    }
 }
 
 impl TermKind for Quantization {
     const STOCHASTIC: bool = true;
     const SHOWS_IN_STATIC_LOG: bool = true;
+    type Raw = Text;
+    const EXAMPLE: Option<&'static str> = Some("quantization = \"0.001 deg\"");
+
+    fn from_raw(raw: &Text, cx: &ReadContext) -> Result<Quantization, ConfigError> {
+        let value = cx.value(raw, Quantity::Integrated(cx.sig), true)?;
+        Quantization::new(value).map_err(|e| cx.refused(&cx.key, e))
+    }
+
+    fn note_units(value: &toml::Value, sig: Signal, note: &mut dyn FnMut(Quantity, &toml::Value)) {
+        note_value_units(value, Quantity::Integrated(sig), sig, note);
+    }
+
     type Generator = Quantizer;
 
     /// The quantiser's phase is the term's one draw.

@@ -1,8 +1,13 @@
 //! Rate ramp: a bias growing linearly with time (docs/model.md §2).
 
-use super::term::{ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind};
+use super::term::{
+    note_value_units, ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind, WriteContext,
+};
 use crate::closed_form as cf;
+use crate::config::error::ConfigError;
+use crate::config::read::{ReadContext, Text};
 use crate::model_error::{check_finite, ModelError};
+use crate::units::{Quantity, Signal};
 use crate::ImuRng;
 
 /// Rate ramp R (rad/s^2, m/s^3), signed.
@@ -31,11 +36,27 @@ impl ErrorTerm for RateRamp {
     fn allan_variance(&self, tau_s: f64) -> Option<f64> {
         Some(cf::rate_ramp_avar(self.rate, tau_s))
     }
+
+    fn config_value(&self, cx: &WriteContext) -> String {
+        cx.quoted(self.rate, Quantity::Ramp(cx.sig))
+    }
 }
 
 impl TermKind for RateRamp {
     const STOCHASTIC: bool = false;
     const SHOWS_IN_STATIC_LOG: bool = true;
+    type Raw = Text;
+    const EXAMPLE: Option<&'static str> = Some("rate_ramp = \"0.01 deg/h/h\"");
+
+    fn from_raw(raw: &Text, cx: &ReadContext) -> Result<RateRamp, ConfigError> {
+        let value = cx.value(raw, Quantity::Ramp(cx.sig), false)?;
+        RateRamp::new(value).map_err(|e| cx.refused(&cx.key, e))
+    }
+
+    fn note_units(value: &toml::Value, sig: Signal, note: &mut dyn FnMut(Quantity, &toml::Value)) {
+        note_value_units(value, Quantity::Ramp(sig), sig, note);
+    }
+
     type Generator = RampGenerator;
 
     fn generator(&self, _cx: &GenContext, _rng: &dyn Fn() -> ImuRng) -> RampGenerator {

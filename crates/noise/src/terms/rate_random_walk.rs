@@ -1,10 +1,15 @@
 //! Rate random walk (docs/model.md §2, §3).
 
-use super::term::{ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind};
+use super::term::{
+    note_value_units, ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind, WriteContext,
+};
 use crate::closed_form as cf;
+use crate::config::error::ConfigError;
+use crate::config::read::{ReadContext, Text};
 use crate::discrete::RandomWalk;
 use crate::filter::FilteredAllan;
 use crate::model_error::{check, ModelError};
+use crate::units::{Quantity, Signal};
 use crate::ImuRng;
 
 /// Rate random walk K (rad/s/sqrt(s), m/s^2/sqrt(s)).
@@ -40,11 +45,27 @@ impl ErrorTerm for RateRandomWalk {
     fn allan_variance_filtered(&self, tau_s: f64, _dt_s: f64, fa: &FilteredAllan) -> Option<f64> {
         Some(fa.random_walk(self.density, tau_s))
     }
+
+    fn config_value(&self, cx: &WriteContext) -> String {
+        cx.quoted(self.density, Quantity::RandomWalk(cx.sig))
+    }
 }
 
 impl TermKind for RateRandomWalk {
     const STOCHASTIC: bool = true;
     const SHOWS_IN_STATIC_LOG: bool = true;
+    type Raw = Text;
+    const EXAMPLE: Option<&'static str> = Some("rate_random_walk = \"0.5 deg/h/sqrt(h)\"");
+
+    fn from_raw(raw: &Text, cx: &ReadContext) -> Result<RateRandomWalk, ConfigError> {
+        let value = cx.value(raw, Quantity::RandomWalk(cx.sig), true)?;
+        RateRandomWalk::new(value).map_err(|e| cx.refused(&cx.key, e))
+    }
+
+    fn note_units(value: &toml::Value, sig: Signal, note: &mut dyn FnMut(Quantity, &toml::Value)) {
+        note_value_units(value, Quantity::RandomWalk(sig), sig, note);
+    }
+
     type Generator = RandomWalkGenerator;
 
     fn generator(&self, cx: &GenContext, rng: &dyn Fn() -> ImuRng) -> RandomWalkGenerator {

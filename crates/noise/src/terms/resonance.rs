@@ -1,10 +1,15 @@
 //! A resonance: a narrow-band random vibration (second-order Gauss-Markov process).
 
-use super::term::{ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind};
+use super::term::{
+    note_value_units, ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind, WriteContext,
+};
 use crate::closed_form as cf;
+use crate::config::error::ConfigError;
+use crate::config::read::{ReadContext, Text};
 use crate::discrete::{draws, normal};
 use crate::filter::FilteredAllan;
 use crate::model_error::{check, ModelError};
+use crate::units::{Quantity, Signal};
 use crate::ImuRng;
 use rand::Rng;
 
@@ -44,6 +49,15 @@ impl Resonance {
     }
 }
 
+/// `resonance = { sigma, frequency, bandwidth }` as written.
+#[derive(serde::Deserialize, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct RawResonance {
+    sigma: Text,
+    frequency: Text,
+    bandwidth: Text,
+}
+
 impl ErrorTerm for Resonance {
     /// [`cf::resonance_avar`].
     fn allan_variance(&self, tau_s: f64) -> Option<f64> {
@@ -59,11 +73,51 @@ impl ErrorTerm for Resonance {
     fn allan_variance_filtered(&self, tau_s: f64, _dt_s: f64, fa: &FilteredAllan) -> Option<f64> {
         Some(fa.resonance(self.sigma, self.frequency_hz, self.bandwidth_hz, tau_s))
     }
+
+    fn config_value(&self, cx: &WriteContext) -> String {
+        format!(
+            "{{ sigma = {}, frequency = {}, bandwidth = {} }}",
+            cx.quoted(self.sigma, Quantity::Signal(cx.sig)),
+            cx.quoted(self.frequency_hz, Quantity::Frequency),
+            cx.quoted(self.bandwidth_hz, Quantity::Frequency)
+        )
+    }
 }
 
 impl TermKind for Resonance {
     const STOCHASTIC: bool = true;
     const SHOWS_IN_STATIC_LOG: bool = true;
+    type Raw = RawResonance;
+    const EXAMPLE: Option<&'static str> =
+        Some("resonance = { sigma = \"0.5 mg\", frequency = \"10 Hz\", bandwidth = \"0.7 Hz\" }");
+
+    /// Stationary std `sigma`, natural `frequency`, half-power `bandwidth` (below twice the
+    /// frequency).
+    fn from_raw(raw: &RawResonance, cx: &ReadContext) -> Result<Resonance, ConfigError> {
+        let sigma = cx.sub_value("sigma", &raw.sigma, Quantity::Signal(cx.sig), true)?;
+        let frequency_hz = cx.sub_positive("frequency", &raw.frequency, Quantity::Frequency)?;
+        let bw_key = cx.sub("bandwidth");
+        let bandwidth_hz = cx
+            .ctx
+            .positive(&bw_key, &raw.bandwidth, Quantity::Frequency)?;
+        Resonance::new(sigma, frequency_hz, bandwidth_hz).map_err(|e| {
+            cx.ctx.invalid_at(
+                &bw_key,
+                Some(&raw.bandwidth),
+                e.expected,
+                format!(
+                    "\"{}\" with frequency \"{}\"",
+                    raw.bandwidth.get_ref(),
+                    raw.frequency.get_ref()
+                ),
+            )
+        })
+    }
+
+    fn note_units(value: &toml::Value, sig: Signal, note: &mut dyn FnMut(Quantity, &toml::Value)) {
+        note_value_units(value, Quantity::Signal(sig), sig, note);
+    }
+
     type Generator = ResonanceGenerator;
 
     fn generator(&self, cx: &GenContext, rng: &dyn Fn() -> ImuRng) -> ResonanceGenerator {

@@ -1,7 +1,12 @@
 //! Scale-factor error (Woodman §3.2.5: drift proportional to the rate and duration of motion).
 
-use super::term::{ErrorTerm, GenContext, Generate, Stage, TermKind};
+use super::term::{
+    note_value_units, ErrorTerm, GenContext, Generate, Stage, TermKind, WriteContext,
+};
+use crate::config::error::ConfigError;
+use crate::config::read::{ReadContext, Text};
 use crate::model_error::{check_finite, ModelError};
+use crate::units::{Quantity, Signal};
 use crate::ImuRng;
 
 /// Scale-factor error (dimensionless: 300 ppm = 3e-4), signed.
@@ -24,11 +29,27 @@ impl ScaleFactor {
     }
 }
 
-impl ErrorTerm for ScaleFactor {}
+impl ErrorTerm for ScaleFactor {
+    fn config_value(&self, cx: &WriteContext) -> String {
+        cx.quoted(self.ratio, Quantity::Ratio)
+    }
+}
 
 impl TermKind for ScaleFactor {
     const STOCHASTIC: bool = false;
     const SHOWS_IN_STATIC_LOG: bool = false;
+    type Raw = Text;
+    const EXAMPLE: Option<&'static str> = Some("scale_factor = \"0.1 %\"");
+
+    fn from_raw(raw: &Text, cx: &ReadContext) -> Result<ScaleFactor, ConfigError> {
+        let value = cx.value(raw, Quantity::Ratio, false)?;
+        ScaleFactor::new(value).map_err(|e| cx.refused(&cx.key, e))
+    }
+
+    fn note_units(value: &toml::Value, sig: Signal, note: &mut dyn FnMut(Quantity, &toml::Value)) {
+        note_value_units(value, Quantity::Ratio, sig, note);
+    }
+
     type Generator = ScaleFactorGenerator;
 
     fn generator(&self, cx: &GenContext, _rng: &dyn Fn() -> ImuRng) -> ScaleFactorGenerator {

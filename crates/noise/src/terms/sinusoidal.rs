@@ -1,9 +1,12 @@
 //! A sinusoidal error (docs/model.md §2: Hou 4.64 for its Allan variance).
 
-use super::term::{ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind};
+use super::term::{ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind, WriteContext};
 use crate::closed_form as cf;
+use crate::config::error::ConfigError;
+use crate::config::read::{ReadContext, Text};
 use crate::filter::FilteredAllan;
 use crate::model_error::{check, ModelError};
+use crate::units::{Quantity, Signal};
 use crate::ImuRng;
 use rand::Rng;
 
@@ -41,6 +44,15 @@ impl Sinusoid {
     }
 }
 
+/// `sinusoidal = { amplitude, frequency, phase? }` as written.
+#[derive(serde::Deserialize, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct RawSinusoid {
+    amplitude: Text,
+    frequency: Text,
+    phase: Option<Text>,
+}
+
 impl ErrorTerm for Sinusoid {
     /// Phase averaged (Hou 4.64).
     fn allan_variance(&self, tau_s: f64) -> Option<f64> {
@@ -59,11 +71,45 @@ impl ErrorTerm for Sinusoid {
     fn allan_variance_filtered(&self, tau_s: f64, _dt_s: f64, fa: &FilteredAllan) -> Option<f64> {
         Some(fa.sinusoid(self.amplitude, self.frequency_hz, tau_s))
     }
+
+    fn config_value(&self, cx: &WriteContext) -> String {
+        let phase = self
+            .phase_rad
+            .map(|p| format!(", phase = {}", cx.quoted(p, Quantity::Angle)))
+            .unwrap_or_default();
+        format!(
+            "{{ amplitude = {}, frequency = {}{phase} }}",
+            cx.quoted(self.amplitude, Quantity::Signal(cx.sig)),
+            cx.quoted(self.frequency_hz, Quantity::Frequency)
+        )
+    }
 }
 
 impl TermKind for Sinusoid {
     const STOCHASTIC: bool = false;
     const SHOWS_IN_STATIC_LOG: bool = true;
+    type Raw = RawSinusoid;
+
+    fn from_raw(raw: &RawSinusoid, cx: &ReadContext) -> Result<Sinusoid, ConfigError> {
+        let amplitude =
+            cx.sub_value("amplitude", &raw.amplitude, Quantity::Signal(cx.sig), true)?;
+        let frequency_hz = cx.sub_positive("frequency", &raw.frequency, Quantity::Frequency)?;
+        let phase_rad = raw
+            .phase
+            .as_ref()
+            .map(|p| cx.sub_value("phase", p, Quantity::Angle, false))
+            .transpose()?;
+        Sinusoid::new(amplitude, frequency_hz, phase_rad).map_err(|e| cx.refused(&cx.key, e))
+    }
+
+    /// None: a written config has never taken its units from this table.
+    fn note_units(
+        _value: &toml::Value,
+        _sig: Signal,
+        _note: &mut dyn FnMut(Quantity, &toml::Value),
+    ) {
+    }
+
     type Generator = SinusoidGenerator;
 
     /// Without a phase, this run's is the term's one draw (uniform on [0, 2 pi)). Behind an output

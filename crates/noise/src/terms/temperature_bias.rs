@@ -1,9 +1,14 @@
 //! Temperature-dependent bias: a coefficient times the excursion of the temperature profile from
 //! its reference (Woodman §3.2.4).
 
-use super::term::{ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind};
+use super::term::{
+    note_value_units, ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind, WriteContext,
+};
+use crate::config::error::ConfigError;
+use crate::config::read::{ReadContext, Text};
 use crate::model_error::{check_finite, ModelError};
 use crate::temperature::TemperatureProfile;
+use crate::units::{Quantity, Signal};
 use crate::ImuRng;
 
 /// Bias per degC away from the reference temperature (rad/s/degC, m/s^2/degC), signed.
@@ -26,11 +31,27 @@ impl TemperatureBias {
     }
 }
 
-impl ErrorTerm for TemperatureBias {}
+impl ErrorTerm for TemperatureBias {
+    fn config_value(&self, cx: &WriteContext) -> String {
+        cx.quoted(self.per_degree, Quantity::PerDegree(cx.sig))
+    }
+}
 
 impl TermKind for TemperatureBias {
     const STOCHASTIC: bool = false;
     const SHOWS_IN_STATIC_LOG: bool = false;
+    type Raw = Text;
+    const EXAMPLE: Option<&'static str> = Some("temperature_bias = \"0.01 deg/s/degC\"");
+
+    fn from_raw(raw: &Text, cx: &ReadContext) -> Result<TemperatureBias, ConfigError> {
+        let value = cx.value(raw, Quantity::PerDegree(cx.sig), false)?;
+        TemperatureBias::new(value).map_err(|e| cx.refused(&cx.key, e))
+    }
+
+    fn note_units(value: &toml::Value, sig: Signal, note: &mut dyn FnMut(Quantity, &toml::Value)) {
+        note_value_units(value, Quantity::PerDegree(sig), sig, note);
+    }
+
     type Generator = TemperatureBiasGenerator;
 
     fn generator(&self, cx: &GenContext, _rng: &dyn Fn() -> ImuRng) -> TemperatureBiasGenerator {

@@ -2,8 +2,11 @@
 //! under `terms/`: [`ErrorTerm`], what a value of it does (callable through a `Term`), and
 //! [`TermKind`], what the type is. The registry (`terms/mod.rs`) ties each type to its effect.
 
+use crate::config::error::ConfigError;
+use crate::config::read::ReadContext;
 use crate::filter::FilteredAllan;
 use crate::temperature::TemperatureProfile;
+use crate::units::{Quantity, Signal};
 use crate::ImuRng;
 use std::fmt;
 
@@ -28,6 +31,53 @@ pub trait ErrorTerm: fmt::Debug {
     fn allan_variance_filtered(&self, tau_s: f64, dt_s: f64, _fa: &FilteredAllan) -> Option<f64> {
         self.allan_variance_sampled(tau_s, dt_s)
     }
+
+    /// The value of the term's config key as the sensor TOML writes it (the text after
+    /// `key = `): a quoted value with its unit, an array or an inline table.
+    fn config_value(&self, cx: &WriteContext) -> String;
+}
+
+/// How a sensor TOML is written: the axis' signal and how values are formatted (exact SI, or in a
+/// config's own units).
+pub struct WriteContext<'a> {
+    pub sig: Signal,
+    /// A value (SI) of a quantity as "value unit".
+    pub format: &'a dyn Fn(f64, Quantity) -> String,
+    /// A plain number (the outlier rate per hour).
+    pub number: &'a dyn Fn(f64) -> String,
+}
+
+impl WriteContext<'_> {
+    /// `"value unit"`, quoted.
+    pub fn quoted(&self, value: f64, q: Quantity) -> String {
+        format!("\"{}\"", (self.format)(value, q))
+    }
+}
+
+/// The units a written config learns from a key's value (`UnitStyle`): a plain string is a value
+/// of `plain`; in an inline table, the values of the usual inner keys (`value`, `sigma`, ... of the
+/// signal, `time_constant`, `period` of time, `frequency`, `cutoff`, `bandwidth` of frequency).
+pub fn note_value_units(
+    value: &toml::Value,
+    plain: Quantity,
+    sig: Signal,
+    note: &mut dyn FnMut(Quantity, &toml::Value),
+) {
+    match value.as_table() {
+        None => note(plain, value),
+        Some(t) => {
+            for (k, inner) in t {
+                match k.as_str() {
+                    "value" | "sigma" | "amplitude" | "stability" | "size" => {
+                        note(Quantity::Signal(sig), inner)
+                    }
+                    "time_constant" | "period" => note(Quantity::Time, inner),
+                    "frequency" | "cutoff" | "bandwidth" => note(Quantity::Frequency, inner),
+                    _ => {}
+                }
+            }
+        }
+    }
 }
 
 /// What an error effect is, beside what its values do.
@@ -38,6 +88,23 @@ pub trait TermKind: ErrorTerm + Sized {
     /// Does a static log's Allan deviation show it (the terms `AxisModel::stochastic_only`
     /// keeps: the stochastic ones, the rate ramp, the sinusoid and the output filter)?
     const SHOWS_IN_STATIC_LOG: bool;
+
+    /// The config key's value as serde reads it from an axis table (units still in strings).
+    type Raw: serde::de::DeserializeOwned + Clone;
+
+    /// Read after the other terms of the axis, which [`TermKind::from_raw`] then sees in
+    /// [`ReadContext::others`] (bias instability's `allan_minimum` convention).
+    const READS_OTHER_TERMS: bool = false;
+
+    /// An example of the key for messages about a value of the wrong shape.
+    const EXAMPLE: Option<&'static str> = None;
+
+    /// The validated term from its key's value: units converted to SI, ranges checked, errors
+    /// naming the file, line and key.
+    fn from_raw(raw: &Self::Raw, cx: &ReadContext) -> Result<Self, ConfigError>;
+
+    /// Tell `note` the units this key's value is written in ([`note_value_units`] for most).
+    fn note_units(value: &toml::Value, sig: Signal, note: &mut dyn FnMut(Quantity, &toml::Value));
 
     /// The per-run state that generates the term's samples.
     type Generator: Generate;

@@ -1,8 +1,13 @@
 //! A bias drawn once per run, turn-on to turn-on.
 
-use super::term::{ErrorTerm, GenContext, Generate, Stage, TermKind};
+use super::term::{
+    note_value_units, ErrorTerm, GenContext, Generate, Stage, TermKind, WriteContext,
+};
+use crate::config::error::ConfigError;
+use crate::config::read::{ReadContext, Text};
 use crate::discrete::normal;
 use crate::model_error::{check, ModelError};
+use crate::units::{Quantity, Signal};
 use crate::ImuRng;
 
 /// Standard deviation of the bias drawn once per run (turn-on to turn-on), rad/s or m/s^2.
@@ -25,11 +30,27 @@ impl TurnOnBias {
     }
 }
 
-impl ErrorTerm for TurnOnBias {}
+impl ErrorTerm for TurnOnBias {
+    fn config_value(&self, cx: &WriteContext) -> String {
+        cx.quoted(self.sigma, Quantity::Signal(cx.sig))
+    }
+}
 
 impl TermKind for TurnOnBias {
     const STOCHASTIC: bool = false;
     const SHOWS_IN_STATIC_LOG: bool = false;
+    type Raw = Text;
+    const EXAMPLE: Option<&'static str> = Some("turn_on_bias = \"3 deg/s\"");
+
+    fn from_raw(raw: &Text, cx: &ReadContext) -> Result<TurnOnBias, ConfigError> {
+        let value = cx.value(raw, Quantity::Signal(cx.sig), true)?;
+        TurnOnBias::new(value).map_err(|e| cx.refused(&cx.key, e))
+    }
+
+    fn note_units(value: &toml::Value, sig: Signal, note: &mut dyn FnMut(Quantity, &toml::Value)) {
+        note_value_units(value, Quantity::Signal(sig), sig, note);
+    }
+
     type Generator = TurnOnBiasGenerator;
 
     /// This run's bias is the term's one draw, N(0, sigma^2).

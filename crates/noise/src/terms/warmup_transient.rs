@@ -1,8 +1,13 @@
 //! The turn-on warm-up transient of the bias.
 
-use super::term::{ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind};
+use super::term::{
+    note_value_units, ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind, WriteContext,
+};
+use crate::config::error::ConfigError;
+use crate::config::read::{ReadContext, Text};
 use crate::discrete::normal;
 use crate::model_error::{check, ModelError};
+use crate::units::{Quantity, Signal};
 use crate::ImuRng;
 
 /// Bias settling after turn-on: `amplitude` e^{-t / tau_s}, with `amplitude` fixed, or, when
@@ -31,11 +36,48 @@ impl WarmupTransient {
     }
 }
 
-impl ErrorTerm for WarmupTransient {}
+/// `warmup_transient = { amplitude, time_constant, per_run? }` as written.
+#[derive(serde::Deserialize, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct RawWarmupTransient {
+    amplitude: Text,
+    time_constant: Text,
+    per_run: Option<bool>,
+}
+
+impl ErrorTerm for WarmupTransient {
+    fn config_value(&self, cx: &WriteContext) -> String {
+        format!(
+            "{{ amplitude = {}, time_constant = {}, per_run = {} }}",
+            cx.quoted(self.amplitude, Quantity::Signal(cx.sig)),
+            cx.quoted(self.tau_s, Quantity::Time),
+            self.per_run
+        )
+    }
+}
 
 impl TermKind for WarmupTransient {
     const STOCHASTIC: bool = false;
     const SHOWS_IN_STATIC_LOG: bool = false;
+    type Raw = RawWarmupTransient;
+    const EXAMPLE: Option<&'static str> = Some("warmup_transient = { amplitude = \"0.03 deg/s\", time_constant = \"600 s\", per_run = false }");
+
+    /// `per_run`: the amplitude drawn per run from N(0, amplitude^2); default false.
+    fn from_raw(
+        raw: &RawWarmupTransient,
+        cx: &ReadContext,
+    ) -> Result<WarmupTransient, ConfigError> {
+        let amplitude =
+            cx.sub_value("amplitude", &raw.amplitude, Quantity::Signal(cx.sig), false)?;
+        let tau_s = cx.sub_positive("time_constant", &raw.time_constant, Quantity::Time)?;
+        WarmupTransient::new(amplitude, tau_s, raw.per_run.unwrap_or(false))
+            .map_err(|e| cx.refused(&cx.key, e))
+    }
+
+    fn note_units(value: &toml::Value, sig: Signal, note: &mut dyn FnMut(Quantity, &toml::Value)) {
+        note_value_units(value, Quantity::Signal(sig), sig, note);
+    }
+
     type Generator = TransientGenerator;
 
     /// A per-run amplitude is the term's one draw.

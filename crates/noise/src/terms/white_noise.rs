@@ -1,10 +1,15 @@
 //! White noise: angle random walk of a gyro, velocity random walk of an accelerometer (docs/model.md §2, §3).
 
-use super::term::{ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind};
+use super::term::{
+    note_value_units, ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind, WriteContext,
+};
 use crate::closed_form as cf;
+use crate::config::error::ConfigError;
+use crate::config::read::{ReadContext, Text};
 use crate::discrete::{draws, normal};
 use crate::filter::FilteredAllan;
 use crate::model_error::{check, ModelError};
+use crate::units::{Quantity, Signal};
 use crate::ImuRng;
 use rand::Rng;
 
@@ -37,11 +42,28 @@ impl ErrorTerm for WhiteNoise {
     fn allan_variance_filtered(&self, tau_s: f64, _dt_s: f64, fa: &FilteredAllan) -> Option<f64> {
         Some(fa.white_noise(self.density, tau_s))
     }
+
+    fn config_value(&self, cx: &WriteContext) -> String {
+        cx.quoted(self.density, Quantity::NoiseDensity(cx.sig))
+    }
 }
 
 impl TermKind for WhiteNoise {
     const STOCHASTIC: bool = true;
     const SHOWS_IN_STATIC_LOG: bool = true;
+    type Raw = Text;
+    const EXAMPLE: Option<&'static str> =
+        Some("white_noise = \"0.05 deg/s/sqrt(Hz)\" (gyro) or \"40 ug/sqrt(Hz)\" (accelerometer)");
+
+    fn from_raw(raw: &Text, cx: &ReadContext) -> Result<WhiteNoise, ConfigError> {
+        let value = cx.value(raw, Quantity::NoiseDensity(cx.sig), true)?;
+        WhiteNoise::new(value).map_err(|e| cx.refused(&cx.key, e))
+    }
+
+    fn note_units(value: &toml::Value, sig: Signal, note: &mut dyn FnMut(Quantity, &toml::Value)) {
+        note_value_units(value, Quantity::NoiseDensity(sig), sig, note);
+    }
+
     type Generator = WhiteNoiseGenerator;
 
     fn generator(&self, cx: &GenContext, rng: &dyn Fn() -> ImuRng) -> WhiteNoiseGenerator {
