@@ -623,10 +623,13 @@ fn checks_text(checks: &Checks) -> String {
 fn model_noise_values(result: &Diagnosis, c: noise::Channel) -> Option<(AxisValue, AxisValue)> {
     let a = result.model_final.axis(c.sensor(), c.axis());
     let n = AxisValue {
-        value: a.white_noise?,
+        value: a.get::<noise::WhiteNoise>()?.density(),
         how: "corrected model".into(),
     };
-    let k = match a.rate_random_walk {
+    let k = match a
+        .get::<noise::RateRandomWalk>()
+        .map(noise::RateRandomWalk::density)
+    {
         Some(k) => AxisValue {
             value: k,
             how: "corrected model".into(),

@@ -141,7 +141,7 @@ fn fitted_on(args: &Args) -> Result<Option<FittedOn>> {
     if args.exact_parameters || noise::is_noise_file_text(&text, &name) {
         return Ok(None);
     }
-    FittedOn::from_model_text(&text).with_context(|| format!("{name}"))
+    FittedOn::from_model_text(&text).with_context(|| name.clone())
 }
 
 fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {

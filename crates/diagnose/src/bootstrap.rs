@@ -31,15 +31,16 @@
 //! fitted: shapes (Gauss-Markov times, frequencies, output filters), deterministic and per-run terms
 //! (biases, ramp, temperature, scale factor, misalignment), Woodman's random-walk bias instability
 //! and every term of a channel the logs did not have. A level no refit sees (every multiplier 0)
-//! keeps its value and is reported as not informed.
+//! keeps its value and is reported as not informed. A term at level 0 (fitted to 0) is drawn
+//! too, uncentred, from a unit reference level: its draws are the refits' (0 or above), so that
+//! the levels it trades with (a flicker level against a rate random walk) spread as they would.
 
 use crate::candidates::TermParams;
 use crate::fitted_on::FittedOn;
-use crate::model_terms::{clear_term, set_term, term_level};
+use crate::model_terms::{set_term, term_level};
 use crate::simulate::{adev_at, static_log, SimSetup};
 use allan::{EdfMethod, Estimator};
-use noise::Channel;
-use noise::{AxisModel, Effect, SensorModel};
+use noise::{AxisModel, Channel, Effect, SensorModel};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -99,15 +100,24 @@ pub enum BootstrapError {
     TooManyTerms { channel: &'static str, terms: usize },
 }
 
+/// A drawn term: its parameters at the reference level the multipliers refer to (the fitted one,
+/// or a unit squared level for a term fitted at 0), and its fitted squared level.
+#[derive(Clone, Copy)]
+struct DrawnTerm {
+    effect: Effect,
+    reference: TermParams,
+    fitted_c: f64,
+}
+
 /// One channel's refit: its drawn terms, the grid and the fixed parts of the least squares.
 struct ChannelFit {
     ch: Channel,
-    terms: Vec<(Effect, TermParams)>,
+    terms: Vec<DrawnTerm>,
     /// Octave averaging factors of the longest log from `tau_min_s`, and per log how many of them
     /// it holds (a log of n samples holds m <= n / 4, the overlapping estimator's Stable32 limit).
     grid_m: Vec<usize>,
     held: Vec<usize>,
-    /// Per tau: the terms' Allan variances at the fitted levels, the rest of the model's, and the
+    /// Per tau: the terms' Allan variances at their reference levels, the rest of the model's, and the
     /// least-squares weight of one unit of EDF (1 / (2 A^2)).
     basis: Vec<Vec<f64>>,
     rest: Vec<f64>,
@@ -139,13 +149,30 @@ fn edf_at(mu: f64, m: usize, n: usize) -> f64 {
 impl ChannelFit {
     /// The refit of channel `ch` of `model` on data like `fitted` (None: nothing to draw there).
     fn new(model: &SensorModel, ch: Channel, fitted: &FittedOn) -> Option<ChannelFit> {
-        let terms: Vec<(Effect, TermParams)> = DRAWN
+        let terms: Vec<DrawnTerm> = DRAWN
             .iter()
-            .filter_map(|&e| term_level(model, ch, e).map(|p| (e, p)))
-            .filter(|(_, p)| p.c() > 0.0)
+            .filter_map(|&effect| {
+                let p = term_level(model, ch, effect)?;
+                let fitted_c = p.c();
+                let reference = if fitted_c > 0.0 {
+                    p
+                } else {
+                    scaled(p, 0.0, 1.0)
+                };
+                (fitted_c >= 0.0).then_some(DrawnTerm {
+                    effect,
+                    reference,
+                    fitted_c,
+                })
+            })
             .collect();
         if terms.is_empty() || !fitted.channels[ch.index()] {
             return None;
+        }
+        // The model with every term at its reference level (the basis columns).
+        let mut reference = model.clone();
+        for t in &terms {
+            set_term(&mut reference, ch, t.effect, &t.reference);
         }
         let dt = fitted.sample_interval_s;
         let n_max = *fitted.samples.iter().max()?;
@@ -163,17 +190,19 @@ impl ChannelFit {
             .collect();
         let taus: Vec<f64> = grid_m.iter().map(|&m| m as f64 * dt).collect();
         let (sensor, axis) = (ch.sensor(), ch.axis());
-        let axis = model.axis(sensor, axis);
-        let total = axis.allan_variance_sampled_many(&taus, dt);
+        let total = model
+            .axis(sensor, axis)
+            .allan_variance_sampled_many(&taus, dt);
+        let axis = reference.axis(sensor, axis);
         let columns: Vec<Vec<f64>> = terms
             .iter()
-            .map(|(e, _)| {
-                let mut only = AxisModel {
-                    output_filter: axis.output_filter,
-                    ..AxisModel::default()
-                };
-                if let Some(t) = axis.term(*e) {
-                    only.set_term(t);
+            .map(|t| {
+                let mut only = AxisModel::default();
+                if let Some(f) = axis.get::<noise::OutputFilter>() {
+                    only.set_term(*f);
+                }
+                if let Some(term) = axis.term(t.effect) {
+                    only.set_term(term.clone());
                 }
                 only.allan_variance_sampled_many(&taus, dt)
             })
@@ -181,8 +210,15 @@ impl ChannelFit {
         let basis: Vec<Vec<f64>> = (0..taus.len())
             .map(|i| columns.iter().map(|c| c[i]).collect())
             .collect();
+        // The model's Allan variance less its drawn terms' (a term fitted at 0 adds nothing).
         let rest = (0..taus.len())
-            .map(|i| total[i] - basis[i].iter().sum::<f64>())
+            .map(|i| {
+                let drawn: f64 = (0..terms.len())
+                    .filter(|&j| terms[j].fitted_c > 0.0)
+                    .map(|j| basis[i][j])
+                    .sum();
+                total[i] - drawn
+            })
             .collect();
         let weight_per_edf = total
             .iter()
@@ -293,20 +329,22 @@ fn nnls_small(rows: &[Vec<f64>], y: &[f64], k: usize) -> Vec<f64> {
     best
 }
 
-/// `params` with its squared level multiplied by `s`.
-fn scaled(params: TermParams, s: f64) -> TermParams {
-    let f = s.max(0.0).sqrt();
+/// `params` with its level multiplied by `factor` plus `unit` (a squared level multiplied by
+/// factor^2, or set to unit^2 with factor 0).
+fn scaled(params: TermParams, factor: f64, unit: f64) -> TermParams {
+    let f = factor.max(0.0);
+    let level = |v: f64| v * f + unit;
     match params {
-        TermParams::Level(v) => TermParams::Level(v * f),
+        TermParams::Level(v) => TermParams::Level(level(v)),
         TermParams::GaussMarkov { sigma, tau_s } => TermParams::GaussMarkov {
-            sigma: sigma * f,
+            sigma: level(sigma),
             tau_s,
         },
         TermParams::Sinusoid {
             amplitude,
             frequency_hz,
         } => TermParams::Sinusoid {
-            amplitude: amplitude * f,
+            amplitude: level(amplitude),
             frequency_hz,
         },
         TermParams::Resonance {
@@ -314,11 +352,14 @@ fn scaled(params: TermParams, s: f64) -> TermParams {
             frequency_hz,
             bandwidth_hz,
         } => TermParams::Resonance {
-            sigma: sigma * f,
+            sigma: level(sigma),
             frequency_hz,
             bandwidth_hz,
         },
-        TermParams::Filter { filter, n } => TermParams::Filter { filter, n: n * f },
+        TermParams::Filter { filter, n } => TermParams::Filter {
+            filter,
+            n: level(n),
+        },
     }
 }
 
@@ -400,7 +441,8 @@ pub fn draw_models(
         });
     }
     let avar = simulate_fitted_logs(model, fitted, &fits, (seed, first_run, replicates), tick);
-    // Multipliers [replicate][channel][term], then centred on 1 by their bootstrap mean.
+    // Multipliers [replicate][channel][term] of the reference squared levels; those of a fitted
+    // level centred on 1 by their bootstrap mean, those of a level fitted at 0 left as drawn.
     let mut s: Vec<Vec<Vec<f64>>> = avar
         .par_iter()
         .map(|per_channel| {
@@ -413,11 +455,13 @@ pub fn draw_models(
     let mut informed: Vec<Vec<bool>> = Vec::new();
     for (k, f) in fits.iter().enumerate() {
         let mut row = Vec::new();
-        for j in 0..f.terms.len() {
+        for (j, t) in f.terms.iter().enumerate() {
             let mean = s.iter().map(|r| r[k][j]).sum::<f64>() / replicates.max(1) as f64;
             row.push(mean > 0.0);
-            for r in s.iter_mut() {
-                r[k][j] = if mean > 0.0 { r[k][j] / mean } else { 1.0 };
+            if t.fitted_c > 0.0 {
+                for r in s.iter_mut() {
+                    r[k][j] = if mean > 0.0 { r[k][j] / mean } else { 1.0 };
+                }
             }
         }
         informed.push(row);
@@ -433,8 +477,8 @@ const FIT_ROUNDS: usize = 3;
 /// The drawn levels (module doc) of `model` refitted jointly to `logs` by the bootstrap's own
 /// estimator (weighted non-negative least squares of the Allan variances on the octave grid from
 /// `tau_min_s`), iteratively reweighted: the weights of each round are those of the previous
-/// round's levels. A level refitted to 0 is removed; a term the model lacks is not added (that
-/// is `diagnose`'s part). With the data it was fitted on, for [`draw_models`]; None when the logs
+/// round's levels. A level refitted to 0 stays in the model at 0 (so that the bootstrap still
+/// draws it); a term the model lacks is not added (that is `diagnose`'s part). With the data it was fitted on, for [`draw_models`]; None when the logs
 /// have no common channel.
 pub fn fit_levels(
     model: &SensorModel,
@@ -472,16 +516,14 @@ pub fn fit_levels(
     Some((current, fitted))
 }
 
-/// The model with every drawn level's square multiplied by its multiplier `s[channel][term]`.
+/// The model with every drawn term at its reference squared level times its multiplier
+/// `s[channel][term]` (a level 0 stays in the model, at 0).
 fn drawn_model(model: &SensorModel, fits: &[ChannelFit], s: &[Vec<f64>]) -> SensorModel {
     let mut out = model.clone();
     for (f, mult) in fits.iter().zip(s) {
-        for (&(effect, params), &m) in f.terms.iter().zip(mult) {
-            if m > 0.0 {
-                set_term(&mut out, f.ch, effect, &scaled(params, m));
-            } else {
-                clear_term(&mut out, f.ch, effect);
-            }
+        for (t, &m) in f.terms.iter().zip(mult) {
+            let params = scaled(t.reference, m.max(0.0).sqrt(), 0.0);
+            set_term(&mut out, f.ch, t.effect, &params);
         }
     }
     out
@@ -500,14 +542,14 @@ fn spread(
             .terms
             .iter()
             .enumerate()
-            .map(|(j, &(effect, params))| {
-                let (parameter, model) = params.named(effect)[0];
-                let mut v: Vec<f64> = s.iter().map(|r| model * r[k][j].sqrt()).collect();
+            .map(|(j, t)| {
+                let (parameter, reference) = t.reference.named(t.effect)[0];
+                let mut v: Vec<f64> = s.iter().map(|r| reference * r[k][j].sqrt()).collect();
                 v.sort_by(f64::total_cmp);
                 LevelSpread {
-                    effect,
+                    effect: t.effect,
                     parameter,
-                    model,
+                    model: t.fitted_c.sqrt(),
                     p2_5: stats::quantile(&v, 0.025),
                     p50: stats::quantile(&v, 0.5),
                     p97_5: stats::quantile(&v, 0.975),

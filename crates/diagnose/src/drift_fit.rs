@@ -290,7 +290,7 @@ impl DriftFitInput<'_> {
             // The channel's own flicker band.
             let band = flicker_band(self.model, self.channel);
             let a = alone.axis_mut(self.channel.sensor(), self.channel.axis());
-            a.bias_instability = Some(noise::BiasInstability::Flicker(noise::Flicker {
+            a.set_term(noise::BiasInstability::Flicker(noise::Flicker {
                 b: c_unit.sqrt(),
                 ..band
             }));

@@ -6,7 +6,8 @@ use crate::columns::map_header;
 use crate::error::{At, LogError, Problem, Result};
 use crate::file::advise_huge_pages;
 use crate::float::{fast_f64, number};
-use crate::{Log, ReadOptions, MAX_LOG_RATE_HZ};
+use crate::limits::{valid_rate_hz, MAX_LOG_RATE_HZ};
+use crate::log::{Log, ReadOptions};
 use noise::Channel;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -22,7 +23,7 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
         return parse_log(&unix, source, opts);
     }
     // A UTF-8 byte-order mark (spreadsheet exports) is not part of the first column's name.
-    let mut pos = if bytes.starts_with(&[0xef, 0xbb, 0xbf]) {
+    let pos = if bytes.starts_with(&[0xef, 0xbb, 0xbf]) {
         3
     } else {
         0
@@ -32,77 +33,8 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
     if bytes[pos..bytes.len().min(pos + 4096)].contains(&0) {
         return Err(LogError::content(source, "contains NUL bytes: not a CSV text file (expected a header such as `t,gx,gy,gz,ax,ay,az`)"));
     }
-    // Header: the first line that is neither blank nor a comment; or, when that line holds only
-    // numbers, the comment line before it with as many fields (EuRoC and TUM-VI write their
-    // header as `#timestamp [ns],w_RS_S_x [rad s^-1],...`).
-    let mut line_no = 0usize;
-    let mut last_comment: Option<String> = None;
-    let (header, header_line) = loop {
-        if pos >= bytes.len() {
-            return Err(LogError::content(
-                source,
-                "no header line (expected a CSV header such as `t,gx,gy,gz,ax,ay,az`)",
-            ));
-        }
-        let end = memchr(b'\n', &bytes[pos..]).map_or(bytes.len(), |i| pos + i);
-        line_no += 1;
-        if end - pos > MAX_HEADER_BYTES {
-            return Err(LogError::content(
-                source,
-                format!(
-                    "a line of more than {} MiB before the header: not a CSV log",
-                    MAX_HEADER_BYTES >> 20
-                ),
-            )
-            .at_line(line_no));
-        }
-        let line = trim_ascii(&bytes[pos..end]);
-        let line_start = pos;
-        pos = (end + 1).min(bytes.len());
-        if line.first() == Some(&b'#') {
-            last_comment = std::str::from_utf8(&line[1..])
-                .ok()
-                .map(|c| c.trim().to_string());
-            continue;
-        }
-        if !line.is_empty() {
-            let text = std::str::from_utf8(line).map_err(|e| {
-                LogError::content(source, "header is not UTF-8")
-                    .at_line(line_no)
-                    .caused_by(e)
-            })?;
-            let fields = text.split(',').count();
-            let numeric = text.split(',').all(|f| f.trim().parse::<f64>().is_ok());
-            match last_comment {
-                Some(c) if numeric && fields > 1 && c.split(',').count() == fields => {
-                    pos = line_start;
-                    break (c, line_no - 1);
-                }
-                _ => break (text.to_string(), line_no),
-            }
-        }
-    };
-    let names: Vec<String> = header.split(',').map(|s| s.trim().to_string()).collect();
-    for (i, n) in names.iter().enumerate() {
-        let problem = if n.is_empty() {
-            format!("column {} has an empty name", i + 1)
-        } else if names[..i].contains(n) {
-            format!("column name {n:?} appears twice")
-        } else {
-            continue;
-        };
-        return Err(LogError::content(source, problem).at_line(header_line));
-    }
-    for (canon, col) in &opts.columns {
-        if !names.contains(col) {
-            let problem = Problem::MappedColumnMissing {
-                channel: canon.clone(),
-                column: col.clone(),
-                header: names.clone(),
-            };
-            return Err(LogError::new(source, problem).at_line(header_line));
-        }
-    }
+    let (header, header_line, pos) = find_header(bytes, pos, source)?;
+    let names = header_names(&header, header_line, source, opts)?;
     // Which channel and unit each column holds (docs/cli.md, "Log columns").
     let (uses, skipped) = map_header(&names, &opts.columns, opts.units)
         .map_err(|p| LogError::new(source, p).at_line(header_line))?;
@@ -151,6 +83,92 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
     })
 }
 
+/// The header: the first line from `pos` that is neither blank nor a comment; or, when that line
+/// holds only numbers, the comment line before it with as many fields (EuRoC and TUM-VI write their
+/// header as `#timestamp [ns],w_RS_S_x [rad s^-1],...`). Returns the header, its line number and
+/// where the data start.
+fn find_header(bytes: &[u8], mut pos: usize, source: &str) -> Result<(String, usize, usize)> {
+    let mut line_no = 0usize;
+    let mut last_comment: Option<String> = None;
+    let (header, header_line) = loop {
+        if pos >= bytes.len() {
+            return Err(LogError::content(
+                source,
+                "no header line (expected a CSV header such as `t,gx,gy,gz,ax,ay,az`)",
+            ));
+        }
+        let end = memchr(b'\n', &bytes[pos..]).map_or(bytes.len(), |i| pos + i);
+        line_no += 1;
+        if end - pos > MAX_HEADER_BYTES {
+            return Err(LogError::content(
+                source,
+                format!(
+                    "a line of more than {} MiB before the header: not a CSV log",
+                    MAX_HEADER_BYTES >> 20
+                ),
+            )
+            .at_line(line_no));
+        }
+        let line = trim_ascii(&bytes[pos..end]);
+        let line_start = pos;
+        pos = (end + 1).min(bytes.len());
+        if line.first() == Some(&b'#') {
+            last_comment = std::str::from_utf8(&line[1..])
+                .ok()
+                .map(|c| c.trim().to_string());
+            continue;
+        }
+        if !line.is_empty() {
+            let text = std::str::from_utf8(line).map_err(|e| {
+                LogError::content(source, "header is not UTF-8")
+                    .at_line(line_no)
+                    .caused_by(e)
+            })?;
+            let fields = text.split(',').count();
+            let numeric = text.split(',').all(|f| f.trim().parse::<f64>().is_ok());
+            match last_comment {
+                Some(c) if numeric && fields > 1 && c.split(',').count() == fields => {
+                    pos = line_start;
+                    break (c, line_no - 1);
+                }
+                _ => break (text.to_string(), line_no),
+            }
+        }
+    };
+    Ok((header, header_line, pos))
+}
+
+/// The column names of the header, checked: none empty, none twice, every mapped column present.
+fn header_names(
+    header: &str,
+    header_line: usize,
+    source: &str,
+    opts: &ReadOptions,
+) -> Result<Vec<String>> {
+    let names: Vec<String> = header.split(',').map(|s| s.trim().to_string()).collect();
+    for (i, n) in names.iter().enumerate() {
+        let problem = if n.is_empty() {
+            format!("column {} has an empty name", i + 1)
+        } else if names[..i].contains(n) {
+            format!("column name {n:?} appears twice")
+        } else {
+            continue;
+        };
+        return Err(LogError::content(source, problem).at_line(header_line));
+    }
+    for (canon, col) in &opts.columns {
+        if !names.contains(col) {
+            let problem = Problem::MappedColumnMissing {
+                channel: canon.clone(),
+                column: col.clone(),
+                header: names.clone(),
+            };
+            return Err(LogError::new(source, problem).at_line(header_line));
+        }
+    }
+    Ok(names)
+}
+
 /// Longest comment or header line accepted, bytes.
 const MAX_HEADER_BYTES: usize = 1 << 20;
 /// Relative difference allowed between the rate setting and the rate of the `t` column.
@@ -166,7 +184,7 @@ pub(crate) fn rate_of(
     source: &str,
     locate: &dyn Fn(usize) -> At,
 ) -> Result<f64> {
-    if let Some(rate_hz) = rate_hz.filter(|&r| !crate::valid_rate_hz(r)) {
+    if let Some(rate_hz) = rate_hz.filter(|&r| !valid_rate_hz(r)) {
         return Err(LogError::new(source, Problem::BadRate { rate_hz }));
     }
     if let Some(t) = t {

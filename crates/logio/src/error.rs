@@ -2,8 +2,8 @@
 //! reader's settings ([`Setting`], the fields of `ReadOptions`) and never a front end's flags; a
 //! front end renders them with its own names through [`LogError::render`].
 
+use crate::limits::MAX_LOG_RATE_HZ;
 use crate::units::{AccelUnit, GyroUnit, TimeUnit};
-use crate::MAX_LOG_RATE_HZ;
 use noise::Sensor;
 
 /// A setting of the reader (a field of `ReadOptions`).

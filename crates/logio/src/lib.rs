@@ -24,12 +24,16 @@ mod csv;
 mod error;
 mod file;
 mod float;
+mod limits;
+mod log;
 mod units;
 
 pub use columns::{ColumnUse, SkipReason, Skipped, Source, UnitOptions};
 pub use csv::parse_log;
 pub use error::{sig, At, LogError, Problem, Result, Setting, SettingNames};
 pub use file::available_memory_bytes;
+pub use limits::{valid_rate_hz, MAX_LOG_RATE_HZ};
+pub use log::{Log, ReadOptions};
 pub use units::{AccelUnit, GyroUnit, TimeUnit};
 
 use file::{check_fits, FileBytes, GIB};
@@ -40,108 +44,6 @@ use std::path::Path;
 
 /// Standard gravity for `g` units (m/s^2): the noise crate's one definition.
 pub use noise::units::STANDARD_GRAVITY_MPS2;
-
-/// Highest sample rate a log may have, Hz.
-pub const MAX_LOG_RATE_HZ: f64 = 1e9;
-
-/// Whether `rate_hz` is a sample rate a log can have (finite, above 0, at most
-/// [`MAX_LOG_RATE_HZ`]): the check of the rate setting, for front ends that validate early.
-pub fn valid_rate_hz(rate_hz: f64) -> bool {
-    rate_hz.is_finite() && rate_hz > 0.0 && rate_hz <= MAX_LOG_RATE_HZ
-}
-
-/// A log in SI units.
-#[derive(Clone, Debug)]
-pub struct Log {
-    /// Where it came from (file name), for messages.
-    pub source: String,
-    /// Sample rate, Hz.
-    pub rate_hz: f64,
-    /// Time column, s (if the file had one).
-    pub t_s: Option<Vec<f64>>,
-    /// Channels by name (canonical where mapped), SI units for gyro and accel channels.
-    pub channels: BTreeMap<String, Vec<f64>>,
-    /// Channel names in file order (without `t`).
-    pub order: Vec<String>,
-    /// How each used column was mapped (file order, `t` included).
-    pub columns: Vec<ColumnUse>,
-    /// Columns not used, with the reason.
-    pub skipped: Vec<Skipped>,
-    /// The sensor_msgs/Imu topic, for a bag or MCAP file.
-    pub topic: Option<String>,
-}
-
-impl Log {
-    /// Number of samples.
-    pub fn len(&self) -> usize {
-        self.channels.values().next().map_or(0, Vec::len)
-    }
-
-    /// Whether the log has no samples (never true for a log `read_log` returns).
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// Sample interval, s.
-    pub fn dt_s(&self) -> f64 {
-        1.0 / self.rate_hz
-    }
-
-    /// The column mapping in one line for people: `gyro_x_dps -> gx (deg/s, from the name)`, and
-    /// the skipped columns; settings named by `names`.
-    pub fn mapping_text(&self, names: SettingNames) -> String {
-        let used: Vec<String> = self
-            .columns
-            .iter()
-            .map(|c| {
-                let unit_from = c.unit_from.render(names);
-                let how = match (c.channel_from, c.unit_from) {
-                    (Source::Setting(s), Source::Name) => {
-                        format!("{}, unit from the name", names(s))
-                    }
-                    (Source::Setting(s), _) => format!("{}, unit {unit_from}", names(s)),
-                    (_, Source::Name) => "from the name".to_string(),
-                    (_, _) => format!("unit {unit_from}"),
-                };
-                format!("{} -> {} ({}, {how})", c.column, c.channel, c.unit)
-            })
-            .collect();
-        let mut s = format!("columns: {}", used.join("; "));
-        if !self.skipped.is_empty() {
-            let skipped: Vec<String> = self
-                .skipped
-                .iter()
-                .map(|k| format!("{} ({})", k.column, k.reason_text(names)))
-                .collect();
-            s.push_str(&format!("\nskipped: {}", skipped.join("; ")));
-        }
-        s
-    }
-
-    /// SI unit of a channel, for tables and plots.
-    pub fn unit_of(name: &str) -> &'static str {
-        match Channel::from_name(name).map(Channel::sensor) {
-            Some(Sensor::Gyro) => "rad/s",
-            Some(Sensor::Accel) => "m/s^2",
-            None if name == "temp" => "degC",
-            None => "1",
-        }
-    }
-}
-
-/// What the reader is told besides the file: the settings a log's names do not give.
-#[derive(Clone, Debug, Default)]
-pub struct ReadOptions {
-    /// Sample rate, Hz ([`valid_rate_hz`]): required when the log has no time column, checked
-    /// against it otherwise.
-    pub rate_hz: Option<f64>,
-    /// Units of columns whose names do not state one (each applies to every column of its kind).
-    pub units: UnitOptions,
-    /// (canonical name, file column) pairs: columns mapped by hand.
-    pub columns: Vec<(String, String)>,
-    /// The sensor_msgs/Imu topic of a bag or MCAP file (default: the only one).
-    pub topic: Option<String>,
-}
 
 /// A bag or MCAP file's IMU topic as a log: channels gx..az in SI (sensor_msgs/Imu is SI by
 /// definition, REP 103), times from header.stamp, the same rate and uniformity checks as a CSV.

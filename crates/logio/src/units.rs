@@ -1,6 +1,6 @@
 //! Units of the time, gyro and accelerometer columns and their factors to SI.
 
-use crate::STANDARD_GRAVITY_MPS2;
+use noise::units::STANDARD_GRAVITY_MPS2;
 
 /// Gyro units.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
