@@ -483,7 +483,7 @@ mod tests {
             name: "white".into(),
             ..Default::default()
         };
-        model.gyro.axes[0].white_noise = Some(1e-3);
+        model.gyro.axes[0].set_term(noise::WhiteNoise::new(1e-3).unwrap());
         let setup = SimSetup {
             dt_s: 0.01,
             samples,

@@ -91,7 +91,7 @@ fn a_random_walk_one_run_cannot_resolve_is_named_from_pooled_runs() {
     let k_true = 5e-6;
     model
         .axis_mut(Channel::Gz.sensor(), Channel::Gz.axis())
-        .rate_random_walk = Some(k_true);
+        .set_term(noise::RateRandomWalk::new(k_true).unwrap());
     let one = diagnose_generated(&model, &base, &[9100], false);
     eprintln!("one run: named {:?}", named(&one));
     let seeds: Vec<u64> = (0..8).map(|r| 9100 + r).collect();
