@@ -687,6 +687,49 @@ fn json_document(
     serde_json::to_string_pretty(&v).context("cannot serialise the diagnosis")
 }
 
+/// The drift check's section of report.md: per horizon and quantity the measured RMS against the
+/// model's 95 % band before and after, beside the Allan gaps of the table above.
+fn drift_check_markdown(result: &Diagnosis) -> String {
+    let mut s = String::new();
+    let Some(d) = &result.drift_check else {
+        return s;
+    };
+    let _ = writeln!(
+        s,
+        "\n## Drift check\n\nProtocol: {}. z = (ln RMS measured - mean ln RMS of the model's replicates) / their spread; the band is the 95 % range of the replicates (log-normal). Drift gap (RMS of z): {:.2} before, {:.2} after; outside the band: {} before, {} after.\n",
+        d.protocol_text, d.before.gap, d.after.gap, d.before.outside, d.after.outside
+    );
+    let _ = writeln!(
+        s,
+        "| horizon | quantity | measured | model before [95 %] | verdict (z) | model after [95 %] | verdict (z) |\n|---|---|---|---|---|---|---|"
+    );
+    for (h0, h1) in d.before.horizons.iter().zip(&d.after.horizons) {
+        for (q, z0) in &h0.quantities {
+            let Some(z1) = h1.quantities.get(q) else {
+                continue;
+            };
+            let v = |x: f64| crate::fmt::channel_value(q, x);
+            let _ = writeln!(
+                s,
+                "| {} | {q} | {} | {} [{}, {}] | {} ({:.2}) | {} [{}, {}] | {} ({:.2}) |",
+                crate::fmt::time(h0.t_s),
+                v(z0.measured_rms),
+                v(z0.model_rms),
+                v(z0.band_lo),
+                v(z0.band_hi),
+                z0.verdict.name(),
+                z0.z,
+                v(z1.model_rms),
+                v(z1.band_lo),
+                v(z1.band_hi),
+                z1.verdict.name(),
+                z1.z
+            );
+        }
+    }
+    s
+}
+
 /// The runs' section of report.md (several runs): each run's gaps and step-0 findings.
 fn runs_markdown(result: &Diagnosis) -> String {
     let mut s = String::new();
@@ -762,11 +805,12 @@ fn markdown_report(
             .iter()
             .map(|e| {
                 format!(
-                    "{} {} ({}): {}",
+                    "{} {} ({}): {}{}",
                     e.kind,
                     e.effect,
                     model_text(e),
-                    params_text(e, name)
+                    params_text(e, name),
+                    drift_gap_text(e)
                 )
             })
             .collect();
@@ -803,6 +847,7 @@ fn markdown_report(
             let _ = writeln!(s, "| {log} | {} |", cells.join(" | "));
         }
     }
+    s.push_str(&drift_check_markdown(result));
     let _ = writeln!(
         s,
         "\n## Drift (RMS over segments, bias removed by the log mean)\n"

@@ -4,15 +4,19 @@
 //!
 //! The model's distribution comes from the band's own simulated logs (no further simulation):
 //! replicate s pools, for run r, simulated log (s + r) mod seeds at run r's length (`simulate`),
-//! so it is distributed exactly as the runs' pooled drift. For each replicate the RMS over its
-//! pooled segments; ln RMS is summarised by its mean mu and standard deviation sd over the
-//! replicates, sd corrected for the logs the replicates share (by sqrt((seeds - 1) /
-//! (seeds - runs)), as the band's spread). The measured pooled RMS gives
-//! z = (ln RMS_measured - mu) / (sd sqrt(1 + runs / seeds)): the measurement is one draw of the
-//! replicate distribution (sd), the centre is known from seeds / runs independent logs. A
-//! log-normal reading of the RMS: the band is exp(mu +- 1.96 sd sqrt(1 + runs / seeds)) and
-//! the verdict `inside` when |z| <= 1.96. The drift gap is the RMS of z over the informed
-//! (horizon, quantity) pairs.
+//! so it is distributed exactly as the runs' pooled drift. Its centre mu is the mean over the
+//! replicates of ln RMS (the RMS over the replicate's pooled segments). Its spread comes from the
+//! independent logs, not from the replicates (which share logs, and whose sample spread rests on
+//! about seeds / runs logs): the pooled mean square MS = sum_r n_r MS_r / N (n_r segments of run
+//! r, N in all) has mean sum_r n_r m_r / N and variance sum_r n_r^2 v_r / N^2, m and v the mean
+//! and variance over the simulated logs of one log's mean square at run r's length; read as a
+//! gamma variable of shape a = mean^2 / variance (the chi-squared form of a mean square of
+//! Gaussian errors, NIST SP 1065 §5.2 for the Allan variance alike), ln RMS = ln MS / 2 has the
+//! standard deviation sd = sqrt(psi'(a)) / 2 (`gap::ln_adev_se`'s log-gamma moment). The
+//! measured pooled RMS gives z = (ln RMS_measured - mu) / (sd sqrt(1 + runs / seeds)): the
+//! measurement is one draw (sd), the centre is known from seeds / runs independent logs. The
+//! band is exp(mu +- 1.96 sd sqrt(1 + runs / seeds)), the verdict `inside` when |z| <= 1.96.
+//! The drift gap is the RMS of z over the informed (horizon, quantity) pairs.
 
 use crate::drift_check::Verdict;
 use crate::input::LogInput;
@@ -172,8 +176,8 @@ pub(crate) fn drift_gap(
                         stats::rms(&v).ln()
                     })
                     .collect();
-                let all: Vec<f64> = (0..seeds).flat_map(replicate).copied().collect();
-                if let Some(d) = quantity_z(values, &ln_rms, &all, runs) {
+                let spread = pooled_mean_square(simulated, of_run, h, q);
+                if let Some(d) = quantity_z(values, &ln_rms, spread, runs) {
                     quantities.insert(q.name(), d);
                 }
             }
@@ -195,17 +199,48 @@ pub(crate) fn drift_gap(
     }
 }
 
-/// One quantity's z (module doc) from the measured values, the replicates' ln RMS and all the
-/// simulated values; None when the model or the measurement has no drift there.
-fn quantity_z(measured: &[f64], ln_rms: &[f64], all: &[f64], runs: usize) -> Option<DriftZ> {
+/// The pooled mean square's mean and variance (module doc) of quantity `q` at horizon `h`, from
+/// each simulated log's own mean square at each run's length.
+fn pooled_mean_square(
+    simulated: &[Vec<Vec<SegmentErrors>>],
+    of_run: &[usize],
+    h: usize,
+    q: Quantity,
+) -> (f64, f64) {
+    let (mut n_all, mut mean, mut var) = (0.0, 0.0, 0.0);
+    for &d in of_run {
+        let ms: Vec<f64> = simulated
+            .iter()
+            .map(|log| {
+                let v = log[d][h].values(q);
+                v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64
+            })
+            .collect();
+        let n = simulated.first().map_or(0, |log| log[d][h].len()) as f64;
+        let m = stats::mean(&ms);
+        let v = ms.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (ms.len() as f64 - 1.0);
+        n_all += n;
+        mean += n * m;
+        var += n * n * v;
+    }
+    (mean / n_all, var / (n_all * n_all))
+}
+
+/// One quantity's z (module doc) from the measured values, the replicates' ln RMS and the pooled
+/// mean square's (mean, variance); None when the model or the measurement has no drift there.
+fn quantity_z(
+    measured: &[f64],
+    ln_rms: &[f64],
+    (mean_square, var_ms): (f64, f64),
+    runs: usize,
+) -> Option<DriftZ> {
     let seeds = ln_rms.len() as f64;
     let mu = stats::mean(ln_rms);
-    let var = ln_rms.iter().map(|l| (l - mu) * (l - mu)).sum::<f64>() / (seeds - 1.0);
-    let widen = (seeds - 1.0) / (seeds - runs as f64);
-    let scale = (var * widen * (1.0 + runs as f64 / seeds)).sqrt();
+    let shape = mean_square * mean_square / var_ms;
+    let sd = crate::gap::trigamma(shape).sqrt() / 2.0;
+    let scale = sd * (1.0 + runs as f64 / seeds).sqrt();
     let rms = stats::rms(measured);
-    let mean_square = all.iter().map(|x| x * x).sum::<f64>() / all.len() as f64;
-    if !(rms > 0.0 && scale > 0.0 && mu.is_finite() && mean_square > 0.0) {
+    if !(rms > 0.0 && scale > 0.0 && scale.is_finite() && mu.is_finite() && mean_square > 0.0) {
         return None;
     }
     let fit = DriftFit {
@@ -230,4 +265,55 @@ fn quantity_z(measured: &[f64], ln_rms: &[f64], all: &[f64], runs: usize) -> Opt
         },
         fit,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Segment errors of one log: `n` heading errors of standard deviation `sigma`.
+    fn log(noise: &[f64], sigma: f64) -> Vec<Vec<SegmentErrors>> {
+        vec![vec![SegmentErrors {
+            horizon_s: 60.0,
+            heading_rad: noise.iter().map(|x| sigma * x).collect(),
+            ..Default::default()
+        }]]
+    }
+
+    /// Heading errors of 40 segments per run, 3 runs, 32 simulated logs: the same distribution
+    /// measured lies inside (|z| well below 4, a 6e-5 two-sided tail), the spread is the gamma
+    /// (chi-squared) one of 120 squared Gaussian errors (sd of ln RMS = sqrt(psi'(60)) / 2 =
+    /// 0.065, within 30 %: its variance is estimated from 32 logs), and three times the error
+    /// is far above.
+    #[test]
+    fn a_measurement_like_the_model_lies_inside_and_a_larger_one_above() {
+        let normals = crate::testutil::normals(40 * 35, 11);
+        let simulated: Vec<Vec<Vec<SegmentErrors>>> = (0..32)
+            .map(|s| log(&normals[40 * s..40 * (s + 1)], 1e-3))
+            .collect();
+        let of_run = [0, 0, 0];
+        let mut active = [false; 6];
+        active[2] = true;
+        let measured = |scale: f64| {
+            let mut m = SegmentErrors {
+                horizon_s: 60.0,
+                ..Default::default()
+            };
+            for r in 0..3 {
+                m.extend(&log(&normals[40 * (32 + r)..40 * (33 + r)], scale * 1e-3)[0][0]);
+            }
+            vec![m]
+        };
+        let like = drift_gap(&measured(1.0), &simulated, &of_run, &active);
+        let z = like.horizons[0].quantities["heading_rad"];
+        assert!(z.z.abs() < 4.0, "{z:?}");
+        let sd = z.fit.scale / (1.0 + 3.0 / 32.0f64).sqrt();
+        let expected = crate::gap::trigamma(60.0).sqrt() / 2.0;
+        assert!((sd / expected - 1.0).abs() < 0.3, "{sd} vs {expected}");
+        assert_eq!(like.horizons[0].quantities.len(), 1, "heading only");
+        let above = drift_gap(&measured(3.0), &simulated, &of_run, &active);
+        let z = above.horizons[0].quantities["heading_rad"];
+        assert_eq!(z.verdict, Verdict::Above, "{z:?}");
+        assert_eq!(above.outside, 1);
+    }
 }

@@ -180,3 +180,77 @@ pub(crate) fn restrict(band: &Band, idx: &[usize]) -> Band {
         centre_logs: band.centre_logs,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(m: usize, dev: f64, edf: f64, n_terms: usize) -> AllanPoint {
+        AllanPoint {
+            tau_s: m as f64 * 0.01,
+            m,
+            dev,
+            n_terms,
+            edf,
+            lo: 0.9 * dev,
+            hi: 1.1 * dev,
+            bins: n_terms / m,
+            alpha: 0,
+        }
+    }
+
+    /// One run's point is kept bit for bit; two runs' variances average with their overlapping
+    /// terms as weights, their EDF add, and the interval is the chi-squared one of the sum.
+    #[test]
+    fn pooled_points_weigh_variances_by_terms_and_add_edf() {
+        let a = point(4, 2.0, 10.0, 300);
+        assert_eq!(pool_point(&[&a]), a);
+        let b = point(4, 1.0, 30.0, 100);
+        let p = pool_point(&[&a, &b]);
+        let avar = (300.0 * 4.0 + 100.0 * 1.0) / 400.0;
+        assert!((p.dev - f64::sqrt(avar)).abs() < 1e-15);
+        assert_eq!((p.edf, p.n_terms, p.m), (40.0, 400, 4));
+        let (lo, hi) = allan::chi2::confidence_interval(p.dev, 40.0, allan::ONE_SIGMA_CI);
+        assert_eq!((p.lo, p.hi), (lo, hi));
+    }
+
+    /// Runs of one length pooled: each tau's weights are the runs' overlapping terms, the EDF of a
+    /// pooled point is the sum of the runs', and a run alone is measured as before.
+    #[test]
+    fn runs_pool_on_the_longest_grid() {
+        let x = crate::testutil::normals(8192, 1);
+        let y = crate::testutil::normals(4096, 2);
+        fn log(s: &[f64]) -> LogInput<'_> {
+            LogInput {
+                dt_s: 0.01,
+                channels: [Some(s), None, None, None, None, None],
+                temperature_c: None,
+            }
+        }
+        let (one, two) = (log(&x), log(&y));
+        let (grid1, alone) = measure(&one, 0.0);
+        let r = measure_runs(&[two, one], 0.0);
+        assert_eq!(r.grid_m, grid1, "the longest run's grid");
+        let alone = alone[noise::Channel::Gx].as_ref().unwrap();
+        let run1 = r.runs[1][noise::Channel::Gx].as_ref().unwrap();
+        assert_eq!(run1.curve.adev, alone.curve.adev);
+        let pooled = r.pooled[noise::Channel::Gx].as_ref().unwrap();
+        let run0 = r.runs[0][noise::Channel::Gx].as_ref().unwrap();
+        for (k, &i) in pooled.idx.iter().enumerate() {
+            let w = &r.weights[0][i];
+            let e0 = run0
+                .idx
+                .iter()
+                .position(|&j| j == i)
+                .map_or(0.0, |j| run0.curve.edf[j]);
+            let e1 = alone
+                .idx
+                .iter()
+                .position(|&j| j == i)
+                .map_or(0.0, |j| alone.curve.edf[j]);
+            assert!((pooled.curve.edf[k] - (e0 + e1)).abs() < 1e-9 * pooled.curve.edf[k]);
+            assert_eq!(w[1] > 0.0, e1 > 0.0);
+            assert_eq!(w[0] > 0.0, e0 > 0.0);
+        }
+    }
+}
