@@ -34,7 +34,7 @@ fn setup(grid_m: Vec<usize>) -> SimSetup<'static> {
 fn bench(c: &mut Criterion) {
     let model = adis();
     let mut truth = model.clone();
-    truth.gyro.axes[0].rate_random_walk = Some(5e-4); // crosses the white noise (N = 8.7e-4) at 3N^2/K^2 = 9 s
+    truth.gyro.axes[0].set_term(noise::RateRandomWalk::new(5e-4).unwrap()); // crosses the white noise (N = 8.7e-4) at 3N^2/K^2 = 9 s
     let log = static_log(&truth, &setup(vec![]), 99, 0);
     let grid: Vec<usize> = (0..15).map(|j| 1usize << j).collect();
     let mut group = c.benchmark_group("diagnose_adis_2^16");

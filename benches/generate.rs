@@ -72,7 +72,7 @@ fn bench(c: &mut Criterion) {
         let mut m = model.clone();
         for s in noise::Sensor::ALL {
             for a in &mut m.triad_mut(s).axes {
-                a.output_filter = Some(noise::OutputFilter::new(kind, d).unwrap());
+                a.set_term(noise::OutputFilter::new(kind, d).unwrap());
             }
         }
         group.bench_function(name, |b| fill_static_all(b, &m));
@@ -84,17 +84,17 @@ fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("filtered_allan");
     let taus: Vec<f64> = (0..18).map(|j| 0.01 * f64::from(1u32 << j)).collect();
     let mut axis = model.gyro.axes[0].clone();
-    axis.output_filter =
-        Some(noise::OutputFilter::new(noise::FilterKind::Bartlett { taps: 16 }, 8).unwrap());
+    axis.set_term(noise::OutputFilter::new(noise::FilterKind::Bartlett { taps: 16 }, 8).unwrap());
     group.bench_function("mtx_gyro_bartlett16_x8_18_taus", |b| {
         b.iter(|| black_box(axis.allan_variance_sampled_many(&taus, 0.01)))
     });
     // A long response (first-order low-pass at 0.1 Hz, 10 Hz output: ~620 samples, the Samsung
     // S5's filter), with a resonance: the FFT autocorrelation and the O(L) exponential sums.
     let mut long = model.gyro.axes[0].clone();
-    long.output_filter =
-        Some(noise::OutputFilter::new(noise::FilterKind::LowPass1 { cutoff_hz: 0.1 }, 1).unwrap());
-    long.resonance = Some(noise::Resonance::new(1e-3, 2.0, 0.2).unwrap());
+    long.set_term(
+        noise::OutputFilter::new(noise::FilterKind::LowPass1 { cutoff_hz: 0.1 }, 1).unwrap(),
+    );
+    long.set_term(noise::Resonance::new(1e-3, 2.0, 0.2).unwrap());
     let taus10: Vec<f64> = (0..18).map(|j| 0.1 * f64::from(1u32 << j)).collect();
     group.bench_function("mtx_gyro_lowpass1_0.1hz_resonance_18_taus", |b| {
         b.iter(|| black_box(long.allan_variance_sampled_many(&taus10, 0.1)))
@@ -108,7 +108,7 @@ fn bench(c: &mut Criterion) {
     let mut m = model.clone();
     for s in noise::Sensor::ALL {
         for a in &mut m.triad_mut(s).axes {
-            a.resonance = Some(noise::Resonance::new(1e-3, 20.0, 0.7).unwrap());
+            a.set_term(noise::Resonance::new(1e-3, 20.0, 0.7).unwrap());
         }
     }
     group.bench_function("fill_static_6_channels", |b| {

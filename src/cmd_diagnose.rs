@@ -50,6 +50,18 @@ pub struct Args {
     /// the original and with the corrected model (repeat or comma-separate)
     #[arg(long, value_delimiter = ',', value_name = "LOG")]
     pub check: Vec<PathBuf>,
+    /// Run the drift check in the loop (docs/diagnose.md, "Drift in the loop"): the logs' drift
+    /// under the `drift` protocol against the model's, before and after, and slow terms fitted to
+    /// the Allan and drift gaps together. On by default with several logs; implied by
+    /// --calibration or --init
+    #[arg(long)]
+    pub drift_check: bool,
+    /// The drift check's bias calibration: none, log-mean (default) or window:TIME
+    #[arg(long, value_name = "HOW", value_parser = crate::cmd_drift::calibration)]
+    pub calibration: Option<diagnose::protocol::Calibration>,
+    /// The drift check's initial attitude: perfect (default) or level:TIME
+    #[arg(long, value_name = "HOW", value_parser = crate::cmd_drift::initialisation)]
+    pub init: Option<diagnose::protocol::Initialisation>,
     /// Print one JSON document on stdout (human text on stderr)
     #[arg(long)]
     pub json: bool,
@@ -84,6 +96,19 @@ fn with_flags(e: DiagnoseError) -> anyhow::Error {
         ),
         e => e.into(),
     }
+}
+
+/// The drift check's protocol (the `drift` command's, on diagnose's horizons), when it runs: with
+/// several logs, or when asked for.
+fn drift_protocol(args: &Args) -> Option<diagnose::protocol::Protocol> {
+    use diagnose::protocol::{Calibration, Initialisation, Protocol};
+    let asked = args.drift_check || args.calibration.is_some() || args.init.is_some();
+    (asked || args.logs.len() > 1).then(|| Protocol {
+        calibration: args.calibration.unwrap_or(Calibration::LogMean),
+        initialisation: args.init.unwrap_or(Initialisation::Perfect),
+        horizons_s: args.horizons.clone(),
+        overlapping: false,
+    })
 }
 
 /// Most simulated logs per band and add-and-resimulate rounds a diagnose run may ask for.
@@ -202,6 +227,7 @@ fn run_inner(args: &Args) -> Result<()> {
         horizons_s: args.horizons.clone(),
         min_delta_bic: args.min_delta_bic,
         tau_min_s: args.tau_min,
+        drift_protocol: drift_protocol(args),
         ..Settings::default()
     };
     let started = std::time::Instant::now();
@@ -429,7 +455,7 @@ fn text_report(result: &Diagnosis, log: &str, model: &Path, elapsed_s: f64) -> S
         for e in &r.effects {
             let _ = writeln!(
                 s,
-                "       {} {} ({}): {}; gap {:.2} -> {:.2}, dBIC {:.0}{}",
+                "       {} {} ({}): {}; gap {:.2} -> {:.2}, dBIC {:.0}{}{}",
                 e.kind,
                 e.effect,
                 model_text(e),
@@ -437,6 +463,7 @@ fn text_report(result: &Diagnosis, log: &str, model: &Path, elapsed_s: f64) -> S
                 e.gap_before,
                 e.gap_after,
                 e.delta_bic,
+                drift_gap_text(e),
                 if e.cannot_tell_from.is_empty() {
                     String::new()
                 } else {
@@ -453,6 +480,7 @@ fn text_report(result: &Diagnosis, log: &str, model: &Path, elapsed_s: f64) -> S
         }
     }
     s.push_str(&runs_text(result));
+    s.push_str(&drift_check_text(result));
     let _ = writeln!(
         s,
         "drift (RMS over segments; bias removed by the log mean): heading, horizontal position"
@@ -475,6 +503,46 @@ fn text_report(result: &Diagnosis, log: &str, model: &Path, elapsed_s: f64) -> S
             s,
             "n/a: the log cannot inform it (heading needs gz; horizontal position needs gx, gy, ax, ay); `imudrift drift` compares every quantity a log informs"
         );
+    }
+    s
+}
+
+/// The drift check in the loop: per horizon and quantity the measured RMS against the model's
+/// band before and after, and the drift gap.
+fn drift_check_text(result: &Diagnosis) -> String {
+    let mut s = String::new();
+    let Some(d) = &result.drift_check else {
+        return s;
+    };
+    let _ = writeln!(
+        s,
+        "drift check ({}): drift gap {:.2} -> {:.2} ({} -> {} outside the 95 % band)",
+        d.protocol_text, d.before.gap, d.after.gap, d.before.outside, d.after.outside
+    );
+    for (h0, h1) in d.before.horizons.iter().zip(&d.after.horizons) {
+        for (q, z0) in &h0.quantities {
+            let Some(z1) = h1.quantities.get(q) else {
+                continue;
+            };
+            let v = |x: f64| crate::fmt::channel_value(q, x);
+            let _ = writeln!(
+                s,
+                "  {:>8} {:<18} measured {:>11}  model before {:>11} [{}, {}] {:<6} z {:>6.2}  after {:>11} [{}, {}] {:<6} z {:>6.2}",
+                crate::fmt::time(h0.t_s),
+                q,
+                v(z0.measured_rms),
+                v(z0.model_rms),
+                v(z0.band_lo),
+                v(z0.band_hi),
+                z0.verdict.name(),
+                z0.z,
+                v(z1.model_rms),
+                v(z1.band_lo),
+                v(z1.band_hi),
+                z1.verdict.name(),
+                z1.z
+            );
+        }
     }
     s
 }
@@ -512,6 +580,14 @@ fn runs_text(result: &Diagnosis) -> String {
     s
 }
 
+/// "; drift gap 3.1 -> 1.2" for an effect the drift loop named.
+fn drift_gap_text(e: &FoundEffect) -> String {
+    match (e.drift_gap_before, e.drift_gap_after) {
+        (Some(b), Some(a)) => format!("; drift gap {b:.2} -> {a:.2}"),
+        _ => String::new(),
+    }
+}
+
 fn model_text(e: &FoundEffect) -> String {
     match &e.model_parameters {
         Some(p) => format!(
@@ -547,10 +623,13 @@ fn checks_text(checks: &Checks) -> String {
 fn model_noise_values(result: &Diagnosis, c: noise::Channel) -> Option<(AxisValue, AxisValue)> {
     let a = result.model_final.axis(c.sensor(), c.axis());
     let n = AxisValue {
-        value: a.white_noise?,
+        value: a.get::<noise::WhiteNoise>()?.density(),
         how: "corrected model".into(),
     };
-    let k = match a.rate_random_walk {
+    let k = match a
+        .get::<noise::RateRandomWalk>()
+        .map(noise::RateRandomWalk::density)
+    {
         Some(k) => AxisValue {
             value: k,
             how: "corrected model".into(),

@@ -80,7 +80,7 @@ pub struct Args {
 }
 
 /// The value parser of `--calibration`: none, log-mean or window:TIME.
-fn calibration(text: &str) -> std::result::Result<Calibration, String> {
+pub(crate) fn calibration(text: &str) -> std::result::Result<Calibration, String> {
     match text {
         "none" => Ok(Calibration::None),
         "log-mean" => Ok(Calibration::LogMean),
@@ -94,7 +94,7 @@ fn calibration(text: &str) -> std::result::Result<Calibration, String> {
 }
 
 /// The value parser of `--init`: perfect or level:TIME.
-fn initialisation(text: &str) -> std::result::Result<Initialisation, String> {
+pub(crate) fn initialisation(text: &str) -> std::result::Result<Initialisation, String> {
     match text {
         "perfect" => Ok(Initialisation::Perfect),
         t => match t.strip_prefix("level:") {

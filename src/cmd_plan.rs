@@ -88,14 +88,17 @@ fn plan_axis(
         };
         out.push(plan_term(kind, &curve, dt_s, target, duration_s, MAX_TAU_S));
     };
-    if let Some(n) = m.white_noise {
+    if let Some(n) = m.get::<noise::WhiteNoise>().map(noise::WhiteNoise::density) {
         // The Allan variance of sampled white noise is exactly N^2 / tau (IEEE 952 annex C).
         term(PlanTerm::WhiteNoise, &|t| n * n / t);
     }
-    if let Some(bi) = &m.bias_instability {
+    if let Some(bi) = m.get::<noise::BiasInstability>() {
         term(PlanTerm::BiasInstability, &|t| bi.avar_sampled(t, dt_s));
     }
-    if let Some(k) = m.rate_random_walk {
+    if let Some(k) = m
+        .get::<noise::RateRandomWalk>()
+        .map(noise::RateRandomWalk::density)
+    {
         term(PlanTerm::RateRandomWalk, &|t| {
             rate_random_walk_avar_sampled(k, t, dt_s)
         });

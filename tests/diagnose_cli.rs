@@ -30,7 +30,9 @@ white_noise = "0.001 m/s^2/sqrt(Hz)"
 fn write_log(dir: &Path) -> std::path::PathBuf {
     let mut truth = SensorModel::from_toml_str(BASE_TOML, "base.toml").expect("base model parses");
     let (sensor, axis) = (noise::Channel::Gx.sensor(), noise::Channel::Gx.axis());
-    truth.axis_mut(sensor, axis).rate_random_walk = Some(K_HIDDEN);
+    truth
+        .axis_mut(sensor, axis)
+        .set_term(noise::RateRandomWalk::new(K_HIDDEN).unwrap());
     let setup = SimSetup {
         dt_s: DT_S,
         samples: SAMPLES,
@@ -141,7 +143,8 @@ fn diagnose_names_hidden_rrw_and_writes_outputs() {
     let m = SensorModel::from_toml_str(&corrected, "base-diagnosed.toml")
         .expect("corrected model loads");
     let k_written = m.gyro.axes[0]
-        .rate_random_walk
+        .get::<noise::RateRandomWalk>()
+        .map(noise::RateRandomWalk::density)
         .expect("gyro x has the rate random walk");
     let k_reported = doc["channels"]["gx"]["effects"][0]["parameters"]["k"]
         .as_f64()
@@ -156,7 +159,10 @@ fn diagnose_names_hidden_rrw_and_writes_outputs() {
         corrected.contains("deg/h/sqrt(h)") || corrected.contains("/sqrt("),
         "{corrected}"
     );
-    assert!(m.gyro.axes[1].rate_random_walk.is_none());
+    assert!(m.gyro.axes[1]
+        .get::<noise::RateRandomWalk>()
+        .map(noise::RateRandomWalk::density)
+        .is_none());
     // Same seed, another thread count: the same JSON, byte for byte.
     assert_eq!(json, run_json(&log, &model, "2", None));
 }

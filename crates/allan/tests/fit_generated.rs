@@ -14,7 +14,7 @@
 
 use allan::fit::{fit_ieee952_terms, FitTerms};
 use allan::{deviation, DataKind, Estimator, TauGrid};
-use noise::process::{GaussMarkovBank, Quantizer, RandomWalk, WhiteNoise};
+use noise::process::{GaussMarkovBank, Quantizer, RandomWalk, WhiteNoiseSampler};
 use rand::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 
@@ -44,7 +44,7 @@ fn generate(t: &Truth, dt: f64, len: usize, seed: u64) -> Vec<f64> {
     let sd_each = (t.b * t.b * rho.ln() / std::f64::consts::PI).sqrt();
     let components: Vec<(f64, f64)> = (0..13).map(|i| (0.05 * rho.powi(i), sd_each)).collect();
     let mut flicker = GaussMarkovBank::new(&components, dt, &mut rng);
-    let white = WhiteNoise::new(t.n, dt);
+    let white = WhiteNoiseSampler::new(t.n, dt);
     let mut walk = RandomWalk::new(t.k, dt);
     let mut quantizer = (t.q > 0.0).then(|| Quantizer::new(t.q, &mut rng));
     let lsb = t.q * 12f64.sqrt();

@@ -197,12 +197,12 @@ impl ChannelFit {
         let columns: Vec<Vec<f64>> = terms
             .iter()
             .map(|t| {
-                let mut only = AxisModel {
-                    output_filter: axis.output_filter,
-                    ..AxisModel::default()
-                };
+                let mut only = AxisModel::default();
+                if let Some(f) = axis.get::<noise::OutputFilter>() {
+                    only.set_term(*f);
+                }
                 if let Some(term) = axis.term(t.effect) {
-                    only.set_term(term);
+                    only.set_term(term.clone());
                 }
                 only.allan_variance_sampled_many(&taus, dt)
             })

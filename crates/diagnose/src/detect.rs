@@ -907,7 +907,8 @@ fn temperature_finding(
         } else {
             vec![]
         },
-        term: noise::Term::TemperatureBias(c1),
+        // A coefficient that is not finite is no finding.
+        term: noise::TemperatureBias::new(c1).ok()?.into(),
         parameters: vec![("coefficient", c1, c1 - 1.96 * reg.sd, c1 + 1.96 * reg.sd)],
         delta_bic: reg.z * reg.z - (x.len() as f64).ln(),
     };
@@ -964,7 +965,7 @@ pub fn preprocess_log(log: &crate::input::LogInput, model: &noise::SensorModel) 
 pub fn model_levels(model: &noise::SensorModel) -> [NoiseLevels; 6] {
     noise::Channel::ALL.map(|c| {
         let a = model.axis(c.sensor(), c.axis());
-        let (b, k_bi) = match &a.bias_instability {
+        let (b, k_bi) = match a.get::<noise::BiasInstability>() {
             Some(noise::BiasInstability::Flicker(f)) => (f.b, 0.0),
             Some(noise::BiasInstability::RandomWalk {
                 stability,
@@ -973,9 +974,12 @@ pub fn model_levels(model: &noise::SensorModel) -> [NoiseLevels; 6] {
             None => (0.0, 0.0),
         };
         NoiseLevels {
-            n: a.white_noise.unwrap_or(0.0),
+            n: a.get::<noise::WhiteNoise>()
+                .map_or(0.0, noise::WhiteNoise::density),
             b,
-            k: a.rate_random_walk.unwrap_or(0.0).hypot(k_bi),
+            k: a.get::<noise::RateRandomWalk>()
+                .map_or(0.0, noise::RateRandomWalk::density)
+                .hypot(k_bi),
         }
     })
 }

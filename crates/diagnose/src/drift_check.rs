@@ -134,7 +134,7 @@ fn likely_cause(
                 .iter()
                 .filter(|&&c| {
                     let a = model.axis(c.sensor(), c.axis());
-                    a.sinusoidal.is_some() || a.gauss_markov.is_some()
+                    a.has(noise::Effect::Sinusoidal) || a.has(noise::Effect::GaussMarkov)
                 })
                 .map(|c| c.name())
                 .collect();

@@ -58,6 +58,8 @@ pub(crate) fn found_by_detector(
         round: 0,
         refinements: 0,
         stand_in: false,
+        drift_gap_before: None,
+        drift_gap_after: None,
     }
 }
 
@@ -89,6 +91,8 @@ pub(crate) fn found_by_fit(
         round,
         refinements: 0,
         stand_in: false,
+        drift_gap_before: None,
+        drift_gap_after: None,
     }
 }
 

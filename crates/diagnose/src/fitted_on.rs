@@ -211,7 +211,9 @@ mod tests {
         );
         assert_eq!(FittedOn::from_model_text(&text).unwrap(), Some(f));
         let model = noise::SensorModel::from_toml_str(&text, "test").unwrap();
-        assert!(model.axis(noise::Sensor::Gyro, 0).white_noise.is_some());
+        assert!(model
+            .axis(noise::Sensor::Gyro, 0)
+            .has(noise::Effect::WhiteNoise));
         assert_eq!(FittedOn::from_model_text("name = \"x\"\n").unwrap(), None);
     }
 

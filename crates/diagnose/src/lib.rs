@@ -13,6 +13,8 @@ pub mod candidates;
 pub mod detect;
 pub mod drift;
 pub mod drift_check;
+mod drift_fit;
+pub mod drift_gap;
 pub mod error;
 mod findings;
 pub mod fit;

@@ -1,18 +1,21 @@
 //! Reading and changing one term of one channel of a `SensorModel` in diagnose's parameterisation.
 
 use crate::candidates::TermParams;
-use noise::{BiasInstability, Channel, Effect, Flicker, GaussMarkov, SensorModel, Sinusoid, Term};
+use noise::{
+    BiasInstability, Channel, Effect, Flicker, GaussMarkov, OutputFilter, Quantization, RateRamp,
+    RateRandomWalk, SensorModel, Sinusoid, TemperatureBias, Term, WhiteNoise,
+};
 
 /// The level the model has for `effect` on channel `ch` (None when absent, or when the term is not in a
 /// form diagnose fits: a Woodman random-walk bias instability is read as absent flicker).
 pub fn term_level(model: &SensorModel, ch: Channel, effect: Effect) -> Option<TermParams> {
     let (sensor, axis) = (ch.sensor(), ch.axis());
-    Some(match model.axis(sensor, axis).term(effect)? {
-        Term::Quantization(v)
-        | Term::WhiteNoise(v)
-        | Term::RateRandomWalk(v)
-        | Term::RateRamp(v)
-        | Term::TemperatureBias(v) => TermParams::Level(v),
+    Some(match model.axis(sensor, axis).term(effect)?.clone() {
+        Term::Quantization(q) => TermParams::Level(q.coefficient()),
+        Term::WhiteNoise(n) => TermParams::Level(n.density()),
+        Term::RateRandomWalk(k) => TermParams::Level(k.density()),
+        Term::RateRamp(r) => TermParams::Level(r.rate()),
+        Term::TemperatureBias(c) => TermParams::Level(c.per_degree()),
         Term::BiasInstability(BiasInstability::Flicker(f)) => TermParams::Level(f.b),
         Term::GaussMarkov(g) => TermParams::GaussMarkov {
             sigma: g.sigma,
@@ -29,7 +32,10 @@ pub fn term_level(model: &SensorModel, ch: Channel, effect: Effect) -> Option<Te
         },
         Term::OutputFilter(filter) => TermParams::Filter {
             filter,
-            n: model.axis(sensor, axis).white_noise.unwrap_or(0.0),
+            n: model
+                .axis(sensor, axis)
+                .get::<WhiteNoise>()
+                .map_or(0.0, WhiteNoise::density),
         },
         _ => return None,
     })
@@ -38,14 +44,14 @@ pub fn term_level(model: &SensorModel, ch: Channel, effect: Effect) -> Option<Te
 /// The output filter channel `ch` has, if any.
 pub fn output_filter(model: &SensorModel, ch: Channel) -> Option<noise::OutputFilter> {
     let (sensor, axis) = (ch.sensor(), ch.axis());
-    model.axis(sensor, axis).output_filter
+    model.axis(sensor, axis).get::<OutputFilter>().copied()
 }
 
 /// Does channel `ch` model its bias instability as Woodman's random walk (TR-696 eq 9)?
 pub fn has_random_walk_bias_instability(model: &SensorModel, ch: Channel) -> bool {
     let (sensor, axis) = (ch.sensor(), ch.axis());
     matches!(
-        model.axis(sensor, axis).bias_instability,
+        model.axis(sensor, axis).get::<BiasInstability>(),
         Some(BiasInstability::RandomWalk { .. })
     )
 }
@@ -53,7 +59,7 @@ pub fn has_random_walk_bias_instability(model: &SensorModel, ch: Channel) -> boo
 /// The flicker band the model uses on channel `ch` (its own, or the noise crate's default).
 pub fn flicker_band(model: &SensorModel, ch: Channel) -> Flicker {
     let (sensor, axis) = (ch.sensor(), ch.axis());
-    match &model.axis(sensor, axis).bias_instability {
+    match model.axis(sensor, axis).get::<BiasInstability>() {
         Some(BiasInstability::Flicker(f)) => Flicker {
             b: 1.0,
             ..f.clone()
@@ -68,15 +74,42 @@ pub fn set_term(model: &mut SensorModel, ch: Channel, effect: Effect, params: &T
     let band = flicker_band(model, ch);
     let (sensor, axis) = (ch.sensor(), ch.axis());
     let a = model.axis_mut(sensor, axis);
+    // A value the term's constructor refuses changes nothing, as a mismatched effect.
+    let level = |v: f64, term: fn(f64) -> Option<Term>| term(v);
     let term = match (effect, *params) {
-        (Effect::Quantization, TermParams::Level(v)) => Term::Quantization(v),
-        (Effect::WhiteNoise, TermParams::Level(v)) => Term::WhiteNoise(v),
+        (Effect::Quantization, TermParams::Level(v)) => {
+            match level(v, |v| Some(Quantization::new(v).ok()?.into())) {
+                Some(t) => t,
+                None => return,
+            }
+        }
+        (Effect::WhiteNoise, TermParams::Level(v)) => {
+            match level(v, |v| Some(WhiteNoise::new(v).ok()?.into())) {
+                Some(t) => t,
+                None => return,
+            }
+        }
         (Effect::BiasInstability, TermParams::Level(v)) => {
             Term::BiasInstability(BiasInstability::Flicker(Flicker { b: v, ..band }))
         }
-        (Effect::RateRandomWalk, TermParams::Level(v)) => Term::RateRandomWalk(v),
-        (Effect::RateRamp, TermParams::Level(v)) => Term::RateRamp(v),
-        (Effect::TemperatureBias, TermParams::Level(v)) => Term::TemperatureBias(v),
+        (Effect::RateRandomWalk, TermParams::Level(v)) => {
+            match level(v, |v| Some(RateRandomWalk::new(v).ok()?.into())) {
+                Some(t) => t,
+                None => return,
+            }
+        }
+        (Effect::RateRamp, TermParams::Level(v)) => {
+            match level(v, |v| Some(RateRamp::new(v).ok()?.into())) {
+                Some(t) => t,
+                None => return,
+            }
+        }
+        (Effect::TemperatureBias, TermParams::Level(v)) => {
+            match level(v, |v| Some(TemperatureBias::new(v).ok()?.into())) {
+                Some(t) => t,
+                None => return,
+            }
+        }
         (Effect::GaussMarkov, TermParams::GaussMarkov { sigma, tau_s }) => {
             Term::GaussMarkov(GaussMarkov { sigma, tau_s })
         }
@@ -89,7 +122,7 @@ pub fn set_term(model: &mut SensorModel, ch: Channel, effect: Effect, params: &T
         ) => Term::Sinusoidal(Sinusoid {
             amplitude,
             frequency_hz,
-            phase_rad: a.sinusoidal.and_then(|s| s.phase_rad),
+            phase_rad: a.get::<Sinusoid>().and_then(|s| s.phase_rad),
         }),
         (
             Effect::Resonance,
@@ -103,7 +136,8 @@ pub fn set_term(model: &mut SensorModel, ch: Channel, effect: Effect, params: &T
             Err(_) => return,
         },
         (Effect::OutputFilter, TermParams::Filter { filter, n }) => {
-            a.white_noise = Some(n);
+            let Ok(n) = WhiteNoise::new(n) else { return };
+            a.set_term(n);
             Term::OutputFilter(filter)
         }
         _ => return,

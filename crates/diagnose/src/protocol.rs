@@ -103,6 +103,22 @@ impl Protocol {
     fn lead(&self, dt_s: f64) -> usize {
         (self.lead_s() / dt_s).round() as usize
     }
+
+    /// How many segments of `horizon_s` a log of `samples` samples gives (as [`segment_errors`]
+    /// cuts them).
+    pub fn segments(&self, samples: usize, dt_s: f64, horizon_s: f64) -> usize {
+        let len = (horizon_s / dt_s).round() as usize;
+        let lead = self.lead(dt_s);
+        if len == 0 || samples < lead + len {
+            return 0;
+        }
+        let stride = if self.overlapping {
+            (len / 2).max(1)
+        } else {
+            len
+        };
+        (samples - lead - len) / stride + 1
+    }
 }
 
 /// The errors at the end of each segment of one horizon, in segment order.
@@ -390,6 +406,29 @@ mod tests {
 
     /// A constant accelerometer bias is invisible after a window calibration, and with a
     /// levelled start a constant tilt-like accelerometer error gives no position error either.
+
+    #[test]
+    fn segment_counts_are_those_cut() {
+        let n = 10_007;
+        let x = walk(n, 3, 1e-3, 0.0);
+        let chans = [Some(x.as_slice()), None, None, None, None, None];
+        for (calibration, overlapping) in [
+            (Calibration::LogMean, false),
+            (Calibration::Window { window_s: 7.0 }, true),
+            (Calibration::None, true),
+        ] {
+            let p = Protocol {
+                calibration,
+                initialisation: Initialisation::Levelled { window_s: 3.0 },
+                horizons_s: vec![],
+                overlapping,
+            };
+            for h in [1.0, 9.99, 33.0, 100.0, 200.0] {
+                let cut = segment_errors(&chans, 0.01, h, &p).len();
+                assert_eq!(p.segments(n, 0.01, h), cut, "{p:?} {h}");
+            }
+        }
+    }
     #[test]
     fn window_calibration_removes_a_constant_bias() {
         let n = 20_000;

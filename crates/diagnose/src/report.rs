@@ -74,6 +74,12 @@ pub struct FoundEffect {
     pub stand_in: bool,
     /// Later rounds that refitted its level after re-simulation.
     pub refinements: usize,
+    /// Named by the drift loop (`drift_fit`): the drift gap before the round that added it and
+    /// after the round's re-simulation (absent otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub drift_gap_before: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub drift_gap_after: Option<f64>,
 }
 
 /// How a named effect differs from the model.
@@ -188,6 +194,10 @@ pub struct Diagnosis {
     /// for one log; docs/cli.md).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub runs: Vec<RunReport>,
+    /// The drift check in the loop (`Settings::drift_protocol`): the drift gap of the original and
+    /// of the corrected model (absent without a protocol).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub drift_check: Option<DriftLoop>,
     /// Shortest tau analysed, s.
     pub tau_min_s: f64,
     /// The corrected model (written as TOML by the CLI).
@@ -199,6 +209,16 @@ pub struct Diagnosis {
     pub grid_m: Vec<usize>,
     #[serde(skip)]
     pub log_bands: Vec<LogBands>,
+}
+
+/// The drift check of diagnose: the protocol, and the drift gap of the original model and of the
+/// corrected one (`drift_gap`).
+#[derive(Clone, Debug, Serialize)]
+pub struct DriftLoop {
+    pub protocol: crate::protocol::Protocol,
+    pub protocol_text: String,
+    pub before: crate::drift_gap::DriftGap,
+    pub after: crate::drift_gap::DriftGap,
 }
 
 /// The bands of one log of a given length, of the original and of the corrected model.

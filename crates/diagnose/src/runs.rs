@@ -113,7 +113,8 @@ fn temperature(found: &[&Finding]) -> Finding {
     let c = swc / sw;
     let sd = sw.recip().sqrt();
     Finding {
-        term: Term::TemperatureBias(c),
+        // A coefficient that is not a finite number keeps the first run's (validated) term.
+        term: noise::TemperatureBias::new(c).map_or_else(|_| found[0].term.clone(), Into::into),
         cannot_tell_from: vec![],
         parameters: vec![("coefficient", c, c - Z_95 * sd, c + Z_95 * sd)],
         delta_bic: 0.0,

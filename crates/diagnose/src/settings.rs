@@ -26,6 +26,9 @@ pub struct Settings {
     /// Taus below this are left out (e.g. where a sensor's internal anti-alias filter shapes the curve,
     /// an effect outside the candidate set), s.
     pub tau_min_s: f64,
+    /// The drift protocol of the drift check in the loop (docs/diagnose.md, "Drift in the loop"),
+    /// or None (no drift check).
+    pub drift_protocol: Option<crate::protocol::Protocol>,
 }
 
 impl Default for Settings {
@@ -39,6 +42,7 @@ impl Default for Settings {
             ambiguity_delta_bic: 6.0,
             effects_per_round: 3,
             tau_min_s: 0.0,
+            drift_protocol: None,
         }
     }
 }

@@ -7,6 +7,7 @@
 
 use crate::drift::{segment_drift, SegmentDrift, G_MPS2};
 use crate::gap::Band;
+use crate::protocol::{all_segment_errors, Protocol, Quantity, SegmentErrors};
 use allan::{DataKind, EdfMethod, Estimator, Options, TauGrid};
 use montecarlo::{run_range, RunKernel};
 use nalgebra::Vector3;
@@ -38,6 +39,9 @@ pub struct SimResult {
     /// The band of one log at each distinct run length (for a held-out log, or one run).
     pub log_bands: Vec<(usize, [Option<Band>; 6])>,
     pub drift: Vec<SegmentDrift>,
+    /// With a protocol in the plan: each simulated log's segment errors under it, per distinct
+    /// run length (ascending) and protocol horizon.
+    pub protocol_errors: Vec<Vec<Vec<SegmentErrors>>>,
 }
 
 /// Error of a simulation run (a non-finite sample or Allan value).
@@ -55,6 +59,9 @@ pub struct SimError {
 pub struct RunPlan {
     pub samples: Vec<usize>,
     pub weights: [Vec<Vec<f64>>; 6],
+    /// A drift protocol every simulated log is also measured with, at every run length (the drift
+    /// check of diagnose; all channels must be simulated), or None.
+    pub protocol: Option<Protocol>,
 }
 
 impl RunPlan {
@@ -63,11 +70,12 @@ impl RunPlan {
         RunPlan {
             samples: vec![samples],
             weights: Default::default(),
+            protocol: None,
         }
     }
 
     /// The distinct run lengths, ascending, and each run's index into them.
-    fn lengths(&self) -> (Vec<usize>, Vec<usize>) {
+    pub(crate) fn lengths(&self) -> (Vec<usize>, Vec<usize>) {
         let mut distinct = self.samples.clone();
         distinct.sort_unstable();
         distinct.dedup();
@@ -88,6 +96,9 @@ struct Kernel<'a> {
     lengths: Vec<usize>,
     /// Segments per length and horizon.
     segments: Vec<Vec<usize>>,
+    /// The drift protocol measured too, and its segments per length and horizon.
+    protocol: Option<&'a Protocol>,
+    protocol_segments: Vec<Vec<usize>>,
 }
 
 impl Kernel<'_> {
@@ -158,13 +169,17 @@ pub fn adev_at(series: &[f64], dt_s: f64, grid_m: &[usize]) -> Vec<f64> {
 
 impl RunKernel for Kernel<'_> {
     fn checkpoints(&self) -> usize {
-        self.taus() * self.lengths.len() + self.segments.iter().flatten().sum::<usize>()
+        self.taus() * self.lengths.len()
+            + self.segments.iter().flatten().sum::<usize>()
+            + self.protocol_segments.iter().flatten().sum::<usize>()
     }
     fn channels(&self) -> usize {
         6
     }
     /// Rows: the Allan deviations at each length (taus in grid order), then per length and
-    /// horizon the segment drifts (heading, horizontal position).
+    /// horizon the segment drifts (heading, horizontal position), then per length and protocol
+    /// horizon the protocol's segment errors (heading, roll, pitch, horizontal position and
+    /// velocity).
     fn run(&self, run: u64, out: &mut [f64]) -> Result<(), montecarlo::runner::RunError> {
         let log = static_log(self.model, self.setup, self.seed, run);
         let m = self.taus();
@@ -186,18 +201,54 @@ impl RunKernel for Kernel<'_> {
                 }
             }
         }
+        // The protocol's errors at every length; the drift rows take theirs when the protocol is
+        // the default one on the same horizons (the same numbers: `drift::segment_drift`).
+        let protocol_errors: Vec<Vec<SegmentErrors>> = self.protocol.map_or(Vec::new(), |p| {
+            self.lengths
+                .iter()
+                .map(|&n| {
+                    let chans: [Option<&[f64]>; 6] =
+                        std::array::from_fn(|c| self.setup.active[c].then(|| &log[c][..n]));
+                    all_segment_errors(&chans, self.setup.dt_s, p)
+                })
+                .collect()
+        });
+        let shared = self.protocol.is_some_and(|p| {
+            p.calibration == Protocol::default().calibration
+                && p.initialisation == Protocol::default().initialisation
+                && !p.overlapping
+                && p.horizons_s == self.setup.horizons_s
+        });
         let mut row = m * self.lengths.len();
         for (d, &n) in self.lengths.iter().enumerate() {
             let chans: [Option<&[f64]>; 6] =
                 std::array::from_fn(|c| self.setup.active[c].then(|| &log[c][..n]));
             for (h, &horizon) in self.setup.horizons_s.iter().enumerate() {
-                let s = segment_drift(&chans, self.setup.dt_s, horizon);
+                let own;
+                let (heading, horizontal) = if shared {
+                    let e = &protocol_errors[d][h];
+                    (&e.heading_rad, &e.pos_horizontal_m)
+                } else {
+                    own = segment_drift(&chans, self.setup.dt_s, horizon);
+                    (&own.heading_rad, &own.horizontal_m)
+                };
                 for j in 0..self.segments[d][h] {
-                    out[row * 6] = s.heading_rad[j];
-                    out[row * 6 + 1] = s.horizontal_m[j];
+                    out[row * 6] = heading[j];
+                    out[row * 6 + 1] = horizontal[j];
                     for c in 2..6 {
                         out[row * 6 + c] = 0.0;
                     }
+                    row += 1;
+                }
+            }
+        }
+        for (d, errors) in protocol_errors.iter().enumerate() {
+            for (h, e) in errors.iter().enumerate() {
+                for j in 0..self.protocol_segments[d][h] {
+                    for (c, q) in Quantity::ALL.iter().enumerate() {
+                        out[row * 6 + c] = e.values(*q)[j];
+                    }
+                    out[row * 6 + 5] = 0.0;
                     row += 1;
                 }
             }
@@ -243,12 +294,25 @@ pub fn simulate_runs(
                 .collect()
         })
         .collect();
+    let protocol_segments: Vec<Vec<usize>> = plan.protocol.as_ref().map_or(Vec::new(), |p| {
+        lengths
+            .iter()
+            .map(|&n| {
+                p.horizons_s
+                    .iter()
+                    .map(|&h| p.segments(n, setup.dt_s, h))
+                    .collect()
+            })
+            .collect()
+    });
     let kernel = Kernel {
         model,
         setup,
         seed,
         lengths: lengths.clone(),
         segments: segments.clone(),
+        protocol: plan.protocol.as_ref(),
+        protocol_segments: protocol_segments.clone(),
     };
     let batch = run_range(&kernel, 0..seeds as u64, &|_| {});
     if let Some(f) = batch.failures.first() {
@@ -287,6 +351,69 @@ pub fn simulate_runs(
             setup.active[ch].then(|| pooled_band(&taus, &adev, plan, &of_run, ch))
         })
     };
+    let drift = model_drift(mx, setup, &segments, &of_run, m * lengths.len(), seeds);
+    let first_row = m * lengths.len() + segments.iter().flatten().sum::<usize>();
+    let protocol_errors = plan.protocol.as_ref().map_or(Vec::new(), |p| {
+        protocol_rows(mx, p, &protocol_segments, first_row, seeds)
+    });
+    Ok(SimResult {
+        bands,
+        log_bands: lengths.into_iter().zip(log_bands).collect(),
+        drift,
+        protocol_errors,
+    })
+}
+
+/// The protocol's segment errors of every simulated log, per length and horizon, from the rows
+/// from `first_row` on.
+fn protocol_rows(
+    mx: &montecarlo::stats::RunMatrix,
+    p: &Protocol,
+    counts: &[Vec<usize>],
+    first_row: usize,
+    seeds: usize,
+) -> Vec<Vec<Vec<SegmentErrors>>> {
+    (0..seeds)
+        .map(|s| {
+            let mut row = first_row;
+            counts
+                .iter()
+                .map(|per_h| {
+                    per_h
+                        .iter()
+                        .zip(&p.horizons_s)
+                        .map(|(&k, &h)| {
+                            let col = |c: usize| -> Vec<f64> {
+                                (row..row + k).map(|r| mx.series(r, c)[s]).collect()
+                            };
+                            let e = SegmentErrors {
+                                horizon_s: h,
+                                heading_rad: col(0),
+                                roll_rad: col(1),
+                                pitch_rad: col(2),
+                                pos_horizontal_m: col(3),
+                                vel_horizontal_mps: col(4),
+                            };
+                            row += k;
+                            e
+                        })
+                        .collect()
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The pooled model drift of the default protocol: simulated log s at the length of run s mod
+/// runs (the runs' mix of lengths), in seed order, from the rows from `first_row` on.
+fn model_drift(
+    mx: &montecarlo::stats::RunMatrix,
+    setup: &SimSetup,
+    segments: &[Vec<usize>],
+    of_run: &[usize],
+    first_row: usize,
+    seeds: usize,
+) -> Vec<SegmentDrift> {
     let mut drift: Vec<SegmentDrift> = setup
         .horizons_s
         .iter()
@@ -295,11 +422,9 @@ pub fn simulate_runs(
             ..Default::default()
         })
         .collect();
-    // The pooled model drift: simulated log s at the length of run s mod runs (the runs' mix of
-    // lengths), in seed order.
     for s in 0..seeds {
         let d = of_run[s % of_run.len()];
-        let mut row = m * lengths.len() + segments[..d].iter().flatten().sum::<usize>();
+        let mut row = first_row + segments[..d].iter().flatten().sum::<usize>();
         for (h, dr) in drift.iter_mut().enumerate() {
             for j in 0..segments[d][h] {
                 dr.heading_rad.push(mx.series(row + j, 0)[s]);
@@ -308,11 +433,7 @@ pub fn simulate_runs(
             row += segments[d][h];
         }
     }
-    Ok(SimResult {
-        bands,
-        log_bands: lengths.into_iter().zip(log_bands).collect(),
-        drift,
-    })
+    drift
 }
 
 /// The pooled band of channel `ch` (see [`simulate_runs`]).

@@ -95,8 +95,11 @@ pub fn diagnose_runs(
         run.resimulate(round, pending)?;
     }
     run.settle_drift()?;
+    run.drift_rounds()?;
     Ok(run.report())
 }
+
+mod drift_rounds;
 
 /// What a run starts from: the logs (runs) as measured, the logs after step 0's corrections, the
 /// detectors' findings, and how to work.
@@ -169,6 +172,11 @@ struct Run<'a> {
     bands: [Option<Band>; 6],
     log_bands: Vec<(usize, [Option<Band>; 6])>,
     last_drift: Vec<SegmentDrift>,
+    /// The drift check (`Settings::drift_protocol`): the runs' segment errors under the protocol,
+    /// the original model's drift gap, and the current model's simulated segment errors.
+    drift_measured: Vec<crate::protocol::SegmentErrors>,
+    drift_gap0: Option<crate::drift_gap::DriftGap>,
+    last_protocol: Vec<Vec<Vec<crate::protocol::SegmentErrors>>>,
     dirty: bool,
     channels: ImuChannels<ChannelState>,
     rounds: usize,
@@ -182,6 +190,7 @@ impl<'a> Run<'a> {
         let plan = RunPlan {
             samples: s.samples.clone(),
             weights: corrected.weights.clone(),
+            protocol: s.settings.drift_protocol.clone(),
         };
         let setup = SimSetup {
             dt_s: first.dt_s,
@@ -214,6 +223,11 @@ impl<'a> Run<'a> {
             )
         };
         let several = logs.len() > 1;
+        let drift_measured = s
+            .settings
+            .drift_protocol
+            .as_ref()
+            .map_or(Vec::new(), |p| crate::drift_gap::measured(&logs, p));
         let mut run = Run {
             settings: s.settings,
             observer: s.observer,
@@ -232,6 +246,9 @@ impl<'a> Run<'a> {
             bands: sim0.bands.clone(),
             log_bands: sim0.log_bands.clone(),
             last_drift: sim0.drift.clone(),
+            drift_measured,
+            drift_gap0: None,
+            last_protocol: sim0.protocol_errors.clone(),
             sim0,
             dirty: false,
             channels: ImuChannels::default(),
@@ -244,6 +261,7 @@ impl<'a> Run<'a> {
             run.channels[c].initial = Self::gap_of(raw.pooled[c].as_ref(), band);
             run.channels[c].done = !run.setup.active[c.index()];
         }
+        run.drift_gap0 = run.drift_gap();
         Ok(run)
     }
 
@@ -472,6 +490,14 @@ impl<'a> Run<'a> {
         let changed: [bool; 6] =
             std::array::from_fn(|c| active[c] && pending.iter().any(|p| p.channel.index() == c));
         let partial = changed != active;
+        let round_plan = RunPlan {
+            protocol: if partial {
+                None
+            } else {
+                self.plan.protocol.clone()
+            },
+            ..self.plan.clone()
+        };
         let round_setup = SimSetup {
             active: changed,
             // A partial round's drift is not used (it needs every channel): not computed.
@@ -486,7 +512,7 @@ impl<'a> Run<'a> {
         let sim = simulate_runs(
             &self.sim_model,
             &round_setup,
-            &self.plan,
+            &round_plan,
             settings.seed,
             settings.seeds,
         )?;
@@ -496,6 +522,7 @@ impl<'a> Run<'a> {
         }
         if !partial {
             self.last_drift = sim.drift;
+            self.last_protocol = sim.protocol_errors;
         }
         Ok(())
     }
@@ -552,8 +579,22 @@ impl<'a> Run<'a> {
                 settings.seeds,
             )?;
             self.last_drift = sim.drift;
+            self.last_protocol = sim.protocol_errors;
+            self.dirty = false;
         }
         Ok(())
+    }
+
+    /// The current model's drift gap under the drift protocol (None without one).
+    fn drift_gap(&self) -> Option<crate::drift_gap::DriftGap> {
+        self.plan.protocol.as_ref()?;
+        let (_, of_run) = self.plan.lengths();
+        Some(crate::drift_gap::drift_gap(
+            &self.drift_measured,
+            &self.last_protocol,
+            &of_run,
+            &self.setup.active,
+        ))
     }
 
     /// Step 6: drift consequence, measured log segments vs model before vs model after.
@@ -660,6 +701,7 @@ impl<'a> Run<'a> {
     fn report(mut self) -> Diagnosis {
         let drift = self.drift();
         let runs = self.run_reports();
+        let drift_check = self.drift_report();
         let mut channels = BTreeMap::new();
         for c in Channel::ALL {
             if let Some(r) = self.channel_report(c) {
@@ -686,6 +728,7 @@ impl<'a> Run<'a> {
             channels,
             drift,
             runs,
+            drift_check,
             tau_min_s: self.settings.tau_min_s,
             model_final: self.out_model,
             grid_m: self.grid_m,

@@ -14,9 +14,9 @@ fn run(threads: usize) -> SimResult {
         .iter_mut()
         .chain(model.accel.axes.iter_mut())
     {
-        axis.white_noise = Some(1e-3);
-        axis.bias_instability = Some(BiasInstability::Flicker(Flicker::with_b(1e-4)));
-        axis.rate_random_walk = Some(1e-5);
+        axis.set_term(noise::WhiteNoise::new(1e-3).unwrap());
+        axis.set_term(BiasInstability::Flicker(Flicker::with_b(1e-4)));
+        axis.set_term(noise::RateRandomWalk::new(1e-5).unwrap());
     }
     let setup = SimSetup {
         dt_s: 0.01,

@@ -52,7 +52,10 @@ fn draw(
 ) -> TermParams {
     let (sensor, axis) = (ch.sensor(), ch.axis());
     let a = base.axis(sensor, axis);
-    let n = a.white_noise.unwrap();
+    let n = a
+        .get::<noise::WhiteNoise>()
+        .map(noise::WhiteNoise::density)
+        .unwrap();
     match effect {
         // Integrated-output quantisation with LSB = Q sqrt(12) of 0.85..1 times the per-sample noise of
         // the integral, N sqrt(dt): gyro LSB 8.5e-6..1e-5 rad (as a rate, 0.05..0.06 deg/s at 100 Hz, like

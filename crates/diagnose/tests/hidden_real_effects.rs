@@ -66,7 +66,10 @@ fn draw(kind: &str, ch: Channel, rng: &mut Xoshiro256PlusPlus) -> Term {
         }),
         // Temperature coefficient such that the 15 degC excursion moves the bias by 0.3..1 sigma.
         "warmup" | "cycling" => Term::TemperatureBias(
-            log_uniform(rng, 0.3, 1.0) * sigma(ch) / 15.0 * if rng.gen() { 1.0 } else { -1.0 },
+            noise::TemperatureBias::new(
+                log_uniform(rng, 0.3, 1.0) * sigma(ch) / 15.0 * if rng.gen() { 1.0 } else { -1.0 },
+            )
+            .unwrap(),
         ),
         // A mode at 3..30 Hz with a half-power bandwidth of 3..15 % of its frequency and a standard
         // deviation of 0.5..1.5 times the white noise's per sample.
@@ -131,7 +134,11 @@ fn key_values(term: &Term, found: &diagnose::report::FoundEffect) -> Vec<(&'stat
             ("amplitude", w.amplitude, found.parameters["amplitude"]),
             ("tau_s", w.tau_s, found.parameters["tau_s"]),
         ],
-        Term::TemperatureBias(c) => vec![("coefficient", *c, found.parameters["coefficient"])],
+        Term::TemperatureBias(c) => vec![(
+            "coefficient",
+            c.per_degree(),
+            found.parameters["coefficient"],
+        )],
         Term::Resonance(r) => vec![
             ("sigma", r.sigma, found.parameters["sigma"]),
             (

@@ -23,7 +23,7 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
         return parse_log(&unix, source, opts);
     }
     // A UTF-8 byte-order mark (spreadsheet exports) is not part of the first column's name.
-    let mut pos = if bytes.starts_with(&[0xef, 0xbb, 0xbf]) {
+    let pos = if bytes.starts_with(&[0xef, 0xbb, 0xbf]) {
         3
     } else {
         0
@@ -33,9 +33,61 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
     if bytes[pos..bytes.len().min(pos + 4096)].contains(&0) {
         return Err(LogError::content(source, "contains NUL bytes: not a CSV text file (expected a header such as `t,gx,gy,gz,ax,ay,az`)"));
     }
-    // Header: the first line that is neither blank nor a comment; or, when that line holds only
-    // numbers, the comment line before it with as many fields (EuRoC and TUM-VI write their
-    // header as `#timestamp [ns],w_RS_S_x [rad s^-1],...`).
+    let (header, header_line, pos) = find_header(bytes, pos, source)?;
+    let names = header_names(&header, header_line, source, opts)?;
+    // Which channel and unit each column holds (docs/cli.md, "Log columns").
+    let (uses, skipped) = map_header(&names, &opts.columns, opts.units)
+        .map_err(|p| LogError::new(source, p).at_line(header_line))?;
+    // Skipped columns may hold anything (a frame_id, a status word); they are not read.
+    let skip: Vec<bool> = uses.iter().map(Option::is_none).collect();
+    let columns = parse_body(bytes, pos, header_line, source, &names, &skip)?;
+    let n_rows = columns.first().map_or(0, Vec::len);
+    if n_rows < 2 {
+        return Err(LogError::content(
+            source,
+            format!("{n_rows} data rows; at least 2 are needed"),
+        ));
+    }
+    let mut channels = BTreeMap::new();
+    let mut order = Vec::new();
+    let mut t_s = None;
+    let mut used = Vec::new();
+    for (u, mut data) in uses.into_iter().zip(columns) {
+        let Some(u) = u else { continue };
+        if u.to_si != 1.0 {
+            data.iter_mut().for_each(|v| *v *= u.to_si);
+        }
+        if u.channel == "t" {
+            t_s = Some(data);
+        } else {
+            order.push(u.channel.to_string());
+            channels.insert(u.channel.to_string(), data);
+        }
+        used.push(u);
+    }
+    if !channels.keys().any(|c| Channel::from_name(c).is_some()) {
+        let problem = Problem::NoImuColumn { header: names };
+        return Err(LogError::new(source, problem).at_line(header_line));
+    }
+    let locate = |row: usize| At::Line(line_of_row(bytes, pos, header_line, row));
+    let rate_hz = rate_of(t_s.as_deref(), opts.rate_hz, source, &locate)?;
+    Ok(Log {
+        source: source.to_string(),
+        rate_hz,
+        t_s,
+        channels,
+        order,
+        columns: used,
+        skipped,
+        topic: None,
+    })
+}
+
+/// The header: the first line from `pos` that is neither blank nor a comment; or, when that line
+/// holds only numbers, the comment line before it with as many fields (EuRoC and TUM-VI write their
+/// header as `#timestamp [ns],w_RS_S_x [rad s^-1],...`). Returns the header, its line number and
+/// where the data start.
+fn find_header(bytes: &[u8], mut pos: usize, source: &str) -> Result<(String, usize, usize)> {
     let mut line_no = 0usize;
     let mut last_comment: Option<String> = None;
     let (header, header_line) = loop {
@@ -83,6 +135,16 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
             }
         }
     };
+    Ok((header, header_line, pos))
+}
+
+/// The column names of the header, checked: none empty, none twice, every mapped column present.
+fn header_names(
+    header: &str,
+    header_line: usize,
+    source: &str,
+    opts: &ReadOptions,
+) -> Result<Vec<String>> {
     let names: Vec<String> = header.split(',').map(|s| s.trim().to_string()).collect();
     for (i, n) in names.iter().enumerate() {
         let problem = if n.is_empty() {
@@ -104,52 +166,7 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
             return Err(LogError::new(source, problem).at_line(header_line));
         }
     }
-    // Which channel and unit each column holds (docs/cli.md, "Log columns").
-    let (uses, skipped) = map_header(&names, &opts.columns, opts.units)
-        .map_err(|p| LogError::new(source, p).at_line(header_line))?;
-    // Skipped columns may hold anything (a frame_id, a status word); they are not read.
-    let skip: Vec<bool> = uses.iter().map(Option::is_none).collect();
-    let columns = parse_body(bytes, pos, header_line, source, &names, &skip)?;
-    let n_rows = columns.first().map_or(0, Vec::len);
-    if n_rows < 2 {
-        return Err(LogError::content(
-            source,
-            format!("{n_rows} data rows; at least 2 are needed"),
-        ));
-    }
-    let mut channels = BTreeMap::new();
-    let mut order = Vec::new();
-    let mut t_s = None;
-    let mut used = Vec::new();
-    for (u, mut data) in uses.into_iter().zip(columns) {
-        let Some(u) = u else { continue };
-        if u.to_si != 1.0 {
-            data.iter_mut().for_each(|v| *v *= u.to_si);
-        }
-        if u.channel == "t" {
-            t_s = Some(data);
-        } else {
-            order.push(u.channel.to_string());
-            channels.insert(u.channel.to_string(), data);
-        }
-        used.push(u);
-    }
-    if !channels.keys().any(|c| Channel::from_name(c).is_some()) {
-        let problem = Problem::NoImuColumn { header: names };
-        return Err(LogError::new(source, problem).at_line(header_line));
-    }
-    let locate = |row: usize| At::Line(line_of_row(bytes, pos, header_line, row));
-    let rate_hz = rate_of(t_s.as_deref(), opts.rate_hz, source, &locate)?;
-    Ok(Log {
-        source: source.to_string(),
-        rate_hz,
-        t_s,
-        channels,
-        order,
-        columns: used,
-        skipped,
-        topic: None,
-    })
+    Ok(names)
 }
 
 /// Longest comment or header line accepted, bytes.

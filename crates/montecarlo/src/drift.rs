@@ -231,17 +231,17 @@ pub fn law_terms(
                     NoiseTerm::Quantization(_) => no_law(
                         "quantisation: the error of the quantised integrated output is bounded by the LSB and depends on the dither from the other terms; no closed form in docs/model.md §4",
                     ),
-                    NoiseTerm::WhiteNoise(n) => Source::White(n),
+                    NoiseTerm::WhiteNoise(n) => Source::White(n.density()),
                     NoiseTerm::BiasInstability(BiasInstability::RandomWalk {
                         stability,
                         period_s,
-                    }) => Source::RandomWalk(cf::woodman_bias_random_walk(stability, period_s)),
+                    }) => Source::RandomWalk(cf::woodman_bias_random_walk(*stability, *period_s)),
                     // Flicker as realised: a sum of stationary Gauss-Markov components.
                     NoiseTerm::BiasInstability(BiasInstability::Flicker(f)) => {
                         Source::GaussMarkovSum(f.components())
                     }
-                    NoiseTerm::RateRandomWalk(k) => Source::RandomWalk(k),
-                    NoiseTerm::RateRamp(r) => Source::Ramp(r),
+                    NoiseTerm::RateRandomWalk(k) => Source::RandomWalk(k.density()),
+                    NoiseTerm::RateRamp(r) => Source::Ramp(r.rate()),
                     NoiseTerm::GaussMarkov(gm) => Source::GaussMarkov {
                         sigma: gm.sigma,
                         tc_s: gm.tau_s,
@@ -253,6 +253,7 @@ pub fn law_terms(
                         sample_interval_s: dt_s,
                     },
                     NoiseTerm::TemperatureBias(c) => {
+                        let c = c.per_degree();
                         match model.temperature {
                             // Table 2: a residual temperature bias integrates like a constant bias.
                             TemperatureProfile::Constant { temp_c } => {
@@ -275,12 +276,13 @@ pub fn law_terms(
                             _ => no_law("temperature bias under a varying temperature profile"),
                         }
                     }
-                    NoiseTerm::ConstantBias(b) => Source::Bias(b),
-                    NoiseTerm::TurnOnBias(s) => Source::RandomConstant(s),
+                    NoiseTerm::ConstantBias(b) => Source::Bias(b.bias()),
+                    NoiseTerm::TurnOnBias(s) => Source::RandomConstant(s.sigma()),
                     // Calibration errors act as a bias proportional to the reading (Table 2:
                     // "drift proportional to rate and duration of motion").
-                    NoiseTerm::ScaleFactor(s) => Source::Bias(s * ideal[axis]),
+                    NoiseTerm::ScaleFactor(s) => Source::Bias(s.ratio() * ideal[axis]),
                     NoiseTerm::Misalignment(mis) => {
+                        let mis = mis.angles_rad();
                         Source::Bias(mis[0] * others[0] + mis[1] * others[1])
                     }
                     // Each output sample is an independent outlier with probability p, size +-a:

@@ -7,7 +7,7 @@ use crate::experiment::{Experiment, Overrides};
 use crate::report::DriftReport;
 use crate::scenario::Scenario;
 use allan::{DataKind, Estimator, Options, TauGrid};
-use noise::{ImuErrors, Sensor, SensorModel, StaticLevel};
+use noise::{BiasInstability, Effect, ImuErrors, Sensor, SensorModel, StaticLevel, WhiteNoise};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -106,18 +106,21 @@ pub fn gyro_readback(model: &SensorModel, seed: u64, duration_s: f64, rate_hz: f
         let readings = allan::fit::readings(&points);
         let at = |tau: f64| points.iter().find(|p| p.tau_s == tau);
         // Spec values from the model.
-        g.arw_spec[axis] = m.white_noise;
+        g.arw_spec[axis] = m.get::<WhiteNoise>().map(WhiteNoise::density);
         // The exact Allan variance of the sampled model (noise crate), not the continuous one: at tau
         // near dt they differ (e.g. the flicker band edge).
         let closed = |tau: f64| m.allan_variance_sampled(tau, dt_s);
         let window = plateau_window(m);
         let in_window = |tau: f64| tau >= window.0 && tau <= window.1;
-        if m.bias_instability.is_some() {
+        if m.has(Effect::BiasInstability) {
             let log_taus: Vec<f64> = points.iter().map(|p| p.tau_s).collect();
             g.bi_spec[axis] = bi_spec_value(m, dt_s, &log_taus);
         }
         // ARW: the slope -1/2 line touching the curve, read at 1 s (Woodman §5.1).
-        if let (Some(nv), Some(p)) = (m.white_noise, at(readings.arw_tau_s)) {
+        if let (Some(nv), Some(p)) = (
+            m.get::<WhiteNoise>().map(WhiteNoise::density),
+            at(readings.arw_tau_s),
+        ) {
             let share = nv * nv / p.tau_s / closed(p.tau_s);
             if share >= MASKED_SHARE {
                 let s = p.tau_s.sqrt();
@@ -147,14 +150,17 @@ pub fn gyro_readback(model: &SensorModel, seed: u64, duration_s: f64, rate_hz: f
         // the floor in a log this short); the spec value itself is the minimum of the whole curve, so
         // other terms shaping that minimum only earn a note.
         if let (Some(bi), Some(p), Some(last)) = (
-            &m.bias_instability,
+            m.get::<BiasInstability>(),
             at(readings.bi_min_tau_s),
             points.last(),
         ) {
             // White noise hides the floor: the curve still falls at the longest usable tau and
             // white noise is most of it there.
-            let white_share =
-                m.white_noise.map_or(0.0, |nv| nv * nv / last.tau_s) / closed(last.tau_s);
+            let white_share = m
+                .get::<WhiteNoise>()
+                .map(WhiteNoise::density)
+                .map_or(0.0, |nv| nv * nv / last.tau_s)
+                / closed(last.tau_s);
             let still_falling =
                 closed(last.tau_s * 1.5) < closed(last.tau_s) && white_share >= MASKED_SHARE;
             let share = bi.avar_sampled(p.tau_s, dt_s) / closed(p.tau_s);
@@ -198,8 +204,8 @@ pub fn gyro_readback(model: &SensorModel, seed: u64, duration_s: f64, rate_hz: f
 /// is flat (the noise crate's `allan_minimum` convention solves B over it); outside, the finite
 /// band of Gauss-Markov components bends the curve (a model artifact).
 fn plateau_window(m: &noise::AxisModel) -> (f64, f64) {
-    match &m.bias_instability {
-        Some(noise::BiasInstability::Flicker(f)) => (30.0 * f.tau_min_s, f.tau_max_s / 30.0),
+    match m.get::<BiasInstability>() {
+        Some(BiasInstability::Flicker(f)) => (30.0 * f.tau_min_s, f.tau_max_s / 30.0),
         _ => (0.0, f64::INFINITY),
     }
 }
@@ -237,8 +243,8 @@ pub fn gyro_spec_values(model: &SensorModel, rate_hz: f64) -> GyroSpec {
     let mut g = GyroSpec::default();
     for axis in 0..3 {
         let m = model.axis(noise::Sensor::Gyro, axis);
-        g.arw_spec[axis] = m.white_noise;
-        if m.bias_instability.is_some() {
+        g.arw_spec[axis] = m.get::<WhiteNoise>().map(WhiteNoise::density);
+        if m.has(Effect::BiasInstability) {
             g.bi_spec[axis] = bi_spec_value(m, dt_s, &taus);
         }
     }

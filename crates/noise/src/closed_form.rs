@@ -43,6 +43,14 @@ pub fn rate_random_walk_avar_sampled(k: f64, tau_s: f64, dt_s: f64) -> f64 {
     rate_random_walk_avar(k, tau_s) + k * k * dt_s * dt_s / (6.0 * tau_s)
 }
 
+/// Random walk K: the continuous form (Hou 4.53, `dt_s` None) or the sampled one.
+pub fn rate_random_walk_avar_at(k: f64, tau_s: f64, dt_s: Option<f64>) -> f64 {
+    match dt_s {
+        None => rate_random_walk_avar(k, tau_s),
+        Some(dt) => rate_random_walk_avar_sampled(k, tau_s, dt),
+    }
+}
+
 /// Rate ramp R (Omega = R t): sigma^2 = R^2 tau^2 / 2 (Hou 4.56). Exact for samples too.
 pub fn rate_ramp_avar(r: f64, tau_s: f64) -> f64 {
     r * r * tau_s * tau_s / 2.0
@@ -86,6 +94,14 @@ pub fn gauss_markov_avar_sampled(sigma: f64, tc_s: f64, tau_s: f64, dt_s: f64) -
         m + 2.0 * phi * (m * one_minus_phi - one_minus_phim) / (one_minus_phi * one_minus_phi);
     let cov = phi * one_minus_phim * one_minus_phim / (one_minus_phi * one_minus_phi);
     sigma * sigma * (var_sum - cov) / (m * m)
+}
+
+/// Gauss-Markov: the continuous form (Hou 4.60, `dt_s` None) or the sampled one.
+pub fn gauss_markov_avar_at(sigma: f64, tc_s: f64, tau_s: f64, dt_s: Option<f64>) -> f64 {
+    match dt_s {
+        None => gauss_markov_avar(sigma, tc_s, tau_s),
+        Some(dt) => gauss_markov_avar_sampled(sigma, tc_s, tau_s, dt),
+    }
 }
 
 /// Sinusoid of amplitude A and frequency f0, phase averaged: sigma^2 = A^2 (sin^2(pi f0 tau)/(pi f0 tau))^2 (Hou 4.64).
@@ -172,7 +188,7 @@ pub fn constant_bias_growth(b: f64, t_s: f64, how: Integration) -> f64 {
 /// (-1)^k e^{-x}), x = t/tau (Cauchy's formula for repeated integrals applied to the exponential;
 /// derived, as `TemperatureProfile::excursion_integral`, which computes it). Deterministic, signed.
 pub fn transient_growth(amplitude: f64, tau_s: f64, t_s: f64, how: Integration) -> f64 {
-    let profile = crate::model::TemperatureProfile::Warmup {
+    let profile = crate::temperature::TemperatureProfile::Warmup {
         start_c: 1.0,
         end_c: 0.0,
         time_constant_s: tau_s,
@@ -364,7 +380,7 @@ pub fn quantization_growth_std(q: f64, t_s: f64, dt_s: f64, how: Integration) ->
 /// a residual temperature bias integrates into orientation error.
 pub fn temperature_bias_growth(
     coefficient: f64,
-    profile: &crate::TemperatureProfile,
+    profile: &crate::temperature::TemperatureProfile,
     reference_c: f64,
     t_s: f64,
     how: Integration,

@@ -1,6 +1,7 @@
 //! Names of the sensors and error effects (the docs/cli.md names), and the `--only` / `--without`
 //! term filter used for ablation by `generate`, `simulate` and `spec`.
 
+pub use crate::terms::Effect;
 use std::collections::BTreeSet;
 use std::fmt;
 
@@ -31,28 +32,6 @@ impl fmt::Display for Sensor {
     }
 }
 
-/// One error effect of an axis. The order here is the order terms are drawn and summed.
-/// Serialised as its [`Effect::name`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub enum Effect {
-    Quantization,
-    WhiteNoise,
-    BiasInstability,
-    RateRandomWalk,
-    RateRamp,
-    GaussMarkov,
-    Sinusoidal,
-    TemperatureBias,
-    ConstantBias,
-    TurnOnBias,
-    ScaleFactor,
-    Misalignment,
-    Outliers,
-    WarmupTransient,
-    OutputFilter,
-    Resonance,
-}
-
 impl serde::Serialize for Effect {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         s.serialize_str(self.name())
@@ -60,63 +39,8 @@ impl serde::Serialize for Effect {
 }
 
 impl Effect {
-    pub const ALL: [Effect; 16] = [
-        Effect::Quantization,
-        Effect::WhiteNoise,
-        Effect::BiasInstability,
-        Effect::RateRandomWalk,
-        Effect::RateRamp,
-        Effect::GaussMarkov,
-        Effect::Sinusoidal,
-        Effect::TemperatureBias,
-        Effect::ConstantBias,
-        Effect::TurnOnBias,
-        Effect::ScaleFactor,
-        Effect::Misalignment,
-        Effect::Outliers,
-        Effect::WarmupTransient,
-        Effect::OutputFilter,
-        Effect::Resonance,
-    ];
-
-    /// The config / CLI / JSON name, e.g. `"white_noise"`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Effect::Quantization => "quantization",
-            Effect::WhiteNoise => "white_noise",
-            Effect::BiasInstability => "bias_instability",
-            Effect::RateRandomWalk => "rate_random_walk",
-            Effect::RateRamp => "rate_ramp",
-            Effect::GaussMarkov => "gauss_markov",
-            Effect::Sinusoidal => "sinusoidal",
-            Effect::TemperatureBias => "temperature_bias",
-            Effect::ConstantBias => "constant_bias",
-            Effect::TurnOnBias => "turn_on_bias",
-            Effect::ScaleFactor => "scale_factor",
-            Effect::Misalignment => "misalignment",
-            Effect::Outliers => "outliers",
-            Effect::WarmupTransient => "warmup_transient",
-            Effect::OutputFilter => "output_filter",
-            Effect::Resonance => "resonance",
-        }
-    }
-
     pub fn from_name(name: &str) -> Option<Effect> {
         Effect::ALL.into_iter().find(|e| e.name() == name)
-    }
-
-    /// Stochastic terms (those with an Allan signature); the others are deterministic or drawn once per run.
-    pub fn is_stochastic(self) -> bool {
-        matches!(
-            self,
-            Effect::Quantization
-                | Effect::WhiteNoise
-                | Effect::BiasInstability
-                | Effect::RateRandomWalk
-                | Effect::GaussMarkov
-                | Effect::Outliers
-                | Effect::Resonance
-        )
     }
 
     /// Index used to derive the term's random sub-stream (stable: never reorder).

@@ -16,26 +16,45 @@
 mod channel;
 pub mod closed_form;
 mod config;
+mod discrete;
 mod effect;
 pub mod fft;
 pub mod filter;
 mod model;
+mod model_error;
 pub mod noise_file;
 pub mod process;
 mod static_level;
+mod temperature;
+pub mod terms;
 pub mod units;
 mod ziggurat;
 
 pub use channel::{Channel, ImuChannels, AXIS_NAMES};
 pub use config::{is_noise_file_text, utf8_text, ConfigError, UnitStyle};
-pub use effect::{Effect, FilterError, Sensor, TermFilter};
-pub use filter::{FilterKind, Outliers, OutputFilter, WarmupTransient};
-pub use model::{
-    AxisModel, BiasInstability, Flicker, GaussMarkov, ModelError, Resonance, SensorModel, Sinusoid,
-    TemperatureProfile, Term, TriadModel,
-};
+pub use effect::{FilterError, Sensor, TermFilter};
+pub use model::{AxisModel, SensorModel, TriadModel};
+pub use model_error::ModelError;
 pub use process::{ChannelErrors, ImuErrors, CHANNEL_NAMES};
 pub use static_level::StaticLevel;
+pub use temperature::TemperatureProfile;
+pub use terms::bias_instability::{BiasInstability, Flicker};
+pub use terms::constant_bias::ConstantBias;
+pub use terms::gauss_markov::GaussMarkov;
+pub use terms::misalignment::Misalignment;
+pub use terms::outliers::Outliers;
+pub use terms::output_filter::{FilterKind, OutputFilter, MAX_RESPONSE};
+pub use terms::quantization::Quantization;
+pub use terms::rate_ramp::RateRamp;
+pub use terms::rate_random_walk::RateRandomWalk;
+pub use terms::resonance::Resonance;
+pub use terms::scale_factor::ScaleFactor;
+pub use terms::sinusoidal::Sinusoid;
+pub use terms::temperature_bias::TemperatureBias;
+pub use terms::turn_on_bias::TurnOnBias;
+pub use terms::warmup_transient::WarmupTransient;
+pub use terms::white_noise::WhiteNoise;
+pub use terms::{Effect, ErrorTerm, Registered, Term, TermKind};
 
 use rand::SeedableRng;
 

@@ -13,7 +13,10 @@
 //! values. One value per sensor: these tools take no per-axis values, so the largest of the three
 //! axes is written (the worst axis, stated in the file) and each axis is given in a comment.
 
-use crate::model::{AxisModel, SensorModel, TemperatureProfile, TriadModel};
+use crate::model::{AxisModel, SensorModel, TriadModel};
+use crate::temperature::TemperatureProfile;
+use crate::terms::rate_random_walk::RateRandomWalk;
+use crate::terms::white_noise::WhiteNoise;
 use std::fmt::Write as _;
 
 /// Which tool's keys.
@@ -287,10 +290,16 @@ pub fn read_noise_file(text: &str, source: &str) -> Result<SensorModel, NoiseFil
         }
         values[slot] = v;
     }
-    let axis = |n: f64, k: f64| AxisModel {
-        white_noise: (n > 0.0).then_some(n),
-        rate_random_walk: (k > 0.0).then_some(k),
-        ..AxisModel::default()
+    // Both values are finite and >= 0 (checked above), so the constructors accept them.
+    let axis = |n: f64, k: f64| {
+        let mut axis = AxisModel::default();
+        if n > 0.0 {
+            axis.set_term(WhiteNoise::new(n).expect("checked above"));
+        }
+        if k > 0.0 {
+            axis.set_term(RateRandomWalk::new(k).expect("checked above"));
+        }
+        axis
     };
     let triad = |n: f64, k: f64| TriadModel {
         axes: [axis(n, k), axis(n, k), axis(n, k)],

@@ -33,10 +33,7 @@ const MS: [usize; 5] = [1, 10, 100, 1000, 10_000];
 
 #[test]
 fn white_noise_matches_n2_over_tau() {
-    let axis = AxisModel {
-        white_noise: Some(1e-3),
-        ..AxisModel::default()
-    };
+    let axis = noise::AxisModel::default().with(noise::WhiteNoise::new(1e-3).unwrap());
     check("white noise", &axis, &MS, &[0]);
     // The sampled form is the continuous one (Hou 4.36) exactly.
     assert_eq!(
@@ -47,23 +44,17 @@ fn white_noise_matches_n2_over_tau() {
 
 #[test]
 fn rate_random_walk_matches_k2_tau_over_3() {
-    let axis = AxisModel {
-        rate_random_walk: Some(1e-4),
-        ..AxisModel::default()
-    };
+    let axis = noise::AxisModel::default().with(noise::RateRandomWalk::new(1e-4).unwrap());
     check("rate random walk", &axis, &MS, &[-2]);
 }
 
 #[test]
 fn woodman_bias_random_walk_matches_its_k() {
     // Woodman eq 9: K = BS / sqrt(T); 1e-3 rad/s over 100 s.
-    let axis = AxisModel {
-        bias_instability: Some(BiasInstability::RandomWalk {
-            stability: 1e-3,
-            period_s: 100.0,
-        }),
-        ..AxisModel::default()
-    };
+    let axis = noise::AxisModel::default().with(BiasInstability::RandomWalk {
+        stability: 1e-3,
+        period_s: 100.0,
+    });
     check("Woodman bias random walk", &axis, &MS, &[-2]);
     let k = cf::woodman_bias_random_walk(1e-3, 100.0);
     assert!((axis.allan_variance(30.0) / cf::rate_random_walk_avar(k, 30.0) - 1.0).abs() < 1e-12);
@@ -74,10 +65,8 @@ fn gauss_markov_matches_its_closed_form() {
     for tc_samples in [3.0, 100.0] {
         for (i, &rate) in RATES_HZ.iter().enumerate() {
             let dt = 1.0 / rate;
-            let axis = AxisModel {
-                gauss_markov: Some(GaussMarkov::new(1e-3, tc_samples * dt).unwrap()),
-                ..AxisModel::default()
-            };
+            let axis =
+                noise::AxisModel::default().with(GaussMarkov::new(1e-3, tc_samples * dt).unwrap());
             let data = gyro_x_series(&axis, rate, N, SEED + 1, i as u64);
             // Between white (tau >> T) and random walk (tau << T): the smaller EDF of the two.
             assert_avar_matches(
@@ -105,10 +94,7 @@ fn resonance_matches_its_closed_form() {
             let dt = 1.0 / rate;
             let f0 = f_rel * rate;
             let bw = zeta2 * f0;
-            let axis = AxisModel {
-                resonance: Some(Resonance::new(2e-3, f0, bw).unwrap()),
-                ..AxisModel::default()
-            };
+            let axis = noise::AxisModel::default().with(Resonance::new(2e-3, f0, bw).unwrap());
             let data = gyro_x_series(&axis, rate, N, SEED + 7, i as u64);
             let cap = narrowband_edf(bw, N as f64 * dt);
             assert_avar_matches_capped(
@@ -141,11 +127,9 @@ fn quantization_adds_3q2_over_tau2() {
     for (i, &rate) in RATES_HZ.iter().enumerate() {
         let dt = 1.0 / rate;
         let lsb = q * 12f64.sqrt();
-        let axis = AxisModel {
-            quantization: Some(q),
-            white_noise: Some(lsb / dt.sqrt()),
-            ..AxisModel::default()
-        };
+        let axis = noise::AxisModel::default()
+            .with(noise::Quantization::new(q).unwrap())
+            .with(noise::WhiteNoise::new(lsb / dt.sqrt()).unwrap());
         let data = gyro_x_series(&axis, rate, N, SEED + 2, i as u64);
         // Every output is a whole number of LSBs of the integral.
         for &y in data.iter().take(1000) {
@@ -176,10 +160,7 @@ fn flicker_matches_its_closed_form_and_plateau() {
         let dt = 1.0 / rate;
         // Band from one sample to the record length.
         let flicker = Flicker::new(b, dt, N as f64 * dt, per_decade).unwrap();
-        let axis = AxisModel {
-            bias_instability: Some(BiasInstability::Flicker(flicker.clone())),
-            ..AxisModel::default()
-        };
+        let axis = noise::AxisModel::default().with(BiasInstability::Flicker(flicker.clone()));
         let data = gyro_x_series(&axis, rate, N, SEED + 3, i as u64);
         // The plateau: averaging times in [30 tau_min, tau_max / 30].
         let ms = [30, 300, 3000, 30_000];
@@ -220,10 +201,7 @@ fn flicker_matches_its_closed_form_and_plateau() {
 #[test]
 fn rate_ramp_is_exact() {
     let r = 1e-6;
-    let axis = AxisModel {
-        rate_ramp: Some(r),
-        ..AxisModel::default()
-    };
+    let axis = noise::AxisModel::default().with(noise::RateRamp::new(r).unwrap());
     for &rate in &RATES_HZ {
         let dt = 1.0 / rate;
         let data = gyro_x_series(&axis, rate, 100_000, SEED, 0);
@@ -248,10 +226,7 @@ fn sinusoid_matches_phase_averaged_closed_form() {
         let dt = 1.0 / rate;
         let f0 = rate / 27.0;
         let a = 1e-3;
-        let axis = AxisModel {
-            sinusoidal: Some(Sinusoid::new(a, f0, None).unwrap()),
-            ..AxisModel::default()
-        };
+        let axis = noise::AxisModel::default().with(Sinusoid::new(a, f0, None).unwrap());
         let data = gyro_x_series(&axis, rate, N, SEED, 0);
         let ms = [1, 3, 7, 13, 27, 40, 100];
         let est = oavar(&data, dt, &ms);
@@ -269,14 +244,12 @@ fn sinusoid_matches_phase_averaged_closed_form() {
 #[test]
 fn sum_of_terms_matches_sum_of_closed_forms() {
     // Independent terms add (docs/model.md §2, "Usual sum for fitting").
-    let axis = AxisModel {
-        white_noise: Some(1e-3),
-        bias_instability: Some(BiasInstability::Flicker(
+    let axis = noise::AxisModel::default()
+        .with(noise::WhiteNoise::new(1e-3).unwrap())
+        .with(BiasInstability::Flicker(
             Flicker::new(2e-4, 0.01, 1e5, 2).unwrap(),
-        )),
-        rate_random_walk: Some(1e-5),
-        gauss_markov: Some(GaussMarkov::new(3e-4, 5.0).unwrap()),
-        ..AxisModel::default()
-    };
+        ))
+        .with(noise::RateRandomWalk::new(1e-5).unwrap())
+        .with(GaussMarkov::new(3e-4, 5.0).unwrap());
     check("white + flicker + RRW + GM", &axis, &MS, &[0, -1, -2]);
 }

@@ -46,11 +46,9 @@ fn series(model: &SensorModel, prep: fn(ImuErrors) -> ImuErrors, n: usize) -> Ve
 fn slow_bias_processes_start_at_zero_and_keep_their_increments() {
     // Default flicker band 0.1 s .. 1e5 s at 100 Hz: the components of T >= 10 s are held
     // (multirate), so both the every-sample and the held parts are referenced.
-    let slow = AxisModel {
-        bias_instability: Some(BiasInstability::Flicker(Flicker::with_b(1e-3))),
-        gauss_markov: Some(GaussMarkov::new(2e-3, 5.0).unwrap()),
-        ..AxisModel::default()
-    };
+    let slow = noise::AxisModel::default()
+        .with(BiasInstability::Flicker(Flicker::with_b(1e-3)))
+        .with(GaussMarkov::new(2e-3, 5.0).unwrap());
     let n = 3000;
     let raw = series(&model(slow.clone()), raw_run, n);
     let cal = series(&model(slow), ImuErrors::with_calibrated_start, n);
@@ -73,16 +71,14 @@ fn slow_bias_processes_start_at_zero_and_keep_their_increments() {
 #[test]
 fn other_terms_are_bit_identical() {
     // White noise and a random walk (already zero at the start): the switch changes nothing.
-    let fast = AxisModel {
-        white_noise: Some(1e-3),
-        rate_random_walk: Some(1e-4),
-        turn_on_bias: Some(1e-2),
-        bias_instability: Some(BiasInstability::RandomWalk {
+    let fast = noise::AxisModel::default()
+        .with(noise::WhiteNoise::new(1e-3).unwrap())
+        .with(noise::RateRandomWalk::new(1e-4).unwrap())
+        .with(noise::TurnOnBias::new(1e-2).unwrap())
+        .with(BiasInstability::RandomWalk {
             stability: 1e-3,
             period_s: 4.0,
-        }),
-        ..AxisModel::default()
-    };
+        });
     let m = model(fast);
     assert_eq!(
         series(&m, raw_run, 500),
@@ -157,12 +153,10 @@ fn window_mean_moments_match_quadrature() {
 
 #[test]
 fn window_calibration_subtracts_a_constant_and_keeps_the_draws() {
-    let slow = AxisModel {
-        white_noise: Some(1e-3),
-        bias_instability: Some(BiasInstability::Flicker(Flicker::with_b(1e-3))),
-        gauss_markov: Some(GaussMarkov::new(2e-3, 5.0).unwrap()),
-        ..AxisModel::default()
-    };
+    let slow = noise::AxisModel::default()
+        .with(noise::WhiteNoise::new(1e-3).unwrap())
+        .with(BiasInstability::Flicker(Flicker::with_b(1e-3)))
+        .with(GaussMarkov::new(2e-3, 5.0).unwrap());
     let m = model(slow);
     let n = 2000;
     let raw = series(&m, raw_run, n);

@@ -17,7 +17,7 @@ fn rel(a: f64, b: f64) -> f64 {
 
 /// Minimum of the closed-form ADEV over the flicker band's plateau [30 tau_min, tau_max / 30].
 fn adev_minimum(axis: &noise::AxisModel) -> f64 {
-    let Some(BiasInstability::Flicker(f)) = &axis.bias_instability else {
+    let Some(BiasInstability::Flicker(f)) = axis.get::<noise::BiasInstability>() else {
         panic!("flicker expected");
     };
     let (lo, hi) = (30.0 * f.tau_min_s, f.tau_max_s / 30.0);
@@ -54,12 +54,26 @@ fn mtx_matches_woodman_table_4() {
             .iter()
             .zip([(0.075, 0.010), (0.078, 0.009), (0.079, 0.012)])
     {
-        assert!(rel(axis.white_noise.unwrap(), arw * PI / 180.0) < 1e-12);
+        assert!(
+            rel(
+                axis.get::<noise::WhiteNoise>()
+                    .map(noise::WhiteNoise::density)
+                    .unwrap(),
+                arw * PI / 180.0
+            ) < 1e-12
+        );
         // Woodman's bias instability is the minimum of the whole curve.
         assert!(rel(adev_minimum(axis), bi * PI / 180.0) < 1e-3);
     }
     for axis in &m.accel.axes {
-        assert!(rel(axis.white_noise.unwrap(), 0.004) < 1e-12);
+        assert!(
+            rel(
+                axis.get::<noise::WhiteNoise>()
+                    .map(noise::WhiteNoise::density)
+                    .unwrap(),
+                0.004
+            ) < 1e-12
+        );
     }
 }
 
@@ -73,23 +87,47 @@ fn honeywell_and_adis_values() {
         // 0.0035 deg/sqrt(h) = 0.0035/60 deg/sqrt(s) (docs/model.md §2).
         assert!(
             rel(
-                gg1320.gyro.axes[axis].white_noise.unwrap(),
+                gg1320.gyro.axes[axis]
+                    .get::<noise::WhiteNoise>()
+                    .map(noise::WhiteNoise::density)
+                    .unwrap(),
                 0.0035 / 60.0 * PI / 180.0
             ) < 1e-12
         );
         assert!(
             rel(
-                gg5300.gyro.axes[axis].white_noise.unwrap(),
+                gg5300.gyro.axes[axis]
+                    .get::<noise::WhiteNoise>()
+                    .map(noise::WhiteNoise::density)
+                    .unwrap(),
                 0.2 / 60.0 * PI / 180.0
             ) < 1e-12
         );
-        assert!(rel(adis.gyro.axes[axis].white_noise.unwrap(), 0.05 * PI / 180.0) < 1e-12);
-        assert!(rel(adis.gyro.axes[axis].turn_on_bias.unwrap(), 3.0 * PI / 180.0) < 1e-12);
+        assert!(
+            rel(
+                adis.gyro.axes[axis]
+                    .get::<noise::WhiteNoise>()
+                    .map(noise::WhiteNoise::density)
+                    .unwrap(),
+                0.05 * PI / 180.0
+            ) < 1e-12
+        );
+        assert!(
+            rel(
+                adis.gyro.axes[axis]
+                    .get::<noise::TurnOnBias>()
+                    .map(noise::TurnOnBias::sigma)
+                    .unwrap(),
+                3.0 * PI / 180.0
+            ) < 1e-12
+        );
         assert!(rel(adev_minimum(&gg1320.gyro.axes[axis]), 0.0035 * deg_h) < 1e-3);
         assert!(rel(adev_minimum(&gg5300.gyro.axes[axis]), 70.0 * deg_h) < 1e-3);
         assert!(rel(adev_minimum(&adis.gyro.axes[axis]), 0.007 * PI / 180.0) < 1e-3);
         // With white noise only besides flicker, B is close to minimum / 0.664.
-        let Some(BiasInstability::Flicker(f)) = &gg5300.gyro.axes[axis].bias_instability else {
+        let Some(BiasInstability::Flicker(f)) =
+            gg5300.gyro.axes[axis].get::<noise::BiasInstability>()
+        else {
             panic!("flicker expected");
         };
         assert!(rel(f.b * FLICKER_PLATEAU_PER_B, 70.0 * deg_h) < 0.05);

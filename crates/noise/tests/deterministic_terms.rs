@@ -4,15 +4,15 @@ mod common;
 
 use common::*;
 use nalgebra::Vector3;
-use noise::{AxisModel, ImuErrors, SensorModel, TemperatureProfile, TriadModel};
+use noise::{ImuErrors, SensorModel, TemperatureProfile, TriadModel};
 
 #[test]
 fn bias_scale_factor_and_misalignment_act_on_the_ideal_input() {
-    let axis = |i: usize| AxisModel {
-        constant_bias: Some(0.01 * (i as f64 + 1.0)),
-        scale_factor: Some(1e-3 * (i as f64 + 1.0)),
-        misalignment: Some([2e-3, -3e-3]),
-        ..AxisModel::default()
+    let axis = |i: usize| {
+        noise::AxisModel::default()
+            .with(noise::ConstantBias::new(0.01 * (i as f64 + 1.0)).unwrap())
+            .with(noise::ScaleFactor::new(1e-3 * (i as f64 + 1.0)).unwrap())
+            .with(noise::Misalignment::new([2e-3, -3e-3]).unwrap())
     };
     let model = SensorModel {
         name: "det".into(),
@@ -43,10 +43,7 @@ fn bias_scale_factor_and_misalignment_act_on_the_ideal_input() {
 #[test]
 fn turn_on_bias_is_drawn_once_per_run() {
     let sigma = 0.05;
-    let axis = AxisModel {
-        turn_on_bias: Some(sigma),
-        ..AxisModel::default()
-    };
+    let axis = noise::AxisModel::default().with(noise::TurnOnBias::new(sigma).unwrap());
     let draws: Vec<f64> = (0..4000)
         .map(|run| {
             let y = gyro_x_series(&axis, 100.0, 50, 3, run);
@@ -82,10 +79,9 @@ fn temperature_bias_follows_the_profile() {
     ];
     let coefficient = 1e-3;
     for profile in profiles {
-        let mut model = gyro_x_model(AxisModel {
-            temperature_bias: Some(coefficient),
-            ..AxisModel::default()
-        });
+        let mut model = gyro_x_model(
+            noise::AxisModel::default().with(noise::TemperatureBias::new(coefficient).unwrap()),
+        );
         model.temperature = profile.clone();
         model.temperature_reference_c = 25.0;
         let dt = 0.1;
@@ -109,16 +105,10 @@ fn temperature_bias_follows_the_profile() {
 
 #[test]
 fn adding_a_term_does_not_reshuffle_the_others() {
-    let white = AxisModel {
-        white_noise: Some(1e-3),
-        ..AxisModel::default()
-    };
+    let white = noise::AxisModel::default().with(noise::WhiteNoise::new(1e-3).unwrap());
     let base = gyro_x_series(&white, 100.0, 10_000, 9, 4);
     let with_bias = gyro_x_series(
-        &AxisModel {
-            constant_bias: Some(0.5),
-            ..white.clone()
-        },
+        &white.clone().with(noise::ConstantBias::new(0.5).unwrap()),
         100.0,
         10_000,
         9,
@@ -129,8 +119,8 @@ fn adding_a_term_does_not_reshuffle_the_others() {
     }
     // A term on another channel leaves this channel's bits alone.
     let mut model = gyro_x_model(white.clone());
-    model.gyro.axes[1].gauss_markov = Some(noise::GaussMarkov::new(1.0, 1.0).unwrap());
-    model.accel.axes[2].white_noise = Some(1.0);
+    model.gyro.axes[1].set_term(noise::GaussMarkov::new(1.0, 1.0).unwrap());
+    model.accel.axes[2].set_term(noise::WhiteNoise::new(1.0).unwrap());
     let mut e = ImuErrors::new(&model, 0.01, 9, 4);
     let mut other = vec![0.0; 10_000];
     e.channels_mut()[0].fill_static(0, &Vector3::zeros(), &mut other);

@@ -34,16 +34,11 @@ fn check(label: &str, axis: &AxisModel, alphas: &[i32]) {
 }
 
 fn filtered(kind: FilterKind, decimation: u32) -> AxisModel {
-    AxisModel {
-        white_noise: Some(1e-3),
-        bias_instability: Some(BiasInstability::Flicker(Flicker::with_b(2e-4))),
-        gauss_markov: Some(GaussMarkov {
-            sigma: 3e-3,
-            tau_s: 0.05,
-        }),
-        output_filter: Some(OutputFilter::new(kind, decimation).unwrap()),
-        ..AxisModel::default()
-    }
+    AxisModel::default()
+        .with(noise::WhiteNoise::new(1e-3).unwrap())
+        .with(BiasInstability::Flicker(Flicker::with_b(2e-4)))
+        .with(GaussMarkov::new(3e-3, 0.05).unwrap())
+        .with(OutputFilter::new(kind, decimation).unwrap())
 }
 
 #[test]
@@ -118,12 +113,10 @@ fn resonance_behind_a_filter_reads_back() {
         let dt = 1.0 / rate;
         // The resonance carries 9 times the white noise's variance, so the check is of it.
         let (f0, bw) = (0.2 * rate, 0.016 * rate);
-        let axis = AxisModel {
-            white_noise: Some(1e-3),
-            resonance: Some(Resonance::new(3e-3 / dt.sqrt(), f0, bw).unwrap()),
-            output_filter: Some(OutputFilter::new(FilterKind::Bartlett { taps: 3 }, 2).unwrap()),
-            ..AxisModel::default()
-        };
+        let axis = noise::AxisModel::default()
+            .with(noise::WhiteNoise::new(1e-3).unwrap())
+            .with(Resonance::new(3e-3 / dt.sqrt(), f0, bw).unwrap())
+            .with(OutputFilter::new(FilterKind::Bartlett { taps: 3 }, 2).unwrap());
         let data = gyro_x_series(&axis, rate, N, SEED + 3, i as u64);
         assert_avar_matches_capped(
             &format!("filtered resonance at {rate} Hz"),
@@ -148,12 +141,14 @@ fn outliers_read_back_as_white_noise() {
     let (size, rate_per_hour) = (0.2, 36_000.0);
     for (i, &rate) in RATES_HZ.iter().enumerate() {
         let dt = 1.0 / rate;
-        let axis = AxisModel {
-            white_noise: Some(1e-3),
-            outliers: Some(Outliers::new(rate_per_hour, size).unwrap()),
-            ..AxisModel::default()
-        };
-        let p = axis.outliers.unwrap().probability(dt);
+        let axis = noise::AxisModel::default()
+            .with(noise::WhiteNoise::new(1e-3).unwrap())
+            .with(Outliers::new(rate_per_hour, size).unwrap());
+        let p = axis
+            .get::<noise::Outliers>()
+            .copied()
+            .unwrap()
+            .probability(dt);
         let data = gyro_x_series(&axis, rate, N, SEED + 13, i as u64);
         let est = oavar(&data, dt, &MS);
         for (&m, &v) in MS.iter().zip(&est) {
@@ -182,11 +177,9 @@ fn filtered_sinusoid_is_the_filter_applied_to_the_raw_sinusoid() {
     ] {
         let f = OutputFilter::new(kind, d).unwrap();
         let (a, hz, phase) = (0.02, 7.3, 0.4);
-        let axis = AxisModel {
-            sinusoidal: Some(noise::Sinusoid::new(a, hz, Some(phase)).unwrap()),
-            output_filter: Some(f),
-            ..AxisModel::default()
-        };
+        let axis = noise::AxisModel::default()
+            .with(noise::Sinusoid::new(a, hz, Some(phase)).unwrap())
+            .with(f);
         let dt = 0.01;
         let data = gyro_x_series(&axis, 100.0, 300, SEED, 0);
         let h = f.impulse_response(dt);

@@ -57,10 +57,7 @@ fn check_growth(label: &str, axis: &AxisModel, law: impl Fn(f64, Integration) ->
 fn white_noise_grows_as_sqrt_t_t3_t5() {
     // Woodman eqs 5 and 18; g N t^{5/2}/sqrt(20) (docs/model.md §1.3). Discrete sums differ by O(1/n) = 0.15 %.
     let n = 1e-3;
-    let axis = AxisModel {
-        white_noise: Some(n),
-        ..AxisModel::default()
-    };
+    let axis = noise::AxisModel::default().with(noise::WhiteNoise::new(n).unwrap());
     check_growth("white noise", &axis, |t, how| {
         cf::white_noise_growth_std(n, t, how)
     });
@@ -69,10 +66,7 @@ fn white_noise_grows_as_sqrt_t_t3_t5() {
 #[test]
 fn random_walk_variance_grows_linearly_and_its_integrals_as_t3_t5_t7() {
     let k = 1e-4;
-    let axis = AxisModel {
-        rate_random_walk: Some(k),
-        ..AxisModel::default()
-    };
+    let axis = noise::AxisModel::default().with(noise::RateRandomWalk::new(k).unwrap());
     // The walk itself: Var b_j = K^2 j dt (docs/model.md §3, b_{j+1} = b_j + K sqrt(dt) w).
     let rate = 100.0;
     for j in [10usize, 100, 999] {
@@ -93,10 +87,7 @@ fn random_walk_variance_grows_linearly_and_its_integrals_as_t3_t5_t7() {
         stability: 1e-3,
         period_s: 100.0,
     };
-    let axis = AxisModel {
-        bias_instability: Some(bs),
-        ..AxisModel::default()
-    };
+    let axis = noise::AxisModel::default().with(bs);
     let k = cf::woodman_bias_random_walk(1e-3, 100.0);
     check_growth("Woodman bias random walk", &axis, |t, how| {
         cf::random_walk_growth_std(k, t, how)
@@ -108,10 +99,7 @@ fn gauss_markov_autocorrelation_is_phi_to_the_lag() {
     let (rate, n) = (100.0, 1 << 20);
     let dt = 1.0 / rate;
     let tc = 20.0 * dt;
-    let axis = AxisModel {
-        gauss_markov: Some(GaussMarkov::new(2e-3, tc).unwrap()),
-        ..AxisModel::default()
-    };
+    let axis = noise::AxisModel::default().with(GaussMarkov::new(2e-3, tc).unwrap());
     let x = gyro_x_series(&axis, rate, n, SEED, 0);
     let phi = (-dt / tc).exp();
     let c0: f64 = x.iter().map(|v| v * v).sum::<f64>() / n as f64;
@@ -136,10 +124,7 @@ fn gauss_markov_autocorrelation_is_phi_to_the_lag() {
 #[test]
 fn gauss_markov_starts_stationary_and_integrates_as_its_law() {
     let (rate, sigma, tc) = (100.0, 2e-3, 2.0);
-    let axis = AxisModel {
-        gauss_markov: Some(GaussMarkov::new(sigma, tc).unwrap()),
-        ..AxisModel::default()
-    };
+    let axis = noise::AxisModel::default().with(GaussMarkov::new(sigma, tc).unwrap());
     let first: Vec<f64> = (0..RUNS)
         .map(|run| gyro_x_series(&axis, rate, 1, SEED, run)[0])
         .collect();
@@ -164,10 +149,7 @@ fn gauss_markov_starts_stationary_and_integrates_as_its_law() {
 #[test]
 fn resonance_starts_stationary_and_integrates_as_its_law() {
     let (rate, sigma, f0, bw) = (100.0, 2e-3, 2.0, 0.5);
-    let axis = AxisModel {
-        resonance: Some(Resonance::new(sigma, f0, bw).unwrap()),
-        ..AxisModel::default()
-    };
+    let axis = noise::AxisModel::default().with(Resonance::new(sigma, f0, bw).unwrap());
     let first: Vec<f64> = (0..RUNS)
         .map(|run| gyro_x_series(&axis, rate, 1, SEED + 5, run)[0])
         .collect();
@@ -217,10 +199,7 @@ fn flicker_integrals_follow_the_component_sum() {
     // Band 1 s .. 1e4 s at 100 Hz: the sampled components differ from continuous ones by O(dt/T) <= 1 %
     // on the shortest, which carries little of the integrated variance over 10 s.
     let flicker = Flicker::new(1e-3, 1.0, 1e4, 2).unwrap();
-    let axis = AxisModel {
-        bias_instability: Some(BiasInstability::Flicker(flicker.clone())),
-        ..AxisModel::default()
-    };
+    let axis = noise::AxisModel::default().with(BiasInstability::Flicker(flicker.clone()));
     let (rate, n) = (100.0, 1000);
     let t = n as f64 / rate;
     let [once, twice, thrice] = integrals(&axis, rate, n);
@@ -235,10 +214,7 @@ fn sinusoid_integrals_follow_the_phase_average() {
     // Random phase per run; f = 0.05 Hz at 100 Hz so the rectangle rule is within ~0.2 % of the
     // integral (w dt = 3e-3); t = 10 s = half a period.
     let (a, f) = (1e-3, 0.05);
-    let axis = AxisModel {
-        sinusoidal: Some(noise::Sinusoid::new(a, f, None).unwrap()),
-        ..AxisModel::default()
-    };
+    let axis = noise::AxisModel::default().with(noise::Sinusoid::new(a, f, None).unwrap());
     check_growth("sinusoid", &axis, |t, how| {
         cf::sinusoid_growth_std(a, f, t, how)
     });
@@ -252,11 +228,9 @@ fn quantization_integrals_follow_the_residual_law() {
     let (rate, q): (f64, f64) = (100.0, 1e-5);
     let dt = 1.0 / rate;
     let lsb = q * 12f64.sqrt();
-    let axis = AxisModel {
-        quantization: Some(q),
-        white_noise: Some(lsb / dt.sqrt()),
-        ..AxisModel::default()
-    };
+    let axis = noise::AxisModel::default()
+        .with(noise::Quantization::new(q).unwrap())
+        .with(noise::WhiteNoise::new(lsb / dt.sqrt()).unwrap());
     let sigma2 = (lsb / dt).powi(2);
     for n in [1usize, 2] {
         let (mut once, mut twice, mut thrice) = (Vec::new(), Vec::new(), Vec::new());

@@ -35,10 +35,18 @@ fn values(m: &SensorModel) -> [f64; 4] {
         assert_eq!(axes[0], axes[2]);
     }
     [
-        g[0].white_noise.unwrap_or(0.0),
-        g[0].rate_random_walk.unwrap_or(0.0),
-        a[0].white_noise.unwrap_or(0.0),
-        a[0].rate_random_walk.unwrap_or(0.0),
+        g[0].get::<noise::WhiteNoise>()
+            .map(noise::WhiteNoise::density)
+            .unwrap_or(0.0),
+        g[0].get::<noise::RateRandomWalk>()
+            .map(noise::RateRandomWalk::density)
+            .unwrap_or(0.0),
+        a[0].get::<noise::WhiteNoise>()
+            .map(noise::WhiteNoise::density)
+            .unwrap_or(0.0),
+        a[0].get::<noise::RateRandomWalk>()
+            .map(noise::RateRandomWalk::density)
+            .unwrap_or(0.0),
     ]
 }
 
@@ -55,7 +63,15 @@ fn euroc_adis16448_values_are_read_exactly() {
     let expected = n * n / 1.0 + k * k * 1.0 / 3.0;
     assert!((g.allan_variance(1.0) - expected).abs() <= 1e-12 * expected);
     // Nothing else is modelled.
-    assert!(g.bias_instability.is_none() && g.quantization.is_none() && g.constant_bias.is_none());
+    assert!(
+        g.get::<noise::BiasInstability>().cloned().is_none()
+            && g.get::<noise::Quantization>()
+                .map(noise::Quantization::coefficient)
+                .is_none()
+            && g.get::<noise::ConstantBias>()
+                .map(noise::ConstantBias::bias)
+                .is_none()
+    );
 }
 
 fn axis(v: f64) -> AxisValue {

@@ -44,10 +44,7 @@ fn outliers_are_a_bernoulli_process_of_exact_size() {
         let dt = 1.0 / rate_hz;
         let o = Outliers::new(per_hour, size).unwrap();
         let p = o.probability(dt);
-        let axis = AxisModel {
-            outliers: Some(o),
-            ..AxisModel::default()
-        };
+        let axis = noise::AxisModel::default().with(o);
         let y = gyro_x_series(&axis, rate_hz, n, seed, 0);
         let label = format!("{per_hour} /h at {rate_hz} Hz");
         assert!(
@@ -95,15 +92,10 @@ fn outliers_are_a_bernoulli_process_of_exact_size() {
 #[test]
 fn outliers_are_added_after_the_filter() {
     let size = 0.05;
-    let base = AxisModel {
-        white_noise: Some(1e-3),
-        output_filter: Some(filter(FilterKind::Bartlett { taps: 12 }, 3)),
-        ..AxisModel::default()
-    };
-    let with = AxisModel {
-        outliers: Some(Outliers::new(360.0, size).unwrap()),
-        ..base.clone()
-    };
+    let base = noise::AxisModel::default()
+        .with(noise::WhiteNoise::new(1e-3).unwrap())
+        .with(filter(FilterKind::Bartlett { taps: 12 }, 3));
+    let with = base.clone().with(Outliers::new(360.0, size).unwrap());
     let n = 200_000;
     let a = gyro_x_series(&base, 100.0, n, 9, 2);
     let b = gyro_x_series(&with, 100.0, n, 9, 2);
@@ -135,14 +127,10 @@ fn warmup_transient_decays_with_its_time_constant() {
     let (rate, n, runs) = (100.0f64, 301, 4000u64);
     let (amp, tau, nd) = (5e-4, 1.0, 1e-4); // white sigma = N / sqrt(dt) = 1e-3
     let sigma = nd / (1.0 / rate).sqrt();
-    let noise_only = AxisModel {
-        white_noise: Some(nd),
-        ..AxisModel::default()
-    };
-    let axis = AxisModel {
-        warmup_transient: Some(WarmupTransient::new(amp, tau, false).unwrap()),
-        ..noise_only.clone()
-    };
+    let noise_only = noise::AxisModel::default().with(noise::WhiteNoise::new(nd).unwrap());
+    let axis = noise_only
+        .clone()
+        .with(WarmupTransient::new(amp, tau, false).unwrap());
     let ks = [0usize, 25, 50, 100, 200, 300];
     let mut sums = [0.0; 6];
     for run in 0..runs {
@@ -182,14 +170,10 @@ fn warmup_transient_decays_with_its_time_constant() {
 fn per_run_warmup_amplitude_has_the_stated_variance() {
     let (rate, n, runs) = (100.0, 200, 3000u64);
     let (amp, tau) = (2e-3, 0.5);
-    let noise_only = AxisModel {
-        white_noise: Some(3e-4),
-        ..AxisModel::default()
-    };
-    let axis = AxisModel {
-        warmup_transient: Some(WarmupTransient::new(amp, tau, true).unwrap()),
-        ..noise_only.clone()
-    };
+    let noise_only = noise::AxisModel::default().with(noise::WhiteNoise::new(3e-4).unwrap());
+    let axis = noise_only
+        .clone()
+        .with(WarmupTransient::new(amp, tau, true).unwrap());
     let mut draws = Vec::new();
     for run in 0..runs {
         let y = gyro_x_series(&axis, rate, n, 23, run);
@@ -245,11 +229,9 @@ fn white_noise_through_each_filter_has_the_exact_variance_and_correlation() {
         // Output autocorrelation at lag k: A_h(kD) / A_h(0).
         let rho = |k: i64| acf(&h, k.unsigned_abs() as usize * d) / acf(&h, 0);
         let kmax = (h.len() / d) as i64 + 2;
-        let axis = AxisModel {
-            white_noise: Some(nd),
-            output_filter: Some(*f),
-            ..AxisModel::default()
-        };
+        let axis = noise::AxisModel::default()
+            .with(noise::WhiteNoise::new(nd).unwrap())
+            .with(*f);
         let y = gyro_x_series(&axis, rate, n, 31, i as u64);
         let label = format!("{:?} decimation {d}", f.kind);
 
@@ -306,10 +288,12 @@ fn temperature_step_drives_the_bias_through_the_filter() {
             at_s: at,
         },
         temperature_reference_c: 25.0,
-        ..gyro_x_model(AxisModel {
-            temperature_bias: Some(c),
-            output_filter: f,
-            ..AxisModel::default()
+        ..gyro_x_model({
+            let axis = AxisModel::default().with(noise::TemperatureBias::new(c).unwrap());
+            match f {
+                Some(f) => axis.with(f),
+                None => axis,
+            }
         })
     };
     let n = 1000;
@@ -360,10 +344,9 @@ fn temperature_step_drives_the_bias_through_the_filter() {
 /// of outputs k-1 and k, four each, behind output k) shows half at k0 and all from k0 + 1 on.
 #[test]
 fn the_ideal_input_is_held_over_the_raw_samples_of_its_output() {
-    let model = gyro_x_model(AxisModel {
-        output_filter: Some(filter(FilterKind::MovingAverage { taps: 8 }, 4)),
-        ..AxisModel::default()
-    });
+    let model = gyro_x_model(
+        noise::AxisModel::default().with(filter(FilterKind::MovingAverage { taps: 8 }, 4)),
+    );
     let mut e = ImuErrors::new(&model, 0.01, 1, 0);
     let k0 = 300;
     let a = Vector3::zeros();
@@ -391,11 +374,9 @@ fn a_ramp_lags_by_the_group_delay() {
         filter(FilterKind::LowPass2 { cutoff_hz: 8.0 }, 4),
         filter(FilterKind::Bartlett { taps: 31 }, 2),
     ] {
-        let axis = AxisModel {
-            rate_ramp: Some(r),
-            output_filter: Some(f),
-            ..AxisModel::default()
-        };
+        let axis = noise::AxisModel::default()
+            .with(noise::RateRamp::new(r).unwrap())
+            .with(f);
         let y = gyro_x_series(&axis, rate, 4000, 1, 0);
         let delay = f.delay_s(dt);
         for k in [0usize, 10, 1000, 3999] {
@@ -420,21 +401,21 @@ fn a_ramp_lags_by_the_group_delay() {
 /// sample at a time; also with a decimation larger than the raw sub-block.
 #[test]
 fn any_block_size_gives_the_same_values_with_every_new_term() {
-    let axis = |i: usize, f: OutputFilter| AxisModel {
-        quantization: Some(1e-6),
-        white_noise: Some(1e-3),
-        bias_instability: Some(noise::BiasInstability::Flicker(noise::Flicker::with_b(
-            1e-4,
-        ))),
-        rate_random_walk: Some(1e-5),
-        gauss_markov: Some(noise::GaussMarkov::new(2e-3, 0.3).unwrap()),
-        sinusoidal: Some(noise::Sinusoid::new(1e-3, 1.3, None).unwrap()),
-        temperature_bias: Some(1e-4),
-        turn_on_bias: Some(1e-2),
-        outliers: Some(Outliers::new(3600.0 * (i as f64 + 1.0), 0.1).unwrap()),
-        warmup_transient: Some(WarmupTransient::new(5e-3, 2.0, i.is_multiple_of(2)).unwrap()),
-        output_filter: Some(f),
-        ..AxisModel::default()
+    let axis = |i: usize, f: OutputFilter| {
+        noise::AxisModel::default()
+            .with(noise::Quantization::new(1e-6).unwrap())
+            .with(noise::WhiteNoise::new(1e-3).unwrap())
+            .with(noise::BiasInstability::Flicker(noise::Flicker::with_b(
+                1e-4,
+            )))
+            .with(noise::RateRandomWalk::new(1e-5).unwrap())
+            .with(noise::GaussMarkov::new(2e-3, 0.3).unwrap())
+            .with(noise::Sinusoid::new(1e-3, 1.3, None).unwrap())
+            .with(noise::TemperatureBias::new(1e-4).unwrap())
+            .with(noise::TurnOnBias::new(1e-2).unwrap())
+            .with(Outliers::new(3600.0 * (i as f64 + 1.0), 0.1).unwrap())
+            .with(WarmupTransient::new(5e-3, 2.0, i.is_multiple_of(2)).unwrap())
+            .with(f)
     };
     let filters = [
         filter(FilterKind::MovingAverage { taps: 5 }, 1),
@@ -527,7 +508,7 @@ fn any_block_size_gives_the_same_values_with_every_new_term() {
 #[test]
 fn a_cutoff_above_the_internal_nyquist_frequency_is_refused_by_axis() {
     let mut model = gyro_x_model(AxisModel::default());
-    model.accel.axes[2].output_filter = Some(filter(FilterKind::LowPass2 { cutoff_hz: 250.0 }, 4));
+    model.accel.axes[2].set_term(filter(FilterKind::LowPass2 { cutoff_hz: 250.0 }, 4));
     // 100 Hz x 4 = 400 Hz internal, Nyquist 200 Hz.
     let e = ImuErrors::check_rate(&model, 0.01).unwrap_err();
     assert_eq!(e.axis, "accel.z");

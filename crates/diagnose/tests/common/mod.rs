@@ -6,7 +6,7 @@
 
 use diagnose::simulate::{static_log, SimSetup};
 use diagnose::{diagnose, Diagnosis, LogInput, Settings};
-use noise::{BiasInstability, Channel, Flicker, ImuErrors, SensorModel};
+use noise::{BiasInstability, Channel, Flicker, ImuErrors, SensorModel, WhiteNoise};
 use rand::Rng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 
@@ -32,9 +32,9 @@ pub fn base_model(with_flicker: bool) -> SensorModel {
         };
         let (sensor, axis) = (ch.sensor(), ch.axis());
         let a = m.axis_mut(sensor, axis);
-        a.white_noise = Some(n);
+        a.set_term(WhiteNoise::new(n).unwrap());
         if with_flicker {
-            a.bias_instability = Some(BiasInstability::Flicker(Flicker::with_b(b)));
+            a.set_term(BiasInstability::Flicker(Flicker::with_b(b)));
         }
     }
     m

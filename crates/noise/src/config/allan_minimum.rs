@@ -3,6 +3,7 @@
 
 use crate::closed_form as cf;
 use crate::model::*;
+use crate::terms::bias_instability::{BiasInstability, Flicker};
 
 /// Log-spaced averaging times inside the flicker band's plateau, [30 tau_min, tau_max / 30], where the
 /// component sum is within 1.3 % of 0.664 B (`Flicker::per_decade`); nearer the band edges it falls off
@@ -33,7 +34,7 @@ pub(super) fn solve_b_for_minimum(
 ) -> Result<f64, f64> {
     let min_with = |b: f64| {
         let mut axis = others.clone();
-        axis.bias_instability = Some(BiasInstability::Flicker(flicker(b)));
+        axis.set_term(BiasInstability::Flicker(flicker(b)));
         model_adev_minimum(&axis, &flicker(b)).0
     };
     let floor = min_with(0.0);

@@ -2,11 +2,28 @@
 //! file, line, key and what was expected.
 
 use super::allan_minimum::solve_b_for_minimum;
+use super::error::ConfigError;
 use super::raw::*;
-use super::ConfigError;
 use crate::effect::Sensor;
-use crate::filter::{FilterKind, Outliers, OutputFilter, WarmupTransient, MAX_RESPONSE};
 use crate::model::*;
+use crate::model_error::ModelError;
+use crate::temperature::TemperatureProfile;
+use crate::terms::bias_instability::{BiasInstability, Flicker};
+use crate::terms::constant_bias::ConstantBias;
+use crate::terms::gauss_markov::GaussMarkov;
+use crate::terms::misalignment::Misalignment;
+use crate::terms::outliers::Outliers;
+use crate::terms::output_filter::{FilterKind, OutputFilter, MAX_RESPONSE};
+use crate::terms::quantization::Quantization;
+use crate::terms::rate_ramp::RateRamp;
+use crate::terms::rate_random_walk::RateRandomWalk;
+use crate::terms::resonance::Resonance;
+use crate::terms::scale_factor::ScaleFactor;
+use crate::terms::sinusoidal::Sinusoid;
+use crate::terms::temperature_bias::TemperatureBias;
+use crate::terms::turn_on_bias::TurnOnBias;
+use crate::terms::warmup_transient::WarmupTransient;
+use crate::terms::white_noise::WhiteNoise;
 use crate::units::{parse_quantity, unit_part, Quantity, Signal};
 use crate::AXIS_NAMES;
 
@@ -289,29 +306,37 @@ fn convert_axis(
             }
         };
     }
-    let scalar = |p: Option<(&Text, String)>, q: Quantity, nonneg: bool| {
-        p.map(|(v, key)| ctx.value(&key, v, q, nonneg)).transpose()
-    };
-    let mut m = AxisModel {
-        quantization: scalar(pick!(quantization), Quantity::Integrated(sig), true)?,
-        white_noise: scalar(pick!(white_noise), Quantity::NoiseDensity(sig), true)?,
-        bias_instability: None,
-        rate_random_walk: scalar(pick!(rate_random_walk), Quantity::RandomWalk(sig), true)?,
-        rate_ramp: scalar(pick!(rate_ramp), Quantity::Ramp(sig), false)?,
-        gauss_markov: None,
-        sinusoidal: None,
-        temperature_bias: scalar(pick!(temperature_bias), Quantity::PerDegree(sig), false)?,
-        constant_bias: scalar(pick!(constant_bias), Quantity::Signal(sig), false)?,
-        turn_on_bias: scalar(pick!(turn_on_bias), Quantity::Signal(sig), true)?,
-        scale_factor: scalar(pick!(scale_factor), Quantity::Ratio, false)?,
-        misalignment: None,
-        outliers: None,
-        warmup_transient: None,
-        output_filter: None,
-        resonance: None,
-    };
+    let mut m = AxisModel::default();
+    // A value that parsed but that the term's constructor refuses (not finite).
+    let refused = |key: String, e: ModelError| ctx.invalid(&key, e.expected, e.to_string());
+    macro_rules! scalar {
+        ($f:ident, $q:expr, $nonneg:expr, $ty:ident) => {
+            if let Some((v, key)) = pick!($f) {
+                let value = ctx.value(&key, v, $q, $nonneg)?;
+                m.set_term($ty::new(value).map_err(|e| refused(key, e))?);
+            }
+        };
+    }
+    scalar!(quantization, Quantity::Integrated(sig), true, Quantization);
+    scalar!(white_noise, Quantity::NoiseDensity(sig), true, WhiteNoise);
+    scalar!(
+        rate_random_walk,
+        Quantity::RandomWalk(sig),
+        true,
+        RateRandomWalk
+    );
+    scalar!(rate_ramp, Quantity::Ramp(sig), false, RateRamp);
+    scalar!(
+        temperature_bias,
+        Quantity::PerDegree(sig),
+        false,
+        TemperatureBias
+    );
+    scalar!(constant_bias, Quantity::Signal(sig), false, ConstantBias);
+    scalar!(turn_on_bias, Quantity::Signal(sig), true, TurnOnBias);
+    scalar!(scale_factor, Quantity::Ratio, false, ScaleFactor);
     if let Some((g, key)) = pick!(gauss_markov) {
-        m.gauss_markov = Some(GaussMarkov {
+        m.set_term(GaussMarkov {
             sigma: ctx.value(
                 &format!("{key}.sigma"),
                 &g.sigma,
@@ -326,7 +351,7 @@ fn convert_axis(
         });
     }
     if let Some((w, key)) = pick!(sinusoidal) {
-        m.sinusoidal = Some(Sinusoid {
+        m.set_term(Sinusoid {
             amplitude: ctx.value(
                 &format!("{key}.amplitude"),
                 &w.amplitude,
@@ -354,25 +379,26 @@ fn convert_axis(
                 format!("{} values", list.len()),
             ));
         }
-        m.misalignment = Some([
+        let angles = [
             ctx.value(&format!("{key}[0]"), &list[0], Quantity::Angle, false)?,
             ctx.value(&format!("{key}[1]"), &list[1], Quantity::Angle, false)?,
-        ]);
+        ];
+        m.set_term(Misalignment::new(angles).map_err(|e| refused(key, e))?);
     }
     if let Some((f, key)) = pick!(output_filter) {
-        m.output_filter = Some(convert_output_filter(ctx, &key, f)?);
+        m.set_term(convert_output_filter(ctx, &key, f)?);
     }
     if let Some((o, key)) = pick!(outliers) {
         let rate = ctx.per_hour(&format!("{key}.rate"), &o.rate)?;
         let size_key = format!("{key}.size");
         let size = ctx.value(&size_key, &o.size, Quantity::Signal(sig), true)?;
-        m.outliers =
-            Some(Outliers::new(rate, size).map_err(|e| {
-                ctx.invalid_at(&size_key, Some(&o.size), e.expected, e.to_string())
-            })?);
+        m.set_term(
+            Outliers::new(rate, size)
+                .map_err(|e| ctx.invalid_at(&size_key, Some(&o.size), e.expected, e.to_string()))?,
+        );
     }
     if let Some((w, key)) = pick!(warmup_transient) {
-        m.warmup_transient = Some(
+        m.set_term(
             WarmupTransient::new(
                 ctx.value(
                     &format!("{key}.amplitude"),
@@ -392,7 +418,7 @@ fn convert_axis(
     }
     if let Some((r, key)) = pick!(resonance) {
         let bw_key = format!("{key}.bandwidth");
-        m.resonance = Some(
+        m.set_term(
             Resonance::new(
                 ctx.value(
                     &format!("{key}.sigma"),
@@ -424,7 +450,8 @@ fn convert_axis(
     // Bias instability last: the "allan_minimum" convention needs the other terms.
     if let Some((b, key)) = pick!(bias_instability) {
         let table = RawBiasField::table(b);
-        m.bias_instability = Some(convert_bias_instability(ctx, &key, &table, sig, &m)?);
+        let b = convert_bias_instability(ctx, &key, &table, sig, &m)?;
+        m.set_term(b);
     }
     Ok(m)
 }

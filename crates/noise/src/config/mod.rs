@@ -40,9 +40,11 @@
 
 mod allan_minimum;
 mod convert;
+mod error;
 mod raw;
 mod write;
 
+pub use error::ConfigError;
 pub use write::UnitStyle;
 
 pub(crate) use convert::signal_of;
@@ -52,33 +54,6 @@ use crate::model::*;
 use convert::{convert_temperature, convert_triad, Ctx};
 use raw::RawSensor;
 use std::path::Path;
-
-/// A config that cannot be used: names the file, the key and what was expected.
-#[derive(Clone, Debug, thiserror::Error)]
-pub enum ConfigError {
-    #[error("{file}: cannot read the file")]
-    Io {
-        file: String,
-        #[source]
-        source: std::sync::Arc<std::io::Error>,
-    },
-    /// TOML syntax, unknown keys, wrong types (the message carries line and column).
-    #[error("{file}: {message}")]
-    Parse { file: String, message: String },
-    /// A Kalibr / OpenVINS / VINS-Fusion noise file that cannot be used.
-    #[error(transparent)]
-    NoiseFile(#[from] crate::noise_file::NoiseFileError),
-    /// A value that parses but is not acceptable.
-    #[error("{file}{at}: key `{key}`: expected {expected}, found {found}", at = line.map(|l| format!(":{l}")).unwrap_or_default())]
-    Invalid {
-        file: String,
-        /// 1-based line of the value, when the value exists.
-        line: Option<usize>,
-        key: String,
-        expected: String,
-        found: String,
-    },
-}
 
 impl SensorModel {
     /// Parse and validate a sensor config. `source_name` (usually the file path) appears in errors.

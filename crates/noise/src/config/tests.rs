@@ -3,7 +3,11 @@
 use super::allan_minimum::model_adev_minimum;
 use super::*;
 use crate::closed_form as cf;
-use crate::filter::{FilterKind, Outliers, OutputFilter, WarmupTransient};
+use crate::temperature::TemperatureProfile;
+use crate::terms::bias_instability::BiasInstability;
+use crate::terms::outliers::Outliers;
+use crate::terms::output_filter::{FilterKind, OutputFilter};
+use crate::terms::warmup_transient::WarmupTransient;
 
 const BASIC: &str = r#"
 name = "test"
@@ -20,9 +24,33 @@ white_noise = "0.1 deg/sqrt(s)"
 fn all_table_applies_unless_axis_overrides() {
     let m = SensorModel::from_toml_str(BASIC, "basic.toml").unwrap();
     let n = 0.075f64.to_radians();
-    assert!((m.gyro.axes[0].white_noise.unwrap() - n).abs() < 1e-15);
-    assert!((m.gyro.axes[1].white_noise.unwrap() - 0.1f64.to_radians()).abs() < 1e-15);
-    assert!((m.gyro.axes[2].white_noise.unwrap() - n).abs() < 1e-15);
+    assert!(
+        (m.gyro.axes[0]
+            .get::<crate::WhiteNoise>()
+            .map(crate::WhiteNoise::density)
+            .unwrap()
+            - n)
+            .abs()
+            < 1e-15
+    );
+    assert!(
+        (m.gyro.axes[1]
+            .get::<crate::WhiteNoise>()
+            .map(crate::WhiteNoise::density)
+            .unwrap()
+            - 0.1f64.to_radians())
+        .abs()
+            < 1e-15
+    );
+    assert!(
+        (m.gyro.axes[2]
+            .get::<crate::WhiteNoise>()
+            .map(crate::WhiteNoise::density)
+            .unwrap()
+            - n)
+            .abs()
+            < 1e-15
+    );
     assert!(m.accel.axes.iter().all(|a| a.effects().is_empty()));
 }
 
@@ -30,7 +58,7 @@ fn all_table_applies_unless_axis_overrides() {
 fn allan_minimum_convention_reproduces_the_minimum() {
     let m = SensorModel::from_toml_str(BASIC, "basic.toml").unwrap();
     let axis = &m.gyro.axes[0];
-    let Some(BiasInstability::Flicker(f)) = &axis.bias_instability else {
+    let Some(BiasInstability::Flicker(f)) = axis.get::<crate::BiasInstability>() else {
         panic!("flicker expected")
     };
     let (min, _) = model_adev_minimum(axis, f);
@@ -88,21 +116,21 @@ resonance = { sigma = "0.5 mg", frequency = "10 Hz", bandwidth = "700 mHz" }
     // The real-sensor effects as read.
     let g = &m.gyro.axes[1];
     assert_eq!(
-        g.output_filter,
+        g.get::<crate::OutputFilter>().copied(),
         Some(OutputFilter {
             kind: FilterKind::LowPass2 { cutoff_hz: 25.0 },
             decimation: 4
         })
     );
     assert_eq!(
-        g.outliers,
+        g.get::<crate::Outliers>().copied(),
         Some(Outliers {
             rate_per_hour: 60.0,
             size: 0.02
         })
     );
     assert_eq!(
-        g.warmup_transient,
+        g.get::<crate::WarmupTransient>().copied(),
         Some(WarmupTransient {
             amplitude: 5e-4,
             tau_s: 600.0,
@@ -111,35 +139,47 @@ resonance = { sigma = "0.5 mg", frequency = "10 Hz", bandwidth = "700 mHz" }
     );
     let [ax, ay, az] = &m.accel.axes;
     assert_eq!(
-        ax.output_filter,
+        ax.get::<crate::OutputFilter>().copied(),
         Some(OutputFilter {
             kind: FilterKind::MovingAverage { taps: 5 },
             decimation: 1
         })
     );
-    assert_eq!(ax.outliers.unwrap().rate_per_hour, 3.0);
     assert_eq!(
-        ay.output_filter.unwrap().kind,
+        ax.get::<crate::Outliers>().copied().unwrap().rate_per_hour,
+        3.0
+    );
+    assert_eq!(
+        ay.get::<crate::OutputFilter>().copied().unwrap().kind,
         FilterKind::LowPass1 { cutoff_hz: 700.0 }
     );
-    assert!((ay.outliers.unwrap().rate_per_hour / (0.013 * 3600.0) - 1.0).abs() < 1e-15);
-    assert!((az.outliers.unwrap().rate_per_hour / 42.0 - 1.0).abs() < 1e-15);
-    let r = az.resonance.unwrap();
+    assert!(
+        (ay.get::<crate::Outliers>().copied().unwrap().rate_per_hour / (0.013 * 3600.0) - 1.0)
+            .abs()
+            < 1e-15
+    );
+    assert!(
+        (az.get::<crate::Outliers>().copied().unwrap().rate_per_hour / 42.0 - 1.0).abs() < 1e-15
+    );
+    let r = az.get::<crate::Resonance>().copied().unwrap();
     assert!((r.sigma / (0.5e-3 * crate::units::STANDARD_GRAVITY_MPS2) - 1.0).abs() < 1e-15);
     assert_eq!(r.frequency_hz, 10.0);
     assert!((r.bandwidth_hz / 0.7 - 1.0).abs() < 1e-15);
     assert!(
-        (az.outliers.unwrap().size / (0.5e-3 * crate::units::STANDARD_GRAVITY_MPS2) - 1.0).abs()
+        (az.get::<crate::Outliers>().copied().unwrap().size
+            / (0.5e-3 * crate::units::STANDARD_GRAVITY_MPS2)
+            - 1.0)
+            .abs()
             < 1e-15
     );
     assert_eq!(
-        az.output_filter,
+        az.get::<crate::OutputFilter>().copied(),
         Some(OutputFilter {
             kind: FilterKind::Bartlett { taps: 8 },
             decimation: 8
         })
     );
-    let w = az.warmup_transient.unwrap();
+    let w = az.get::<crate::WarmupTransient>().copied().unwrap();
     assert!(w.amplitude < 0.0 && w.tau_s == 600.0 && !w.per_run);
     // Every new term written back, bit for bit, on every axis it is on.
     let written = m.to_toml_string();
@@ -367,8 +407,7 @@ fn outlier_rates_in_any_time_unit() {
         )
         .unwrap()
         .gyro
-        .axes[0]
-            .outliers
+        .axes[0].get::<crate::Outliers>().copied()
             .unwrap()
             .rate_per_hour
     };
@@ -467,33 +506,57 @@ output_filter = { kind = "bartlett", taps = 16 }
     // Exact where five digits are exact: integers, round values.
     for i in 0..3 {
         assert_eq!(
-            back.gyro.axes[i].output_filter,
-            m.gyro.axes[i].output_filter
+            back.gyro.axes[i].get::<crate::OutputFilter>().copied(),
+            m.gyro.axes[i].get::<crate::OutputFilter>().copied()
         );
-        assert_eq!(back.gyro.axes[i].outliers, m.gyro.axes[i].outliers);
+        assert_eq!(
+            back.gyro.axes[i].get::<crate::Outliers>().copied(),
+            m.gyro.axes[i].get::<crate::Outliers>().copied()
+        );
     }
     assert_eq!(
-        back.accel.axes[1].output_filter,
-        m.accel.axes[1].output_filter
+        back.accel.axes[1].get::<crate::OutputFilter>().copied(),
+        m.accel.axes[1].get::<crate::OutputFilter>().copied()
     );
     let (wb, wm) = (
-        back.accel.axes[0].warmup_transient.unwrap(),
-        m.accel.axes[0].warmup_transient.unwrap(),
+        back.accel.axes[0]
+            .get::<crate::WarmupTransient>()
+            .copied()
+            .unwrap(),
+        m.accel.axes[0]
+            .get::<crate::WarmupTransient>()
+            .copied()
+            .unwrap(),
     );
     assert!(wb.per_run && wb.tau_s == wm.tau_s && (wb.amplitude / wm.amplitude - 1.0).abs() < 5e-5);
     let rel = |a: f64, b: f64| (a / b - 1.0).abs();
     for (a, b) in m.gyro.axes.iter().zip(&back.gyro.axes) {
-        assert!(rel(a.white_noise.unwrap(), b.white_noise.unwrap()) < 5e-5);
+        assert!(
+            rel(
+                a.get::<crate::WhiteNoise>()
+                    .map(crate::WhiteNoise::density)
+                    .unwrap(),
+                b.get::<crate::WhiteNoise>()
+                    .map(crate::WhiteNoise::density)
+                    .unwrap()
+            ) < 5e-5
+        );
     }
     assert!(
         rel(
-            m.accel.axes[0].white_noise.unwrap(),
-            back.accel.axes[0].white_noise.unwrap()
+            m.accel.axes[0]
+                .get::<crate::WhiteNoise>()
+                .map(crate::WhiteNoise::density)
+                .unwrap(),
+            back.accel.axes[0]
+                .get::<crate::WhiteNoise>()
+                .map(crate::WhiteNoise::density)
+                .unwrap()
         ) < 5e-5
     );
     // Quantities the input does not use are written in spec-sheet units.
     let mut k = m.clone();
-    k.gyro.axes[0].rate_random_walk = Some(1e-5);
+    k.gyro.axes[0].set_term(crate::RateRandomWalk::new(1e-5).unwrap());
     assert!(k
         .to_toml_string_styled(&UnitStyle::from_config_text(text))
         .contains("deg/h/sqrt(h)"));

@@ -2,8 +2,24 @@
 
 use super::signal_of;
 use crate::effect::Sensor;
-use crate::filter::FilterKind;
 use crate::model::*;
+use crate::temperature::TemperatureProfile;
+use crate::terms::bias_instability::BiasInstability;
+use crate::terms::constant_bias::ConstantBias;
+use crate::terms::gauss_markov::GaussMarkov;
+use crate::terms::misalignment::Misalignment;
+use crate::terms::outliers::Outliers;
+use crate::terms::output_filter::{FilterKind, OutputFilter};
+use crate::terms::quantization::Quantization;
+use crate::terms::rate_ramp::RateRamp;
+use crate::terms::rate_random_walk::RateRandomWalk;
+use crate::terms::resonance::Resonance;
+use crate::terms::scale_factor::ScaleFactor;
+use crate::terms::sinusoidal::Sinusoid;
+use crate::terms::temperature_bias::TemperatureBias;
+use crate::terms::turn_on_bias::TurnOnBias;
+use crate::terms::warmup_transient::WarmupTransient;
+use crate::terms::white_noise::WhiteNoise;
 use crate::units::{format_si, Quantity, Signal};
 use crate::AXIS_NAMES;
 use std::fmt::Write as _;
@@ -120,31 +136,31 @@ fn write_axis_with(
     let mut line = |key: &str, v: f64, q: Quantity| {
         let _ = writeln!(s, "{key} = \"{}\"", format_si(v, q));
     };
-    if let Some(v) = a.quantization {
+    if let Some(v) = a.get::<Quantization>().map(Quantization::coefficient) {
         line("quantization", v, Quantity::Integrated(sig));
     }
-    if let Some(v) = a.white_noise {
+    if let Some(v) = a.get::<WhiteNoise>().map(WhiteNoise::density) {
         line("white_noise", v, Quantity::NoiseDensity(sig));
     }
-    if let Some(v) = a.rate_random_walk {
+    if let Some(v) = a.get::<RateRandomWalk>().map(RateRandomWalk::density) {
         line("rate_random_walk", v, Quantity::RandomWalk(sig));
     }
-    if let Some(v) = a.rate_ramp {
+    if let Some(v) = a.get::<RateRamp>().map(RateRamp::rate) {
         line("rate_ramp", v, Quantity::Ramp(sig));
     }
-    if let Some(v) = a.temperature_bias {
+    if let Some(v) = a.get::<TemperatureBias>().map(TemperatureBias::per_degree) {
         line("temperature_bias", v, Quantity::PerDegree(sig));
     }
-    if let Some(v) = a.constant_bias {
+    if let Some(v) = a.get::<ConstantBias>().map(ConstantBias::bias) {
         line("constant_bias", v, Quantity::Signal(sig));
     }
-    if let Some(v) = a.turn_on_bias {
+    if let Some(v) = a.get::<TurnOnBias>().map(TurnOnBias::sigma) {
         line("turn_on_bias", v, Quantity::Signal(sig));
     }
-    if let Some(v) = a.scale_factor {
+    if let Some(v) = a.get::<ScaleFactor>().map(ScaleFactor::ratio) {
         line("scale_factor", v, Quantity::Ratio);
     }
-    match &a.bias_instability {
+    match a.get::<BiasInstability>() {
         Some(BiasInstability::Flicker(f)) => {
             let _ = writeln!(
                 s,
@@ -168,7 +184,7 @@ fn write_axis_with(
         }
         None => {}
     }
-    if let Some(g) = a.gauss_markov {
+    if let Some(g) = a.get::<GaussMarkov>() {
         let _ = writeln!(
             s,
             "gauss_markov = {{ sigma = \"{}\", time_constant = \"{}\" }}",
@@ -176,7 +192,7 @@ fn write_axis_with(
             format_si(g.tau_s, Quantity::Time)
         );
     }
-    if let Some(w) = a.sinusoidal {
+    if let Some(w) = a.get::<Sinusoid>() {
         let phase = w
             .phase_rad
             .map(|p| format!(", phase = \"{}\"", format_si(p, Quantity::Angle)))
@@ -188,7 +204,7 @@ fn write_axis_with(
             format_si(w.frequency_hz, Quantity::Frequency)
         );
     }
-    if let Some(f) = a.output_filter {
+    if let Some(f) = a.get::<OutputFilter>() {
         let parameter = match f.kind {
             FilterKind::MovingAverage { taps } | FilterKind::Bartlett { taps } => {
                 format!("taps = {taps}")
@@ -204,7 +220,7 @@ fn write_axis_with(
             f.decimation
         );
     }
-    if let Some(o) = a.outliers {
+    if let Some(o) = a.get::<Outliers>() {
         let _ = writeln!(
             s,
             "outliers = {{ rate = \"{} /h\", size = \"{}\" }}",
@@ -212,7 +228,7 @@ fn write_axis_with(
             format_si(o.size, Quantity::Signal(sig))
         );
     }
-    if let Some(w) = a.warmup_transient {
+    if let Some(w) = a.get::<WarmupTransient>() {
         let _ = writeln!(
             s,
             "warmup_transient = {{ amplitude = \"{}\", time_constant = \"{}\", per_run = {} }}",
@@ -221,7 +237,7 @@ fn write_axis_with(
             w.per_run
         );
     }
-    if let Some(r) = a.resonance {
+    if let Some(r) = a.get::<Resonance>() {
         let _ = writeln!(
             s,
             "resonance = {{ sigma = \"{}\", frequency = \"{}\", bandwidth = \"{}\" }}",
@@ -230,7 +246,7 @@ fn write_axis_with(
             format_si(r.bandwidth_hz, Quantity::Frequency)
         );
     }
-    if let Some([m1, m2]) = a.misalignment {
+    if let Some([m1, m2]) = a.get::<Misalignment>().map(Misalignment::angles_rad) {
         let _ = writeln!(
             s,
             "misalignment = [\"{}\", \"{}\"]",

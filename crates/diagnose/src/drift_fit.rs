@@ -1,0 +1,378 @@
+//! Long-averaging-time terms fitted to the Allan gap and the drift gap together (docs/diagnose.md,
+//! "Drift in the loop"): where the measured drift leaves the model's band although the Allan
+//! curve no longer names anything, a slow term the Allan points of the runs cannot resolve alone
+//! may still be what the drift integrates.
+//!
+//! A candidate (rate random walk, bias-instability level, rate ramp, Gauss-Markov process with a
+//! correlation time at or beyond the longest averaging time) changes the Allan variance by
+//! (c - c0) f(tau) (`fit`) and the mean square of each drift quantity by (c - c0) u, u the
+//! quantity's mean square per unit c of the term alone on the channel under the protocol: drift
+//! errors are linear in the channel's error to first order (Woodman §3.2, §4.2: heading,
+//! attitude and position integrate the rate and specific-force errors), so the independent
+//! terms' mean squares add, as their Allan variances do. u is measured by simulating the term
+//! alone (`UnitDrift`), at a coarser sample interval (the slow terms' drift does not depend on
+//! it: their exact discrete processes are sampled every k dt, at least 100 samples per shortest
+//! horizon) and many logs; it proposes a level, which the re-simulation at the logs' own rate
+//! then confirms or rejects.
+//!
+//! The level minimises chi2 = sum over taus of z_allan^2 + sum over the channel's (horizon,
+//! quantity) pairs of z_drift^2 (`drift_gap::DriftFit::z`), and the candidate is named by the
+//! Allan rule (`Settings::min_delta_bic`): its BIC = chi2 + k ln M (M taus and drift pairs) + the
+//! cost of a searched shape must be below the unchanged model's chi2 by at least that much.
+
+use crate::candidates::{
+    free_parameters, shape_search_penalty, unit_family_signature, unit_signature, TermParams,
+};
+use crate::drift_gap::DriftFit;
+use crate::fit::{aic, bic, FitData, CHI2_1_95};
+use crate::gap::{Band, Curve, Gap};
+use crate::model_terms::{flicker_band, has_random_walk_bias_instability, set_term, term_level};
+use crate::protocol::{all_segment_errors, Protocol, Quantity};
+use crate::simulate::{static_log, SimSetup};
+use crate::trials::{sqrt_params, Trial};
+use noise::{Channel, Effect, SensorModel};
+
+/// The candidates of the drift loop, in the order tried.
+pub const DRIFT_CANDIDATES: [Effect; 4] = [
+    Effect::RateRandomWalk,
+    Effect::BiasInstability,
+    Effect::RateRamp,
+    Effect::GaussMarkov,
+];
+
+/// Correlation times of the Gauss-Markov candidate per longest averaging time tau_max: at and
+/// beyond it (a shorter one the Allan curve resolves itself).
+const GAUSS_MARKOV_TIMES: [f64; 3] = [1.0, 3.0, 10.0];
+
+/// First montecarlo run index of the unit simulations (apart from the bands' runs).
+const UNIT_RUN_BASE: u64 = 1 << 40;
+
+/// How the drift of a term alone is simulated: the runs' lengths, the protocol, the seed.
+pub(crate) struct UnitDrift<'a> {
+    pub(crate) dt_s: f64,
+    pub(crate) samples: &'a [usize],
+    pub(crate) protocol: &'a Protocol,
+    pub(crate) seed: u64,
+    /// Simulated logs per run length.
+    pub(crate) logs: usize,
+}
+
+impl UnitDrift<'_> {
+    /// The decimation k: the largest of a few that keeps every horizon and window a whole number
+    /// of k dt and the shortest horizon at least 100 samples.
+    fn decimation(&self) -> usize {
+        let p = self.protocol;
+        let spans: Vec<f64> = p
+            .horizons_s
+            .iter()
+            .copied()
+            .chain([p.lead_s()].into_iter().filter(|w| *w > 0.0))
+            .map(|t| t / self.dt_s)
+            .collect();
+        let shortest = spans.iter().copied().fold(f64::INFINITY, f64::min);
+        [100usize, 50, 40, 25, 20, 10, 5, 4, 2]
+            .into_iter()
+            .find(|&k| {
+                shortest / k as f64 >= 100.0
+                    && spans.iter().all(|s| {
+                        let q = s / k as f64;
+                        (q - q.round()).abs() < 1e-9 * q.max(1.0)
+                    })
+            })
+            .unwrap_or(1)
+    }
+
+    /// Mean square of every quantity at every protocol horizon (`[h][Quantity::ALL index]`) of
+    /// `model`'s channel `c` alone (the other channels ideal), over the simulated logs at every
+    /// run length.
+    pub(crate) fn mean_squares(&self, model: &SensorModel, c: Channel) -> Vec<[f64; 5]> {
+        use rayon::prelude::*;
+        let k = self.decimation();
+        let dt_u = self.dt_s * k as f64;
+        let lengths: Vec<usize> = self.samples.iter().map(|n| n / k).collect();
+        let setup = SimSetup {
+            dt_s: dt_u,
+            samples: lengths.iter().copied().max().unwrap_or(0),
+            grid_m: Vec::new(),
+            active: std::array::from_fn(|i| i == c.index()),
+            horizons_s: Vec::new(),
+            temperature_c: None,
+            temp_coeff: [0.0; 6],
+        };
+        let nh = self.protocol.horizons_s.len();
+        let sums: Vec<Vec<([f64; 5], usize)>> = (0..self.logs as u64)
+            .into_par_iter()
+            .map(|s| {
+                let log = static_log(model, &setup, self.seed, UNIT_RUN_BASE + s);
+                let mut acc = vec![([0.0; 5], 0usize); nh];
+                for &n in &lengths {
+                    let chans: [Option<&[f64]>; 6] =
+                        std::array::from_fn(|i| (i == c.index()).then(|| &log[i][..n]));
+                    for (h, e) in all_segment_errors(&chans, dt_u, self.protocol)
+                        .iter()
+                        .enumerate()
+                    {
+                        for (qi, q) in Quantity::ALL.iter().enumerate() {
+                            acc[h].0[qi] += e.values(*q).iter().map(|x| x * x).sum::<f64>();
+                        }
+                        acc[h].1 += e.len();
+                    }
+                }
+                acc
+            })
+            .collect();
+        (0..nh)
+            .map(|h| {
+                let count: usize = sums.iter().map(|a| a[h].1).sum();
+                std::array::from_fn(|qi| {
+                    sums.iter().map(|a| a[h].0[qi]).sum::<f64>() / count.max(1) as f64
+                })
+            })
+            .collect()
+    }
+}
+
+/// What one channel's drift candidates are fitted to.
+pub(crate) struct DriftFitInput<'a> {
+    pub(crate) model: &'a SensorModel,
+    pub(crate) channel: Channel,
+    pub(crate) measured: &'a Curve,
+    pub(crate) band: &'a Band,
+    pub(crate) gap: &'a Gap,
+    pub(crate) dt_s: f64,
+    /// The rate ramp's level (`trials`: the runs' least-squares slope).
+    pub(crate) ramp_slope: f64,
+    /// The channel's informed (horizon index, quantity, drift numbers).
+    pub(crate) drift: Vec<(usize, Quantity, DriftFit)>,
+    pub(crate) unit: UnitDrift<'a>,
+}
+
+/// A candidate of the drift loop: its trial (as an Allan candidate's, for the report) and its
+/// BIC gain on the joint likelihood.
+pub(crate) struct DriftTrial {
+    pub(crate) trial: Trial,
+    pub(crate) delta_bic: f64,
+}
+
+impl DriftFitInput<'_> {
+    /// The joint chi2 when the term's level moves from c0 to c, its Allan signature `f` and unit
+    /// drift `u[h][q]`.
+    fn chi2(&self, data: &FitData, f: &[f64], u: &[[f64; 5]], c0: f64, c: f64) -> f64 {
+        let allan = data.chi2(f, c - c0);
+        let drift: f64 = self
+            .drift
+            .iter()
+            .map(|(h, q, d)| {
+                let qi = Quantity::ALL.iter().position(|x| x == q).unwrap_or(0);
+                d.z((c - c0) * u[*h][qi]).powi(2)
+            })
+            .sum();
+        allan + drift
+    }
+
+    /// Every drift candidate fitted (module doc), the best shape of each.
+    pub(crate) fn trials(&self) -> Vec<DriftTrial> {
+        let ln_meas: Vec<f64> = self.measured.adev.iter().map(|a| a.ln()).collect();
+        let data = FitData {
+            ln_meas: &ln_meas,
+            ln_band: &self.band.ln_mean,
+            avar_band: &self.band.avar_mean,
+            s: &self.gap.s,
+        };
+        let tau_max = self.measured.tau_s.last().copied().unwrap_or(1.0);
+        let mut out = Vec::new();
+        for effect in DRIFT_CANDIDATES {
+            if effect == Effect::BiasInstability
+                && has_random_walk_bias_instability(self.model, self.channel)
+            {
+                continue;
+            }
+            let current = term_level(self.model, self.channel, effect);
+            let shapes: Vec<Option<f64>> = match (effect, current.and_then(|c| c.shape())) {
+                (Effect::GaussMarkov, Some(t)) => vec![Some(t)],
+                (Effect::GaussMarkov, None) => GAUSS_MARKOV_TIMES
+                    .iter()
+                    .map(|k| Some(k * tau_max))
+                    .collect(),
+                _ => vec![None],
+            };
+            let penalty = shape_search_penalty(shapes.len());
+            let best = shapes
+                .into_iter()
+                .filter_map(|shape| self.fit(&data, effect, shape, current, penalty))
+                .min_by(|a, b| a.trial.bic.total_cmp(&b.trial.bic));
+            out.extend(best);
+        }
+        out
+    }
+
+    /// One candidate at one shape.
+    fn fit(
+        &self,
+        data: &FitData,
+        effect: Effect,
+        shape: Option<f64>,
+        current: Option<TermParams>,
+        penalty: f64,
+    ) -> Option<DriftTrial> {
+        let (tau, dt_s) = (&self.measured.tau_s, self.dt_s);
+        let flicker = flicker_band(self.model, self.channel);
+        let f: Vec<f64> = tau
+            .iter()
+            .map(|&t| match shape {
+                Some(s) => unit_family_signature(effect, s, t, dt_s),
+                None => unit_signature(effect, t, dt_s, &flicker),
+            })
+            .collect();
+        let c0 = current.map_or(0.0, |p| p.c());
+        // The unit level: the model's own, else the one at which the term alone would reach the
+        // measured Allan variance at the longest tau (the drift is then of a realistic size).
+        let last = f.len().checked_sub(1)?;
+        let c_unit = if c0 > 0.0 {
+            c0
+        } else {
+            self.measured.adev[last].powi(2) / f[last]
+        };
+        if !(c_unit > 0.0 && c_unit.is_finite()) {
+            return None;
+        }
+        let params_at = |c: f64| -> TermParams {
+            let level = TermParams::Level(c.sqrt());
+            match shape {
+                Some(tau_s) => TermParams::GaussMarkov {
+                    sigma: c.sqrt(),
+                    tau_s,
+                },
+                None => level,
+            }
+        };
+        let u = self.unit_drift(effect, &params_at(c_unit), c_unit);
+        let chi = |c: f64| self.chi2(data, &f, &u, c0, c);
+        let (c, chi2) = if effect == Effect::RateRamp {
+            // A ramp's level is the runs' slope (deterministic, `trials`).
+            let c = self.ramp_slope * self.ramp_slope;
+            (c, chi(c))
+        } else {
+            minimise(&chi, c0, c_unit)
+        };
+        let (k, m) = (free_parameters(effect), f.len() + self.drift.len());
+        let base = chi(c0);
+        let bic_new = bic(chi2, k, m) + penalty;
+        let (c_lo, c_hi) = interval(&chi, c, chi2 + CHI2_1_95);
+        let mut params = params_at(c);
+        if effect == Effect::RateRamp {
+            params = TermParams::Level(self.ramp_slope);
+        }
+        Some(DriftTrial {
+            trial: Trial {
+                effect,
+                params,
+                lo: sqrt_params(params, c_lo),
+                hi: sqrt_params(params, c_hi),
+                model: current,
+                bic: bic_new,
+                aic: aic(chi2, k) + penalty,
+                delta_avar: f.iter().map(|v| (c - c0) * v).collect(),
+            },
+            delta_bic: base - bic_new,
+        })
+    }
+
+    /// u[h][q]: each quantity's mean square per unit c of the term at level `params` (c_unit)
+    /// alone on the channel.
+    fn unit_drift(&self, effect: Effect, params: &TermParams, c_unit: f64) -> Vec<[f64; 5]> {
+        let mut alone = SensorModel {
+            gyro: Default::default(),
+            accel: Default::default(),
+            ..self.model.clone()
+        };
+        if effect == Effect::BiasInstability {
+            // The channel's own flicker band.
+            let band = flicker_band(self.model, self.channel);
+            let a = alone.axis_mut(self.channel.sensor(), self.channel.axis());
+            a.set_term(noise::BiasInstability::Flicker(noise::Flicker {
+                b: c_unit.sqrt(),
+                ..band
+            }));
+        } else {
+            set_term(&mut alone, self.channel, effect, params);
+        }
+        self.unit
+            .mean_squares(&alone, self.channel)
+            .into_iter()
+            .map(|ms| ms.map(|v| v / c_unit))
+            .collect()
+    }
+}
+
+/// The level c >= 0 minimising `chi`: 0, c0 and a log grid from 1e-6 to 1e4 times `scale`, then a
+/// golden-section search in ln c between the best grid value's neighbours.
+fn minimise(chi: &dyn Fn(f64) -> f64, c0: f64, scale: f64) -> (f64, f64) {
+    const GRID: usize = 100;
+    let (lo, hi) = ((scale * 1e-6).ln(), (scale * 1e4).ln());
+    let grid: Vec<f64> = (0..=GRID)
+        .map(|j| (lo + (hi - lo) * j as f64 / GRID as f64).exp())
+        .collect();
+    let mut best = (0.0, chi(0.0));
+    if c0 > 0.0 {
+        let v = chi(c0);
+        if v < best.1 {
+            best = (c0, v);
+        }
+    }
+    let mut jb = None;
+    for (j, &c) in grid.iter().enumerate() {
+        let v = chi(c);
+        if v < best.1 {
+            best = (c, v);
+            jb = Some(j);
+        }
+    }
+    if let Some(j) = jb {
+        let (mut a, mut b) = (grid[j.saturating_sub(1)].ln(), grid[(j + 1).min(GRID)].ln());
+        let g = 0.5 * (5f64.sqrt() - 1.0);
+        for _ in 0..40 {
+            let (x1, x2) = (b - g * (b - a), a + g * (b - a));
+            if chi(x1.exp()) < chi(x2.exp()) {
+                b = x2;
+            } else {
+                a = x1;
+            }
+        }
+        let c = (0.5 * (a + b)).exp();
+        let v = chi(c);
+        if v < best.1 {
+            best = (c, v);
+        }
+    }
+    best
+}
+
+/// The profile interval {c : chi(c) <= level} around `c`, by bisection in ln c on each side
+/// (bounded by 1e-6 and 1e6 times c).
+fn interval(chi: &dyn Fn(f64) -> f64, c: f64, level: f64) -> (f64, f64) {
+    if c <= 0.0 {
+        return (0.0, 0.0);
+    }
+    let edge = |far: f64| {
+        if chi(far) <= level {
+            return far;
+        }
+        let (mut inside, mut outside) = (c.ln(), far.ln());
+        for _ in 0..50 {
+            let mid = 0.5 * (inside + outside);
+            if chi(mid.exp()) <= level {
+                inside = mid;
+            } else {
+                outside = mid;
+            }
+        }
+        inside.exp()
+    };
+    let lo = if chi(0.0) <= level {
+        0.0
+    } else {
+        edge(c * 1e-6)
+    };
+    (lo, edge(c * 1e6))
+}

@@ -1,0 +1,196 @@
+//! The drift loop of the workflow (docs/diagnose.md, "Drift in the loop"): after the Allan rounds,
+//! while the runs' drift under the protocol leaves the model's band, the long-averaging-time terms
+//! are fitted to the Allan gap and the drift gap together (`drift_fit`) on every channel an
+//! outside quantity comes from; each channel's best candidate that passes the BIC rule is named,
+//! the corrected model re-simulated (every channel: the drift needs them all), and the round kept
+//! only if the joint chi2 (the drift gap's and the changed channels' Allan gaps') shrank.
+
+use super::{shifted_band, Run};
+use crate::candidates::TermParams;
+use crate::drift_fit::{DriftFitInput, DriftTrial, UnitDrift};
+use crate::drift_gap::DriftGap;
+use crate::error::DiagnoseError;
+use crate::findings::{found_by_fit, merge_refinements, rejected_record, Choice};
+use crate::gap::gap;
+use crate::model_terms::{set_term, term_level};
+use crate::report::{Candidate, CandidateRecord, DriftLoop};
+use crate::simulate::simulate_runs;
+use crate::trials::named_map;
+use noise::{Channel, Effect};
+
+/// A change the drift loop made: the channel, the effect and its level before.
+type Change = (Channel, Effect, Option<TermParams>);
+
+impl Run<'_> {
+    /// The drift loop (module doc), at most `max_rounds` rounds.
+    pub(super) fn drift_rounds(&mut self) -> Result<(), DiagnoseError> {
+        if self.plan.protocol.is_none() {
+            return Ok(());
+        }
+        for _ in 0..self.settings.max_rounds {
+            let Some(before) = self.drift_gap() else {
+                break;
+            };
+            let round = self.rounds + 1;
+            let changes: Vec<Change> = before
+                .channels_outside()
+                .into_iter()
+                .filter_map(|c| self.drift_choice(c, &before, round))
+                .collect();
+            if changes.is_empty() || !self.drift_resimulate(round, &before, changes)? {
+                break;
+            }
+        }
+        Ok(())
+    }
+
+    /// The drift candidates of channel `c` weighed, and the best one that passes the BIC rule
+    /// named (put into both models); the change made.
+    fn drift_choice(&mut self, c: Channel, drift: &DriftGap, round: usize) -> Option<Change> {
+        let (band, g) = self.gap(c)?;
+        let curve = self.measured[c].as_ref()?.curve.clone();
+        let protocol = self.plan.protocol.clone()?;
+        let input = DriftFitInput {
+            model: &self.sim_model,
+            channel: c,
+            measured: &curve,
+            band: &band,
+            gap: &g,
+            dt_s: self.dt_s(),
+            ramp_slope: self.ramp_slope[c],
+            drift: drift.of_channel(c),
+            unit: UnitDrift {
+                dt_s: self.dt_s(),
+                samples: &self.samples,
+                protocol: &protocol,
+                seed: self.settings.seed,
+                logs: (4 * self.settings.seeds).max(64),
+            },
+        };
+        let trials = input.trials();
+        self.channels[c]
+            .records
+            .extend(trials.iter().map(|t| CandidateRecord {
+                round,
+                effect: Candidate {
+                    effect: t.trial.effect,
+                    rejected: false,
+                },
+                delta_bic: t.delta_bic,
+                delta_aic: f64::NAN,
+                parameters: named_map(t.trial.effect, &t.trial.params),
+            }));
+        let best: &DriftTrial = trials
+            .iter()
+            .filter(|t| t.delta_bic >= self.settings.min_delta_bic)
+            .max_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic))?;
+        let cannot_tell_from = trials
+            .iter()
+            .filter(|t| {
+                t.trial.effect != best.trial.effect
+                    && best.delta_bic - t.delta_bic < self.settings.ambiguity_delta_bic
+            })
+            .map(|t| t.trial.effect)
+            .collect();
+        let effect = best.trial.effect;
+        let previous = term_level(&self.sim_model, c, effect);
+        set_term(&mut self.sim_model, c, effect, &best.trial.params);
+        set_term(&mut self.out_model, c, effect, &best.trial.params);
+        let predicted = gap(&curve, &shifted_band(&band, &best.trial.delta_avar)).rms;
+        let choice = Choice {
+            trial: &best.trial,
+            delta_bic: best.delta_bic,
+            cannot_tell_from,
+        };
+        let mut found = found_by_fit(choice, round, g.rms, predicted, self.dt_s());
+        found.drift_gap_before = Some(drift.gap);
+        self.channels[c].effects.push(found);
+        Some((c, effect, previous))
+    }
+
+    /// The round's re-simulation: kept (true) if the joint chi2 of the drift gap and the changed
+    /// channels' Allan gaps shrank, else undone (the state before it kept).
+    fn drift_resimulate(
+        &mut self,
+        round: usize,
+        before: &DriftGap,
+        changes: Vec<Change>,
+    ) -> Result<bool, DiagnoseError> {
+        self.observer
+            .step(crate::observer::Step::Resimulate { round });
+        let settings = self.settings;
+        let sim = simulate_runs(
+            &self.sim_model,
+            &self.setup,
+            &self.plan,
+            settings.seed,
+            settings.seeds,
+        )?;
+        let (_, of_run) = self.plan.lengths();
+        let after = crate::drift_gap::drift_gap(
+            &self.drift_measured,
+            &sim.protocol_errors,
+            &of_run,
+            &self.setup.active,
+        );
+        let allan_chi2 = |run: &Self, bands: &[Option<crate::gap::Band>; 6]| -> f64 {
+            changes
+                .iter()
+                .filter_map(|(c, _, _)| {
+                    Self::gap_of(run.measured[*c].as_ref(), bands[c.index()].as_ref())
+                })
+                .map(|(_, g)| g.z.iter().map(|z| z * z).sum::<f64>())
+                .sum()
+        };
+        let kept = after.chi2() + allan_chi2(self, &sim.bands)
+            < before.chi2() + allan_chi2(self, &self.bands);
+        for (c, _, _) in &changes {
+            let allan_after =
+                Self::gap_of(self.measured[*c].as_ref(), sim.bands[c.index()].as_ref())
+                    .map_or(f64::NAN, |(_, g)| g.rms);
+            let state = &mut self.channels[*c];
+            let first_new = state
+                .effects
+                .iter()
+                .position(|e| e.round == round)
+                .unwrap_or(state.effects.len());
+            for e in &mut state.effects[first_new..] {
+                e.gap_after = allan_after;
+                e.drift_gap_after = Some(after.gap);
+            }
+            if kept {
+                merge_refinements(&mut state.effects, first_new);
+            } else {
+                let rejected: Vec<CandidateRecord> = state
+                    .effects
+                    .drain(first_new..)
+                    .map(|e| rejected_record(round, e))
+                    .collect();
+                state.records.extend(rejected);
+            }
+        }
+        if kept {
+            self.rounds = round;
+            self.bands = sim.bands;
+            self.log_bands = sim.log_bands;
+            self.last_drift = sim.drift;
+            self.last_protocol = sim.protocol_errors;
+        } else {
+            for (c, effect, previous) in changes.into_iter().rev() {
+                self.undo(c, effect, previous);
+            }
+        }
+        Ok(kept)
+    }
+
+    /// The drift check's report: the original and the corrected model's drift gaps.
+    pub(super) fn drift_report(&self) -> Option<DriftLoop> {
+        let protocol = self.plan.protocol.clone()?;
+        Some(DriftLoop {
+            protocol_text: protocol.describe(),
+            protocol,
+            before: self.drift_gap0.clone()?,
+            after: self.drift_gap()?,
+        })
+    }
+}

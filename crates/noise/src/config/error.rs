@@ -1,0 +1,28 @@
+//! What can be wrong with a sensor config.
+
+/// A config that cannot be used: names the file, the key and what was expected.
+#[derive(Clone, Debug, thiserror::Error)]
+pub enum ConfigError {
+    #[error("{file}: cannot read the file")]
+    Io {
+        file: String,
+        #[source]
+        source: std::sync::Arc<std::io::Error>,
+    },
+    /// TOML syntax, unknown keys, wrong types (the message carries line and column).
+    #[error("{file}: {message}")]
+    Parse { file: String, message: String },
+    /// A Kalibr / OpenVINS / VINS-Fusion noise file that cannot be used.
+    #[error(transparent)]
+    NoiseFile(#[from] crate::noise_file::NoiseFileError),
+    /// A value that parses but is not acceptable.
+    #[error("{file}{at}: key `{key}`: expected {expected}, found {found}", at = line.map(|l| format!(":{l}")).unwrap_or_default())]
+    Invalid {
+        file: String,
+        /// 1-based line of the value, when the value exists.
+        line: Option<usize>,
+        key: String,
+        expected: String,
+        found: String,
+    },
+}

@@ -1,0 +1,90 @@
+//! A first-order Gauss-Markov bias (docs/model.md §2, §3).
+
+use super::term::{ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind};
+use crate::closed_form as cf;
+use crate::discrete::GaussMarkovBank;
+use crate::filter::FilteredAllan;
+use crate::model_error::{check, ModelError};
+use crate::ImuRng;
+
+/// First-order Gauss-Markov bias: stationary std `sigma`, correlation time `tau_s`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GaussMarkov {
+    pub sigma: f64,
+    pub tau_s: f64,
+}
+
+impl GaussMarkov {
+    pub fn new(sigma: f64, tau_s: f64) -> Result<GaussMarkov, ModelError> {
+        Ok(GaussMarkov {
+            sigma: check("Gauss-Markov sigma", sigma, false)?,
+            tau_s: check("Gauss-Markov correlation time", tau_s, true)?,
+        })
+    }
+}
+
+impl ErrorTerm for GaussMarkov {
+    /// Hou 4.60 (docs/model.md §2).
+    fn allan_variance(&self, tau_s: f64) -> Option<f64> {
+        Some(cf::gauss_markov_avar(self.sigma, self.tau_s, tau_s))
+    }
+
+    fn allan_variance_sampled(&self, tau_s: f64, dt_s: f64) -> Option<f64> {
+        Some(cf::gauss_markov_avar_sampled(
+            self.sigma, self.tau_s, tau_s, dt_s,
+        ))
+    }
+
+    fn allan_variance_filtered(&self, tau_s: f64, _dt_s: f64, fa: &FilteredAllan) -> Option<f64> {
+        Some(fa.gauss_markov(self.sigma, self.tau_s, tau_s))
+    }
+}
+
+impl TermKind for GaussMarkov {
+    const STOCHASTIC: bool = true;
+    const SHOWS_IN_STATIC_LOG: bool = true;
+    type Generator = BankGenerator;
+
+    /// A bank of one, its initial state drawn from the term's stream.
+    fn generator(&self, cx: &GenContext, rng: &dyn Fn() -> ImuRng) -> BankGenerator {
+        BankGenerator::new(&[(self.tau_s, self.sigma)], cx.dt_raw_s, rng())
+    }
+}
+
+/// A bank of Gauss-Markov processes with its stream (also flicker's band, `bias_instability`):
+/// the slowly varying biases a calibration references.
+#[derive(Clone, Debug)]
+pub struct BankGenerator {
+    bank: GaussMarkovBank,
+    rng: ImuRng,
+}
+
+impl BankGenerator {
+    /// `components`: (correlation time s, stationary std), run multi-rate
+    /// ([`GaussMarkovBank::multirate`]); the initial states are the first draws of `rng`.
+    pub(crate) fn new(components: &[(f64, f64)], dt_s: f64, mut rng: ImuRng) -> BankGenerator {
+        BankGenerator {
+            bank: GaussMarkovBank::multirate(components, dt_s, &mut rng),
+            rng,
+        }
+    }
+}
+
+impl Generate for BankGenerator {
+    fn stage(&self) -> Stage {
+        Stage::Raw
+    }
+
+    #[inline]
+    fn add_raw(&mut self, _clock: RawClock, out: &mut [f64], scratch: &mut Vec<f64>) {
+        self.bank.add_block(&mut self.rng, out, scratch);
+    }
+
+    fn calibrate_start(&mut self) {
+        self.bank.reference_to_start();
+    }
+
+    fn calibrate_window(&mut self, window_s: f64, rng: &dyn Fn() -> ImuRng) {
+        self.bank.reference_to_window_mean(window_s, &mut rng());
+    }
+}

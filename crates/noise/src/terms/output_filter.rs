@@ -1,0 +1,357 @@
+//! The sensor's own digital output filter.
+//!
+//! An [`OutputFilter`] runs at an internal rate (`decimation` times the output rate) on everything
+//! the channel's error terms produce except quantisation and outliers, which act on the output
+//! register; the output keeps every `decimation`-th filtered sample. Every kind has unit DC gain, so
+//! the long-tau Allan deviation and the drift growth laws (which depend on the noise spectrum at
+//! low frequency) are unchanged; the filter lowers the short-tau Allan deviation, correlates
+//! neighbouring samples and delays the signal by its group delay. Its exact Allan variance is in
+//! `crate::filter::FilteredAllan`.
+//!
+//! Impulse responses (internal interval `dt_i`, normalised to unit DC gain):
+//! - `moving_average` with `taps` L: h_i = 1/L, i < L.
+//! - `bartlett` with `taps` L: the triangle h_i proportional to min(i + 1, L - i), i < L (the
+//!   convolution of two moving averages of ceil(L/2) and floor(L/2) + 1 taps; Oppenheim & Schafer,
+//!   "Discrete-Time Signal Processing", 3rd ed., §7.5.1, Bartlett window without its zero end points).
+//! - `lowpass1` with `cutoff_hz` f_c: y_n = a y_{n-1} + (1 - a) x_n, a = exp(-2 pi f_c dt_i) (impulse
+//!   invariance of the RC low-pass, Oppenheim & Schafer §7.2.1).
+//! - `lowpass2` with `cutoff_hz` f_c: second-order Butterworth by the bilinear transform with
+//!   pre-warping, K = tan(pi f_c dt_i) (Oppenheim & Schafer §7.2.2; the RBJ audio-EQ cookbook biquad
+//!   with Q = 1/sqrt(2)).
+//!
+//! The infinite responses are truncated where the remaining tail is below 1e-17 of the response's
+//! peak (their sum then differs from 1 by less than 1e-15).
+
+use super::term::{ErrorTerm, GenContext, NoGenerator, TermKind};
+use crate::model_error::{check, ModelError};
+use crate::ImuRng;
+
+/// Which filter.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FilterKind {
+    MovingAverage { taps: u32 },
+    Bartlett { taps: u32 },
+    LowPass1 { cutoff_hz: f64 },
+    LowPass2 { cutoff_hz: f64 },
+}
+
+impl FilterKind {
+    /// The config / JSON name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            FilterKind::MovingAverage { .. } => "moving_average",
+            FilterKind::Bartlett { .. } => "bartlett",
+            FilterKind::LowPass1 { .. } => "lowpass1",
+            FilterKind::LowPass2 { .. } => "lowpass2",
+        }
+    }
+    /// The kinds' names, for messages.
+    pub const NAMES: [&'static str; 4] = ["moving_average", "bartlett", "lowpass1", "lowpass2"];
+}
+
+/// Longest impulse response accepted, internal samples (the exact Allan variance costs its square).
+pub const MAX_RESPONSE: usize = 8192;
+
+/// The channel's digital output filter: `kind` at the internal rate `decimation` x the output rate,
+/// every `decimation`-th filtered sample kept (1: no decimation).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OutputFilter {
+    pub kind: FilterKind,
+    pub decimation: u32,
+}
+
+impl OutputFilter {
+    /// Check the values: taps 1..=MAX_RESPONSE, decimation >= 1, cutoff finite and > 0.
+    /// (The cutoff's upper limit, the internal Nyquist frequency, depends on the rate: see
+    /// [`OutputFilter::check_rate`].)
+    pub fn new(kind: FilterKind, decimation: u32) -> Result<OutputFilter, ModelError> {
+        match kind {
+            FilterKind::MovingAverage { taps } | FilterKind::Bartlett { taps } => {
+                if taps == 0 || taps as usize > MAX_RESPONSE {
+                    return Err(ModelError {
+                        what: "output filter taps",
+                        expected: "1 to 8192 taps",
+                        found: f64::from(taps),
+                    });
+                }
+            }
+            FilterKind::LowPass1 { cutoff_hz } | FilterKind::LowPass2 { cutoff_hz } => {
+                check("output filter cutoff", cutoff_hz, true)?;
+            }
+        }
+        if decimation == 0 {
+            return Err(ModelError {
+                what: "output filter decimation",
+                expected: "a whole number >= 1",
+                found: 0.0,
+            });
+        }
+        Ok(OutputFilter { kind, decimation })
+    }
+
+    /// Internal sample interval for output interval `dt_s`.
+    pub fn internal_dt(&self, dt_s: f64) -> f64 {
+        dt_s / f64::from(self.decimation)
+    }
+
+    /// Can this filter run at output interval `dt_s`? A low-pass cutoff must lie below the internal
+    /// Nyquist frequency and its response must fit in [`MAX_RESPONSE`] internal samples.
+    pub fn check_rate(&self, dt_s: f64) -> Result<(), ModelError> {
+        let dt_i = self.internal_dt(dt_s);
+        if let FilterKind::LowPass1 { cutoff_hz } | FilterKind::LowPass2 { cutoff_hz } = self.kind {
+            if cutoff_hz >= 0.5 / dt_i {
+                return Err(ModelError {
+                    what: "output filter cutoff",
+                    expected: "a frequency below the internal Nyquist frequency (output rate x decimation / 2)",
+                    found: cutoff_hz,
+                });
+            }
+        }
+        if self.response_len(dt_i).is_none() {
+            return Err(ModelError {
+                what: "output filter cutoff",
+                expected:
+                    "a cutoff high enough that the response settles within 8192 internal samples",
+                found: match self.kind {
+                    FilterKind::LowPass1 { cutoff_hz } | FilterKind::LowPass2 { cutoff_hz } => {
+                        cutoff_hz
+                    }
+                    _ => f64::NAN,
+                },
+            });
+        }
+        Ok(())
+    }
+
+    fn response_len(&self, dt_i: f64) -> Option<usize> {
+        let h = self.raw_response(dt_i, MAX_RESPONSE + 1);
+        (h.len() <= MAX_RESPONSE).then_some(h.len())
+    }
+
+    /// Impulse response at the internal interval `dt_i`, unit DC gain (see the module docs).
+    /// At most `limit` samples.
+    fn raw_response(&self, dt_i: f64, limit: usize) -> Vec<f64> {
+        match self.kind {
+            FilterKind::MovingAverage { taps } => vec![1.0 / f64::from(taps); taps as usize],
+            FilterKind::Bartlett { taps } => {
+                let l = taps as usize;
+                let w: Vec<f64> = (0..l).map(|i| (i + 1).min(l - i) as f64).collect();
+                let s: f64 = w.iter().sum();
+                w.into_iter().map(|v| v / s).collect()
+            }
+            FilterKind::LowPass1 { cutoff_hz } => {
+                let (b, a) = lowpass1_coefficients(cutoff_hz, dt_i);
+                iir_response(&b, &a, limit)
+            }
+            FilterKind::LowPass2 { cutoff_hz } => {
+                let (b, a) = lowpass2_coefficients(cutoff_hz, dt_i);
+                iir_response(&b, &a, limit)
+            }
+        }
+    }
+
+    /// The impulse response at output interval `dt_s` (internal samples, unit DC gain).
+    pub fn impulse_response(&self, dt_s: f64) -> Vec<f64> {
+        let mut h = self.raw_response(self.internal_dt(dt_s), MAX_RESPONSE);
+        let s: f64 = h.iter().sum();
+        if s != 0.0 && (s - 1.0).abs() > 0.0 {
+            h.iter_mut().for_each(|v| *v /= s);
+        }
+        h
+    }
+
+    /// The recursion (b, a) for the IIR kinds at output interval `dt_s`
+    /// (y_n = sum b_j x_{n-j} - sum_{j>=1} a_j y_{n-j}, a_0 = 1); None for the FIR kinds.
+    pub fn recursion(&self, dt_s: f64) -> Option<(Vec<f64>, Vec<f64>)> {
+        let dt_i = self.internal_dt(dt_s);
+        match self.kind {
+            FilterKind::LowPass1 { cutoff_hz } => Some(lowpass1_coefficients(cutoff_hz, dt_i)),
+            FilterKind::LowPass2 { cutoff_hz } => Some(lowpass2_coefficients(cutoff_hz, dt_i)),
+            _ => None,
+        }
+    }
+
+    /// One-sided equivalent noise bandwidth of the output, Hz: white noise of one-sided density S0
+    /// leaves the filter with variance S0 B. B = (f_i / 2) sum h_i^2 (f_i the internal rate, unit DC
+    /// gain); no filter: the Nyquist frequency. Decimation keeps the variance, so B is that of the
+    /// internal filter.
+    pub fn noise_bandwidth_hz(&self, dt_s: f64) -> f64 {
+        let dt_i = self.internal_dt(dt_s);
+        let h = self.impulse_response(dt_s);
+        0.5 / dt_i * h.iter().map(|v| v * v).sum::<f64>()
+    }
+
+    /// Group delay at DC, s (sum i h_i dt_i): how far the filtered signal lags.
+    pub fn delay_s(&self, dt_s: f64) -> f64 {
+        let dt_i = self.internal_dt(dt_s);
+        self.impulse_response(dt_s)
+            .iter()
+            .enumerate()
+            .map(|(i, v)| i as f64 * v)
+            .sum::<f64>()
+            * dt_i
+    }
+}
+
+fn lowpass1_coefficients(cutoff_hz: f64, dt_i: f64) -> (Vec<f64>, Vec<f64>) {
+    let a = (-std::f64::consts::TAU * cutoff_hz * dt_i).exp();
+    (vec![1.0 - a], vec![1.0, -a])
+}
+
+fn lowpass2_coefficients(cutoff_hz: f64, dt_i: f64) -> (Vec<f64>, Vec<f64>) {
+    let k = (std::f64::consts::PI * cutoff_hz * dt_i).tan();
+    let r2 = std::f64::consts::SQRT_2;
+    let norm = 1.0 / (1.0 + r2 * k + k * k);
+    let b0 = k * k * norm;
+    (
+        vec![b0, 2.0 * b0, b0],
+        vec![
+            1.0,
+            2.0 * (k * k - 1.0) * norm,
+            (1.0 - r2 * k + k * k) * norm,
+        ],
+    )
+}
+
+/// Impulse response of the recursion, until the remaining tail is below 1e-17 of the peak (checked
+/// over the last two samples, which bound a stable first- or second-order tail), at most `limit`.
+fn iir_response(b: &[f64], a: &[f64], limit: usize) -> Vec<f64> {
+    let mut h: Vec<f64> = Vec::new();
+    let mut peak: f64 = 0.0;
+    for n in 0..limit {
+        let mut y = if n < b.len() { b[n] } else { 0.0 };
+        for j in 1..a.len() {
+            if n >= j {
+                y -= a[j] * h[n - j];
+            }
+        }
+        peak = peak.max(y.abs());
+        h.push(y);
+        if n >= b.len() + 2 && h[n].abs() + h[n - 1].abs() < 1e-17 * peak {
+            break;
+        }
+    }
+    h
+}
+
+/// The filter adds no error of its own; it changes the other terms' Allan variances
+/// (`crate::filter::FilteredAllan`, used by `AxisModel`).
+impl ErrorTerm for OutputFilter {}
+
+impl TermKind for OutputFilter {
+    const STOCHASTIC: bool = false;
+    const SHOWS_IN_STATIC_LOG: bool = true;
+    type Generator = NoGenerator;
+
+    /// The channel runs the filter itself ([`FilterState`]): it sets the interval of every other
+    /// term's raw samples.
+    fn generator(&self, _cx: &GenContext, _rng: &dyn Fn() -> ImuRng) -> NoGenerator {
+        NoGenerator
+    }
+}
+
+/// An IIR recursion: coefficients (b, a) and the input and output histories (newest first).
+#[derive(Clone, Debug)]
+struct IirState {
+    b: Vec<f64>,
+    a: Vec<f64>,
+    xs: Vec<f64>,
+    ys: Vec<f64>,
+}
+
+/// The output filter's running state: the raw history it needs and where the raw stream stands.
+#[derive(Clone, Debug)]
+pub(crate) struct FilterState {
+    /// Impulse response (FIR kinds; for the IIR kinds only its length sets the pre-roll).
+    h: Vec<f64>,
+    /// The IIR kinds' recursion and histories.
+    iir: Option<IirState>,
+    pub(crate) decimation: usize,
+    /// Raw samples before the one output 0 is read at: the response's length - 1, so the filter's
+    /// history is full (FIR) or settled to 1e-17 (IIR) at t = 0.
+    pub(crate) preroll: usize,
+    /// Raw samples produced so far.
+    pub(crate) raw_done: u64,
+    /// The last `h.len() - 1` raw samples (FIR), oldest first.
+    history: Vec<f64>,
+    /// Scratch for one block's raw samples.
+    pub(crate) raw: Vec<f64>,
+}
+
+impl FilterState {
+    pub(crate) fn new(f: &OutputFilter, dt_s: f64) -> FilterState {
+        let h = f.impulse_response(dt_s);
+        let iir = f.recursion(dt_s).map(|(b, a)| {
+            let (nb, na) = (b.len(), a.len());
+            IirState {
+                b,
+                a,
+                xs: vec![0.0; nb],
+                ys: vec![0.0; na],
+            }
+        });
+        FilterState {
+            preroll: h.len() - 1,
+            h,
+            iir,
+            decimation: f.decimation as usize,
+            raw_done: 0,
+            history: Vec::new(),
+            raw: Vec::new(),
+        }
+    }
+
+    /// Filter the raw samples `start ..` in `raw`, writing the output samples k0 .. into `out`.
+    /// The impulse response (internal samples, unit DC gain).
+    pub(crate) fn response(&self) -> &[f64] {
+        &self.h
+    }
+
+    pub(crate) fn filter(&mut self, start: u64, raw: &[f64], k0: u64, out: &mut [f64]) {
+        let (d, pre) = (self.decimation as u64, self.preroll as u64);
+        let is_output = |r: u64| r >= pre && (r - pre).is_multiple_of(d);
+        let slot = |r: u64| ((r - pre) / d - k0) as usize;
+        if let Some(IirState { b, a, xs, ys }) = &mut self.iir {
+            for (j, &x) in raw.iter().enumerate() {
+                xs.rotate_right(1);
+                xs[0] = x;
+                let mut y: f64 = b.iter().zip(xs.iter()).map(|(b, x)| b * x).sum();
+                for i in 1..a.len() {
+                    y -= a[i] * ys[i - 1];
+                }
+                ys.rotate_right(1);
+                ys[0] = y;
+                let r = start + j as u64;
+                if is_output(r) {
+                    out[slot(r)] = y;
+                }
+            }
+        } else {
+            // y_r = sum_i h_i x_{r-i}, only at the raw indices that are read out.
+            let l = self.h.len();
+            let hist = self.history.len();
+            let mut joined = std::mem::take(&mut self.history);
+            joined.extend_from_slice(raw);
+            let first = start.max(pre);
+            let mut r = if is_output(first) {
+                first
+            } else {
+                pre + (first - pre).div_ceil(d) * d
+            };
+            let end = start + raw.len() as u64;
+            while r < end {
+                // Position of raw sample r in `joined`.
+                let p = (r - start) as usize + hist;
+                let mut y = 0.0;
+                for (i, hi) in self.h.iter().enumerate() {
+                    y += hi * joined[p - i];
+                }
+                out[slot(r)] = y;
+                r += d;
+            }
+            let keep = (l - 1).min(joined.len());
+            self.history = joined[joined.len() - keep..].to_vec();
+        }
+        self.raw_done = start + raw.len() as u64;
+    }
+}

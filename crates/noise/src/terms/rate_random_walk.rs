@@ -1,0 +1,74 @@
+//! Rate random walk (docs/model.md §2, §3).
+
+use super::term::{ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind};
+use crate::closed_form as cf;
+use crate::discrete::RandomWalk;
+use crate::filter::FilteredAllan;
+use crate::model_error::{check, ModelError};
+use crate::ImuRng;
+
+/// Rate random walk K (rad/s/sqrt(s), m/s^2/sqrt(s)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RateRandomWalk {
+    density: f64,
+}
+
+impl RateRandomWalk {
+    /// A finite value >= 0.
+    pub fn new(density: f64) -> Result<RateRandomWalk, ModelError> {
+        Ok(RateRandomWalk {
+            density: check("rate random walk density", density, false)?,
+        })
+    }
+
+    /// K (rad/s/sqrt(s) or m/s^2/sqrt(s)).
+    pub fn density(&self) -> f64 {
+        self.density
+    }
+}
+
+impl ErrorTerm for RateRandomWalk {
+    /// sigma^2 = K^2 tau / 3 (Hou 4.53).
+    fn allan_variance(&self, tau_s: f64) -> Option<f64> {
+        Some(cf::rate_random_walk_avar(self.density, tau_s))
+    }
+
+    fn allan_variance_sampled(&self, tau_s: f64, dt_s: f64) -> Option<f64> {
+        Some(cf::rate_random_walk_avar_sampled(self.density, tau_s, dt_s))
+    }
+
+    fn allan_variance_filtered(&self, tau_s: f64, _dt_s: f64, fa: &FilteredAllan) -> Option<f64> {
+        Some(fa.random_walk(self.density, tau_s))
+    }
+}
+
+impl TermKind for RateRandomWalk {
+    const STOCHASTIC: bool = true;
+    const SHOWS_IN_STATIC_LOG: bool = true;
+    type Generator = RandomWalkGenerator;
+
+    fn generator(&self, cx: &GenContext, rng: &dyn Fn() -> ImuRng) -> RandomWalkGenerator {
+        RandomWalkGenerator {
+            walk: RandomWalk::new(self.density, cx.dt_raw_s),
+            rng: rng(),
+        }
+    }
+}
+
+/// A random walk with its stream (also Woodman's bias random walk, `bias_instability`).
+#[derive(Clone, Debug)]
+pub struct RandomWalkGenerator {
+    pub(crate) walk: RandomWalk,
+    pub(crate) rng: ImuRng,
+}
+
+impl Generate for RandomWalkGenerator {
+    fn stage(&self) -> Stage {
+        Stage::Raw
+    }
+
+    #[inline]
+    fn add_raw(&mut self, _clock: RawClock, out: &mut [f64], scratch: &mut Vec<f64>) {
+        self.walk.add_block(&mut self.rng, out, scratch);
+    }
+}

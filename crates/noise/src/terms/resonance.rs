@@ -1,0 +1,154 @@
+//! A resonance: a narrow-band random vibration (second-order Gauss-Markov process).
+
+use super::term::{ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind};
+use crate::closed_form as cf;
+use crate::discrete::{draws, normal};
+use crate::filter::FilteredAllan;
+use crate::model_error::{check, ModelError};
+use crate::ImuRng;
+use rand::Rng;
+
+/// A resonance: a narrow-band random vibration, white noise through a damped oscillator (a
+/// second-order Gauss-Markov process). Stationary std `sigma`, natural frequency `frequency_hz`,
+/// half-power (-3 dB) bandwidth `bandwidth_hz` = 2 zeta f0 of its spectral peak; underdamped
+/// (bandwidth below twice the frequency). Closed forms in [`cf::resonance_exponent`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Resonance {
+    pub sigma: f64,
+    pub frequency_hz: f64,
+    pub bandwidth_hz: f64,
+}
+
+impl Resonance {
+    pub fn new(sigma: f64, frequency_hz: f64, bandwidth_hz: f64) -> Result<Resonance, ModelError> {
+        check("resonance sigma", sigma, false)?;
+        check("resonance frequency", frequency_hz, true)?;
+        check("resonance bandwidth", bandwidth_hz, true)?;
+        if bandwidth_hz >= 2.0 * frequency_hz {
+            return Err(ModelError {
+                what: "resonance bandwidth",
+                expected: "a bandwidth below twice the frequency (an underdamped resonance)",
+                found: bandwidth_hz,
+            });
+        }
+        Ok(Resonance {
+            sigma,
+            frequency_hz,
+            bandwidth_hz,
+        })
+    }
+
+    /// Damping ratio zeta = bandwidth / (2 frequency).
+    pub fn damping(&self) -> f64 {
+        self.bandwidth_hz / (2.0 * self.frequency_hz)
+    }
+}
+
+impl ErrorTerm for Resonance {
+    /// [`cf::resonance_avar`].
+    fn allan_variance(&self, tau_s: f64) -> Option<f64> {
+        let (s, f, b) = (self.sigma, self.frequency_hz, self.bandwidth_hz);
+        Some(cf::resonance_avar(s, f, b, tau_s))
+    }
+
+    fn allan_variance_sampled(&self, tau_s: f64, dt_s: f64) -> Option<f64> {
+        let (s, f, b) = (self.sigma, self.frequency_hz, self.bandwidth_hz);
+        Some(cf::resonance_avar_sampled(s, f, b, tau_s, dt_s))
+    }
+
+    fn allan_variance_filtered(&self, tau_s: f64, _dt_s: f64, fa: &FilteredAllan) -> Option<f64> {
+        Some(fa.resonance(self.sigma, self.frequency_hz, self.bandwidth_hz, tau_s))
+    }
+}
+
+impl TermKind for Resonance {
+    const STOCHASTIC: bool = true;
+    const SHOWS_IN_STATIC_LOG: bool = true;
+    type Generator = ResonanceGenerator;
+
+    fn generator(&self, cx: &GenContext, rng: &dyn Fn() -> ImuRng) -> ResonanceGenerator {
+        let mut rng = rng();
+        ResonanceGenerator {
+            resonator: Resonator::new(self, cx.dt_raw_s, &mut rng),
+            rng,
+        }
+    }
+}
+
+/// A resonance (second-order Gauss-Markov: x'' + 2 zeta w0 x' + w0^2 x = w), exactly discretised: the
+/// state (x, x') advances by Phi = e^{A dt}, A = [[0, 1], [-w0^2, -2 zeta w0]], plus a normal draw of
+/// covariance Q = P - Phi P Phi^T, P = diag(sigma^2, w0^2 sigma^2) the stationary covariance (Lyapunov:
+/// A P + P A^T + diag(0, 4 zeta w0^3 sigma^2) = 0), applied through its Cholesky factor; started from
+/// P. For the underdamped case, with a = zeta w0, wd = w0 sqrt(1 - zeta^2), c = cos wd dt, s = sin wd dt:
+/// Phi = e^{-a dt} [[c + (a/wd) s, s/wd], [-(w0^2/wd) s, c - (a/wd) s]] (van Loan 1978 for the
+/// discretisation; Maybeck vol. 1 §4.9 for the process). The output is x, point-sampled.
+#[derive(Clone, Copy, Debug)]
+pub struct Resonator {
+    phi: [[f64; 2]; 2],
+    /// Lower Cholesky factor of Q: (l11, l21, l22).
+    chol: (f64, f64, f64),
+    state: [f64; 2],
+}
+
+impl Resonator {
+    pub fn new<R: Rng + ?Sized>(r: &Resonance, dt_s: f64, rng: &mut R) -> Resonator {
+        let w0 = std::f64::consts::TAU * r.frequency_hz;
+        let zeta = r.damping();
+        let a = zeta * w0;
+        let wd = w0 * (1.0 - zeta * zeta).sqrt();
+        let (s, c) = (wd * dt_s).sin_cos();
+        let e = (-a * dt_s).exp();
+        let phi = [
+            [e * (c + a / wd * s), e * s / wd],
+            [-e * w0 * w0 / wd * s, e * (c - a / wd * s)],
+        ];
+        let p = [r.sigma * r.sigma, w0 * w0 * r.sigma * r.sigma];
+        // Q = P - Phi P Phi^T.
+        let q11 = p[0] - (phi[0][0] * phi[0][0] * p[0] + phi[0][1] * phi[0][1] * p[1]);
+        let q21 = -(phi[1][0] * phi[0][0] * p[0] + phi[1][1] * phi[0][1] * p[1]);
+        let q22 = p[1] - (phi[1][0] * phi[1][0] * p[0] + phi[1][1] * phi[1][1] * p[1]);
+        let l11 = q11.max(0.0).sqrt();
+        let l21 = if l11 > 0.0 { q21 / l11 } else { 0.0 };
+        let l22 = (q22 - l21 * l21).max(0.0).sqrt();
+        let state = [p[0].sqrt() * normal(rng), p[1].sqrt() * normal(rng)];
+        Resonator {
+            phi,
+            chol: (l11, l21, l22),
+            state,
+        }
+    }
+
+    /// Add the next `out.len()` values (two normals per sample, in sample order).
+    #[inline]
+    fn add_block(&mut self, rng: &mut ImuRng, out: &mut [f64], scratch: &mut Vec<f64>) {
+        let n = out.len();
+        let w = draws(rng, scratch, 2 * n);
+        let (l11, l21, l22) = self.chol;
+        let [x, v] = &mut self.state;
+        for (o, d) in out.iter_mut().zip(w.chunks_exact(2)) {
+            *o += *x;
+            let nx = self.phi[0][0] * *x + self.phi[0][1] * *v + l11 * d[0];
+            let nv = self.phi[1][0] * *x + self.phi[1][1] * *v + l21 * d[0] + l22 * d[1];
+            *x = nx;
+            *v = nv;
+        }
+    }
+}
+
+/// A resonance with its stream.
+#[derive(Clone, Debug)]
+pub struct ResonanceGenerator {
+    resonator: Resonator,
+    rng: ImuRng,
+}
+
+impl Generate for ResonanceGenerator {
+    fn stage(&self) -> Stage {
+        Stage::Raw
+    }
+
+    #[inline]
+    fn add_raw(&mut self, _clock: RawClock, out: &mut [f64], scratch: &mut Vec<f64>) {
+        self.resonator.add_block(&mut self.rng, out, scratch);
+    }
+}

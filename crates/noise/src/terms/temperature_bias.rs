@@ -1,0 +1,65 @@
+//! Temperature-dependent bias: a coefficient times the excursion of the temperature profile from
+//! its reference (Woodman §3.2.4).
+
+use super::term::{ErrorTerm, GenContext, Generate, RawClock, Stage, TermKind};
+use crate::model_error::{check_finite, ModelError};
+use crate::temperature::TemperatureProfile;
+use crate::ImuRng;
+
+/// Bias per degC away from the reference temperature (rad/s/degC, m/s^2/degC), signed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TemperatureBias {
+    per_degree: f64,
+}
+
+impl TemperatureBias {
+    /// Any finite value.
+    pub fn new(per_degree: f64) -> Result<TemperatureBias, ModelError> {
+        Ok(TemperatureBias {
+            per_degree: check_finite("temperature bias coefficient", per_degree)?,
+        })
+    }
+
+    /// The coefficient, per degC.
+    pub fn per_degree(&self) -> f64 {
+        self.per_degree
+    }
+}
+
+impl ErrorTerm for TemperatureBias {}
+
+impl TermKind for TemperatureBias {
+    const STOCHASTIC: bool = false;
+    const SHOWS_IN_STATIC_LOG: bool = false;
+    type Generator = TemperatureBiasGenerator;
+
+    fn generator(&self, cx: &GenContext, _rng: &dyn Fn() -> ImuRng) -> TemperatureBiasGenerator {
+        TemperatureBiasGenerator {
+            per_degree: self.per_degree,
+            profile: cx.temperature.clone(),
+            reference_c: cx.temperature_reference_c,
+        }
+    }
+}
+
+/// c (T(t) - T_ref).
+#[derive(Clone, Debug)]
+pub struct TemperatureBiasGenerator {
+    per_degree: f64,
+    profile: TemperatureProfile,
+    reference_c: f64,
+}
+
+impl Generate for TemperatureBiasGenerator {
+    fn stage(&self) -> Stage {
+        Stage::Raw
+    }
+
+    #[inline]
+    fn add_raw(&mut self, clock: RawClock, out: &mut [f64], _scratch: &mut Vec<f64>) {
+        let (c, reference) = (self.per_degree, self.reference_c);
+        out.iter_mut()
+            .enumerate()
+            .for_each(|(i, v)| *v += c * (self.profile.at(clock.t(i)) - reference));
+    }
+}
