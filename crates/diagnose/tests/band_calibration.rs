@@ -1,13 +1,14 @@
 //! End-to-end calibration of the drift band with the fit's uncertainty (docs/drift.md,
-//! "Parameter uncertainty"): logs generated from a known model are diagnosed from a wrong
-//! starting model, and the drift of held-out logs of the same known model must fall inside the
-//! diagnosed model's 95 % band (levels drawn by the parametric bootstrap) about 95 % of the time.
-//! The same check with the diagnosed levels taken as exact is counted beside it.
+//! "Parameter uncertainty"): logs generated from a known model are fitted from a wrong starting
+//! model, and the drift of held-out logs of the same known model must fall inside the fitted
+//! model's 95 % band (levels drawn by the parametric bootstrap) about 95 % of the time. The same
+//! check with the fitted levels taken as exact is counted beside it.
 //!
 //! Each seed s: one training log (master seed 2 000 000 + s), `held_out` held-out logs (master
-//! seed 3 000 000 + s, runs 0..), `diagnose` from `START` (band seed 11 + s), the drift check of
-//! the held-out logs pooled against the diagnosed model with 39 replicates (seed 5 + s; with 39 the
-//! band is the smallest and largest replicate, 95 % by Wilks' rule).
+//! seed 3 000 000 + s, runs 0..), the fit (`bootstrap::fit_levels` of `START`'s levels, or the
+//! whole `diagnose` from `START` with band seed 11 + s), the drift check of the held-out logs
+//! pooled against the fitted model with 39 replicates (seed 5 + s; with 39 the band is the
+//! smallest and largest replicate, 95 % by Wilks' rule).
 //!
 //! Heading, roll and pitch come from the independent channels gz, gx and gy (fitted, simulated and
 //! measured independently), so per horizon they are 3 independent Bernoulli trials per seed:
@@ -229,7 +230,7 @@ fn held_out_drift_falls_inside_the_band_with_the_fit_uncertainty() {
     let design = Design {
         fit: Fit::Levels,
         compare_exact: false,
-        seeds: std::env::var("BAND_SEEDS").map_or(40, |v| v.parse().unwrap()),
+        seeds: 40,
         dt_s: 0.1,
         train_samples: 72_000,
         held_out: 3,
@@ -242,8 +243,8 @@ fn held_out_drift_falls_inside_the_band_with_the_fit_uncertainty() {
     assert_calibrated(&coverage(&design));
 }
 
-/// The documented figure (docs/drift.md): 200 seeds, the same logs, horizons 10 s, 60 s, 10 min
-/// and 1 h. Run with `cargo test --release -p imudrift-diagnose --test band_calibration --
+/// The documented figure (docs/drift.md): 200 seeds (`BAND_SEEDS` to change), the same logs,
+/// horizons 10 s, 60 s, 10 min and 1 h; accepted 551..=586 attitude verdicts inside of 600. Run with `cargo test --release -p imudrift-diagnose --test band_calibration --
 /// --ignored --nocapture`.
 #[test]
 #[ignore = "long: the documented calibration figure"]
@@ -290,12 +291,14 @@ fn binomial_acceptance_matches_a_direct_sum() {
     );
 }
 
-/// The same with `diagnose`'s whole workflow as the fit (its own choice of terms from `START`):
-/// printed for docs/drift.md, not asserted (the band can hold the levels' uncertainty, not a
-/// wrong choice of terms). Run with `cargo test --release -p imudrift-diagnose --test
+/// The same with `diagnose`'s whole workflow as the fit (its own choice of terms from `START`),
+/// asserted like the figure: what issue 23 asks of the whole chain. It does not hold yet (docs/drift.md:
+/// from the wrong start `diagnose` stands a Gauss-Markov process in for part of the flicker, and the
+/// band can hold the levels' uncertainty, not a wrong choice of terms); it is the check for the
+/// diagnose work of issue 23 item 2. Run with `cargo test --release -p imudrift-diagnose --test
 /// band_calibration diagnosed -- --ignored --nocapture`.
 #[test]
-#[ignore = "long: a figure for docs/drift.md"]
+#[ignore = "fails: diagnose's choice of terms from a wrong start (docs/drift.md); issue 23 item 2"]
 fn diagnosed_coverage_figure() {
     let design = Design {
         fit: Fit::Diagnose,
@@ -310,5 +313,5 @@ fn diagnosed_coverage_figure() {
             ..Protocol::default()
         },
     };
-    coverage(&design);
+    assert_calibrated(&coverage(&design));
 }
