@@ -577,3 +577,46 @@ fn logs_larger_than_memory_are_refused_up_front() {
         assert!(err.contains(needle), "{err}");
     }
 }
+
+/// Issue 27, item 2: values whose squares overflow, and a rate so low that the averaging times
+/// do, are refused with the line and column (they gave null deviations with exit 0).
+#[test]
+fn values_and_rates_that_overflow_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut lines: Vec<String> = log_text(3000, "\n").lines().map(String::from).collect();
+    lines[1001] = "10.00,1e300".to_string();
+    let text = lines.join("\n");
+    let huge = write(dir.path(), "huge.csv", text.as_bytes());
+    for args in [
+        vec!["allan", huge.as_str(), "--json"],
+        vec![
+            "diagnose",
+            &huge,
+            "--model",
+            "configs/sensors/mtx.toml",
+            "--json",
+        ],
+    ] {
+        refused(&args, &["huge.csv:1002", "column \"gx\"", "1e300", "1e100"]);
+    }
+    let mut no_t = String::from("gx\n");
+    for line in log_text(3000, "\n").lines().skip(1) {
+        no_t += line.split(',').nth(1).unwrap();
+        no_t.push('\n');
+    }
+    let no_t = write(dir.path(), "no_t.csv", no_t.as_bytes());
+    refused(
+        &["allan", &no_t, "--rate", "1e-300", "--json"],
+        &["--rate", "1e-6"],
+    );
+    let long = format!("t,gx\n0,{}\n", "1".repeat(100_000));
+    let long = write(dir.path(), "long.csv", long.as_bytes());
+    let out = imudrift(&["allan", &long, "--rate", "100", "--json"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.len() < 1000,
+        "the 100 000-digit field was echoed: {} bytes",
+        err.len()
+    );
+}
