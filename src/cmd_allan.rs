@@ -99,6 +99,8 @@ pub struct ChannelResult {
 
 pub fn run(args: Args) -> Result<()> {
     args.noise_file.check()?;
+    crate::output::note_inputs([&args.log]);
+    args.noise_file.refuse_inputs()?;
     let _out_lock = args
         .out
         .as_deref()
@@ -199,9 +201,9 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
     );
     if args.json {
         eprint!("{table}");
-        println!("{}", serde_json::to_string_pretty(&doc)?);
+        output::print_stdout(&format!("{}\n", serde_json::to_string_pretty(&doc)?))?;
     } else {
-        print!("{table}");
+        output::print_stdout(&table)?;
     }
     stage("printed");
     let per_channel: [Option<(AxisValue, AxisValue)>; 6] = std::array::from_fn(|c| {

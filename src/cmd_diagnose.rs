@@ -116,6 +116,8 @@ const MAX_SEEDS: usize = 4096;
 const MAX_ROUNDS: usize = 100;
 
 pub fn run(args: Args) -> Result<()> {
+    crate::output::note_inputs(args.logs.iter().chain([&args.model]).chain(&args.check));
+    args.noise_file.refuse_inputs()?;
     args.noise_file.check()?;
     let _out_lock = args
         .out
@@ -206,6 +208,14 @@ fn run_inner(args: &Args) -> Result<()> {
     }
     let inputs: Vec<LogInput> = logs.iter().map(log_channels).collect::<Result<_>>()?;
     let input = inputs[0];
+    let longest = logs.iter().map(logio::Log::len).max().unwrap_or(0);
+    let protocol = drift_protocol(args).unwrap_or_else(|| diagnose::protocol::Protocol {
+        calibration: diagnose::protocol::Calibration::LogMean,
+        initialisation: diagnose::protocol::Initialisation::Perfect,
+        horizons_s: args.horizons.clone(),
+        overlapping: false,
+    });
+    crate::cmd_drift::check_sampling(&protocol, input.dt_s, longest)?;
     // An output filter in the model must fit the log's rate.
     noise::ImuErrors::check_rate(&model, input.dt_s).map_err(|e| {
         anyhow::anyhow!(
@@ -270,7 +280,7 @@ fn run_inner(args: &Args) -> Result<()> {
         log.topic.as_deref(),
     )?;
     if args.json {
-        println!("{doc}");
+        crate::output::print_stdout(&format!("{doc}\n"))?;
     }
     if let Some(dir) = &args.out {
         let _set = crate::output::begin_set(dir)?;

@@ -106,6 +106,55 @@ pub(crate) fn initialisation(text: &str) -> std::result::Result<Initialisation, 
     }
 }
 
+/// Refuse horizons and windows the logs' sampling cannot carry, naming the option, the value and
+/// the sample interval: a horizon must be a whole number of samples (0.014 s at 100 Hz is not:
+/// it was computed as one sample and reported as 0.014 s), a window at least one sample and at
+/// most the longest log (a shorter one panicked, a longer one overflowed).
+pub(crate) fn check_sampling(protocol: &Protocol, dt_s: f64, samples: usize) -> Result<()> {
+    let rate = format!(
+        "{}, a sample every {}",
+        crate::fmt::si(1.0 / dt_s, "Hz"),
+        crate::fmt::time(dt_s)
+    );
+    for &h in &protocol.horizons_s {
+        let n = h / dt_s;
+        let whole = n.round();
+        if whole < 1.0 {
+            bail!("--horizons {h}: shorter than one sample of the logs ({rate})");
+        }
+        if (n - whole).abs() > 1e-6 * whole {
+            bail!(
+                "--horizons {h}: {} samples of the logs ({rate}); a horizon is a whole number of samples, e.g. {}",
+                crate::fmt::sig(n, 4).trim_end_matches('0'),
+                crate::fmt::time(whole * dt_s)
+            );
+        }
+    }
+    let longest_s = samples as f64 * dt_s;
+    let windows = [
+        match protocol.calibration {
+            Calibration::Window { window_s } => Some(("--calibration window:", window_s)),
+            _ => None,
+        },
+        match protocol.initialisation {
+            Initialisation::Levelled { window_s } => Some(("--init level:", window_s)),
+            Initialisation::Perfect => None,
+        },
+    ];
+    for (flag, w) in windows.into_iter().flatten() {
+        if (w / dt_s).round() < 1.0 {
+            bail!("{flag}{w}: the window is shorter than one sample of the logs ({rate})");
+        }
+        if w > longest_s {
+            bail!(
+                "{flag}{w}: the window is longer than the longest log ({})",
+                crate::fmt::time(longest_s)
+            );
+        }
+    }
+    Ok(())
+}
+
 fn protocol(args: &Args) -> Protocol {
     Protocol {
         calibration: args.calibration,
@@ -116,6 +165,7 @@ fn protocol(args: &Args) -> Protocol {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    crate::output::note_inputs(args.logs.iter().chain([&args.model]));
     let _out_lock = args
         .out
         .as_deref()
@@ -167,6 +217,10 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
             temperature_c: None,
         })
         .collect();
+    if let Some(first) = inputs.first() {
+        let longest = logs.iter().map(logio::Log::len).max().unwrap_or(0);
+        check_sampling(&protocol, first.dt_s, longest)?;
+    }
     // An output filter in the model must fit the logs' rate.
     if let Some(first) = inputs.first() {
         noise::ImuErrors::check_rate(&model, first.dt_s).map_err(|e| {
@@ -215,7 +269,7 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
     }
     let doc = serde_json::to_string_pretty(&doc)?;
     if args.json {
-        println!("{doc}");
+        crate::output::print_stdout(&format!("{doc}\n"))?;
     }
     if let Some(dir) = &args.out {
         let _set = crate::output::begin_set(dir)?;

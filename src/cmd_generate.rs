@@ -130,6 +130,8 @@ fn plan(args: &Args) -> Result<Plan> {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    crate::output::note_inputs([&args.sensor]);
+    crate::output::refuse_input_as_output("-o", &args.output)?;
     let plan = plan(&args)?;
     let pool = crate::cli::pool(args.threads)?;
     let progress = crate::progress::Progress::new("generate", "samples", plan.samples);
@@ -163,7 +165,7 @@ pub fn run(args: Args) -> Result<()> {
             "terms": plan.filter.describe(),
             "elapsed_s": elapsed_s,
         });
-        println!("{doc}");
+        crate::output::print_stdout(&format!("{doc}\n"))?;
     }
     Ok(())
 }

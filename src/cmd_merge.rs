@@ -2,9 +2,8 @@
 //! result a single `simulate` computes (same per-run values, merged in run-index order).
 
 use crate::cmd_simulate::emit;
-use crate::experiment_run::{ablation_experiments, check_memory, experiment_from, Inputs};
+use crate::experiment_run::{ablation_experiments, check_memory, shard_experiment};
 use anyhow::{bail, Context, Result};
-use montecarlo::experiment::Overrides;
 use montecarlo::runner::RunFailure;
 use montecarlo::shard::{ShardFile, SHARD_FORMAT};
 use montecarlo::RunMatrix;
@@ -29,6 +28,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    crate::output::note_inputs(&args.shards);
     let _out_lock = args
         .out
         .as_deref()
@@ -51,22 +51,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     let (first_path, first) = &files[0];
     // Each file's experiment, resolved against its scenario: runs and seed compare by value.
-    let experiment_of = |f: &ShardFile| {
-        let inputs = Inputs {
-            scenario_source: f.scenario_source.clone(),
-            scenario_toml: f.scenario_toml.clone(),
-            sensor_source: f.sensor_source.clone(),
-            sensor_toml: f.sensor_toml.clone(),
-        };
-        let overrides = Overrides {
-            runs: f.runs,
-            seed: f.seed,
-            only: f.only.clone(),
-            without: f.without.clone(),
-        };
-        let exp = experiment_from(&inputs, &overrides)?;
-        anyhow::Ok((inputs, overrides, exp))
-    };
+    let experiment_of = shard_experiment;
     let (inputs, overrides, exp) = experiment_of(first)
         .with_context(|| format!("{}: the stored scenario", first_path.display()))?;
     // The merged values must fit, as for `simulate` itself (which would have asked for shards).

@@ -9,7 +9,6 @@ use anyhow::{bail, Context, Result};
 use noise::closed_form::rate_random_walk_avar_sampled;
 use noise::{Sensor, SensorModel};
 use serde::Serialize;
-use std::io::Write;
 use std::path::PathBuf;
 
 /// Longest averaging time searched for a reading, s (about 12 days).
@@ -153,9 +152,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     eprint!("{}", text(&doc));
     if args.json {
-        let mut out = std::io::stdout().lock();
-        serde_json::to_writer_pretty(&mut out, &doc)?;
-        writeln!(out)?;
+        crate::output::print_stdout(&(serde_json::to_string_pretty(&doc)? + "\n"))?;
     }
     Ok(())
 }

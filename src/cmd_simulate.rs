@@ -65,6 +65,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    crate::output::note_inputs([&args.scenario]);
     // Shards of one job write their own files into one directory at once: no lock for them.
     let _out_lock = match (&args.out, &args.shard) {
         (Some(dir), None) => Some(crate::output::prepare_dir(dir)?),
@@ -97,25 +98,9 @@ pub fn run(args: Args) -> Result<()> {
             &exp,
             (range.end - range.start) * (1 + 2 * subs.len() as u64),
         )?;
-        let result = pool.install(|| execute(&exp, range.clone(), "shard"));
-        // The shard's slice of every ablation sub-experiment, so `merge` rebuilds the table.
-        let batch = |e: &Experiment, label: &str| {
-            let r = pool.install(|| execute(e, range.clone(), label));
-            ablation::Batch {
-                matrix: r.matrix,
-                failures: r.failures,
-            }
-        };
-        let ablation = with_ablation.then(|| {
-            subs.iter()
-                .map(|t| ablation::TermBatches {
-                    term: t.term.clone(),
-                    only: batch(&t.only, &t.term),
-                    without: batch(&t.without, &t.term),
-                })
-                .collect()
-        });
-        let file = ShardFile {
+        // The file without its values yet: its experiment is checked against the directory's
+        // other shards before any work.
+        let mut file = ShardFile {
             format: SHARD_FORMAT.into(),
             scenario_source: inputs.scenario_source,
             scenario_toml: inputs.scenario_toml,
@@ -126,10 +111,31 @@ pub fn run(args: Args) -> Result<()> {
             only: args.only,
             without: args.without,
             shard,
-            matrix: result.matrix,
-            failures: result.failures,
-            ablation,
+            matrix: montecarlo::RunMatrix::new(0, 0),
+            failures: Vec::new(),
+            ablation: with_ablation.then(Vec::new),
         };
+        crate::experiment_run::refuse_other_experiments(dir, &file, &exp)?;
+        let result = pool.install(|| execute(&exp, range.clone(), "shard"));
+        // The shard's slice of every ablation sub-experiment, so `merge` rebuilds the table.
+        let batch = |e: &Experiment, label: &str| {
+            let r = pool.install(|| execute(e, range.clone(), label));
+            ablation::Batch {
+                matrix: r.matrix,
+                failures: r.failures,
+            }
+        };
+        file.ablation = with_ablation.then(|| {
+            subs.iter()
+                .map(|t| ablation::TermBatches {
+                    term: t.term.clone(),
+                    only: batch(&t.only, &t.term),
+                    without: batch(&t.without, &t.term),
+                })
+                .collect()
+        });
+        file.matrix = result.matrix;
+        file.failures = result.failures;
         ensure_dir(dir)?;
         let path = dir.join(format!("shard-{}-of-{}.json", shard.index, shard.count));
         write_atomic(&path, |w| Ok(serde_json::to_writer(w, &file)?))?;
@@ -260,9 +266,7 @@ pub fn emit(
     };
     let text = serde_json::to_string_pretty(&doc)? + "\n";
     if json {
-        let mut stdout = std::io::stdout().lock();
-        stdout.write_all(text.as_bytes())?;
-        stdout.flush()?;
+        crate::output::print_stdout(&text)?;
     }
     if let Some(dir) = out {
         let _set = crate::output::begin_set(dir)?;

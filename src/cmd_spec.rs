@@ -17,7 +17,6 @@ use montecarlo::spec::{
 };
 use noise::{Effect, Sensor, SensorModel};
 use serde::Serialize;
-use std::io::Write;
 use std::path::PathBuf;
 
 /// Drift times when neither --times nor --require gives any, s.
@@ -128,6 +127,7 @@ fn informs(model: &SensorModel, channel: Channel) -> bool {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    crate::output::note_inputs(&args.sensors);
     let _out_lock = args
         .out
         .as_deref()
@@ -151,9 +151,7 @@ pub fn run(args: Args) -> Result<()> {
     eprint!("{}", table(&doc));
     let text = serde_json::to_string_pretty(&doc)? + "\n";
     if args.json {
-        let mut out = std::io::stdout().lock();
-        out.write_all(text.as_bytes())?;
-        out.flush()?;
+        crate::output::print_stdout(&text)?;
     }
     if let Some(dir) = &args.out {
         let _set = crate::output::begin_set(dir)?;

@@ -10,6 +10,7 @@ use montecarlo::experiment::{Experiment, ExperimentError, Overrides};
 use montecarlo::report::DriftReport;
 use montecarlo::runner::{run_range, BatchResult};
 use montecarlo::scenario::Scenario;
+use montecarlo::shard::ShardFile;
 use noise::SensorModel;
 use std::path::Path;
 
@@ -110,6 +111,7 @@ pub fn read_inputs(path: &Path, edits: &ScenarioEdits) -> Result<(Inputs, Scenar
         Some(dir) if scenario.sensor.is_relative() => dir.join(&scenario.sensor),
         _ => scenario.sensor.clone(),
     };
+    crate::output::note_inputs([&sensor_path]);
     let sensor_source = sensor_path.display().to_string();
     let sensor_bytes = std::fs::read(&sensor_path).with_context(|| {
         format!("{scenario_source}: key `sensor`: cannot read sensor file {sensor_source}")
@@ -158,6 +160,59 @@ pub fn ablation_experiments(
 ) -> Result<Vec<ablation::TermExperiments>> {
     let (scenario, model, exp) = parse_inputs(inputs, overrides)?;
     ablation::experiments(&scenario, &model, overrides, &exp).map_err(with_flag)
+}
+
+/// A shard file's experiment, resolved against its stored scenario (so that runs and seed
+/// compare by value: an explicit `--seed` equal to the scenario's own is the same experiment),
+/// with the inputs and overrides it was built from.
+pub fn shard_experiment(f: &ShardFile) -> Result<(Inputs, Overrides, Experiment)> {
+    let inputs = Inputs {
+        scenario_source: f.scenario_source.clone(),
+        scenario_toml: f.scenario_toml.clone(),
+        sensor_source: f.sensor_source.clone(),
+        sensor_toml: f.sensor_toml.clone(),
+    };
+    let overrides = Overrides {
+        runs: f.runs,
+        seed: f.seed,
+        only: f.only.clone(),
+        without: f.without.clone(),
+    };
+    let exp = experiment_from(&inputs, &overrides)?;
+    Ok((inputs, overrides, exp))
+}
+
+/// Refuse to write shard `file` (of experiment `exp`) into `dir` when the directory holds a
+/// shard of another experiment (scenario, sensor, runs, seed, terms, ablation or k differ): a
+/// shard directory holds the shards of one experiment, and `merge` needs them all alike.
+pub fn refuse_other_experiments(dir: &Path, file: &ShardFile, exp: &Experiment) -> Result<()> {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Ok(());
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if !(name.starts_with("shard-") && name.ends_with(".json")) {
+            continue;
+        }
+        let path = entry.path();
+        let Ok(text) = std::fs::read_to_string(&path) else {
+            continue;
+        };
+        let Ok(other) = serde_json::from_str::<ShardFile>(&text) else {
+            continue;
+        };
+        let same = file.same_experiment(&other)
+            && shard_experiment(&other)
+                .is_ok_and(|(_, _, e)| (e.runs, e.seed) == (exp.runs, exp.seed));
+        if !same {
+            bail!(
+                "--out {}: {} is a shard of another experiment or split (scenario, sensor, runs, seed, terms, ablation and k must match); a shard directory holds the shards of one experiment: choose another --out or remove it",
+                dir.display(),
+                path.display()
+            );
+        }
+    }
+    Ok(())
 }
 
 /// Memory for the per-run values above which `simulate` asks for shards instead (8 GiB).

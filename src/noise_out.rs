@@ -53,6 +53,14 @@ pub struct NoiseFileArgs {
 }
 
 impl NoiseFileArgs {
+    /// Refuse a noise file path that is one of the command's inputs (noted before).
+    pub fn refuse_inputs(&self) -> Result<()> {
+        match &self.kalibr {
+            Some(path) => crate::output::refuse_input_as_output("--kalibr", path),
+            None => Ok(()),
+        }
+    }
+
     /// Check the options before any work.
     pub fn check(&self) -> Result<()> {
         if !(self.inflate.is_finite() && self.inflate >= 1.0) {

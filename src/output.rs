@@ -9,12 +9,102 @@
 //!   complete (a `kill -9` cannot be caught: it may leave a `.tmp*` file, never a partial output).
 //! - `--out DIR` is created, checked writable and locked (`DIR/.imudrift.lock`) before any work,
 //!   so two runs writing the same directory cannot interleave their files.
+//! - No output replaces one of the command's inputs: the inputs are noted ([`note_inputs`]) and an
+//!   output path that is the same file (same device and inode, through links; else the same
+//!   canonical path) is refused before any work ([`refuse_input_as_output`], and for `--out`
+//!   the names every command writes there), and again by [`write_atomic`] before it writes.
 
 use anyhow::{bail, Context, Result};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Mutex;
+
+/// The files the command reads, with their identity.
+static INPUTS: Mutex<Vec<(PathBuf, FileId)>> = Mutex::new(Vec::new());
+
+/// What makes two paths the same file: device and inode on Unix, else the canonical path.
+#[derive(Clone, Debug, PartialEq, Eq)]
+enum FileId {
+    #[cfg(unix)]
+    Inode(u64, u64),
+    #[cfg(not(unix))]
+    Canonical(PathBuf),
+}
+
+fn file_id(path: &Path) -> Option<FileId> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        let m = std::fs::metadata(path).ok()?;
+        Some(FileId::Inode(m.dev(), m.ino()))
+    }
+    #[cfg(not(unix))]
+    {
+        std::fs::canonicalize(path).ok().map(FileId::Canonical)
+    }
+}
+
+/// Note the files the command reads (a path that does not exist yet is not noted: reading it
+/// fails on its own).
+pub fn note_inputs<P: AsRef<Path>>(paths: impl IntoIterator<Item = P>) {
+    if let Ok(mut list) = INPUTS.lock() {
+        for p in paths {
+            let p = p.as_ref();
+            if let Some(id) = file_id(p) {
+                list.push((p.to_path_buf(), id));
+            }
+        }
+    }
+}
+
+/// The noted input that `path` is the same file as, if any.
+fn input_at(path: &Path) -> Option<PathBuf> {
+    let id = file_id(path)?;
+    let list = INPUTS.lock().ok()?;
+    list.iter().find(|(_, i)| *i == id).map(|(p, _)| p.clone())
+}
+
+/// Refuse an output `path` (set by `setting`, e.g. `-o`) that is one of the noted inputs:
+/// writing it would replace what the command reads (`allan log.csv --kalibr log.csv`).
+pub fn refuse_input_as_output(setting: &str, path: &Path) -> Result<()> {
+    if let Some(input) = input_at(path) {
+        bail!(
+            "{setting} {}: is the same file as the input {}: writing it would replace the input; choose another output path",
+            path.display(),
+            input.display()
+        );
+    }
+    Ok(())
+}
+
+/// The file names the commands write into `--out DIR` (and every `.svg`).
+const OUT_NAMES: [&str; 9] = [
+    "allan.csv",
+    "allan.json",
+    "diagnose.json",
+    "report.md",
+    "drift.json",
+    "drift.csv",
+    "spec.json",
+    "spec.csv",
+    "drift.svg",
+];
+
+/// Refuse an `--out DIR` holding an input under a name the commands write there.
+fn refuse_inputs_in_out_dir(dir: &Path) -> Result<()> {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Ok(());
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let written = OUT_NAMES.contains(&name.as_str()) || name.ends_with(".svg");
+        if written {
+            refuse_input_as_output("--out", &entry.path())?;
+        }
+    }
+    Ok(())
+}
 
 /// Temporary files that exist now (removed on a termination signal).
 static TEMPORARIES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
@@ -103,6 +193,13 @@ pub fn write_atomic<F>(path: &Path, fill: F) -> Result<()>
 where
     F: FnOnce(&mut dyn Write) -> Result<()>,
 {
+    if let Some(input) = input_at(path) {
+        bail!(
+            "{}: is the same file as the input {}: refusing to replace an input with an output; choose another output path",
+            path.display(),
+            input.display()
+        );
+    }
     // A device or FIFO (/dev/null, /dev/stdout, a pipe) is written directly: renaming a
     // temporary file over it would replace the device itself.
     if std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
@@ -143,6 +240,15 @@ where
     Ok(())
 }
 
+/// Print `text` on standard output, flushed: a closed pipe (`| head -c 10`) or a full disk is
+/// an error the command reports (status 1), never a panic as `print!` gives.
+pub fn print_stdout(text: &str) -> Result<()> {
+    let mut out = std::io::stdout().lock();
+    out.write_all(text.as_bytes())
+        .and_then(|()| out.flush())
+        .context("cannot write to standard output")
+}
+
 /// Write a string atomically.
 pub fn write_string(path: &Path, text: &str) -> Result<()> {
     write_atomic(path, |w| Ok(w.write_all(text.as_bytes())?))
@@ -159,6 +265,7 @@ pub struct OutLock {
 /// written there, without locking it.
 pub fn prepare_shared_dir(dir: &Path) -> Result<OutLock> {
     ensure_dir(dir)?;
+    refuse_inputs_in_out_dir(dir)?;
     tempfile::NamedTempFile::new_in(dir)
         .map(drop)
         .with_context(|| format!("--out {}: cannot write files there", dir.display()))?;
@@ -169,6 +276,7 @@ pub fn prepare_shared_dir(dir: &Path) -> Result<OutLock> {
 /// written there, and lock it against another imudrift writing the same directory.
 pub fn prepare_dir(dir: &Path) -> Result<OutLock> {
     ensure_dir(dir)?;
+    refuse_inputs_in_out_dir(dir)?;
     let path = dir.join(".imudrift.lock");
     let file = std::fs::OpenOptions::new()
         .create(true)

@@ -685,3 +685,237 @@ fn values_and_rates_that_overflow_are_refused() {
         err.len()
     );
 }
+
+/// Issue 27, item 5: an output that is one of the command's inputs (the same path, another
+/// spelling of it, or a link to it) is refused before any work and the input is left as it was.
+#[test]
+fn outputs_never_replace_an_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = write(dir.path(), "victim.csv", log_text(3000, "\n").as_bytes());
+    let before = std::fs::read(&log).unwrap();
+    refused(
+        &["allan", &log, "--kalibr", &log, "--json"],
+        &["--kalibr", "same file as the input"],
+    );
+    let other_spelling = format!("{}/./victim.csv", dir.path().display());
+    refused(
+        &["allan", &log, "--kalibr", &other_spelling, "--json"],
+        &["same file as the input"],
+    );
+    #[cfg(unix)]
+    {
+        let link = dir.path().join("link.yaml");
+        std::os::unix::fs::symlink(&log, &link).unwrap();
+        refused(
+            &["allan", &log, "--kalibr", link.to_str().unwrap(), "--json"],
+            &["same file as the input"],
+        );
+    }
+    assert_eq!(std::fs::read(&log).unwrap(), before, "the log was replaced");
+    let model = write(
+        dir.path(),
+        "mm.toml",
+        &std::fs::read(root().join("configs/sensors/mtx.toml")).unwrap(),
+    );
+    let model_before = std::fs::read(&model).unwrap();
+    refused(
+        &[
+            "generate",
+            &model,
+            "--duration",
+            "1",
+            "--rate",
+            "100",
+            "-o",
+            &model,
+        ],
+        &["-o", "same file as the input"],
+    );
+    refused(
+        &[
+            "diagnose", &log, "--model", &model, "--kalibr", &model, "--json",
+        ],
+        &["same file as the input"],
+    );
+    assert_eq!(
+        std::fs::read(&model).unwrap(),
+        model_before,
+        "the model was replaced"
+    );
+    // An input named as an output of `--out DIR`, inside DIR.
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    let inside = write(&out, "allan.csv", log_text(3000, "\n").as_bytes());
+    refused(
+        &["allan", &inside, "--out", out.to_str().unwrap(), "--json"],
+        &["--out", "same file as the input"],
+    );
+}
+
+/// Issue 27, item 6: a shard directory holds the shards of one experiment; a shard of another
+/// experiment is refused before any work and the first shard stays.
+#[test]
+fn a_shard_directory_holds_one_experiment() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().to_str().unwrap();
+    let shard = |scenario: &str, runs: &str| {
+        imudrift(&[
+            "simulate",
+            scenario,
+            "--runs",
+            runs,
+            "--duration",
+            "5",
+            "--no-ablation",
+            "--shard",
+            "0/2",
+            "--out",
+            d,
+        ])
+    };
+    common::ok(shard("configs/sensors/mtx.toml", "4"));
+    let first = std::fs::read(dir.path().join("shard-0-of-2.json")).unwrap();
+    // The same shard of the same experiment again: allowed (the same values).
+    common::ok(shard("configs/sensors/mtx.toml", "4"));
+    for (scenario, runs) in [
+        ("configs/sensors/adis16405.toml", "4"),
+        ("configs/sensors/mtx.toml", "6"),
+    ] {
+        let out = shard(scenario, runs);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{err}");
+        assert!(err.contains("shard of another experiment"), "{err}");
+    }
+    assert_eq!(
+        std::fs::read(dir.path().join("shard-0-of-2.json")).unwrap(),
+        first
+    );
+}
+
+/// Issue 27, items 8-9: windows shorter than a sample or longer than the logs (they panicked in
+/// protocol.rs), and horizons that are not a whole number of samples (0.014 s at 100 Hz was
+/// computed as one sample and reported as 0.014 s), are refused naming the option, the value
+/// and the sample interval.
+#[test]
+fn horizons_and_windows_must_fit_the_sampling() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut text = String::from("t,gx,gy,gz,ax,ay,az\n");
+    for (i, line) in log_text(6000, "\n").lines().skip(1).enumerate() {
+        let v = line.split(',').nth(1).unwrap();
+        let v: f64 = v.parse().unwrap();
+        text += &format!(
+            "{:.2},{v},{},{},{},{},{}\n",
+            i as f64 * 0.01,
+            -v,
+            v * 0.5,
+            v * 0.01,
+            -v * 0.01,
+            -9.81 + v * 0.01
+        );
+    }
+    let log = write(dir.path(), "still.csv", text.as_bytes());
+    let model = "configs/sensors/mtx.toml";
+    let drift = |extra: &[&str], needles: &[&str]| {
+        let mut args = vec!["drift", &log, &log, "--model", model, "--json"];
+        args.extend_from_slice(extra);
+        refused(&args, needles);
+    };
+    for w in ["0.001", "0.004", "1e-300"] {
+        let init = format!("level:{w}");
+        drift(
+            &["--init", &init],
+            &["--init level:", "shorter than one sample", "0.01 s"],
+        );
+        let cal = format!("window:{w}");
+        drift(
+            &["--calibration", &cal],
+            &["--calibration window:", "shorter than one sample"],
+        );
+    }
+    drift(&["--init", "level:1e19"], &["longer than the longest log"]);
+    drift(
+        &["--calibration", "window:1e20"],
+        &["longer than the longest log"],
+    );
+    drift(
+        &["--horizons", "0.01,0.014"],
+        &["--horizons 0.014", "1.4 samples", "whole number"],
+    );
+    drift(
+        &["--horizons", "0.004"],
+        &["--horizons 0.004", "shorter than one sample"],
+    );
+    refused(
+        &[
+            "diagnose",
+            &log,
+            "--model",
+            model,
+            "--horizons",
+            "0.014",
+            "--json",
+        ],
+        &["--horizons 0.014", "whole number"],
+    );
+}
+
+/// Issue 27, item 12: standard output on a full disk (`/dev/full`) ends every command with an
+/// error line and status 1 (allan, diagnose and drift panicked "failed printing to stdout").
+#[cfg(target_os = "linux")]
+#[test]
+fn a_full_stdout_is_an_error_line_in_every_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = write(dir.path(), "ok.csv", log_text(3000, "\n").as_bytes());
+    let gen = dir.path().join("g.csv");
+    let model = "configs/sensors/mtx.toml";
+    let cases: Vec<Vec<&str>> = vec![
+        vec!["allan", &log],
+        vec!["allan", &log, "--json"],
+        vec!["diagnose", &log, "--model", model, "--json"],
+        vec![
+            "drift",
+            &log,
+            &log,
+            "--model",
+            model,
+            "--json",
+            "--horizons",
+            "1",
+        ],
+        vec![
+            "generate",
+            model,
+            "--duration",
+            "1",
+            "--rate",
+            "100",
+            "-o",
+            gen.to_str().unwrap(),
+            "--json",
+        ],
+        vec![
+            "simulate",
+            model,
+            "--runs",
+            "4",
+            "--duration",
+            "5",
+            "--json",
+        ],
+        vec!["plan", model, "--json"],
+    ];
+    for args in cases {
+        let full = std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap();
+        let out = command().args(&args).stdout(full).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(
+            err.contains("cannot write to standard output"),
+            "{args:?}: {err}"
+        );
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+}

@@ -99,9 +99,18 @@ impl Protocol {
         cal.max(lev)
     }
 
-    /// Samples needed before a segment's start (its calibration and levelling windows).
+    /// Samples needed before a segment's start (its calibration and levelling windows): each
+    /// window is [`window_samples`] long, so a segment never starts before its windows.
     fn lead(&self, dt_s: f64) -> usize {
-        (self.lead_s() / dt_s).round() as usize
+        let cal = match self.calibration {
+            Calibration::Window { window_s } => window_samples(window_s, dt_s),
+            _ => 0,
+        };
+        let lev = match self.initialisation {
+            Initialisation::Levelled { window_s } => window_samples(window_s, dt_s),
+            Initialisation::Perfect => 0,
+        };
+        cal.max(lev)
     }
 
     /// How many segments of `horizon_s` a log of `samples` samples gives (as [`segment_errors`]
@@ -109,7 +118,7 @@ impl Protocol {
     pub fn segments(&self, samples: usize, dt_s: f64, horizon_s: f64) -> usize {
         let len = (horizon_s / dt_s).round() as usize;
         let lead = self.lead(dt_s);
-        if len == 0 || samples < lead + len {
+        if len == 0 || samples < lead.saturating_add(len) {
             return 0;
         }
         let stride = if self.overlapping {
@@ -119,6 +128,12 @@ impl Protocol {
         };
         (samples - lead - len) / stride + 1
     }
+}
+
+/// Samples in a window of `window_s` at `dt_s`: the nearest whole number, at least one (a
+/// front end refuses a window shorter than a sample: it names its own setting).
+fn window_samples(window_s: f64, dt_s: f64) -> usize {
+    ((window_s / dt_s).round() as usize).max(1)
 }
 
 /// The errors at the end of each segment of one horizon, in segment order.
@@ -302,7 +317,7 @@ fn segment_errors_with(
         ..Default::default()
     };
     let lead = protocol.lead(dt_s);
-    if len == 0 || n < lead + len {
+    if len == 0 || n < lead.saturating_add(len) {
         return out;
     }
     let ideal = [0.0, 0.0, 0.0, 0.0, 0.0, -G_MPS2];
@@ -319,7 +334,7 @@ fn segment_errors_with(
             Calibration::None => 0.0,
             Calibration::LogMean => means.whole[ch].map_or(0.0, |m| m - ideal[ch]),
             Calibration::Window { window_s } => {
-                let w = ((window_s / dt_s).round() as usize).max(1);
+                let w = window_samples(window_s, dt_s);
                 means
                     .window(ch, start - w, start)
                     .map_or(0.0, |m| m - ideal[ch])
@@ -329,7 +344,7 @@ fn segment_errors_with(
         let attitude = match protocol.initialisation {
             Initialisation::Perfect => Attitude::identity(),
             Initialisation::Levelled { window_s } => {
-                let w = ((window_s / dt_s).round() as usize).max(1);
+                let w = window_samples(window_s, dt_s);
                 let f: [f64; 3] = std::array::from_fn(|a| {
                     means
                         .window(3 + a, start - w, start)
