@@ -88,7 +88,7 @@ impl TermParams {
                 ("bandwidth_hz", bandwidth_hz),
             ],
             TermParams::Filter { filter, n } => {
-                let mut v = match filter.kind {
+                let mut v = match filter.kind() {
                     FilterKind::MovingAverage { taps } | FilterKind::Bartlett { taps } => {
                         vec![("taps", f64::from(taps))]
                     }
@@ -96,7 +96,7 @@ impl TermParams {
                         vec![("cutoff_hz", cutoff_hz)]
                     }
                 };
-                v.push(("decimation", f64::from(filter.decimation)));
+                v.push(("decimation", f64::from(filter.decimation())));
                 v.push(("n", n));
                 v
             }

@@ -290,10 +290,9 @@ impl DriftFitInput<'_> {
             // The channel's own flicker band.
             let band = flicker_band(self.model, self.channel);
             let a = alone.axis_mut(self.channel.sensor(), self.channel.axis());
-            a.set_term(noise::BiasInstability::Flicker(noise::Flicker {
-                b: c_unit.sqrt(),
-                ..band
-            }));
+            if let Ok(flicker) = band.with_level(c_unit.sqrt()) {
+                a.set_term(noise::BiasInstability::Flicker(flicker));
+            }
         } else {
             set_term(&mut alone, self.channel, effect, params);
         }

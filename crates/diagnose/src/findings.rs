@@ -250,7 +250,7 @@ fn bounds_of(effect: Effect, params: &TermParams, dt_s: f64) -> BTreeMap<String,
 fn parameters_of(effect: Effect, params: &TermParams, dt_s: f64) -> Parameters {
     let mut p: Parameters = named_map(effect, params).into();
     if let TermParams::Filter { filter, .. } = params {
-        p.kind = Some(filter.kind.name());
+        p.kind = Some(filter.kind().name());
         p.values
             .insert("noise_bandwidth_hz".into(), filter.noise_bandwidth_hz(dt_s));
     }

@@ -16,19 +16,19 @@ pub fn term_level(model: &SensorModel, ch: Channel, effect: Effect) -> Option<Te
         Term::RateRandomWalk(k) => TermParams::Level(k.density()),
         Term::RateRamp(r) => TermParams::Level(r.rate()),
         Term::TemperatureBias(c) => TermParams::Level(c.per_degree()),
-        Term::BiasInstability(BiasInstability::Flicker(f)) => TermParams::Level(f.b),
+        Term::BiasInstability(BiasInstability::Flicker(f)) => TermParams::Level(f.b()),
         Term::GaussMarkov(g) => TermParams::GaussMarkov {
-            sigma: g.sigma,
-            tau_s: g.tau_s,
+            sigma: g.sigma(),
+            tau_s: g.tau_s(),
         },
         Term::Sinusoidal(s) => TermParams::Sinusoid {
-            amplitude: s.amplitude,
-            frequency_hz: s.frequency_hz,
+            amplitude: s.amplitude(),
+            frequency_hz: s.frequency_hz(),
         },
         Term::Resonance(r) => TermParams::Resonance {
-            sigma: r.sigma,
-            frequency_hz: r.frequency_hz,
-            bandwidth_hz: r.bandwidth_hz,
+            sigma: r.sigma(),
+            frequency_hz: r.frequency_hz(),
+            bandwidth_hz: r.bandwidth_hz(),
         },
         Term::OutputFilter(filter) => TermParams::Filter {
             filter,
@@ -60,12 +60,10 @@ pub fn has_random_walk_bias_instability(model: &SensorModel, ch: Channel) -> boo
 pub fn flicker_band(model: &SensorModel, ch: Channel) -> Flicker {
     let (sensor, axis) = (ch.sensor(), ch.axis());
     match model.axis(sensor, axis).get::<BiasInstability>() {
-        Some(BiasInstability::Flicker(f)) => Flicker {
-            b: 1.0,
-            ..f.clone()
-        },
+        Some(BiasInstability::Flicker(f)) => f.with_level(1.0),
         _ => Flicker::with_b(1.0),
     }
+    .expect("B = 1 is a valid level")
 }
 
 /// Set `effect` on channel `ch` to `params` (adding it if absent); parameters that do not fit the
@@ -89,9 +87,10 @@ pub fn set_term(model: &mut SensorModel, ch: Channel, effect: Effect, params: &T
                 None => return,
             }
         }
-        (Effect::BiasInstability, TermParams::Level(v)) => {
-            Term::BiasInstability(BiasInstability::Flicker(Flicker { b: v, ..band }))
-        }
+        (Effect::BiasInstability, TermParams::Level(v)) => match band.with_level(v) {
+            Ok(f) => Term::BiasInstability(BiasInstability::Flicker(f)),
+            Err(_) => return,
+        },
         (Effect::RateRandomWalk, TermParams::Level(v)) => {
             match level(v, |v| Some(RateRandomWalk::new(v).ok()?.into())) {
                 Some(t) => t,
@@ -111,7 +110,10 @@ pub fn set_term(model: &mut SensorModel, ch: Channel, effect: Effect, params: &T
             }
         }
         (Effect::GaussMarkov, TermParams::GaussMarkov { sigma, tau_s }) => {
-            Term::GaussMarkov(GaussMarkov { sigma, tau_s })
+            match GaussMarkov::new(sigma, tau_s) {
+                Ok(g) => Term::GaussMarkov(g),
+                Err(_) => return,
+            }
         }
         (
             Effect::Sinusoidal,
@@ -119,11 +121,14 @@ pub fn set_term(model: &mut SensorModel, ch: Channel, effect: Effect, params: &T
                 amplitude,
                 frequency_hz,
             },
-        ) => Term::Sinusoidal(Sinusoid {
+        ) => match Sinusoid::new(
             amplitude,
             frequency_hz,
-            phase_rad: a.get::<Sinusoid>().and_then(|s| s.phase_rad),
-        }),
+            a.get::<Sinusoid>().and_then(|s| s.phase_rad()),
+        ) {
+            Ok(s) => Term::Sinusoidal(s),
+            Err(_) => return,
+        },
         (
             Effect::Resonance,
             TermParams::Resonance {

@@ -624,8 +624,9 @@ impl<'a> FilterSearch<'a> {
         let mut seeds: Vec<OutputFilter> = Vec::new();
         for t in tried.iter() {
             let same = |f: &OutputFilter| {
-                f.decimation == t.1.filter.decimation
-                    && std::mem::discriminant(&f.kind) == std::mem::discriminant(&t.1.filter.kind)
+                f.decimation() == t.1.filter.decimation()
+                    && std::mem::discriminant(&f.kind())
+                        == std::mem::discriminant(&t.1.filter.kind())
             };
             let best_of_family = tried
                 .iter()
@@ -637,7 +638,7 @@ impl<'a> FilterSearch<'a> {
             }
         }
         for f in seeds {
-            match f.kind {
+            match f.kind() {
                 FilterKind::MovingAverage { taps } | FilterKind::Bartlett { taps } => {
                     self.refine_taps(f, taps, tried)
                 }
@@ -653,11 +654,11 @@ impl<'a> FilterSearch<'a> {
         let lo = ((f64::from(taps) / 1.3).floor() as u32).max(2);
         let hi = (f64::from(taps) * 1.3).ceil() as u32;
         for l in lo..=hi {
-            let kind = match f.kind {
+            let kind = match f.kind() {
                 FilterKind::MovingAverage { .. } => FilterKind::MovingAverage { taps: l },
                 _ => FilterKind::Bartlett { taps: l },
             };
-            if let Ok(g) = OutputFilter::new(kind, f.decimation) {
+            if let Ok(g) = OutputFilter::new(kind, f.decimation()) {
                 if !tried.iter().any(|u| u.1.filter == g) {
                     tried.extend(self.try_filter(g));
                 }
@@ -668,11 +669,11 @@ impl<'a> FilterSearch<'a> {
     /// The cutoff by golden section in ln f within one grid step either side of `cutoff_hz`.
     fn refine_cutoff(&self, f: OutputFilter, cutoff_hz: f64) -> Option<(f64, OutputFilterFit)> {
         let with = |fc: f64| {
-            let kind = match f.kind {
+            let kind = match f.kind() {
                 FilterKind::LowPass1 { .. } => FilterKind::LowPass1 { cutoff_hz: fc },
                 _ => FilterKind::LowPass2 { cutoff_hz: fc },
             };
-            OutputFilter::new(kind, f.decimation).ok()
+            OutputFilter::new(kind, f.decimation()).ok()
         };
         let chi = |ln_fc: f64| {
             with(ln_fc.exp())
@@ -706,8 +707,8 @@ impl<'a> FilterSearch<'a> {
             .filter(|t| t.0 <= best_chi2 + alike)
             .min_by(|a, b| {
                 a.1.filter
-                    .decimation
-                    .cmp(&b.1.filter.decimation)
+                    .decimation()
+                    .cmp(&b.1.filter.decimation())
                     .then(a.0.total_cmp(&b.0))
             })
     }

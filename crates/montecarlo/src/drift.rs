@@ -243,13 +243,13 @@ pub fn law_terms(
                     NoiseTerm::RateRandomWalk(k) => Source::RandomWalk(k.density()),
                     NoiseTerm::RateRamp(r) => Source::Ramp(r.rate()),
                     NoiseTerm::GaussMarkov(gm) => Source::GaussMarkov {
-                        sigma: gm.sigma,
-                        tc_s: gm.tau_s,
+                        sigma: gm.sigma(),
+                        tc_s: gm.tau_s(),
                     },
                     NoiseTerm::Sinusoidal(w) => Source::Sinusoid {
-                        amplitude: w.amplitude,
-                        freq_hz: w.frequency_hz,
-                        phase: w.phase_rad,
+                        amplitude: w.amplitude(),
+                        freq_hz: w.frequency_hz(),
+                        phase: w.phase_rad(),
                         sample_interval_s: dt_s,
                     },
                     NoiseTerm::TemperatureBias(c) => {
@@ -288,17 +288,17 @@ pub fn law_terms(
                     // Each output sample is an independent outlier with probability p, size +-a:
                     // white noise of variance p a^2 per sample, density a sqrt(p dt).
                     NoiseTerm::Outliers(o) => {
-                        Source::White(o.size * (o.probability(dt_s) * dt_s).sqrt())
+                        Source::White(o.size() * (o.probability(dt_s) * dt_s).sqrt())
                     }
                     NoiseTerm::WarmupTransient(w) => Source::Transient {
-                        amplitude: w.amplitude,
-                        tau_s: w.tau_s,
-                        per_run: w.per_run,
+                        amplitude: w.amplitude(),
+                        tau_s: w.tau_s(),
+                        per_run: w.per_run(),
                     },
                     NoiseTerm::Resonance(r) => Source::Resonance {
-                        sigma: r.sigma,
-                        frequency_hz: r.frequency_hz,
-                        bandwidth_hz: r.bandwidth_hz,
+                        sigma: r.sigma(),
+                        frequency_hz: r.frequency_hz(),
+                        bandwidth_hz: r.bandwidth_hz(),
                     },
                     NoiseTerm::OutputFilter(_) => unreachable!("skipped above"),
                 };

@@ -203,7 +203,7 @@ mod tests {
         let terms: [Term; Effect::COUNT] = [
             quantization::Quantization::new(1e-3).unwrap().into(),
             white_noise::WhiteNoise::new(2e-3).unwrap().into(),
-            BiasInstability::Flicker(Flicker::with_b(3e-5)).into(),
+            BiasInstability::Flicker(Flicker::with_b(3e-5).unwrap()).into(),
             rate_random_walk::RateRandomWalk::new(4e-6).unwrap().into(),
             rate_ramp::RateRamp::new(5e-7).unwrap().into(),
             gauss_markov::GaussMarkov::new(6e-4, 70.0).unwrap().into(),

@@ -23,15 +23,15 @@ use crate::ImuRng;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Flicker {
     /// IEEE coefficient B (signal units); the Allan plateau is 0.6643 B.
-    pub b: f64,
+    b: f64,
     /// Shortest correlation time of the band, s.
-    pub tau_min_s: f64,
+    tau_min_s: f64,
     /// Longest correlation time of the band, s.
-    pub tau_max_s: f64,
+    tau_max_s: f64,
     /// Gauss-Markov components per decade of correlation time. Over averaging times
     /// [30 tau_min, tau_max / 30] the closed-form Allan deviation of the sum stays within
     /// 0.987 .. 1.010 of 0.664 B with 1 per decade and 0.987 .. 1.000 with 2 (checked numerically).
-    pub per_decade: u32,
+    per_decade: u32,
 }
 
 impl Flicker {
@@ -42,6 +42,8 @@ impl Flicker {
     /// One per decade: as flat as two within the plateau (see `per_decade`), at half the cost per sample.
     pub const DEFAULT_PER_DECADE: u32 = 1;
 
+    /// Checks B (finite, >= 0), the band (finite, > 0, end after start) and 1 to 20 components
+    /// per decade.
     pub fn new(
         b: f64,
         tau_min_s: f64,
@@ -73,14 +75,42 @@ impl Flicker {
         })
     }
 
-    /// With the default band.
-    pub fn with_b(b: f64) -> Flicker {
-        Flicker {
+    /// With the default band (B checked as in [`Flicker::new`]).
+    pub fn with_b(b: f64) -> Result<Flicker, ModelError> {
+        Flicker::new(
             b,
-            tau_min_s: Self::DEFAULT_TAU_MIN_S,
-            tau_max_s: Self::DEFAULT_TAU_MAX_S,
-            per_decade: Self::DEFAULT_PER_DECADE,
-        }
+            Self::DEFAULT_TAU_MIN_S,
+            Self::DEFAULT_TAU_MAX_S,
+            Self::DEFAULT_PER_DECADE,
+        )
+    }
+
+    /// The same band with coefficient `b` (checked as in [`Flicker::new`]).
+    pub fn with_level(&self, b: f64) -> Result<Flicker, ModelError> {
+        Ok(Flicker {
+            b: check("flicker B", b, false)?,
+            ..self.clone()
+        })
+    }
+
+    /// IEEE coefficient B (signal units); the Allan plateau is 0.6643 B.
+    pub fn b(&self) -> f64 {
+        self.b
+    }
+
+    /// Shortest correlation time of the band, s.
+    pub fn tau_min_s(&self) -> f64 {
+        self.tau_min_s
+    }
+
+    /// Longest correlation time of the band, s.
+    pub fn tau_max_s(&self) -> f64 {
+        self.tau_max_s
+    }
+
+    /// Gauss-Markov components per decade of correlation time.
+    pub fn per_decade(&self) -> u32 {
+        self.per_decade
     }
 
     /// The Gauss-Markov components as (correlation time s, stationary std), shortest first.

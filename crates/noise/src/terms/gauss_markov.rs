@@ -13,16 +13,27 @@ use crate::ImuRng;
 /// First-order Gauss-Markov bias: stationary std `sigma`, correlation time `tau_s`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GaussMarkov {
-    pub sigma: f64,
-    pub tau_s: f64,
+    sigma: f64,
+    tau_s: f64,
 }
 
 impl GaussMarkov {
+    /// Checks sigma (finite, >= 0) and the correlation time (finite, > 0).
     pub fn new(sigma: f64, tau_s: f64) -> Result<GaussMarkov, ModelError> {
         Ok(GaussMarkov {
             sigma: check("Gauss-Markov sigma", sigma, false)?,
             tau_s: check("Gauss-Markov correlation time", tau_s, true)?,
         })
+    }
+
+    /// Stationary standard deviation (signal units).
+    pub fn sigma(&self) -> f64 {
+        self.sigma
+    }
+
+    /// Correlation time, s.
+    pub fn tau_s(&self) -> f64 {
+        self.tau_s
     }
 }
 

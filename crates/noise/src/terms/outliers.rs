@@ -17,17 +17,29 @@ use rand::Rng;
 /// p size^2 per sample (independent, zero mean): p size^2 / m at tau = m dt.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Outliers {
-    pub rate_per_hour: f64,
-    pub size: f64,
+    rate_per_hour: f64,
+    size: f64,
 }
 
 impl Outliers {
+    /// Checks the rate and the size (finite, >= 0).
     pub fn new(rate_per_hour: f64, size: f64) -> Result<Outliers, ModelError> {
         Ok(Outliers {
             rate_per_hour: check("outlier rate", rate_per_hour, false)?,
             size: check("outlier size", size, false)?,
         })
     }
+
+    /// Mean number of outliers per hour.
+    pub fn rate_per_hour(&self) -> f64 {
+        self.rate_per_hour
+    }
+
+    /// The displacement of one outlier (signal units).
+    pub fn size(&self) -> f64 {
+        self.size
+    }
+
     /// Probability that one output sample of interval `dt_s` is an outlier.
     pub fn probability(&self, dt_s: f64) -> f64 {
         (self.rate_per_hour * dt_s / 3600.0).min(1.0)

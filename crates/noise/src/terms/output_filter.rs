@@ -59,8 +59,8 @@ pub const MAX_RESPONSE: usize = 8192;
 /// every `decimation`-th filtered sample kept (1: no decimation).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct OutputFilter {
-    pub kind: FilterKind,
-    pub decimation: u32,
+    kind: FilterKind,
+    decimation: u32,
 }
 
 impl OutputFilter {
@@ -90,6 +90,16 @@ impl OutputFilter {
             });
         }
         Ok(OutputFilter { kind, decimation })
+    }
+
+    /// Which filter, with its taps or cutoff.
+    pub fn kind(&self) -> FilterKind {
+        self.kind
+    }
+
+    /// Internal samples per output sample (1: no decimation).
+    pub fn decimation(&self) -> u32 {
+        self.decimation
     }
 
     /// Internal sample interval for output interval `dt_s`.

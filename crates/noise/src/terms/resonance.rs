@@ -19,12 +19,14 @@ use rand::Rng;
 /// (bandwidth below twice the frequency). Closed forms in [`cf::resonance_exponent`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Resonance {
-    pub sigma: f64,
-    pub frequency_hz: f64,
-    pub bandwidth_hz: f64,
+    sigma: f64,
+    frequency_hz: f64,
+    bandwidth_hz: f64,
 }
 
 impl Resonance {
+    /// Checks sigma (finite, >= 0), the frequency and bandwidth (finite, > 0) and that the
+    /// bandwidth is below twice the frequency (underdamped).
     pub fn new(sigma: f64, frequency_hz: f64, bandwidth_hz: f64) -> Result<Resonance, ModelError> {
         check("resonance sigma", sigma, false)?;
         check("resonance frequency", frequency_hz, true)?;
@@ -41,6 +43,21 @@ impl Resonance {
             frequency_hz,
             bandwidth_hz,
         })
+    }
+
+    /// Stationary standard deviation (signal units).
+    pub fn sigma(&self) -> f64 {
+        self.sigma
+    }
+
+    /// Natural frequency, Hz.
+    pub fn frequency_hz(&self) -> f64 {
+        self.frequency_hz
+    }
+
+    /// Half-power (-3 dB) bandwidth, Hz.
+    pub fn bandwidth_hz(&self) -> f64 {
+        self.bandwidth_hz
     }
 
     /// Damping ratio zeta = bandwidth / (2 frequency).

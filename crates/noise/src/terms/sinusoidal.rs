@@ -14,12 +14,13 @@ use rand::Rng;
 /// uniformly per run (the phase average is what the Allan closed form describes).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sinusoid {
-    pub amplitude: f64,
-    pub frequency_hz: f64,
-    pub phase_rad: Option<f64>,
+    amplitude: f64,
+    frequency_hz: f64,
+    phase_rad: Option<f64>,
 }
 
 impl Sinusoid {
+    /// Checks the amplitude (finite, >= 0), the frequency (finite, > 0) and the phase (finite).
     pub fn new(
         amplitude: f64,
         frequency_hz: f64,
@@ -41,6 +42,21 @@ impl Sinusoid {
             frequency_hz,
             phase_rad,
         })
+    }
+
+    /// Amplitude (signal units).
+    pub fn amplitude(&self) -> f64 {
+        self.amplitude
+    }
+
+    /// Frequency, Hz.
+    pub fn frequency_hz(&self) -> f64 {
+        self.frequency_hz
+    }
+
+    /// The fixed phase, rad; None: drawn per run.
+    pub fn phase_rad(&self) -> Option<f64> {
+        self.phase_rad
     }
 }
 

@@ -14,12 +14,13 @@ use crate::ImuRng;
 /// `per_run` is set, drawn per run from N(0, amplitude^2) (turn-on to turn-on).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WarmupTransient {
-    pub amplitude: f64,
-    pub tau_s: f64,
-    pub per_run: bool,
+    amplitude: f64,
+    tau_s: f64,
+    per_run: bool,
 }
 
 impl WarmupTransient {
+    /// Checks the amplitude (finite, any sign) and the time constant (finite, > 0).
     pub fn new(amplitude: f64, tau_s: f64, per_run: bool) -> Result<WarmupTransient, ModelError> {
         if !amplitude.is_finite() {
             return Err(ModelError {
@@ -33,6 +34,21 @@ impl WarmupTransient {
             tau_s: check("warm-up transient time constant", tau_s, true)?,
             per_run,
         })
+    }
+
+    /// Amplitude at t = 0 (signal units, signed), or the standard deviation of the per-run draw.
+    pub fn amplitude(&self) -> f64 {
+        self.amplitude
+    }
+
+    /// Time constant, s.
+    pub fn tau_s(&self) -> f64 {
+        self.tau_s
+    }
+
+    /// Is the amplitude drawn per run from N(0, amplitude^2)?
+    pub fn per_run(&self) -> bool {
+        self.per_run
     }
 }
 
