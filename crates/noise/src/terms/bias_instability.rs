@@ -492,6 +492,23 @@ fn flicker_band(
 }
 
 impl ErrorTerm for BiasInstability {
+    /// Flicker's B, named `b` (docs/cli.md; its band is a convention, not a shape), or the random
+    /// walk's stability, named `stability`.
+    fn level(&self) -> Option<(&'static str, f64)> {
+        Some(match self {
+            BiasInstability::Flicker(f) => ("b", f.b),
+            BiasInstability::RandomWalk { stability, .. } => ("stability", *stability),
+        })
+    }
+
+    /// The random walk's period, named `period_s`; flicker has none.
+    fn shape(&self) -> Vec<(&'static str, f64)> {
+        match self {
+            BiasInstability::Flicker(_) => Vec::new(),
+            BiasInstability::RandomWalk { period_s, .. } => vec![("period_s", *period_s)],
+        }
+    }
+
     fn allan_variance(&self, tau_s: f64) -> Option<f64> {
         Some(self.avar(tau_s))
     }
@@ -545,6 +562,17 @@ impl TermKind for BiasInstability {
     type Raw = toml::Spanned<RawBiasField>;
     /// The `allan_minimum` convention solves B against the axis' other terms.
     const READS_OTHER_TERMS: bool = true;
+
+    /// Flicker's band, or the random walk's period, kept.
+    fn with_level(&self, level: f64) -> Result<BiasInstability, ModelError> {
+        Ok(match self {
+            BiasInstability::Flicker(f) => BiasInstability::Flicker(f.with_level(level)?),
+            BiasInstability::RandomWalk { period_s, .. } => BiasInstability::RandomWalk {
+                stability: check("bias random walk stability", level, false)?,
+                period_s: *period_s,
+            },
+        })
+    }
 
     /// Flicker (`model` absent or `"flicker"`) or Woodman's random walk (`model = "random_walk"`).
     fn from_raw(

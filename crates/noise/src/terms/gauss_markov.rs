@@ -46,6 +46,16 @@ pub struct RawGaussMarkov {
 }
 
 impl ErrorTerm for GaussMarkov {
+    /// Sigma, named `sigma` (docs/cli.md).
+    fn level(&self) -> Option<(&'static str, f64)> {
+        Some(("sigma", self.sigma))
+    }
+
+    /// The correlation time, named `tau_s`.
+    fn shape(&self) -> Vec<(&'static str, f64)> {
+        vec![("tau_s", self.tau_s)]
+    }
+
     /// Hou 4.60 (docs/model.md §2).
     fn allan_variance(&self, tau_s: f64) -> Option<f64> {
         Some(cf::gauss_markov_avar(self.sigma, self.tau_s, tau_s))
@@ -74,6 +84,11 @@ impl TermKind for GaussMarkov {
     const STOCHASTIC: bool = true;
     const SHOWS_IN_STATIC_LOG: bool = true;
     type Raw = RawGaussMarkov;
+
+    /// The correlation time kept.
+    fn with_level(&self, level: f64) -> Result<GaussMarkov, ModelError> {
+        GaussMarkov::new(level, self.tau_s)
+    }
 
     fn from_raw(raw: &RawGaussMarkov, cx: &ReadContext) -> Result<GaussMarkov, ConfigError> {
         let sigma = cx.sub_value("sigma", &raw.sigma, Quantity::Signal(cx.sig), true)?;

@@ -260,6 +260,20 @@ pub struct RawOutputFilter {
 /// The filter adds no error of its own; it changes the other terms' Allan variances
 /// (`crate::filter::FilteredAllan`, used by `AxisModel`).
 impl ErrorTerm for OutputFilter {
+    /// The taps (`taps`) or the cutoff (`cutoff_hz`), and the decimation (`decimation`); a filter
+    /// has no level.
+    fn shape(&self) -> Vec<(&'static str, f64)> {
+        let first = match self.kind {
+            FilterKind::MovingAverage { taps } | FilterKind::Bartlett { taps } => {
+                ("taps", f64::from(taps))
+            }
+            FilterKind::LowPass1 { cutoff_hz } | FilterKind::LowPass2 { cutoff_hz } => {
+                ("cutoff_hz", cutoff_hz)
+            }
+        };
+        vec![first, ("decimation", f64::from(self.decimation))]
+    }
+
     fn config_value(&self, cx: &WriteContext) -> String {
         let parameter = match self.kind {
             FilterKind::MovingAverage { taps } | FilterKind::Bartlett { taps } => {

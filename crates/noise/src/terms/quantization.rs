@@ -33,6 +33,11 @@ impl Quantization {
 }
 
 impl ErrorTerm for Quantization {
+    /// Q, named `q` (docs/cli.md).
+    fn level(&self) -> Option<(&'static str, f64)> {
+        Some(("q", self.q))
+    }
+
     /// sigma^2 = 3 Q^2 / tau^2 (Hou 4.29), sampled or not; the output filter does not act on it
     /// (quantisation is of the output register).
     fn allan_variance(&self, tau_s: f64) -> Option<f64> {
@@ -49,6 +54,10 @@ impl TermKind for Quantization {
     const SHOWS_IN_STATIC_LOG: bool = true;
     type Raw = Text;
     const EXAMPLE: Option<&'static str> = Some("quantization = \"0.001 deg\"");
+
+    fn with_level(&self, level: f64) -> Result<Quantization, ModelError> {
+        Quantization::new(level)
+    }
 
     fn from_raw(raw: &Text, cx: &ReadContext) -> Result<Quantization, ConfigError> {
         let value = cx.value(raw, Quantity::Integrated(cx.sig), true)?;

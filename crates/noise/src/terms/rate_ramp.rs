@@ -31,6 +31,11 @@ impl RateRamp {
 }
 
 impl ErrorTerm for RateRamp {
+    /// R (signed), named `r` (docs/cli.md).
+    fn level(&self) -> Option<(&'static str, f64)> {
+        Some(("r", self.rate))
+    }
+
     /// sigma^2 = R^2 tau^2 / 2 (Hou 4.56), exact for samples too; unit DC gain keeps it through
     /// the output filter.
     fn allan_variance(&self, tau_s: f64) -> Option<f64> {
@@ -47,6 +52,10 @@ impl TermKind for RateRamp {
     const SHOWS_IN_STATIC_LOG: bool = true;
     type Raw = Text;
     const EXAMPLE: Option<&'static str> = Some("rate_ramp = \"0.01 deg/h/h\"");
+
+    fn with_level(&self, level: f64) -> Result<RateRamp, ModelError> {
+        RateRamp::new(level)
+    }
 
     fn from_raw(raw: &Text, cx: &ReadContext) -> Result<RateRamp, ConfigError> {
         let value = cx.value(raw, Quantity::Ramp(cx.sig), false)?;

@@ -33,6 +33,11 @@ impl RateRandomWalk {
 }
 
 impl ErrorTerm for RateRandomWalk {
+    /// K, named `k` (docs/cli.md).
+    fn level(&self) -> Option<(&'static str, f64)> {
+        Some(("k", self.density))
+    }
+
     /// sigma^2 = K^2 tau / 3 (Hou 4.53).
     fn allan_variance(&self, tau_s: f64) -> Option<f64> {
         Some(cf::rate_random_walk_avar(self.density, tau_s))
@@ -56,6 +61,10 @@ impl TermKind for RateRandomWalk {
     const SHOWS_IN_STATIC_LOG: bool = true;
     type Raw = Text;
     const EXAMPLE: Option<&'static str> = Some("rate_random_walk = \"0.5 deg/h/sqrt(h)\"");
+
+    fn with_level(&self, level: f64) -> Result<RateRandomWalk, ModelError> {
+        RateRandomWalk::new(level)
+    }
 
     fn from_raw(raw: &Text, cx: &ReadContext) -> Result<RateRandomWalk, ConfigError> {
         let value = cx.value(raw, Quantity::RandomWalk(cx.sig), true)?;

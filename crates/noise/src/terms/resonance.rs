@@ -76,6 +76,19 @@ pub struct RawResonance {
 }
 
 impl ErrorTerm for Resonance {
+    /// Sigma, named `sigma` (docs/cli.md).
+    fn level(&self) -> Option<(&'static str, f64)> {
+        Some(("sigma", self.sigma))
+    }
+
+    /// The frequency and bandwidth, named `frequency_hz` and `bandwidth_hz`.
+    fn shape(&self) -> Vec<(&'static str, f64)> {
+        vec![
+            ("frequency_hz", self.frequency_hz),
+            ("bandwidth_hz", self.bandwidth_hz),
+        ]
+    }
+
     /// [`cf::resonance_avar`].
     fn allan_variance(&self, tau_s: f64) -> Option<f64> {
         let (s, f, b) = (self.sigma, self.frequency_hz, self.bandwidth_hz);
@@ -107,6 +120,11 @@ impl TermKind for Resonance {
     type Raw = RawResonance;
     const EXAMPLE: Option<&'static str> =
         Some("resonance = { sigma = \"0.5 mg\", frequency = \"10 Hz\", bandwidth = \"0.7 Hz\" }");
+
+    /// The frequency and bandwidth kept.
+    fn with_level(&self, level: f64) -> Result<Resonance, ModelError> {
+        Resonance::new(level, self.frequency_hz, self.bandwidth_hz)
+    }
 
     /// Stationary std `sigma`, natural `frequency`, half-power `bandwidth` (below twice the
     /// frequency).

@@ -70,6 +70,17 @@ pub struct RawSinusoid {
 }
 
 impl ErrorTerm for Sinusoid {
+    /// The amplitude, named `amplitude` (docs/cli.md).
+    fn level(&self) -> Option<(&'static str, f64)> {
+        Some(("amplitude", self.amplitude))
+    }
+
+    /// The frequency, named `frequency_hz` (a fixed phase moves no Allan variance, which is the
+    /// phase average: not a shape).
+    fn shape(&self) -> Vec<(&'static str, f64)> {
+        vec![("frequency_hz", self.frequency_hz)]
+    }
+
     /// Phase averaged (Hou 4.64).
     fn allan_variance(&self, tau_s: f64) -> Option<f64> {
         Some(cf::sinusoid_avar(self.amplitude, self.frequency_hz, tau_s))
@@ -105,6 +116,11 @@ impl TermKind for Sinusoid {
     const STOCHASTIC: bool = false;
     const SHOWS_IN_STATIC_LOG: bool = true;
     type Raw = RawSinusoid;
+
+    /// The frequency and phase kept.
+    fn with_level(&self, level: f64) -> Result<Sinusoid, ModelError> {
+        Sinusoid::new(level, self.frequency_hz, self.phase_rad)
+    }
 
     fn from_raw(raw: &RawSinusoid, cx: &ReadContext) -> Result<Sinusoid, ConfigError> {
         let amplitude =

@@ -32,6 +32,11 @@ impl TemperatureBias {
 }
 
 impl ErrorTerm for TemperatureBias {
+    /// The coefficient (signed), named `coefficient` (docs/cli.md).
+    fn level(&self) -> Option<(&'static str, f64)> {
+        Some(("coefficient", self.per_degree))
+    }
+
     fn config_value(&self, cx: &WriteContext) -> String {
         cx.quoted(self.per_degree, Quantity::PerDegree(cx.sig))
     }
@@ -42,6 +47,10 @@ impl TermKind for TemperatureBias {
     const SHOWS_IN_STATIC_LOG: bool = false;
     type Raw = Text;
     const EXAMPLE: Option<&'static str> = Some("temperature_bias = \"0.01 deg/s/degC\"");
+
+    fn with_level(&self, level: f64) -> Result<TemperatureBias, ModelError> {
+        TemperatureBias::new(level)
+    }
 
     fn from_raw(raw: &Text, cx: &ReadContext) -> Result<TemperatureBias, ConfigError> {
         let value = cx.value(raw, Quantity::PerDegree(cx.sig), false)?;

@@ -34,6 +34,11 @@ impl WhiteNoise {
 }
 
 impl ErrorTerm for WhiteNoise {
+    /// N, named `n` (docs/cli.md).
+    fn level(&self) -> Option<(&'static str, f64)> {
+        Some(("n", self.density))
+    }
+
     /// sigma^2 = N^2 / tau (Hou 4.36), exact for the sampled sequence too.
     fn allan_variance(&self, tau_s: f64) -> Option<f64> {
         Some(cf::white_noise_avar(self.density, tau_s))
@@ -54,6 +59,10 @@ impl TermKind for WhiteNoise {
     type Raw = Text;
     const EXAMPLE: Option<&'static str> =
         Some("white_noise = \"0.05 deg/s/sqrt(Hz)\" (gyro) or \"40 ug/sqrt(Hz)\" (accelerometer)");
+
+    fn with_level(&self, level: f64) -> Result<WhiteNoise, ModelError> {
+        WhiteNoise::new(level)
+    }
 
     fn from_raw(raw: &Text, cx: &ReadContext) -> Result<WhiteNoise, ConfigError> {
         let value = cx.value(raw, Quantity::NoiseDensity(cx.sig), true)?;
