@@ -11,6 +11,7 @@ use crate::config::error::ConfigError;
 use crate::config::read::{in_units_of, ReadContext, Text};
 use crate::discrete::RandomWalk;
 use crate::filter::FilteredAllan;
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model::AxisModel;
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
@@ -492,6 +493,18 @@ fn flicker_band(
 }
 
 impl ErrorTerm for BiasInstability {
+    /// Flicker as realised, a sum of stationary Gauss-Markov components; Woodman's bias random
+    /// walk as a random walk of density stability / sqrt(period).
+    fn law_sources(&self, _cx: &LawSourceContext) -> Vec<LawSource> {
+        vec![match self {
+            BiasInstability::Flicker(f) => LawSource::GaussMarkovSum(f.components()),
+            BiasInstability::RandomWalk {
+                stability,
+                period_s,
+            } => LawSource::RandomWalk(cf::woodman_bias_random_walk(*stability, *period_s)),
+        }]
+    }
+
     /// Flicker's B, named `b` (docs/cli.md; its band is a convention, not a shape), or the random
     /// walk's stability, named `stability`.
     fn level(&self) -> Option<(&'static str, f64)> {
@@ -653,6 +666,12 @@ impl Generate for BiasInstabilityGenerator {
             g.calibrate_window(window_s, rng);
         }
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> BiasInstability {
+    BiasInstability::Flicker(Flicker::with_b(3e-5).unwrap())
 }
 
 #[cfg(test)]

@@ -6,6 +6,7 @@ use crate::config::error::ConfigError;
 use crate::config::read::{ReadContext, Text};
 use crate::discrete::GaussMarkovBank;
 use crate::filter::FilteredAllan;
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -46,6 +47,13 @@ pub struct RawGaussMarkov {
 }
 
 impl ErrorTerm for GaussMarkov {
+    fn law_sources(&self, _cx: &LawSourceContext) -> Vec<LawSource> {
+        vec![LawSource::GaussMarkov {
+            sigma: self.sigma,
+            tc_s: self.tau_s,
+        }]
+    }
+
     /// Sigma, named `sigma` (docs/cli.md).
     fn level(&self) -> Option<(&'static str, f64)> {
         Some(("sigma", self.sigma))
@@ -148,4 +156,10 @@ impl Generate for BankGenerator {
     fn calibrate_window(&mut self, window_s: f64, rng: &dyn Fn() -> ImuRng) {
         self.bank.reference_to_window_mean(window_s, &mut rng());
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> GaussMarkov {
+    GaussMarkov::new(6e-4, 70.0).unwrap()
 }

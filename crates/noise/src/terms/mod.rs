@@ -176,6 +176,12 @@ macro_rules! registry {
             }
         }
 
+        /// One valid term of each effect, in registry order (each file's `sample`), for tests.
+        #[cfg(test)]
+        pub(crate) fn samples() -> [Term; Effect::COUNT] {
+            [$(Term::$effect($file::sample()),)+]
+        }
+
         /// The per-run generator of one term: a closed enum, so the per-sample calls are static.
         #[derive(Clone, Debug)]
         pub enum Generator {

@@ -5,6 +5,7 @@ use super::term::{
 };
 use crate::config::error::ConfigError;
 use crate::config::read::{ReadContext, Text};
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -60,6 +61,14 @@ pub struct RawOutliers {
 }
 
 impl ErrorTerm for Outliers {
+    /// Each output sample is an independent outlier with probability p, size +-a: white noise of
+    /// variance p a^2 per sample, density a sqrt(p dt).
+    fn law_sources(&self, cx: &LawSourceContext) -> Vec<LawSource> {
+        vec![LawSource::White(
+            self.size * (self.probability(cx.dt_s) * cx.dt_s).sqrt(),
+        )]
+    }
+
     /// White noise of variance p size^2 per output sample (no continuous form: p needs dt).
     fn allan_variance_sampled(&self, tau_s: f64, dt_s: f64) -> Option<f64> {
         Some(self.avar_sampled(tau_s, dt_s))
@@ -157,4 +166,10 @@ impl Generate for OutlierState {
     fn output(&mut self, k0: u64, _dt_s: f64, out: &mut [f64]) {
         self.add(k0, out);
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> Outliers {
+    Outliers::new(60.0, 0.1).unwrap()
 }

@@ -25,6 +25,7 @@
 use super::term::{note_value_units, ErrorTerm, GenContext, NoGenerator, TermKind, WriteContext};
 use crate::config::error::ConfigError;
 use crate::config::read::{Integer, ReadContext, Text};
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -260,6 +261,12 @@ pub struct RawOutputFilter {
 /// The filter adds no error of its own; it changes the other terms' Allan variances
 /// (`crate::filter::FilteredAllan`, used by `AxisModel`).
 impl ErrorTerm for OutputFilter {
+    /// None: unit DC gain adds no error of its own, and the other terms' laws hold for times much
+    /// longer than its impulse response.
+    fn law_sources(&self, _cx: &LawSourceContext) -> Vec<LawSource> {
+        Vec::new()
+    }
+
     /// The taps (`taps`) or the cutoff (`cutoff_hz`), and the decimation (`decimation`); a filter
     /// has no level.
     fn shape(&self) -> Vec<(&'static str, f64)> {
@@ -504,4 +511,10 @@ impl FilterState {
         }
         self.raw_done = start + raw.len() as u64;
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> OutputFilter {
+    OutputFilter::new(FilterKind::Bartlett { taps: 8 }, 2).unwrap()
 }

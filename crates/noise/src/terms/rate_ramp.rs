@@ -6,6 +6,7 @@ use super::term::{
 use crate::closed_form as cf;
 use crate::config::error::ConfigError;
 use crate::config::read::{ReadContext, Text};
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check_finite, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -31,6 +32,10 @@ impl RateRamp {
 }
 
 impl ErrorTerm for RateRamp {
+    fn law_sources(&self, _cx: &LawSourceContext) -> Vec<LawSource> {
+        vec![LawSource::Ramp(self.rate)]
+    }
+
     /// R (signed), named `r` (docs/cli.md).
     fn level(&self) -> Option<(&'static str, f64)> {
         Some(("r", self.rate))
@@ -94,4 +99,10 @@ impl Generate for RampGenerator {
                 .for_each(|(i, v)| *v += ramp * clock.t(i));
         }
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> RateRamp {
+    RateRamp::new(5e-7).unwrap()
 }

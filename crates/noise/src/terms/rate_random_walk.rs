@@ -8,6 +8,7 @@ use crate::config::error::ConfigError;
 use crate::config::read::{ReadContext, Text};
 use crate::discrete::RandomWalk;
 use crate::filter::FilteredAllan;
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -33,6 +34,10 @@ impl RateRandomWalk {
 }
 
 impl ErrorTerm for RateRandomWalk {
+    fn law_sources(&self, _cx: &LawSourceContext) -> Vec<LawSource> {
+        vec![LawSource::RandomWalk(self.density)]
+    }
+
     /// K, named `k` (docs/cli.md).
     fn level(&self) -> Option<(&'static str, f64)> {
         Some(("k", self.density))
@@ -101,4 +106,10 @@ impl Generate for RandomWalkGenerator {
     fn add_raw(&mut self, _clock: RawClock, out: &mut [f64], scratch: &mut Vec<f64>) {
         self.walk.add_block(&mut self.rng, out, scratch);
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> RateRandomWalk {
+    RateRandomWalk::new(4e-6).unwrap()
 }

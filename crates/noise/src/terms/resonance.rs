@@ -8,6 +8,7 @@ use crate::config::error::ConfigError;
 use crate::config::read::{ReadContext, Text};
 use crate::discrete::{draws, normal};
 use crate::filter::FilteredAllan;
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -76,6 +77,14 @@ pub struct RawResonance {
 }
 
 impl ErrorTerm for Resonance {
+    fn law_sources(&self, _cx: &LawSourceContext) -> Vec<LawSource> {
+        vec![LawSource::Resonance {
+            sigma: self.sigma,
+            frequency_hz: self.frequency_hz,
+            bandwidth_hz: self.bandwidth_hz,
+        }]
+    }
+
     /// Sigma, named `sigma` (docs/cli.md).
     fn level(&self) -> Option<(&'static str, f64)> {
         Some(("sigma", self.sigma))
@@ -240,4 +249,10 @@ impl Generate for ResonanceGenerator {
     fn add_raw(&mut self, _clock: RawClock, out: &mut [f64], scratch: &mut Vec<f64>) {
         self.resonator.add_block(&mut self.rng, out, scratch);
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> Resonance {
+    Resonance::new(7e-4, 20.0, 0.7).unwrap()
 }

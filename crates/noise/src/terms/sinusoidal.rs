@@ -5,6 +5,7 @@ use crate::closed_form as cf;
 use crate::config::error::ConfigError;
 use crate::config::read::{ReadContext, Text};
 use crate::filter::FilteredAllan;
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -70,6 +71,16 @@ pub struct RawSinusoid {
 }
 
 impl ErrorTerm for Sinusoid {
+    /// Point-sampled at the run's interval.
+    fn law_sources(&self, cx: &LawSourceContext) -> Vec<LawSource> {
+        vec![LawSource::Sinusoid {
+            amplitude: self.amplitude,
+            freq_hz: self.frequency_hz,
+            phase: self.phase_rad,
+            sample_interval_s: cx.dt_s,
+        }]
+    }
+
     /// The amplitude, named `amplitude` (docs/cli.md).
     fn level(&self) -> Option<(&'static str, f64)> {
         Some(("amplitude", self.amplitude))
@@ -212,4 +223,10 @@ impl Generate for SinusoidGenerator {
             .enumerate()
             .for_each(|(i, v)| *v += a * (omega * (k0 + i as u64) as f64 * dt_s + phase).sin());
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> Sinusoid {
+    Sinusoid::new(8e-3, 9.0, Some(0.1)).unwrap()
 }

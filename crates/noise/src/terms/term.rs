@@ -5,6 +5,7 @@
 use crate::config::error::ConfigError;
 use crate::config::read::ReadContext;
 use crate::filter::FilteredAllan;
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::ModelError;
 use crate::temperature::TemperatureProfile;
 use crate::units::{Quantity, Signal};
@@ -32,6 +33,11 @@ pub trait ErrorTerm: fmt::Debug {
     fn allan_variance_filtered(&self, tau_s: f64, dt_s: f64, _fa: &FilteredAllan) -> Option<f64> {
         self.allan_variance_sampled(tau_s, dt_s)
     }
+
+    /// Its growth-law sources (docs/model.md §4) under the laws' conditions `cx`, in the order
+    /// the laws add them: usually one; none for a term that adds no error of its own (the output
+    /// filter); [`LawSource::NoLaw`] for one without a closed form.
+    fn law_sources(&self, cx: &LawSourceContext) -> Vec<LawSource>;
 
     /// The level its Allan variance is quadratic in, with its docs/cli.md JSON name (`q`, `n`, `b`,
     /// `k`, `r`, `coefficient`, `sigma`, `amplitude`): what a fit of the term's size estimates.

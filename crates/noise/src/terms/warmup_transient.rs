@@ -6,6 +6,7 @@ use super::term::{
 use crate::config::error::ConfigError;
 use crate::config::read::{ReadContext, Text};
 use crate::discrete::normal;
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -62,6 +63,14 @@ pub struct RawWarmupTransient {
 }
 
 impl ErrorTerm for WarmupTransient {
+    fn law_sources(&self, _cx: &LawSourceContext) -> Vec<LawSource> {
+        vec![LawSource::Transient {
+            amplitude: self.amplitude,
+            tau_s: self.tau_s,
+            per_run: self.per_run,
+        }]
+    }
+
     fn config_value(&self, cx: &WriteContext) -> String {
         format!(
             "{{ amplitude = {}, time_constant = {}, per_run = {} }}",
@@ -129,4 +138,10 @@ impl Generate for TransientGenerator {
             .enumerate()
             .for_each(|(i, v)| *v += a * (-clock.t(i).max(0.0) / tau).exp());
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> WarmupTransient {
+    WarmupTransient::new(5e-4, 600.0, false).unwrap()
 }

@@ -8,6 +8,7 @@ use crate::config::error::ConfigError;
 use crate::config::read::{ReadContext, Text};
 use crate::discrete::{draws, normal};
 use crate::filter::FilteredAllan;
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -34,6 +35,10 @@ impl WhiteNoise {
 }
 
 impl ErrorTerm for WhiteNoise {
+    fn law_sources(&self, _cx: &LawSourceContext) -> Vec<LawSource> {
+        vec![LawSource::White(self.density)]
+    }
+
     /// N, named `n` (docs/cli.md).
     fn level(&self) -> Option<(&'static str, f64)> {
         Some(("n", self.density))
@@ -126,4 +131,10 @@ impl Generate for WhiteNoiseGenerator {
     fn add_raw(&mut self, _clock: RawClock, out: &mut [f64], scratch: &mut Vec<f64>) {
         self.sampler.add_block(&mut self.rng, out, scratch);
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> WhiteNoise {
+    WhiteNoise::new(2e-3).unwrap()
 }
