@@ -418,9 +418,10 @@ pub fn draw_models(
 ) -> Result<Draws, BootstrapError> {
     noise::ImuErrors::check_rate(model, fitted.sample_interval_s)
         .map_err(|e| BootstrapError::Rate(e.to_string()))?;
+    let unfiltered = without_output_filters(model, fitted.sample_interval_s);
     let fits: Vec<ChannelFit> = Channel::ALL
         .into_iter()
-        .filter_map(|ch| ChannelFit::new(model, ch, fitted))
+        .filter_map(|ch| ChannelFit::new(&unfiltered, ch, fitted))
         .collect();
     if let Some(f) = fits.iter().find(|f| f.terms.len() > MAX_TERMS) {
         return Err(BootstrapError::TooManyTerms {
@@ -428,7 +429,13 @@ pub fn draw_models(
             terms: f.terms.len(),
         });
     }
-    let avar = simulate_fitted_logs(model, fitted, &fits, (seed, first_run, replicates), tick);
+    let avar = simulate_fitted_logs(
+        &unfiltered,
+        fitted,
+        &fits,
+        (seed, first_run, replicates),
+        tick,
+    );
     // Multipliers [replicate][channel][term] of the reference squared levels; those of a fitted
     // level centred on 1 by their bootstrap mean, those of a level fitted at 0 left as drawn.
     let mut s: Vec<Vec<Vec<f64>>> = avar
@@ -457,6 +464,30 @@ pub fn draw_models(
     let models = s.iter().map(|r| drawn_model(model, &fits, r)).collect();
     let spread = spread(fitted, &fits, &s, &informed);
     Ok(Draws { models, spread })
+}
+
+/// `model` without its output filters: the bootstrap's logs are simulated at the output rate.
+///
+/// An output filter (DC gain 1) shapes the Allan variance only at averaging times of the order of
+/// its length, and a decimating one makes every term run at the raw rate, up to 16 times the work.
+/// The refit needs only the *relative* spread of the levels, which comes from the long averaging
+/// times where a level has few degrees of freedom, and the draws are centred by their bootstrap
+/// mean (module doc), which absorbs what the filter changes in the Allan variances themselves; the
+/// basis columns and the simulated logs both come from this model, so they agree with each other.
+/// The drawn levels are then set on the filtered model (`drawn_model`). The end-to-end check is the
+/// calibration test (`tests/band_calibration.rs`). A model that cannot run at the output rate
+/// without its filters (a tone above the output Nyquist frequency) keeps them.
+fn without_output_filters(model: &SensorModel, dt_s: f64) -> SensorModel {
+    let mut m = model.clone();
+    for ch in Channel::ALL {
+        m.axis_mut(ch.sensor(), ch.axis())
+            .remove(Effect::OutputFilter);
+    }
+    if noise::ImuErrors::check_rate(&m, dt_s).is_ok() {
+        m
+    } else {
+        model.clone()
+    }
 }
 
 /// Rounds of [`fit_levels`]: each refits with the weights of the previous round's levels.
