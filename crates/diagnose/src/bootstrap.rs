@@ -151,7 +151,7 @@ impl ChannelFit {
     /// The refit of channel `ch` of `model` on data like `fitted` (None: nothing to draw there).
     fn new(model: &SensorModel, ch: Channel, fitted: &FittedOn) -> Option<ChannelFit> {
         let terms = drawn_terms(model, ch);
-        if terms.is_empty() || !fitted.channels[ch.index()] {
+        if terms.is_empty() || !fitted.channels[ch] {
             return None;
         }
         let dt = fitted.sample_interval_s;
@@ -372,10 +372,10 @@ fn simulate_fitted_logs(
                 dt_s: fitted.sample_interval_s,
                 samples: fitted.samples[t],
                 grid_m: Vec::new(),
-                active: std::array::from_fn(|c| fits.iter().any(|f| f.ch.index() == c)),
+                active: noise::ImuChannels::from_fn(|c| fits.iter().any(|f| f.ch == c)),
                 horizons_s: Vec::new(),
                 temperature_c: None,
-                temp_coeff: [0.0; 6],
+                temp_coeff: noise::ImuChannels::default(),
             };
             let run = first_run + (r * logs + t) as u64;
             let log = static_log(model, &setup, seed, run);
@@ -383,7 +383,7 @@ fn simulate_fitted_logs(
                 .iter()
                 .map(|f| {
                     let ms = &f.grid_m[..f.held[t]];
-                    adev_at(&log[f.ch.index()], fitted.sample_interval_s, ms)
+                    adev_at(&log[f.ch], fitted.sample_interval_s, ms)
                         .iter()
                         .map(|a| a * a)
                         .collect()
