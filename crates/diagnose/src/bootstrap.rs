@@ -35,12 +35,11 @@
 //! too, uncentred, from a unit reference level: its draws are the refits' (0 or above), so that
 //! the levels it trades with (a flicker level against a rate random walk) spread as they would.
 
-use crate::candidates::TermParams;
 use crate::fitted_on::FittedOn;
-use crate::model_terms::{set_term, term_level};
+use crate::model_terms::{fitted_term, set_term, squared_level};
 use crate::simulate::{adev_at, static_log, SimSetup};
 use allan::{EdfMethod, Estimator};
-use noise::{AxisModel, Channel, Effect, SensorModel};
+use noise::{AxisModel, Channel, Effect, SensorModel, Term};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -100,12 +99,14 @@ pub enum BootstrapError {
     TooManyTerms { channel: &'static str, terms: usize },
 }
 
-/// A drawn term: its parameters at the reference level the multipliers refer to (the fitted one,
-/// or a unit squared level for a term fitted at 0), and its fitted squared level.
-#[derive(Clone, Copy)]
+/// A drawn term: the term at the reference level the multipliers refer to (the fitted one, or a
+/// unit squared level for a term fitted at 0), that level with its JSON name, and its fitted
+/// squared level.
+#[derive(Clone)]
 struct DrawnTerm {
     effect: Effect,
-    reference: TermParams,
+    reference: Term,
+    level: (&'static str, f64),
     fitted_c: f64,
 }
 
@@ -149,30 +150,9 @@ fn edf_at(mu: f64, m: usize, n: usize) -> f64 {
 impl ChannelFit {
     /// The refit of channel `ch` of `model` on data like `fitted` (None: nothing to draw there).
     fn new(model: &SensorModel, ch: Channel, fitted: &FittedOn) -> Option<ChannelFit> {
-        let terms: Vec<DrawnTerm> = DRAWN
-            .iter()
-            .filter_map(|&effect| {
-                let p = term_level(model, ch, effect)?;
-                let fitted_c = p.c();
-                let reference = if fitted_c > 0.0 {
-                    p
-                } else {
-                    scaled(p, 0.0, 1.0)
-                };
-                (fitted_c >= 0.0).then_some(DrawnTerm {
-                    effect,
-                    reference,
-                    fitted_c,
-                })
-            })
-            .collect();
-        if terms.is_empty() || !fitted.channels[ch.index()] {
+        let terms = drawn_terms(model, ch);
+        if terms.is_empty() || !fitted.channels[ch] {
             return None;
-        }
-        // The model with every term at its reference level (the basis columns).
-        let mut reference = model.clone();
-        for t in &terms {
-            set_term(&mut reference, ch, t.effect, &t.reference);
         }
         let dt = fitted.sample_interval_s;
         let n_max = *fitted.samples.iter().max()?;
@@ -189,27 +169,10 @@ impl ChannelFit {
             .map(|&n| grid_m.iter().filter(|&&m| m <= n / 4).count())
             .collect();
         let taus: Vec<f64> = grid_m.iter().map(|&m| m as f64 * dt).collect();
-        let (sensor, axis) = (ch.sensor(), ch.axis());
         let total = model
-            .axis(sensor, axis)
+            .axis(ch.sensor(), ch.axis())
             .allan_variance_sampled_many(&taus, dt);
-        let axis = reference.axis(sensor, axis);
-        let columns: Vec<Vec<f64>> = terms
-            .iter()
-            .map(|t| {
-                let mut only = AxisModel::default();
-                if let Some(f) = axis.get::<noise::OutputFilter>() {
-                    only.set_term(*f);
-                }
-                if let Some(term) = axis.term(t.effect) {
-                    only.set_term(term.clone());
-                }
-                only.allan_variance_sampled_many(&taus, dt)
-            })
-            .collect();
-        let basis: Vec<Vec<f64>> = (0..taus.len())
-            .map(|i| columns.iter().map(|c| c[i]).collect())
-            .collect();
+        let basis = basis(model, ch, &terms, &taus, dt);
         // The model's Allan variance less its drawn terms' (a term fitted at 0 adds nothing).
         let rest = (0..taus.len())
             .map(|i| {
@@ -274,6 +237,57 @@ impl ChannelFit {
     }
 }
 
+/// The terms of channel `ch` whose level is drawn (module doc), each at its reference level.
+fn drawn_terms(model: &SensorModel, ch: Channel) -> Vec<DrawnTerm> {
+    DRAWN
+        .iter()
+        .filter_map(|&effect| {
+            let p = fitted_term(model, ch, effect)?;
+            let fitted_c = squared_level(Some(p));
+            let reference = if fitted_c > 0.0 {
+                p.clone()
+            } else {
+                scaled(p, 0.0, 1.0)?
+            };
+            let level = reference.level()?;
+            (fitted_c >= 0.0).then_some(DrawnTerm {
+                effect,
+                reference,
+                level,
+                fitted_c,
+            })
+        })
+        .collect()
+}
+
+/// Per tau, each term's Allan variance at its reference level alone on the channel (behind the
+/// channel's output filter, if it has one): the columns of the least squares.
+fn basis(
+    model: &SensorModel,
+    ch: Channel,
+    terms: &[DrawnTerm],
+    taus: &[f64],
+    dt: f64,
+) -> Vec<Vec<f64>> {
+    let filter = model
+        .axis(ch.sensor(), ch.axis())
+        .get::<noise::OutputFilter>();
+    let columns: Vec<Vec<f64>> = terms
+        .iter()
+        .map(|t| {
+            let mut only = AxisModel::default();
+            if let Some(f) = filter {
+                only.set_term(*f);
+            }
+            only.set_term(t.reference.clone());
+            only.allan_variance_sampled_many(taus, dt)
+        })
+        .collect();
+    (0..taus.len())
+        .map(|i| columns.iter().map(|c| c[i]).collect())
+        .collect()
+}
+
 /// d ln A / d ln tau at grid point `i` (central between the neighbours, one-sided at the ends).
 fn local_slope(taus: &[f64], avar: &[f64], i: usize) -> f64 {
     if taus.len() < 2 {
@@ -329,38 +343,12 @@ fn nnls_small(rows: &[Vec<f64>], y: &[f64], k: usize) -> Vec<f64> {
     best
 }
 
-/// `params` with its level multiplied by `factor` plus `unit` (a squared level multiplied by
-/// factor^2, or set to unit^2 with factor 0).
-fn scaled(params: TermParams, factor: f64, unit: f64) -> TermParams {
-    let f = factor.max(0.0);
-    let level = |v: f64| v * f + unit;
-    match params {
-        TermParams::Level(v) => TermParams::Level(level(v)),
-        TermParams::GaussMarkov { sigma, tau_s } => TermParams::GaussMarkov {
-            sigma: level(sigma),
-            tau_s,
-        },
-        TermParams::Sinusoid {
-            amplitude,
-            frequency_hz,
-        } => TermParams::Sinusoid {
-            amplitude: level(amplitude),
-            frequency_hz,
-        },
-        TermParams::Resonance {
-            sigma,
-            frequency_hz,
-            bandwidth_hz,
-        } => TermParams::Resonance {
-            sigma: level(sigma),
-            frequency_hz,
-            bandwidth_hz,
-        },
-        TermParams::Filter { filter, n } => TermParams::Filter {
-            filter,
-            n: level(n),
-        },
-    }
+/// `term` with its level multiplied by `factor` plus `unit` (a squared level multiplied by
+/// factor^2, or set to unit^2 with factor 0); None when it has no level or the term's constructor
+/// refuses the new one (not a finite number).
+fn scaled(term: &Term, factor: f64, unit: f64) -> Option<Term> {
+    let (_, v) = term.level()?;
+    term.with_level(v * factor.max(0.0) + unit).ok()
 }
 
 /// Simulated logs like the fitted ones: replicate r, log t is run `first_run + r T + t` of `seed`
@@ -384,10 +372,10 @@ fn simulate_fitted_logs(
                 dt_s: fitted.sample_interval_s,
                 samples: fitted.samples[t],
                 grid_m: Vec::new(),
-                active: std::array::from_fn(|c| fits.iter().any(|f| f.ch.index() == c)),
+                active: noise::ImuChannels::from_fn(|c| fits.iter().any(|f| f.ch == c)),
                 horizons_s: Vec::new(),
                 temperature_c: None,
-                temp_coeff: [0.0; 6],
+                temp_coeff: noise::ImuChannels::default(),
             };
             let run = first_run + (r * logs + t) as u64;
             let log = static_log(model, &setup, seed, run);
@@ -395,7 +383,7 @@ fn simulate_fitted_logs(
                 .iter()
                 .map(|f| {
                     let ms = &f.grid_m[..f.held[t]];
-                    adev_at(&log[f.ch.index()], fitted.sample_interval_s, ms)
+                    adev_at(&log[f.ch], fitted.sample_interval_s, ms)
                         .iter()
                         .map(|a| a * a)
                         .collect()
@@ -548,13 +536,15 @@ pub fn fit_levels(
 }
 
 /// The model with every drawn term at its reference squared level times its multiplier
-/// `s[channel][term]` (a level 0 stays in the model, at 0).
+/// `s[channel][term]` (a level 0 stays in the model, at 0; a multiplier that is not a finite
+/// number leaves the model's level).
 fn drawn_model(model: &SensorModel, fits: &[ChannelFit], s: &[Vec<f64>]) -> SensorModel {
     let mut out = model.clone();
     for (f, mult) in fits.iter().zip(s) {
         for (t, &m) in f.terms.iter().zip(mult) {
-            let params = scaled(t.reference, m.max(0.0).sqrt(), 0.0);
-            set_term(&mut out, f.ch, t.effect, &params);
+            if let Some(term) = scaled(&t.reference, m.max(0.0).sqrt(), 0.0) {
+                set_term(&mut out, f.ch, term);
+            }
         }
     }
     out
@@ -574,7 +564,7 @@ fn spread(
             .iter()
             .enumerate()
             .map(|(j, t)| {
-                let (parameter, reference) = t.reference.named(t.effect)[0];
+                let (parameter, reference) = t.level;
                 let mut v: Vec<f64> = s.iter().map(|r| reference * r[k][j].sqrt()).collect();
                 v.sort_by(f64::total_cmp);
                 LevelSpread {

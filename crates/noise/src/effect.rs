@@ -193,9 +193,15 @@ mod tests {
         let f = TermFilter::parse(Some("gyro"), Some("gyro.white_noise")).unwrap();
         assert!(!f.allows(Sensor::Gyro, Effect::WhiteNoise));
         assert!(f.allows(Sensor::Gyro, Effect::Quantization));
+        // Every gyro effect in registry order (`Effect::ALL`), then the exclusion.
+        let every: Vec<String> = Effect::ALL
+            .iter()
+            .map(|e| format!("gyro.{}", e.name()))
+            .collect();
+        assert!(every[..2] == ["gyro.quantization", "gyro.white_noise"]);
         assert_eq!(
             f.describe(),
-            "--only gyro.quantization,gyro.white_noise,gyro.bias_instability,gyro.rate_random_walk,gyro.rate_ramp,gyro.gauss_markov,gyro.sinusoidal,gyro.temperature_bias,gyro.constant_bias,gyro.turn_on_bias,gyro.scale_factor,gyro.misalignment,gyro.outliers,gyro.warmup_transient,gyro.output_filter,gyro.resonance --without gyro.white_noise"
+            format!("--only {} --without gyro.white_noise", every.join(","))
         );
         assert!(TermFilter::all().is_all());
     }
