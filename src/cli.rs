@@ -27,6 +27,34 @@ pub fn duration_or_zero_s(text: &str) -> std::result::Result<f64, String> {
     Ok(duration_s)
 }
 
+/// Check the environment variables imudrift reads, before any work: a value that is not what
+/// the variable takes is an error naming it (it was ignored silently, or panicked).
+pub fn check_environment() -> Result<()> {
+    let var = |name: &str| std::env::var_os(name).map(|v| v.to_string_lossy().into_owned());
+    if let Some(v) = var("IMUDRIFT_PROGRESS_INTERVAL_S") {
+        let max = crate::progress::MAX_INTERVAL_S;
+        if !v
+            .trim()
+            .parse::<f64>()
+            .is_ok_and(|s| (0.0..=max).contains(&s))
+        {
+            bail!(
+                "environment variable IMUDRIFT_PROGRESS_INTERVAL_S={}: expected seconds from 0 to {max} between progress lines",
+                logio::quote_prefix(&v)
+            );
+        }
+    }
+    if let Some(v) = var("IMUDRIFT_MEMORY_LIMIT") {
+        if !v.trim().parse::<u64>().is_ok_and(|b| b > 0) {
+            bail!(
+                "environment variable IMUDRIFT_MEMORY_LIMIT={}: expected a whole number of bytes > 0, e.g. 8000000000 for 8 GB",
+                logio::quote_prefix(&v)
+            );
+        }
+    }
+    Ok(())
+}
+
 /// A sample rate given on the command line, Hz, finite and > 0.
 pub fn check_rate_hz(flag: &str, rate_hz: f64) -> Result<f64> {
     if !(rate_hz.is_finite() && rate_hz > 0.0) {

@@ -82,6 +82,13 @@ fn plan(args: &Args) -> Result<Plan> {
     if args.rate > MAX_RATE_HZ {
         bail!("--rate {}: expected at most {MAX_RATE_HZ:e} Hz", args.rate);
     }
+    crate::experiment_run::check_work(
+        &model,
+        1.0,
+        samples,
+        &format!("-o {}", args.output.display()),
+        "generate a shorter log or at a lower --rate",
+    )?;
     // The log must fit where it goes: refuse before writing rather than fill the disk.
     if std::fs::metadata(&args.output).map_or(true, |m| m.is_file()) {
         let dir = match args.output.parent() {
@@ -92,11 +99,11 @@ fn plan(args: &Args) -> Result<Plan> {
         if let Ok(free) = fs4::available_space(&dir) {
             if need > free as f64 {
                 bail!(
-                    "-o {}: {samples:.3e} samples are about {:.1} GB of CSV and {} has {:.1} GB free: generate a shorter log, at a lower --rate, or on another disk",
+                    "-o {}: {samples:.3e} samples are about {} of CSV and {} has {} free: generate a shorter log, at a lower --rate, or on another disk",
                     args.output.display(),
-                    need / 1e9,
+                    crate::fmt::bytes(need),
                     dir.display(),
-                    free as f64 / 1e9
+                    crate::fmt::bytes(free as f64)
                 );
             }
         }

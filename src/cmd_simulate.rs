@@ -94,10 +94,9 @@ pub fn run(args: Args) -> Result<()> {
             bail!("--shard: expected --out DIR for the shard file");
         };
         let range = shard.runs(exp.runs);
-        check_memory(
-            &exp,
-            (range.end - range.start) * (1 + 2 * subs.len() as u64),
-        )?;
+        let shard_runs = (range.end - range.start) * (1 + 2 * subs.len() as u64);
+        check_memory(&exp, shard_runs)?;
+        crate::experiment_run::check_experiment_work(&exp, shard_runs)?;
         // The file without its values yet: its experiment is checked against the directory's
         // other shards before any work.
         let mut file = ShardFile {
@@ -157,6 +156,7 @@ pub fn run(args: Args) -> Result<()> {
         return Ok(());
     }
     check_memory(&exp, exp.runs)?;
+    crate::experiment_run::check_experiment_work(&exp, exp.runs * (1 + 2 * subs.len() as u64))?;
     let result = pool.install(|| execute(&exp, 0..exp.runs, "simulate"));
     let report = exp.report(&result.matrix, &result.failures);
     let ablation = with_ablation.then(|| {

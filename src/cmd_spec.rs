@@ -289,6 +289,7 @@ fn compare_sensor(
     let exp = drift_experiment(&model, times, rate, runs, seed)
         .with_context(|| path.display().to_string())?;
     check_memory(&exp, exp.runs)?;
+    crate::experiment_run::check_experiment_work(&exp, exp.runs)?;
     let gyro = match readback_duration {
         Some(d) => {
             eprintln!(

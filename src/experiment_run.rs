@@ -215,6 +215,57 @@ pub fn refuse_other_experiments(dir: &Path, file: &ShardFile, exp: &Experiment) 
     Ok(())
 }
 
+/// Most samples a command may compute (runs x steps x the largest output-filter decimation:
+/// every internal sample of the noise processes and every mechanisation step counts), about 3 h
+/// on 2 cores at 1e7 steps/s per core: work beyond it is refused before it starts.
+pub const MAX_WORK_SAMPLES: f64 = 1e11;
+
+/// The largest output-filter decimation of `model` (1 without a filter): the internal samples
+/// per output sample.
+pub fn max_decimation(model: &SensorModel) -> f64 {
+    noise::Sensor::ALL
+        .iter()
+        .flat_map(|&s| model.triad(s).axes.iter())
+        .filter_map(|axis| axis.get::<noise::OutputFilter>())
+        .map(|f| f64::from(f.decimation()))
+        .fold(1.0, f64::max)
+}
+
+/// Refuse `runs` runs of `samples` output samples of `model` when they are more work than
+/// [`MAX_WORK_SAMPLES`]; `what` names the job and `remedy` the options that shrink it.
+pub fn check_work(
+    model: &SensorModel,
+    runs: f64,
+    samples: f64,
+    what: &str,
+    remedy: &str,
+) -> Result<()> {
+    let decimation = max_decimation(model);
+    let work = runs * samples * decimation;
+    if !(work <= MAX_WORK_SAMPLES) {
+        let filter = if decimation > 1.0 {
+            format!(" x decimation {decimation}")
+        } else {
+            String::new()
+        };
+        bail!(
+            "{what}: {runs:.3e} run(s) x {samples:.3e} samples{filter} are {work:.2e} samples of work (limit {MAX_WORK_SAMPLES:.0e}, about 3 h on 2 cores): {remedy}"
+        );
+    }
+    Ok(())
+}
+
+/// [`check_work`] for `runs` runs of `exp` (before they are simulated; `merge` does no such work).
+pub fn check_experiment_work(exp: &Experiment, runs: u64) -> Result<()> {
+    check_work(
+        &exp.model,
+        runs as f64,
+        exp.scenario.duration_s * exp.scenario.rate_hz,
+        &exp.scenario.name,
+        "use fewer --runs, a shorter --duration or a lower --rate (or split the runs with --shard i/k)",
+    )
+}
+
 /// Memory for the per-run values above which `simulate` asks for shards instead (8 GiB).
 const MAX_VALUE_BYTES: u64 = 8 << 30;
 
@@ -222,11 +273,17 @@ const MAX_VALUE_BYTES: u64 = 8 << 30;
 pub fn check_memory(exp: &Experiment, runs: u64) -> Result<()> {
     let per_run = (exp.scenario.checkpoint_steps.len() * Channel::ALL.len() * 8) as u64;
     let bytes = runs.saturating_mul(per_run);
-    if bytes > MAX_VALUE_BYTES {
+    let limit = logio::available_memory_bytes().map_or(MAX_VALUE_BYTES, |a| a.min(MAX_VALUE_BYTES));
+    if bytes > limit {
         bail!(
-            "--runs: {runs} runs x {} checkpoints keep {:.1} GiB of per-run values (limit 8 GiB); split them with --shard i/k and `imudrift merge`, or use fewer checkpoints",
+            "--runs: {runs} runs x {} checkpoints keep {} of per-run values (limit {}); split them with --shard i/k and `imudrift merge`, or use fewer checkpoints",
             exp.scenario.checkpoint_steps.len(),
-            bytes as f64 / (1u64 << 30) as f64
+            crate::fmt::bytes(bytes as f64),
+            if limit == MAX_VALUE_BYTES {
+                "8 GiB".to_string()
+            } else {
+                format!("{}, the memory available", crate::fmt::bytes(limit as f64))
+            }
         );
     }
     Ok(())

@@ -57,6 +57,10 @@ fn main() -> std::process::ExitCode {
         }
     };
     output::clean_up_on_signals();
+    if let Err(e) = cli::check_environment() {
+        eprintln!("error: {e:#}");
+        return std::process::ExitCode::FAILURE;
+    }
     let result = match cli.command {
         Command::Simulate(a) => cmd_simulate::run(a),
         Command::Generate(a) => cmd_generate::run(a),

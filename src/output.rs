@@ -200,6 +200,12 @@ where
             input.display()
         );
     }
+    if path.is_dir() {
+        bail!(
+            "{}: is a directory; give the name of a file to write",
+            path.display()
+        );
+    }
     // A device or FIFO (/dev/null, /dev/stdout, a pipe) is written directly: renaming a
     // temporary file over it would replace the device itself.
     if std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {

@@ -5,6 +5,9 @@ use std::io::IsTerminal;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
+/// Longest progress interval `IMUDRIFT_PROGRESS_INTERVAL_S` may set (a day), s.
+pub const MAX_INTERVAL_S: f64 = 86_400.0;
+
 /// Seconds between plain progress lines when stderr is not a terminal (environment variable
 /// `IMUDRIFT_PROGRESS_INTERVAL_S` overrides it; 0 prints at every update).
 const DEFAULT_INTERVAL_S: f64 = 10.0;
@@ -44,7 +47,7 @@ impl Progress {
         let interval_s = std::env::var("IMUDRIFT_PROGRESS_INTERVAL_S")
             .ok()
             .and_then(|v| v.parse::<f64>().ok())
-            .filter(|v| v.is_finite() && *v >= 0.0)
+            .filter(|v| (0.0..=MAX_INTERVAL_S).contains(v))
             .unwrap_or(DEFAULT_INTERVAL_S);
         Progress {
             label: label.into(),

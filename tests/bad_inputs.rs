@@ -408,13 +408,13 @@ fn generate_refuses_values_that_overflow() {
             "generate",
             "configs/sensors/mtx.toml",
             "--duration",
-            "1e6",
+            "1e5",
             "--rate",
             "1e6",
             "-o",
             log.to_str().unwrap(),
         ],
-        &["GB of CSV", "GB free"],
+        &["of CSV", "free"],
     );
     refused(
         &[
@@ -918,4 +918,128 @@ fn a_full_stdout_is_an_error_line_in_every_command() {
         );
         assert!(!err.contains("panicked"), "{args:?}: {err}");
     }
+}
+
+/// Issue 27, items 11 and 14: one work limit (runs x samples x output-filter decimation) for
+/// simulate, spec and generate, checked before any work; long numbers are not echoed whole.
+#[test]
+fn work_beyond_the_limit_is_refused_before_it_starts() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = "configs/sensors/mtx.toml";
+    let started = std::time::Instant::now();
+    refused(
+        &["simulate", model, "--rate", "1e9", "--json"],
+        &["samples of work", "limit 1e11"],
+    );
+    refused(
+        &["simulate", model, "--duration", "1e6 h", "--json"],
+        &["samples of work"],
+    );
+    let fast = write(
+        dir.path(),
+        "fast.toml",
+        format!(
+            "name = \"f\"\nsensor = {:?}\nrate_hz = 1e10\nduration_s = 60\n",
+            root().join(model)
+        )
+        .as_bytes(),
+    );
+    refused(&["simulate", &fast, "--json"], &["samples of work"]);
+    // 1000 samples behind a filter decimating by 1e6 are 1e9 internal samples per run.
+    let decimated = write(
+        dir.path(),
+        "dec.toml",
+        b"name = \"d\"\n[gyro.all]\nwhite_noise = \"0.05 deg/s/sqrt(Hz)\"\noutput_filter = { kind = \"moving_average\", taps = 4, decimation = 1000000 }\n",
+    );
+    refused(
+        &[
+            "simulate",
+            &decimated,
+            "--rate",
+            "100",
+            "--duration",
+            "10",
+            "--runs",
+            "200",
+            "--json",
+        ],
+        &["decimation 1000000", "samples of work"],
+    );
+    assert!(
+        started.elapsed().as_secs() < 20,
+        "the refusals took {:?}",
+        started.elapsed()
+    );
+    let out = imudrift(&["simulate", model, "--duration", "1e300", "--json"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.len() < 400, "a 300-digit number was echoed: {err}");
+    let out = imudrift(&[
+        "generate",
+        model,
+        "--duration",
+        "1",
+        "--rate",
+        "100",
+        "-o",
+        dir.path().to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("is a directory") && !err.contains("(os error 21): Is a directory"),
+        "{err}"
+    );
+}
+
+/// Issue 27, item 13: the environment variables imudrift reads are validated with a named error
+/// (1e300 panicked; abc, 1e3 and -5 were ignored silently), and the memory limit applies to
+/// simulate's per-run values too.
+#[test]
+fn environment_variables_are_validated() {
+    let model = "configs/sensors/mtx.toml";
+    for (name, value) in [
+        ("IMUDRIFT_PROGRESS_INTERVAL_S", "1e300"),
+        ("IMUDRIFT_PROGRESS_INTERVAL_S", "abc"),
+        ("IMUDRIFT_MEMORY_LIMIT", "abc"),
+        ("IMUDRIFT_MEMORY_LIMIT", "1e3"),
+        ("IMUDRIFT_MEMORY_LIMIT", "-5"),
+    ] {
+        let out = command()
+            .args([
+                "simulate",
+                model,
+                "--runs",
+                "4",
+                "--duration",
+                "5",
+                "--json",
+            ])
+            .env(name, value)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{name}={value}: {err}");
+        assert!(
+            err.contains(&format!("environment variable {name}=")),
+            "{err}"
+        );
+        assert!(!err.contains("panicked"), "{err}");
+    }
+    let out = command()
+        .args([
+            "simulate",
+            model,
+            "--runs",
+            "400",
+            "--duration",
+            "5",
+            "--json",
+        ])
+        .env("IMUDRIFT_MEMORY_LIMIT", "1000")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("the memory available"), "{err}");
 }

@@ -225,6 +225,9 @@ fn choose_topic(
         },
         None => match imu.as_slice() {
             [one] => return Ok(one.to_string()),
+            [] if topics.is_empty() => Problem::Content(format!(
+                "no {imu_type} topic: the file defines no topic at all (empty, or its chunks are damaged)"
+            )),
             [] => Problem::Content(format!("no {imu_type} topic (topics: {})", listing())),
             many => Problem::SeveralTopics {
                 imu_type,

@@ -204,16 +204,16 @@ impl Scenario {
         let seed = raw.seed.unwrap_or(DEFAULT_SEED);
         let steps_f = duration_s * rate_hz;
         let steps = steps_f.round();
+        if !(steps <= 1e12) {
+            return Err(err(
+                "duration_s",
+                format!("{steps_f:.3e} samples at rate_hz = {rate_hz:e} is more than 1e12"),
+            ));
+        }
         if steps < 1.0 || (steps_f - steps).abs() > 1e-9 * steps.max(1.0) {
             return Err(err(
                 "duration_s",
                 format!("expected a whole number of samples at rate_hz = {rate_hz}, got {steps_f} samples"),
-            ));
-        }
-        if steps > 1e12 {
-            return Err(err(
-                "duration_s",
-                format!("{steps_f} samples is more than 1e12"),
             ));
         }
         let steps = steps as u64;

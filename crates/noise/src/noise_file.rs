@@ -217,75 +217,187 @@ const KEYS: [(&str, &str); 4] = [
     ("accelerometer_random_walk", "acc_w"),
 ];
 
-/// `key: value` lines of the YAML subset these files use (comments, one level of nesting under
-/// `imu0:`, matrices and lists ignored), with their line numbers; the first occurrence of a key.
-fn flat_entries(text: &str) -> Vec<(String, String, usize)> {
-    let mut out: Vec<(String, String, usize)> = Vec::new();
-    for (i, raw) in text.lines().enumerate() {
-        let line = match raw.find('#') {
-            Some(k) => &raw[..k],
-            None => raw,
+/// One scalar of a noise file: its key path (`["imu0", "gyroscope_noise_density"]`), its text
+/// and its 1-based line.
+struct Entry {
+    path: Vec<String>,
+    value: String,
+    line: usize,
+}
+
+/// A container being read: a mapping (waiting for a key, or holding the key of the value being
+/// read) or a sequence; `as_key` when the container is itself a (complex) mapping key.
+enum Frame {
+    Map { key: Option<String>, as_key: bool },
+    Seq { as_key: bool },
+}
+
+/// Collects every scalar reachable through mapping keys (the parser's events, YAML 1.2 as
+/// `yaml-rust2` reads it: flow maps, quoting, anchors and aliases, block scalars), in file
+/// order: a later duplicate key comes later, so the last one wins as YAML says.
+#[derive(Default)]
+struct Collector {
+    stack: Vec<Frame>,
+    path: Vec<String>,
+    anchors: std::collections::HashMap<usize, String>,
+    entries: Vec<Entry>,
+}
+
+impl Collector {
+    /// A container starts: under the current key (or as a key, or in a sequence).
+    fn open(&mut self, map: bool) {
+        let as_key = matches!(self.stack.last(), Some(Frame::Map { key: None, .. }));
+        let segment = match self.stack.last() {
+            Some(Frame::Map { key: Some(k), .. }) => k.clone(),
+            _ => "-".to_string(),
         };
-        let Some((key, value)) = line.split_once(':') else {
-            continue;
-        };
-        let key = key.trim();
-        if key.is_empty() || !key.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
-            continue;
-        }
-        if out.iter().any(|(k, _, _)| k == key) {
-            continue;
-        }
-        out.push((
-            key.to_string(),
-            value.trim().trim_matches('"').to_string(),
-            i + 1,
-        ));
+        self.path.push(segment);
+        self.stack.push(if map {
+            Frame::Map { key: None, as_key }
+        } else {
+            Frame::Seq { as_key }
+        });
     }
-    out
+
+    /// A container ends: it was the value of its parent's key (or a key itself).
+    fn close(&mut self) {
+        self.path.pop();
+        let as_key = match self.stack.pop() {
+            Some(Frame::Map { as_key, .. } | Frame::Seq { as_key }) => as_key,
+            None => false,
+        };
+        if let Some(Frame::Map { key, .. }) = self.stack.last_mut() {
+            *key = as_key.then(|| "?".to_string());
+        }
+    }
+
+    fn scalar(&mut self, value: String, line: usize) {
+        match self.stack.last_mut() {
+            Some(Frame::Map {
+                key: key @ None, ..
+            }) => *key = Some(value),
+            Some(Frame::Map { key, .. }) => {
+                let mut path = self.path[1..].to_vec();
+                path.extend(key.take());
+                self.entries.push(Entry { path, value, line });
+            }
+            _ => {}
+        }
+    }
+}
+
+impl yaml_rust2::parser::MarkedEventReceiver for Collector {
+    fn on_event(&mut self, ev: yaml_rust2::Event, mark: yaml_rust2::scanner::Marker) {
+        use yaml_rust2::Event;
+        match ev {
+            Event::Scalar(value, _, anchor, _) => {
+                if anchor > 0 {
+                    self.anchors.insert(anchor, value.clone());
+                }
+                self.scalar(value, mark.line());
+            }
+            Event::Alias(id) => {
+                let value = self.anchors.get(&id).cloned().unwrap_or_default();
+                self.scalar(value, mark.line());
+            }
+            Event::MappingStart(..) => self.open(true),
+            Event::SequenceStart(..) => self.open(false),
+            Event::MappingEnd | Event::SequenceEnd => self.close(),
+            _ => {}
+        }
+    }
+}
+
+/// The scalars of a noise file read as YAML (a leading byte-order mark and OpenCV's `%YAML:1.0`
+/// first line, which is not a YAML directive, are skipped), or the parser's error and its line.
+fn yaml_entries(text: &str) -> Result<Vec<Entry>, (usize, String)> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let text = match text.strip_prefix("%YAML:") {
+        Some(rest) => rest.find('\n').map_or("", |i| &rest[i..]),
+        None => text,
+    };
+    let mut collector = Collector::default();
+    yaml_rust2::parser::Parser::new_from_str(text)
+        .load(&mut collector, false)
+        .map_err(|e| (e.marker().line(), e.info().to_string()))?;
+    Ok(collector.entries)
+}
+
+/// The entry of `key` where the tools put it: at the top level (Kalibr, VINS-Fusion) or under
+/// `imu0:` (OpenVINS); the top level first. The last occurrence wins (YAML: a later duplicate
+/// replaces the earlier value).
+fn find<'a>(entries: &'a [Entry], key: &str) -> Option<&'a Entry> {
+    let at = |prefix: &[&str]| {
+        entries.iter().rev().find(|e| {
+            e.path.len() == prefix.len() + 1
+                && e.path.iter().zip(prefix).all(|(a, b)| a == b)
+                && e.path.last().is_some_and(|k| k == key)
+        })
+    };
+    at(&[]).or_else(|| at(&["imu0"]))
+}
+
+/// At most the first 40 characters of `text` (and "..." when cut), for messages.
+fn prefix(text: &str) -> String {
+    match text.char_indices().nth(40) {
+        None => text.to_string(),
+        Some((at, _)) => format!("{}... ({} bytes)", &text[..at], text.len()),
+    }
 }
 
 /// Does this text look like a Kalibr / OpenVINS / VINS-Fusion IMU noise file?
 pub fn is_noise_file(text: &str) -> bool {
-    let e = flat_entries(text);
-    KEYS.iter()
-        .any(|(a, b)| e.iter().any(|(k, _, _)| k == a || k == b))
+    yaml_entries(text).is_ok_and(|e| {
+        KEYS.iter()
+            .any(|(a, b)| find(&e, a).is_some() || find(&e, b).is_some())
+    })
 }
 
 /// Read a noise file as a sensor model: white noise and rate random walk on every axis (the same
 /// value on the three axes of a sensor), nothing else. `source` names the file in errors and
 /// gives the model its name.
 pub fn read_noise_file(text: &str, source: &str) -> Result<SensorModel, NoiseFileError> {
-    let entries = flat_entries(text);
     let err = |line: Option<usize>, message: String| NoiseFileError {
         file: source.to_string(),
         line,
         message,
     };
+    let entries = yaml_entries(text)
+        .map_err(|(line, info)| err(Some(line), format!("not a YAML file: {info}")))?;
     let mut values = [0.0f64; 4];
     for (slot, (long, short)) in KEYS.iter().enumerate() {
-        let found = entries
-            .iter()
-            .find(|(k, _, _)| k == long || k == short)
-            .ok_or_else(|| {
-                err(
-                    None,
-                    format!(
-                        "no `{long}` (or `{short}`): an IMU noise file gives gyroscope_noise_density, gyroscope_random_walk, accelerometer_noise_density and accelerometer_random_walk"
-                    ),
-                )
-            })?;
-        let (key, text_value, line) = found;
-        let v: f64 = text_value.parse().map_err(|_| {
+        let found = find(&entries, long).or_else(|| find(&entries, short)).ok_or_else(|| {
             err(
-                Some(*line),
-                format!("key `{key}`: expected a number (continuous-time density, SI), found `{text_value}`"),
+                None,
+                format!(
+                    "no `{long}` (or `{short}`) at the top level or under `imu0:`: an IMU noise file gives gyroscope_noise_density, gyroscope_random_walk, accelerometer_noise_density and accelerometer_random_walk"
+                ),
             )
         })?;
-        if !(v.is_finite() && v >= 0.0) {
+        let key = found.path.last().map_or("", String::as_str);
+        let (text_value, line) = (found.value.trim(), found.line);
+        let v: f64 = text_value.parse().map_err(|_| {
+            err(
+                Some(line),
+                format!(
+                    "key `{key}`: expected a number (continuous-time density, SI), found `{}`",
+                    prefix(text_value)
+                ),
+            )
+        })?;
+        if !v.is_finite() {
             return Err(err(
-                Some(*line),
-                format!("key `{key}`: expected a value >= 0, found {text_value}"),
+                Some(line),
+                format!("key `{key}`: {} is beyond the range of numbers (a finite value >= 0 is expected)", prefix(text_value)),
+            ));
+        }
+        if v < 0.0 {
+            return Err(err(
+                Some(line),
+                format!(
+                    "key `{key}`: expected a value >= 0, found {}",
+                    prefix(text_value)
+                ),
             ));
         }
         values[slot] = v;
@@ -309,10 +421,7 @@ pub fn read_noise_file(text: &str, source: &str) -> Result<SensorModel, NoiseFil
         .map_or("noise file".to_string(), |s| {
             s.to_string_lossy().to_string()
         });
-    let rate = entries
-        .iter()
-        .find(|(k, _, _)| k == "update_rate")
-        .map(|(_, v, _)| v.clone());
+    let rate = find(&entries, "update_rate").map(|e| prefix(e.value.trim()));
     Ok(SensorModel {
         name,
         description: Some(format!(

@@ -173,3 +173,67 @@ fn a_noise_file_loads_wherever_a_sensor_toml_does() {
     let e = SensorModel::load(&bad).unwrap_err().to_string();
     assert!(e.contains("bad.yaml"), "{e}");
 }
+
+/// Issue 27, item 7: noise files are read as YAML. A duplicate key takes the last value (as YAML
+/// does); a key inside a text block or under another section is not the IMU's; a byte-order
+/// mark, a flow map, a quoted number and an anchor are read; OpenVINS's keys under `imu0:`.
+#[test]
+fn noise_files_are_read_as_yaml() {
+    let v = |text: &str| {
+        values(&read_noise_file(text, "y.yaml").unwrap_or_else(|e| panic!("{text}\n{e}")))
+    };
+    let four = "gyroscope_noise_density: 1.0e-4\ngyroscope_random_walk: 2.0e-5\naccelerometer_noise_density: 3.0e-3\naccelerometer_random_walk: 4.0e-4\n";
+    let want = [1.0e-4, 2.0e-5, 3.0e-3, 4.0e-4];
+    assert_eq!(v(four), want);
+    // Duplicate: the last wins.
+    assert_eq!(v(&format!("gyroscope_noise_density: 9.0e-1\n{four}")), want);
+    // A key inside a text block, or under another section, is not the IMU's.
+    let decoy = format!(
+        "description: |\n  gyroscope_noise_density: 7.0\ncam0:\n  gyroscope_noise_density: 8.0\n{four}"
+    );
+    assert_eq!(v(&decoy), want);
+    let only_decoys =
+        "description: |\n  gyroscope_noise_density: 7.0\ncam0:\n  gyroscope_random_walk: 8.0\n";
+    assert!(read_noise_file(only_decoys, "d.yaml").is_err());
+    // Byte-order mark, flow map, quoted number, anchor and alias.
+    assert_eq!(v(&format!("\u{feff}{four}")), want);
+    let flow = "{gyroscope_noise_density: 1.0e-4, gyroscope_random_walk: \"2.0e-5\", accelerometer_noise_density: &a 3.0e-3, accelerometer_random_walk: 4.0e-4}\n";
+    assert_eq!(v(flow), want);
+    let alias = "base: &n 1.0e-4\ngyroscope_noise_density: *n\ngyroscope_random_walk: 2.0e-5\naccelerometer_noise_density: 3.0e-3\naccelerometer_random_walk: 4.0e-4\n";
+    assert_eq!(v(alias), want);
+    // OpenVINS: %YAML:1.0 and the keys under imu0.
+    let openvins = format!(
+        "%YAML:1.0\n\nimu0:\n{}",
+        four.lines().map(|l| format!("  {l}\n")).collect::<String>()
+    );
+    assert_eq!(v(&openvins), want);
+    // 1e400 is out of range, not "negative".
+    let e = read_noise_file(&four.replace("1.0e-4", "1e400"), "r.yaml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("r.yaml:1") && e.contains("beyond the range"),
+        "{e}"
+    );
+    // A 1 MB number is quoted by a prefix.
+    let long = four.replace("1.0e-4", &"1".repeat(1 << 20));
+    let e = read_noise_file(&long, "l.yaml").unwrap_err().to_string();
+    assert!(e.len() < 400, "{} bytes", e.len());
+}
+
+/// Issue 27, item 7: reading is linear in the number of keys (20 k / 80 k keys took 0.2 / 4.5 s).
+#[test]
+fn many_keys_read_in_linear_time() {
+    let mut text = String::new();
+    for i in 0..80_000 {
+        text += &format!("key_{i}: {i}\n");
+    }
+    text += "gyroscope_noise_density: 1.0e-4\ngyroscope_random_walk: 2.0e-5\naccelerometer_noise_density: 3.0e-3\naccelerometer_random_walk: 4.0e-4\n";
+    let started = std::time::Instant::now();
+    read_noise_file(&text, "big.yaml").unwrap();
+    assert!(
+        started.elapsed().as_secs_f64() < 2.0,
+        "{:?}",
+        started.elapsed()
+    );
+}
