@@ -242,7 +242,7 @@ pub fn check_work(
 ) -> Result<()> {
     let decimation = max_decimation(model);
     let work = runs * samples * decimation;
-    if !(work <= MAX_WORK_SAMPLES) {
+    if work.is_nan() || work > MAX_WORK_SAMPLES {
         let filter = if decimation > 1.0 {
             format!(" x decimation {decimation}")
         } else {

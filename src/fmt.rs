@@ -73,7 +73,7 @@ pub fn time(t_s: f64) -> String {
 /// A size in bytes for people, binary units: "512 bytes", "3.5 KiB", "1.2 GiB" (never "0.0 GB").
 pub fn bytes(b: f64) -> String {
     const UNITS: [&str; 6] = ["KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
-    if !(b >= 1024.0) {
+    if b.is_nan() || b < 1024.0 {
         return format!("{b} bytes");
     }
     let mut v = b;

@@ -204,7 +204,7 @@ impl Scenario {
         let seed = raw.seed.unwrap_or(DEFAULT_SEED);
         let steps_f = duration_s * rate_hz;
         let steps = steps_f.round();
-        if !(steps <= 1e12) {
+        if steps > 1e12 {
             return Err(err(
                 "duration_s",
                 format!("{steps_f:.3e} samples at rate_hz = {rate_hz:e} is more than 1e12"),
