@@ -137,7 +137,7 @@ pub fn read_imu(path: &Path, format: Format, topic: Option<&str>) -> Result<ImuS
 }
 
 /// Every gyro and accelerometer value finite and of a magnitude a log may hold
-/// ([`crate::valid_value`]), as the CSV reader requires: else an error naming the message (in
+/// ([`crate::limits::valid_value`]), as the CSV reader requires: else an error naming the message (in
 /// file order) and the field.
 fn check_values(s: &ImuSeries, source: &str) -> Result<()> {
     let fields = [
@@ -146,7 +146,7 @@ fn check_values(s: &ImuSeries, source: &str) -> Result<()> {
     ];
     for (field, axes) in fields {
         for (axis, values) in axes.iter().enumerate() {
-            let Some(k) = values.iter().position(|&v| !crate::valid_value(v)) else {
+            let Some(k) = values.iter().position(|&v| !crate::limits::valid_value(v)) else {
                 continue;
             };
             let v = values[k];
