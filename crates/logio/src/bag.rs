@@ -153,7 +153,7 @@ fn check_values(s: &ImuSeries, source: &str) -> Result<()> {
             let problem = if v.is_finite() {
                 format!(
                     "{} is beyond the largest magnitude a log may hold ({:e}: squares of larger values overflow)",
-                    crate::sig(v, 3),
+                    crate::error::sig(v, 3),
                     crate::MAX_ABS_VALUE
                 )
             } else {
