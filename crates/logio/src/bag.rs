@@ -154,7 +154,7 @@ fn check_values(s: &ImuSeries, source: &str) -> Result<()> {
                 format!(
                     "{} is beyond the largest magnitude a log may hold ({:e}: squares of larger values overflow)",
                     crate::error::sig(v, 3),
-                    crate::MAX_ABS_VALUE
+                    crate::limits::MAX_ABS_VALUE
                 )
             } else {
                 format!("{v} is not a number a sensor measures")
