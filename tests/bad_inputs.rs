@@ -1043,3 +1043,20 @@ fn environment_variables_are_validated() {
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(err.contains("the memory available"), "{err}");
 }
+
+/// Issue 27, item 10: a device or a pipe given as a log is read with a bound (`/dev/zero` took
+/// over 3 GB within seconds).
+#[cfg(target_os = "linux")]
+#[test]
+fn devices_and_pipes_are_read_with_a_bound() {
+    let started = std::time::Instant::now();
+    let out = command()
+        .args(["allan", "/dev/zero", "--rate", "100", "--json"])
+        .env("IMUDRIFT_MEMORY_LIMIT", "300000000")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("not a regular file"), "{err}");
+    assert!(started.elapsed().as_secs() < 30, "{:?}", started.elapsed());
+}

@@ -25,6 +25,20 @@ impl FileBytes {
                 return Ok(FileBytes::Mapped(map));
             }
         }
+        if !meta.is_file() {
+            // A device or a pipe (/dev/zero, a FIFO) has no size to check: read it with a bound.
+            let limit = available_memory_bytes()
+                .map_or(MAX_STREAM_BYTES, |a| (a / 3).min(MAX_STREAM_BYTES));
+            let mut buf = Vec::new();
+            (&file).take(limit + 1).read_to_end(&mut buf)?;
+            if buf.len() as u64 > limit {
+                return Err(std::io::Error::other(format!(
+                    "not a regular file (a device or a pipe) and it gives more than {:.2} GiB (the most read from a stream, at most a third of the memory available); save the log to a file",
+                    limit as f64 / GIB
+                )));
+            }
+            return Ok(FileBytes::Read(buf));
+        }
         let mut buf = Vec::with_capacity(meta.len() as usize + 1);
         (&file).read_to_end(&mut buf)?;
         Ok(FileBytes::Read(buf))
@@ -67,6 +81,9 @@ pub(crate) fn advise_huge_pages<T>(buf: &[T]) {
 }
 
 pub(crate) const GIB: f64 = (1u64 << 30) as f64;
+
+/// Most bytes read from a file that is not a regular file (a device, a pipe): 1 GiB.
+const MAX_STREAM_BYTES: u64 = 1 << 30;
 
 /// Memory the system can still give (Linux `MemAvailable`), bytes, or less when the environment
 /// variable `IMUDRIFT_MEMORY_LIMIT` (bytes) says so (a share of a shared machine); `None` when
