@@ -159,7 +159,7 @@ fn check_values(s: &ImuSeries, source: &str) -> Result<()> {
             } else {
                 format!("{v} is not a number a sensor measures")
             };
-            let at = crate::At::Message {
+            let at = crate::error::At::Message {
                 topic: s.topic.clone(),
                 index: k + 1,
             };
