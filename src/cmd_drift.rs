@@ -6,7 +6,6 @@ use crate::log_input::{self, LogArgs};
 use crate::output::write_string;
 use crate::plot::{Band, LogLogPlot, Series};
 use anyhow::{anyhow, bail, Context, Result};
-use diagnose::drift::CHANNELS;
 use diagnose::drift_check::{
     check_drift_fitted, simulated_logs, CheckError, CheckSettings, DriftCheck, Verdict,
 };
@@ -158,7 +157,7 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
         .iter()
         .map(|l| LogInput {
             dt_s: l.dt_s(),
-            channels: std::array::from_fn(|c| l.channels.get(CHANNELS[c]).map(Vec::as_slice)),
+            channels: noise::ImuChannels::from_fn(|c| l.channels.get(c.name()).map(Vec::as_slice)),
             temperature_c: None,
         })
         .collect();
@@ -174,7 +173,7 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
     }
     if inputs
         .iter()
-        .any(|i| i.channels.iter().all(Option::is_none))
+        .any(|i| i.channels.values().iter().all(Option::is_none))
     {
         bail!("a log has no gyro or accelerometer channel");
     }

@@ -952,7 +952,7 @@ fn transient_finding(
 /// ([`model_levels`]).
 pub fn preprocess_log(log: &crate::input::LogInput, model: &noise::SensorModel) -> Preprocessed {
     preprocess(
-        ImuChannels(log.channels),
+        log.channels,
         log.temperature_c,
         log.dt_s,
         &model_levels(model),
