@@ -966,10 +966,9 @@ pub fn model_levels(model: &noise::SensorModel) -> ImuChannels<NoiseLevels> {
         let a = model.axis(c.sensor(), c.axis());
         let (b, k_bi) = match a.get::<noise::BiasInstability>() {
             Some(noise::BiasInstability::Flicker(f)) => (f.b(), 0.0),
-            Some(noise::BiasInstability::RandomWalk {
-                stability,
-                period_s,
-            }) => (0.0, stability / period_s.sqrt()),
+            Some(noise::BiasInstability::RandomWalk(w)) => {
+                (0.0, w.stability() / w.period_s().sqrt())
+            }
             None => (0.0, 0.0),
         };
         NoiseLevels {
