@@ -6,6 +6,7 @@ use crate::log_input::{self, LogArgs};
 use crate::output::write_string;
 use crate::plot::{Band, LogLogPlot, Series};
 use anyhow::{anyhow, bail, Context, Result};
+use diagnose::drift::CHANNELS;
 use diagnose::drift_check::{
     check_drift_fitted, simulated_logs, CheckError, CheckSettings, DriftCheck, Verdict,
 };
@@ -151,6 +152,11 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
     for path in &args.logs {
         let log = log_input::read_log(path, &opts)?;
         eprintln!("{}: {}", log.source, log_input::mapping_text(&log));
+        log_input::refuse_constant(
+            &log,
+            CHANNELS,
+            "leave the column out or map another one with --col",
+        )?;
         logs.push(log);
     }
     let inputs: Vec<LogInput> = logs
