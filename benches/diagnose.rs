@@ -48,7 +48,7 @@ fn bench(c: &mut Criterion) {
     group.bench_function("whole_workflow_hidden_rrw", |b| {
         let input = LogInput {
             dt_s: DT_S,
-            channels: log.0.each_ref().map(|c| Some(c.as_slice())),
+            channels: noise::ImuChannels(log.0.each_ref().map(|c| Some(c.as_slice()))),
             temperature_c: None,
         };
         let settings = Settings {

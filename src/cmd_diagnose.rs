@@ -152,9 +152,8 @@ pub fn run(args: Args) -> Result<()> {
 /// The channels of a log as diagnose reads them, once checked: a log without a gyro or
 /// accelerometer channel, or with a constant one, is refused.
 fn log_channels(log: &logio::Log) -> Result<LogInput<'_>> {
-    let channels: [Option<&[f64]>; 6] =
-        std::array::from_fn(|c| log.channels.get(CHANNELS[c]).map(Vec::as_slice));
-    if channels.iter().all(Option::is_none) {
+    let channels = noise::ImuChannels::from_fn(|c| log.channels.get(c.name()).map(Vec::as_slice));
+    if channels.values().iter().all(Option::is_none) {
         bail!(
             "{}: no gyro or accelerometer channel (expected columns gx gy gz ax ay az, or map them with --col gx=NAME; columns: {})",
             log.source,
@@ -240,7 +239,9 @@ fn run_inner(args: &Args) -> Result<()> {
         let held = args.log_args.read(path)?;
         let input = LogInput {
             dt_s: held.dt_s(),
-            channels: std::array::from_fn(|c| held.channels.get(CHANNELS[c]).map(Vec::as_slice)),
+            channels: noise::ImuChannels::from_fn(|c| {
+                held.channels.get(c.name()).map(Vec::as_slice)
+            }),
             temperature_c: held.channels.get("temp").map(Vec::as_slice),
         };
         let gaps = result

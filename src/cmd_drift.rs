@@ -163,7 +163,7 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
         .iter()
         .map(|l| LogInput {
             dt_s: l.dt_s(),
-            channels: std::array::from_fn(|c| l.channels.get(CHANNELS[c]).map(Vec::as_slice)),
+            channels: noise::ImuChannels::from_fn(|c| l.channels.get(c.name()).map(Vec::as_slice)),
             temperature_c: None,
         })
         .collect();
@@ -179,7 +179,7 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
     }
     if inputs
         .iter()
-        .any(|i| i.channels.iter().all(Option::is_none))
+        .any(|i| i.channels.values().iter().all(Option::is_none))
     {
         bail!("a log has no gyro or accelerometer channel");
     }

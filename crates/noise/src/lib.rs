@@ -40,7 +40,7 @@ pub use model_error::ModelError;
 pub use process::{ChannelErrors, ImuErrors, CHANNEL_NAMES};
 pub use static_level::StaticLevel;
 pub use temperature::TemperatureProfile;
-pub use terms::bias_instability::{BiasInstability, Flicker};
+pub use terms::bias_instability::{BiasInstability, BiasRandomWalk, Flicker};
 pub use terms::constant_bias::ConstantBias;
 pub use terms::gauss_markov::GaussMarkov;
 pub use terms::misalignment::Misalignment;
