@@ -406,12 +406,12 @@ fn drift_line(d: &DriftRow, heading: bool, horizontal: bool) -> String {
             format!("{:>11} {:>11}", "-", "-")
         } else {
             let h = if heading {
-                crate::fmt::channel_value("heading_rad", s.heading_rms_rad)
+                crate::fmt::quantity_value("heading_rad", s.heading_rms_rad)
             } else {
                 "n/a".into()
             };
             let p = if horizontal {
-                crate::fmt::channel_value("pos_horizontal_m", s.horizontal_rms_m)
+                crate::fmt::quantity_value("pos_horizontal_m", s.horizontal_rms_m)
             } else {
                 "n/a".into()
             };
@@ -524,7 +524,7 @@ fn drift_check_text(result: &Diagnosis) -> String {
             let Some(z1) = h1.quantities.get(q) else {
                 continue;
             };
-            let v = |x: f64| crate::fmt::channel_value(q, x);
+            let v = |x: f64| crate::fmt::quantity_value(q, x);
             let _ = writeln!(
                 s,
                 "  {:>8} {:<18} measured {:>11}  model before {:>11} [{}, {}] {:<6} z {:>6.2}  after {:>11} [{}, {}] {:<6} z {:>6.2}",
@@ -708,7 +708,7 @@ fn drift_check_markdown(result: &Diagnosis) -> String {
             let Some(z1) = h1.quantities.get(q) else {
                 continue;
             };
-            let v = |x: f64| crate::fmt::channel_value(q, x);
+            let v = |x: f64| crate::fmt::quantity_value(q, x);
             let _ = writeln!(
                 s,
                 "| {} | {q} | {} | {} [{}, {}] | {} ({:.2}) | {} [{}, {}] | {} ({:.2}) |",

@@ -254,7 +254,7 @@ fn text(r: &DriftCheck, logs: &[String], model: &std::path::Path, elapsed_s: f64
     for h in &r.horizons {
         for q in Quantity::ALL {
             let c = &h.channels[q.name()];
-            let v = |x: f64| crate::fmt::channel_value(q.name(), x);
+            let v = |x: f64| crate::fmt::quantity_value(q.name(), x);
             let measured = c
                 .measured
                 .map(|m| format!("{} [{}, {}]", v(m.rms), v(m.rms_lo), v(m.rms_hi)))

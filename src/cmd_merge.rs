@@ -87,7 +87,7 @@ pub fn run(args: Args) -> Result<()> {
         f.check(
             exp.runs,
             exp.scenario.checkpoint_steps.len(),
-            montecarlo::channels::Channel::ALL.len(),
+            montecarlo::nav_quantity::NavQuantity::ALL.len(),
         )
         .with_context(|| format!("{}: not a consistent shard file", path.display()))?;
     }

@@ -1,4 +1,5 @@
-//! `imudrift simulate SCENARIO.toml`: Monte Carlo drift run; every channel beside its growth law.
+//! `imudrift simulate SCENARIO.toml`: Monte Carlo drift run; every navigation-error quantity beside
+//! its growth law.
 
 use crate::cli::pool;
 use crate::experiment_run::{
@@ -9,8 +10,8 @@ use crate::output::{ensure_dir, write_atomic, write_string};
 use crate::plot::{Band, LogLogPlot, Series, PALETTE};
 use anyhow::{bail, Context, Result};
 use montecarlo::ablation::{self, AblationRow};
-use montecarlo::channels::Channel;
 use montecarlo::experiment::{Experiment, Overrides};
+use montecarlo::nav_quantity::NavQuantity;
 use montecarlo::report::DriftReport;
 use montecarlo::runner::Shard;
 use montecarlo::shard::{ShardFile, SHARD_FORMAT};
@@ -196,7 +197,9 @@ struct JsonOut<'a> {
 
 #[derive(Serialize)]
 struct ReferenceOut {
-    channel: String,
+    /// The quantity's name (JSON key `channel`, docs/cli.md).
+    #[serde(rename = "channel")]
+    quantity: String,
     statistic: String,
     t_s: f64,
     value: f64,
@@ -212,7 +215,7 @@ fn reference_out(report: &DriftReport, exp: &Experiment) -> Option<ReferenceOut>
         .checkpoints
         .iter()
         .min_by(|a, b| (a.t_s - r.t_s).abs().total_cmp(&(b.t_s - r.t_s).abs()))?;
-    let c = cp.channels.get(&r.channel)?;
+    let c = cp.quantities.get(&r.quantity)?;
     let simulated = match r.statistic.as_str() {
         "mean" => c.mean,
         "rms" => c.rms,
@@ -220,7 +223,7 @@ fn reference_out(report: &DriftReport, exp: &Experiment) -> Option<ReferenceOut>
         _ => c.p95,
     };
     Some(ReferenceOut {
-        channel: r.channel.clone(),
+        quantity: r.quantity.clone(),
         statistic: r.statistic.clone(),
         t_s: cp.t_s,
         value: r.value,
@@ -267,7 +270,10 @@ pub fn emit(
         let _set = crate::output::begin_set(dir)?;
         write_string(&dir.join("drift.json"), &text)?;
         write_atomic(&dir.join("drift.csv"), |w| write_csv(w, report))?;
-        write_string(&dir.join("drift.svg"), &svg(report, Channel::PosHorizontal))?;
+        write_string(
+            &dir.join("drift.svg"),
+            &svg(report, NavQuantity::PosHorizontal),
+        )?;
         eprintln!("wrote {}/drift.{{json,csv,svg}}", dir.display());
     }
     Ok(())
@@ -285,13 +291,13 @@ fn write_csv(w: &mut dyn Write, r: &DriftReport) -> Result<()> {
     )?;
     writeln!(w, "t_s,channel,mean,std,rms,p5,p50,p95,law_mean,law_std,law_rms,ratio,ratio_lo,ratio_hi,law_note")?;
     for cp in &r.checkpoints {
-        for ch in Channel::ALL {
-            let c = &cp.channels[ch.name()];
+        for q in NavQuantity::ALL {
+            let c = &cp.quantities[q.name()];
             writeln!(
                 w,
                 "{},{},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{},{},{},{},{},{},{}",
                 cp.t_s,
-                ch.name(),
+                q.name(),
                 c.mean,
                 c.std,
                 c.rms,
@@ -311,7 +317,7 @@ fn write_csv(w: &mut dyn Write, r: &DriftReport) -> Result<()> {
     Ok(())
 }
 
-fn fmt_ratio(c: &montecarlo::report::ChannelReport) -> String {
+fn fmt_ratio(c: &montecarlo::report::QuantityReport) -> String {
     match (c.ratio, c.ratio_lo, c.ratio_hi) {
         (Some(r), Some(lo), Some(hi)) => {
             let flag = if lo <= 1.0 && 1.0 <= hi { "" } else { " *" };
@@ -351,19 +357,19 @@ fn table(
         "{:>10} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}  ratio",
         "t", "mean", "p50", "p95", "rms", "law mean", "law rms"
     );
-    let h = Channel::PosHorizontal.name();
+    let h = NavQuantity::PosHorizontal.name();
     for cp in &r.checkpoints {
-        let c = &cp.channels[h];
+        let c = &cp.quantities[h];
         let _ = writeln!(
             s,
             "{:>10} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}  {}",
             fmt::time(cp.t_s),
-            fmt::channel_value(h, c.mean),
-            fmt::channel_value(h, c.p50),
-            fmt::channel_value(h, c.p95),
-            fmt::channel_value(h, c.rms),
-            fmt::channel_opt(h, c.law_mean),
-            fmt::channel_opt(h, c.law_rms),
+            fmt::quantity_value(h, c.mean),
+            fmt::quantity_value(h, c.p50),
+            fmt::quantity_value(h, c.p95),
+            fmt::quantity_value(h, c.rms),
+            fmt::quantity_opt(h, c.law_mean),
+            fmt::quantity_opt(h, c.law_rms),
             fmt_ratio(c)
         );
     }
@@ -378,23 +384,23 @@ fn table(
             "{:>20} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}  ratio / note",
             "channel", "mean", "std", "rms", "p95", "law mean", "law std"
         );
-        for ch in Channel::ALL {
-            let c = &last.channels[ch.name()];
+        for q in NavQuantity::ALL {
+            let c = &last.quantities[q.name()];
             let tail = match &c.law_note {
                 Some(n) if c.ratio.is_none() => n.clone(),
                 _ => fmt_ratio(c),
             };
-            let v = |x: f64| fmt::channel_value(ch.name(), x);
+            let v = |x: f64| fmt::quantity_value(q.name(), x);
             let _ = writeln!(
                 s,
                 "{:>20} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}  {}",
-                ch.name(),
+                q.name(),
                 v(c.mean),
                 v(c.std),
                 v(c.rms),
                 v(c.p95),
-                fmt::channel_opt(ch.name(), c.law_mean),
-                fmt::channel_opt(ch.name(), c.law_std),
+                fmt::quantity_opt(q.name(), c.law_mean),
+                fmt::quantity_opt(q.name(), c.law_std),
                 tail
             );
         }
@@ -403,11 +409,11 @@ fn table(
         let _ = writeln!(
             s,
             "\n{} {} at {}: simulated {}, published {} ({:+.0} %; {})",
-            rf.channel,
+            rf.quantity,
             rf.statistic,
             fmt::time(rf.t_s),
-            fmt::channel_value(&rf.channel, rf.simulated),
-            fmt::channel_value(&rf.channel, rf.value),
+            fmt::quantity_value(&rf.quantity, rf.simulated),
+            fmt::quantity_value(&rf.quantity, rf.value),
             100.0 * (rf.simulated / rf.value - 1.0),
             rf.source
         );
@@ -444,14 +450,14 @@ fn table(
     s
 }
 
-/// Log-log plot of one channel (shared writer, src/plot.rs): simulated mean and rms, the p5-p95
+/// Log-log plot of one quantity (shared writer, src/plot.rs): simulated mean and rms, the p5-p95
 /// band, and the law's mean and rms.
-fn svg(r: &DriftReport, ch: Channel) -> String {
+fn svg(r: &DriftReport, q: NavQuantity) -> String {
     let t: Vec<f64> = r.checkpoints.iter().map(|c| c.t_s).collect();
-    let col = |f: &dyn Fn(&montecarlo::report::ChannelReport) -> f64| -> Vec<f64> {
+    let col = |f: &dyn Fn(&montecarlo::report::QuantityReport) -> f64| -> Vec<f64> {
         r.checkpoints
             .iter()
-            .map(|c| f(&c.channels[ch.name()]))
+            .map(|c| f(&c.quantities[q.name()]))
             .collect()
     };
     let nan = f64::NAN;
@@ -459,12 +465,12 @@ fn svg(r: &DriftReport, ch: Channel) -> String {
         title: format!(
             "{}: {} vs time ({} runs, seed {})",
             r.scenario,
-            ch.name(),
+            q.name(),
             r.runs_ok,
             r.seed
         ),
         x_label: "t (s)".into(),
-        y_label: ch.name().into(),
+        y_label: q.name().into(),
         series: vec![
             Series::new("simulated mean", t.clone(), col(&|c| c.mean), PALETTE[0]),
             Series::new("simulated rms", t.clone(), col(&|c| c.rms), PALETTE[2]),

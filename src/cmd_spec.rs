@@ -9,7 +9,7 @@ use crate::experiment_run::{check_memory, execute};
 use crate::fmt;
 use crate::output::{write_atomic, write_string};
 use anyhow::{Context, Result};
-use montecarlo::channels::Channel;
+use montecarlo::nav_quantity::NavQuantity;
 use montecarlo::requirement::{evaluate, Requirement, RequirementResult, Verdict};
 use montecarlo::spec::{
     drift_experiment, drift_rows, gyro_readback, gyro_spec_values, SensorSpec, READBACK_CONFIDENCE,
@@ -116,11 +116,11 @@ fn model_notes(model: &SensorModel) -> Vec<String> {
     notes
 }
 
-/// Whether the model has a term that drives `channel`.
-fn informs(model: &SensorModel, channel: Channel) -> bool {
+/// Whether the model has a term that drives `quantity`.
+fn informs(model: &SensorModel, quantity: NavQuantity) -> bool {
     let gyro = has_any(model, Sensor::Gyro);
     let accel = has_any(model, Sensor::Accel);
-    if channel.name().ends_with("_rad") {
+    if quantity.name().ends_with("_rad") {
         gyro
     } else {
         gyro || accel
@@ -329,8 +329,8 @@ fn compare_sensor(
                 .iter()
                 .position(|&t| (t - req.t_s).abs() <= 0.5 / rate)
                 .context("a requirement's time is not a checkpoint")?;
-            let values = batch.matrix.series(cp, req.channel as usize);
-            Ok(evaluate(req, values, informs(&model, req.channel)))
+            let values = batch.matrix.series(cp, req.quantity as usize);
+            Ok(evaluate(req, values, informs(&model, req.quantity)))
         })
         .collect::<Result<Vec<_>>>()?;
     Ok(SensorOut {
@@ -504,7 +504,7 @@ fn table(doc: &SpecDoc) -> String {
         "hor rms law",
         "hor p95 sim"
     );
-    let (yaw, hor) = (Channel::Yaw.name(), Channel::PosHorizontal.name());
+    let (yaw, hor) = (NavQuantity::Yaw.name(), NavQuantity::PosHorizontal.name());
     for sen in &doc.sensors {
         for d in &sen.spec.drift {
             let _ = writeln!(
@@ -512,13 +512,13 @@ fn table(doc: &SpecDoc) -> String {
                 "{:<22} {:>8} {:>11} {:>11} {:>12} {:>12} {:>12} {:>12} {:>12}",
                 sen.spec.name,
                 fmt::time(d.t_s),
-                fmt::channel_value(yaw, d.heading_rms_sim_rad),
-                fmt::channel_opt(yaw, d.heading_rms_law_rad),
-                fmt::channel_value(hor, d.horizontal_mean_sim_m),
-                fmt::channel_opt(hor, d.horizontal_mean_law_m),
-                fmt::channel_value(hor, d.horizontal_rms_sim_m),
-                fmt::channel_opt(hor, d.horizontal_rms_law_m),
-                fmt::channel_value(hor, d.horizontal_p95_sim_m),
+                fmt::quantity_value(yaw, d.heading_rms_sim_rad),
+                fmt::quantity_opt(yaw, d.heading_rms_law_rad),
+                fmt::quantity_value(hor, d.horizontal_mean_sim_m),
+                fmt::quantity_opt(hor, d.horizontal_mean_law_m),
+                fmt::quantity_value(hor, d.horizontal_rms_sim_m),
+                fmt::quantity_opt(hor, d.horizontal_rms_law_m),
+                fmt::quantity_value(hor, d.horizontal_p95_sim_m),
             );
             if let Some(n) = &d.law_note {
                 let _ = writeln!(s, "  {:<20} t = {}: {n}", "", fmt::time(d.t_s));
@@ -546,7 +546,7 @@ fn table(doc: &SpecDoc) -> String {
         );
         for sen in &doc.sensors {
             for r in sen.requirements.iter().filter(|r| &r.requirement == req) {
-                let v = |x: f64| fmt::channel_value(r.channel, x);
+                let v = |x: f64| fmt::quantity_value(r.quantity, x);
                 let verdict = match r.verdict {
                     Verdict::Pass => "PASS",
                     Verdict::Fail => "FAIL",
@@ -578,7 +578,7 @@ fn table(doc: &SpecDoc) -> String {
                     let _ = writeln!(
                         s,
                         "  note: {}: the model has no error term that drives {}",
-                        sen.spec.name, r.channel
+                        sen.spec.name, r.quantity
                     );
                 }
             }

@@ -5,8 +5,8 @@
 
 use anyhow::{bail, Context, Result};
 use montecarlo::ablation;
-use montecarlo::channels::Channel;
 use montecarlo::experiment::{Experiment, ExperimentError, Overrides};
+use montecarlo::nav_quantity::NavQuantity;
 use montecarlo::runner::{run_range, BatchResult};
 use montecarlo::scenario::Scenario;
 use noise::SensorModel;
@@ -162,9 +162,9 @@ pub fn ablation_experiments(
 /// Memory for the per-run values above which `simulate` asks for shards instead (8 GiB).
 const MAX_VALUE_BYTES: u64 = 8 << 30;
 
-/// Refuse a run range whose per-run values (8 bytes per run, checkpoint and channel) would not fit.
+/// Refuse a run range whose per-run values (8 bytes per run, checkpoint and quantity) would not fit.
 pub fn check_memory(exp: &Experiment, runs: u64) -> Result<()> {
-    let per_run = (exp.scenario.checkpoint_steps.len() * Channel::ALL.len() * 8) as u64;
+    let per_run = (exp.scenario.checkpoint_steps.len() * NavQuantity::ALL.len() * 8) as u64;
     let bytes = runs.saturating_mul(per_run);
     if bytes > MAX_VALUE_BYTES {
         bail!(

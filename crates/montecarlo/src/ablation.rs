@@ -3,8 +3,8 @@
 //! the horizontal drift, and when. The sub-experiments are built from the parsed scenario and
 //! model (no re-parse); shards carry their slices of them so a merge gives the same table.
 
-use crate::channels::Channel;
 use crate::experiment::{Experiment, Overrides};
+use crate::nav_quantity::NavQuantity;
 use crate::report::DriftReport;
 use crate::runner::RunFailure;
 use crate::scenario::Scenario;
@@ -100,7 +100,7 @@ pub fn experiments(
 
 fn last_horizontal(r: &DriftReport) -> (f64, f64) {
     r.checkpoints.last().map_or((f64::NAN, f64::NAN), |cp| {
-        let c = &cp.channels[Channel::PosHorizontal.name()];
+        let c = &cp.quantities[NavQuantity::PosHorizontal.name()];
         (c.mean, c.rms)
     })
 }
@@ -123,7 +123,7 @@ pub fn rows(
                 only_rms_m: only
                     .checkpoints
                     .iter()
-                    .map(|c| c.channels[Channel::PosHorizontal.name()].rms)
+                    .map(|c| c.quantities[NavQuantity::PosHorizontal.name()].rms)
                     .collect(),
             }
         })

@@ -10,7 +10,7 @@
 //! accelerometer error on body x, y, z integrates into north, east, down velocity and position.
 //! Independent terms add in variance; deterministic ones add in mean.
 
-use crate::channels::Channel;
+use crate::nav_quantity::NavQuantity;
 use noise::closed_form::{self as cf, Integration};
 use serde::{Deserialize, Serialize};
 
@@ -268,11 +268,11 @@ pub fn gauss_markov_from_window_variance(
 /// The tilt gain g is inside `Integration::Tilt` (standard gravity); `g_scale` rescales it for a
 /// scenario gravity other than standard; for initial attitude the tilt acts as an accelerometer bias
 /// g sin(eps) (docs/model.md §1.2), integrated once and twice.
-fn paths(entry: Entry, gravity_mps2: f64) -> Vec<(Channel, Option<Integration>, f64)> {
-    use Channel::*;
+fn paths(entry: Entry, gravity_mps2: f64) -> Vec<(NavQuantity, Option<Integration>, f64)> {
+    use NavQuantity::*;
     let g_scale = gravity_mps2 / noise::units::STANDARD_GRAVITY_MPS2;
     // roll error drives east (+g), pitch error drives north (-g); yaw nothing at first order.
-    let tilt = |axis: usize| -> Option<(Channel, Channel, f64)> {
+    let tilt = |axis: usize| -> Option<(NavQuantity, NavQuantity, f64)> {
         match axis {
             0 => Some((VelEast, PosEast, 1.0)),
             1 => Some((VelNorth, PosNorth, -1.0)),
@@ -321,11 +321,11 @@ pub struct LawContext {
     pub gravity_mps2: f64,
 }
 
-/// The laws of every channel at time `t_s`, in [`Channel::ALL`] order.
+/// The laws of every channel at time `t_s`, in [`NavQuantity::ALL`] order.
 pub fn channel_laws(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
     if !ctx.static_level {
         let why = format!("no closed-form law: {}", ctx.reason);
-        let mut laws: Vec<Law> = Channel::ALL
+        let mut laws: Vec<Law> = NavQuantity::ALL
             .iter()
             .map(|_| Law::NotApplicable(why.clone()))
             .collect();
@@ -340,12 +340,12 @@ pub fn channel_laws(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
                 .filter(|t| matches!(t.entry, Entry::Gyro(2) | Entry::InitialAttitude(2)))
                 .cloned()
                 .collect();
-            let yaw = Channel::Yaw as usize;
+            let yaw = NavQuantity::Yaw as usize;
             laws[yaw] = channel_laws(&yaw_terms, &static_ctx, t_s).swap_remove(yaw);
         }
         return laws;
     }
-    let n = Channel::ALL.len();
+    let n = NavQuantity::ALL.len();
     let mut mean = vec![0.0f64; n];
     let mut var = vec![0.0f64; n];
     let mut missing: Vec<Option<String>> = vec![None; n];
@@ -366,18 +366,18 @@ pub fn channel_laws(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
         }
     }
     // Small-angle check on the predicted attitude error of the three angle channels.
-    let worst_angle = [Channel::Roll, Channel::Pitch, Channel::Yaw]
+    let worst_angle = [NavQuantity::Roll, NavQuantity::Pitch, NavQuantity::Yaw]
         .iter()
         .map(|&c| mean[c as usize].hypot(var[c as usize].sqrt()))
         .fold(0.0, f64::max);
     let large = worst_angle > SMALL_ANGLE_LIMIT_RAD;
     // An attitude error without a law couples into every velocity and position channel at second
     // order (g (1 - cos eps) vertically, docs/model.md §1.2), so those channels have no law either.
-    let angle_missing = [Channel::Roll, Channel::Pitch, Channel::Yaw]
+    let angle_missing = [NavQuantity::Roll, NavQuantity::Pitch, NavQuantity::Yaw]
         .iter()
         .find_map(|&c| missing[c as usize].clone());
     let single = |i: usize| -> Law {
-        let is_angle = i <= Channel::Yaw as usize;
+        let is_angle = i <= NavQuantity::Yaw as usize;
         if let Some(why) = missing[i].as_ref().or(if is_angle {
             None
         } else {
@@ -399,12 +399,15 @@ pub fn channel_laws(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
     // The vertical channels' law is first order; a tilt eps adds g (1 - cos eps) ~ g eps^2/2 to the
     // vertical specific force (docs/model.md §1.2). Bound its effect with the final tilt mean square
     // (tilt grows with t, so this overestimates) and withhold the law where it exceeds 10 % of it.
-    let tilt_ms: f64 = [Channel::Roll, Channel::Pitch]
+    let tilt_ms: f64 = [NavQuantity::Roll, NavQuantity::Pitch]
         .iter()
         .map(|&c| mean[c as usize].powi(2) + var[c as usize])
         .sum();
     let second_order = ctx.gravity_mps2 * tilt_ms / 2.0;
-    for (ch, growth) in [(Channel::VelDown, t_s), (Channel::PosDown, t_s * t_s / 2.0)] {
+    for (ch, growth) in [
+        (NavQuantity::VelDown, t_s),
+        (NavQuantity::PosDown, t_s * t_s / 2.0),
+    ] {
         let i = ch as usize;
         if let Some(first) = laws[i].rms() {
             let bound = second_order * growth;
@@ -416,8 +419,16 @@ pub fn channel_laws(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
         }
     }
     for (h, a, b) in [
-        (Channel::PosHorizontal, Channel::PosNorth, Channel::PosEast),
-        (Channel::VelHorizontal, Channel::VelNorth, Channel::VelEast),
+        (
+            NavQuantity::PosHorizontal,
+            NavQuantity::PosNorth,
+            NavQuantity::PosEast,
+        ),
+        (
+            NavQuantity::VelHorizontal,
+            NavQuantity::VelNorth,
+            NavQuantity::VelEast,
+        ),
     ] {
         let gaussian = !not_gaussian[a as usize] && !not_gaussian[b as usize];
         laws[h as usize] = horizontal_law(&laws[a as usize], &laws[b as usize], gaussian);
@@ -519,7 +530,7 @@ mod tests {
             })
             .collect();
         let laws = channel_laws(&terms, &ctx(), 60.0);
-        let Law::Value { mean, .. } = laws[Channel::PosHorizontal as usize] else {
+        let Law::Value { mean, .. } = laws[NavQuantity::PosHorizontal as usize] else {
             panic!()
         };
         // The note rounds to 0.1 m.
@@ -852,12 +863,12 @@ mod tests {
             source: Source::Bias(b),
         }];
         let laws = channel_laws(&terms, &ctx(), 10.0);
-        let Law::Value { mean, std } = laws[Channel::PosNorth as usize] else {
+        let Law::Value { mean, std } = laws[NavQuantity::PosNorth as usize] else {
             panic!()
         };
         assert_eq!(std, 0.0);
         assert!((mean + 9.80665 * b * 1000.0 / 6.0).abs() < 1e-12);
-        let Law::Value { mean, .. } = laws[Channel::Pitch as usize] else {
+        let Law::Value { mean, .. } = laws[NavQuantity::Pitch as usize] else {
             panic!()
         };
         assert!((mean - b * 10.0).abs() < 1e-15);
@@ -869,11 +880,11 @@ mod tests {
         }];
         let laws = channel_laws(&terms, &ctx(), 10.0);
         assert!(matches!(
-            laws[Channel::PosHorizontal as usize],
+            laws[NavQuantity::PosHorizontal as usize],
             Law::NotApplicable(_)
         ));
         assert_eq!(
-            laws[Channel::Roll as usize],
+            laws[NavQuantity::Roll as usize],
             Law::Value {
                 mean: 0.0,
                 std: 0.0

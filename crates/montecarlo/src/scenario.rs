@@ -40,8 +40,9 @@ struct RawScenario {
 #[derive(Debug, Clone, PartialEq, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Reference {
-    /// Channel name (`pos_horizontal_m` ...).
-    pub channel: String,
+    /// The navigation-error quantity's name (`pos_horizontal_m` ...; TOML / JSON key `channel`).
+    #[serde(rename = "channel")]
+    pub quantity: String,
     /// Statistic compared: `mean`, `rms`, `p50` or `p95`.
     pub statistic: String,
     pub t_s: f64,
@@ -145,7 +146,7 @@ pub const DEFAULT_RATE_HZ: f64 = 100.0;
 pub const DEFAULT_RUNS: u64 = 500;
 /// Default master seed when a scenario leaves `seed` out.
 pub const DEFAULT_SEED: u64 = 1;
-/// Most checkpoints a scenario may ask for: each costs 8 bytes per run per channel.
+/// Most checkpoints a scenario may ask for: each costs 8 bytes per run per navigation-error quantity.
 pub const MAX_CHECKPOINTS: usize = 100_000;
 /// Default number of log-spaced checkpoints.
 pub const DEFAULT_LOG_COUNT: usize = 25;
@@ -270,12 +271,12 @@ impl Scenario {
                     format!("expected mean, rms, p50 or p95, got `{}`", r.statistic),
                 ));
             }
-            if crate::channels::Channel::from_name(&r.channel).is_none() {
+            if crate::nav_quantity::NavQuantity::from_name(&r.quantity).is_none() {
                 return Err(err(
                     "reference.channel",
                     format!(
                         "expected a channel name such as pos_horizontal_m, got `{}`",
-                        r.channel
+                        r.quantity
                     ),
                 ));
             }

@@ -39,9 +39,14 @@ pub struct ShardError(pub String);
 
 impl ShardFile {
     /// Whether the file is consistent in itself and with its experiment (`runs` runs, `checkpoints`
-    /// checkpoints, `channels` channels): a valid split, well-formed matrices of that shape, and
+    /// checkpoints, `quantities` navigation-error quantities): a valid split, well-formed matrices of that shape, and
     /// only runs of its own slice (ablation sub-runs included).
-    pub fn check(&self, runs: u64, checkpoints: usize, channels: usize) -> Result<(), ShardError> {
+    pub fn check(
+        &self,
+        runs: u64,
+        checkpoints: usize,
+        quantities: usize,
+    ) -> Result<(), ShardError> {
         let fail = |what: String| Err(ShardError(what));
         if self.shard.count == 0 || self.shard.index >= self.shard.count {
             return fail(format!(
@@ -64,10 +69,10 @@ impl ShardFile {
         );
         for (what, m, failures) in batches {
             m.check().or_else(|e| fail(format!("key `{what}`: {e}")))?;
-            if (m.checkpoints, m.channels) != (checkpoints, channels) {
+            if (m.checkpoints, m.quantities) != (checkpoints, quantities) {
                 return fail(format!(
-                    "key `{what}`: {} checkpoints x {} channels, but the experiment has {checkpoints} x {channels}",
-                    m.checkpoints, m.channels
+                    "key `{what}`: {} checkpoints x {} quantities, but the experiment has {checkpoints} x {quantities}",
+                    m.checkpoints, m.quantities
                 ));
             }
             let ids = m

@@ -2,8 +2,8 @@
 //! (Woodman's method, TR-696 §5.1) from a simulated long static log made with the noise crate, and
 //! the drift at chosen times (law and simulation) from a static Monte Carlo run.
 
-use crate::channels::Channel;
 use crate::experiment::{Experiment, Overrides};
+use crate::nav_quantity::NavQuantity;
 use crate::report::DriftReport;
 use crate::scenario::Scenario;
 use allan::{DataKind, Estimator, Options, TauGrid};
@@ -277,8 +277,8 @@ pub fn drift_rows(report: &DriftReport) -> Vec<DriftRow> {
         .checkpoints
         .iter()
         .map(|cp| {
-            let yaw = &cp.channels[Channel::Yaw.name()];
-            let h = &cp.channels[Channel::PosHorizontal.name()];
+            let yaw = &cp.quantities[NavQuantity::Yaw.name()];
+            let h = &cp.quantities[NavQuantity::PosHorizontal.name()];
             DriftRow {
                 t_s: cp.t_s,
                 heading_rms_sim_rad: yaw.rms,
