@@ -6,9 +6,9 @@ use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use montecarlo::experiment::{Experiment, Overrides};
 use montecarlo::run_range;
 use montecarlo::scenario::Scenario;
-use noise::SensorModel;
+use noise::{Effect, Sensor, SensorModel, TermSelector};
 
-fn experiment(only: Option<Vec<String>>) -> Experiment {
+fn experiment(only: Option<Vec<TermSelector>>) -> Experiment {
     let root = env!("CARGO_MANIFEST_DIR");
     let text =
         std::fs::read_to_string(format!("{root}/configs/scenarios/mtx-static-60s.toml")).unwrap();
@@ -42,8 +42,8 @@ fn bench(c: &mut Criterion) {
         (
             "white_noise_only",
             Some(vec![
-                "gyro.white_noise".to_string(),
-                "accel.white_noise".to_string(),
+                TermSelector::term(Sensor::Gyro, Effect::WhiteNoise),
+                TermSelector::term(Sensor::Accel, Effect::WhiteNoise),
             ]),
         ),
     ] {

@@ -47,11 +47,11 @@ pub struct Args {
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Keep only these error terms, e.g. `gyro.white_noise,accel.white_noise`
-    #[arg(long, value_delimiter = ',')]
-    pub only: Option<Vec<String>>,
+    #[arg(long, value_delimiter = ',', value_parser = noise::TermSelector::parse)]
+    pub only: Option<Vec<noise::TermSelector>>,
     /// Switch these error terms off, e.g. `gyro.bias_instability`
-    #[arg(long, value_delimiter = ',')]
-    pub without: Vec<String>,
+    #[arg(long, value_delimiter = ',', value_parser = noise::TermSelector::parse)]
+    pub without: Vec<noise::TermSelector>,
     /// Run only the deterministic slice i/k of the runs (0 <= i < k) and write a shard file for
     /// `imudrift merge` into --out DIR
     #[arg(long, value_name = "I/K")]

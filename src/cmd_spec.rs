@@ -64,11 +64,11 @@ pub struct Args {
     #[arg(long, value_parser = crate::cli::duration_s)]
     pub readback_duration: Option<f64>,
     /// Keep only these error terms
-    #[arg(long, value_delimiter = ',')]
-    pub only: Option<Vec<String>>,
+    #[arg(long, value_delimiter = ',', value_parser = noise::TermSelector::parse)]
+    pub only: Option<Vec<noise::TermSelector>>,
     /// Switch these error terms off
-    #[arg(long, value_delimiter = ',')]
-    pub without: Vec<String>,
+    #[arg(long, value_delimiter = ',', value_parser = noise::TermSelector::parse)]
+    pub without: Vec<noise::TermSelector>,
     /// Print one JSON document on stdout
     #[arg(long)]
     pub json: bool,
@@ -134,7 +134,7 @@ pub fn run(args: Args) -> Result<()> {
         .map(crate::output::prepare_dir)
         .transpose()?;
     let settings = Settings::from_args(&args)?;
-    let filter = crate::cli::term_filter(args.only.as_deref(), &args.without)?;
+    let filter = noise::TermFilter::new(args.only.as_deref(), &args.without);
     let pool = pool(args.threads)?;
     let mut sensors = Vec::new();
     for path in &args.sensors {

@@ -3,7 +3,7 @@
 //! error naming the file and key without leaving an output file.
 
 use nalgebra::Vector3;
-use noise::{ImuErrors, Sensor, SensorModel, TermFilter};
+use noise::{ImuErrors, Sensor, SensorModel, TermFilter, TermSelector};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -121,7 +121,10 @@ fn only_and_without_switch_terms() {
         assert_eq!(&row[4..7], &[0.0, 0.0, -9.80665]);
     }
     // The gyro columns are the white-noise stream alone: the same bits as the library with that filter.
-    let filter = TermFilter::parse(Some("gyro.white_noise"), None).unwrap();
+    let filter = TermFilter::new(
+        Some(&[TermSelector::parse("gyro.white_noise").unwrap()]),
+        &[],
+    );
     let model = SensorModel::load(&mtx()).unwrap().filtered(&filter);
     let mut errors = ImuErrors::new(&model, 0.01, 1, 0);
     for (k, row) in rows.iter().enumerate() {

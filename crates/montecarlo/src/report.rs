@@ -7,6 +7,7 @@ use crate::laws::{channel_laws, Law, LawContext, Term};
 use crate::nav_quantity::NavQuantity;
 use crate::runner::RunFailure;
 use crate::stats::{ratio_interval, summarise, RunMatrix, Z_999};
+use noise::TermSelector;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use strapdown::spec::TrajectorySpec;
@@ -74,10 +75,10 @@ pub struct DriftReport {
     /// The scenario's trajectory as written, tagged by `kind`, units in the field names
     /// (docs/cli.md).
     pub trajectory: TrajectorySpec,
-    /// The active error terms after `--only` / `--without` (docs/cli.md names).
+    /// The active error terms after the term switches `only` / `without` (docs/cli.md names).
     pub active_terms: Vec<String>,
-    pub only: Option<Vec<String>>,
-    pub without: Vec<String>,
+    pub only: Option<Vec<TermSelector>>,
+    pub without: Vec<TermSelector>,
     /// Confidence level of `ratio_lo` .. `ratio_hi`.
     pub confidence: f64,
     pub checkpoints: Vec<CheckpointReport>,
@@ -94,8 +95,8 @@ pub struct ReportMeta {
     pub duration_s: f64,
     pub scheme: String,
     pub trajectory: TrajectorySpec,
-    pub only: Option<Vec<String>>,
-    pub without: Vec<String>,
+    pub only: Option<Vec<TermSelector>>,
+    pub without: Vec<TermSelector>,
     pub checkpoint_steps: Vec<u64>,
 }
 

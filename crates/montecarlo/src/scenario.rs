@@ -3,6 +3,7 @@
 //! error-term switches. A raw serde struct (`deny_unknown_fields`) is converted into the validated
 //! [`Scenario`]; every error names the source, the key and what was expected.
 
+use noise::TermSelector;
 use serde::Deserialize;
 use std::path::PathBuf;
 use strapdown::{AnyTrajectory, Scheme, TrajectorySpec};
@@ -118,9 +119,9 @@ pub struct Scenario {
     /// Step indices k (t = k dt) at which errors are recorded, ascending, unique, 1 <= k <= steps.
     pub checkpoint_steps: Vec<u64>,
     pub alignment: Alignment,
-    /// Term switches (`gyro.white_noise` ...), parsed by the noise crate's filter.
-    pub only: Option<Vec<String>>,
-    pub without: Vec<String>,
+    /// Term switches `terms.only` / `terms.without` (`gyro.white_noise` ...).
+    pub only: Option<Vec<TermSelector>>,
+    pub without: Vec<TermSelector>,
     /// `terms.bias_calibrated_at_start`: the slowly varying bias processes (flicker bias
     /// instability, Gauss-Markov) are referenced to their value at t = 0, b(t) - b(0), as for a
     /// user who estimates the bias at turn-on and subtracts it (Woodman TR-696 §3.2.1).
@@ -264,6 +265,7 @@ impl Scenario {
         }
         let alignment = alignment(raw.alignment.unwrap_or_default(), &err)?;
         let terms = raw.terms.unwrap_or_default();
+        let (only, without) = term_switches(&terms, &err)?;
         if let Some(r) = &raw.reference {
             if !["mean", "rms", "p50", "p95"].contains(&r.statistic.as_str()) {
                 return Err(err(
@@ -327,8 +329,8 @@ impl Scenario {
             trajectory,
             checkpoint_steps,
             alignment,
-            only: terms.only,
-            without: terms.without.unwrap_or_default(),
+            only,
+            without,
             bias_calibrated_at_start: terms.bias_calibrated_at_start.unwrap_or(false)
                 || terms.bias_calibration_window_s.is_some(),
             bias_calibration_window_s: terms.bias_calibration_window_s,
@@ -339,6 +341,30 @@ impl Scenario {
 }
 
 type ErrFn<'a> = dyn Fn(&str, String) -> ScenarioError + 'a;
+
+/// `terms.only` and `terms.without`, each item read as a term (the error names the key).
+#[allow(clippy::type_complexity)]
+fn term_switches(
+    terms: &RawTerms,
+    err: &ErrFn,
+) -> Result<(Option<Vec<TermSelector>>, Vec<TermSelector>), ScenarioError> {
+    let read = |key: &str, items: &[String]| -> Result<Vec<TermSelector>, ScenarioError> {
+        items
+            .iter()
+            .map(|item| TermSelector::parse(item).map_err(|e| err(key, e.to_string())))
+            .collect()
+    };
+    let only = terms
+        .only
+        .as_deref()
+        .map(|items| read("terms.only", items))
+        .transpose()?;
+    let without = read(
+        "terms.without",
+        terms.without.as_deref().unwrap_or_default(),
+    )?;
+    Ok((only, without))
+}
 
 fn finite(key: &str, v: f64, err: &ErrFn) -> Result<f64, ScenarioError> {
     if v.is_finite() {
@@ -508,6 +534,14 @@ mod tests {
                 format!("{MIN}[terms]\nbias_calibrated_at_start = false\nbias_calibration_window_s = 10.0\n"),
                 "terms.bias_calibration_window_s",
             ),
+            (
+                format!("{MIN}[terms]\nonly = [\"gyro.whte_noise\"]\n"),
+                "terms.only",
+            ),
+            (
+                format!("{MIN}[terms]\nwithout = [\"gyro\", \"magneto\"]\n"),
+                "terms.without",
+            ),
         ];
         let s = Scenario::from_toml_str(
             &format!("{MIN}[terms]\nbias_calibration_window_s = 10.0\n"),
@@ -515,6 +549,13 @@ mod tests {
         )
         .unwrap();
         assert!(s.bias_calibrated_at_start && s.bias_calibration_window_s == Some(10.0));
+        let s = Scenario::from_toml_str(
+            &format!("{MIN}[terms]\nonly = [\"white_noise\"]\nwithout = [\"accel\"]\n"),
+            "s.toml",
+        )
+        .unwrap();
+        assert_eq!(s.only.as_ref().map(|o| o[0].text()), Some("white_noise"));
+        assert_eq!(s.without[0].terms().count(), noise::Effect::ALL.len());
         for (text, key) in cases {
             let e = Scenario::from_toml_str(&text, "s.toml").unwrap_err();
             assert_eq!(e.key, key, "{e}");

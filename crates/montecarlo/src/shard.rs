@@ -5,6 +5,7 @@
 
 use crate::runner::{RunFailure, Shard};
 use crate::stats::RunMatrix;
+use noise::TermSelector;
 use serde::{Deserialize, Serialize};
 
 /// Format tag written into every shard file.
@@ -22,8 +23,8 @@ pub struct ShardFile {
     /// Overrides in effect (the experiment identity together with the two texts).
     pub runs: Option<u64>,
     pub seed: Option<u64>,
-    pub only: Option<Vec<String>>,
-    pub without: Vec<String>,
+    pub only: Option<Vec<TermSelector>>,
+    pub without: Vec<TermSelector>,
     pub shard: Shard,
     pub matrix: RunMatrix,
     pub failures: Vec<RunFailure>,
