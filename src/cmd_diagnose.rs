@@ -181,7 +181,7 @@ fn log_channels(log: &logio::Log) -> Result<LogInput<'_>> {
 }
 
 fn run_inner(args: &Args) -> Result<()> {
-    let model = SensorModel::load(&args.model)?;
+    let model = crate::files::sensor_model(&args.model)?;
     let mut logs = Vec::with_capacity(args.logs.len());
     for path in &args.logs {
         let log = args.log_args.read(path)?;
@@ -345,8 +345,8 @@ fn corrected_model(
         );
     }
     // In the units and conventions of the input model (spec-sheet units where it has none).
-    let style = std::fs::read_to_string(model_path)
-        .map(|text| noise::UnitStyle::from_config_text(&text))
+    let style = crate::files::read_text(model_path)
+        .map(|file| noise::UnitStyle::from_config_text(&file.text))
         .unwrap_or_default();
     out.push_str(&result.model_final.to_toml_string_styled(&style));
     if let Some(f) = fitted_on {

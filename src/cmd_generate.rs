@@ -67,7 +67,7 @@ const MAX_RATE_HZ: f64 = 1e6;
 const BYTES_PER_ROW: f64 = 8.0 * 25.0;
 
 fn plan(args: &Args) -> Result<Plan> {
-    let model = SensorModel::load(&args.sensor)?;
+    let model = crate::files::sensor_model(&args.sensor)?;
     let filter = noise::TermFilter::new(args.only.as_deref(), &args.without);
     check_rate_hz("--rate", args.rate)?;
     let duration_s = args.duration;

@@ -36,8 +36,7 @@ pub fn run(args: Args) -> Result<()> {
         .transpose()?;
     let mut files = Vec::new();
     for path in &args.shards {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read shard {}", path.display()))?;
+        let text = crate::files::read_text(path)?.text;
         let file: ShardFile = serde_json::from_str(&text)
             .with_context(|| format!("{}: not an imudrift shard file", path.display()))?;
         if file.format != SHARD_FORMAT {

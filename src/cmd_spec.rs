@@ -285,9 +285,7 @@ fn compare_sensor(
         readback_duration_s: readback_duration,
     } = settings;
     let (rate, runs, readback_duration) = (*rate, *runs, *readback_duration);
-    let model = SensorModel::load(path)
-        .map_err(|e| anyhow::anyhow!("{e}"))?
-        .filtered(filter);
+    let model = crate::files::sensor_model(path)?.filtered(filter);
     let exp = drift_experiment(&model, times, rate, runs, seed)
         .with_context(|| path.display().to_string())?;
     check_memory(&exp, exp.runs)?;

@@ -3,6 +3,7 @@
 //! `--duration` / `--rate`, build the experiment and its ablation sub-experiments, check the
 //! memory of the per-run values, and run a range of runs with progress.
 
+use crate::files::{self, TextFile};
 use anyhow::{bail, Context, Result};
 use montecarlo::ablation;
 use montecarlo::experiment::{Experiment, ExperimentError, Overrides};
@@ -83,9 +84,7 @@ fn edit_scenario_toml(text: &str, source: &str, edits: &ScenarioEdits) -> Result
 /// Read the scenario and its sensor (path relative to the scenario file). A sensor TOML given in
 /// place of a scenario gets the default static scenario.
 pub fn read_inputs(path: &Path, edits: &ScenarioEdits) -> Result<(Inputs, Scenario)> {
-    let given = path.display().to_string();
-    let bytes = std::fs::read(path).with_context(|| format!("cannot read {given}"))?;
-    let text = noise::utf8_text(bytes, &given)?;
+    let TextFile { name: given, text } = files::read_text(path)?;
     let (scenario_source, scenario_toml) =
         if is_sensor_toml(&text) || noise::is_noise_file_text(&text, &given) {
             let file = path
@@ -110,10 +109,9 @@ pub fn read_inputs(path: &Path, edits: &ScenarioEdits) -> Result<(Inputs, Scenar
         _ => scenario.sensor.clone(),
     };
     let sensor_source = sensor_path.display().to_string();
-    let sensor_bytes = std::fs::read(&sensor_path).with_context(|| {
-        format!("{scenario_source}: key `sensor`: cannot read sensor file {sensor_source}")
-    })?;
-    let sensor_toml = noise::utf8_text(sensor_bytes, &sensor_source)?;
+    let sensor_toml = files::read_text(&sensor_path)
+        .with_context(|| format!("{scenario_source}: key `sensor`: the sensor file"))?
+        .text;
     Ok((
         Inputs {
             scenario_source,
@@ -136,8 +134,7 @@ pub fn parse_inputs(
     overrides: &Overrides,
 ) -> Result<(Scenario, SensorModel, Experiment)> {
     let scenario = Scenario::from_toml_str(&inputs.scenario_toml, &inputs.scenario_source)?;
-    let model = SensorModel::from_text(&inputs.sensor_toml, &inputs.sensor_source)
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let model = SensorModel::from_text(&inputs.sensor_toml, &inputs.sensor_source)?;
     let exp = Experiment::new(scenario.clone(), &model, overrides).map_err(with_flag)?;
     Ok((scenario, model, exp))
 }

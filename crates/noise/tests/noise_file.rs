@@ -172,13 +172,10 @@ fn bad_files_name_the_line_and_the_key() {
 
 #[test]
 fn a_noise_file_loads_wherever_a_sensor_toml_does() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("euroc.yaml");
-    std::fs::write(&path, EUROC).unwrap();
-    let m = SensorModel::load(&path).unwrap();
+    let m = SensorModel::from_text(EUROC, "euroc.yaml").unwrap();
     assert_eq!(values(&m)[0], 1.6968e-04);
-    let bad = dir.path().join("bad.yaml");
-    std::fs::write(&bad, "gyroscope_noise_density: x\n").unwrap();
-    let e = SensorModel::load(&bad).unwrap_err().to_string();
+    let e = SensorModel::from_text("gyroscope_noise_density: x\n", "bad.yaml")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("bad.yaml"), "{e}");
 }
