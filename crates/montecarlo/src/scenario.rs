@@ -179,61 +179,15 @@ impl Scenario {
             key: key.to_string(),
             message,
         };
-        let raw: RawScenario = toml::from_str(text).map_err(|e| {
-            let message = e.message();
-            if message.contains("missing field `sensor`") {
-                return err(
-                    "sensor",
-                    "missing: a scenario names its sensor, e.g. `sensor = \"../sensors/mtx.toml\"` \
-                     (relative to the scenario file); every other key has a default \
-                     (a sensor TOML can also be simulated directly: `imudrift simulate SENSOR.toml`)"
-                        .into(),
-                );
-            }
-            // toml's message names the line, column and offending key.
-            err("(document)", e.to_string().trim_end().replace('\n', " "))
-        })?;
-        let positive = |key: &str, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(v)
-            } else {
-                Err(err(key, format!("expected a finite number > 0, got {v}")))
-            }
-        };
-        let duration_s = positive("duration_s", raw.duration_s.unwrap_or(DEFAULT_DURATION_S))?;
-        let rate_hz = positive("rate_hz", raw.rate_hz.unwrap_or(DEFAULT_RATE_HZ))?;
+        let raw = parse_raw(text, &err)?;
+        let (duration_s, rate_hz, steps) = timing(&raw, &err)?;
         let runs = raw.runs.unwrap_or(DEFAULT_RUNS);
-        let seed = raw.seed.unwrap_or(DEFAULT_SEED);
-        let steps_f = duration_s * rate_hz;
-        let steps = steps_f.round();
-        if steps < 1.0 || (steps_f - steps).abs() > 1e-9 * steps.max(1.0) {
-            return Err(err(
-                "duration_s",
-                format!("expected a whole number of samples at rate_hz = {rate_hz}, got {steps_f} samples"),
-            ));
-        }
-        if steps > 1e12 {
-            return Err(err(
-                "duration_s",
-                format!("{steps_f} samples is more than 1e12"),
-            ));
-        }
-        let steps = steps as u64;
         if runs == 0 {
             return Err(err("runs", "expected an integer >= 1".into()));
         }
-        let scheme_name = raw.scheme.as_deref().unwrap_or(Scheme::Accurate.name());
-        let scheme = Scheme::from_name(scheme_name).ok_or_else(|| {
-            err(
-                "scheme",
-                format!(
-                    "expected one of {}, got `{scheme_name}`",
-                    Scheme::ALL.map(|s| format!("`{}`", s.name())).join(", ")
-                ),
-            )
-        })?;
+        let scheme = scheme(raw.scheme.as_deref(), &err)?;
         let gravity_mps2 = match raw.gravity_mps2 {
-            Some(g) => positive("gravity_mps2", g)?,
+            Some(g) => positive("gravity_mps2", g, &err)?,
             None => STANDARD_GRAVITY_MPS2,
         };
         let trajectory_spec = raw.trajectory.unwrap_or(TrajectorySpec::Static {
@@ -241,20 +195,7 @@ impl Scenario {
             pitch_deg: 0.0,
             yaw_deg: 0.0,
         });
-        // Ideal accelerometer outputs with the scenario's gravity, so a static IMU stays still.
-        let trajectory = trajectory_spec
-            .build_with_gravity(gravity_mps2)
-            .map_err(|e| match e {
-                strapdown::TrajectoryError::Invalid { key, expected, got } => err(
-                    &if key == "gravity_mps2" {
-                        key
-                    } else {
-                        format!("trajectory.{key}")
-                    },
-                    format!("expected {expected}, got {got}"),
-                ),
-                other => err("trajectory", other.to_string()),
-            })?;
+        let trajectory = build_trajectory(&trajectory_spec, gravity_mps2, &err)?;
         let mut checkpoint_steps = checkpoint_steps(raw.checkpoints, rate_hz, steps, &err)?;
         if let Some(r) = &raw.reference {
             // The reference time is always a checkpoint.
@@ -267,44 +208,9 @@ impl Scenario {
         let terms = raw.terms.unwrap_or_default();
         let (only, without) = term_switches(&terms, &err)?;
         if let Some(r) = &raw.reference {
-            if !["mean", "rms", "p50", "p95"].contains(&r.statistic.as_str()) {
-                return Err(err(
-                    "reference.statistic",
-                    format!("expected mean, rms, p50 or p95, got `{}`", r.statistic),
-                ));
-            }
-            if crate::nav_quantity::NavQuantity::from_name(&r.quantity).is_none() {
-                return Err(err(
-                    "reference.channel",
-                    format!(
-                        "expected a channel name such as pos_horizontal_m, got `{}`",
-                        r.quantity
-                    ),
-                ));
-            }
-            if !(r.t_s > 0.0 && r.t_s <= duration_s) {
-                return Err(err(
-                    "reference.t_s",
-                    format!("expected a time in (0, duration_s], got {}", r.t_s),
-                ));
-            }
+            check_reference(r, duration_s, &err)?;
         }
-        if let Some(w) = terms.bias_calibration_window_s {
-            if !(w.is_finite() && w > 0.0) {
-                return Err(err(
-                    "terms.bias_calibration_window_s",
-                    format!("expected a calibration window > 0 s, got {w}"),
-                ));
-            }
-            if terms.bias_calibrated_at_start == Some(false) {
-                return Err(err(
-                    "terms.bias_calibration_window_s",
-                    "a calibration window needs the bias calibrated at start: set \
-                     terms.bias_calibrated_at_start = true or leave it out"
-                        .into(),
-                ));
-            }
-        }
+        check_calibration(&terms, &err)?;
         if raw.sensor.trim().is_empty() {
             return Err(err("sensor", "expected a path to a sensor TOML".into()));
         }
@@ -322,7 +228,7 @@ impl Scenario {
             duration_s,
             rate_hz,
             runs,
-            seed,
+            seed: raw.seed.unwrap_or(DEFAULT_SEED),
             scheme,
             gravity_mps2,
             trajectory_spec,
@@ -338,6 +244,141 @@ impl Scenario {
             ablation: raw.ablation.unwrap_or(false),
         })
     }
+}
+
+/// The TOML document; a missing `sensor` says how to give one.
+fn parse_raw(text: &str, err: &ErrFn) -> Result<RawScenario, ScenarioError> {
+    toml::from_str(text).map_err(|e| {
+        let message = e.message();
+        if message.contains("missing field `sensor`") {
+            return err(
+                "sensor",
+                "missing: a scenario names its sensor, e.g. `sensor = \"../sensors/mtx.toml\"` \
+                 (relative to the scenario file); every other key has a default \
+                 (a sensor TOML can also be simulated directly: `imudrift simulate SENSOR.toml`)"
+                    .into(),
+            );
+        }
+        // toml's message names the line, column and offending key.
+        err("(document)", e.to_string().trim_end().replace('\n', " "))
+    })
+}
+
+/// A finite value > 0.
+fn positive(key: &str, v: f64, err: &ErrFn) -> Result<f64, ScenarioError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(err(key, format!("expected a finite number > 0, got {v}")))
+    }
+}
+
+/// Duration (s), rate (Hz) and the number of steps: a whole number of samples, at most 1e12.
+fn timing(raw: &RawScenario, err: &ErrFn) -> Result<(f64, f64, u64), ScenarioError> {
+    let duration_s = positive(
+        "duration_s",
+        raw.duration_s.unwrap_or(DEFAULT_DURATION_S),
+        err,
+    )?;
+    let rate_hz = positive("rate_hz", raw.rate_hz.unwrap_or(DEFAULT_RATE_HZ), err)?;
+    let steps_f = duration_s * rate_hz;
+    let steps = steps_f.round();
+    if steps < 1.0 || (steps_f - steps).abs() > 1e-9 * steps.max(1.0) {
+        return Err(err(
+            "duration_s",
+            format!(
+                "expected a whole number of samples at rate_hz = {rate_hz}, got {steps_f} samples"
+            ),
+        ));
+    }
+    if steps > 1e12 {
+        return Err(err(
+            "duration_s",
+            format!("{steps_f} samples is more than 1e12"),
+        ));
+    }
+    Ok((duration_s, rate_hz, steps as u64))
+}
+
+/// The mechanisation scheme by strapdown's name (default: accurate).
+fn scheme(name: Option<&str>, err: &ErrFn) -> Result<Scheme, ScenarioError> {
+    let name = name.unwrap_or(Scheme::Accurate.name());
+    Scheme::from_name(name).ok_or_else(|| {
+        err(
+            "scheme",
+            format!(
+                "expected one of {}, got `{name}`",
+                Scheme::ALL.map(|s| format!("`{}`", s.name())).join(", ")
+            ),
+        )
+    })
+}
+
+/// The trajectory with the scenario's gravity in its ideal accelerometer outputs, so a static
+/// IMU stays still; an invalid value names its `trajectory.` key.
+fn build_trajectory(
+    spec: &TrajectorySpec,
+    gravity_mps2: f64,
+    err: &ErrFn,
+) -> Result<AnyTrajectory, ScenarioError> {
+    spec.build_with_gravity(gravity_mps2).map_err(|e| match e {
+        strapdown::TrajectoryError::Invalid { key, expected, got } => err(
+            &if key == "gravity_mps2" {
+                key
+            } else {
+                format!("trajectory.{key}")
+            },
+            format!("expected {expected}, got {got}"),
+        ),
+        other => err("trajectory", other.to_string()),
+    })
+}
+
+/// The `[reference]` table: a known statistic of a known quantity inside the run.
+fn check_reference(r: &Reference, duration_s: f64, err: &ErrFn) -> Result<(), ScenarioError> {
+    if !["mean", "rms", "p50", "p95"].contains(&r.statistic.as_str()) {
+        return Err(err(
+            "reference.statistic",
+            format!("expected mean, rms, p50 or p95, got `{}`", r.statistic),
+        ));
+    }
+    if crate::nav_quantity::NavQuantity::from_name(&r.quantity).is_none() {
+        return Err(err(
+            "reference.channel",
+            format!(
+                "expected a channel name such as pos_horizontal_m, got `{}`",
+                r.quantity
+            ),
+        ));
+    }
+    if !(r.t_s > 0.0 && r.t_s <= duration_s) {
+        return Err(err(
+            "reference.t_s",
+            format!("expected a time in (0, duration_s], got {}", r.t_s),
+        ));
+    }
+    Ok(())
+}
+
+/// `terms.bias_calibration_window_s`: > 0 s, and not with the bias calibration switched off.
+fn check_calibration(terms: &RawTerms, err: &ErrFn) -> Result<(), ScenarioError> {
+    if let Some(w) = terms.bias_calibration_window_s {
+        if !(w.is_finite() && w > 0.0) {
+            return Err(err(
+                "terms.bias_calibration_window_s",
+                format!("expected a calibration window > 0 s, got {w}"),
+            ));
+        }
+        if terms.bias_calibrated_at_start == Some(false) {
+            return Err(err(
+                "terms.bias_calibration_window_s",
+                "a calibration window needs the bias calibrated at start: set \
+                 terms.bias_calibrated_at_start = true or leave it out"
+                    .into(),
+            ));
+        }
+    }
+    Ok(())
 }
 
 type ErrFn<'a> = dyn Fn(&str, String) -> ScenarioError + 'a;
