@@ -24,10 +24,10 @@ fn setup(grid_m: Vec<usize>) -> SimSetup<'static> {
         dt_s: DT_S,
         samples: SAMPLES,
         grid_m,
-        active: [true; 6],
+        active: noise::ImuChannels([true; 6]),
         horizons_s: vec![60.0],
         temperature_c: None,
-        temp_coeff: [0.0; 6],
+        temp_coeff: noise::ImuChannels::default(),
     }
 }
 
@@ -48,7 +48,7 @@ fn bench(c: &mut Criterion) {
     group.bench_function("whole_workflow_hidden_rrw", |b| {
         let input = LogInput {
             dt_s: DT_S,
-            channels: std::array::from_fn(|c| Some(log[c].as_slice())),
+            channels: log.0.each_ref().map(|c| Some(c.as_slice())),
             temperature_c: None,
         };
         let settings = Settings {

@@ -153,6 +153,11 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
         }
         args.channels.clone()
     };
+    crate::log_input::refuse_constant(
+        &log,
+        names.iter().map(String::as_str),
+        "leave it out with --channels",
+    )?;
     // The channels are analysed by value: each one's phase is computed in its own buffer.
     let samples = log.len();
     let mut log = log;
@@ -169,14 +174,6 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
         .collect();
     stage("all channels");
     for r in &results {
-        // A constant channel (stuck sensor, a column of zeros) has no Allan deviation to read.
-        if !r.points.is_empty() && r.points.iter().all(|p| p.dev == 0.0) {
-            bail!(
-                "{}: channel {} is constant: it has no noise to analyse (a stuck or disconnected sensor, or a column of zeros?); leave it out with --channels",
-                log.source,
-                r.name
-            );
-        }
         let usable = r.points.iter().filter(|p| p.woodman_ok()).count();
         if usable < MIN_USABLE_TAUS {
             bail!(

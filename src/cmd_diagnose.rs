@@ -162,17 +162,11 @@ fn log_channels(log: &logio::Log) -> Result<LogInput<'_>> {
         );
     }
     // A constant channel has no Allan curve: comparing it with the model would say nothing.
-    for (name, data) in CHANNELS.iter().zip(&channels) {
-        if let Some(d) = data {
-            if d.iter().all(|&v| v == d[0]) {
-                bail!(
-                    "{}: channel {name} is constant ({}): it has no noise to compare with the model (a stuck or disconnected sensor, or a column of zeros?); leave the column out or map another one with --col",
-                    log.source,
-                    d[0]
-                );
-            }
-        }
-    }
+    log_input::refuse_constant(
+        log,
+        CHANNELS,
+        "leave the column out or map another one with --col",
+    )?;
     Ok(LogInput {
         dt_s: log.dt_s(),
         channels,

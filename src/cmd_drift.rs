@@ -151,6 +151,11 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
     for path in &args.logs {
         let log = log_input::read_log(path, &opts)?;
         eprintln!("{}: {}", log.source, log_input::mapping_text(&log));
+        log_input::refuse_constant(
+            &log,
+            CHANNELS,
+            "leave the column out or map another one with --col",
+        )?;
         logs.push(log);
     }
     let inputs: Vec<LogInput> = logs

@@ -252,6 +252,7 @@ pub fn emit(
                 .map_or("no run finished".to_string(), |f| f.message.clone())
         );
     }
+    crate::experiment_run::check_finite(report)?;
     let reference = reference_out(report, exp);
     eprint!("{}", table(report, reference.as_ref(), ablation));
     report_failures(&report.failed_runs);

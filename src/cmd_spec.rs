@@ -313,6 +313,8 @@ fn compare_sensor(
         );
     }
     let report = exp.report(&batch.matrix, &batch.failures);
+    crate::experiment_run::check_finite(&report)
+        .with_context(|| format!("{}: drift of {}", path.display(), model.name))?;
     for f in &batch.failures {
         eprintln!(
             "warning: {}: drift run {} failed: {}",

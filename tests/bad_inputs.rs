@@ -57,6 +57,25 @@ fn allan_refuses_logs_too_short_or_constant() {
     refused(&["allan", &zero, "--json"], &["channel gx is constant"]);
 }
 
+/// Issue 27, item 4: a channel constant at any value (az = -9.81 on every row) is refused by
+/// `allan` as by `diagnose` and `drift`, with the one shared message (allan fitted a
+/// quantisation of 2.8e-28 m/s to it).
+#[test]
+fn every_command_refuses_a_constant_channel_at_any_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut text = String::from("t,gx,az\n");
+    for (i, line) in log_text(3000, "\n").lines().skip(1).enumerate() {
+        let v = line.split(',').nth(1).unwrap();
+        text += &format!("{:.2},{v},-9.81\n", i as f64 * 0.01);
+    }
+    let log = write(dir.path(), "level.csv", text.as_bytes());
+    let needles = ["channel az is constant (-9.81)", "no noise to analyse"];
+    refused(&["allan", &log, "--json"], &needles);
+    let model = "configs/sensors/mtx.toml";
+    refused(&["diagnose", &log, "--model", model, "--json"], &needles);
+    refused(&["drift", &log, &log, "--model", model, "--json"], &needles);
+}
+
 #[test]
 fn diagnose_refuses_a_constant_channel() {
     let dir = tempfile::tempdir().unwrap();
@@ -306,10 +325,56 @@ fn merge_refuses_corrupted_shards_with_the_reason() {
             corrupt("huge.json", &|v| v["runs"] = 1_000_000_000_000u64.into()),
             "limit 8 GiB",
         ),
+        // Issue 27, item 3: a value edited to 1e200 overflows the statistics (NaN, exit 0).
+        (
+            corrupt("overflow.json", &|v| {
+                v["matrix"]["values"][5][0] = 1e200.into()
+            }),
+            "overflow the statistics",
+        ),
     ];
     for (path, needle) in &cases {
         refused(&["merge", path, &s0], &[needle]);
     }
+}
+
+/// Issue 27, item 3: a simulation whose runs are finite but whose statistics overflow (a bias of
+/// 1e200 mg, gravity of 1e300) is an error naming the statistic, channel and time, not a table
+/// of NaN with exit 0; `spec` likewise.
+#[test]
+fn simulations_whose_statistics_overflow_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let sensor = write(
+        dir.path(),
+        "big.toml",
+        b"name = \"big\"\n[accel.all]\nwhite_noise = \"0.004 m/s^2/sqrt(Hz)\"\nconstant_bias = \"1e200 mg\"\n",
+    );
+    let needles = ["of pos_", "at t = 0.1 s", "overflow the statistics"];
+    refused(
+        &[
+            "simulate",
+            &sensor,
+            "--runs",
+            "5",
+            "--duration",
+            "10",
+            "--json",
+        ],
+        &needles,
+    );
+    refused(
+        &["spec", &sensor, "--runs", "5", "--times", "10", "--json"],
+        &["overflow the statistics"],
+    );
+    let scenario = format!(
+        "name = \"g\"\nsensor = {:?}\nduration_s = 10\ngravity_mps2 = 1e300\n",
+        root().join("configs/sensors/mtx.toml")
+    );
+    let scenario = write(dir.path(), "g.toml", scenario.as_bytes());
+    let out = imudrift(&["simulate", &scenario, "--runs", "5", "--json"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(out.stdout.is_empty(), "printed a result: {err}");
 }
 
 /// `generate` never writes `inf` or `NaN` into a log: a model whose values overflow is an error
@@ -576,4 +641,47 @@ fn logs_larger_than_memory_are_refused_up_front() {
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains(needle), "{err}");
     }
+}
+
+/// Issue 27, item 2: values whose squares overflow, and a rate so low that the averaging times
+/// do, are refused with the line and column (they gave null deviations with exit 0).
+#[test]
+fn values_and_rates_that_overflow_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut lines: Vec<String> = log_text(3000, "\n").lines().map(String::from).collect();
+    lines[1001] = "10.00,1e300".to_string();
+    let text = lines.join("\n");
+    let huge = write(dir.path(), "huge.csv", text.as_bytes());
+    for args in [
+        vec!["allan", huge.as_str(), "--json"],
+        vec![
+            "diagnose",
+            &huge,
+            "--model",
+            "configs/sensors/mtx.toml",
+            "--json",
+        ],
+    ] {
+        refused(&args, &["huge.csv:1002", "column \"gx\"", "1e300", "1e100"]);
+    }
+    let mut no_t = String::from("gx\n");
+    for line in log_text(3000, "\n").lines().skip(1) {
+        no_t += line.split(',').nth(1).unwrap();
+        no_t.push('\n');
+    }
+    let no_t = write(dir.path(), "no_t.csv", no_t.as_bytes());
+    refused(
+        &["allan", &no_t, "--rate", "1e-300", "--json"],
+        &["--rate", "1e-6"],
+    );
+    let long = format!("t,gx\n0,{}\n", "1".repeat(100_000));
+    let long = write(dir.path(), "long.csv", long.as_bytes());
+    let out = imudrift(&["allan", &long, "--rate", "100", "--json"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.len() < 1000,
+        "the 100 000-digit field was echoed: {} bytes",
+        err.len()
+    );
 }

@@ -199,3 +199,46 @@ fn two_hour_200_hz_bag_in_under_five_seconds() {
         assert!(secs < 5.0, "{secs} s");
     }
 }
+
+/// Issue 27, item 1: a NaN, an inf or a value whose square overflows inside a message is refused
+/// as the CSV reader refuses it (file, message, field), by every command that reads the log.
+#[test]
+fn non_finite_or_huge_values_in_bags_and_mcap_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for (k, (bad, needle)) in [
+        (f64::NAN, "NaN"),
+        (f64::INFINITY, "inf"),
+        (-1e300, "-1.00e300"),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let mut s = samples(3000);
+        s[1234].accel[1] = bad;
+        let bag = dir.path().join(format!("bad{k}.bag"));
+        let mcap = dir.path().join(format!("bad{k}.mcap"));
+        write_rosbag(&bag, "/imu", &s).unwrap();
+        write_mcap(&mcap, &[("/imu", &s)]).unwrap();
+        for path in [&bag, &mcap] {
+            let p = path.to_str().unwrap();
+            for args in [
+                vec!["allan", p, "--json"],
+                vec![
+                    "diagnose",
+                    p,
+                    "--model",
+                    "configs/sensors/mtx.toml",
+                    "--json",
+                ],
+            ] {
+                let out = imudrift(&args);
+                let err = String::from_utf8_lossy(&out.stderr);
+                assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+                assert!(out.stdout.is_empty(), "{args:?} printed a result");
+                for n in ["topic /imu message 1235", "linear_acceleration.y", needle] {
+                    assert!(err.contains(n), "{args:?}: {n:?} not in {err}");
+                }
+            }
+        }
+    }
+}

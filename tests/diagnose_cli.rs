@@ -37,16 +37,16 @@ fn write_log(dir: &Path) -> std::path::PathBuf {
         dt_s: DT_S,
         samples: SAMPLES,
         grid_m: vec![],
-        active: [true; 6],
+        active: noise::ImuChannels([true; 6]),
         horizons_s: vec![],
         temperature_c: None,
-        temp_coeff: [0.0; 6],
+        temp_coeff: noise::ImuChannels::default(),
     };
     let log = static_log(&truth, &setup, 424_242, 0);
     let mut text = String::from("# hidden: gyro x rate random walk\nt,gx,gy,gz,ax,ay,az\n");
     for k in 0..SAMPLES {
         let _ = write!(text, "{}", k as f64 * DT_S);
-        for ch in &log {
+        for ch in log.values() {
             let _ = write!(text, ",{:e}", ch[k]);
         }
         text.push('\n');

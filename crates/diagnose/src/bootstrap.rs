@@ -150,32 +150,9 @@ fn edf_at(mu: f64, m: usize, n: usize) -> f64 {
 impl ChannelFit {
     /// The refit of channel `ch` of `model` on data like `fitted` (None: nothing to draw there).
     fn new(model: &SensorModel, ch: Channel, fitted: &FittedOn) -> Option<ChannelFit> {
-        let terms: Vec<DrawnTerm> = DRAWN
-            .iter()
-            .filter_map(|&effect| {
-                let p = fitted_term(model, ch, effect)?;
-                let fitted_c = squared_level(Some(p));
-                let reference = if fitted_c > 0.0 {
-                    p.clone()
-                } else {
-                    scaled(p, 0.0, 1.0)?
-                };
-                let level = reference.level()?;
-                (fitted_c >= 0.0).then_some(DrawnTerm {
-                    effect,
-                    reference,
-                    level,
-                    fitted_c,
-                })
-            })
-            .collect();
-        if terms.is_empty() || !fitted.channels[ch.index()] {
+        let terms = drawn_terms(model, ch);
+        if terms.is_empty() || !fitted.channels[ch] {
             return None;
-        }
-        // The model with every term at its reference level (the basis columns).
-        let mut reference = model.clone();
-        for t in &terms {
-            set_term(&mut reference, ch, t.reference.clone());
         }
         let dt = fitted.sample_interval_s;
         let n_max = *fitted.samples.iter().max()?;
@@ -192,27 +169,10 @@ impl ChannelFit {
             .map(|&n| grid_m.iter().filter(|&&m| m <= n / 4).count())
             .collect();
         let taus: Vec<f64> = grid_m.iter().map(|&m| m as f64 * dt).collect();
-        let (sensor, axis) = (ch.sensor(), ch.axis());
         let total = model
-            .axis(sensor, axis)
+            .axis(ch.sensor(), ch.axis())
             .allan_variance_sampled_many(&taus, dt);
-        let axis = reference.axis(sensor, axis);
-        let columns: Vec<Vec<f64>> = terms
-            .iter()
-            .map(|t| {
-                let mut only = AxisModel::default();
-                if let Some(f) = axis.get::<noise::OutputFilter>() {
-                    only.set_term(*f);
-                }
-                if let Some(term) = axis.term(t.effect) {
-                    only.set_term(term.clone());
-                }
-                only.allan_variance_sampled_many(&taus, dt)
-            })
-            .collect();
-        let basis: Vec<Vec<f64>> = (0..taus.len())
-            .map(|i| columns.iter().map(|c| c[i]).collect())
-            .collect();
+        let basis = basis(model, ch, &terms, &taus, dt);
         // The model's Allan variance less its drawn terms' (a term fitted at 0 adds nothing).
         let rest = (0..taus.len())
             .map(|i| {
@@ -275,6 +235,57 @@ impl ChannelFit {
         }
         nnls_small(&rows, &rhs, self.terms.len())
     }
+}
+
+/// The terms of channel `ch` whose level is drawn (module doc), each at its reference level.
+fn drawn_terms(model: &SensorModel, ch: Channel) -> Vec<DrawnTerm> {
+    DRAWN
+        .iter()
+        .filter_map(|&effect| {
+            let p = fitted_term(model, ch, effect)?;
+            let fitted_c = squared_level(Some(p));
+            let reference = if fitted_c > 0.0 {
+                p.clone()
+            } else {
+                scaled(p, 0.0, 1.0)?
+            };
+            let level = reference.level()?;
+            (fitted_c >= 0.0).then_some(DrawnTerm {
+                effect,
+                reference,
+                level,
+                fitted_c,
+            })
+        })
+        .collect()
+}
+
+/// Per tau, each term's Allan variance at its reference level alone on the channel (behind the
+/// channel's output filter, if it has one): the columns of the least squares.
+fn basis(
+    model: &SensorModel,
+    ch: Channel,
+    terms: &[DrawnTerm],
+    taus: &[f64],
+    dt: f64,
+) -> Vec<Vec<f64>> {
+    let filter = model
+        .axis(ch.sensor(), ch.axis())
+        .get::<noise::OutputFilter>();
+    let columns: Vec<Vec<f64>> = terms
+        .iter()
+        .map(|t| {
+            let mut only = AxisModel::default();
+            if let Some(f) = filter {
+                only.set_term(*f);
+            }
+            only.set_term(t.reference.clone());
+            only.allan_variance_sampled_many(taus, dt)
+        })
+        .collect();
+    (0..taus.len())
+        .map(|i| columns.iter().map(|c| c[i]).collect())
+        .collect()
 }
 
 /// d ln A / d ln tau at grid point `i` (central between the neighbours, one-sided at the ends).
@@ -361,10 +372,10 @@ fn simulate_fitted_logs(
                 dt_s: fitted.sample_interval_s,
                 samples: fitted.samples[t],
                 grid_m: Vec::new(),
-                active: std::array::from_fn(|c| fits.iter().any(|f| f.ch.index() == c)),
+                active: noise::ImuChannels::from_fn(|c| fits.iter().any(|f| f.ch == c)),
                 horizons_s: Vec::new(),
                 temperature_c: None,
-                temp_coeff: [0.0; 6],
+                temp_coeff: noise::ImuChannels::default(),
             };
             let run = first_run + (r * logs + t) as u64;
             let log = static_log(model, &setup, seed, run);
@@ -372,7 +383,7 @@ fn simulate_fitted_logs(
                 .iter()
                 .map(|f| {
                     let ms = &f.grid_m[..f.held[t]];
-                    adev_at(&log[f.ch.index()], fitted.sample_interval_s, ms)
+                    adev_at(&log[f.ch], fitted.sample_interval_s, ms)
                         .iter()
                         .map(|a| a * a)
                         .collect()

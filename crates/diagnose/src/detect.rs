@@ -13,7 +13,7 @@
 
 use crate::stats::median;
 use allan::{DataKind, Estimator, TauGrid};
-use noise::Flicker;
+use noise::{Channel, Flicker, ImuChannels};
 
 /// Largest half-width of the neighbourhood whose median is a sample's reference.
 const HALF_WINDOW: usize = 3;
@@ -625,12 +625,12 @@ mod tests {
             .map(|k| if k % 3 == 0 { 0.05 } else { 0.0 })
             .collect();
         let temp: Vec<f64> = (0..n).map(|k| 20.0 + 1e-3 * k as f64).collect();
-        let floors = [NoiseLevels::default(); 6];
-        let mut channels: [Option<&[f64]>; 6] = [None; 6];
-        channels[0] = Some(&constant);
-        channels[1] = Some(&toggling);
+        let floors = ImuChannels::<NoiseLevels>::default();
+        let mut channels: ImuChannels<Option<&[f64]>> = ImuChannels::default();
+        channels[Channel::Gx] = Some(&constant);
+        channels[Channel::Gy] = Some(&toggling);
         let pre = preprocess(channels, Some(&temp), 0.01, &floors);
-        for c in 0..2 {
+        for c in [Channel::Gx, Channel::Gy] {
             assert!(
                 pre.findings[c].is_empty(),
                 "channel {c}: {:?}",
@@ -735,12 +735,12 @@ pub struct Finding {
 
 /// What the detectors did to a log: the corrected channels and the findings per channel.
 pub struct Preprocessed {
-    pub channels: [Option<Vec<f64>>; 6],
-    pub findings: [Vec<Finding>; 6],
+    pub channels: ImuChannels<Option<Vec<f64>>>,
+    pub findings: ImuChannels<Vec<Finding>>,
     /// The broad spectral peak of each corrected channel (a resonance's frequency and bandwidth).
-    pub peaks: [Option<crate::spectrum::SpectralPeak>; 6],
+    pub peaks: ImuChannels<Option<crate::spectrum::SpectralPeak>>,
     /// The spectral lines of each corrected channel (`spectrum::spectral_lines_runs`), Hz.
-    pub lines: [Vec<f64>; 6],
+    pub lines: ImuChannels<Vec<f64>>,
 }
 
 /// At least this many outliers are needed to name them (the threshold admits 0.01 false ones per log).
@@ -755,14 +755,14 @@ pub const MAX_OUTLIER_FRACTION: f64 = 0.01;
 /// A temperature column that follows a warm-up looks like a transient: the temperature, a measured
 /// cause, is tried first.
 pub fn preprocess(
-    channels: [Option<&[f64]>; 6],
+    channels: ImuChannels<Option<&[f64]>>,
     temperature_c: Option<&[f64]>,
     dt_s: f64,
-    floors: &[NoiseLevels; 6],
+    floors: &ImuChannels<NoiseLevels>,
 ) -> Preprocessed {
     use rayon::prelude::*;
     // Channels in parallel (each result depends on its channel only).
-    let per: Vec<Option<Detected>> = (0..6)
+    let per: Vec<Option<Detected>> = Channel::ALL
         .into_par_iter()
         .map(|c| channels[c].map(|raw| detect_channel(raw, temperature_c, dt_s, &floors[c])))
         .collect();
@@ -772,7 +772,7 @@ pub fn preprocess(
         peaks: Default::default(),
         lines: Default::default(),
     };
-    for (c, d) in per.into_iter().enumerate() {
+    for (c, d) in Channel::ALL.into_iter().zip(per) {
         if let Some(d) = d {
             out.channels[c] = Some(d.corrected);
             out.findings[c] = d.findings;
@@ -952,7 +952,7 @@ fn transient_finding(
 /// ([`model_levels`]).
 pub fn preprocess_log(log: &crate::input::LogInput, model: &noise::SensorModel) -> Preprocessed {
     preprocess(
-        log.channels,
+        ImuChannels(log.channels),
         log.temperature_c,
         log.dt_s,
         &model_levels(model),
@@ -961,8 +961,8 @@ pub fn preprocess_log(log: &crate::input::LogInput, model: &noise::SensorModel) 
 
 /// The noise levels of the sensor model's channels (white, flicker B, rate random walk K; a Woodman
 /// bias random walk counts as K), the floor of the regressions' coloured-noise levels.
-pub fn model_levels(model: &noise::SensorModel) -> [NoiseLevels; 6] {
-    noise::Channel::ALL.map(|c| {
+pub fn model_levels(model: &noise::SensorModel) -> ImuChannels<NoiseLevels> {
+    ImuChannels::from_fn(|c| {
         let a = model.axis(c.sensor(), c.axis());
         let (b, k_bi) = match a.get::<noise::BiasInstability>() {
             Some(noise::BiasInstability::Flicker(f)) => (f.b(), 0.0),

@@ -355,15 +355,15 @@ fn simulate_experiments<'m>(
                 dt_s,
                 samples,
                 grid_m: Vec::new(),
-                active: std::array::from_fn(|c| log.channels[c].is_some()),
+                active: noise::ImuChannels::from_fn(|c| log.channels[c.index()].is_some()),
                 horizons_s: Vec::new(),
                 temperature_c: None,
-                temp_coeff: [0.0; 6],
+                temp_coeff: noise::ImuChannels::default(),
             };
             let run = (r * logs.len() + l) as u64;
             let sim = static_log(model_of(r), &setup, settings.seed, run);
-            let chans: [Option<&[f64]>; 6] =
-                std::array::from_fn(|c| setup.active[c].then(|| sim[c].as_slice()));
+            let chans =
+                noise::ImuChannels::from_fn(|c| setup.active[c].then(|| sim[c].as_slice())).0;
             let out = all_segment_errors(&chans, dt_s, &settings.protocol);
             progress.tick();
             out

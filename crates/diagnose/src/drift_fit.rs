@@ -96,10 +96,10 @@ impl UnitDrift<'_> {
             dt_s: dt_u,
             samples: lengths.iter().copied().max().unwrap_or(0),
             grid_m: Vec::new(),
-            active: std::array::from_fn(|i| i == c.index()),
+            active: noise::ImuChannels::from_fn(|i| i == c),
             horizons_s: Vec::new(),
             temperature_c: None,
-            temp_coeff: [0.0; 6],
+            temp_coeff: noise::ImuChannels::default(),
         };
         let nh = self.protocol.horizons_s.len();
         let sums: Vec<Vec<([f64; 5], usize)>> = (0..self.logs as u64)
@@ -108,8 +108,7 @@ impl UnitDrift<'_> {
                 let log = static_log(model, &setup, self.seed, UNIT_RUN_BASE + s);
                 let mut acc = vec![([0.0; 5], 0usize); nh];
                 for &n in &lengths {
-                    let chans: [Option<&[f64]>; 6] =
-                        std::array::from_fn(|i| (i == c.index()).then(|| &log[i][..n]));
+                    let chans = noise::ImuChannels::from_fn(|i| (i == c).then(|| &log[i][..n])).0;
                     for (h, e) in all_segment_errors(&chans, dt_u, self.protocol)
                         .iter()
                         .enumerate()

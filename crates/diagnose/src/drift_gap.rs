@@ -21,7 +21,7 @@
 use crate::drift_check::Verdict;
 use crate::input::LogInput;
 use crate::protocol::{all_segment_errors, Protocol, Quantity, SegmentErrors};
-use noise::Channel;
+use noise::{Channel, ImuChannels};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -152,7 +152,7 @@ pub(crate) fn drift_gap(
     measured: &[SegmentErrors],
     simulated: &[Vec<Vec<SegmentErrors>>],
     of_run: &[usize],
-    active: &[bool; 6],
+    active: &ImuChannels<bool>,
 ) -> DriftGap {
     let seeds = simulated.len();
     let runs = of_run.len();
@@ -162,7 +162,7 @@ pub(crate) fn drift_gap(
         .map(|(h, meas)| {
             let mut quantities = BTreeMap::new();
             for q in Quantity::ALL {
-                let informed = q.needs().iter().all(|c| active[c.index()]);
+                let informed = q.needs().iter().all(|&c| active[c]);
                 let values = meas.values(q);
                 if !informed || values.is_empty() || seeds <= runs {
                     continue;
@@ -292,8 +292,8 @@ mod tests {
             .map(|s| log(&normals[40 * s..40 * (s + 1)], 1e-3))
             .collect();
         let of_run = [0, 0, 0];
-        let mut active = [false; 6];
-        active[2] = true;
+        let mut active = ImuChannels::<bool>::default();
+        active[Channel::Gz] = true;
         let measured = |scale: f64| {
             let mut m = SegmentErrors {
                 horizon_s: 60.0,

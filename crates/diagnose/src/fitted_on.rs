@@ -18,8 +18,8 @@
 //! The table is read here, not in the noise crate (which only skips it): it describes data, not
 //! the error model.
 
-use crate::drift::CHANNELS;
 use crate::input::LogInput;
+use noise::{Channel, ImuChannels};
 use serde::{Deserialize, Serialize, Serializer};
 use std::fmt::Write as _;
 
@@ -32,13 +32,13 @@ pub struct FittedOn {
     pub samples: Vec<usize>,
     /// Which of gx gy gz ax ay az every log had.
     #[serde(serialize_with = "channel_names")]
-    pub channels: [bool; 6],
+    pub channels: ImuChannels<bool>,
     /// Shortest averaging time the fit used, s.
     pub tau_min_s: f64,
 }
 
-fn channel_names<S: Serializer>(channels: &[bool; 6], s: S) -> Result<S::Ok, S::Error> {
-    s.collect_seq((0..6).filter(|&c| channels[c]).map(|c| CHANNELS[c]))
+fn channel_names<S: Serializer>(channels: &ImuChannels<bool>, s: S) -> Result<S::Ok, S::Error> {
+    s.collect_seq(channels.iter().filter(|(_, &on)| on).map(|(c, _)| c.name()))
 }
 
 /// The table as written.
@@ -91,9 +91,9 @@ impl TryFrom<RawFittedOn> for FittedOn {
                 "one sample count of at least 64 per log",
             ));
         }
-        let mut channels = [false; 6];
+        let mut channels = ImuChannels::<bool>::default();
         for name in &raw.channels {
-            let c = CHANNELS.iter().position(|c| c == name).ok_or_else(|| {
+            let c = Channel::from_name(name).ok_or_else(|| {
                 bad(
                     "channels",
                     format!("{:?}", raw.channels),
@@ -102,7 +102,7 @@ impl TryFrom<RawFittedOn> for FittedOn {
             })?;
             channels[c] = true;
         }
-        if !channels.contains(&true) {
+        if !channels.values().contains(&true) {
             return Err(bad(
                 "channels",
                 "[]".into(),
@@ -142,7 +142,9 @@ impl FittedOn {
         Some(FittedOn {
             sample_interval_s: first.dt_s,
             samples,
-            channels: std::array::from_fn(|c| logs.iter().all(|l| l.channels[c].is_some())),
+            channels: ImuChannels::from_fn(|c| {
+                logs.iter().all(|l| l.channels[c.index()].is_some())
+            }),
             tau_min_s,
         })
     }
@@ -173,9 +175,11 @@ impl FittedOn {
         let _ = writeln!(s, "sample_interval_s = {:?}", self.sample_interval_s);
         let samples: Vec<String> = self.samples.iter().map(|n| n.to_string()).collect();
         let _ = writeln!(s, "samples = [{}]", samples.join(", "));
-        let names: Vec<String> = (0..6)
-            .filter(|&c| self.channels[c])
-            .map(|c| format!("\"{}\"", CHANNELS[c]))
+        let names: Vec<String> = self
+            .channels
+            .iter()
+            .filter(|(_, &on)| on)
+            .map(|(c, _)| format!("\"{}\"", c.name()))
             .collect();
         let _ = writeln!(s, "channels = [{}]", names.join(", "));
         let _ = writeln!(s, "tau_min_s = {:?}", self.tau_min_s);
@@ -196,7 +200,7 @@ mod tests {
         FittedOn {
             sample_interval_s: 0.01,
             samples: vec![1_000_000, 999_999],
-            channels: [true, true, true, false, false, true],
+            channels: ImuChannels([true, true, true, false, false, true]),
             tau_min_s: 0.04,
         }
     }

@@ -33,8 +33,8 @@ impl Diagnosis {
         for (c, m) in measured.iter() {
             let (Some(m), Some(b0), Some(b1)) = (
                 m.as_ref(),
-                bands.initial[c.index()].as_ref(),
-                bands.corrected[c.index()].as_ref(),
+                bands.initial[c].as_ref(),
+                bands.corrected[c].as_ref(),
             ) else {
                 continue;
             };

@@ -2,6 +2,7 @@
 
 use crate::drift::CHANNELS;
 use crate::error::DiagnoseError;
+use noise::ImuChannels;
 
 /// The measured log, SI, channels in the order gx gy gz ax ay az (None: not in the log).
 #[derive(Clone, Copy, Debug)]
@@ -13,10 +14,10 @@ pub struct LogInput<'a> {
 
 impl<'a> LogInput<'a> {
     /// The same log with other channel series (e.g. the detectors' corrected ones, see `detect`).
-    pub fn with_channels(&self, channels: &'a [Option<Vec<f64>>; 6]) -> LogInput<'a> {
+    pub fn with_channels(&self, channels: &'a ImuChannels<Option<Vec<f64>>>) -> LogInput<'a> {
         LogInput {
             dt_s: self.dt_s,
-            channels: std::array::from_fn(|c| channels[c].as_deref()),
+            channels: channels.0.each_ref().map(Option::as_deref),
             temperature_c: self.temperature_c,
         }
     }

@@ -10,7 +10,7 @@
 use crate::gap::{Band, Curve};
 use crate::input::LogInput;
 use allan::{AllanPoint, DataKind, Estimator, TauGrid};
-use noise::ImuChannels;
+use noise::{Channel, ImuChannels};
 
 /// One channel's measurement on the common grid: indices into the grid it has valid points at.
 #[derive(Clone, Debug)]
@@ -29,13 +29,13 @@ pub(crate) struct Runs {
     pub(crate) grid_m: Vec<usize>,
     pub(crate) pooled: ImuChannels<Option<Measured>>,
     pub(crate) runs: Vec<ImuChannels<Option<Measured>>>,
-    pub(crate) weights: [Vec<Vec<f64>>; 6],
+    pub(crate) weights: ImuChannels<Vec<Vec<f64>>>,
 }
 
 /// Every channel's overlapping Allan points of a log on the octave grid (Greenhall EDF).
-fn points(log: &LogInput) -> [Vec<AllanPoint>; 6] {
-    std::array::from_fn(|c| {
-        log.channels[c].map_or_else(Vec::new, |s| {
+fn points(log: &LogInput) -> ImuChannels<Vec<AllanPoint>> {
+    ImuChannels::from_fn(|c| {
+        log.channels[c.index()].map_or_else(Vec::new, |s| {
             allan::deviation(
                 s,
                 DataKind::Rate,
@@ -120,19 +120,22 @@ pub(crate) fn measure(
 /// run's, the pooled curve as in the module doc.
 pub(crate) fn measure_runs(logs: &[LogInput], tau_min_s: f64) -> Runs {
     use rayon::prelude::*;
-    let per_run: Vec<[Vec<AllanPoint>; 6]> = logs.par_iter().map(points).collect();
+    let per_run: Vec<ImuChannels<Vec<AllanPoint>>> = logs.par_iter().map(points).collect();
     let longest = (0..per_run.len())
-        .max_by_key(|&r| (per_run[r].iter().map(Vec::len).max(), std::cmp::Reverse(r)))
+        .max_by_key(|&r| {
+            let longest_curve = per_run[r].values().iter().map(Vec::len).max();
+            (longest_curve, std::cmp::Reverse(r))
+        })
         .unwrap_or(0);
     let grid_m: Vec<usize> = per_run
         .get(longest)
-        .and_then(|p| p.iter().find(|v| !v.is_empty()))
+        .and_then(|p| p.values().iter().find(|v| !v.is_empty()))
         .map(|v| v.iter().map(|p| p.m).collect())
         .unwrap_or_default();
-    let mut weights: [Vec<Vec<f64>>; 6] = Default::default();
-    let mut pooled_points: [Vec<AllanPoint>; 6] = Default::default();
-    for c in 0..6 {
-        if logs.first().is_none_or(|l| l.channels[c].is_none()) {
+    let mut weights: ImuChannels<Vec<Vec<f64>>> = ImuChannels::default();
+    let mut pooled_points: ImuChannels<Vec<AllanPoint>> = ImuChannels::default();
+    for c in Channel::ALL {
+        if logs.first().is_none_or(|l| l.channels[c.index()].is_none()) {
             continue;
         }
         for &m in &grid_m {
@@ -151,9 +154,9 @@ pub(crate) fn measure_runs(logs: &[LogInput], tau_min_s: f64) -> Runs {
             }
         }
     }
-    let channel = |points: &[Vec<AllanPoint>; 6], c: noise::Channel| {
+    let channel = |points: &ImuChannels<Vec<AllanPoint>>, c: Channel| {
         logs.first()?.channels[c.index()]?;
-        Some(curve_of(&points[c.index()], &grid_m, tau_min_s))
+        Some(curve_of(&points[c], &grid_m, tau_min_s))
     };
     Runs {
         pooled: ImuChannels::from_fn(|c| channel(&pooled_points, c)),
@@ -237,7 +240,7 @@ mod tests {
         let pooled = r.pooled[noise::Channel::Gx].as_ref().unwrap();
         let run0 = r.runs[0][noise::Channel::Gx].as_ref().unwrap();
         for (k, &i) in pooled.idx.iter().enumerate() {
-            let w = &r.weights[0][i];
+            let w = &r.weights[Channel::Gx][i];
             let e0 = run0
                 .idx
                 .iter()

@@ -2,7 +2,7 @@
 
 use crate::drift::DriftSummary;
 use crate::gap::{Band, Disagreement};
-use noise::{Effect, SensorModel};
+use noise::{Effect, ImuChannels, SensorModel};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -225,8 +225,8 @@ pub struct DriftLoop {
 #[derive(Clone, Debug)]
 pub struct LogBands {
     pub samples: usize,
-    pub initial: [Option<Band>; 6],
-    pub corrected: [Option<Band>; 6],
+    pub initial: ImuChannels<Option<Band>>,
+    pub corrected: ImuChannels<Option<Band>>,
 }
 
 /// One run of several pooled: its own curve per channel (after step 0's corrections), its gap

@@ -11,7 +11,7 @@ use crate::protocol::{all_segment_errors, Protocol, Quantity, SegmentErrors};
 use allan::{DataKind, EdfMethod, Estimator, Options, TauGrid};
 use montecarlo::{run_range, RunKernel};
 use nalgebra::Vector3;
-use noise::{ImuErrors, SensorModel};
+use noise::{Channel, ImuChannels, ImuErrors, SensorModel};
 
 /// What to simulate.
 #[derive(Clone, Debug)]
@@ -22,22 +22,22 @@ pub struct SimSetup<'a> {
     /// Averaging factors of the measured curve (the band uses exactly these).
     pub grid_m: Vec<usize>,
     /// Which of gx gy gz ax ay az are in the measured log.
-    pub active: [bool; 6],
+    pub active: ImuChannels<bool>,
     /// Drift horizons, seconds.
     pub horizons_s: Vec<f64>,
     /// The measured temperature (degC), which drives fitted temperature-bias terms (`temp_coeff`).
     pub temperature_c: Option<&'a [f64]>,
     /// Fitted temperature-bias coefficient per channel (SI per degC), applied to the measured temperature.
-    pub temp_coeff: [f64; 6],
+    pub temp_coeff: ImuChannels<f64>,
 }
 
 /// Bands of the active channels and the segment drifts of all seeds (merged in seed order).
 #[derive(Clone, Debug)]
 pub struct SimResult {
     /// The band of the measurement (pooled over the runs of a `RunPlan`).
-    pub bands: [Option<Band>; 6],
+    pub bands: ImuChannels<Option<Band>>,
     /// The band of one log at each distinct run length (for a held-out log, or one run).
-    pub log_bands: Vec<(usize, [Option<Band>; 6])>,
+    pub log_bands: Vec<(usize, ImuChannels<Option<Band>>)>,
     pub drift: Vec<SegmentDrift>,
     /// With a protocol in the plan: each simulated log's segment errors under it, per distinct
     /// run length (ascending) and protocol horizon.
@@ -58,7 +58,7 @@ pub struct SimError {
 #[derive(Clone, Debug)]
 pub struct RunPlan {
     pub samples: Vec<usize>,
-    pub weights: [Vec<Vec<f64>>; 6],
+    pub weights: ImuChannels<Vec<Vec<f64>>>,
     /// A drift protocol every simulated log is also measured with, at every run length (the drift
     /// check of diagnose; all channels must be simulated), or None.
     pub protocol: Option<Protocol>,
@@ -115,22 +115,30 @@ fn segment_count(samples: usize, horizon_s: f64, dt_s: f64) -> usize {
 }
 
 /// Generate the static log of run `run`: channels gx gy gz ax ay az, SI (inactive channels empty).
-pub fn static_log(model: &SensorModel, setup: &SimSetup, seed: u64, run: u64) -> [Vec<f64>; 6] {
+pub fn static_log(
+    model: &SensorModel,
+    setup: &SimSetup,
+    seed: u64,
+    run: u64,
+) -> ImuChannels<Vec<f64>> {
     let n = setup.samples;
     let mut errors = ImuErrors::new(model, setup.dt_s, seed, run);
     // A static level IMU reads zero rate and specific force (0, 0, -g) (docs/cli.md convention).
     let gyro = Vector3::zeros();
     let accel = Vector3::new(0.0, 0.0, -G_MPS2);
-    let mut out: [Vec<f64>; 6] = Default::default();
+    let mut out: ImuChannels<Vec<f64>> = ImuChannels::default();
     // Each channel owns its random streams, so generating only the active ones changes nothing else.
-    for (ch, gen) in errors.channels_mut().iter_mut().enumerate() {
+    for (ch, gen) in Channel::ALL
+        .into_iter()
+        .zip(errors.channels_mut().iter_mut())
+    {
         if setup.active[ch] {
             out[ch] = vec![0.0; n];
-            gen.fill_static(0, if ch < 3 { &gyro } else { &accel }, &mut out[ch]);
+            gen.fill_static(0, if ch.is_gyro() { &gyro } else { &accel }, &mut out[ch]);
         }
     }
     if let Some(temp) = setup.temperature_c {
-        for (ch, series) in out.iter_mut().enumerate() {
+        for (ch, series) in out.iter_mut() {
             let c = setup.temp_coeff[ch];
             if c != 0.0 {
                 for (x, t) in series.iter_mut().zip(temp) {
@@ -186,7 +194,7 @@ impl RunKernel for Kernel<'_> {
         let m = self.taus();
         let longest = self.setup.samples;
         for (d, &n) in self.lengths.iter().enumerate() {
-            for ch in 0..6 {
+            for ch in Channel::ALL {
                 let adev = if self.setup.active[ch] {
                     adev_at(&log[ch][..n], self.setup.dt_s, &self.setup.grid_m)
                 } else {
@@ -194,7 +202,7 @@ impl RunKernel for Kernel<'_> {
                 };
                 for (i, a) in adev.into_iter().enumerate() {
                     // A shorter run has no point at the longest taus (its weight there is 0).
-                    out[(d * m + i) * 6 + ch] = if n < longest && !a.is_finite() {
+                    out[(d * m + i) * 6 + ch.index()] = if n < longest && !a.is_finite() {
                         0.0
                     } else {
                         a
@@ -208,9 +216,9 @@ impl RunKernel for Kernel<'_> {
             self.lengths
                 .iter()
                 .map(|&n| {
-                    let chans: [Option<&[f64]>; 6] =
-                        std::array::from_fn(|c| self.setup.active[c].then(|| &log[c][..n]));
-                    all_segment_errors(&chans, self.setup.dt_s, p)
+                    let chans =
+                        ImuChannels::from_fn(|c| self.setup.active[c].then(|| &log[c][..n]));
+                    all_segment_errors(&chans.0, self.setup.dt_s, p)
                 })
                 .collect()
         });
@@ -222,8 +230,7 @@ impl RunKernel for Kernel<'_> {
         });
         let mut row = m * self.lengths.len();
         for (d, &n) in self.lengths.iter().enumerate() {
-            let chans: [Option<&[f64]>; 6] =
-                std::array::from_fn(|c| self.setup.active[c].then(|| &log[c][..n]));
+            let chans = ImuChannels::from_fn(|c| self.setup.active[c].then(|| &log[c][..n])).0;
             for (h, &horizon) in self.setup.horizons_s.iter().enumerate() {
                 let own;
                 let (heading, horizontal) = if shared {
@@ -330,25 +337,29 @@ pub fn simulate_runs(
         .collect();
     let m = taus.len();
     // adev[d][ch][s][i]: simulated log s measured at length d.
-    let adev: Vec<[Vec<Vec<f64>>; 6]> = (0..lengths.len())
+    let adev: Vec<ImuChannels<Vec<Vec<f64>>>> = (0..lengths.len())
         .map(|d| {
-            std::array::from_fn(|ch| {
+            ImuChannels::from_fn(|ch| {
                 (0..seeds)
-                    .map(|s| (0..m).map(|i| mx.series(d * m + i, ch)[s]).collect())
+                    .map(|s| {
+                        (0..m)
+                            .map(|i| mx.series(d * m + i, ch.index())[s])
+                            .collect()
+                    })
                     .collect()
             })
         })
         .collect();
-    let log_bands: Vec<[Option<Band>; 6]> = adev
+    let log_bands: Vec<ImuChannels<Option<Band>>> = adev
         .iter()
         .map(|a| {
-            std::array::from_fn(|ch| setup.active[ch].then(|| Band::from_seeds(&taus, &a[ch])))
+            ImuChannels::from_fn(|ch| setup.active[ch].then(|| Band::from_seeds(&taus, &a[ch])))
         })
         .collect();
     let bands = if plan.samples.len() == 1 {
         log_bands[0].clone()
     } else {
-        std::array::from_fn(|ch| {
+        ImuChannels::from_fn(|ch| {
             setup.active[ch].then(|| pooled_band(&taus, &adev, plan, &of_run, ch))
         })
     };
@@ -440,10 +451,10 @@ fn model_drift(
 /// The pooled band of channel `ch` (see [`simulate_runs`]).
 fn pooled_band(
     taus: &[f64],
-    adev: &[[Vec<Vec<f64>>; 6]],
+    adev: &[ImuChannels<Vec<Vec<f64>>>],
     plan: &RunPlan,
     of_run: &[usize],
-    ch: usize,
+    ch: Channel,
 ) -> Band {
     let seeds = adev[0][ch].len();
     let runs = plan.samples.len();
@@ -489,10 +500,10 @@ mod tests {
             dt_s: 0.01,
             samples,
             grid_m: (0..6).map(|j| 1usize << j).collect(),
-            active: [true, false, false, false, false, false],
+            active: ImuChannels::from_fn(|c| c == noise::Channel::Gx),
             horizons_s: vec![5.0],
             temperature_c: None,
-            temp_coeff: [0.0; 6],
+            temp_coeff: ImuChannels::default(),
         };
         (model, setup)
     }
@@ -503,7 +514,10 @@ mod tests {
         let (model, setup) = white(2048);
         let a = simulate(&model, &setup, 3, 8).unwrap();
         let b = simulate_runs(&model, &setup, &RunPlan::single(2048), 3, 8).unwrap();
-        let (a, b) = (a.bands[0].as_ref().unwrap(), b.bands[0].as_ref().unwrap());
+        let (a, b) = (
+            a.bands[noise::Channel::Gx].as_ref().unwrap(),
+            b.bands[noise::Channel::Gx].as_ref().unwrap(),
+        );
         assert_eq!(a.ln_mean, b.ln_mean);
         assert_eq!(a.ln_sd, b.ln_sd);
         assert_eq!(a.centre_logs, 8.0);
@@ -519,21 +533,20 @@ mod tests {
         let taus = setup.grid_m.len();
         let plan = RunPlan {
             samples: vec![8192; runs],
-            weights: [
-                vec![vec![1.0; runs]; taus],
-                vec![],
-                vec![],
-                vec![],
-                vec![],
-                vec![],
-            ],
+            weights: ImuChannels::from_fn(|c| {
+                if c == Channel::Gx {
+                    vec![vec![1.0; runs]; taus]
+                } else {
+                    vec![]
+                }
+            }),
             protocol: None,
         };
         let one = simulate(&model, &setup, 5, 16).unwrap();
         let pooled = simulate_runs(&model, &setup, &plan, 5, 16).unwrap();
         let (one, pooled) = (
-            one.bands[0].as_ref().unwrap(),
-            pooled.bands[0].as_ref().unwrap(),
+            one.bands[noise::Channel::Gx].as_ref().unwrap(),
+            pooled.bands[noise::Channel::Gx].as_ref().unwrap(),
         );
         assert_eq!(pooled.centre_logs, 2.0);
         for i in 0..taus {
@@ -556,14 +569,13 @@ mod tests {
         let (seeds, runs) = (16usize, 8usize);
         let plan = RunPlan {
             samples: vec![100; runs],
-            weights: [
-                vec![vec![1.0; runs]],
-                vec![],
-                vec![],
-                vec![],
-                vec![],
-                vec![],
-            ],
+            weights: ImuChannels::from_fn(|c| {
+                if c == Channel::Gx {
+                    vec![vec![1.0; runs]]
+                } else {
+                    vec![]
+                }
+            }),
             protocol: None,
         };
         let (_, of_run) = plan.lengths();
@@ -571,13 +583,13 @@ mod tests {
         let adev = |k: usize| (0.3 * normals[k]).exp();
         let mut mean_var = 0.0;
         for rep in 0..4000 {
-            let logs: Vec<[Vec<Vec<f64>>; 6]> = vec![std::array::from_fn(|ch| {
-                if ch > 0 {
+            let logs: Vec<ImuChannels<Vec<Vec<f64>>>> = vec![ImuChannels::from_fn(|ch| {
+                if ch != Channel::Gx {
                     return vec![];
                 }
                 (0..seeds).map(|s| vec![adev(rep * seeds + s)]).collect()
             })];
-            let band = pooled_band(&[1.0], &logs, &plan, &of_run, 0);
+            let band = pooled_band(&[1.0], &logs, &plan, &of_run, Channel::Gx);
             mean_var += band.ln_sd[0].powi(2) / 4000.0;
         }
         let base = 4000 * seeds;

@@ -156,8 +156,8 @@ struct Run<'a> {
     /// Least-squares slope of each corrected channel against time (the rate-ramp level, see `trials`).
     ramp_slope: ImuChannels<f64>,
     /// The broad spectral peak and the spectral lines of each channel (over all runs' segments).
-    peaks: [Option<SpectralPeak>; 6],
-    lines: [Vec<f64>; 6],
+    peaks: ImuChannels<Option<SpectralPeak>>,
+    lines: ImuChannels<Vec<f64>>,
     setup: SimSetup<'a>,
     plan: RunPlan,
     /// The model simulated (step 0's terms left out: their effects are removed from the log) and the
@@ -168,8 +168,8 @@ struct Run<'a> {
     sim0: SimResult,
     /// The current model's band per channel (pooled, and of one log at each run length), and its
     /// drift (stale while `dirty`).
-    bands: [Option<Band>; 6],
-    log_bands: Vec<(usize, [Option<Band>; 6])>,
+    bands: ImuChannels<Option<Band>>,
+    log_bands: Vec<(usize, ImuChannels<Option<Band>>)>,
     last_drift: Vec<SegmentDrift>,
     /// The drift check (`Settings::drift_protocol`): the runs' segment errors under the protocol,
     /// the original model's drift gap, and the current model's simulated segment errors.
@@ -195,14 +195,14 @@ impl<'a> Run<'a> {
             dt_s: first.dt_s,
             samples: s.samples.iter().copied().max().unwrap_or(0),
             grid_m: corrected.grid_m.clone(),
-            active: std::array::from_fn(|c| first.channels[c].is_some()),
+            active: ImuChannels::from_fn(|c| first.channels[c.index()].is_some()),
             horizons_s: s.settings.horizons_s.clone(),
             temperature_c: if s.logs.len() == 1 {
                 first.temperature_c
             } else {
                 None
             },
-            temp_coeff: [0.0; 6],
+            temp_coeff: ImuChannels::default(),
         };
         let sim0 = Self::band(model, &setup, &plan, s.settings, s.observer)?;
         let logs = s.logs;
@@ -212,13 +212,15 @@ impl<'a> Run<'a> {
             let xs =
                 |c: usize| -> Vec<&[f64]> { logs.iter().filter_map(|l| l.channels[c]).collect() };
             (
-                std::array::from_fn(|c| {
-                    let xs = xs(c);
+                ImuChannels::from_fn(|c| {
+                    let xs = xs(c.index());
                     (!xs.is_empty())
                         .then(|| crate::spectrum::broad_peak_runs(&xs, first.dt_s))
                         .flatten()
                 }),
-                std::array::from_fn(|c| crate::spectrum::spectral_lines_runs(&xs(c), first.dt_s)),
+                ImuChannels::from_fn(|c| {
+                    crate::spectrum::spectral_lines_runs(&xs(c.index()), first.dt_s)
+                }),
             )
         };
         let several = logs.len() > 1;
@@ -256,9 +258,9 @@ impl<'a> Run<'a> {
             plan,
         };
         for c in Channel::ALL {
-            let band = run.bands[c.index()].as_ref();
+            let band = run.bands[c].as_ref();
             run.channels[c].initial = Self::gap_of(raw.pooled[c].as_ref(), band);
-            run.channels[c].done = !run.setup.active[c.index()];
+            run.channels[c].done = !run.setup.active[c];
         }
         run.drift_gap0 = run.drift_gap();
         Ok(run)
@@ -312,7 +314,7 @@ impl<'a> Run<'a> {
 
     /// Step 3 for channel `c` against the current model's band.
     fn gap(&self, c: Channel) -> Option<(Band, Gap)> {
-        Self::gap_of(self.measured[c].as_ref(), self.bands[c.index()].as_ref())
+        Self::gap_of(self.measured[c].as_ref(), self.bands[c].as_ref())
     }
 
     /// Round 0: the time-domain detectors' findings enter the corrected model (their effects are
@@ -324,11 +326,8 @@ impl<'a> Run<'a> {
                 continue;
             };
             let (gap_before, gap_after) = (g0.rms, g1.rms);
-            let per_run: Vec<&[crate::detect::Finding]> = self
-                .pre
-                .iter()
-                .map(|p| p.findings[c.index()].as_slice())
-                .collect();
+            let per_run: Vec<&[crate::detect::Finding]> =
+                self.pre.iter().map(|p| p.findings[c].as_slice()).collect();
             for f in &crate::runs::pooled_findings(&per_run, &self.hours()) {
                 let axis = self.out_model.axis_mut(c.sensor(), c.axis());
                 let had = axis.term(f.term.effect()).is_some();
@@ -414,8 +413,8 @@ impl<'a> Run<'a> {
             gap: g,
             dt_s,
             ramp_slope: self.ramp_slope[c],
-            peak: self.peaks[c.index()],
-            lines: &self.lines[c.index()],
+            peak: self.peaks[c],
+            lines: &self.lines[c],
             line_resolution_hz: crate::spectrum::line_resolution_hz(&self.series(c), dt_s),
         })
     }
@@ -488,8 +487,7 @@ impl<'a> Run<'a> {
         self.rounds = round;
         self.observer.step(Step::Resimulate { round });
         let active = self.setup.active;
-        let changed: [bool; 6] =
-            std::array::from_fn(|c| active[c] && pending.iter().any(|p| p.channel.index() == c));
+        let changed = ImuChannels::from_fn(|c| active[c] && pending.iter().any(|p| p.channel == c));
         let partial = changed != active;
         let round_plan = RunPlan {
             protocol: if partial {
@@ -532,7 +530,7 @@ impl<'a> Run<'a> {
     /// round's changes are undone (recorded as rejected) and the channel is done.
     fn keep_or_undo(&mut self, round: usize, p: Pending, sim: &SimResult) {
         let c = p.channel;
-        let band = sim.bands[c.index()].clone();
+        let band = sim.bands[c].clone();
         let after = Self::gap_of(self.measured[c].as_ref(), band.as_ref())
             .map(|(_, g)| g.rms)
             .unwrap_or(f64::NAN);
@@ -546,9 +544,9 @@ impl<'a> Run<'a> {
             found.gap_after = after;
         }
         if !(after.is_nan() || after >= p.gap_before) {
-            self.bands[c.index()] = band;
+            self.bands[c] = band;
             for (mine, new) in self.log_bands.iter_mut().zip(&sim.log_bands) {
-                mine.1[c.index()] = new.1[c.index()].clone();
+                mine.1[c] = new.1[c].clone();
             }
             merge_refinements(&mut state.effects, first_new);
             return;
@@ -640,11 +638,8 @@ impl<'a> Run<'a> {
     /// Each run's curves, gaps and step-0 findings (several runs only; the pooled findings are
     /// the channels').
     fn run_reports(&self) -> Vec<RunReport> {
-        let band_at = |bands: &[(usize, [Option<Band>; 6])], n: usize, c: Channel| {
-            bands
-                .iter()
-                .find(|b| b.0 == n)
-                .and_then(|b| b.1[c.index()].clone())
+        let band_at = |bands: &[(usize, ImuChannels<Option<Band>>)], n: usize, c: Channel| {
+            bands.iter().find(|b| b.0 == n).and_then(|b| b.1[c].clone())
         };
         (0..self.run_measured.len())
             .map(|r| {
@@ -664,7 +659,7 @@ impl<'a> Run<'a> {
                         Self::gap_of(Some(m), b.as_ref()).map_or(f64::NAN, |g| g.1.rms)
                     };
                     let (g0, g_corr, g1) = (rms(raw, &b0), rms(m, &b0), rms(m, &b1));
-                    let found: Vec<FoundEffect> = self.pre[r].findings[c.index()]
+                    let found: Vec<FoundEffect> = self.pre[r].findings[c]
                         .iter()
                         .map(|f| {
                             let had = self.channels[c].effects.iter().any(|e| {

@@ -90,18 +90,18 @@ fn log_of(model: &SensorModel, dt_s: f64, samples: usize, seed: u64, run: u64) -
         dt_s,
         samples,
         grid_m: Vec::new(),
-        active: [true; 6],
+        active: noise::ImuChannels([true; 6]),
         horizons_s: Vec::new(),
         temperature_c: None,
-        temp_coeff: [0.0; 6],
+        temp_coeff: noise::ImuChannels::default(),
     };
-    static_log(model, &setup, seed, run)
+    static_log(model, &setup, seed, run).0
 }
 
 fn input(dt_s: f64, log: &[Vec<f64>; 6]) -> LogInput<'_> {
     LogInput {
         dt_s,
-        channels: std::array::from_fn(|c| Some(log[c].as_slice())),
+        channels: log.each_ref().map(|c| Some(c.as_slice())),
         temperature_c: None,
     }
 }

@@ -22,10 +22,10 @@ fn run(threads: usize) -> SimResult {
         dt_s: 0.01,
         samples: 1 << 13,
         grid_m: (0..11).map(|j| 1usize << j).collect(),
-        active: [true; 6],
+        active: noise::ImuChannels([true; 6]),
         horizons_s: vec![10.0],
         temperature_c: None,
-        temp_coeff: [0.0; 6],
+        temp_coeff: noise::ImuChannels::default(),
     };
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
@@ -36,7 +36,7 @@ fn run(threads: usize) -> SimResult {
 
 fn bits(r: &SimResult) -> Vec<u64> {
     let mut out = Vec::new();
-    for b in r.bands.iter().flatten() {
+    for b in r.bands.values().iter().flatten() {
         for v in [&b.ln_mean, &b.ln_sd, &b.avar_mean, &b.adev_lo, &b.adev_hi] {
             out.extend(v.iter().map(|x| x.to_bits()));
         }
@@ -86,26 +86,26 @@ bias_instability = "30 ug"
         dt_s: 0.1,
         samples: 6_000,
         grid_m: Vec::new(),
-        active: [true; 6],
+        active: noise::ImuChannels([true; 6]),
         horizons_s: Vec::new(),
         temperature_c: None,
-        temp_coeff: [0.0; 6],
+        temp_coeff: noise::ImuChannels::default(),
     };
     let logs: Vec<[Vec<f64>; 6]> = (0..2)
-        .map(|run| diagnose::simulate::static_log(&model, &setup, 99, run))
+        .map(|run| diagnose::simulate::static_log(&model, &setup, 99, run).0)
         .collect();
     let inputs: Vec<diagnose::LogInput> = logs
         .iter()
         .map(|l| diagnose::LogInput {
             dt_s: 0.1,
-            channels: std::array::from_fn(|c| Some(l[c].as_slice())),
+            channels: l.each_ref().map(|c| Some(c.as_slice())),
             temperature_c: None,
         })
         .collect();
     let fitted = FittedOn {
         sample_interval_s: 0.1,
         samples: vec![4_000, 3_000],
-        channels: [true; 6],
+        channels: noise::ImuChannels([true; 6]),
         tau_min_s: 0.0,
     };
     let settings = CheckSettings {

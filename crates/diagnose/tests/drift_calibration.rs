@@ -34,10 +34,10 @@ fn coverage(
         dt_s: dt,
         samples,
         grid_m: Vec::new(),
-        active: [true; 6],
+        active: noise::ImuChannels([true; 6]),
         horizons_s: Vec::new(),
         temperature_c: None,
-        temp_coeff: [0.0; 6],
+        temp_coeff: noise::ImuChannels::default(),
     };
     let mut counts: Vec<(f64, usize, usize)> =
         protocol.horizons_s.iter().map(|&h| (h, 0, 0)).collect();
@@ -46,7 +46,7 @@ fn coverage(
         let log = static_log(&model, &setup, 1_000_000 + s, 0);
         let input = LogInput {
             dt_s: dt,
-            channels: std::array::from_fn(|c| Some(log[c].as_slice())),
+            channels: log.0.each_ref().map(|c| Some(c.as_slice())),
             temperature_c: None,
         };
         let settings = CheckSettings {

@@ -131,8 +131,43 @@ pub fn read_imu(path: &Path, format: Format, topic: Option<&str>) -> Result<ImuS
         );
         return Err(LogError::content(&source, problem));
     }
+    check_values(&series, &source)?;
     sort_by_stamp(&mut series, &source)?;
     Ok(series)
+}
+
+/// Every gyro and accelerometer value finite and of a magnitude a log may hold
+/// ([`crate::valid_value`]), as the CSV reader requires: else an error naming the message (in
+/// file order) and the field.
+fn check_values(s: &ImuSeries, source: &str) -> Result<()> {
+    let fields = [
+        ("angular_velocity", &s.gyro),
+        ("linear_acceleration", &s.accel),
+    ];
+    for (field, axes) in fields {
+        for (axis, values) in axes.iter().enumerate() {
+            let Some(k) = values.iter().position(|&v| !crate::valid_value(v)) else {
+                continue;
+            };
+            let v = values[k];
+            let problem = if v.is_finite() {
+                format!(
+                    "{} is beyond the largest magnitude a log may hold ({:e}: squares of larger values overflow)",
+                    crate::sig(v, 3),
+                    crate::MAX_ABS_VALUE
+                )
+            } else {
+                format!("{v} is not a number a sensor measures")
+            };
+            let at = crate::At::Message {
+                topic: s.topic.clone(),
+                index: k + 1,
+            };
+            let column = format!("{field}.{}", noise::AXIS_NAMES[axis]);
+            return Err(LogError::content(source, problem).at(at).in_column(&column));
+        }
+    }
+    Ok(())
 }
 
 /// Messages in stamp order (bags are in receive order); two messages with one stamp are refused.

@@ -6,7 +6,9 @@ use crate::columns::map_header;
 use crate::error::{At, LogError, Problem, Result};
 use crate::file::advise_huge_pages;
 use crate::float::{fast_f64, number};
-use crate::limits::{valid_rate_hz, MAX_LOG_RATE_HZ};
+use crate::limits::{
+    quote_prefix, valid_rate_hz, valid_value, MAX_ABS_VALUE, MAX_LOG_RATE_HZ, MIN_LOG_RATE_HZ,
+};
 use crate::log::{Log, ReadOptions};
 use noise::Channel;
 use rayon::prelude::*;
@@ -235,6 +237,12 @@ fn check_uniform(t: &[f64], source: &str, locate: &dyn Fn(usize) -> At) -> Resul
         let problem = Problem::TimeStepTooSmall { median_s: median };
         return Err(LogError::new(source, problem));
     }
+    if 1.0 / median < MIN_LOG_RATE_HZ {
+        let problem = format!(
+            "the `t` column's median step is {median:e} s; expected a sample rate of at least {MIN_LOG_RATE_HZ:e} Hz (is `t` in seconds?)"
+        );
+        return Err(LogError::content(source, problem));
+    }
     if let Some(k) = t
         .windows(2)
         .position(|w| ((w[1] - w[0]) - median).abs() > STEP_TOLERANCE * median)
@@ -441,18 +449,23 @@ fn parse_chunk_into(chunk: &[u8], out: &mut [&mut [f64]], skip: &[bool]) -> (usi
             };
             if k < n_cols {
                 match value {
-                    Some(v) if v.is_finite() => out[k][row] = v,
+                    Some(v) if valid_value(v) => out[k][row] = v,
                     _ if skip[k] => out[k][row] = f64::NAN,
                     _ => {
                         let end = chunk[i..]
                             .iter()
                             .position(|&b| b == b',' || b == b'\n')
                             .map_or(n, |p| i + p);
-                        let text = String::from_utf8_lossy(&chunk[i..end]).trim().to_string();
+                        let text = String::from_utf8_lossy(&chunk[i..end]);
+                        let text = quote_prefix(text.trim());
+                        let problem = match value {
+                            Some(v) if v.is_finite() => format!("{text} is {}; expected a magnitude below {MAX_ABS_VALUE:e} (squares of larger values overflow)", crate::sig(v, 3)),
+                            _ => format!("cannot read {text} as a number"),
+                        };
                         let bad = BadRow {
                             line: lines,
                             column: Some(k),
-                            problem: format!("cannot read {text:?} as a number"),
+                            problem,
                         };
                         return (lines_in(chunk), Err(bad));
                     }
@@ -495,7 +508,7 @@ fn fast_line(chunk: &[u8], mut i: usize, out: &mut [&mut [f64]], row: usize) -> 
     }
     for (k, col) in out.iter_mut().enumerate() {
         let (v, used) = number(chunk.get(i..)?)?;
-        if !v.is_finite() {
+        if !valid_value(v) {
             return None; // the general path reports it
         }
         i += used;

@@ -2,7 +2,7 @@
 //! reader's settings ([`Setting`], the fields of `ReadOptions`) and never a front end's flags; a
 //! front end renders them with its own names through [`LogError::render`].
 
-use crate::limits::MAX_LOG_RATE_HZ;
+use crate::limits::{MAX_LOG_RATE_HZ, MIN_LOG_RATE_HZ};
 use crate::units::{AccelUnit, GyroUnit, TimeUnit};
 use noise::Sensor;
 
@@ -115,7 +115,7 @@ impl Problem {
             }
             Problem::Content(text) => text.clone(),
             Problem::BadRate { rate_hz } => format!(
-                "{} {}: expected the log's sample rate in Hz, above 0 and at most {MAX_LOG_RATE_HZ:e}",
+                "{} {}: expected the log's sample rate in Hz, at least {MIN_LOG_RATE_HZ:e} and at most {MAX_LOG_RATE_HZ:e}",
                 n(Setting::Rate),
                 sig(*rate_hz, 6)
             ),

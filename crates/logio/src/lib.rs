@@ -32,7 +32,9 @@ pub use columns::{ColumnUse, SkipReason, Skipped, Source, UnitOptions};
 pub use csv::parse_log;
 pub use error::{sig, At, LogError, Problem, Result, Setting, SettingNames};
 pub use file::available_memory_bytes;
-pub use limits::{valid_rate_hz, MAX_LOG_RATE_HZ};
+pub use limits::{
+    quote_prefix, valid_rate_hz, valid_value, MAX_ABS_VALUE, MAX_LOG_RATE_HZ, MIN_LOG_RATE_HZ,
+};
 pub use log::{Log, ReadOptions};
 pub use units::{AccelUnit, GyroUnit, TimeUnit};
 

@@ -15,7 +15,7 @@ use crate::model_terms::{current_term, set_term};
 use crate::report::{Candidate, CandidateRecord, DriftLoop};
 use crate::simulate::simulate_runs;
 use crate::trials::named_map;
-use noise::{Channel, Effect, Term};
+use noise::{Channel, Effect, ImuChannels, Term};
 
 /// A change the drift loop made: the channel, the effect and its term before.
 type Change = (Channel, Effect, Option<Term>);
@@ -132,21 +132,18 @@ impl Run<'_> {
             &of_run,
             &self.setup.active,
         );
-        let allan_chi2 = |run: &Self, bands: &[Option<crate::gap::Band>; 6]| -> f64 {
+        let allan_chi2 = |run: &Self, bands: &ImuChannels<Option<crate::gap::Band>>| -> f64 {
             changes
                 .iter()
-                .filter_map(|(c, _, _)| {
-                    Self::gap_of(run.measured[*c].as_ref(), bands[c.index()].as_ref())
-                })
+                .filter_map(|(c, _, _)| Self::gap_of(run.measured[*c].as_ref(), bands[*c].as_ref()))
                 .map(|(_, g)| g.z.iter().map(|z| z * z).sum::<f64>())
                 .sum()
         };
         let kept = after.chi2() + allan_chi2(self, &sim.bands)
             < before.chi2() + allan_chi2(self, &self.bands);
         for (c, _, _) in &changes {
-            let allan_after =
-                Self::gap_of(self.measured[*c].as_ref(), sim.bands[c.index()].as_ref())
-                    .map_or(f64::NAN, |(_, g)| g.rms);
+            let allan_after = Self::gap_of(self.measured[*c].as_ref(), sim.bands[*c].as_ref())
+                .map_or(f64::NAN, |(_, g)| g.rms);
             let state = &mut self.channels[*c];
             let first_new = state
                 .effects

@@ -58,12 +58,12 @@ impl GeneratedLog {
             dt_s: DT_S,
             samples,
             grid_m: vec![],
-            active: [true; 6],
+            active: noise::ImuChannels([true; 6]),
             horizons_s: vec![60.0],
             temperature_c: None,
-            temp_coeff: [0.0; 6],
+            temp_coeff: noise::ImuChannels::default(),
         };
-        let channels = static_log(model, &setup, seed, 0);
+        let channels = static_log(model, &setup, seed, 0).0;
         let temperature_c = record_temperature.then(|| {
             let errors = ImuErrors::new(model, DT_S, seed, 0);
             (0..samples as u64)
