@@ -137,7 +137,7 @@ pub fn read_imu(path: &Path, format: Format, topic: Option<&str>) -> Result<ImuS
 }
 
 /// Every gyro and accelerometer value finite and of a magnitude a log may hold
-/// ([`crate::valid_value`]), as the CSV reader requires: else an error naming the message (in
+/// ([`crate::limits::valid_value`]), as the CSV reader requires: else an error naming the message (in
 /// file order) and the field.
 fn check_values(s: &ImuSeries, source: &str) -> Result<()> {
     let fields = [
@@ -146,20 +146,20 @@ fn check_values(s: &ImuSeries, source: &str) -> Result<()> {
     ];
     for (field, axes) in fields {
         for (axis, values) in axes.iter().enumerate() {
-            let Some(k) = values.iter().position(|&v| !crate::valid_value(v)) else {
+            let Some(k) = values.iter().position(|&v| !crate::limits::valid_value(v)) else {
                 continue;
             };
             let v = values[k];
             let problem = if v.is_finite() {
                 format!(
                     "{} is beyond the largest magnitude a log may hold ({:e}: squares of larger values overflow)",
-                    crate::sig(v, 3),
-                    crate::MAX_ABS_VALUE
+                    crate::error::sig(v, 3),
+                    crate::limits::MAX_ABS_VALUE
                 )
             } else {
                 format!("{v} is not a number a sensor measures")
             };
-            let at = crate::At::Message {
+            let at = crate::error::At::Message {
                 topic: s.topic.clone(),
                 index: k + 1,
             };

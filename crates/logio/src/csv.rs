@@ -459,7 +459,7 @@ fn parse_chunk_into(chunk: &[u8], out: &mut [&mut [f64]], skip: &[bool]) -> (usi
                         let text = String::from_utf8_lossy(&chunk[i..end]);
                         let text = quote_prefix(text.trim());
                         let problem = match value {
-                            Some(v) if v.is_finite() => format!("{text} is {}; expected a magnitude below {MAX_ABS_VALUE:e} (squares of larger values overflow)", crate::sig(v, 3)),
+                            Some(v) if v.is_finite() => format!("{text} is {}; expected a magnitude below {MAX_ABS_VALUE:e} (squares of larger values overflow)", crate::error::sig(v, 3)),
                             _ => format!("cannot read {text} as a number"),
                         };
                         let bad = BadRow {
