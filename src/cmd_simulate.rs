@@ -89,67 +89,8 @@ pub fn run(args: Args) -> Result<()> {
         Vec::new()
     };
     if let Some(text) = &args.shard {
-        let shard = Shard::parse(text).context("--shard")?;
-        let Some(dir) = &args.out else {
-            bail!("--shard: expected --out DIR for the shard file");
-        };
-        let range = shard.runs(exp.runs);
-        check_memory(
-            &exp,
-            (range.end - range.start) * (1 + 2 * subs.len() as u64),
-        )?;
-        let result = pool.install(|| execute(&exp, range.clone(), "shard"));
-        // The shard's slice of every ablation sub-experiment, so `merge` rebuilds the table.
-        let batch = |e: &Experiment, label: &str| {
-            let r = pool.install(|| execute(e, range.clone(), label));
-            ablation::Batch {
-                matrix: r.matrix,
-                failures: r.failures,
-            }
-        };
-        let ablation = with_ablation.then(|| {
-            subs.iter()
-                .map(|t| ablation::TermBatches {
-                    term: t.term.clone(),
-                    only: batch(&t.only, &t.term),
-                    without: batch(&t.without, &t.term),
-                })
-                .collect()
-        });
-        let file = ShardFile {
-            format: SHARD_FORMAT.into(),
-            scenario_source: inputs.scenario_source,
-            scenario_toml: inputs.scenario_toml,
-            sensor_source: inputs.sensor_source,
-            sensor_toml: inputs.sensor_toml,
-            runs: args.runs,
-            seed: args.seed,
-            only: args.only,
-            without: args.without,
-            shard,
-            matrix: result.matrix,
-            failures: result.failures,
-            ablation,
-        };
-        ensure_dir(dir)?;
-        let path = dir.join(format!("shard-{}-of-{}.json", shard.index, shard.count));
-        write_atomic(&path, |w| Ok(serde_json::to_writer(w, &file)?))?;
-        report_failures(&file.failures);
-        eprintln!(
-            "shard {}/{}: runs {:?} of {}, {} finished{}; wrote {}",
-            shard.index,
-            shard.count,
-            shard.runs(exp.runs),
-            exp.runs,
-            file.matrix.runs(),
-            if with_ablation {
-                format!(" (and {} ablation sub-runs)", 2 * subs.len())
-            } else {
-                String::new()
-            },
-            path.display()
-        );
-        return Ok(());
+        let subs = with_ablation.then_some(subs.as_slice());
+        return run_shard(&args, text, inputs, &exp, subs, &pool);
     }
     check_memory(&exp, exp.runs)?;
     let result = pool.install(|| execute(&exp, 0..exp.runs, "simulate"));
@@ -174,6 +115,78 @@ pub fn run(args: Args) -> Result<()> {
         args.json,
         args.out.as_deref(),
     )
+}
+
+/// `--shard i/k`: run the slice of the runs (and of every ablation sub-experiment, `subs`) and
+/// write the shard file `merge` reads.
+fn run_shard(
+    args: &Args,
+    text: &str,
+    inputs: crate::experiment_run::Inputs,
+    exp: &Experiment,
+    subs: Option<&[ablation::TermExperiments]>,
+    pool: &rayon::ThreadPool,
+) -> Result<()> {
+    let shard = Shard::parse(text).context("--shard")?;
+    let Some(dir) = &args.out else {
+        bail!("--shard: expected --out DIR for the shard file");
+    };
+    let range = shard.runs(exp.runs);
+    check_memory(
+        exp,
+        (range.end - range.start) * (1 + 2 * subs.map_or(0, <[_]>::len) as u64),
+    )?;
+    let result = pool.install(|| execute(exp, range.clone(), "shard"));
+    // The shard's slice of every ablation sub-experiment, so `merge` rebuilds the table.
+    let batch = |e: &Experiment, label: &str| {
+        let r = pool.install(|| execute(e, range.clone(), label));
+        ablation::Batch {
+            matrix: r.matrix,
+            failures: r.failures,
+        }
+    };
+    let ablation = subs.map(|subs| {
+        subs.iter()
+            .map(|t| ablation::TermBatches {
+                term: t.term.clone(),
+                only: batch(&t.only, &t.term),
+                without: batch(&t.without, &t.term),
+            })
+            .collect()
+    });
+    let file = ShardFile {
+        format: SHARD_FORMAT.into(),
+        scenario_source: inputs.scenario_source,
+        scenario_toml: inputs.scenario_toml,
+        sensor_source: inputs.sensor_source,
+        sensor_toml: inputs.sensor_toml,
+        runs: args.runs,
+        seed: args.seed,
+        only: args.only.clone(),
+        without: args.without.clone(),
+        shard,
+        matrix: result.matrix,
+        failures: result.failures,
+        ablation,
+    };
+    ensure_dir(dir)?;
+    let path = dir.join(format!("shard-{}-of-{}.json", shard.index, shard.count));
+    write_atomic(&path, |w| Ok(serde_json::to_writer(w, &file)?))?;
+    report_failures(&file.failures);
+    eprintln!(
+        "shard {}/{}: runs {:?} of {}, {} finished{}; wrote {}",
+        shard.index,
+        shard.count,
+        shard.runs(exp.runs),
+        exp.runs,
+        file.matrix.runs(),
+        subs.map_or(String::new(), |subs| format!(
+            " (and {} ablation sub-runs)",
+            2 * subs.len()
+        )),
+        path.display()
+    );
+    Ok(())
 }
 
 fn report_failures(failures: &[montecarlo::RunFailure]) {
@@ -334,6 +347,19 @@ fn table(
     ablation: Option<&[AblationRow]>,
 ) -> String {
     let mut s = String::new();
+    horizontal_table(&mut s, r);
+    last_checkpoint_table(&mut s, r);
+    if let Some(rf) = reference {
+        reference_line(&mut s, rf);
+    }
+    if let Some(rows) = ablation {
+        ablation_tables(&mut s, r, rows);
+    }
+    s
+}
+
+/// The run's header line and the horizontal position error at every checkpoint beside its law.
+fn horizontal_table(s: &mut String, r: &DriftReport) {
     use std::fmt::Write as _;
     let _ = writeln!(
         s,
@@ -374,6 +400,11 @@ fn table(
             fmt_ratio(c)
         );
     }
+}
+
+/// Every navigation-error quantity at the last checkpoint beside its law (or why it has none).
+fn last_checkpoint_table(s: &mut String, r: &DriftReport) {
+    use std::fmt::Write as _;
     if let Some(last) = r.checkpoints.last() {
         let _ = writeln!(
             s,
@@ -406,49 +437,54 @@ fn table(
             );
         }
     }
-    if let Some(rf) = reference {
-        let _ = writeln!(
-            s,
-            "\n{} {} at {}: simulated {}, published {} ({:+.0} %; {})",
-            rf.quantity,
-            rf.statistic,
-            fmt::time(rf.t_s),
-            fmt::quantity_value(&rf.quantity, rf.simulated),
-            fmt::quantity_value(&rf.quantity, rf.value),
-            100.0 * (rf.simulated / rf.value - 1.0),
-            rf.source
-        );
-        if let Some(note) = &rf.note {
-            let _ = writeln!(s, "  {note}");
-        }
+}
+
+/// The scenario's published reference beside the simulated value.
+fn reference_line(s: &mut String, rf: &ReferenceOut) {
+    use std::fmt::Write as _;
+    let _ = writeln!(
+        s,
+        "\n{} {} at {}: simulated {}, published {} ({:+.0} %; {})",
+        rf.quantity,
+        rf.statistic,
+        fmt::time(rf.t_s),
+        fmt::quantity_value(&rf.quantity, rf.simulated),
+        fmt::quantity_value(&rf.quantity, rf.value),
+        100.0 * (rf.simulated / rf.value - 1.0),
+        rf.source
+    );
+    if let Some(note) = &rf.note {
+        let _ = writeln!(s, "  {note}");
     }
-    if let Some(rows) = ablation {
-        let spans = ablation::dominant_spans(r, rows);
-        let _ = writeln!(
-            s,
-            "\nlargest contributor to the horizontal error (term alone, mean square) vs time:"
-        );
-        for (term, from, to) in spans {
-            let _ = writeln!(s, "  {from:>9.3} s .. {to:>9.3} s  {term}");
-        }
-        let _ = writeln!(s, "\nablation at the last checkpoint (horizontal position): each term alone, and the model without it");
-        let _ = writeln!(
-            s,
-            "{:>28} {:>14} {:>16} {:>16}",
-            "term", "alone mean m", "alone share ms", "without mean m"
-        );
-        for row in rows {
-            let _ = writeln!(
-                s,
-                "{:>28} {:>14.3} {:>15.1}% {:>16.3}",
-                row.term,
-                row.only_mean_m,
-                100.0 * row.only_share,
-                row.without_mean_m
-            );
-        }
+}
+
+/// Which term dominates the horizontal error when, and each term alone / removed at the end.
+fn ablation_tables(s: &mut String, r: &DriftReport, rows: &[AblationRow]) {
+    use std::fmt::Write as _;
+    let spans = ablation::dominant_spans(r, rows);
+    let _ = writeln!(
+        s,
+        "\nlargest contributor to the horizontal error (term alone, mean square) vs time:"
+    );
+    for (term, from, to) in spans {
+        let _ = writeln!(s, "  {from:>9.3} s .. {to:>9.3} s  {term}");
     }
-    s
+    let _ = writeln!(s, "\nablation at the last checkpoint (horizontal position): each term alone, and the model without it");
+    let _ = writeln!(
+        s,
+        "{:>28} {:>14} {:>16} {:>16}",
+        "term", "alone mean m", "alone share ms", "without mean m"
+    );
+    for row in rows {
+        let _ = writeln!(
+            s,
+            "{:>28} {:>14.3} {:>15.1}% {:>16.3}",
+            row.term,
+            row.only_mean_m,
+            100.0 * row.only_share,
+            row.without_mean_m
+        );
+    }
 }
 
 /// Log-log plot of one quantity (shared writer, src/plot.rs): simulated mean and rms, the p5-p95

@@ -404,9 +404,18 @@ fn write_drift_csv(dir: &std::path::Path, doc: &SpecDoc) -> Result<()> {
     })
 }
 
+/// The text tables: the spec values (or spec vs readback), the drift, and each requirement.
 fn table(doc: &SpecDoc) -> String {
-    use std::fmt::Write as _;
     let mut s = String::new();
+    spec_table(&mut s, doc);
+    drift_table(&mut s, doc);
+    requirement_tables(&mut s, doc);
+    s
+}
+
+/// The gyro spec values per sensor and axis; with a readback, beside the values read back.
+fn spec_table(s: &mut String, doc: &SpecDoc) {
+    use std::fmt::Write as _;
     let opt = |x: Option<f64>, f: fn(f64) -> String| x.map_or("n/a".to_string(), f);
     if let Some(d) = doc.readback_duration_s {
         let _ = writeln!(
@@ -485,6 +494,11 @@ fn table(doc: &SpecDoc) -> String {
             let _ = writeln!(s, "  note: {}: {n}", sen.spec.name);
         }
     }
+}
+
+/// Heading and horizontal drift per sensor and time, simulation and law.
+fn drift_table(s: &mut String, doc: &SpecDoc) {
+    use std::fmt::Write as _;
     let _ = writeln!(
         s,
         "\ndrift, static and level ({} Hz Monte Carlo, {} runs): heading rms and horizontal position, simulation / law",
@@ -528,6 +542,11 @@ fn table(doc: &SpecDoc) -> String {
             let _ = writeln!(s, "  note: {}: {n}", sen.spec.name);
         }
     }
+}
+
+/// One table per requirement: each sensor's verdict, value, interval and margin.
+fn requirement_tables(s: &mut String, doc: &SpecDoc) {
+    use std::fmt::Write as _;
     // Every sensor answers the same requirements, in the order given.
     let reqs: Vec<&String> = doc
         .sensors
@@ -585,5 +604,4 @@ fn table(doc: &SpecDoc) -> String {
         }
         let _ = writeln!(s, "  PASS / FAIL: the whole 95 % interval is under / over the threshold; undecided: more runs (--runs) decide it; margin = threshold - value");
     }
-    s
 }
