@@ -13,7 +13,7 @@ const SAMPLES: usize = 1 << 16;
 const DT_S: f64 = 0.01;
 
 fn adis() -> SensorModel {
-    SensorModel::load(
+    imudrift::files::sensor_model(
         &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/sensors/adis16405.toml"),
     )
     .expect("adis16405.toml")

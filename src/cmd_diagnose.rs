@@ -174,7 +174,7 @@ fn log_channels(log: &logio::Log) -> Result<LogInput<'_>> {
 }
 
 fn run_inner(args: &Args) -> Result<()> {
-    let model = SensorModel::load(&args.model)?;
+    let model = crate::files::sensor_model(&args.model)?;
     let mut logs = Vec::with_capacity(args.logs.len());
     for path in &args.logs {
         let log = args.log_args.read(path)?;
@@ -340,8 +340,8 @@ fn corrected_model(
         );
     }
     // In the units and conventions of the input model (spec-sheet units where it has none).
-    let style = std::fs::read_to_string(model_path)
-        .map(|text| noise::UnitStyle::from_config_text(&text))
+    let style = crate::files::read_text(model_path)
+        .map(|file| noise::UnitStyle::from_config_text(&file.text))
         .unwrap_or_default();
     out.push_str(&result.model_final.to_toml_string_styled(&style));
     if let Some(f) = fitted_on {
@@ -401,12 +401,12 @@ fn drift_line(d: &DriftRow, heading: bool, horizontal: bool) -> String {
             format!("{:>11} {:>11}", "-", "-")
         } else {
             let h = if heading {
-                crate::fmt::channel_value("heading_rad", s.heading_rms_rad)
+                crate::fmt::quantity_value("heading_rad", s.heading_rms_rad)
             } else {
                 "n/a".into()
             };
             let p = if horizontal {
-                crate::fmt::channel_value("pos_horizontal_m", s.horizontal_rms_m)
+                crate::fmt::quantity_value("pos_horizontal_m", s.horizontal_rms_m)
             } else {
                 "n/a".into()
             };
@@ -519,7 +519,7 @@ fn drift_check_text(result: &Diagnosis) -> String {
             let Some(z1) = h1.quantities.get(q) else {
                 continue;
             };
-            let v = |x: f64| crate::fmt::channel_value(q, x);
+            let v = |x: f64| crate::fmt::quantity_value(q, x);
             let _ = writeln!(
                 s,
                 "  {:>8} {:<18} measured {:>11}  model before {:>11} [{}, {}] {:<6} z {:>6.2}  after {:>11} [{}, {}] {:<6} z {:>6.2}",
@@ -703,7 +703,7 @@ fn drift_check_markdown(result: &Diagnosis) -> String {
             let Some(z1) = h1.quantities.get(q) else {
                 continue;
             };
-            let v = |x: f64| crate::fmt::channel_value(q, x);
+            let v = |x: f64| crate::fmt::quantity_value(q, x);
             let _ = writeln!(
                 s,
                 "| {} | {q} | {} | {} [{}, {}] | {} ({:.2}) | {} [{}, {}] | {} ({:.2}) |",

@@ -33,7 +33,7 @@ mod ziggurat;
 
 pub use channel::{Channel, ImuChannels, AXIS_NAMES};
 pub use config::{is_noise_file_text, utf8_text, ConfigError, UnitStyle};
-pub use effect::{FilterError, Sensor, TermFilter};
+pub use effect::{Sensor, TermFilter, TermSelector, TermSelectorError};
 pub use law_source::{LawSource, LawSourceContext};
 pub use model::{AxisModel, SensorModel, TriadModel};
 pub use model_error::ModelError;
