@@ -13,7 +13,7 @@ const SAMPLES: usize = 1 << 16;
 const DT_S: f64 = 0.01;
 
 fn adis() -> SensorModel {
-    SensorModel::load(
+    imudrift::files::sensor_model(
         &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/sensors/adis16405.toml"),
     )
     .expect("adis16405.toml")
@@ -48,7 +48,7 @@ fn bench(c: &mut Criterion) {
     group.bench_function("whole_workflow_hidden_rrw", |b| {
         let input = LogInput {
             dt_s: DT_S,
-            channels: log.0.each_ref().map(|c| Some(c.as_slice())),
+            channels: noise::ImuChannels(log.0.each_ref().map(|c| Some(c.as_slice()))),
             temperature_c: None,
         };
         let settings = Settings {

@@ -11,7 +11,7 @@ use std::hint::black_box;
 const SAMPLES: u64 = 100_000;
 
 fn mtx() -> SensorModel {
-    SensorModel::load(
+    imudrift::files::sensor_model(
         &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/sensors/mtx.toml"),
     )
     .expect("mtx.toml")

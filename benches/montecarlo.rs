@@ -6,14 +6,14 @@ use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use montecarlo::experiment::{Experiment, Overrides};
 use montecarlo::run_range;
 use montecarlo::scenario::Scenario;
-use noise::SensorModel;
+use noise::{Effect, Sensor, TermSelector};
 
-fn experiment(only: Option<Vec<String>>) -> Experiment {
+fn experiment(only: Option<Vec<TermSelector>>) -> Experiment {
     let root = env!("CARGO_MANIFEST_DIR");
     let text =
         std::fs::read_to_string(format!("{root}/configs/scenarios/mtx-static-60s.toml")).unwrap();
     let scenario = Scenario::from_toml_str(&text, "mtx-static-60s.toml").unwrap();
-    let model = SensorModel::load(std::path::Path::new(&format!(
+    let model = imudrift::files::sensor_model(std::path::Path::new(&format!(
         "{root}/configs/sensors/mtx.toml"
     )))
     .unwrap();
@@ -42,8 +42,8 @@ fn bench(c: &mut Criterion) {
         (
             "white_noise_only",
             Some(vec![
-                "gyro.white_noise".to_string(),
-                "accel.white_noise".to_string(),
+                TermSelector::term(Sensor::Gyro, Effect::WhiteNoise),
+                TermSelector::term(Sensor::Accel, Effect::WhiteNoise),
             ]),
         ),
     ] {

@@ -86,12 +86,25 @@ pub fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
         .context("cannot start the worker threads")
 }
 
-/// The term switches of `--only a,b` and `--without c` (comma lists in every command).
-pub fn term_filter(only: Option<&[String]>, without: &[String]) -> Result<noise::TermFilter> {
-    Ok(noise::TermFilter::parse(
-        only.map(|v| v.join(",")).as_deref(),
-        (!without.is_empty()).then(|| without.join(",")).as_deref(),
-    )?)
+/// A term filter as the options that make it (for reports), e.g. `--without gyro.white_noise`:
+/// each list as `sensor.effect` items in order.
+pub fn describe_filter(filter: &noise::TermFilter) -> String {
+    let list = |terms: &[(noise::Sensor, noise::Effect)]| {
+        terms
+            .iter()
+            .map(|(s, e)| format!("{s}.{e}"))
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    let mut parts = Vec::new();
+    if let Some(only) = filter.only_terms() {
+        parts.push(format!("--only {}", list(&only)));
+    }
+    let without = filter.without_terms();
+    if !without.is_empty() {
+        parts.push(format!("--without {}", list(&without)));
+    }
+    parts.join(" ")
 }
 
 /// The value parser of a flag whose values are the names of a library's enum (`all` every
@@ -141,4 +154,20 @@ pub fn grid(text: &str) -> std::result::Result<GridArg, String> {
         text: text.to_string(),
         grid,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_filter_is_described_as_its_options() {
+        let item = |s: &str| noise::TermSelector::parse(s).unwrap();
+        assert_eq!(describe_filter(&noise::TermFilter::all()), "");
+        let f = noise::TermFilter::new(Some(&[item("gyro.scale_factor")]), &[item("white_noise")]);
+        assert_eq!(
+            describe_filter(&f),
+            "--only gyro.scale_factor --without gyro.white_noise,accel.white_noise"
+        );
+    }
 }

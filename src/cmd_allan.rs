@@ -137,24 +137,7 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
     let log = args.log_args.read(&args.log)?;
     eprintln!("{}: {}", log.source, log_input::mapping_text(&log));
     stage("read + parse");
-    let names: Vec<String> = if args.channels.is_empty() {
-        log.order
-            .iter()
-            .filter(|n| n.as_str() != "temp")
-            .cloned()
-            .collect()
-    } else {
-        for c in &args.channels {
-            if !log.channels.contains_key(c) {
-                bail!(
-                    "--channels: {}: no channel {c:?} (channels: {})",
-                    log.source,
-                    log.order.join(", ")
-                );
-            }
-        }
-        args.channels.clone()
-    };
+    let names = channel_names(args, &log)?;
     crate::log_input::refuse_constant(
         &log,
         names.iter().map(String::as_str),
@@ -175,21 +158,7 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
         .map(|(name, data)| analyse(data, &name, dt_s, est, grid, opts, &stage))
         .collect();
     stage("all channels");
-    for r in &results {
-        let usable = r.points.iter().filter(|p| p.woodman_ok()).count();
-        if usable < MIN_USABLE_TAUS {
-            bail!(
-                "{}: {samples} samples give {usable} averaging time(s) with at least 9 intervals (Woodman's rule) for channel {}; an Allan analysis needs at least {MIN_USABLE_TAUS}: use a longer log{}",
-                log.source,
-                r.name,
-                if r.points.is_empty() {
-                    " (the --grid has no averaging factor this log can hold)"
-                } else {
-                    ""
-                }
-            );
-        }
-    }
+    check_usable(&log, samples, &results)?;
     let table = tables(&log, samples, &results, est);
     let doc = json_document(
         &log,
@@ -217,23 +186,78 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
         log.topic.as_deref(),
     )?;
     if let Some(dir) = &args.out {
-        let _set = output::begin_set(dir)?;
-        output::write_string(&dir.join("allan.csv"), &csv(&results))?;
-        output::write_string(
-            &dir.join("allan.json"),
-            &serde_json::to_string_pretty(&doc)?,
-        )?;
-        let files = svg_names(results.iter().map(|r| r.name.as_str()));
-        for (r, name) in results.iter().zip(&files) {
-            output::write_string(&dir.join(name), &plot(r, est, &log.source).to_svg())?;
-        }
-        stage("files written");
-        eprintln!(
-            "wrote allan.csv, allan.json and {} to {}",
-            files.join(", "),
-            dir.display()
-        );
+        write_files(dir, &log, &results, est, &doc, &stage)?;
     }
+    Ok(())
+}
+
+/// The channels to analyse: `--channels` (each must be in the log), else every channel but the
+/// temperature, in log order.
+fn channel_names(args: &Args, log: &Log) -> Result<Vec<String>> {
+    if args.channels.is_empty() {
+        return Ok(log
+            .order
+            .iter()
+            .filter(|n| n.as_str() != "temp")
+            .cloned()
+            .collect());
+    }
+    for c in &args.channels {
+        if !log.channels.contains_key(c) {
+            bail!(
+                "--channels: {}: no channel {c:?} (channels: {})",
+                log.source,
+                log.order.join(", ")
+            );
+        }
+    }
+    Ok(args.channels.clone())
+}
+
+/// Refuse a curve with fewer than [`MIN_USABLE_TAUS`] averaging times that have at least 9
+/// intervals (Woodman's rule).
+fn check_usable(log: &Log, samples: usize, results: &[ChannelResult]) -> Result<()> {
+    for r in results {
+        let usable = r.points.iter().filter(|p| p.woodman_ok()).count();
+        if usable < MIN_USABLE_TAUS {
+            bail!(
+                "{}: {samples} samples give {usable} averaging time(s) with at least 9 intervals (Woodman's rule) for channel {}; an Allan analysis needs at least {MIN_USABLE_TAUS}: use a longer log{}",
+                log.source,
+                r.name,
+                if r.points.is_empty() {
+                    " (the --grid has no averaging factor this log can hold)"
+                } else {
+                    ""
+                }
+            );
+        }
+    }
+    Ok(())
+}
+
+/// `--out DIR`: allan.csv, allan.json and one SVG per channel, as one set (`stage` marks the
+/// files written for `--timing`).
+fn write_files(
+    dir: &std::path::Path,
+    log: &Log,
+    results: &[ChannelResult],
+    est: Estimator,
+    doc: &Value,
+    stage: &dyn Fn(&str),
+) -> Result<()> {
+    let _set = output::begin_set(dir)?;
+    output::write_string(&dir.join("allan.csv"), &csv(results))?;
+    output::write_string(&dir.join("allan.json"), &serde_json::to_string_pretty(doc)?)?;
+    let files = svg_names(results.iter().map(|r| r.name.as_str()));
+    for (r, name) in results.iter().zip(&files) {
+        output::write_string(&dir.join(name), &plot(r, est, &log.source).to_svg())?;
+    }
+    stage("files written");
+    eprintln!(
+        "wrote allan.csv, allan.json and {} to {}",
+        files.join(", "),
+        dir.display()
+    );
     Ok(())
 }
 
@@ -271,103 +295,114 @@ fn tables(log: &Log, samples: usize, results: &[ChannelResult], est: Estimator) 
     );
     for r in results {
         let units = crate::fmt::allan_units(r.unit);
-        let (dev_scale, dev_unit) = (&units[0].0, &units[0].1);
         let _ = writeln!(
             s,
-            "\nchannel {} (deviation in {dev_unit}; JSON and CSV in {})",
-            r.name, r.unit
+            "\nchannel {} (deviation in {}; JSON and CSV in {})",
+            r.name, units[0].1, r.unit
         );
-        let _ = writeln!(
-            s,
-            "{:>10} {:>9} {:>10} {:>3} {:>9} {:>11} {:>11} {:>11}",
-            "tau", "m", "terms", "a", "edf", "dev_lo", "dev", "dev_hi"
-        );
-        let d = |v: f64| crate::fmt::sig(v * dev_scale, 4);
-        for p in &r.points {
-            let flag = if est == Estimator::NonOverlapping && !p.woodman_ok() {
-                " <9 bins"
-            } else {
-                ""
-            };
-            let _ = writeln!(
-                s,
-                "{:>10} {:>9} {:>10} {:>3} {:>9} {:>11} {:>11} {:>11}{flag}",
-                crate::fmt::time(p.tau_s),
-                p.m,
-                p.n_terms,
-                p.alpha,
-                crate::fmt::sig(p.edf, 3),
-                d(p.lo),
-                d(p.dev),
-                d(p.hi)
-            );
-        }
-        let Some(f) = &r.fit else {
-            let _ = writeln!(
-                s,
-                "IEEE 952 fit: not done for {} (the model's closed forms are those of the Allan variance)",
-                est.name()
-            );
-            continue;
-        };
-        let unit = r.unit;
-        let _ = writeln!(
-            s,
-            "IEEE 952 fit (weighted NNLS in ln avar, 1-sigma; reduced chi2 {:.2}, model error {:.1}%):",
-            f.reduced_chi2,
-            100.0 * f.model_error
-        );
-        let si_units = [
-            format!("{unit}*s"),
-            format!("{unit}*sqrt(s)"),
-            unit.to_string(),
-            format!("{unit}/sqrt(s)"),
-            format!("{unit}/s"),
-        ];
-        let labels = [
-            "Q quantisation",
-            "N white (ARW/VRW)",
-            "B bias instability",
-            "K rate random walk",
-            "R rate ramp",
-        ];
-        for (i, (t, label)) in f.terms().iter().zip(labels).enumerate() {
-            let (scale, shown) = (&units[i + 1].0, &units[i + 1].1);
-            match t {
-                Some(t) => {
-                    let _ = writeln!(
-                        s,
-                        "  {label:<20} {} +- {} {shown}   ({:.4e} {})",
-                        crate::fmt::sig(t.value * scale, 4),
-                        crate::fmt::sig(t.sigma * scale, 2),
-                        t.value,
-                        si_units[i]
-                    );
-                }
-                None => {
-                    let _ = writeln!(s, "  {label:<20} not present");
-                }
-            }
-        }
-        for w in warnings(r) {
-            let _ = writeln!(s, "warning: {}: {w}", r.name);
-        }
-        let rd = &f.readings;
-        let _ = writeln!(
-            s,
-            "readings: ARW (-1/2 line at 1 s) {} {}; bias instability min {} {} at tau = {} (IEEE B = min/0.664 = {} {}); RRW (+1/2 line at 3 s) {} {}",
-            crate::fmt::sig(rd.arw_at_1s * units[2].0, 4),
-            units[2].1,
-            crate::fmt::sig(rd.bi_min * units[3].0, 4),
-            units[3].1,
-            crate::fmt::time(rd.bi_min_tau_s),
-            crate::fmt::sig(rd.bi_ieee * units[3].0, 4),
-            units[3].1,
-            crate::fmt::sig(rd.rrw_at_3s * units[4].0, 4),
-            units[4].1
-        );
+        points_table(&mut s, r, est, &units);
+        fit_lines(&mut s, r, est, &units);
     }
     s
+}
+
+/// One channel's deviation at every tau with its interval, in spec-sheet units (`units[0]`).
+fn points_table(s: &mut String, r: &ChannelResult, est: Estimator, units: &[(f64, String); 6]) {
+    let dev_scale = &units[0].0;
+    let _ = writeln!(
+        s,
+        "{:>10} {:>9} {:>10} {:>3} {:>9} {:>11} {:>11} {:>11}",
+        "tau", "m", "terms", "a", "edf", "dev_lo", "dev", "dev_hi"
+    );
+    let d = |v: f64| crate::fmt::sig(v * dev_scale, 4);
+    for p in &r.points {
+        let flag = if est == Estimator::NonOverlapping && !p.woodman_ok() {
+            " <9 bins"
+        } else {
+            ""
+        };
+        let _ = writeln!(
+            s,
+            "{:>10} {:>9} {:>10} {:>3} {:>9} {:>11} {:>11} {:>11}{flag}",
+            crate::fmt::time(p.tau_s),
+            p.m,
+            p.n_terms,
+            p.alpha,
+            crate::fmt::sig(p.edf, 3),
+            d(p.lo),
+            d(p.dev),
+            d(p.hi)
+        );
+    }
+}
+
+/// One channel's IEEE 952 fit (each coefficient in its spec-sheet unit and in SI), its warnings
+/// and the spec-sheet readings; only the Allan-variance estimators have one.
+fn fit_lines(s: &mut String, r: &ChannelResult, est: Estimator, units: &[(f64, String); 6]) {
+    let Some(f) = &r.fit else {
+        let _ = writeln!(
+            s,
+            "IEEE 952 fit: not done for {} (the model's closed forms are those of the Allan variance)",
+            est.name()
+        );
+        return;
+    };
+    let unit = r.unit;
+    let _ = writeln!(
+        s,
+        "IEEE 952 fit (weighted NNLS in ln avar, 1-sigma; reduced chi2 {:.2}, model error {:.1}%):",
+        f.reduced_chi2,
+        100.0 * f.model_error
+    );
+    let si_units = [
+        format!("{unit}*s"),
+        format!("{unit}*sqrt(s)"),
+        unit.to_string(),
+        format!("{unit}/sqrt(s)"),
+        format!("{unit}/s"),
+    ];
+    let labels = [
+        "Q quantisation",
+        "N white (ARW/VRW)",
+        "B bias instability",
+        "K rate random walk",
+        "R rate ramp",
+    ];
+    for (i, (t, label)) in f.terms().iter().zip(labels).enumerate() {
+        let (scale, shown) = (&units[i + 1].0, &units[i + 1].1);
+        match t {
+            Some(t) => {
+                let _ = writeln!(
+                    s,
+                    "  {label:<20} {} +- {} {shown}   ({:.4e} {})",
+                    crate::fmt::sig(t.value * scale, 4),
+                    crate::fmt::sig(t.sigma * scale, 2),
+                    t.value,
+                    si_units[i]
+                );
+            }
+            None => {
+                let _ = writeln!(s, "  {label:<20} not present");
+            }
+        }
+    }
+    for w in warnings(r) {
+        let _ = writeln!(s, "warning: {}: {w}", r.name);
+    }
+    let rd = &f.readings;
+    let _ = writeln!(
+        s,
+        "readings: ARW (-1/2 line at 1 s) {} {}; bias instability min {} {} at tau = {} (IEEE B = min/0.664 = {} {}); RRW (+1/2 line at 3 s) {} {}",
+        crate::fmt::sig(rd.arw_at_1s * units[2].0, 4),
+        units[2].1,
+        crate::fmt::sig(rd.bi_min * units[3].0, 4),
+        units[3].1,
+        crate::fmt::time(rd.bi_min_tau_s),
+        crate::fmt::sig(rd.bi_ieee * units[3].0, 4),
+        units[3].1,
+        crate::fmt::sig(rd.rrw_at_3s * units[4].0, 4),
+        units[4].1
+    );
 }
 
 fn num(v: f64) -> Value {

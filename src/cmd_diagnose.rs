@@ -154,9 +154,8 @@ pub fn run(args: Args) -> Result<()> {
 /// The channels of a log as diagnose reads them, once checked: a log without a gyro or
 /// accelerometer channel, or with a constant one, is refused.
 fn log_channels(log: &logio::Log) -> Result<LogInput<'_>> {
-    let channels: [Option<&[f64]>; 6] =
-        std::array::from_fn(|c| log.channels.get(CHANNELS[c]).map(Vec::as_slice));
-    if channels.iter().all(Option::is_none) {
+    let channels = noise::ImuChannels::from_fn(|c| log.channels.get(c.name()).map(Vec::as_slice));
+    if channels.values().iter().all(Option::is_none) {
         bail!(
             "{}: no gyro or accelerometer channel (expected columns gx gy gz ax ay az, or map them with --col gx=NAME; columns: {})",
             log.source,
@@ -177,7 +176,7 @@ fn log_channels(log: &logio::Log) -> Result<LogInput<'_>> {
 }
 
 fn run_inner(args: &Args) -> Result<()> {
-    let model = SensorModel::load(&args.model)?;
+    let model = crate::files::sensor_model(&args.model)?;
     let mut logs = Vec::with_capacity(args.logs.len());
     for path in &args.logs {
         let log = args.log_args.read(path)?;
@@ -250,7 +249,9 @@ fn run_inner(args: &Args) -> Result<()> {
         let held = args.log_args.read(path)?;
         let input = LogInput {
             dt_s: held.dt_s(),
-            channels: std::array::from_fn(|c| held.channels.get(CHANNELS[c]).map(Vec::as_slice)),
+            channels: noise::ImuChannels::from_fn(|c| {
+                held.channels.get(c.name()).map(Vec::as_slice)
+            }),
             temperature_c: held.channels.get("temp").map(Vec::as_slice),
         };
         let gaps = result
@@ -349,8 +350,8 @@ fn corrected_model(
         );
     }
     // In the units and conventions of the input model (spec-sheet units where it has none).
-    let style = std::fs::read_to_string(model_path)
-        .map(|text| noise::UnitStyle::from_config_text(&text))
+    let style = crate::files::read_text(model_path)
+        .map(|file| noise::UnitStyle::from_config_text(&file.text))
         .unwrap_or_default();
     out.push_str(&result.model_final.to_toml_string_styled(&style));
     if let Some(f) = fitted_on {
@@ -410,12 +411,12 @@ fn drift_line(d: &DriftRow, heading: bool, horizontal: bool) -> String {
             format!("{:>11} {:>11}", "-", "-")
         } else {
             let h = if heading {
-                crate::fmt::channel_value("heading_rad", s.heading_rms_rad)
+                crate::fmt::quantity_value("heading_rad", s.heading_rms_rad)
             } else {
                 "n/a".into()
             };
             let p = if horizontal {
-                crate::fmt::channel_value("pos_horizontal_m", s.horizontal_rms_m)
+                crate::fmt::quantity_value("pos_horizontal_m", s.horizontal_rms_m)
             } else {
                 "n/a".into()
             };
@@ -528,7 +529,7 @@ fn drift_check_text(result: &Diagnosis) -> String {
             let Some(z1) = h1.quantities.get(q) else {
                 continue;
             };
-            let v = |x: f64| crate::fmt::channel_value(q, x);
+            let v = |x: f64| crate::fmt::quantity_value(q, x);
             let _ = writeln!(
                 s,
                 "  {:>8} {:<18} measured {:>11}  model before {:>11} [{}, {}] {:<6} z {:>6.2}  after {:>11} [{}, {}] {:<6} z {:>6.2}",
@@ -712,7 +713,7 @@ fn drift_check_markdown(result: &Diagnosis) -> String {
             let Some(z1) = h1.quantities.get(q) else {
                 continue;
             };
-            let v = |x: f64| crate::fmt::channel_value(q, x);
+            let v = |x: f64| crate::fmt::quantity_value(q, x);
             let _ = writeln!(
                 s,
                 "| {} | {q} | {} | {} [{}, {}] | {} ({:.2}) | {} [{}, {}] | {} ({:.2}) |",

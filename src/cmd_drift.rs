@@ -2,6 +2,7 @@
 //! the model predicts under one protocol, with intervals and a verdict (docs/drift.md,
 //! docs/cli.md for the JSON).
 
+use crate::files::{self, TextFile};
 use crate::log_input::{self, LogArgs};
 use crate::output::write_string;
 use crate::plot::{Band, LogLogPlot, Series};
@@ -13,7 +14,6 @@ use diagnose::drift_check::{
 use diagnose::fitted_on::FittedOn;
 use diagnose::protocol::{Calibration, Initialisation, Protocol, Quantity};
 use diagnose::LogInput;
-use noise::SensorModel;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -184,19 +184,18 @@ pub fn run(args: Args) -> Result<()> {
 
 /// The data the model's levels were fitted on, from its `[fitted_on]` table (None for a noise
 /// file, a model without the table, or with `--exact-parameters`).
-fn fitted_on(args: &Args) -> Result<Option<FittedOn>> {
-    let name = args.model.display().to_string();
-    let text = std::fs::read(&args.model).with_context(|| format!("cannot read {name}"))?;
-    let text = noise::utf8_text(text, &name)?;
-    if args.exact_parameters || noise::is_noise_file_text(&text, &name) {
+fn fitted_on(args: &Args, model_file: &TextFile) -> Result<Option<FittedOn>> {
+    let TextFile { name, text } = model_file;
+    if args.exact_parameters || noise::is_noise_file_text(text, name) {
         return Ok(None);
     }
-    FittedOn::from_model_text(&text).with_context(|| name.clone())
+    FittedOn::from_model_text(text).with_context(|| name.clone())
 }
 
 fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
-    let model = SensorModel::load(&args.model)?;
-    let fitted = fitted_on(args)?;
+    let model_file = files::read_text(&args.model)?;
+    let model = files::sensor_model_of(&model_file)?;
+    let fitted = fitted_on(args, &model_file)?;
     let opts = args.log_args.options()?;
     let mut logs = Vec::new();
     for path in &args.logs {
@@ -213,7 +212,7 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
         .iter()
         .map(|l| LogInput {
             dt_s: l.dt_s(),
-            channels: std::array::from_fn(|c| l.channels.get(CHANNELS[c]).map(Vec::as_slice)),
+            channels: noise::ImuChannels::from_fn(|c| l.channels.get(c.name()).map(Vec::as_slice)),
             temperature_c: None,
         })
         .collect();
@@ -233,7 +232,7 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
     }
     if inputs
         .iter()
-        .any(|i| i.channels.iter().all(Option::is_none))
+        .any(|i| i.channels.values().iter().all(Option::is_none))
     {
         bail!("a log has no gyro or accelerometer channel");
     }
@@ -313,7 +312,7 @@ fn text(r: &DriftCheck, logs: &[String], model: &std::path::Path, elapsed_s: f64
     for h in &r.horizons {
         for q in Quantity::ALL {
             let c = &h.channels[q.name()];
-            let v = |x: f64| crate::fmt::channel_value(q.name(), x);
+            let v = |x: f64| crate::fmt::quantity_value(q.name(), x);
             let measured = c
                 .measured
                 .map(|m| format!("{} [{}, {}]", v(m.rms), v(m.rms_lo), v(m.rms_hi)))

@@ -39,11 +39,11 @@ pub struct Args {
     #[arg(long, default_value_t = 0)]
     pub run: u64,
     /// Only these terms, e.g. gyro.white_noise,accel.constant_bias (or `white_noise`, `gyro`)
-    #[arg(long, value_delimiter = ',')]
-    pub only: Option<Vec<String>>,
+    #[arg(long, value_delimiter = ',', value_parser = noise::TermSelector::parse)]
+    pub only: Option<Vec<noise::TermSelector>>,
     /// All terms but these, same syntax as --only
-    #[arg(long, value_delimiter = ',')]
-    pub without: Vec<String>,
+    #[arg(long, value_delimiter = ',', value_parser = noise::TermSelector::parse)]
+    pub without: Vec<noise::TermSelector>,
     /// Worker threads (default: all cores); the output does not depend on it
     #[arg(long)]
     pub threads: Option<usize>,
@@ -67,8 +67,8 @@ const MAX_RATE_HZ: f64 = 1e6;
 const BYTES_PER_ROW: f64 = 8.0 * 25.0;
 
 fn plan(args: &Args) -> Result<Plan> {
-    let model = SensorModel::load(&args.sensor)?;
-    let filter = crate::cli::term_filter(args.only.as_deref(), &args.without)?;
+    let model = crate::files::sensor_model(&args.sensor)?;
+    let filter = noise::TermFilter::new(args.only.as_deref(), &args.without);
     check_rate_hz("--rate", args.rate)?;
     let duration_s = args.duration;
     let samples = (duration_s * args.rate).round();
@@ -169,7 +169,7 @@ pub fn run(args: Args) -> Result<()> {
             "rate_hz": plan.rate_hz,
             "samples": plan.samples,
             "duration_s": plan.samples as f64 / plan.rate_hz,
-            "terms": plan.filter.describe(),
+            "terms": crate::cli::describe_filter(&plan.filter),
             "elapsed_s": elapsed_s,
         });
         crate::output::print_stdout(&format!("{doc}\n"))?;
@@ -197,7 +197,7 @@ fn write_log(
         if plan.filter.is_all() {
             String::new()
         } else {
-            format!(", terms {}", plan.filter.describe())
+            format!(", terms {}", crate::cli::describe_filter(&plan.filter))
         }
     )?;
     writeln!(

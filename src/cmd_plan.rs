@@ -106,7 +106,7 @@ fn plan_axis(
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let model = SensorModel::load(&args.sensor).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let model = crate::files::sensor_model(&args.sensor)?;
     let target = parse_fraction(&args.uncertainty)?;
     let rate_hz = check_rate_hz("--rate", args.rate)?;
     if !(MIN_RATE_HZ..=MAX_RATE_HZ).contains(&rate_hz) {

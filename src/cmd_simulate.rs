@@ -1,4 +1,5 @@
-//! `imudrift simulate SCENARIO.toml`: Monte Carlo drift run; every channel beside its growth law.
+//! `imudrift simulate SCENARIO.toml`: Monte Carlo drift run; every navigation-error quantity beside
+//! its growth law.
 
 use crate::cli::pool;
 use crate::experiment_run::{
@@ -9,8 +10,8 @@ use crate::output::{ensure_dir, write_atomic, write_string};
 use crate::plot::{Band, LogLogPlot, Series, PALETTE};
 use anyhow::{bail, Context, Result};
 use montecarlo::ablation::{self, AblationRow};
-use montecarlo::channels::Channel;
 use montecarlo::experiment::{Experiment, Overrides};
+use montecarlo::nav_quantity::NavQuantity;
 use montecarlo::report::DriftReport;
 use montecarlo::runner::Shard;
 use montecarlo::shard::{ShardFile, SHARD_FORMAT};
@@ -46,11 +47,11 @@ pub struct Args {
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Keep only these error terms, e.g. `gyro.white_noise,accel.white_noise`
-    #[arg(long, value_delimiter = ',')]
-    pub only: Option<Vec<String>>,
+    #[arg(long, value_delimiter = ',', value_parser = noise::TermSelector::parse)]
+    pub only: Option<Vec<noise::TermSelector>>,
     /// Switch these error terms off, e.g. `gyro.bias_instability`
-    #[arg(long, value_delimiter = ',')]
-    pub without: Vec<String>,
+    #[arg(long, value_delimiter = ',', value_parser = noise::TermSelector::parse)]
+    pub without: Vec<noise::TermSelector>,
     /// Run only the deterministic slice i/k of the runs (0 <= i < k) and write a shard file for
     /// `imudrift merge` into --out DIR
     #[arg(long, value_name = "I/K")]
@@ -89,71 +90,8 @@ pub fn run(args: Args) -> Result<()> {
         Vec::new()
     };
     if let Some(text) = &args.shard {
-        let shard = Shard::parse(text).context("--shard")?;
-        let Some(dir) = &args.out else {
-            bail!("--shard: expected --out DIR for the shard file");
-        };
-        let range = shard.runs(exp.runs);
-        let shard_runs = (range.end - range.start) * (1 + 2 * subs.len() as u64);
-        check_memory(&exp, shard_runs)?;
-        crate::experiment_run::check_experiment_work(&exp, shard_runs)?;
-        // The file without its values yet: its experiment is checked against the directory's
-        // other shards before any work.
-        let mut file = ShardFile {
-            format: SHARD_FORMAT.into(),
-            scenario_source: inputs.scenario_source,
-            scenario_toml: inputs.scenario_toml,
-            sensor_source: inputs.sensor_source,
-            sensor_toml: inputs.sensor_toml,
-            runs: args.runs,
-            seed: args.seed,
-            only: args.only,
-            without: args.without,
-            shard,
-            matrix: montecarlo::RunMatrix::new(0, 0),
-            failures: Vec::new(),
-            ablation: with_ablation.then(Vec::new),
-        };
-        crate::experiment_run::refuse_other_experiments(dir, &file, &exp)?;
-        let result = pool.install(|| execute(&exp, range.clone(), "shard"));
-        // The shard's slice of every ablation sub-experiment, so `merge` rebuilds the table.
-        let batch = |e: &Experiment, label: &str| {
-            let r = pool.install(|| execute(e, range.clone(), label));
-            ablation::Batch {
-                matrix: r.matrix,
-                failures: r.failures,
-            }
-        };
-        file.ablation = with_ablation.then(|| {
-            subs.iter()
-                .map(|t| ablation::TermBatches {
-                    term: t.term.clone(),
-                    only: batch(&t.only, &t.term),
-                    without: batch(&t.without, &t.term),
-                })
-                .collect()
-        });
-        file.matrix = result.matrix;
-        file.failures = result.failures;
-        ensure_dir(dir)?;
-        let path = dir.join(format!("shard-{}-of-{}.json", shard.index, shard.count));
-        write_atomic(&path, |w| Ok(serde_json::to_writer(w, &file)?))?;
-        report_failures(&file.failures);
-        eprintln!(
-            "shard {}/{}: runs {:?} of {}, {} finished{}; wrote {}",
-            shard.index,
-            shard.count,
-            shard.runs(exp.runs),
-            exp.runs,
-            file.matrix.runs(),
-            if with_ablation {
-                format!(" (and {} ablation sub-runs)", 2 * subs.len())
-            } else {
-                String::new()
-            },
-            path.display()
-        );
-        return Ok(());
+        let subs = with_ablation.then_some(subs.as_slice());
+        return run_shard(&args, text, inputs, &exp, subs, &pool);
     }
     check_memory(&exp, exp.runs)?;
     crate::experiment_run::check_experiment_work(&exp, exp.runs * (1 + 2 * subs.len() as u64))?;
@@ -181,6 +119,82 @@ pub fn run(args: Args) -> Result<()> {
     )
 }
 
+/// `--shard i/k`: run the slice of the runs (and of every ablation sub-experiment, `subs`) and
+/// write the shard file `merge` reads.
+fn run_shard(
+    args: &Args,
+    text: &str,
+    inputs: crate::experiment_run::Inputs,
+    exp: &Experiment,
+    subs: Option<&[ablation::TermExperiments]>,
+    pool: &rayon::ThreadPool,
+) -> Result<()> {
+    let shard = Shard::parse(text).context("--shard")?;
+    let Some(dir) = &args.out else {
+        bail!("--shard: expected --out DIR for the shard file");
+    };
+    let range = shard.runs(exp.runs);
+    let shard_runs = (range.end - range.start) * (1 + 2 * subs.map_or(0, <[_]>::len) as u64);
+    check_memory(exp, shard_runs)?;
+    crate::experiment_run::check_experiment_work(exp, shard_runs)?;
+    // The file without its values yet: its experiment is checked against the directory's other
+    // shards before any work.
+    let mut file = ShardFile {
+        format: SHARD_FORMAT.into(),
+        scenario_source: inputs.scenario_source,
+        scenario_toml: inputs.scenario_toml,
+        sensor_source: inputs.sensor_source,
+        sensor_toml: inputs.sensor_toml,
+        runs: args.runs,
+        seed: args.seed,
+        only: args.only.clone(),
+        without: args.without.clone(),
+        shard,
+        matrix: montecarlo::RunMatrix::new(0, 0),
+        failures: Vec::new(),
+        ablation: subs.map(|_| Vec::new()),
+    };
+    crate::experiment_run::refuse_other_experiments(dir, &file, exp)?;
+    let result = pool.install(|| execute(exp, range.clone(), "shard"));
+    // The shard's slice of every ablation sub-experiment, so `merge` rebuilds the table.
+    let batch = |e: &Experiment, label: &str| {
+        let r = pool.install(|| execute(e, range.clone(), label));
+        ablation::Batch {
+            matrix: r.matrix,
+            failures: r.failures,
+        }
+    };
+    file.ablation = subs.map(|subs| {
+        subs.iter()
+            .map(|t| ablation::TermBatches {
+                term: t.term.clone(),
+                only: batch(&t.only, &t.term),
+                without: batch(&t.without, &t.term),
+            })
+            .collect()
+    });
+    file.matrix = result.matrix;
+    file.failures = result.failures;
+    ensure_dir(dir)?;
+    let path = dir.join(format!("shard-{}-of-{}.json", shard.index, shard.count));
+    write_atomic(&path, |w| Ok(serde_json::to_writer(w, &file)?))?;
+    report_failures(&file.failures);
+    eprintln!(
+        "shard {}/{}: runs {:?} of {}, {} finished{}; wrote {}",
+        shard.index,
+        shard.count,
+        shard.runs(exp.runs),
+        exp.runs,
+        file.matrix.runs(),
+        subs.map_or(String::new(), |subs| format!(
+            " (and {} ablation sub-runs)",
+            2 * subs.len()
+        )),
+        path.display()
+    );
+    Ok(())
+}
+
 fn report_failures(failures: &[montecarlo::RunFailure]) {
     for f in failures.iter().take(10) {
         eprintln!("warning: run {} failed: {}", f.run, f.message);
@@ -202,7 +216,9 @@ struct JsonOut<'a> {
 
 #[derive(Serialize)]
 struct ReferenceOut {
-    channel: String,
+    /// The quantity's name (JSON key `channel`, docs/cli.md).
+    #[serde(rename = "channel")]
+    quantity: String,
     statistic: String,
     t_s: f64,
     value: f64,
@@ -218,7 +234,7 @@ fn reference_out(report: &DriftReport, exp: &Experiment) -> Option<ReferenceOut>
         .checkpoints
         .iter()
         .min_by(|a, b| (a.t_s - r.t_s).abs().total_cmp(&(b.t_s - r.t_s).abs()))?;
-    let c = cp.channels.get(&r.channel)?;
+    let c = cp.quantities.get(&r.quantity)?;
     let simulated = match r.statistic.as_str() {
         "mean" => c.mean,
         "rms" => c.rms,
@@ -226,7 +242,7 @@ fn reference_out(report: &DriftReport, exp: &Experiment) -> Option<ReferenceOut>
         _ => c.p95,
     };
     Some(ReferenceOut {
-        channel: r.channel.clone(),
+        quantity: r.quantity.clone(),
         statistic: r.statistic.clone(),
         t_s: cp.t_s,
         value: r.value,
@@ -272,7 +288,10 @@ pub fn emit(
         let _set = crate::output::begin_set(dir)?;
         write_string(&dir.join("drift.json"), &text)?;
         write_atomic(&dir.join("drift.csv"), |w| write_csv(w, report))?;
-        write_string(&dir.join("drift.svg"), &svg(report, Channel::PosHorizontal))?;
+        write_string(
+            &dir.join("drift.svg"),
+            &svg(report, NavQuantity::PosHorizontal),
+        )?;
         eprintln!("wrote {}/drift.{{json,csv,svg}}", dir.display());
     }
     Ok(())
@@ -290,13 +309,13 @@ fn write_csv(w: &mut dyn Write, r: &DriftReport) -> Result<()> {
     )?;
     writeln!(w, "t_s,channel,mean,std,rms,p5,p50,p95,law_mean,law_std,law_rms,ratio,ratio_lo,ratio_hi,law_note")?;
     for cp in &r.checkpoints {
-        for ch in Channel::ALL {
-            let c = &cp.channels[ch.name()];
+        for q in NavQuantity::ALL {
+            let c = &cp.quantities[q.name()];
             writeln!(
                 w,
                 "{},{},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{},{},{},{},{},{},{}",
                 cp.t_s,
-                ch.name(),
+                q.name(),
                 c.mean,
                 c.std,
                 c.rms,
@@ -316,7 +335,7 @@ fn write_csv(w: &mut dyn Write, r: &DriftReport) -> Result<()> {
     Ok(())
 }
 
-fn fmt_ratio(c: &montecarlo::report::ChannelReport) -> String {
+fn fmt_ratio(c: &montecarlo::report::QuantityReport) -> String {
     match (c.ratio, c.ratio_lo, c.ratio_hi) {
         (Some(r), Some(lo), Some(hi)) => {
             let flag = if lo <= 1.0 && 1.0 <= hi { "" } else { " *" };
@@ -332,6 +351,19 @@ fn table(
     ablation: Option<&[AblationRow]>,
 ) -> String {
     let mut s = String::new();
+    horizontal_table(&mut s, r);
+    last_checkpoint_table(&mut s, r);
+    if let Some(rf) = reference {
+        reference_line(&mut s, rf);
+    }
+    if let Some(rows) = ablation {
+        ablation_tables(&mut s, r, rows);
+    }
+    s
+}
+
+/// The run's header line and the horizontal position error at every checkpoint beside its law.
+fn horizontal_table(s: &mut String, r: &DriftReport) {
     use std::fmt::Write as _;
     let _ = writeln!(
         s,
@@ -356,22 +388,27 @@ fn table(
         "{:>10} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}  ratio",
         "t", "mean", "p50", "p95", "rms", "law mean", "law rms"
     );
-    let h = Channel::PosHorizontal.name();
+    let h = NavQuantity::PosHorizontal.name();
     for cp in &r.checkpoints {
-        let c = &cp.channels[h];
+        let c = &cp.quantities[h];
         let _ = writeln!(
             s,
             "{:>10} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}  {}",
             fmt::time(cp.t_s),
-            fmt::channel_value(h, c.mean),
-            fmt::channel_value(h, c.p50),
-            fmt::channel_value(h, c.p95),
-            fmt::channel_value(h, c.rms),
-            fmt::channel_opt(h, c.law_mean),
-            fmt::channel_opt(h, c.law_rms),
+            fmt::quantity_value(h, c.mean),
+            fmt::quantity_value(h, c.p50),
+            fmt::quantity_value(h, c.p95),
+            fmt::quantity_value(h, c.rms),
+            fmt::quantity_opt(h, c.law_mean),
+            fmt::quantity_opt(h, c.law_rms),
             fmt_ratio(c)
         );
     }
+}
+
+/// Every navigation-error quantity at the last checkpoint beside its law (or why it has none).
+fn last_checkpoint_table(s: &mut String, r: &DriftReport) {
+    use std::fmt::Write as _;
     if let Some(last) = r.checkpoints.last() {
         let _ = writeln!(
             s,
@@ -383,80 +420,85 @@ fn table(
             "{:>20} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}  ratio / note",
             "channel", "mean", "std", "rms", "p95", "law mean", "law std"
         );
-        for ch in Channel::ALL {
-            let c = &last.channels[ch.name()];
+        for q in NavQuantity::ALL {
+            let c = &last.quantities[q.name()];
             let tail = match &c.law_note {
                 Some(n) if c.ratio.is_none() => n.clone(),
                 _ => fmt_ratio(c),
             };
-            let v = |x: f64| fmt::channel_value(ch.name(), x);
+            let v = |x: f64| fmt::quantity_value(q.name(), x);
             let _ = writeln!(
                 s,
                 "{:>20} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}  {}",
-                ch.name(),
+                q.name(),
                 v(c.mean),
                 v(c.std),
                 v(c.rms),
                 v(c.p95),
-                fmt::channel_opt(ch.name(), c.law_mean),
-                fmt::channel_opt(ch.name(), c.law_std),
+                fmt::quantity_opt(q.name(), c.law_mean),
+                fmt::quantity_opt(q.name(), c.law_std),
                 tail
             );
         }
     }
-    if let Some(rf) = reference {
-        let _ = writeln!(
-            s,
-            "\n{} {} at {}: simulated {}, published {} ({:+.0} %; {})",
-            rf.channel,
-            rf.statistic,
-            fmt::time(rf.t_s),
-            fmt::channel_value(&rf.channel, rf.simulated),
-            fmt::channel_value(&rf.channel, rf.value),
-            100.0 * (rf.simulated / rf.value - 1.0),
-            rf.source
-        );
-        if let Some(note) = &rf.note {
-            let _ = writeln!(s, "  {note}");
-        }
-    }
-    if let Some(rows) = ablation {
-        let spans = ablation::dominant_spans(r, rows);
-        let _ = writeln!(
-            s,
-            "\nlargest contributor to the horizontal error (term alone, mean square) vs time:"
-        );
-        for (term, from, to) in spans {
-            let _ = writeln!(s, "  {from:>9.3} s .. {to:>9.3} s  {term}");
-        }
-        let _ = writeln!(s, "\nablation at the last checkpoint (horizontal position): each term alone, and the model without it");
-        let _ = writeln!(
-            s,
-            "{:>28} {:>14} {:>16} {:>16}",
-            "term", "alone mean m", "alone share ms", "without mean m"
-        );
-        for row in rows {
-            let _ = writeln!(
-                s,
-                "{:>28} {:>14.3} {:>15.1}% {:>16.3}",
-                row.term,
-                row.only_mean_m,
-                100.0 * row.only_share,
-                row.without_mean_m
-            );
-        }
-    }
-    s
 }
 
-/// Log-log plot of one channel (shared writer, src/plot.rs): simulated mean and rms, the p5-p95
+/// The scenario's published reference beside the simulated value.
+fn reference_line(s: &mut String, rf: &ReferenceOut) {
+    use std::fmt::Write as _;
+    let _ = writeln!(
+        s,
+        "\n{} {} at {}: simulated {}, published {} ({:+.0} %; {})",
+        rf.quantity,
+        rf.statistic,
+        fmt::time(rf.t_s),
+        fmt::quantity_value(&rf.quantity, rf.simulated),
+        fmt::quantity_value(&rf.quantity, rf.value),
+        100.0 * (rf.simulated / rf.value - 1.0),
+        rf.source
+    );
+    if let Some(note) = &rf.note {
+        let _ = writeln!(s, "  {note}");
+    }
+}
+
+/// Which term dominates the horizontal error when, and each term alone / removed at the end.
+fn ablation_tables(s: &mut String, r: &DriftReport, rows: &[AblationRow]) {
+    use std::fmt::Write as _;
+    let spans = ablation::dominant_spans(r, rows);
+    let _ = writeln!(
+        s,
+        "\nlargest contributor to the horizontal error (term alone, mean square) vs time:"
+    );
+    for (term, from, to) in spans {
+        let _ = writeln!(s, "  {from:>9.3} s .. {to:>9.3} s  {term}");
+    }
+    let _ = writeln!(s, "\nablation at the last checkpoint (horizontal position): each term alone, and the model without it");
+    let _ = writeln!(
+        s,
+        "{:>28} {:>14} {:>16} {:>16}",
+        "term", "alone mean m", "alone share ms", "without mean m"
+    );
+    for row in rows {
+        let _ = writeln!(
+            s,
+            "{:>28} {:>14.3} {:>15.1}% {:>16.3}",
+            row.term,
+            row.only_mean_m,
+            100.0 * row.only_share,
+            row.without_mean_m
+        );
+    }
+}
+
+/// Log-log plot of one quantity (shared writer, src/plot.rs): simulated mean and rms, the p5-p95
 /// band, and the law's mean and rms.
-fn svg(r: &DriftReport, ch: Channel) -> String {
+fn svg(r: &DriftReport, q: NavQuantity) -> String {
     let t: Vec<f64> = r.checkpoints.iter().map(|c| c.t_s).collect();
-    let col = |f: &dyn Fn(&montecarlo::report::ChannelReport) -> f64| -> Vec<f64> {
+    let col = |f: &dyn Fn(&montecarlo::report::QuantityReport) -> f64| -> Vec<f64> {
         r.checkpoints
             .iter()
-            .map(|c| f(&c.channels[ch.name()]))
+            .map(|c| f(&c.quantities[q.name()]))
             .collect()
     };
     let nan = f64::NAN;
@@ -464,12 +506,12 @@ fn svg(r: &DriftReport, ch: Channel) -> String {
         title: format!(
             "{}: {} vs time ({} runs, seed {})",
             r.scenario,
-            ch.name(),
+            q.name(),
             r.runs_ok,
             r.seed
         ),
         x_label: "t (s)".into(),
-        y_label: ch.name().into(),
+        y_label: q.name().into(),
         series: vec![
             Series::new("simulated mean", t.clone(), col(&|c| c.mean), PALETTE[0]),
             Series::new("simulated rms", t.clone(), col(&|c| c.rms), PALETTE[2]),

@@ -9,7 +9,7 @@ use crate::experiment_run::{check_memory, execute};
 use crate::fmt;
 use crate::output::{write_atomic, write_string};
 use anyhow::{Context, Result};
-use montecarlo::channels::Channel;
+use montecarlo::nav_quantity::NavQuantity;
 use montecarlo::requirement::{evaluate, Requirement, RequirementResult, Verdict};
 use montecarlo::spec::{
     drift_experiment, drift_rows, gyro_readback, gyro_spec_values, SensorSpec, READBACK_CONFIDENCE,
@@ -63,11 +63,11 @@ pub struct Args {
     #[arg(long, value_parser = crate::cli::duration_s)]
     pub readback_duration: Option<f64>,
     /// Keep only these error terms
-    #[arg(long, value_delimiter = ',')]
-    pub only: Option<Vec<String>>,
+    #[arg(long, value_delimiter = ',', value_parser = noise::TermSelector::parse)]
+    pub only: Option<Vec<noise::TermSelector>>,
     /// Switch these error terms off
-    #[arg(long, value_delimiter = ',')]
-    pub without: Vec<String>,
+    #[arg(long, value_delimiter = ',', value_parser = noise::TermSelector::parse)]
+    pub without: Vec<noise::TermSelector>,
     /// Print one JSON document on stdout
     #[arg(long)]
     pub json: bool,
@@ -115,11 +115,11 @@ fn model_notes(model: &SensorModel) -> Vec<String> {
     notes
 }
 
-/// Whether the model has a term that drives `channel`.
-fn informs(model: &SensorModel, channel: Channel) -> bool {
+/// Whether the model has a term that drives `quantity`.
+fn informs(model: &SensorModel, quantity: NavQuantity) -> bool {
     let gyro = has_any(model, Sensor::Gyro);
     let accel = has_any(model, Sensor::Accel);
-    if channel.name().ends_with("_rad") {
+    if quantity.name().ends_with("_rad") {
         gyro
     } else {
         gyro || accel
@@ -134,7 +134,7 @@ pub fn run(args: Args) -> Result<()> {
         .map(crate::output::prepare_dir)
         .transpose()?;
     let settings = Settings::from_args(&args)?;
-    let filter = crate::cli::term_filter(args.only.as_deref(), &args.without)?;
+    let filter = noise::TermFilter::new(args.only.as_deref(), &args.without);
     let pool = pool(args.threads)?;
     let mut sensors = Vec::new();
     for path in &args.sensors {
@@ -283,9 +283,7 @@ fn compare_sensor(
         readback_duration_s: readback_duration,
     } = settings;
     let (rate, runs, readback_duration) = (*rate, *runs, *readback_duration);
-    let model = SensorModel::load(path)
-        .map_err(|e| anyhow::anyhow!("{e}"))?
-        .filtered(filter);
+    let model = crate::files::sensor_model(path)?.filtered(filter);
     let exp = drift_experiment(&model, times, rate, runs, seed)
         .with_context(|| path.display().to_string())?;
     check_memory(&exp, exp.runs)?;
@@ -330,8 +328,8 @@ fn compare_sensor(
                 .iter()
                 .position(|&t| (t - req.t_s).abs() <= 0.5 / rate)
                 .context("a requirement's time is not a checkpoint")?;
-            let values = batch.matrix.series(cp, req.channel as usize);
-            Ok(evaluate(req, values, informs(&model, req.channel)))
+            let values = batch.matrix.series(cp, req.quantity as usize);
+            Ok(evaluate(req, values, informs(&model, req.quantity)))
         })
         .collect::<Result<Vec<_>>>()?;
     Ok(SensorOut {
@@ -405,9 +403,18 @@ fn write_drift_csv(dir: &std::path::Path, doc: &SpecDoc) -> Result<()> {
     })
 }
 
+/// The text tables: the spec values (or spec vs readback), the drift, and each requirement.
 fn table(doc: &SpecDoc) -> String {
-    use std::fmt::Write as _;
     let mut s = String::new();
+    spec_table(&mut s, doc);
+    drift_table(&mut s, doc);
+    requirement_tables(&mut s, doc);
+    s
+}
+
+/// The gyro spec values per sensor and axis; with a readback, beside the values read back.
+fn spec_table(s: &mut String, doc: &SpecDoc) {
+    use std::fmt::Write as _;
     let opt = |x: Option<f64>, f: fn(f64) -> String| x.map_or("n/a".to_string(), f);
     if let Some(d) = doc.readback_duration_s {
         let _ = writeln!(
@@ -486,6 +493,11 @@ fn table(doc: &SpecDoc) -> String {
             let _ = writeln!(s, "  note: {}: {n}", sen.spec.name);
         }
     }
+}
+
+/// Heading and horizontal drift per sensor and time, simulation and law.
+fn drift_table(s: &mut String, doc: &SpecDoc) {
+    use std::fmt::Write as _;
     let _ = writeln!(
         s,
         "\ndrift, static and level ({} Hz Monte Carlo, {} runs): heading rms and horizontal position, simulation / law",
@@ -505,7 +517,7 @@ fn table(doc: &SpecDoc) -> String {
         "hor rms law",
         "hor p95 sim"
     );
-    let (yaw, hor) = (Channel::Yaw.name(), Channel::PosHorizontal.name());
+    let (yaw, hor) = (NavQuantity::Yaw.name(), NavQuantity::PosHorizontal.name());
     for sen in &doc.sensors {
         for d in &sen.spec.drift {
             let _ = writeln!(
@@ -513,13 +525,13 @@ fn table(doc: &SpecDoc) -> String {
                 "{:<22} {:>8} {:>11} {:>11} {:>12} {:>12} {:>12} {:>12} {:>12}",
                 sen.spec.name,
                 fmt::time(d.t_s),
-                fmt::channel_value(yaw, d.heading_rms_sim_rad),
-                fmt::channel_opt(yaw, d.heading_rms_law_rad),
-                fmt::channel_value(hor, d.horizontal_mean_sim_m),
-                fmt::channel_opt(hor, d.horizontal_mean_law_m),
-                fmt::channel_value(hor, d.horizontal_rms_sim_m),
-                fmt::channel_opt(hor, d.horizontal_rms_law_m),
-                fmt::channel_value(hor, d.horizontal_p95_sim_m),
+                fmt::quantity_value(yaw, d.heading_rms_sim_rad),
+                fmt::quantity_opt(yaw, d.heading_rms_law_rad),
+                fmt::quantity_value(hor, d.horizontal_mean_sim_m),
+                fmt::quantity_opt(hor, d.horizontal_mean_law_m),
+                fmt::quantity_value(hor, d.horizontal_rms_sim_m),
+                fmt::quantity_opt(hor, d.horizontal_rms_law_m),
+                fmt::quantity_value(hor, d.horizontal_p95_sim_m),
             );
             if let Some(n) = &d.law_note {
                 let _ = writeln!(s, "  {:<20} t = {}: {n}", "", fmt::time(d.t_s));
@@ -529,6 +541,11 @@ fn table(doc: &SpecDoc) -> String {
             let _ = writeln!(s, "  note: {}: {n}", sen.spec.name);
         }
     }
+}
+
+/// One table per requirement: each sensor's verdict, value, interval and margin.
+fn requirement_tables(s: &mut String, doc: &SpecDoc) {
+    use std::fmt::Write as _;
     // Every sensor answers the same requirements, in the order given.
     let reqs: Vec<&String> = doc
         .sensors
@@ -547,7 +564,7 @@ fn table(doc: &SpecDoc) -> String {
         );
         for sen in &doc.sensors {
             for r in sen.requirements.iter().filter(|r| &r.requirement == req) {
-                let v = |x: f64| fmt::channel_value(r.channel, x);
+                let v = |x: f64| fmt::quantity_value(r.quantity, x);
                 let verdict = match r.verdict {
                     Verdict::Pass => "PASS",
                     Verdict::Fail => "FAIL",
@@ -579,12 +596,11 @@ fn table(doc: &SpecDoc) -> String {
                     let _ = writeln!(
                         s,
                         "  note: {}: the model has no error term that drives {}",
-                        sen.spec.name, r.channel
+                        sen.spec.name, r.quantity
                     );
                 }
             }
         }
         let _ = writeln!(s, "  PASS / FAIL: the whole 95 % interval is under / over the threshold; undecided: more runs (--runs) decide it; margin = threshold - value");
     }
-    s
 }

@@ -3,10 +3,11 @@
 //! `--duration` / `--rate`, build the experiment and its ablation sub-experiments, check the
 //! memory of the per-run values, and run a range of runs with progress.
 
+use crate::files::{self, TextFile};
 use anyhow::{bail, Context, Result};
 use montecarlo::ablation;
-use montecarlo::channels::Channel;
 use montecarlo::experiment::{Experiment, ExperimentError, Overrides};
+use montecarlo::nav_quantity::NavQuantity;
 use montecarlo::report::DriftReport;
 use montecarlo::runner::{run_range, BatchResult};
 use montecarlo::scenario::Scenario;
@@ -85,9 +86,7 @@ fn edit_scenario_toml(text: &str, source: &str, edits: &ScenarioEdits) -> Result
 /// Read the scenario and its sensor (path relative to the scenario file). A sensor TOML given in
 /// place of a scenario gets the default static scenario.
 pub fn read_inputs(path: &Path, edits: &ScenarioEdits) -> Result<(Inputs, Scenario)> {
-    let given = path.display().to_string();
-    let bytes = std::fs::read(path).with_context(|| format!("cannot read {given}"))?;
-    let text = noise::utf8_text(bytes, &given)?;
+    let TextFile { name: given, text } = files::read_text(path)?;
     let (scenario_source, scenario_toml) =
         if is_sensor_toml(&text) || noise::is_noise_file_text(&text, &given) {
             let file = path
@@ -113,10 +112,9 @@ pub fn read_inputs(path: &Path, edits: &ScenarioEdits) -> Result<(Inputs, Scenar
     };
     crate::output::note_inputs([&sensor_path]);
     let sensor_source = sensor_path.display().to_string();
-    let sensor_bytes = std::fs::read(&sensor_path).with_context(|| {
-        format!("{scenario_source}: key `sensor`: cannot read sensor file {sensor_source}")
-    })?;
-    let sensor_toml = noise::utf8_text(sensor_bytes, &sensor_source)?;
+    let sensor_toml = files::read_text(&sensor_path)
+        .with_context(|| format!("{scenario_source}: key `sensor`: the sensor file"))?
+        .text;
     Ok((
         Inputs {
             scenario_source,
@@ -139,8 +137,7 @@ pub fn parse_inputs(
     overrides: &Overrides,
 ) -> Result<(Scenario, SensorModel, Experiment)> {
     let scenario = Scenario::from_toml_str(&inputs.scenario_toml, &inputs.scenario_source)?;
-    let model = SensorModel::from_text(&inputs.sensor_toml, &inputs.sensor_source)
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let model = SensorModel::from_text(&inputs.sensor_toml, &inputs.sensor_source)?;
     let exp = Experiment::new(scenario.clone(), &model, overrides).map_err(with_flag)?;
     Ok((scenario, model, exp))
 }
@@ -269,9 +266,9 @@ pub fn check_experiment_work(exp: &Experiment, runs: u64) -> Result<()> {
 /// Memory for the per-run values above which `simulate` asks for shards instead (8 GiB).
 const MAX_VALUE_BYTES: u64 = 8 << 30;
 
-/// Refuse a run range whose per-run values (8 bytes per run, checkpoint and channel) would not fit.
+/// Refuse a run range whose per-run values (8 bytes per run, checkpoint and quantity) would not fit.
 pub fn check_memory(exp: &Experiment, runs: u64) -> Result<()> {
-    let per_run = (exp.scenario.checkpoint_steps.len() * Channel::ALL.len() * 8) as u64;
+    let per_run = (exp.scenario.checkpoint_steps.len() * NavQuantity::ALL.len() * 8) as u64;
     let bytes = runs.saturating_mul(per_run);
     let limit = logio::available_memory_bytes().map_or(MAX_VALUE_BYTES, |a| a.min(MAX_VALUE_BYTES));
     if bytes > limit {
@@ -300,10 +297,10 @@ pub fn execute(exp: &Experiment, runs: std::ops::Range<u64>, label: &str) -> Bat
 
 /// Refuse a report with a statistic that is not a number (the runs' values were finite, but
 /// their squares or sums overflowed, e.g. a bias of 1e200 mg): an error naming the statistic,
-/// the channel and the time, never a table of NaN or a JSON of nulls.
+/// the navigation-error quantity and the time, never a table of NaN or a JSON of nulls.
 pub fn check_finite(report: &DriftReport) -> Result<()> {
     for cp in &report.checkpoints {
-        for (channel, c) in &cp.channels {
+        for (name, c) in &cp.quantities {
             let optional = [
                 ("law_mean", c.law_mean),
                 ("law_std", c.law_std),
@@ -326,10 +323,10 @@ pub fn check_finite(report: &DriftReport) -> Result<()> {
             let bad = values
                 .into_iter()
                 .chain(optional)
-                .find_map(|(q, v)| v.filter(|v| !v.is_finite()).map(|v| (q, v)));
-            if let Some((quantity, v)) = bad {
+                .find_map(|(s, v)| v.filter(|v| !v.is_finite()).map(|v| (s, v)));
+            if let Some((statistic, v)) = bad {
                 bail!(
-                    "the {quantity} of {channel} at t = {} s over the {} runs is {v}: the runs' values (mean {}) overflow the statistics; the model's values are probably far too large (check their units)",
+                    "the {statistic} of {name} at t = {} s over the {} runs is {v}: the runs' values (mean {}) overflow the statistics; the model's values are probably far too large (check their units)",
                     cp.t_s,
                     report.runs_ok,
                     crate::fmt::sig(c.mean, 3)

@@ -34,23 +34,23 @@ pub fn si(v: f64, unit: &str) -> String {
     format!("{} {prefix}{unit}", sig(scaled, 4))
 }
 
-/// A drift channel's value (SI, named as in the JSON: `_rad`, `_m`, `_mps`) as a person reads
+/// A navigation-error quantity's value (SI, named as in the JSON: `_rad`, `_m`, `_mps`) as a person reads
 /// it: angles in degrees, positions and velocities with SI prefixes.
-pub fn channel_value(channel: &str, v_si: f64) -> String {
-    if channel.ends_with("_rad") {
+pub fn quantity_value(quantity: &str, v_si: f64) -> String {
+    if quantity.ends_with("_rad") {
         format!("{} deg", sig(v_si.to_degrees(), 4))
-    } else if channel.ends_with("_mps") {
+    } else if quantity.ends_with("_mps") {
         si(v_si, "m/s")
-    } else if channel.ends_with("_m") {
+    } else if quantity.ends_with("_m") {
         si(v_si, "m")
     } else {
         sig(v_si, 4)
     }
 }
 
-/// An optional channel value ("n/a" when absent).
-pub fn channel_opt(channel: &str, v_si: Option<f64>) -> String {
-    v_si.map_or_else(|| "n/a".into(), |v| channel_value(channel, v))
+/// An optional quantity value ("n/a" when absent).
+pub fn quantity_opt(quantity: &str, v_si: Option<f64>) -> String {
+    v_si.map_or_else(|| "n/a".into(), |v| quantity_value(quantity, v))
 }
 
 /// A time in seconds, compactly: "0.1 s", "60 s", "10 min", "1 h".
@@ -164,8 +164,8 @@ mod tests {
         assert_eq!(si(4.9218, "m"), "4.922 m");
         assert_eq!(si(0.0, "m"), "0 m");
         assert_eq!(si(2.4e6, "m"), "2400 km");
-        assert_eq!(channel_value("yaw_rad", std::f64::consts::PI), "180.0 deg");
-        assert_eq!(channel_value("vel_horizontal_mps", 9.58), "9.580 m/s");
+        assert_eq!(quantity_value("yaw_rad", std::f64::consts::PI), "180.0 deg");
+        assert_eq!(quantity_value("vel_horizontal_mps", 9.58), "9.580 m/s");
         assert_eq!(time(600.0), "10 min");
         assert_eq!(time(3600.0), "1 h");
         assert_eq!(time(0.1), "0.1 s");

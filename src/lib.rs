@@ -12,6 +12,7 @@ pub mod cmd_plan;
 pub mod cmd_simulate;
 pub mod cmd_spec;
 pub mod experiment_run;
+pub mod files;
 pub mod fmt;
 pub mod log_input;
 pub mod noise_out;

@@ -3,7 +3,7 @@
 //! meaning of each value are in docs/noise-files.md; the writer is `noise::noise_file`.
 
 use anyhow::{bail, Result};
-use noise::noise_file::{write_noise_file, AxisValue, Flavor, NoiseValues};
+use noise::noise_file::{write_noise_file, AxisValue, Flavor, Inflation, NoiseValues};
 use std::path::PathBuf;
 
 /// `--noise-format`: whose keys the noise file uses.
@@ -119,7 +119,11 @@ impl NoiseFileArgs {
             update_rate_hz,
             origin: origin.to_string(),
         };
-        let text = write_noise_file(&values, self.noise_format.flavor(), self.inflate);
+        let inflation = Inflation {
+            factor: self.inflate,
+            setting: "--inflate",
+        };
+        let text = write_noise_file(&values, self.noise_format.flavor(), inflation);
         crate::output::write_string(path, &text)?;
         eprintln!(
             "wrote {} ({} keys{})",

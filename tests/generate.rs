@@ -3,7 +3,7 @@
 //! error naming the file and key without leaving an output file.
 
 use nalgebra::Vector3;
-use noise::{ImuErrors, Sensor, SensorModel, TermFilter};
+use noise::{ImuErrors, Sensor, TermFilter, TermSelector};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -87,7 +87,7 @@ fn csv_holds_the_library_values_exactly() {
     assert_eq!(header, ["t", "gx", "gy", "gz", "ax", "ay", "az", "temp"]);
     assert_eq!(rows.len(), 70_000);
 
-    let model = SensorModel::load(&mtx()).unwrap();
+    let model = imudrift::files::sensor_model(&mtx()).unwrap();
     let mut errors = ImuErrors::new(&model, 0.01, 11, 0);
     let level = noise::StaticLevel::STANDARD;
     let (w, f) = (level.triad(Sensor::Gyro), level.triad(Sensor::Accel));
@@ -121,8 +121,13 @@ fn only_and_without_switch_terms() {
         assert_eq!(&row[4..7], &[0.0, 0.0, -9.80665]);
     }
     // The gyro columns are the white-noise stream alone: the same bits as the library with that filter.
-    let filter = TermFilter::parse(Some("gyro.white_noise"), None).unwrap();
-    let model = SensorModel::load(&mtx()).unwrap().filtered(&filter);
+    let filter = TermFilter::new(
+        Some(&[TermSelector::parse("gyro.white_noise").unwrap()]),
+        &[],
+    );
+    let model = imudrift::files::sensor_model(&mtx())
+        .unwrap()
+        .filtered(&filter);
     let mut errors = ImuErrors::new(&model, 0.01, 1, 0);
     for (k, row) in rows.iter().enumerate() {
         let (g, _) = errors.corrupt(k as u64, &Vector3::zeros(), &Vector3::zeros());

@@ -83,7 +83,7 @@ fn check(target: f64, slow_rate: &str) {
     let hi = (allan::chi2::chi2_ppf(0.9995, dof) / dof).sqrt();
     let mut checked = 0;
     for sensor in ["configs/sensors/mtx.toml", "configs/sensors/adis16405.toml"] {
-        let model = SensorModel::load(&root().join(sensor)).unwrap();
+        let model = imudrift::files::sensor_model(&root().join(sensor)).unwrap();
         let rates = if slow_rate == "100" {
             vec!["100"]
         } else {

@@ -519,7 +519,7 @@ pub fn fit_levels(
                     .iter()
                     .enumerate()
                     .map(|(t, l)| {
-                        let x = l.channels[f.ch.index()].unwrap_or(&[]);
+                        let x = l.channels[f.ch].unwrap_or(&[]);
                         let ms = &f.grid_m[..f.held[t]];
                         adev_at(x, fitted.sample_interval_s, ms)
                             .iter()

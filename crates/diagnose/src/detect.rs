@@ -952,7 +952,7 @@ fn transient_finding(
 /// ([`model_levels`]).
 pub fn preprocess_log(log: &crate::input::LogInput, model: &noise::SensorModel) -> Preprocessed {
     preprocess(
-        ImuChannels(log.channels),
+        log.channels,
         log.temperature_c,
         log.dt_s,
         &model_levels(model),
@@ -966,10 +966,9 @@ pub fn model_levels(model: &noise::SensorModel) -> ImuChannels<NoiseLevels> {
         let a = model.axis(c.sensor(), c.axis());
         let (b, k_bi) = match a.get::<noise::BiasInstability>() {
             Some(noise::BiasInstability::Flicker(f)) => (f.b(), 0.0),
-            Some(noise::BiasInstability::RandomWalk {
-                stability,
-                period_s,
-            }) => (0.0, stability / period_s.sqrt()),
+            Some(noise::BiasInstability::RandomWalk(w)) => {
+                (0.0, w.stability() / w.period_s().sqrt())
+            }
             None => (0.0, 0.0),
         };
         NoiseLevels {

@@ -257,7 +257,7 @@ pub fn check_drift_fitted(
     // Measured segments per horizon, per log (kept apart for the effective count).
     let by_log: Vec<Vec<SegmentErrors>> = logs
         .par_iter()
-        .map(|l| all_segment_errors(&l.channels, dt_s, p))
+        .map(|l| all_segment_errors(&l.channels.0, dt_s, p))
         .collect();
     let progress = Progress {
         done: std::sync::atomic::AtomicUsize::new(0),
@@ -346,6 +346,7 @@ fn simulate_experiments<'m>(
             let log = &logs[l];
             let samples = log
                 .channels
+                .values()
                 .iter()
                 .flatten()
                 .map(|c| c.len())
@@ -355,7 +356,7 @@ fn simulate_experiments<'m>(
                 dt_s,
                 samples,
                 grid_m: Vec::new(),
-                active: noise::ImuChannels::from_fn(|c| log.channels[c.index()].is_some()),
+                active: noise::ImuChannels::from_fn(|c| log.channels[c].is_some()),
                 horizons_s: Vec::new(),
                 temperature_c: None,
                 temp_coeff: noise::ImuChannels::default(),
@@ -399,7 +400,7 @@ impl Experiment<'_> {
             let missing: Vec<&str> = q
                 .needs()
                 .iter()
-                .filter(|&&c| self.logs.iter().any(|l| l.channels[c.index()].is_none()))
+                .filter(|&&c| self.logs.iter().any(|l| l.channels[c].is_none()))
                 .map(|c| c.name())
                 .collect();
             let check = if !missing.is_empty() || segments == 0 {

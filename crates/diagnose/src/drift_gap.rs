@@ -131,7 +131,7 @@ pub(crate) fn measured(logs: &[LogInput], p: &Protocol) -> Vec<SegmentErrors> {
     use rayon::prelude::*;
     let per_run: Vec<Vec<SegmentErrors>> = logs
         .par_iter()
-        .map(|l| all_segment_errors(&l.channels, l.dt_s, p))
+        .map(|l| all_segment_errors(&l.channels.0, l.dt_s, p))
         .collect();
     (0..p.horizons_s.len())
         .map(|h| {

@@ -137,14 +137,12 @@ impl FittedOn {
         let first = logs.first()?;
         let samples = logs
             .iter()
-            .map(|l| l.channels.iter().flatten().map(|c| c.len()).min())
+            .map(|l| l.channels.values().iter().flatten().map(|c| c.len()).min())
             .collect::<Option<Vec<usize>>>()?;
         Some(FittedOn {
             sample_interval_s: first.dt_s,
             samples,
-            channels: ImuChannels::from_fn(|c| {
-                logs.iter().all(|l| l.channels[c.index()].is_some())
-            }),
+            channels: ImuChannels::from_fn(|c| logs.iter().all(|l| l.channels[c].is_some())),
             tau_min_s,
         })
     }

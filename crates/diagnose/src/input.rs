@@ -1,14 +1,13 @@
 //! What diagnose reads: the measured log, and the checks of its shape.
 
-use crate::drift::CHANNELS;
 use crate::error::DiagnoseError;
 use noise::ImuChannels;
 
-/// The measured log, SI, channels in the order gx gy gz ax ay az (None: not in the log).
+/// The measured log, SI, one series per channel (None: not in the log).
 #[derive(Clone, Copy, Debug)]
 pub struct LogInput<'a> {
     pub dt_s: f64,
-    pub channels: [Option<&'a [f64]>; 6],
+    pub channels: ImuChannels<Option<&'a [f64]>>,
     pub temperature_c: Option<&'a [f64]>,
 }
 
@@ -17,7 +16,7 @@ impl<'a> LogInput<'a> {
     pub fn with_channels(&self, channels: &'a ImuChannels<Option<Vec<f64>>>) -> LogInput<'a> {
         LogInput {
             dt_s: self.dt_s,
-            channels: channels.0.each_ref().map(Option::as_deref),
+            channels: ImuChannels::from_fn(|c| channels[c].as_deref()),
             temperature_c: self.temperature_c,
         }
     }
@@ -27,17 +26,18 @@ impl<'a> LogInput<'a> {
         if !(self.dt_s > 0.0 && self.dt_s.is_finite()) {
             return Err(DiagnoseError::BadInterval(self.dt_s));
         }
-        let first = (0..6)
-            .find(|&c| self.channels[c].is_some())
+        let (first, samples) = self
+            .channels
+            .iter()
+            .find_map(|(c, s)| s.map(|s| (c, s.len())))
             .ok_or(DiagnoseError::NoChannels)?;
-        let samples = self.channels[first].map(|c| c.len()).unwrap_or(0);
-        for c in 0..6 {
-            if let Some(s) = self.channels[c] {
+        for (c, s) in self.channels.iter() {
+            if let Some(s) = s {
                 if s.len() != samples {
                     return Err(DiagnoseError::Length {
-                        channel: CHANNELS[c],
+                        channel: c.name(),
                         got: s.len(),
-                        first: CHANNELS[first],
+                        first: first.name(),
                         expected: samples,
                     });
                 }
@@ -63,9 +63,10 @@ impl<'a> LogInput<'a> {
 pub fn validate_runs(logs: &[LogInput]) -> Result<Vec<usize>, DiagnoseError> {
     let first = logs.first().ok_or(DiagnoseError::NoRuns)?;
     let names = |l: &LogInput| {
-        (0..6)
-            .filter(|&c| l.channels[c].is_some())
-            .map(|c| CHANNELS[c])
+        l.channels
+            .iter()
+            .filter(|(_, s)| s.is_some())
+            .map(|(c, _)| c.name())
             .collect::<Vec<_>>()
             .join(" ")
     };

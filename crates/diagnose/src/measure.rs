@@ -35,7 +35,7 @@ pub(crate) struct Runs {
 /// Every channel's overlapping Allan points of a log on the octave grid (Greenhall EDF).
 fn points(log: &LogInput) -> ImuChannels<Vec<AllanPoint>> {
     ImuChannels::from_fn(|c| {
-        log.channels[c.index()].map_or_else(Vec::new, |s| {
+        log.channels[c].map_or_else(Vec::new, |s| {
             allan::deviation(
                 s,
                 DataKind::Rate,
@@ -135,7 +135,7 @@ pub(crate) fn measure_runs(logs: &[LogInput], tau_min_s: f64) -> Runs {
     let mut weights: ImuChannels<Vec<Vec<f64>>> = ImuChannels::default();
     let mut pooled_points: ImuChannels<Vec<AllanPoint>> = ImuChannels::default();
     for c in Channel::ALL {
-        if logs.first().is_none_or(|l| l.channels[c.index()].is_none()) {
+        if logs.first().is_none_or(|l| l.channels[c].is_none()) {
             continue;
         }
         for &m in &grid_m {
@@ -155,7 +155,7 @@ pub(crate) fn measure_runs(logs: &[LogInput], tau_min_s: f64) -> Runs {
         }
     }
     let channel = |points: &ImuChannels<Vec<AllanPoint>>, c: Channel| {
-        logs.first()?.channels[c.index()]?;
+        logs.first()?.channels[c]?;
         Some(curve_of(&points[c], &grid_m, tau_min_s))
     };
     Runs {
@@ -226,7 +226,7 @@ mod tests {
         fn log(s: &[f64]) -> LogInput<'_> {
             LogInput {
                 dt_s: 0.01,
-                channels: [Some(s), None, None, None, None, None],
+                channels: ImuChannels::from_fn(|c| (c == Channel::Gx).then_some(s)),
                 temperature_c: None,
             }
         }

@@ -9,7 +9,7 @@ use noise::{BiasInstability, Channel, Effect, Flicker, OutputFilter, SensorModel
 pub fn fitted_term(model: &SensorModel, ch: Channel, effect: Effect) -> Option<&Term> {
     let term = model.axis(ch.sensor(), ch.axis()).term(effect)?;
     match term {
-        Term::BiasInstability(BiasInstability::RandomWalk { .. }) => None,
+        Term::BiasInstability(BiasInstability::RandomWalk(_)) => None,
         t => t.level().map(|_| t),
     }
 }
@@ -30,7 +30,7 @@ pub fn has_random_walk_bias_instability(model: &SensorModel, ch: Channel) -> boo
     let (sensor, axis) = (ch.sensor(), ch.axis());
     matches!(
         model.axis(sensor, axis).get::<BiasInstability>(),
-        Some(BiasInstability::RandomWalk { .. })
+        Some(BiasInstability::RandomWalk(_))
     )
 }
 

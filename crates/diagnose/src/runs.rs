@@ -5,7 +5,7 @@
 
 use crate::detect::Finding;
 use crate::input::LogInput;
-use noise::Effect;
+use noise::{Channel, Effect};
 
 /// Two-sided 95 % normal quantile.
 const Z_95: f64 = 1.959_963_984_540_054;
@@ -158,7 +158,7 @@ fn transient(found: &[&Finding]) -> Finding {
 /// least-squares slope): one run's slope; several runs' RMS slope weighted by their lengths (each
 /// run's slope adds its square to the pooled Allan variance, R^2 tau^2 / 2), signed as their
 /// weighted mean.
-pub(crate) fn ramp_slope(logs: &[LogInput], c: usize) -> f64 {
+pub(crate) fn ramp_slope(logs: &[LogInput], c: Channel) -> f64 {
     let slopes: Vec<(f64, f64)> = logs
         .iter()
         .filter_map(|l| l.channels[c].map(|x| (x.len() as f64, crate::stats::slope(x, l.dt_s))))

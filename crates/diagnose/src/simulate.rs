@@ -181,7 +181,8 @@ impl RunKernel for Kernel<'_> {
             + self.segments.iter().flatten().sum::<usize>()
             + self.protocol_segments.iter().flatten().sum::<usize>()
     }
-    fn channels(&self) -> usize {
+    /// One value per IMU channel at each row.
+    fn quantities(&self) -> usize {
         6
     }
     /// Rows: the Allan deviations at each length (taus in grid order), then per length and

@@ -195,7 +195,7 @@ impl<'a> Run<'a> {
             dt_s: first.dt_s,
             samples: s.samples.iter().copied().max().unwrap_or(0),
             grid_m: corrected.grid_m.clone(),
-            active: ImuChannels::from_fn(|c| first.channels[c.index()].is_some()),
+            active: ImuChannels::from_fn(|c| first.channels[c].is_some()),
             horizons_s: s.settings.horizons_s.clone(),
             temperature_c: if s.logs.len() == 1 {
                 first.temperature_c
@@ -210,17 +210,15 @@ impl<'a> Run<'a> {
             (s.pre[0].peaks, s.pre[0].lines.clone())
         } else {
             let xs =
-                |c: usize| -> Vec<&[f64]> { logs.iter().filter_map(|l| l.channels[c]).collect() };
+                |c: Channel| -> Vec<&[f64]> { logs.iter().filter_map(|l| l.channels[c]).collect() };
             (
                 ImuChannels::from_fn(|c| {
-                    let xs = xs(c.index());
+                    let xs = xs(c);
                     (!xs.is_empty())
                         .then(|| crate::spectrum::broad_peak_runs(&xs, first.dt_s))
                         .flatten()
                 }),
-                ImuChannels::from_fn(|c| {
-                    crate::spectrum::spectral_lines_runs(&xs(c.index()), first.dt_s)
-                }),
+                ImuChannels::from_fn(|c| crate::spectrum::spectral_lines_runs(&xs(c), first.dt_s)),
             )
         };
         let several = logs.len() > 1;
@@ -238,7 +236,7 @@ impl<'a> Run<'a> {
             measured: corrected.pooled,
             run_measured: if several { corrected.runs } else { Vec::new() },
             run_raw: if several { raw.runs } else { Vec::new() },
-            ramp_slope: ImuChannels::from_fn(|c| crate::runs::ramp_slope(&logs, c.index())),
+            ramp_slope: ImuChannels::from_fn(|c| crate::runs::ramp_slope(&logs, c)),
             peaks,
             lines,
             logs,
@@ -747,10 +745,7 @@ impl<'a> Run<'a> {
 
     /// Channel `c` of every corrected run (empty when not measured).
     fn series(&self, c: Channel) -> Vec<&'a [f64]> {
-        self.logs
-            .iter()
-            .filter_map(|l| l.channels[c.index()])
-            .collect()
+        self.logs.iter().filter_map(|l| l.channels[c]).collect()
     }
 
     /// The measured segment drifts of one horizon, every run's segments in run order (each run
@@ -761,7 +756,7 @@ impl<'a> Run<'a> {
             ..Default::default()
         };
         for l in &self.logs {
-            all.extend(&segment_drift(&l.channels, l.dt_s, horizon_s));
+            all.extend(&segment_drift(&l.channels.0, l.dt_s, horizon_s));
         }
         all
     }

@@ -101,7 +101,7 @@ fn log_of(model: &SensorModel, dt_s: f64, samples: usize, seed: u64, run: u64) -
 fn input(dt_s: f64, log: &[Vec<f64>; 6]) -> LogInput<'_> {
     LogInput {
         dt_s,
-        channels: log.each_ref().map(|c| Some(c.as_slice())),
+        channels: noise::ImuChannels(log.each_ref().map(|c| Some(c.as_slice()))),
         temperature_c: None,
     }
 }

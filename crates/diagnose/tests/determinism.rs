@@ -98,7 +98,7 @@ bias_instability = "30 ug"
         .iter()
         .map(|l| diagnose::LogInput {
             dt_s: 0.1,
-            channels: l.each_ref().map(|c| Some(c.as_slice())),
+            channels: noise::ImuChannels(l.each_ref().map(|c| Some(c.as_slice()))),
             temperature_c: None,
         })
         .collect();

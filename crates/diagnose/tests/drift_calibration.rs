@@ -46,7 +46,7 @@ fn coverage(
         let log = static_log(&model, &setup, 1_000_000 + s, 0);
         let input = LogInput {
             dt_s: dt,
-            channels: log.0.each_ref().map(|c| Some(c.as_slice())),
+            channels: noise::ImuChannels(log.0.each_ref().map(|c| Some(c.as_slice()))),
             temperature_c: None,
         };
         let settings = CheckSettings {

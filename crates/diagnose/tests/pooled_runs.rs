@@ -29,7 +29,7 @@ fn diagnose_generated(
         .iter()
         .map(|l| LogInput {
             dt_s: DT_S,
-            channels: std::array::from_fn(|c| Some(l.channels[c].as_slice())),
+            channels: noise::ImuChannels(l.channels.each_ref().map(|c| Some(c.as_slice()))),
             temperature_c: None,
         })
         .collect();

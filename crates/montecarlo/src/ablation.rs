@@ -3,13 +3,13 @@
 //! the horizontal drift, and when. The sub-experiments are built from the parsed scenario and
 //! model (no re-parse); shards carry their slices of them so a merge gives the same table.
 
-use crate::channels::Channel;
 use crate::experiment::{Experiment, Overrides};
+use crate::nav_quantity::NavQuantity;
 use crate::report::DriftReport;
 use crate::runner::RunFailure;
 use crate::scenario::Scenario;
 use crate::stats::RunMatrix;
-use noise::SensorModel;
+use noise::{Effect, Sensor, SensorModel, TermSelector};
 use serde::{Deserialize, Serialize};
 
 /// One row of the ablation table.
@@ -48,16 +48,22 @@ pub struct TermBatches {
     pub without: Batch,
 }
 
-/// The terms an ablation covers: the experiment's active error terms (sorted, as the report lists
-/// them), without the initial alignment errors (not a sensor term).
-pub fn terms(exp: &Experiment) -> Vec<String> {
-    exp.terms
-        .iter()
-        .map(|t| t.name.clone())
-        .filter(|n| !n.starts_with("alignment."))
-        .collect::<std::collections::BTreeSet<_>>()
+/// The terms an ablation covers: the experiment's active sensor error terms, sorted by name as
+/// the report lists them (the initial alignment errors are not a sensor term).
+pub fn terms(exp: &Experiment) -> Vec<TermSelector> {
+    let active: std::collections::BTreeSet<&str> =
+        exp.terms.iter().map(|t| t.name.as_str()).collect();
+    let mut terms: Vec<TermSelector> = Sensor::ALL
         .into_iter()
-        .collect()
+        .flat_map(|s| {
+            Effect::ALL
+                .into_iter()
+                .map(move |e| TermSelector::term(s, e))
+        })
+        .filter(|t| active.contains(t.text()))
+        .collect();
+    terms.sort_by(|a, b| a.text().cmp(b.text()));
+    terms
 }
 
 /// For each term of [`terms`], the experiment with only that term and the one without it, both
@@ -90,7 +96,7 @@ pub fn experiments(
                 },
             )?;
             Ok(TermExperiments {
-                term,
+                term: term.text().to_string(),
                 only,
                 without,
             })
@@ -100,7 +106,7 @@ pub fn experiments(
 
 fn last_horizontal(r: &DriftReport) -> (f64, f64) {
     r.checkpoints.last().map_or((f64::NAN, f64::NAN), |cp| {
-        let c = &cp.channels[Channel::PosHorizontal.name()];
+        let c = &cp.quantities[NavQuantity::PosHorizontal.name()];
         (c.mean, c.rms)
     })
 }
@@ -123,7 +129,7 @@ pub fn rows(
                 only_rms_m: only
                     .checkpoints
                     .iter()
-                    .map(|c| c.channels[Channel::PosHorizontal.name()].rms)
+                    .map(|c| c.quantities[NavQuantity::PosHorizontal.name()].rms)
                     .collect(),
             }
         })

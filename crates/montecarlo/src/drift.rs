@@ -2,8 +2,8 @@
 //! mechanisation, one run per random stream, errors recorded at the checkpoints; and the list of
 //! active terms with the law each one obeys.
 
-use crate::channels::Channel;
 use crate::laws::{Entry, LawContext, Term};
+use crate::nav_quantity::NavQuantity;
 use crate::runner::{RunError, RunKernel};
 use crate::scenario::{Alignment, Scenario};
 use nalgebra::Vector3;
@@ -81,8 +81,8 @@ impl RunKernel for DriftKernel {
     fn checkpoints(&self) -> usize {
         self.checkpoint_steps.len()
     }
-    fn channels(&self) -> usize {
-        Channel::ALL.len()
+    fn quantities(&self) -> usize {
+        NavQuantity::ALL.len()
     }
 
     fn run(&self, run: u64, out: &mut [f64]) -> Result<(), RunError> {
@@ -97,7 +97,7 @@ impl RunKernel for DriftKernel {
         // its initial rate there), so a constant-rate start is not a spurious step.
         let (g_prev, _) = self.trajectory.imu_average(-self.dt_s, 0.0);
         nav.set_previous_gyro(&g_prev, self.dt_s);
-        let width = Channel::ALL.len();
+        let width = NavQuantity::ALL.len();
         // A static IMU's ideal outputs do not change: compute them once (hot loop).
         let still = self
             .trajectory
@@ -144,11 +144,11 @@ impl RunKernel for DriftKernel {
             }
             let truth = self.trajectory.truth(k as f64 * self.dt_s);
             let e = nav_error(nav.state(), &truth);
-            let values = Channel::values(&e);
+            let values = NavQuantity::values(&e);
             if let Some(i) = values.iter().position(|v| !v.is_finite()) {
                 return Err(RunError::NonFinite {
                     run,
-                    quantity: Channel::ALL[i].name().to_string(),
+                    quantity: NavQuantity::ALL[i].name().to_string(),
                     t_s: k as f64 * self.dt_s,
                 });
             }
@@ -313,14 +313,14 @@ mod tests {
     }
 
     fn run(k: &DriftKernel) -> Vec<f64> {
-        let mut out = vec![f64::NAN; k.checkpoints() * k.channels()];
+        let mut out = vec![f64::NAN; k.checkpoints() * k.quantities()];
         k.run(0, &mut out).unwrap();
         out
     }
 
     #[test]
     fn perfect_sensor_has_no_drift_static_and_turning() {
-        // Static level: gravity cancels bit-exactly (strapdown's Static), so every channel is 0.
+        // Static level: gravity cancels bit-exactly (strapdown's Static), so every quantity is 0.
         assert!(run(&kernel("")).iter().all(|&v| v == 0.0));
         // A non-standard gravity: the ideal accelerometer reads it too, so still no drift.
         assert!(run(&kernel("gravity_mps2 = 9.78\n"))
@@ -338,10 +338,10 @@ mod tests {
     fn fixed_alignment_error_is_the_initial_attitude_error() {
         let k = kernel("[alignment]\nroll_deg = 0.1\n[checkpoints]\ntimes_s = [0.01]\n");
         let out = run(&k);
-        let roll = out[Channel::Roll as usize];
+        let roll = out[NavQuantity::Roll as usize];
         assert!((roll - 0.1f64.to_radians()).abs() < 1e-12, "{roll}");
         // After one step the east velocity is g sin(eps) dt (docs/model.md §1.2), to rounding.
-        let ve = out[Channel::VelEast as usize];
+        let ve = out[NavQuantity::VelEast as usize];
         let expected = 9.80665 * 0.1f64.to_radians().sin() * 0.01;
         assert!((ve / expected - 1.0).abs() < 1e-9, "{ve} vs {expected}");
     }

@@ -8,17 +8,19 @@ use crate::report::{build_report, DriftReport, ReportMeta};
 use crate::runner::RunFailure;
 use crate::scenario::Scenario;
 use crate::stats::RunMatrix;
-use noise::{SensorModel, TermFilter};
+use noise::{SensorModel, TermFilter, TermSelector};
 
-/// Command-line overrides of a scenario.
+/// A front end's overrides of a scenario's settings.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Overrides {
+    /// Replaces the scenario's `runs`.
     pub runs: Option<u64>,
+    /// Replaces the scenario's `seed`.
     pub seed: Option<u64>,
-    /// `--only`: replaces the scenario's `terms.only`.
-    pub only: Option<Vec<String>>,
-    /// `--without`: added to the scenario's `terms.without`.
-    pub without: Vec<String>,
+    /// Replaces the scenario's `terms.only`.
+    pub only: Option<Vec<TermSelector>>,
+    /// Added to the scenario's `terms.without`.
+    pub without: Vec<TermSelector>,
 }
 
 /// Why an experiment cannot be built from a scenario, a model and overrides.
@@ -27,9 +29,6 @@ pub enum ExperimentError {
     /// The run count (an override; a scenario's own `runs` is checked when it is read) is 0.
     #[error("the number of runs must be at least 1")]
     NoRuns,
-    /// A term switch (`only` / `without`) names no known term.
-    #[error(transparent)]
-    Terms(#[from] noise::FilterError),
     /// A generated scenario (spec's drift scenario) is not valid.
     #[error(transparent)]
     Scenario(#[from] crate::scenario::ScenarioError),
@@ -46,14 +45,16 @@ pub struct Experiment {
     pub model: SensorModel,
     pub runs: u64,
     pub seed: u64,
-    pub only: Option<Vec<String>>,
-    pub without: Vec<String>,
+    /// The term switches in effect (the override's `only`, else the scenario's; the scenario's
+    /// `without` and then the override's).
+    pub only: Option<Vec<TermSelector>>,
+    pub without: Vec<TermSelector>,
     pub terms: Vec<Term>,
     pub law_context: LawContext,
 }
 
 impl Experiment {
-    /// Apply the overrides and term switches. Errors name the offending option and term.
+    /// Apply the overrides and term switches.
     pub fn new(
         scenario: Scenario,
         model: &SensorModel,
@@ -67,10 +68,7 @@ impl Experiment {
         let only = overrides.only.clone().or_else(|| scenario.only.clone());
         let mut without = scenario.without.clone();
         without.extend(overrides.without.iter().cloned());
-        let filter = TermFilter::parse(
-            only.as_ref().map(|v| v.join(",")).as_deref(),
-            (!without.is_empty()).then(|| without.join(",")).as_deref(),
-        )?;
+        let filter = TermFilter::new(only.as_deref(), &without);
         let model = model.filtered(&filter);
         noise::ImuErrors::check_rate(&model, scenario.dt_s())?;
         let (terms, law_context) = law_terms(

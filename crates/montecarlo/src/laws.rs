@@ -10,7 +10,7 @@
 //! accelerometer error on body x, y, z integrates into north, east, down velocity and position.
 //! Independent terms add in variance; deterministic ones add in mean.
 
-use crate::channels::Channel;
+use crate::nav_quantity::NavQuantity;
 use noise::closed_form::{self as cf, Integration};
 use noise::LawSource;
 use serde::{Deserialize, Serialize};
@@ -207,11 +207,11 @@ pub fn gauss_markov_from_window_variance(
 /// The tilt gain g is inside `Integration::Tilt` (standard gravity); `g_scale` rescales it for a
 /// scenario gravity other than standard; for initial attitude the tilt acts as an accelerometer bias
 /// g sin(eps) (docs/model.md §1.2), integrated once and twice.
-fn paths(entry: Entry, gravity_mps2: f64) -> Vec<(Channel, Option<Integration>, f64)> {
-    use Channel::*;
+fn paths(entry: Entry, gravity_mps2: f64) -> Vec<(NavQuantity, Option<Integration>, f64)> {
+    use NavQuantity::*;
     let g_scale = gravity_mps2 / noise::units::STANDARD_GRAVITY_MPS2;
     // roll error drives east (+g), pitch error drives north (-g); yaw nothing at first order.
-    let tilt = |axis: usize| -> Option<(Channel, Channel, f64)> {
+    let tilt = |axis: usize| -> Option<(NavQuantity, NavQuantity, f64)> {
         match axis {
             0 => Some((VelEast, PosEast, 1.0)),
             1 => Some((VelNorth, PosNorth, -1.0)),
@@ -264,7 +264,7 @@ pub struct LawContext {
 /// of the z gyro terms under a constant rate about body z (`LawContext::yaw_rate_rad_s`).
 fn laws_in_motion(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
     let why = format!("no closed-form law: {}", ctx.reason);
-    let mut laws: Vec<Law> = Channel::ALL
+    let mut laws: Vec<Law> = NavQuantity::ALL
         .iter()
         .map(|_| Law::NotApplicable(why.clone()))
         .collect();
@@ -279,7 +279,7 @@ fn laws_in_motion(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
             .filter(|t| matches!(t.entry, Entry::Gyro(2) | Entry::InitialAttitude(2)))
             .cloned()
             .collect();
-        let yaw = Channel::Yaw as usize;
+        let yaw = NavQuantity::Yaw as usize;
         laws[yaw] = channel_laws(&yaw_terms, &static_ctx, t_s).swap_remove(yaw);
     }
     laws
@@ -291,7 +291,10 @@ fn laws_in_motion(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
 /// of it.
 fn withhold_incomplete_vertical(laws: &mut [Law], tilt_ms: f64, gravity_mps2: f64, t_s: f64) {
     let second_order = gravity_mps2 * tilt_ms / 2.0;
-    for (ch, growth) in [(Channel::VelDown, t_s), (Channel::PosDown, t_s * t_s / 2.0)] {
+    for (ch, growth) in [
+        (NavQuantity::VelDown, t_s),
+        (NavQuantity::PosDown, t_s * t_s / 2.0),
+    ] {
         let i = ch as usize;
         if let Some(first) = laws[i].rms() {
             let bound = second_order * growth;
@@ -304,12 +307,12 @@ fn withhold_incomplete_vertical(laws: &mut [Law], tilt_ms: f64, gravity_mps2: f6
     }
 }
 
-/// The laws of every channel at time `t_s`, in [`Channel::ALL`] order.
+/// The laws of every channel at time `t_s`, in [`NavQuantity::ALL`] order.
 pub fn channel_laws(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
     if !ctx.static_level {
         return laws_in_motion(terms, ctx, t_s);
     }
-    let n = Channel::ALL.len();
+    let n = NavQuantity::ALL.len();
     let mut mean = vec![0.0f64; n];
     let mut var = vec![0.0f64; n];
     let mut missing: Vec<Option<String>> = vec![None; n];
@@ -330,18 +333,18 @@ pub fn channel_laws(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
         }
     }
     // Small-angle check on the predicted attitude error of the three angle channels.
-    let worst_angle = [Channel::Roll, Channel::Pitch, Channel::Yaw]
+    let worst_angle = [NavQuantity::Roll, NavQuantity::Pitch, NavQuantity::Yaw]
         .iter()
         .map(|&c| mean[c as usize].hypot(var[c as usize].sqrt()))
         .fold(0.0, f64::max);
     let large = worst_angle > SMALL_ANGLE_LIMIT_RAD;
     // An attitude error without a law couples into every velocity and position channel at second
     // order (g (1 - cos eps) vertically, docs/model.md §1.2), so those channels have no law either.
-    let angle_missing = [Channel::Roll, Channel::Pitch, Channel::Yaw]
+    let angle_missing = [NavQuantity::Roll, NavQuantity::Pitch, NavQuantity::Yaw]
         .iter()
         .find_map(|&c| missing[c as usize].clone());
     let single = |i: usize| -> Law {
-        let is_angle = i <= Channel::Yaw as usize;
+        let is_angle = i <= NavQuantity::Yaw as usize;
         if let Some(why) = missing[i].as_ref().or(if is_angle {
             None
         } else {
@@ -360,14 +363,22 @@ pub fn channel_laws(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
         }
     };
     let mut laws: Vec<Law> = (0..n).map(single).collect();
-    let tilt_ms: f64 = [Channel::Roll, Channel::Pitch]
+    let tilt_ms: f64 = [NavQuantity::Roll, NavQuantity::Pitch]
         .iter()
         .map(|&c| mean[c as usize].powi(2) + var[c as usize])
         .sum();
     withhold_incomplete_vertical(&mut laws, tilt_ms, ctx.gravity_mps2, t_s);
     for (h, a, b) in [
-        (Channel::PosHorizontal, Channel::PosNorth, Channel::PosEast),
-        (Channel::VelHorizontal, Channel::VelNorth, Channel::VelEast),
+        (
+            NavQuantity::PosHorizontal,
+            NavQuantity::PosNorth,
+            NavQuantity::PosEast,
+        ),
+        (
+            NavQuantity::VelHorizontal,
+            NavQuantity::VelNorth,
+            NavQuantity::VelEast,
+        ),
     ] {
         let gaussian = !not_gaussian[a as usize] && !not_gaussian[b as usize];
         laws[h as usize] = horizontal_law(&laws[a as usize], &laws[b as usize], gaussian);
@@ -469,7 +480,7 @@ mod tests {
             })
             .collect();
         let laws = channel_laws(&terms, &ctx(), 60.0);
-        let Law::Value { mean, .. } = laws[Channel::PosHorizontal as usize] else {
+        let Law::Value { mean, .. } = laws[NavQuantity::PosHorizontal as usize] else {
             panic!()
         };
         // The note rounds to 0.1 m.
@@ -802,12 +813,12 @@ mod tests {
             source: LawSource::Bias(b),
         }];
         let laws = channel_laws(&terms, &ctx(), 10.0);
-        let Law::Value { mean, std } = laws[Channel::PosNorth as usize] else {
+        let Law::Value { mean, std } = laws[NavQuantity::PosNorth as usize] else {
             panic!()
         };
         assert_eq!(std, 0.0);
         assert!((mean + 9.80665 * b * 1000.0 / 6.0).abs() < 1e-12);
-        let Law::Value { mean, .. } = laws[Channel::Pitch as usize] else {
+        let Law::Value { mean, .. } = laws[NavQuantity::Pitch as usize] else {
             panic!()
         };
         assert!((mean - b * 10.0).abs() < 1e-15);
@@ -819,11 +830,11 @@ mod tests {
         }];
         let laws = channel_laws(&terms, &ctx(), 10.0);
         assert!(matches!(
-            laws[Channel::PosHorizontal as usize],
+            laws[NavQuantity::PosHorizontal as usize],
             Law::NotApplicable(_)
         ));
         assert_eq!(
-            laws[Channel::Roll as usize],
+            laws[NavQuantity::Roll as usize],
             Law::Value {
                 mean: 0.0,
                 std: 0.0

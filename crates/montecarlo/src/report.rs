@@ -1,12 +1,13 @@
-//! The drift report: per checkpoint and channel, the simulated statistics beside the law of the
+//! The drift report: per checkpoint and navigation-error quantity, the simulated statistics beside the law of the
 //! active terms, the ratio simulated/law and its 99.9 % confidence interval (docs/cli.md `simulate`
 //! JSON fields: `seed`, `runs`, `checkpoints[]` with `t_s` and `channels{name: {mean, std, rms, p50,
 //! p95, law_std, ratio}}`; more fields are added, none renamed).
 
-use crate::channels::Channel;
 use crate::laws::{channel_laws, Law, LawContext, Term};
+use crate::nav_quantity::NavQuantity;
 use crate::runner::RunFailure;
 use crate::stats::{ratio_interval, summarise, RunMatrix, Z_999};
+use noise::TermSelector;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use strapdown::spec::TrajectorySpec;
@@ -18,16 +19,16 @@ use strapdown::spec::TrajectorySpec;
 /// relative deviation is below 4 dt/t. Added to the statistical interval, never instead of it.
 pub const DISCRETISATION_ALLOWANCE_STEPS: f64 = 4.0;
 
-/// One channel at one checkpoint.
+/// One navigation-error quantity at one checkpoint.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ChannelReport {
+pub struct QuantityReport {
     pub mean: f64,
     pub std: f64,
     pub rms: f64,
     pub p5: f64,
     pub p50: f64,
     pub p95: f64,
-    /// Law: signed mean of the deterministic terms (for horizontal channels: mean magnitude).
+    /// Law: signed mean of the deterministic terms (for horizontal quantities: mean magnitude).
     pub law_mean: Option<f64>,
     /// Law: standard deviation.
     pub law_std: Option<f64>,
@@ -52,7 +53,9 @@ pub struct ChannelReport {
 pub struct CheckpointReport {
     pub t_s: f64,
     pub step: u64,
-    pub channels: BTreeMap<String, ChannelReport>,
+    /// Per quantity by its name (JSON key `channels`, docs/cli.md).
+    #[serde(rename = "channels")]
+    pub quantities: BTreeMap<String, QuantityReport>,
 }
 
 /// The whole `simulate` result.
@@ -72,10 +75,10 @@ pub struct DriftReport {
     /// The scenario's trajectory as written, tagged by `kind`, units in the field names
     /// (docs/cli.md).
     pub trajectory: TrajectorySpec,
-    /// The active error terms after `--only` / `--without` (docs/cli.md names).
+    /// The active error terms after the term switches `only` / `without` (docs/cli.md names).
     pub active_terms: Vec<String>,
-    pub only: Option<Vec<String>>,
-    pub without: Vec<String>,
+    pub only: Option<Vec<TermSelector>>,
+    pub without: Vec<TermSelector>,
     /// Confidence level of `ratio_lo` .. `ratio_hi`.
     pub confidence: f64,
     pub checkpoints: Vec<CheckpointReport>,
@@ -92,8 +95,8 @@ pub struct ReportMeta {
     pub duration_s: f64,
     pub scheme: String,
     pub trajectory: TrajectorySpec,
-    pub only: Option<Vec<String>>,
-    pub without: Vec<String>,
+    pub only: Option<Vec<TermSelector>>,
+    pub without: Vec<TermSelector>,
     pub checkpoint_steps: Vec<u64>,
 }
 
@@ -118,12 +121,12 @@ pub fn build_report(
             let t_s = step as f64 * dt_s;
             let laws = channel_laws(terms, ctx, t_s);
             let allowance = DISCRETISATION_ALLOWANCE_STEPS / step as f64;
-            let channels = Channel::ALL
+            let quantities = NavQuantity::ALL
                 .iter()
-                .map(|&ch| {
-                    let s = summarise(matrix.series(cp, ch as usize));
-                    let law = &laws[ch as usize];
-                    let mut r = ChannelReport {
+                .map(|&q| {
+                    let s = summarise(matrix.series(cp, q as usize));
+                    let law = &laws[q as usize];
+                    let mut r = QuantityReport {
                         mean: s.mean,
                         std: s.std,
                         rms: s.rms,
@@ -168,13 +171,13 @@ pub fn build_report(
                             r.mean_ratio_hi = finite((ratio + half) * (1.0 + allowance));
                         }
                     }
-                    (ch.name().to_string(), r)
+                    (q.name().to_string(), r)
                 })
                 .collect();
             CheckpointReport {
                 t_s,
                 step,
-                channels,
+                quantities,
             }
         })
         .collect();

@@ -1,15 +1,15 @@
 //! Drift requirements (`spec --require "pos_horizontal_m < 10 m @ 300 s"`): a statistic of the
-//! absolute error of one drift channel at one time, compared with a threshold, with the Monte
+//! absolute error of one navigation-error quantity ([`NavQuantity`]) at one time, compared with a threshold, with the Monte
 //! Carlo uncertainty of the statistic so a verdict near the threshold says so.
 //!
 //! Grammar: `[STAT] CHANNEL (<|<=) VALUE [UNIT] @ TIME [UNIT]`, where STAT is `p50`, `p68`, `p95`,
 //! `p99`, `rms` or `mean` (default `p95`: a requirement usually bounds what 95 % of runs stay
-//! under), CHANNEL a drift channel name (`yaw_rad`, `pos_horizontal_m`, ...), VALUE in the
-//! channel's SI unit unless a unit is given (angles: rad, mrad, deg, arcmin, arcsec; positions:
+//! under), CHANNEL a quantity's name (`yaw_rad`, `pos_horizontal_m`, ...), VALUE in the
+//! quantity's SI unit unless a unit is given (angles: rad, mrad, deg, arcmin, arcsec; positions:
 //! m, km, cm, mm, ft, nmi; velocities: m/s, mm/s, cm/s, km/h, ft/s, kn), and TIME in s, ms, min
 //! or h. Statistics are of |error| over the runs.
 
-use crate::channels::Channel;
+use crate::nav_quantity::NavQuantity;
 use ::stats::quantile;
 use serde::Serialize;
 
@@ -76,15 +76,15 @@ impl Statistic {
 pub struct Requirement {
     pub text: String,
     pub statistic: Statistic,
-    pub channel: Channel,
+    pub quantity: NavQuantity,
     /// `<=` rather than `<`.
     pub inclusive: bool,
     pub threshold_si: f64,
     pub t_s: f64,
 }
 
-fn unit_scale(channel: Channel, unit: &str) -> Option<f64> {
-    let name = channel.name();
+fn unit_scale(quantity: NavQuantity, unit: &str) -> Option<f64> {
+    let name = quantity.name();
     let u = unit.trim();
     if name.ends_with("_rad") {
         Some(match u {
@@ -163,22 +163,22 @@ impl std::str::FromStr for Requirement {
             return Err(fail("no `<` or `<=`".into()));
         };
         let words: Vec<&str> = lhs.split_whitespace().collect();
-        let (statistic, channel_name) = match words.as_slice() {
-            [ch] => (Statistic::P95, *ch),
-            [st, ch] => (
+        let (statistic, quantity_name) = match words.as_slice() {
+            [name] => (Statistic::P95, *name),
+            [st, name] => (
                 Statistic::from_name(st).ok_or_else(|| {
                     fail(format!(
                         "unknown statistic `{st}` (p50, p68, p95, p99, rms or mean)"
                     ))
                 })?,
-                *ch,
+                *name,
             ),
             _ => return Err(fail("expected a channel name before `<`".into())),
         };
-        let channel = Channel::from_name(channel_name).ok_or_else(|| {
+        let quantity = NavQuantity::from_name(quantity_name).ok_or_else(|| {
             fail(format!(
-                "unknown channel `{channel_name}` (one of {})",
-                Channel::ALL.map(|c| c.name()).join(", ")
+                "unknown channel `{quantity_name}` (one of {})",
+                NavQuantity::ALL.map(|c| c.name()).join(", ")
             ))
         })?;
         let rhs = rhs.trim();
@@ -193,11 +193,11 @@ impl std::str::FromStr for Requirement {
         let scale = if unit.trim().is_empty() {
             1.0
         } else {
-            unit_scale(channel, unit).ok_or_else(|| {
+            unit_scale(quantity, unit).ok_or_else(|| {
                 fail(format!(
                     "unit `{}` does not fit channel {}",
                     unit.trim(),
-                    channel.name()
+                    quantity.name()
                 ))
             })?
         };
@@ -208,7 +208,7 @@ impl std::str::FromStr for Requirement {
         Ok(Requirement {
             text: text.trim().to_string(),
             statistic,
-            channel,
+            quantity,
             inclusive,
             threshold_si,
             t_s,
@@ -226,7 +226,7 @@ pub enum Verdict {
     Fail,
     /// The threshold lies inside the statistic's 95 % Monte Carlo interval: more runs decide it.
     Undecided,
-    /// The model has no error term that drives this channel (e.g. attitude without gyro terms).
+    /// The model has no error term that drives this quantity (e.g. attitude without gyro terms).
     NotInformed,
 }
 
@@ -235,7 +235,9 @@ pub enum Verdict {
 pub struct RequirementResult {
     pub requirement: String,
     pub statistic: Statistic,
-    pub channel: &'static str,
+    /// The quantity's name (JSON key `channel`, docs/cli.md).
+    #[serde(rename = "channel")]
+    pub quantity: &'static str,
     pub t_s: f64,
     pub threshold: f64,
     /// The statistic of |error| over the runs (SI).
@@ -252,8 +254,8 @@ pub struct RequirementResult {
     pub runs: usize,
 }
 
-/// Evaluate `req` on the per-run signed errors `values` of its channel at its time.
-/// `informed` is false when the model has no term that drives the channel.
+/// Evaluate `req` on the per-run signed errors `values` of its quantity at its time.
+/// `informed` is false when the model has no term that drives the quantity.
 pub fn evaluate(req: &Requirement, values: &[f64], informed: bool) -> RequirementResult {
     let mut abs: Vec<f64> = values.iter().map(|v| v.abs()).collect();
     abs.sort_unstable_by(f64::total_cmp);
@@ -325,7 +327,7 @@ pub fn evaluate(req: &Requirement, values: &[f64], informed: bool) -> Requiremen
     RequirementResult {
         requirement: req.text.clone(),
         statistic: req.statistic,
-        channel: req.channel.name(),
+        quantity: req.quantity.name(),
         t_s: req.t_s,
         threshold: req.threshold_si,
         value,
@@ -347,7 +349,7 @@ mod tests {
     fn parses_the_documented_forms() {
         let r: Requirement = "pos_horizontal_m < 10 @ 300s".parse().unwrap();
         assert_eq!(r.statistic, Statistic::P95);
-        assert_eq!(r.channel, Channel::PosHorizontal);
+        assert_eq!(r.quantity, NavQuantity::PosHorizontal);
         assert_eq!((r.threshold_si, r.t_s, r.inclusive), (10.0, 300.0, false));
         let r: Requirement = "p50 yaw_rad <= 2 deg @ 10 min".parse().unwrap();
         assert_eq!(r.statistic, Statistic::P50);
@@ -392,7 +394,7 @@ mod tests {
         let req = |t: f64| Requirement {
             text: String::new(),
             statistic: Statistic::P95,
-            channel: Channel::PosHorizontal,
+            quantity: NavQuantity::PosHorizontal,
             inclusive: false,
             threshold_si: t,
             t_s: 1.0,

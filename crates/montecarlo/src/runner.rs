@@ -13,11 +13,13 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 /// the progress callback frequent.
 pub const BLOCK_RUNS: u64 = 64;
 
-/// One Monte Carlo run: given its index, fill `out[checkpoint * channels + channel]`.
+/// One Monte Carlo run: given its index, fill `out[checkpoint * quantities + quantity]`, the values
+/// the kernel records at each checkpoint (the navigation-error quantities, [`crate::NavQuantity`],
+/// for the drift kernel).
 /// Implementations draw all randomness from streams derived from (seed, run), never shared state.
 pub trait RunKernel: Sync {
     fn checkpoints(&self) -> usize;
-    fn channels(&self) -> usize;
+    fn quantities(&self) -> usize;
     /// Simulate run `run`; the error says what went wrong (e.g. a non-finite state).
     fn run(&self, run: u64, out: &mut [f64]) -> Result<(), RunError>;
 }
@@ -33,8 +35,8 @@ pub enum RunError {
         t_s: f64,
     },
     /// The kernel wrote a non-finite output value.
-    #[error("non-finite value at checkpoint {checkpoint} channel {channel}")]
-    NonFiniteOutput { checkpoint: usize, channel: usize },
+    #[error("non-finite value at checkpoint {checkpoint} quantity {quantity}")]
+    NonFiniteOutput { checkpoint: usize, quantity: usize },
     /// The kernel panicked (the payload's message, when it has one).
     #[error("run panicked{}", .0.as_ref().map(|m| format!(": {m}")).unwrap_or_default())]
     Panicked(Option<String>),
@@ -63,8 +65,8 @@ fn run_one<K: RunKernel>(kernel: &K, run: u64, width: usize) -> Result<Vec<f64>,
         Ok(Ok(())) => match out.iter().position(|v| !v.is_finite()) {
             None => Ok(out),
             Some(i) => Err(RunError::NonFiniteOutput {
-                checkpoint: i / kernel.channels().max(1),
-                channel: i % kernel.channels().max(1),
+                checkpoint: i / kernel.quantities().max(1),
+                quantity: i % kernel.quantities().max(1),
             }),
         },
         Ok(Err(e)) => Err(e),
@@ -84,8 +86,8 @@ pub fn run_range<K: RunKernel>(
     runs: Range<u64>,
     progress: &(dyn Fn(u64) + Sync),
 ) -> BatchResult {
-    let width = kernel.checkpoints() * kernel.channels();
-    let mut matrix = RunMatrix::new(kernel.checkpoints(), kernel.channels());
+    let width = kernel.checkpoints() * kernel.quantities();
+    let mut matrix = RunMatrix::new(kernel.checkpoints(), kernel.quantities());
     let mut failures = Vec::new();
     let mut start = runs.start;
     while start < runs.end {
@@ -155,7 +157,7 @@ mod tests {
         fn checkpoints(&self) -> usize {
             3
         }
-        fn channels(&self) -> usize {
+        fn quantities(&self) -> usize {
             2
         }
         fn run(&self, run: u64, out: &mut [f64]) -> Result<(), RunError> {

@@ -3,6 +3,7 @@
 //! error-term switches. A raw serde struct (`deny_unknown_fields`) is converted into the validated
 //! [`Scenario`]; every error names the source, the key and what was expected.
 
+use noise::TermSelector;
 use serde::Deserialize;
 use std::path::PathBuf;
 use strapdown::{AnyTrajectory, Scheme, TrajectorySpec};
@@ -40,8 +41,9 @@ struct RawScenario {
 #[derive(Debug, Clone, PartialEq, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Reference {
-    /// Channel name (`pos_horizontal_m` ...).
-    pub channel: String,
+    /// The navigation-error quantity's name (`pos_horizontal_m` ...; TOML / JSON key `channel`).
+    #[serde(rename = "channel")]
+    pub quantity: String,
     /// Statistic compared: `mean`, `rms`, `p50` or `p95`.
     pub statistic: String,
     pub t_s: f64,
@@ -117,9 +119,9 @@ pub struct Scenario {
     /// Step indices k (t = k dt) at which errors are recorded, ascending, unique, 1 <= k <= steps.
     pub checkpoint_steps: Vec<u64>,
     pub alignment: Alignment,
-    /// Term switches (`gyro.white_noise` ...), parsed by the noise crate's filter.
-    pub only: Option<Vec<String>>,
-    pub without: Vec<String>,
+    /// Term switches `terms.only` / `terms.without` (`gyro.white_noise` ...).
+    pub only: Option<Vec<TermSelector>>,
+    pub without: Vec<TermSelector>,
     /// `terms.bias_calibrated_at_start`: the slowly varying bias processes (flicker bias
     /// instability, Gauss-Markov) are referenced to their value at t = 0, b(t) - b(0), as for a
     /// user who estimates the bias at turn-on and subtracts it (Woodman TR-696 §3.2.1).
@@ -145,7 +147,7 @@ pub const DEFAULT_RATE_HZ: f64 = 100.0;
 pub const DEFAULT_RUNS: u64 = 500;
 /// Default master seed when a scenario leaves `seed` out.
 pub const DEFAULT_SEED: u64 = 1;
-/// Most checkpoints a scenario may ask for: each costs 8 bytes per run per channel.
+/// Most checkpoints a scenario may ask for: each costs 8 bytes per run per navigation-error quantity.
 pub const MAX_CHECKPOINTS: usize = 100_000;
 /// Default number of log-spaced checkpoints.
 pub const DEFAULT_LOG_COUNT: usize = 25;
@@ -177,61 +179,15 @@ impl Scenario {
             key: key.to_string(),
             message,
         };
-        let raw: RawScenario = toml::from_str(text).map_err(|e| {
-            let message = e.message();
-            if message.contains("missing field `sensor`") {
-                return err(
-                    "sensor",
-                    "missing: a scenario names its sensor, e.g. `sensor = \"../sensors/mtx.toml\"` \
-                     (relative to the scenario file); every other key has a default \
-                     (a sensor TOML can also be simulated directly: `imudrift simulate SENSOR.toml`)"
-                        .into(),
-                );
-            }
-            // toml's message names the line, column and offending key.
-            err("(document)", e.to_string().trim_end().replace('\n', " "))
-        })?;
-        let positive = |key: &str, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(v)
-            } else {
-                Err(err(key, format!("expected a finite number > 0, got {v}")))
-            }
-        };
-        let duration_s = positive("duration_s", raw.duration_s.unwrap_or(DEFAULT_DURATION_S))?;
-        let rate_hz = positive("rate_hz", raw.rate_hz.unwrap_or(DEFAULT_RATE_HZ))?;
+        let raw = parse_raw(text, &err)?;
+        let (duration_s, rate_hz, steps) = timing(&raw, &err)?;
         let runs = raw.runs.unwrap_or(DEFAULT_RUNS);
-        let seed = raw.seed.unwrap_or(DEFAULT_SEED);
-        let steps_f = duration_s * rate_hz;
-        let steps = steps_f.round();
-        if steps > 1e12 {
-            return Err(err(
-                "duration_s",
-                format!("{steps_f:.3e} samples at rate_hz = {rate_hz:e} is more than 1e12"),
-            ));
-        }
-        if steps < 1.0 || (steps_f - steps).abs() > 1e-9 * steps.max(1.0) {
-            return Err(err(
-                "duration_s",
-                format!("expected a whole number of samples at rate_hz = {rate_hz}, got {steps_f} samples"),
-            ));
-        }
-        let steps = steps as u64;
         if runs == 0 {
             return Err(err("runs", "expected an integer >= 1".into()));
         }
-        let scheme_name = raw.scheme.as_deref().unwrap_or(Scheme::Accurate.name());
-        let scheme = Scheme::from_name(scheme_name).ok_or_else(|| {
-            err(
-                "scheme",
-                format!(
-                    "expected one of {}, got `{scheme_name}`",
-                    Scheme::ALL.map(|s| format!("`{}`", s.name())).join(", ")
-                ),
-            )
-        })?;
+        let scheme = scheme(raw.scheme.as_deref(), &err)?;
         let gravity_mps2 = match raw.gravity_mps2 {
-            Some(g) => positive("gravity_mps2", g)?,
+            Some(g) => positive("gravity_mps2", g, &err)?,
             None => STANDARD_GRAVITY_MPS2,
         };
         let trajectory_spec = raw.trajectory.unwrap_or(TrajectorySpec::Static {
@@ -239,20 +195,7 @@ impl Scenario {
             pitch_deg: 0.0,
             yaw_deg: 0.0,
         });
-        // Ideal accelerometer outputs with the scenario's gravity, so a static IMU stays still.
-        let trajectory = trajectory_spec
-            .build_with_gravity(gravity_mps2)
-            .map_err(|e| match e {
-                strapdown::TrajectoryError::Invalid { key, expected, got } => err(
-                    &if key == "gravity_mps2" {
-                        key
-                    } else {
-                        format!("trajectory.{key}")
-                    },
-                    format!("expected {expected}, got {got}"),
-                ),
-                other => err("trajectory", other.to_string()),
-            })?;
+        let trajectory = build_trajectory(&trajectory_spec, gravity_mps2, &err)?;
         let mut checkpoint_steps = checkpoint_steps(raw.checkpoints, rate_hz, steps, &err)?;
         if let Some(r) = &raw.reference {
             // The reference time is always a checkpoint.
@@ -263,45 +206,11 @@ impl Scenario {
         }
         let alignment = alignment(raw.alignment.unwrap_or_default(), &err)?;
         let terms = raw.terms.unwrap_or_default();
+        let (only, without) = term_switches(&terms, &err)?;
         if let Some(r) = &raw.reference {
-            if !["mean", "rms", "p50", "p95"].contains(&r.statistic.as_str()) {
-                return Err(err(
-                    "reference.statistic",
-                    format!("expected mean, rms, p50 or p95, got `{}`", r.statistic),
-                ));
-            }
-            if crate::channels::Channel::from_name(&r.channel).is_none() {
-                return Err(err(
-                    "reference.channel",
-                    format!(
-                        "expected a channel name such as pos_horizontal_m, got `{}`",
-                        r.channel
-                    ),
-                ));
-            }
-            if !(r.t_s > 0.0 && r.t_s <= duration_s) {
-                return Err(err(
-                    "reference.t_s",
-                    format!("expected a time in (0, duration_s], got {}", r.t_s),
-                ));
-            }
+            check_reference(r, duration_s, &err)?;
         }
-        if let Some(w) = terms.bias_calibration_window_s {
-            if !(w.is_finite() && w > 0.0) {
-                return Err(err(
-                    "terms.bias_calibration_window_s",
-                    format!("expected a calibration window > 0 s, got {w}"),
-                ));
-            }
-            if terms.bias_calibrated_at_start == Some(false) {
-                return Err(err(
-                    "terms.bias_calibration_window_s",
-                    "a calibration window needs the bias calibrated at start: set \
-                     terms.bias_calibrated_at_start = true or leave it out"
-                        .into(),
-                ));
-            }
-        }
+        check_calibration(&terms, &err)?;
         if raw.sensor.trim().is_empty() {
             return Err(err("sensor", "expected a path to a sensor TOML".into()));
         }
@@ -319,15 +228,15 @@ impl Scenario {
             duration_s,
             rate_hz,
             runs,
-            seed,
+            seed: raw.seed.unwrap_or(DEFAULT_SEED),
             scheme,
             gravity_mps2,
             trajectory_spec,
             trajectory,
             checkpoint_steps,
             alignment,
-            only: terms.only,
-            without: terms.without.unwrap_or_default(),
+            only,
+            without,
             bias_calibrated_at_start: terms.bias_calibrated_at_start.unwrap_or(false)
                 || terms.bias_calibration_window_s.is_some(),
             bias_calibration_window_s: terms.bias_calibration_window_s,
@@ -337,7 +246,166 @@ impl Scenario {
     }
 }
 
+/// The TOML document; a missing `sensor` says how to give one.
+fn parse_raw(text: &str, err: &ErrFn) -> Result<RawScenario, ScenarioError> {
+    toml::from_str(text).map_err(|e| {
+        let message = e.message();
+        if message.contains("missing field `sensor`") {
+            return err(
+                "sensor",
+                "missing: a scenario names its sensor, e.g. `sensor = \"../sensors/mtx.toml\"` \
+                 (relative to the scenario file); every other key has a default \
+                 (a sensor TOML can also be simulated directly: `imudrift simulate SENSOR.toml`)"
+                    .into(),
+            );
+        }
+        // toml's message names the line, column and offending key.
+        err("(document)", e.to_string().trim_end().replace('\n', " "))
+    })
+}
+
+/// A finite value > 0.
+fn positive(key: &str, v: f64, err: &ErrFn) -> Result<f64, ScenarioError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(err(key, format!("expected a finite number > 0, got {v}")))
+    }
+}
+
+/// Duration (s), rate (Hz) and the number of steps: a whole number of samples, at most 1e12.
+fn timing(raw: &RawScenario, err: &ErrFn) -> Result<(f64, f64, u64), ScenarioError> {
+    let duration_s = positive(
+        "duration_s",
+        raw.duration_s.unwrap_or(DEFAULT_DURATION_S),
+        err,
+    )?;
+    let rate_hz = positive("rate_hz", raw.rate_hz.unwrap_or(DEFAULT_RATE_HZ), err)?;
+    let steps_f = duration_s * rate_hz;
+    let steps = steps_f.round();
+    if steps > 1e12 {
+        return Err(err(
+            "duration_s",
+            format!("{steps_f:.3e} samples at rate_hz = {rate_hz:e} is more than 1e12"),
+        ));
+    }
+    if steps < 1.0 || (steps_f - steps).abs() > 1e-9 * steps.max(1.0) {
+        return Err(err(
+            "duration_s",
+            format!(
+                "expected a whole number of samples at rate_hz = {rate_hz}, got {steps_f} samples"
+            ),
+        ));
+    }
+    Ok((duration_s, rate_hz, steps as u64))
+}
+
+/// The mechanisation scheme by strapdown's name (default: accurate).
+fn scheme(name: Option<&str>, err: &ErrFn) -> Result<Scheme, ScenarioError> {
+    let name = name.unwrap_or(Scheme::Accurate.name());
+    Scheme::from_name(name).ok_or_else(|| {
+        err(
+            "scheme",
+            format!(
+                "expected one of {}, got `{name}`",
+                Scheme::ALL.map(|s| format!("`{}`", s.name())).join(", ")
+            ),
+        )
+    })
+}
+
+/// The trajectory with the scenario's gravity in its ideal accelerometer outputs, so a static
+/// IMU stays still; an invalid value names its `trajectory.` key.
+fn build_trajectory(
+    spec: &TrajectorySpec,
+    gravity_mps2: f64,
+    err: &ErrFn,
+) -> Result<AnyTrajectory, ScenarioError> {
+    spec.build_with_gravity(gravity_mps2).map_err(|e| match e {
+        strapdown::TrajectoryError::Invalid { key, expected, got } => err(
+            &if key == "gravity_mps2" {
+                key
+            } else {
+                format!("trajectory.{key}")
+            },
+            format!("expected {expected}, got {got}"),
+        ),
+        other => err("trajectory", other.to_string()),
+    })
+}
+
+/// The `[reference]` table: a known statistic of a known quantity inside the run.
+fn check_reference(r: &Reference, duration_s: f64, err: &ErrFn) -> Result<(), ScenarioError> {
+    if !["mean", "rms", "p50", "p95"].contains(&r.statistic.as_str()) {
+        return Err(err(
+            "reference.statistic",
+            format!("expected mean, rms, p50 or p95, got `{}`", r.statistic),
+        ));
+    }
+    if crate::nav_quantity::NavQuantity::from_name(&r.quantity).is_none() {
+        return Err(err(
+            "reference.channel",
+            format!(
+                "expected a channel name such as pos_horizontal_m, got `{}`",
+                r.quantity
+            ),
+        ));
+    }
+    if !(r.t_s > 0.0 && r.t_s <= duration_s) {
+        return Err(err(
+            "reference.t_s",
+            format!("expected a time in (0, duration_s], got {}", r.t_s),
+        ));
+    }
+    Ok(())
+}
+
+/// `terms.bias_calibration_window_s`: > 0 s, and not with the bias calibration switched off.
+fn check_calibration(terms: &RawTerms, err: &ErrFn) -> Result<(), ScenarioError> {
+    if let Some(w) = terms.bias_calibration_window_s {
+        if !(w.is_finite() && w > 0.0) {
+            return Err(err(
+                "terms.bias_calibration_window_s",
+                format!("expected a calibration window > 0 s, got {w}"),
+            ));
+        }
+        if terms.bias_calibrated_at_start == Some(false) {
+            return Err(err(
+                "terms.bias_calibration_window_s",
+                "a calibration window needs the bias calibrated at start: set \
+                 terms.bias_calibrated_at_start = true or leave it out"
+                    .into(),
+            ));
+        }
+    }
+    Ok(())
+}
+
 type ErrFn<'a> = dyn Fn(&str, String) -> ScenarioError + 'a;
+
+/// `terms.only` and `terms.without`, each item read as a term (the error names the key).
+#[allow(clippy::type_complexity)]
+fn term_switches(
+    terms: &RawTerms,
+    err: &ErrFn,
+) -> Result<(Option<Vec<TermSelector>>, Vec<TermSelector>), ScenarioError> {
+    let read = |key: &str, items: &[String]| -> Result<Vec<TermSelector>, ScenarioError> {
+        items
+            .iter()
+            .map(|item| TermSelector::parse(item).map_err(|e| err(key, e.to_string())))
+            .collect()
+    };
+    let only = terms
+        .only
+        .as_deref()
+        .map(|items| read("terms.only", items))
+        .transpose()?;
+    let without = read(
+        "terms.without",
+        terms.without.as_deref().unwrap_or_default(),
+    )?;
+    Ok((only, without))
+}
 
 fn finite(key: &str, v: f64, err: &ErrFn) -> Result<f64, ScenarioError> {
     if v.is_finite() {
@@ -507,6 +575,14 @@ mod tests {
                 format!("{MIN}[terms]\nbias_calibrated_at_start = false\nbias_calibration_window_s = 10.0\n"),
                 "terms.bias_calibration_window_s",
             ),
+            (
+                format!("{MIN}[terms]\nonly = [\"gyro.whte_noise\"]\n"),
+                "terms.only",
+            ),
+            (
+                format!("{MIN}[terms]\nwithout = [\"gyro\", \"magneto\"]\n"),
+                "terms.without",
+            ),
         ];
         let s = Scenario::from_toml_str(
             &format!("{MIN}[terms]\nbias_calibration_window_s = 10.0\n"),
@@ -514,6 +590,13 @@ mod tests {
         )
         .unwrap();
         assert!(s.bias_calibrated_at_start && s.bias_calibration_window_s == Some(10.0));
+        let s = Scenario::from_toml_str(
+            &format!("{MIN}[terms]\nonly = [\"white_noise\"]\nwithout = [\"accel\"]\n"),
+            "s.toml",
+        )
+        .unwrap();
+        assert_eq!(s.only.as_ref().map(|o| o[0].text()), Some("white_noise"));
+        assert_eq!(s.without[0].terms().count(), noise::Effect::ALL.len());
         for (text, key) in cases {
             let e = Scenario::from_toml_str(&text, "s.toml").unwrap_err();
             assert_eq!(e.key, key, "{e}");

@@ -5,6 +5,7 @@
 
 use crate::runner::{RunFailure, Shard};
 use crate::stats::RunMatrix;
+use noise::TermSelector;
 use serde::{Deserialize, Serialize};
 
 /// Format tag written into every shard file.
@@ -22,8 +23,8 @@ pub struct ShardFile {
     /// Overrides in effect (the experiment identity together with the two texts).
     pub runs: Option<u64>,
     pub seed: Option<u64>,
-    pub only: Option<Vec<String>>,
-    pub without: Vec<String>,
+    pub only: Option<Vec<TermSelector>>,
+    pub without: Vec<TermSelector>,
     pub shard: Shard,
     pub matrix: RunMatrix,
     pub failures: Vec<RunFailure>,
@@ -39,9 +40,14 @@ pub struct ShardError(pub String);
 
 impl ShardFile {
     /// Whether the file is consistent in itself and with its experiment (`runs` runs, `checkpoints`
-    /// checkpoints, `channels` channels): a valid split, well-formed matrices of that shape, and
+    /// checkpoints, `quantities` navigation-error quantities): a valid split, well-formed matrices of that shape, and
     /// only runs of its own slice (ablation sub-runs included).
-    pub fn check(&self, runs: u64, checkpoints: usize, channels: usize) -> Result<(), ShardError> {
+    pub fn check(
+        &self,
+        runs: u64,
+        checkpoints: usize,
+        quantities: usize,
+    ) -> Result<(), ShardError> {
         let fail = |what: String| Err(ShardError(what));
         if self.shard.count == 0 || self.shard.index >= self.shard.count {
             return fail(format!(
@@ -64,10 +70,10 @@ impl ShardFile {
         );
         for (what, m, failures) in batches {
             m.check().or_else(|e| fail(format!("key `{what}`: {e}")))?;
-            if (m.checkpoints, m.channels) != (checkpoints, channels) {
+            if (m.checkpoints, m.quantities) != (checkpoints, quantities) {
                 return fail(format!(
-                    "key `{what}`: {} checkpoints x {} channels, but the experiment has {checkpoints} x {channels}",
-                    m.checkpoints, m.channels
+                    "key `{what}`: {} checkpoints x {} quantities, but the experiment has {checkpoints} x {quantities}",
+                    m.checkpoints, m.quantities
                 ));
             }
             let ids = m

@@ -2,8 +2,8 @@
 //! (Woodman's method, TR-696 §5.1) from a simulated long static log made with the noise crate, and
 //! the drift at chosen times (law and simulation) from a static Monte Carlo run.
 
-use crate::channels::Channel;
 use crate::experiment::{Experiment, Overrides};
+use crate::nav_quantity::NavQuantity;
 use crate::report::DriftReport;
 use crate::scenario::Scenario;
 use allan::{DataKind, Estimator, Options, TauGrid};
@@ -73,6 +73,38 @@ pub struct SensorSpec {
 pub fn gyro_readback(model: &SensorModel, seed: u64, duration_s: f64, rate_hz: f64) -> GyroSpec {
     let dt_s = 1.0 / rate_hz;
     let n = (duration_s * rate_hz).round() as usize;
+    let mut g = GyroSpec::default();
+    for (axis, points) in readback_curves(model, seed, n, dt_s) {
+        let m = model.axis(noise::Sensor::Gyro, axis);
+        g.arw_spec[axis] = m.get::<WhiteNoise>().map(WhiteNoise::density);
+        if m.has(Effect::BiasInstability) {
+            let log_taus: Vec<f64> = points.iter().map(|p| p.tau_s).collect();
+            g.bi_spec[axis] = bi_spec_value(m, dt_s, &log_taus);
+        }
+        let reading = AxisReading {
+            axis,
+            name: ["x", "y", "z"][axis],
+            model: m,
+            dt_s,
+            log_hours: n as f64 * dt_s / 3600.0,
+            readings: allan::fit::readings(&points),
+            points: &points,
+        };
+        reading.arw(&mut g);
+        reading.bias_instability(&mut g);
+    }
+    g
+}
+
+/// Per gyro axis, the overlapping Allan deviation of `n` samples of its static output at `dt_s`
+/// (99 % intervals), at the taus Woodman's rule allows (at least 9 bins, TR-696 §5.1,
+/// docs/model.md §1.7).
+fn readback_curves(
+    model: &SensorModel,
+    seed: u64,
+    n: usize,
+    dt_s: f64,
+) -> Vec<(usize, Vec<allan::AllanPoint>)> {
     let mut errors = ImuErrors::new(model, dt_s, seed, 0);
     let still_gyro = StaticLevel::STANDARD.triad(Sensor::Gyro);
     let opts = Options {
@@ -80,7 +112,7 @@ pub fn gyro_readback(model: &SensorModel, seed: u64, duration_s: f64, rate_hz: f
         ..Options::default()
     };
     let channels = errors.channels_mut();
-    let per_axis: Vec<_> = channels[..3]
+    channels[..3]
         .par_iter_mut()
         .enumerate()
         .map(|(axis, ch)| {
@@ -94,110 +126,126 @@ pub fn gyro_readback(model: &SensorModel, seed: u64, duration_s: f64, rate_hz: f
                 &TauGrid::PerDecade(10),
                 &opts,
             );
-            // Woodman's rule (TR-696 §5.1, docs/model.md §1.7): a tau needs at least 9 bins.
             let points: Vec<_> = points.into_iter().filter(|p| p.woodman_ok()).collect();
             (axis, points)
         })
-        .collect();
-    let mut g = GyroSpec::default();
-    for (axis, points) in per_axis {
-        let m = model.axis(noise::Sensor::Gyro, axis);
-        let name = ["x", "y", "z"][axis];
-        let readings = allan::fit::readings(&points);
-        let at = |tau: f64| points.iter().find(|p| p.tau_s == tau);
-        // Spec values from the model.
-        g.arw_spec[axis] = m.get::<WhiteNoise>().map(WhiteNoise::density);
-        // The exact Allan variance of the sampled model (noise crate), not the continuous one: at tau
-        // near dt they differ (e.g. the flicker band edge).
-        let closed = |tau: f64| m.allan_variance_sampled(tau, dt_s);
-        let window = plateau_window(m);
-        let in_window = |tau: f64| tau >= window.0 && tau <= window.1;
-        if m.has(Effect::BiasInstability) {
-            let log_taus: Vec<f64> = points.iter().map(|p| p.tau_s).collect();
-            g.bi_spec[axis] = bi_spec_value(m, dt_s, &log_taus);
-        }
-        // ARW: the slope -1/2 line touching the curve, read at 1 s (Woodman §5.1).
-        if let (Some(nv), Some(p)) = (
-            m.get::<WhiteNoise>().map(WhiteNoise::density),
-            at(readings.arw_tau_s),
-        ) {
-            let share = nv * nv / p.tau_s / closed(p.tau_s);
-            if share >= MASKED_SHARE {
-                let s = p.tau_s.sqrt();
-                g.arw_sim[axis] = Some(readings.arw_at_1s);
-                g.arw_sim_lo[axis] = Some(p.lo * s);
-                g.arw_sim_hi[axis] = Some(p.hi * s);
-                // The tangent line also collects the other terms at that tau: by the closed form
-                // the reading exceeds N by 1/sqrt(share) - 1.
-                let bias = 1.0 / share.sqrt() - 1.0;
-                if bias > 0.005 {
-                    g.notes.push(format!(
-                        "gyro {name}: the ARW reading at tau = {:.3} s includes {:.1} % from other terms (closed form)",
-                        p.tau_s,
-                        100.0 * bias
-                    ));
-                }
-            } else {
+        .collect()
+}
+
+/// One gyro axis's simulated Allan curve and the model it came from, read as Woodman read his.
+struct AxisReading<'a> {
+    axis: usize,
+    name: &'static str,
+    model: &'a noise::AxisModel,
+    dt_s: f64,
+    log_hours: f64,
+    readings: allan::fit::Readings,
+    points: &'a [allan::AllanPoint],
+}
+
+impl AxisReading<'_> {
+    fn at(&self, tau: f64) -> Option<&allan::AllanPoint> {
+        self.points.iter().find(|p| p.tau_s == tau)
+    }
+
+    /// The exact Allan variance of the sampled model (noise crate), not the continuous one: at tau
+    /// near dt they differ (e.g. the flicker band edge).
+    fn closed(&self, tau: f64) -> f64 {
+        self.model.allan_variance_sampled(tau, self.dt_s)
+    }
+
+    /// ARW: the slope -1/2 line touching the curve, read at 1 s (Woodman §5.1); not read when
+    /// white noise is less than [`MASKED_SHARE`] of the Allan variance there.
+    fn arw(&self, g: &mut GyroSpec) {
+        let (axis, name) = (self.axis, self.name);
+        let (Some(nv), Some(p)) = (
+            self.model.get::<WhiteNoise>().map(WhiteNoise::density),
+            self.at(self.readings.arw_tau_s),
+        ) else {
+            return;
+        };
+        let share = nv * nv / p.tau_s / self.closed(p.tau_s);
+        if share >= MASKED_SHARE {
+            let s = p.tau_s.sqrt();
+            g.arw_sim[axis] = Some(self.readings.arw_at_1s);
+            g.arw_sim_lo[axis] = Some(p.lo * s);
+            g.arw_sim_hi[axis] = Some(p.hi * s);
+            // The tangent line also collects the other terms at that tau: by the closed form
+            // the reading exceeds N by 1/sqrt(share) - 1.
+            let bias = 1.0 / share.sqrt() - 1.0;
+            if bias > 0.005 {
                 g.notes.push(format!(
-                    "gyro {name}: ARW cannot be read back: at tau = {:.3} s white noise is only {:.0} % of the Allan variance",
+                    "gyro {name}: the ARW reading at tau = {:.3} s includes {:.1} % from other terms (closed form)",
                     p.tau_s,
-                    100.0 * share
+                    100.0 * bias
                 ));
             }
-        }
-        // Bias instability: the minimum of the simulated curve (Woodman §5.1). It cannot be read
-        // back when the model's curve is still falling at the longest usable tau (white noise hides
-        // the floor in a log this short); the spec value itself is the minimum of the whole curve, so
-        // other terms shaping that minimum only earn a note.
-        if let (Some(bi), Some(p), Some(last)) = (
-            m.get::<BiasInstability>(),
-            at(readings.bi_min_tau_s),
-            points.last(),
-        ) {
-            // White noise hides the floor: the curve still falls at the longest usable tau and
-            // white noise is most of it there.
-            let white_share = m
-                .get::<WhiteNoise>()
-                .map(WhiteNoise::density)
-                .map_or(0.0, |nv| nv * nv / last.tau_s)
-                / closed(last.tau_s);
-            let still_falling =
-                closed(last.tau_s * 1.5) < closed(last.tau_s) && white_share >= MASKED_SHARE;
-            let share = bi.avar_sampled(p.tau_s, dt_s) / closed(p.tau_s);
-            if still_falling && p.tau_s >= last.tau_s {
-                g.notes.push(format!(
-                    "gyro {name}: bias instability cannot be read back: the model's Allan deviation still falls at the longest usable tau ({:.0} s, 9 bins) of a {:.0} h log; white noise masks the floor",
-                    last.tau_s,
-                    n as f64 * dt_s / 3600.0
-                ));
-            } else {
-                g.bi_sim[axis] = Some(readings.bi_min);
-                g.bi_sim_lo[axis] = Some(p.lo);
-                g.bi_sim_hi[axis] = Some(p.hi);
-                g.bi_sim_tau_s[axis] = Some(p.tau_s);
-                if share < MASKED_SHARE {
-                    g.notes.push(format!(
-                        "gyro {name}: at the minimum (tau = {:.0} s) bias instability is only {:.0} % of the Allan variance: the reading is shaped by other terms",
-                        p.tau_s,
-                        100.0 * share
-                    ));
-                }
-                if p.tau_s >= last.tau_s {
-                    g.notes.push(format!(
-                        "gyro {name}: the minimum is at the longest usable tau ({:.0} s, 9 bins): the floor may lie beyond this log, so the reading is an upper bound",
-                        p.tau_s
-                    ));
-                }
-                if !in_window(p.tau_s) {
-                    g.notes.push(format!(
-                        "gyro {name}: the minimum lies at tau = {:.3} s, outside the flicker plateau [{:.3} s, {:.0} s] where the model's band edge bends the curve",
-                        p.tau_s, window.0, window.1
-                    ));
-                }
-            }
+        } else {
+            g.notes.push(format!(
+                "gyro {name}: ARW cannot be read back: at tau = {:.3} s white noise is only {:.0} % of the Allan variance",
+                p.tau_s,
+                100.0 * share
+            ));
         }
     }
-    g
+
+    /// Bias instability: the minimum of the simulated curve (Woodman §5.1). It cannot be read
+    /// back when the model's curve is still falling at the longest usable tau (white noise hides
+    /// the floor in a log this short); the spec value itself is the minimum of the whole curve, so
+    /// other terms shaping that minimum only earn a note.
+    fn bias_instability(&self, g: &mut GyroSpec) {
+        let (axis, name) = (self.axis, self.name);
+        let (Some(bi), Some(p), Some(last)) = (
+            self.model.get::<BiasInstability>(),
+            self.at(self.readings.bi_min_tau_s),
+            self.points.last(),
+        ) else {
+            return;
+        };
+        // White noise hides the floor: the curve still falls at the longest usable tau and
+        // white noise is most of it there.
+        let white_share = self
+            .model
+            .get::<WhiteNoise>()
+            .map(WhiteNoise::density)
+            .map_or(0.0, |nv| nv * nv / last.tau_s)
+            / self.closed(last.tau_s);
+        let still_falling =
+            self.closed(last.tau_s * 1.5) < self.closed(last.tau_s) && white_share >= MASKED_SHARE;
+        if still_falling && p.tau_s >= last.tau_s {
+            g.notes.push(format!(
+                "gyro {name}: bias instability cannot be read back: the model's Allan deviation still falls at the longest usable tau ({:.0} s, 9 bins) of a {:.0} h log; white noise masks the floor",
+                last.tau_s,
+                self.log_hours
+            ));
+            return;
+        }
+        g.bi_sim[axis] = Some(self.readings.bi_min);
+        g.bi_sim_lo[axis] = Some(p.lo);
+        g.bi_sim_hi[axis] = Some(p.hi);
+        g.bi_sim_tau_s[axis] = Some(p.tau_s);
+        let share = bi.avar_sampled(p.tau_s, self.dt_s) / self.closed(p.tau_s);
+        if share < MASKED_SHARE {
+            g.notes.push(format!(
+                "gyro {name}: at the minimum (tau = {:.0} s) bias instability is only {:.0} % of the Allan variance: the reading is shaped by other terms",
+                p.tau_s,
+                100.0 * share
+            ));
+        }
+        if p.tau_s >= last.tau_s {
+            g.notes.push(format!(
+                "gyro {name}: the minimum is at the longest usable tau ({:.0} s, 9 bins): the floor may lie beyond this log, so the reading is an upper bound",
+                p.tau_s
+            ));
+        }
+        let window = plateau_window(self.model);
+        if !(p.tau_s >= window.0 && p.tau_s <= window.1) {
+            g.notes.push(format!(
+                "gyro {name}: the minimum lies at tau = {:.3} s, outside the flicker plateau [{:.3} s, {:.0} s] where the model's band edge bends the curve",
+                p.tau_s, window.0, window.1
+            ));
+        }
+    }
 }
 
 /// The plateau window of a flicker bias instability: the averaging times where its Allan deviation
@@ -277,8 +325,8 @@ pub fn drift_rows(report: &DriftReport) -> Vec<DriftRow> {
         .checkpoints
         .iter()
         .map(|cp| {
-            let yaw = &cp.channels[Channel::Yaw.name()];
-            let h = &cp.channels[Channel::PosHorizontal.name()];
+            let yaw = &cp.quantities[NavQuantity::Yaw.name()];
+            let h = &cp.quantities[NavQuantity::PosHorizontal.name()];
             DriftRow {
                 t_s: cp.t_s,
                 heading_rms_sim_rad: yaw.rms,

@@ -1,8 +1,8 @@
-//! Drift statistics over runs: per checkpoint and channel, the mean, std, rms and quantiles.
+//! Drift statistics over runs: per checkpoint and navigation-error quantity, the mean, std, rms and quantiles.
 //!
 //! Storage choice (docs/architecture.md, Statistics): quantiles are exact, so the per-run value of every
-//! (checkpoint, channel) is kept as one `f64` (8 bytes per run per checkpoint per channel: 10 000
-//! runs x 25 checkpoints x 11 channels = 22 MB). Everything else (strapdown state, noise state) is
+//! (checkpoint, quantity) is kept as one `f64` (8 bytes per run per checkpoint per quantity: 10 000
+//! runs x 25 checkpoints x 11 quantities = 22 MB). Everything else (strapdown state, noise state) is
 //! per run and dropped when the run ends, so memory grows only by that vector. Statistics are always
 //! computed from the values in run-index order (Welford), so a single machine, any thread count and
 //! any set of merged shards give bit-identical numbers.
@@ -17,30 +17,33 @@ pub const Z_999: f64 = 3.290_526_731_491_926;
 #[error("{0}")]
 pub struct MatrixError(pub String);
 
-/// Per-run values, `values[(checkpoint * channels + channel) * runs + run]`, runs in index order.
+/// Per-run values, `values[(checkpoint * quantities + quantity) * runs + run]`, runs in index order.
+/// The quantities are the navigation-error columns ([`crate::NavQuantity`] for the drift kernel).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RunMatrix {
     pub checkpoints: usize,
-    pub channels: usize,
+    /// Quantities per checkpoint (the shard files' key `channels`, kept for existing files).
+    #[serde(rename = "channels")]
+    pub quantities: usize,
     /// Run indices stored, ascending (failed runs are absent).
     pub run_ids: Vec<u64>,
-    /// Column-major per (checkpoint, channel): `series(cp, ch)` is contiguous.
+    /// Column-major per (checkpoint, quantity): `series(cp, q)` is contiguous.
     values: Vec<Vec<f64>>,
 }
 
 impl RunMatrix {
-    pub fn new(checkpoints: usize, channels: usize) -> RunMatrix {
+    pub fn new(checkpoints: usize, quantities: usize) -> RunMatrix {
         RunMatrix {
             checkpoints,
-            channels,
+            quantities,
             run_ids: Vec::new(),
-            values: vec![Vec::new(); checkpoints * channels],
+            values: vec![Vec::new(); checkpoints * quantities],
         }
     }
 
-    /// Append one run; `row[cp * channels + ch]`. Runs must be pushed in ascending index order.
+    /// Append one run; `row[cp * quantities + q]`. Runs must be pushed in ascending index order.
     pub fn push(&mut self, run: u64, row: &[f64]) {
-        debug_assert_eq!(row.len(), self.checkpoints * self.channels);
+        debug_assert_eq!(row.len(), self.checkpoints * self.quantities);
         debug_assert!(self.run_ids.last().is_none_or(|&last| last < run));
         self.run_ids.push(run);
         for (series, &v) in self.values.iter_mut().zip(row) {
@@ -52,16 +55,16 @@ impl RunMatrix {
         self.run_ids.len()
     }
 
-    /// Whether a matrix read from a file is well formed: one series per (checkpoint, channel),
+    /// Whether a matrix read from a file is well formed: one series per (checkpoint, quantity),
     /// each with one value per run, run indices strictly ascending. `Err` says what is wrong.
     pub fn check(&self) -> Result<(), MatrixError> {
         let fail = |what: String| Err(MatrixError(what));
-        if self.values.len() != self.checkpoints * self.channels {
+        if self.values.len() != self.checkpoints * self.quantities {
             return fail(format!(
-                "{} value series for {} checkpoints x {} channels",
+                "{} value series for {} checkpoints x {} quantities",
                 self.values.len(),
                 self.checkpoints,
-                self.channels
+                self.quantities
             ));
         }
         if let Some(i) = self
@@ -84,19 +87,19 @@ impl RunMatrix {
         Ok(())
     }
 
-    /// The values of one (checkpoint, channel) over runs, in run-index order.
-    pub fn series(&self, checkpoint: usize, channel: usize) -> &[f64] {
-        &self.values[checkpoint * self.channels + channel]
+    /// The values of one (checkpoint, quantity) over runs, in run-index order.
+    pub fn series(&self, checkpoint: usize, quantity: usize) -> &[f64] {
+        &self.values[checkpoint * self.quantities + quantity]
     }
 
     /// Merge matrices holding disjoint run sets (e.g. shards) into one in run-index order.
     /// Returns `None` if the shapes differ or a run index occurs twice.
     pub fn merge(parts: Vec<RunMatrix>) -> Option<RunMatrix> {
         let first = parts.first()?;
-        let (checkpoints, channels) = (first.checkpoints, first.channels);
+        let (checkpoints, quantities) = (first.checkpoints, first.quantities);
         if parts
             .iter()
-            .any(|p| p.checkpoints != checkpoints || p.channels != channels)
+            .any(|p| p.checkpoints != checkpoints || p.quantities != quantities)
         {
             return None;
         }
@@ -110,7 +113,7 @@ impl RunMatrix {
         if order.windows(2).any(|w| w[0].0 == w[1].0) {
             return None;
         }
-        let mut out = RunMatrix::new(checkpoints, channels);
+        let mut out = RunMatrix::new(checkpoints, quantities);
         out.run_ids = order.iter().map(|o| o.0).collect();
         for (s, series) in out.values.iter_mut().enumerate() {
             *series = order
@@ -122,7 +125,7 @@ impl RunMatrix {
     }
 }
 
-/// Summary of one channel at one checkpoint over all successful runs.
+/// Summary of one quantity at one checkpoint over all successful runs.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Summary {
     pub count: u64,
@@ -231,7 +234,7 @@ pub fn summarise(values: &[f64]) -> Summary {
 ///
 /// The mean of x^2 over n independent runs is asymptotically normal (central limit theorem) with
 /// standard error sd(x^2)/sqrt(n), estimated from the runs themselves, so the interval holds for
-/// non-Gaussian channels (horizontal error) too. `rel_allowance` widens it multiplicatively for a
+/// non-Gaussian quantities (horizontal error) too. `rel_allowance` widens it multiplicatively for a
 /// stated deterministic error of the law itself (discretisation), which matters when the runs
 /// agree exactly (constant bias).
 pub fn ratio_interval(s: &Summary, law_rms: f64, z: f64, rel_allowance: f64) -> (f64, f64) {

@@ -1,17 +1,17 @@
 //! Every error term alone against its growth law (docs/model.md §4, Tables 2 and 3 of the seed):
-//! at every checkpoint and for every channel that has a law, the 99.9 % interval of
+//! at every checkpoint and for every quantity that has a law, the 99.9 % interval of
 //! simulated rms / law rms (from the runs, plus the stated discretisation allowance) must contain 1.
 //!
 //! False-positive rate: each interval is 99.9 % two-sided (per-check rate 1e-3). The ~1000 checks
-//! here are far from independent (one term's angle, velocity, position and horizontal channels are
+//! here are far from independent (one term's angle, velocity, position and horizontal quantities are
 //! functions of the same paths, and later checkpoints contain the earlier ones); counting one
 //! independent check per term, axis and decade of time (~150) bounds the family-wise rate by ~15 %
 //! for a fresh seed. The seeds are fixed (seed = 1 everywhere, not tuned), so the suite is
 //! deterministic; a failure after a code change is a real change of the simulated statistics.
 
-use imudrift_montecarlo::channels::Channel;
 use imudrift_montecarlo::experiment::{Experiment, Overrides};
 use imudrift_montecarlo::laws::horizontal_rayleigh_mean;
+use imudrift_montecarlo::nav_quantity::NavQuantity;
 use imudrift_montecarlo::report::DriftReport;
 use imudrift_montecarlo::run_range;
 use imudrift_montecarlo::scenario::Scenario;
@@ -44,12 +44,12 @@ fn simulate(
     exp.report(&r.matrix, &r.failures)
 }
 
-/// Assert every law-bearing channel's interval contains 1; return how many were checked.
-fn check(name: &str, report: &DriftReport, expect_channels: &[Channel]) -> usize {
+/// Assert every law-bearing quantity's interval contains 1; return how many were checked.
+fn check(name: &str, report: &DriftReport, expect_quantities: &[NavQuantity]) -> usize {
     let mut checked = 0;
     let mut bad = Vec::new();
     for cp in &report.checkpoints {
-        for (ch, c) in &cp.channels {
+        for (ch, c) in &cp.quantities {
             if let (Some(r), Some(lo), Some(hi)) = (c.ratio, c.ratio_lo, c.ratio_hi) {
                 checked += 1;
                 if !(lo <= 1.0 && 1.0 <= hi) {
@@ -72,8 +72,8 @@ fn check(name: &str, report: &DriftReport, expect_channels: &[Channel]) -> usize
             }
         }
     }
-    for ch in expect_channels {
-        let last = &report.checkpoints.last().unwrap().channels[ch.name()];
+    for ch in expect_quantities {
+        let last = &report.checkpoints.last().unwrap().quantities[ch.name()];
         assert!(
             last.ratio.is_some(),
             "{name}: {} has no law: {:?}",
@@ -93,21 +93,21 @@ fn check(name: &str, report: &DriftReport, expect_channels: &[Channel]) -> usize
 const CHECKS: &str = "[checkpoints]\nlog_count = 6\nfirst_s = 1.0\n";
 
 /// Channels a gyro term drives (angles, and horizontal through tilt): all but the vertical ones.
-fn gyro_law_channels() -> Vec<Channel> {
-    Channel::ALL
+fn gyro_law_quantities() -> Vec<NavQuantity> {
+    NavQuantity::ALL
         .into_iter()
-        .filter(|c| !matches!(c, Channel::PosDown | Channel::VelDown))
+        .filter(|c| !matches!(c, NavQuantity::PosDown | NavQuantity::VelDown))
         .collect()
 }
 
 /// Channels an accelerometer term drives: all but the angles.
-fn accel_law_channels() -> &'static [Channel] {
-    &Channel::ALL[3..]
+fn accel_law_quantities() -> &'static [NavQuantity] {
+    &NavQuantity::ALL[3..]
 }
 
 #[test]
 fn gyro_terms_alone_follow_their_laws() {
-    let tilt = gyro_law_channels();
+    let tilt = gyro_law_quantities();
     // Magnitudes keep the attitude error below ~0.01 rad at 20 s (small-angle laws).
     let cases: [(&str, &str); 10] = [
         ("white_noise", "[gyro.all]\nwhite_noise = \"0.002 deg/sqrt(s)\"\n"),
@@ -125,7 +125,7 @@ fn gyro_terms_alone_follow_their_laws() {
     ];
     for (name, toml) in cases {
         let r = simulate(toml, CHECKS, 20.0, 50.0, RUNS);
-        // Single-axis deterministic cases leave the other channels at exactly zero (no law to check).
+        // Single-axis deterministic cases leave the other quantities at exactly zero (no law to check).
         let n = if name.starts_with("constant")
             || name.starts_with("temperature")
             || name.starts_with("rate_ramp")
@@ -140,8 +140,8 @@ fn gyro_terms_alone_follow_their_laws() {
 
 #[test]
 fn accel_terms_alone_follow_their_laws() {
-    use Channel::*;
-    let all = accel_law_channels();
+    use NavQuantity::*;
+    let all = accel_law_quantities();
     let cases: [(&str, &str); 10] = [
         ("white_noise", "[accel.all]\nwhite_noise = \"0.004 m/s^2/sqrt(Hz)\"\n"),
         ("rate_random_walk", "[accel.all]\nrate_random_walk = \"0.001 m/s^2/sqrt(s)\"\n"),
@@ -156,7 +156,7 @@ fn accel_terms_alone_follow_their_laws() {
         ("misalignment (static: m g from z)", "[accel.x]\nmisalignment = [\"0.5 mrad\", \"1 mrad\"]\n[accel.y]\nmisalignment = [\"0.3 mrad\", \"-2 mrad\"]\n"),
     ];
     for (name, toml) in cases {
-        let expect: &[Channel] = if name.starts_with("scale") {
+        let expect: &[NavQuantity] = if name.starts_with("scale") {
             &[PosDown, VelDown]
         } else if name.starts_with("misalignment") {
             &[PosNorth, PosEast, PosHorizontal, VelNorth, VelEast]
@@ -173,7 +173,7 @@ const GAUSS_MARKOV: &str = "[gyro.all]\ngauss_markov = { sigma = \"0.01 deg/s\",
 
 #[test]
 fn gauss_markov_and_alignment_follow_their_laws() {
-    use Channel::*;
+    use NavQuantity::*;
     // Gauss-Markov (T = 2 s, so the checkpoints span t = T/4 .. 10 T, where neither asymptote
     // holds) and flicker bias instability (the noise crate's sum of Gauss-Markov components).
     let gm = GAUSS_MARKOV;
@@ -222,11 +222,11 @@ fn gyro_scale_factor_while_turning_grows_with_rate_and_duration() {
         100.0,
         20,
     );
-    check("scale_factor", &r, &[Channel::Yaw]);
-    let last = &r.checkpoints.last().unwrap().channels["yaw_rad"];
+    check("scale_factor", &r, &[NavQuantity::Yaw]);
+    let last = &r.checkpoints.last().unwrap().quantities["yaw_rad"];
     // yaw error = s w t = 1e-3 * 30 deg/s * 10 s = 0.3 deg.
     assert!((last.mean - 1e-3 * 30f64.to_radians() * 10.0).abs() < 1e-3 * last.mean.abs());
-    let north = &r.checkpoints.last().unwrap().channels["pos_north_m"];
+    let north = &r.checkpoints.last().unwrap().quantities["pos_north_m"];
     assert!(north.law_note.as_deref().unwrap_or("").contains("motion"));
 }
 
@@ -244,7 +244,7 @@ fn mtx_gyro_white_noise_mean_horizontal_is_the_rayleigh_mean() {
         100.0,
         4000,
     );
-    let h = &r.checkpoints[0].channels["pos_horizontal_m"];
+    let h = &r.checkpoints[0].quantities["pos_horizontal_m"];
     let g = 9.80665;
     let sigma = |arw_deg: f64| g * arw_deg.to_radians() * 60f64.powf(2.5) / 20f64.sqrt();
     // Roll (x) drives east, pitch (y) drives north.
@@ -259,7 +259,7 @@ fn mtx_gyro_white_noise_mean_horizontal_is_the_rayleigh_mean() {
 
 #[test]
 fn sinusoid_alone_follows_its_law() {
-    use Channel::*;
+    use NavQuantity::*;
     // The noise crate point-samples A sin(2 pi f t_k + phi) and the mechanisation holds each
     // sample over its interval; the law (`noise::closed_form::sinusoid_growth_sampled`) accounts
     // for that exactly: the once-integrated sum is the continuous integral at phase phi - pi f dt
@@ -271,13 +271,17 @@ fn sinusoid_alone_follows_its_law() {
     let gyro =
         format!("[gyro.all]\nsinusoidal = {{ amplitude = \"0.05 deg/s\", frequency = \"{f}\" }}\n");
     let r = simulate(&gyro, CHECKS, 20.0, 50.0, RUNS);
-    let n = check("gyro.sinusoidal (random phase)", &r, &gyro_law_channels());
+    let n = check("gyro.sinusoidal (random phase)", &r, &gyro_law_quantities());
     assert!(n >= 6 * 9, "only {n} checks");
     let accel = format!(
         "[accel.all]\nsinusoidal = {{ amplitude = \"0.05 m/s^2\", frequency = \"{f}\" }}\n"
     );
     let r = simulate(&accel, CHECKS, 20.0, 50.0, RUNS);
-    let n = check("accel.sinusoidal (random phase)", &r, accel_law_channels());
+    let n = check(
+        "accel.sinusoidal (random phase)",
+        &r,
+        accel_law_quantities(),
+    );
     assert!(n >= 6 * 8, "only {n} checks");
     // Fixed phase: every run is the same deterministic k-fold integral, so the signed mean is
     // checked (20 runs; the interval is the 4 dt/t allowance alone). Without the half-sample
@@ -287,12 +291,12 @@ fn sinusoid_alone_follows_its_law() {
         "[gyro.x]\nsinusoidal = {{ amplitude = \"0.05 deg/s\", frequency = \"{f}\", phase = \"60 deg\" }}\n[accel.x]\nsinusoidal = {{ amplitude = \"0.05 m/s^2\", frequency = \"{f}\", phase = \"-40 deg\" }}\n"
     );
     let r = simulate(&fixed, CHECKS, 20.0, 50.0, 20);
-    let fixed_channels = [Roll, VelEast, PosEast, VelNorth, PosNorth];
-    check("sinusoid (fixed phase)", &r, &fixed_channels);
+    let fixed_quantities = [Roll, VelEast, PosEast, VelNorth, PosNorth];
+    check("sinusoid (fixed phase)", &r, &fixed_quantities);
     for cp in &r.checkpoints {
-        for ch in fixed_channels {
+        for ch in fixed_quantities {
             assert!(
-                cp.channels[ch.name()].mean_ratio.is_some(),
+                cp.quantities[ch.name()].mean_ratio.is_some(),
                 "t={} {}: no mean check",
                 cp.t_s,
                 ch.name()
@@ -310,17 +314,17 @@ fn resonance_alone_follows_its_law() {
     // process by the sample-and-hold gain sinc^2(pi f dt), 1 - 3e-4 here.
     let gyro = "[gyro.all]\nresonance = { sigma = \"0.1 deg/s\", frequency = \"1 Hz\", bandwidth = \"0.3 Hz\" }\n";
     let r = simulate(gyro, CHECKS, 20.0, 100.0, RUNS);
-    let n = check("gyro.resonance", &r, &gyro_law_channels());
+    let n = check("gyro.resonance", &r, &gyro_law_quantities());
     assert!(n >= 6 * 9, "only {n} checks");
     let accel = "[accel.all]\nresonance = { sigma = \"0.05 m/s^2\", frequency = \"1 Hz\", bandwidth = \"0.3 Hz\" }\n";
     let r = simulate(accel, CHECKS, 20.0, 100.0, RUNS);
-    let n = check("accel.resonance", &r, accel_law_channels());
+    let n = check("accel.resonance", &r, accel_law_quantities());
     assert!(n >= 6 * 8, "only {n} checks");
 }
 
 #[test]
 fn bias_calibrated_at_start_follows_its_law() {
-    use Channel::*;
+    use NavQuantity::*;
     // `terms.bias_calibrated_at_start`: each Gauss-Markov process referenced to its value at
     // t = 0 (`laws::gauss_markov_from_start_variance`). The same magnitudes as the uncalibrated
     // cases above; T = 2 s puts the checkpoints (0.5 .. 20 s) on both sides of T, where the
@@ -354,7 +358,7 @@ fn bias_calibrated_at_start_follows_its_law() {
 
 #[test]
 fn bias_calibration_window_follows_its_law() {
-    use Channel::*;
+    use NavQuantity::*;
     // `terms.bias_calibration_window_s`: each Gauss-Markov process referenced to its mean over a
     // window before t = 0 (`laws::gauss_markov_from_window_variance`). GM with T = 2 s and a 3 s
     // window (W ~ T, so the window mean is neither b(0) nor 0 and its covariance with b(t)

@@ -33,14 +33,14 @@ mod ziggurat;
 
 pub use channel::{Channel, ImuChannels, AXIS_NAMES};
 pub use config::{is_noise_file_text, utf8_text, ConfigError, UnitStyle};
-pub use effect::{FilterError, Sensor, TermFilter};
+pub use effect::{Sensor, TermFilter, TermSelector, TermSelectorError};
 pub use law_source::{LawSource, LawSourceContext};
 pub use model::{AxisModel, SensorModel, TriadModel};
 pub use model_error::ModelError;
 pub use process::{ChannelErrors, ImuErrors, CHANNEL_NAMES};
 pub use static_level::StaticLevel;
 pub use temperature::TemperatureProfile;
-pub use terms::bias_instability::{BiasInstability, Flicker};
+pub use terms::bias_instability::{BiasInstability, BiasRandomWalk, Flicker};
 pub use terms::constant_bias::ConstantBias;
 pub use terms::gauss_markov::GaussMarkov;
 pub use terms::misalignment::Misalignment;

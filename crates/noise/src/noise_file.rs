@@ -63,37 +63,114 @@ pub struct NoiseValues {
     pub origin: String,
 }
 
-/// Write a noise file. `inflate` multiplies the four written values (1 = as measured); the
-/// measured values stay in the comments.
-pub fn write_noise_file(v: &NoiseValues, flavor: Flavor, inflate: f64) -> String {
-    let worst = |a: &[AxisValue; 3]| a.iter().map(|x| x.value).fold(f64::NAN, f64::max);
-    let rows: [(&str, &str, &str, &[AxisValue; 3]); 4] = [
-        (
-            "accelerometer_noise_density",
-            "acc_n",
-            "m/s^2/sqrt(Hz), accelerometer white noise",
-            &v.accel_noise_density,
-        ),
-        (
-            "accelerometer_random_walk",
-            "acc_w",
-            "m/s^3/sqrt(Hz), accelerometer bias random walk",
-            &v.accel_random_walk,
-        ),
-        (
-            "gyroscope_noise_density",
-            "gyr_n",
-            "rad/s/sqrt(Hz), gyro white noise",
-            &v.gyro_noise_density,
-        ),
-        (
-            "gyroscope_random_walk",
-            "gyr_w",
-            "rad/s^2/sqrt(Hz), gyro bias random walk",
-            &v.gyro_random_walk,
-        ),
-    ];
+/// The margin multiplied into the four written values, and the name of the setting that gave it
+/// (written into the header comment: a front end passes its own name for it, e.g. its option).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Inflation<'a> {
+    /// The factor (1 = the values as measured).
+    pub factor: f64,
+    /// The setting's name as the reader of the file knows it.
+    pub setting: &'a str,
+}
+
+impl Inflation<'static> {
+    /// The values as measured (factor 1: the header says nothing about a margin).
+    pub const NONE: Inflation<'static> = Inflation {
+        factor: 1.0,
+        setting: "inflate",
+    };
+}
+
+/// One written value: the Kalibr / OpenVINS key, the VINS-Fusion key, the unit and meaning (a
+/// comment), and the per-axis values.
+struct Row<'a> {
+    key: &'static str,
+    short: &'static str,
+    unit: &'static str,
+    axes: &'a [AxisValue; 3],
+}
+
+/// The four values in the order the files list them.
+fn rows(v: &NoiseValues) -> [Row<'_>; 4] {
+    [
+        Row {
+            key: "accelerometer_noise_density",
+            short: "acc_n",
+            unit: "m/s^2/sqrt(Hz), accelerometer white noise",
+            axes: &v.accel_noise_density,
+        },
+        Row {
+            key: "accelerometer_random_walk",
+            short: "acc_w",
+            unit: "m/s^3/sqrt(Hz), accelerometer bias random walk",
+            axes: &v.accel_random_walk,
+        },
+        Row {
+            key: "gyroscope_noise_density",
+            short: "gyr_n",
+            unit: "rad/s/sqrt(Hz), gyro white noise",
+            axes: &v.gyro_noise_density,
+        },
+        Row {
+            key: "gyroscope_random_walk",
+            short: "gyr_w",
+            unit: "rad/s^2/sqrt(Hz), gyro bias random walk",
+            axes: &v.gyro_random_walk,
+        },
+    ]
+}
+
+/// The largest of the three axes (the one value per sensor these tools take).
+fn worst(axes: &[AxisValue; 3]) -> f64 {
+    axes.iter().map(|x| x.value).fold(f64::NAN, f64::max)
+}
+
+/// Write a noise file. `inflation` multiplies the four written values (factor 1 = as measured);
+/// the measured values stay in the comments.
+pub fn write_noise_file(v: &NoiseValues, flavor: Flavor, inflation: Inflation<'_>) -> String {
+    let rows = rows(v);
     let mut s = String::new();
+    write_header(&mut s, v, flavor, inflation, &rows);
+    let indent = if flavor == Flavor::OpenVins { "  " } else { "" };
+    if flavor == Flavor::OpenVins {
+        s.push_str("imu0:\n  T_i_b:\n    - [1.0, 0.0, 0.0, 0.0]\n    - [0.0, 1.0, 0.0, 0.0]\n    - [0.0, 0.0, 1.0, 0.0]\n    - [0.0, 0.0, 0.0, 1.0]\n");
+    }
+    if flavor == Flavor::VinsFusion {
+        write_vins_fusion_note(&mut s, v, inflation.factor);
+        let _ = writeln!(s, "imu_topic: \"{}\"", v.rostopic);
+    }
+    for row in &rows {
+        let name = if flavor == Flavor::VinsFusion {
+            row.short
+        } else {
+            row.key
+        };
+        let _ = writeln!(
+            s,
+            "{indent}{name}: {}  # [{}]",
+            sci(worst(row.axes) * inflation.factor),
+            row.unit
+        );
+    }
+    if flavor != Flavor::VinsFusion {
+        let _ = writeln!(s, "{indent}rostopic: {}", v.rostopic);
+        let _ = writeln!(s, "{indent}update_rate: {}", v.update_rate_hz);
+    }
+    if flavor == Flavor::OpenVins {
+        write_openvins_intrinsics(&mut s);
+    }
+    s
+}
+
+/// The header comments: where the values come from, what they mean, the margin if any, and each
+/// axis's value with how it was obtained.
+fn write_header(
+    s: &mut String,
+    v: &NoiseValues,
+    flavor: Flavor,
+    inflation: Inflation<'_>,
+    rows: &[Row<'_>; 4],
+) {
     if flavor != Flavor::Kalibr {
         s.push_str("%YAML:1.0\n");
     }
@@ -109,76 +186,58 @@ pub fn write_noise_file(v: &NoiseValues, flavor: Flavor, inflate: f64) -> String
          # Discrete at dt: noise sigma/sqrt(dt), random walk sigma*sqrt(dt).\n\
          # One value per sensor: the largest of the three axes (worst axis); each axis below.\n",
     );
-    if inflate != 1.0 {
+    if inflation.factor != 1.0 {
         let _ = writeln!(
             s,
-            "# The written values are the measured ones multiplied by {inflate} (--inflate), a margin for what the\n# two-term model leaves out (bias instability, temperature, vibration); the measured values are below."
+            "# The written values are the measured ones multiplied by {} ({}), a margin for what the\n# two-term model leaves out (bias instability, temperature, vibration); the measured values are below.",
+            inflation.factor, inflation.setting
         );
     }
-    for (key, _, unit, axes) in &rows {
-        let per_axis: Vec<String> = axes
+    for row in rows {
+        let per_axis: Vec<String> = row
+            .axes
             .iter()
             .zip(["x", "y", "z"])
             .map(|(a, n)| format!("{n} {} ({})", sci(a.value), a.how))
             .collect();
-        let _ = writeln!(s, "# {key} [{unit}]: {}", per_axis.join(", "));
+        let _ = writeln!(s, "# {} [{}]: {}", row.key, row.unit, per_axis.join(", "));
     }
-    let indent = if flavor == Flavor::OpenVins { "  " } else { "" };
-    if flavor == Flavor::OpenVins {
-        s.push_str("imu0:\n  T_i_b:\n    - [1.0, 0.0, 0.0, 0.0]\n    - [0.0, 1.0, 0.0, 0.0]\n    - [0.0, 0.0, 1.0, 0.0]\n    - [0.0, 0.0, 0.0, 1.0]\n");
-    }
-    if flavor == Flavor::VinsFusion {
-        // VINS-Fusion's preintegration adds (value * dt)^2 per sample (mid-point rule: half of
-        // it for the white noise), so a continuous density acts smaller there; the values that
-        // make it carry the continuous model, for users who want that (docs/noise-files.md).
-        let dt = 1.0 / v.update_rate_hz;
-        if dt.is_finite() && dt > 0.0 {
-            let _ = writeln!(
-                s,
-                "# VINS-Fusion applies these per sample; to make its propagation carry the continuous model at {} Hz use\n# gyr_n {}, acc_n {}, gyr_w {}, acc_w {} (sqrt(2/dt) N and K/sqrt(dt), worst axis).",
-                v.update_rate_hz,
-                sci(worst(&v.gyro_noise_density) * inflate * (2.0 / dt).sqrt()),
-                sci(worst(&v.accel_noise_density) * inflate * (2.0 / dt).sqrt()),
-                sci(worst(&v.gyro_random_walk) * inflate / dt.sqrt()),
-                sci(worst(&v.accel_random_walk) * inflate / dt.sqrt()),
-            );
-        }
-        let _ = writeln!(s, "imu_topic: \"{}\"", v.rostopic);
-    }
-    for (key, short, unit, axes) in &rows {
-        let name = if flavor == Flavor::VinsFusion {
-            short
-        } else {
-            key
-        };
+}
+
+/// VINS-Fusion's preintegration adds (value * dt)^2 per sample (mid-point rule: half of it for
+/// the white noise), so a continuous density acts smaller there; the comment gives the values that
+/// make it carry the continuous model, for users who want that (docs/noise-files.md).
+fn write_vins_fusion_note(s: &mut String, v: &NoiseValues, inflate: f64) {
+    let dt = 1.0 / v.update_rate_hz;
+    if dt.is_finite() && dt > 0.0 {
         let _ = writeln!(
             s,
-            "{indent}{name}: {}  # [{unit}]",
-            sci(worst(axes) * inflate)
+            "# VINS-Fusion applies these per sample; to make its propagation carry the continuous model at {} Hz use\n# gyr_n {}, acc_n {}, gyr_w {}, acc_w {} (sqrt(2/dt) N and K/sqrt(dt), worst axis).",
+            v.update_rate_hz,
+            sci(worst(&v.gyro_noise_density) * inflate * (2.0 / dt).sqrt()),
+            sci(worst(&v.accel_noise_density) * inflate * (2.0 / dt).sqrt()),
+            sci(worst(&v.gyro_random_walk) * inflate / dt.sqrt()),
+            sci(worst(&v.accel_random_walk) * inflate / dt.sqrt()),
         );
     }
-    if flavor != Flavor::VinsFusion {
-        let _ = writeln!(s, "{indent}rostopic: {}", v.rostopic);
-        let _ = writeln!(s, "{indent}update_rate: {}", v.update_rate_hz);
-    }
-    if flavor == Flavor::OpenVins {
-        // OpenVINS's parser requires the intrinsics too; "calibrated" with identity matrices
-        // and a zero g-sensitivity says the IMU is taken as already corrected.
-        s.push_str("  time_offset: 0.0\n  model: \"calibrated\"\n");
-        for (key, rows) in [
-            ("Tw", EYE3),
-            ("R_IMUtoGYRO", EYE3),
-            ("Ta", EYE3),
-            ("R_IMUtoACC", EYE3),
-            ("Tg", ["0.0, 0.0, 0.0"; 3]),
-        ] {
-            let _ = writeln!(s, "  {key}:");
-            for r in rows {
-                let _ = writeln!(s, "    - [{r}]");
-            }
+}
+
+/// OpenVINS's parser requires the intrinsics too; "calibrated" with identity matrices and a zero
+/// g-sensitivity says the IMU is taken as already corrected.
+fn write_openvins_intrinsics(s: &mut String) {
+    s.push_str("  time_offset: 0.0\n  model: \"calibrated\"\n");
+    for (key, rows) in [
+        ("Tw", EYE3),
+        ("R_IMUtoGYRO", EYE3),
+        ("Ta", EYE3),
+        ("R_IMUtoACC", EYE3),
+        ("Tg", ["0.0, 0.0, 0.0"; 3]),
+    ] {
+        let _ = writeln!(s, "  {key}:");
+        for r in rows {
+            let _ = writeln!(s, "    - [{r}]");
         }
     }
-    s
 }
 
 const EYE3: [&str; 3] = ["1.0, 0.0, 0.0", "0.0, 1.0, 0.0", "0.0, 0.0, 1.0"];

@@ -435,10 +435,22 @@ impl<'a> Parser<'a> {
         self.depth -= 1;
         u
     }
+    /// One factor: a base (a root, a parenthesised product or a named unit) and its power.
     fn factor_inner(&mut self) -> Result<Unit, UnitError> {
         self.skip_ws();
+        let mut u = self.base()?;
+        self.skip_ws();
+        if let Some(p) = self.power()? {
+            u.factor = u.factor.powi(p);
+            u.dim = u.dim.pow_half(2 * p).expect("integer power");
+            u.offset = 0.0;
+        }
+        Ok(u)
+    }
+
+    /// `sqrt(..)` / `rt(..)` (the datasheet shorthand), `√..`, `(..)` or a named unit.
+    fn base(&mut self) -> Result<Unit, UnitError> {
         let rest = &self.s[self.pos..];
-        // `rt(Hz)` is the datasheet shorthand for sqrt(Hz).
         let root_len = if rest.starts_with("sqrt(") {
             5
         } else if rest.starts_with("rt(") {
@@ -446,68 +458,76 @@ impl<'a> Parser<'a> {
         } else {
             0
         };
-        let mut u = if root_len > 0 {
+        if root_len > 0 {
             self.pos += root_len;
-            let inner = self.product()?;
-            self.skip_ws();
-            if self.peek() != Some(')') {
-                return Err(self.err("expected `)`"));
-            }
-            self.pos += 1;
-            sqrt_unit(inner, self)?
+            let inner = self.closed_product()?;
+            sqrt_unit(inner, self)
         } else if rest.starts_with('√') {
             self.pos += '√'.len_utf8();
             let inner = self.factor()?;
-            sqrt_unit(inner, self)?
+            sqrt_unit(inner, self)
         } else if rest.starts_with('(') {
             self.pos += 1;
-            let inner = self.product()?;
-            self.skip_ws();
-            if self.peek() != Some(')') {
-                return Err(self.err("expected `)`"));
-            }
-            self.pos += 1;
-            inner
+            self.closed_product()
         } else {
-            let len: usize = rest
-                .char_indices()
-                .find(|&(_, c)| {
-                    !(c.is_alphanumeric() || matches!(c, '%' | '°' | 'º' | 'µ'))
-                        || matches!(c, '²' | '³')
-                })
-                .map(|(i, _)| i)
-                .unwrap_or(rest.len());
-            let name = &rest[..len];
-            if name.is_empty() {
-                return Err(self.err("expected a unit name"));
-            }
-            let unknown = || {
-                self.err(&format!(
-                    "unknown unit `{name}` (known: rad mrad urad deg arcmin arcsec m mm s ms us min h Hz kHz mHz g mg ug dps dph degC K ppm %, with sqrt(..), √.., rt.. for roots, e.g. \"0.05 deg/s/sqrt(Hz)\", \"0.2 °/√h\", \"40 ug/rtHz\")"
-                ))
-            };
-            // `rtHz`, `rth`, `rthr`: the datasheet shorthand for the root of a unit.
-            let (factor, dim, root) = match atom(name) {
-                Some((f, d)) => (f, d, false),
-                None => match name.strip_prefix("rt").and_then(atom) {
-                    Some((f, d)) => (f, d, true),
-                    None => return Err(unknown()),
-                },
-            };
-            self.pos += len;
-            let unit = Unit {
-                factor,
-                offset: if name == "K" { -273.15 } else { 0.0 },
-                dim,
-            };
-            if root {
-                sqrt_unit(unit, self)?
-            } else {
-                unit
-            }
-        };
+            self.named()
+        }
+    }
+
+    /// A product and the `)` that closes it (the opening one already read).
+    fn closed_product(&mut self) -> Result<Unit, UnitError> {
+        let inner = self.product()?;
         self.skip_ws();
-        let power = match self.peek() {
+        if self.peek() != Some(')') {
+            return Err(self.err("expected `)`"));
+        }
+        self.pos += 1;
+        Ok(inner)
+    }
+
+    /// A unit's name ([`atom`]), or `rt` and a name (`rtHz`, `rth`: the root of that unit).
+    fn named(&mut self) -> Result<Unit, UnitError> {
+        let rest = &self.s[self.pos..];
+        let len: usize = rest
+            .char_indices()
+            .find(|&(_, c)| {
+                !(c.is_alphanumeric() || matches!(c, '%' | '°' | 'º' | 'µ'))
+                    || matches!(c, '²' | '³')
+            })
+            .map(|(i, _)| i)
+            .unwrap_or(rest.len());
+        let name = &rest[..len];
+        if name.is_empty() {
+            return Err(self.err("expected a unit name"));
+        }
+        let unknown = || {
+            self.err(&format!(
+                "unknown unit `{name}` (known: rad mrad urad deg arcmin arcsec m mm s ms us min h Hz kHz mHz g mg ug dps dph degC K ppm %, with sqrt(..), √.., rt.. for roots, e.g. \"0.05 deg/s/sqrt(Hz)\", \"0.2 °/√h\", \"40 ug/rtHz\")"
+            ))
+        };
+        let (factor, dim, root) = match atom(name) {
+            Some((f, d)) => (f, d, false),
+            None => match name.strip_prefix("rt").and_then(atom) {
+                Some((f, d)) => (f, d, true),
+                None => return Err(unknown()),
+            },
+        };
+        self.pos += len;
+        let unit = Unit {
+            factor,
+            offset: if name == "K" { -273.15 } else { 0.0 },
+            dim,
+        };
+        if root {
+            sqrt_unit(unit, self)
+        } else {
+            Ok(unit)
+        }
+    }
+
+    /// `^N` (an integer from -MAX_UNIT_POWER to MAX_UNIT_POWER), `²`, `³`, or none.
+    fn power(&mut self) -> Result<Option<i32>, UnitError> {
+        Ok(match self.peek() {
             Some('^') => {
                 self.pos += 1;
                 self.skip_ws();
@@ -534,13 +554,7 @@ impl<'a> Parser<'a> {
                 Some(3)
             }
             _ => None,
-        };
-        if let Some(p) = power {
-            u.factor = u.factor.powi(p);
-            u.dim = u.dim.pow_half(2 * p).expect("integer power");
-            u.offset = 0.0;
-        }
-        Ok(u)
+        })
     }
 }
 

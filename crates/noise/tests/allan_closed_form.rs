@@ -51,10 +51,9 @@ fn rate_random_walk_matches_k2_tau_over_3() {
 #[test]
 fn woodman_bias_random_walk_matches_its_k() {
     // Woodman eq 9: K = BS / sqrt(T); 1e-3 rad/s over 100 s.
-    let axis = noise::AxisModel::default().with(BiasInstability::RandomWalk {
-        stability: 1e-3,
-        period_s: 100.0,
-    });
+    let axis = noise::AxisModel::default().with(BiasInstability::RandomWalk(
+        noise::BiasRandomWalk::new(1e-3, 100.0).unwrap(),
+    ));
     check("Woodman bias random walk", &axis, &MS, &[-2]);
     let k = cf::woodman_bias_random_walk(1e-3, 100.0);
     assert!((axis.allan_variance(30.0) / cf::rate_random_walk_avar(k, 30.0) - 1.0).abs() < 1e-12);

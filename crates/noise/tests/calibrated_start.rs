@@ -75,10 +75,9 @@ fn other_terms_are_bit_identical() {
         .with(noise::WhiteNoise::new(1e-3).unwrap())
         .with(noise::RateRandomWalk::new(1e-4).unwrap())
         .with(noise::TurnOnBias::new(1e-2).unwrap())
-        .with(BiasInstability::RandomWalk {
-            stability: 1e-3,
-            period_s: 4.0,
-        });
+        .with(BiasInstability::RandomWalk(
+            noise::BiasRandomWalk::new(1e-3, 4.0).unwrap(),
+        ));
     let m = model(fast);
     assert_eq!(
         series(&m, raw_run, 500),

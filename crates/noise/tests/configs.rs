@@ -1,14 +1,13 @@
 //! The shipped sensor configs load, carry their spec-sheet values in SI, and round-trip.
 
+mod common;
+
 use noise::closed_form::FLICKER_PLATEAU_PER_B;
 use noise::{BiasInstability, SensorModel};
 use std::f64::consts::PI;
 
 fn load(name: &str) -> SensorModel {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../configs/sensors")
-        .join(name);
-    SensorModel::load(&path).unwrap_or_else(|e| panic!("{e}"))
+    common::shipped_model(name)
 }
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -34,7 +33,7 @@ fn every_config_round_trips() {
     for entry in std::fs::read_dir(dir).unwrap() {
         let path = entry.unwrap().path();
         if path.extension().is_some_and(|e| e == "toml") {
-            let m = SensorModel::load(&path).unwrap_or_else(|e| panic!("{e}"));
+            let m = common::read_model(&path);
             assert_eq!(
                 SensorModel::from_toml_str(&m.to_toml_string(), "rt").unwrap(),
                 m

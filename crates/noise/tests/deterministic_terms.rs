@@ -135,10 +135,7 @@ fn adding_a_term_does_not_reshuffle_the_others() {
 
 #[test]
 fn corrupt_and_channel_fill_give_the_same_bits() {
-    let model = SensorModel::load(
-        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/sensors/mtx.toml"),
-    )
-    .unwrap();
+    let model = common::shipped_model("mtx.toml");
     let ideal = noise::StaticLevel::STANDARD.inputs();
     let mut a = ImuErrors::new(&model, 0.01, 42, 1);
     let mut b = a.clone();

@@ -83,10 +83,7 @@ fn random_walk_variance_grows_linearly_and_its_integrals_as_t3_t5_t7() {
         cf::random_walk_growth_std(k, t, how)
     });
     // Woodman's bias random walk is the same law with K = BS/sqrt(T) (eq 9).
-    let bs = BiasInstability::RandomWalk {
-        stability: 1e-3,
-        period_s: 100.0,
-    };
+    let bs = BiasInstability::RandomWalk(noise::BiasRandomWalk::new(1e-3, 100.0).unwrap());
     let axis = noise::AxisModel::default().with(bs);
     let k = cf::woodman_bias_random_walk(1e-3, 100.0);
     check_growth("Woodman bias random walk", &axis, |t, how| {

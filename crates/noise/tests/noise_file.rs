@@ -1,7 +1,9 @@
 //! Kalibr / OpenVINS / VINS-Fusion IMU noise files: the published EuRoC values read exactly, the
 //! three flavours written and read back, and bad files named by line and key.
 
-use noise::noise_file::{read_noise_file, write_noise_file, AxisValue, Flavor, NoiseValues};
+use noise::noise_file::{
+    read_noise_file, write_noise_file, AxisValue, Flavor, Inflation, NoiseValues,
+};
 use noise::SensorModel;
 
 /// The EuRoC MAV dataset's `imu0/sensor.yaml` (ADIS16448), as published with the dataset.
@@ -96,7 +98,7 @@ fn sample() -> NoiseValues {
 #[test]
 fn every_flavour_round_trips_with_the_worst_axis() {
     for flavor in [Flavor::Kalibr, Flavor::OpenVins, Flavor::VinsFusion] {
-        let text = write_noise_file(&sample(), flavor, 1.0);
+        let text = write_noise_file(&sample(), flavor, Inflation::NONE);
         let m = read_noise_file(&text, "imu.yaml").unwrap_or_else(|e| panic!("{text}\n{e}"));
         // Written with five significant digits: the worst axis of each value.
         assert_eq!(
@@ -109,9 +111,9 @@ fn every_flavour_round_trips_with_the_worst_axis() {
         // Per-axis values in the comments.
         assert!(text.contains("x 1.1000e-04"), "{text}");
     }
-    let kalibr = write_noise_file(&sample(), Flavor::Kalibr, 1.0);
+    let kalibr = write_noise_file(&sample(), Flavor::Kalibr, Inflation::NONE);
     assert!(kalibr.contains("rostopic: /imu0") && kalibr.contains("update_rate: 200"));
-    let openvins = write_noise_file(&sample(), Flavor::OpenVins, 1.0);
+    let openvins = write_noise_file(&sample(), Flavor::OpenVins, Inflation::NONE);
     assert!(openvins.starts_with("%YAML:1.0") && openvins.contains("imu0:\n  T_i_b:"));
     for key in [
         "model: \"calibrated\"",
@@ -124,7 +126,7 @@ fn every_flavour_round_trips_with_the_worst_axis() {
     ] {
         assert!(openvins.contains(key), "{key}\n{openvins}");
     }
-    let vins = write_noise_file(&sample(), Flavor::VinsFusion, 1.0);
+    let vins = write_noise_file(&sample(), Flavor::VinsFusion, Inflation::NONE);
     assert!(vins.contains("gyr_n: 1.3000e-04") && vins.contains("acc_w: 3.1000e-04"));
     // PyYAML floats: a dot and a signed exponent.
     assert!(
@@ -134,13 +136,20 @@ fn every_flavour_round_trips_with_the_worst_axis() {
 
 #[test]
 fn inflation_multiplies_the_written_values_and_says_so() {
-    let text = write_noise_file(&sample(), Flavor::Kalibr, 10.0);
+    let text = write_noise_file(
+        &sample(),
+        Flavor::Kalibr,
+        Inflation {
+            factor: 10.0,
+            setting: "margin",
+        },
+    );
     let m = read_noise_file(&text, "imu.yaml").unwrap();
     let v = values(&m);
     for (got, want) in v.iter().zip([1.3e-3, 2.5e-5, 2.1e-2, 3.1e-3]) {
         assert!((got - want).abs() <= 1e-12 * want, "{got} {want}");
     }
-    assert!(text.contains("multiplied by 10"), "{text}");
+    assert!(text.contains("multiplied by 10 (margin)"), "{text}");
 }
 
 #[test]
@@ -163,14 +172,11 @@ fn bad_files_name_the_line_and_the_key() {
 
 #[test]
 fn a_noise_file_loads_wherever_a_sensor_toml_does() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("euroc.yaml");
-    std::fs::write(&path, EUROC).unwrap();
-    let m = SensorModel::load(&path).unwrap();
+    let m = SensorModel::from_text(EUROC, "euroc.yaml").unwrap();
     assert_eq!(values(&m)[0], 1.6968e-04);
-    let bad = dir.path().join("bad.yaml");
-    std::fs::write(&bad, "gyroscope_noise_density: x\n").unwrap();
-    let e = SensorModel::load(&bad).unwrap_err().to_string();
+    let e = SensorModel::from_text("gyroscope_noise_density: x\n", "bad.yaml")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("bad.yaml"), "{e}");
 }
 

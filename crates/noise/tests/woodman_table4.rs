@@ -23,9 +23,7 @@ const ARW_TOLERANCE: f64 = 0.05;
 const MIN_TOLERANCE: f64 = 0.20;
 
 pub fn mtx() -> SensorModel {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/sensors/mtx.toml");
-    SensorModel::load(&path).unwrap()
+    common::shipped_model("mtx.toml")
 }
 
 /// (ADEV at 1 s, minimum ADEV, tau of the minimum) per gyro axis, deg/s.

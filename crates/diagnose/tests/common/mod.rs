@@ -80,7 +80,7 @@ impl GeneratedLog {
     pub fn diagnose(&self, base: &SensorModel, seeds: usize) -> Diagnosis {
         let input = LogInput {
             dt_s: DT_S,
-            channels: std::array::from_fn(|c| Some(self.channels[c].as_slice())),
+            channels: noise::ImuChannels(self.channels.each_ref().map(|c| Some(c.as_slice()))),
             temperature_c: self.temperature_c.as_deref(),
         };
         let settings = Settings {

@@ -11,6 +11,7 @@ use crate::terms::{Effect, RawAxis};
 use crate::units::Quantity;
 use crate::AXIS_NAMES;
 
+/// The `[temperature]` table: the profile and the reference temperature (25 degC when absent).
 pub(super) fn convert_temperature(
     ctx: &Ctx,
     raw: Option<&RawTemperature>,
@@ -18,120 +19,167 @@ pub(super) fn convert_temperature(
     let Some(raw) = raw else {
         return Ok((TemperatureProfile::default(), 25.0));
     };
-    let t = Quantity::Temperature;
-    let fields: [(&str, &Option<Text>); 10] = [
-        ("value", &raw.value),
-        ("start", &raw.start),
-        ("end", &raw.end),
-        ("rate", &raw.rate),
-        ("time_constant", &raw.time_constant),
-        ("mean", &raw.mean),
-        ("amplitude", &raw.amplitude),
-        ("period", &raw.period),
-        ("at", &raw.at),
-        ("reference", &raw.reference),
-    ];
-    let profile = raw.profile.get_ref().as_str();
-    let (uses, profile_keys): (&[&str], &str) = match profile {
-        "constant" => (&["value"], "value"),
-        "ramp" => (&["start", "rate", "end"], "start, rate and optionally end"),
-        "warmup" => (
-            &["start", "end", "time_constant"],
-            "start, end, time_constant",
-        ),
-        "sinusoid" => (&["mean", "amplitude", "period"], "mean, amplitude, period"),
-        "step" => (&["start", "end", "at"], "start, end, at"),
-        other => {
-            return Err(ctx.invalid_at(
-                "temperature.profile",
-                Some(&raw.profile),
-                "one of \"constant\", \"ramp\", \"warmup\", \"sinusoid\", \"step\"",
-                format!("\"{other}\""),
-            ))
-        }
+    let keys = ProfileKeys::of(ctx, raw)?;
+    keys.check_no_extra(raw)?;
+    let profile = keys.profile(raw)?;
+    let reference = match &raw.reference {
+        Some(r) => ctx.value("temperature.reference", r, Quantity::Temperature, false)?,
+        None => 25.0,
     };
-    for (name, v) in fields {
-        if v.is_some() && name != "reference" && !uses.contains(&name) {
-            return Err(ctx.invalid_at(
-                &format!("temperature.{name}"),
-                v.as_ref(),
-                format!("only {profile_keys} for profile \"{profile}\""),
-                "an extra key",
-            ));
-        }
+    Ok((profile, reference))
+}
+
+/// A temperature profile's name and the keys it uses (the rest of the table must not be set).
+struct ProfileKeys<'a> {
+    ctx: &'a Ctx<'a>,
+    /// `constant`, `ramp`, `warmup`, `sinusoid` or `step`.
+    name: &'a str,
+    uses: &'static [&'static str],
+    /// The keys as a message lists them.
+    described: &'static str,
+}
+
+impl<'a> ProfileKeys<'a> {
+    /// The keys of `raw`'s profile; an unknown profile is an error naming the ones there are.
+    fn of(ctx: &'a Ctx<'a>, raw: &'a RawTemperature) -> Result<ProfileKeys<'a>, ConfigError> {
+        let name = raw.profile.get_ref().as_str();
+        let (uses, described): (&'static [&'static str], &'static str) = match name {
+            "constant" => (&["value"], "value"),
+            "ramp" => (&["start", "rate", "end"], "start, rate and optionally end"),
+            "warmup" => (
+                &["start", "end", "time_constant"],
+                "start, end, time_constant",
+            ),
+            "sinusoid" => (&["mean", "amplitude", "period"], "mean, amplitude, period"),
+            "step" => (&["start", "end", "at"], "start, end, at"),
+            other => {
+                return Err(ctx.invalid_at(
+                    "temperature.profile",
+                    Some(&raw.profile),
+                    "one of \"constant\", \"ramp\", \"warmup\", \"sinusoid\", \"step\"",
+                    format!("\"{other}\""),
+                ))
+            }
+        };
+        Ok(ProfileKeys {
+            ctx,
+            name,
+            uses,
+            described,
+        })
     }
-    let need = |name: &str, v: &'_ Option<Text>| -> Result<(String, Text), ConfigError> {
+
+    /// A key the profile does not use is an error (`reference` belongs to every profile).
+    fn check_no_extra(&self, raw: &RawTemperature) -> Result<(), ConfigError> {
+        let fields: [(&str, &Option<Text>); 10] = [
+            ("value", &raw.value),
+            ("start", &raw.start),
+            ("end", &raw.end),
+            ("rate", &raw.rate),
+            ("time_constant", &raw.time_constant),
+            ("mean", &raw.mean),
+            ("amplitude", &raw.amplitude),
+            ("period", &raw.period),
+            ("at", &raw.at),
+            ("reference", &raw.reference),
+        ];
+        for (name, v) in fields {
+            if v.is_some() && name != "reference" && !self.uses.contains(&name) {
+                return Err(self.ctx.invalid_at(
+                    &format!("temperature.{name}"),
+                    v.as_ref(),
+                    format!("only {} for profile \"{}\"", self.described, self.name),
+                    "an extra key",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// A key the profile needs, with its dotted name; missing is an error listing the keys.
+    fn need(&self, name: &str, v: &Option<Text>) -> Result<(String, Text), ConfigError> {
         let key = format!("temperature.{name}");
         let text = v.clone().ok_or_else(|| {
-            ctx.invalid(
+            self.ctx.invalid(
                 &key,
-                format!("{profile_keys} for profile \"{profile}\""),
+                format!("{} for profile \"{}\"", self.described, self.name),
                 "nothing",
             )
         })?;
         Ok((key, text))
-    };
-    let get = |name: &str, v: &Option<Text>, q: Quantity| -> Result<f64, ConfigError> {
-        let (key, text) = need(name, v)?;
-        ctx.value(&key, &text, q, false)
-    };
-    let get_positive = |name: &str, v: &Option<Text>, q: Quantity| -> Result<f64, ConfigError> {
-        let (key, text) = need(name, v)?;
-        ctx.positive(&key, &text, q)
-    };
-    let profile = match profile {
-        "constant" => TemperatureProfile::Constant {
-            temp_c: get("value", &raw.value, t)?,
-        },
-        "ramp" => {
-            let start_c = get("start", &raw.start, t)?;
-            let rate_c_per_s = get("rate", &raw.rate, Quantity::TemperatureRate)?;
-            let end_c = match &raw.end {
-                None => None,
-                Some(text) => {
-                    let end = ctx.value("temperature.end", text, t, false)?;
-                    // The ramp must be able to reach its end.
-                    if (end - start_c) * rate_c_per_s < 0.0 {
-                        return Err(ctx.invalid_at(
-                            "temperature.end",
-                            Some(text),
-                            "an end temperature the ramp reaches (above start for a rising ramp, below for a falling one)",
-                            format!("\"{}\"", text.get_ref()),
-                        ));
-                    }
-                    Some(end)
+    }
+
+    /// A needed value of quantity `q`, any sign.
+    fn get(&self, name: &str, v: &Option<Text>, q: Quantity) -> Result<f64, ConfigError> {
+        let (key, text) = self.need(name, v)?;
+        self.ctx.value(&key, &text, q, false)
+    }
+
+    /// A needed value of quantity `q`, > 0.
+    fn get_positive(&self, name: &str, v: &Option<Text>, q: Quantity) -> Result<f64, ConfigError> {
+        let (key, text) = self.need(name, v)?;
+        self.ctx.positive(&key, &text, q)
+    }
+
+    /// The profile from its keys (checked by [`ProfileKeys::of`] and `check_no_extra`).
+    fn profile(&self, raw: &RawTemperature) -> Result<TemperatureProfile, ConfigError> {
+        let t = Quantity::Temperature;
+        Ok(match self.name {
+            "constant" => TemperatureProfile::Constant {
+                temp_c: self.get("value", &raw.value, t)?,
+            },
+            "ramp" => self.ramp(raw)?,
+            "warmup" => TemperatureProfile::Warmup {
+                start_c: self.get("start", &raw.start, t)?,
+                end_c: self.get("end", &raw.end, t)?,
+                time_constant_s: self.get_positive(
+                    "time_constant",
+                    &raw.time_constant,
+                    Quantity::Time,
+                )?,
+            },
+            "step" => {
+                let (key, at) = self.need("at", &raw.at)?;
+                TemperatureProfile::Step {
+                    before_c: self.get("start", &raw.start, t)?,
+                    after_c: self.get("end", &raw.end, t)?,
+                    at_s: self.ctx.value(&key, &at, Quantity::Time, true)?,
                 }
-            };
-            TemperatureProfile::Ramp {
-                start_c,
-                rate_c_per_s,
-                end_c,
             }
-        }
-        "warmup" => TemperatureProfile::Warmup {
-            start_c: get("start", &raw.start, t)?,
-            end_c: get("end", &raw.end, t)?,
-            time_constant_s: get_positive("time_constant", &raw.time_constant, Quantity::Time)?,
-        },
-        "step" => {
-            let (key, at) = need("at", &raw.at)?;
-            TemperatureProfile::Step {
-                before_c: get("start", &raw.start, t)?,
-                after_c: get("end", &raw.end, t)?,
-                at_s: ctx.value(&key, &at, Quantity::Time, true)?,
+            _ => TemperatureProfile::Sinusoid {
+                mean_c: self.get("mean", &raw.mean, t)?,
+                amplitude_c: self.get("amplitude", &raw.amplitude, t)?,
+                period_s: self.get_positive("period", &raw.period, Quantity::Time)?,
+            },
+        })
+    }
+
+    /// A ramp: start and rate, and an end it must be able to reach.
+    fn ramp(&self, raw: &RawTemperature) -> Result<TemperatureProfile, ConfigError> {
+        let t = Quantity::Temperature;
+        let start_c = self.get("start", &raw.start, t)?;
+        let rate_c_per_s = self.get("rate", &raw.rate, Quantity::TemperatureRate)?;
+        let end_c = match &raw.end {
+            None => None,
+            Some(text) => {
+                let end = self.ctx.value("temperature.end", text, t, false)?;
+                if (end - start_c) * rate_c_per_s < 0.0 {
+                    return Err(self.ctx.invalid_at(
+                        "temperature.end",
+                        Some(text),
+                        "an end temperature the ramp reaches (above start for a rising ramp, below for a falling one)",
+                        format!("\"{}\"", text.get_ref()),
+                    ));
+                }
+                Some(end)
             }
-        }
-        _ => TemperatureProfile::Sinusoid {
-            mean_c: get("mean", &raw.mean, t)?,
-            amplitude_c: get("amplitude", &raw.amplitude, t)?,
-            period_s: get_positive("period", &raw.period, Quantity::Time)?,
-        },
-    };
-    let reference = match &raw.reference {
-        Some(r) => ctx.value("temperature.reference", r, t, false)?,
-        None => 25.0,
-    };
-    Ok((profile, reference))
+        };
+        Ok(TemperatureProfile::Ramp {
+            start_c,
+            rate_c_per_s,
+            end_c,
+        })
+    }
 }
 
 pub(super) fn convert_triad(

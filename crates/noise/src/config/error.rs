@@ -3,12 +3,6 @@
 /// A config that cannot be used: names the file, the key and what was expected.
 #[derive(Clone, Debug, thiserror::Error)]
 pub enum ConfigError {
-    #[error("{file}: cannot read the file")]
-    Io {
-        file: String,
-        #[source]
-        source: std::sync::Arc<std::io::Error>,
-    },
     /// TOML syntax, unknown keys, wrong types (the message carries line and column).
     #[error("{file}: {message}")]
     Parse { file: String, message: String },

@@ -44,7 +44,6 @@ use crate::model::*;
 use convert::{convert_temperature, convert_triad};
 use raw::RawSensor;
 use read::Ctx;
-use std::path::Path;
 
 impl SensorModel {
     /// Parse and validate a sensor config. `source_name` (usually the file path) appears in errors.
@@ -70,19 +69,9 @@ impl SensorModel {
         })
     }
 
-    /// Read a config file.
-    pub fn load(path: &Path) -> Result<SensorModel, ConfigError> {
-        let name = path.display().to_string();
-        let bytes = std::fs::read(path).map_err(|e| ConfigError::Io {
-            file: name.clone(),
-            source: std::sync::Arc::new(e),
-        })?;
-        let text = utf8_text(bytes, &name)?;
-        SensorModel::from_text(&text, &name)
-    }
-
     /// A sensor TOML, or a Kalibr / OpenVINS / VINS-Fusion IMU noise file (accepted wherever a
     /// sensor TOML is): a `.yaml` / `.yml` `source`, or text with their keys that is not TOML.
+    /// The library reads no files: the front end reads the file and passes its text and name.
     pub fn from_text(text: &str, source: &str) -> Result<SensorModel, ConfigError> {
         if is_noise_file_text(text, source) {
             return Ok(crate::noise_file::read_noise_file(text, source)?);

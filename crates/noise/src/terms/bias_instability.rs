@@ -158,9 +158,42 @@ impl Flicker {
 pub enum BiasInstability {
     /// Flicker noise, IEEE 952 (Allan plateau 0.664 B).
     Flicker(Flicker),
-    /// Woodman's bias random walk (TR-696 §3.2.3, eq 9): the bias changes by `stability` (1 sigma)
-    /// over `period_s`, i.e. a random walk of density K = stability / sqrt(period).
-    RandomWalk { stability: f64, period_s: f64 },
+    /// Woodman's bias random walk (TR-696 §3.2.3, eq 9).
+    RandomWalk(BiasRandomWalk),
+}
+
+/// Woodman's bias random walk (TR-696 §3.2.3, eq 9): the bias changes by `stability` (1 sigma)
+/// over `period_s`, i.e. a random walk of density K = stability / sqrt(period).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BiasRandomWalk {
+    stability: f64,
+    period_s: f64,
+}
+
+impl BiasRandomWalk {
+    /// Checks the stability (finite, >= 0) and the period (finite, > 0).
+    pub fn new(stability: f64, period_s: f64) -> Result<BiasRandomWalk, ModelError> {
+        Ok(BiasRandomWalk {
+            stability: check("bias random walk stability", stability, false)?,
+            period_s: check("bias random walk period", period_s, true)?,
+        })
+    }
+
+    /// The bias change over the period (1 sigma, signal units).
+    pub fn stability(&self) -> f64 {
+        self.stability
+    }
+
+    /// The period, s.
+    pub fn period_s(&self) -> f64 {
+        self.period_s
+    }
+
+    /// The random walk's density K = stability / sqrt(period) (Woodman eq 9,
+    /// `closed_form::woodman_bias_random_walk`).
+    pub fn density(&self) -> f64 {
+        cf::woodman_bias_random_walk(self.stability, self.period_s)
+    }
 }
 
 impl BiasInstability {
@@ -178,10 +211,10 @@ impl BiasInstability {
     fn avar_at(&self, tau_s: f64, dt_s: Option<f64>) -> f64 {
         match self {
             BiasInstability::Flicker(f) => f.avar_at(tau_s, dt_s),
-            BiasInstability::RandomWalk {
+            BiasInstability::RandomWalk(BiasRandomWalk {
                 stability,
                 period_s,
-            } => cf::rate_random_walk_avar_at(
+            }) => cf::rate_random_walk_avar_at(
                 cf::woodman_bias_random_walk(*stability, *period_s),
                 tau_s,
                 dt_s,
@@ -363,10 +396,9 @@ fn read_random_walk(
         &need("period", &raw.period)?,
         Quantity::Time,
     )?;
-    Ok(BiasInstability::RandomWalk {
-        stability,
-        period_s,
-    })
+    BiasRandomWalk::new(stability, period_s)
+        .map(BiasInstability::RandomWalk)
+        .map_err(|e| cx.refused(&cx.key, e))
 }
 
 /// `{ value, convention, band?, per_decade? }`: flicker with B stated (`"ieee"`) or solved from the
@@ -498,10 +530,10 @@ impl ErrorTerm for BiasInstability {
     fn law_sources(&self, _cx: &LawSourceContext) -> Vec<LawSource> {
         vec![match self {
             BiasInstability::Flicker(f) => LawSource::GaussMarkovSum(f.components()),
-            BiasInstability::RandomWalk {
+            BiasInstability::RandomWalk(BiasRandomWalk {
                 stability,
                 period_s,
-            } => LawSource::RandomWalk(cf::woodman_bias_random_walk(*stability, *period_s)),
+            }) => LawSource::RandomWalk(cf::woodman_bias_random_walk(*stability, *period_s)),
         }]
     }
 
@@ -510,7 +542,9 @@ impl ErrorTerm for BiasInstability {
     fn level(&self) -> Option<(&'static str, f64)> {
         Some(match self {
             BiasInstability::Flicker(f) => ("b", f.b),
-            BiasInstability::RandomWalk { stability, .. } => ("stability", *stability),
+            BiasInstability::RandomWalk(BiasRandomWalk { stability, .. }) => {
+                ("stability", *stability)
+            }
         })
     }
 
@@ -518,7 +552,9 @@ impl ErrorTerm for BiasInstability {
     fn shape(&self) -> Vec<(&'static str, f64)> {
         match self {
             BiasInstability::Flicker(_) => Vec::new(),
-            BiasInstability::RandomWalk { period_s, .. } => vec![("period_s", *period_s)],
+            BiasInstability::RandomWalk(BiasRandomWalk { period_s, .. }) => {
+                vec![("period_s", *period_s)]
+            }
         }
     }
 
@@ -541,10 +577,10 @@ impl ErrorTerm for BiasInstability {
                 cx.quoted(f.tau_max_s, Quantity::Time),
                 f.per_decade
             ),
-            BiasInstability::RandomWalk {
+            BiasInstability::RandomWalk(BiasRandomWalk {
                 stability,
                 period_s,
-            } => format!(
+            }) => format!(
                 "{{ model = \"random_walk\", stability = {}, period = {} }}",
                 cx.quoted(*stability, Quantity::Signal(cx.sig)),
                 cx.quoted(*period_s, Quantity::Time)
@@ -560,10 +596,10 @@ impl ErrorTerm for BiasInstability {
                 .iter()
                 .map(|&(tc, s)| fa.gauss_markov(s, tc, tau_s))
                 .sum(),
-            BiasInstability::RandomWalk {
+            BiasInstability::RandomWalk(BiasRandomWalk {
                 stability,
                 period_s,
-            } => fa.random_walk(cf::woodman_bias_random_walk(*stability, *period_s), tau_s),
+            }) => fa.random_walk(cf::woodman_bias_random_walk(*stability, *period_s), tau_s),
         })
     }
 }
@@ -580,10 +616,9 @@ impl TermKind for BiasInstability {
     fn with_level(&self, level: f64) -> Result<BiasInstability, ModelError> {
         Ok(match self {
             BiasInstability::Flicker(f) => BiasInstability::Flicker(f.with_level(level)?),
-            BiasInstability::RandomWalk { period_s, .. } => BiasInstability::RandomWalk {
-                stability: check("bias random walk stability", level, false)?,
-                period_s: *period_s,
-            },
+            BiasInstability::RandomWalk(w) => {
+                BiasInstability::RandomWalk(BiasRandomWalk::new(level, w.period_s)?)
+            }
         })
     }
 
@@ -623,10 +658,10 @@ impl TermKind for BiasInstability {
                 rng(),
             )),
             // Woodman eq 9 / AirSim: K = BS / sqrt(T_BS), so BS·sqrt(dt/T_BS) per step.
-            BiasInstability::RandomWalk {
+            BiasInstability::RandomWalk(BiasRandomWalk {
                 stability,
                 period_s,
-            } => BiasInstabilityGenerator::RandomWalk(RandomWalkGenerator {
+            }) => BiasInstabilityGenerator::RandomWalk(RandomWalkGenerator {
                 walk: RandomWalk::new(stability / period_s.sqrt(), cx.dt_raw_s),
                 rng: rng(),
             }),

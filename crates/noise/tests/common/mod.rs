@@ -10,6 +10,21 @@ use noise::{AxisModel, ImuErrors, SensorModel, TriadModel};
 /// fewer than 200 comparisons, so the chance that any fails on a correct model is below 2e-4.
 pub const ALPHA: f64 = 1e-6;
 
+/// A sensor model file (the library parses text; reading the file is the caller's part).
+pub fn read_model(path: &std::path::Path) -> SensorModel {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    SensorModel::from_text(&text, &path.display().to_string()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// A shipped sensor config, `configs/sensors/NAME`.
+pub fn shipped_model(name: &str) -> SensorModel {
+    read_model(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../configs/sensors")
+            .join(name),
+    )
+}
+
 /// A sensor whose gyro x axis is `axis` and everything else perfect.
 pub fn gyro_x_model(axis: AxisModel) -> SensorModel {
     SensorModel {
