@@ -58,6 +58,29 @@ impl TermParams {
         }
     }
 
+    /// The same term at squared level `c` (shape kept).
+    pub fn with_c(&self, c: f64) -> TermParams {
+        let v = c.max(0.0).sqrt();
+        match *self {
+            TermParams::Level(_) => TermParams::Level(v),
+            TermParams::GaussMarkov { tau_s, .. } => TermParams::GaussMarkov { sigma: v, tau_s },
+            TermParams::Sinusoid { frequency_hz, .. } => TermParams::Sinusoid {
+                amplitude: v,
+                frequency_hz,
+            },
+            TermParams::Resonance {
+                frequency_hz,
+                bandwidth_hz,
+                ..
+            } => TermParams::Resonance {
+                sigma: v,
+                frequency_hz,
+                bandwidth_hz,
+            },
+            TermParams::Filter { filter, .. } => TermParams::Filter { filter, n: v },
+        }
+    }
+
     /// The shape parameter, if any (Gauss-Markov time, sinusoid frequency).
     pub fn shape(&self) -> Option<f64> {
         match *self {

@@ -27,6 +27,7 @@ pub mod model_terms;
 pub mod observer;
 pub mod protocol;
 pub mod report;
+mod relevel;
 mod runs;
 pub mod settings;
 pub mod simulate;

@@ -387,7 +387,27 @@ impl<'a> Run<'a> {
             let base_bic = bic(data.chi2_base(), 0, ln_meas.len());
             let records = trial_records(round, &ts, base_bic, data.chi2_base());
             self.channels[c].records.extend(records);
-            let Some(choice) = self.select(c, &ts, base_bic) else {
+            let choice = self.select(c, &ts, base_bic);
+            if let Some(joint) = crate::relevel::joint_relevel(&data, &ts)
+                .filter(|j| self.prefer_joint(j, choice.as_ref(), base_bic))
+            {
+                for t in &joint.levels {
+                    changes.extend(self.accept(c, t));
+                }
+                predicted = shifted_band(&predicted, &joint.delta_avar);
+                g_pred = gap(&curve, &predicted);
+                for trial in &joint.levels {
+                    let choice = Choice {
+                        trial,
+                        delta_bic: base_bic - joint.bic,
+                        cannot_tell_from: Vec::new(),
+                    };
+                    let found = found_by_fit(choice, round, g.rms, g_pred.rms, self.dt_s());
+                    self.channels[c].effects.push(found);
+                }
+                continue;
+            }
+            let Some(choice) = choice else {
                 break;
             };
             changes.extend(self.accept(c, choice.trial));
@@ -451,6 +471,20 @@ impl<'a> Run<'a> {
             delta_bic,
             cannot_tell_from,
         })
+    }
+
+    /// Step 4: is the joint re-level of the model's own levels (module `relevel`) the step to take?
+    /// When it gains `min_delta_bic` and is within the ambiguity margin of the best single candidate
+    /// or better (Occam, as in `select`: the model's own terms before a new one).
+    fn prefer_joint(
+        &self,
+        joint: &crate::relevel::Relevel,
+        best: Option<&Choice>,
+        base_bic: f64,
+    ) -> bool {
+        let settings = self.settings;
+        base_bic - joint.bic >= settings.min_delta_bic
+            && best.is_none_or(|b| joint.bic - b.trial.bic < settings.ambiguity_delta_bic)
     }
 
     /// Step 4: put the chosen term into both models; the changes made, each with the level before.

@@ -1,0 +1,224 @@
+//! Step 4, the joint re-level: the levels of the terms the model already has, fitted together.
+//!
+//! Each wrong-level candidate of step 4 moves one level with the others held, so a model whose
+//! terms are right but whose levels are all wrong (a datasheet off in every figure) is corrected one
+//! level per step, and a candidate with more freedom (an output filter that lowers the short-tau
+//! noise, a Gauss-Markov bump between the flicker plateau and the random walk) can explain more of
+//! the gap in one step than any single level: forward selection then names it, and the right terms
+//! end up beside a stand-in. The joint re-level is the model's own terms at once: the Allan variance
+//! is the sum of the terms' (IEEE 952 Annex C, docs/model.md §2), each linear in its squared level
+//! c_j, so the prediction is `avar_band + sum_j (c_j - c0_j) f_j(tau)` with the signatures `f_j` of
+//! the wrong-level candidates, and the levels minimise the same chi2 in ln adev as every candidate
+//! (module `fit`), with c_j >= 0. The minimum is found by cyclic coordinate descent (each coordinate
+//! the one-level fit of `fit::fit_linear` against the band moved by the others; Wright 2015,
+//! "Coordinate descent algorithms", Math. Program. 151, 3-34), which converges for this smooth
+//! objective over a box. It is weighed by the same BIC (k = one per level) against the single
+//! candidates; where it is within the ambiguity margin of the best one, it is preferred (Occam: the
+//! model's own terms before a new one, as for a single re-level).
+//!
+//! The intervals reported for each level are conditional on the others' fitted values (the profile
+//! of that level alone, widened by the Birge ratio of the joint fit as for every candidate).
+
+use crate::fit::{aic, bic, birge_scale, fit_linear, linear_interval, predicted_ln_adev, FitData};
+use crate::fit::CHI2_1_95;
+use crate::trials::Trial;
+use noise::Effect;
+
+/// Sweeps of the coordinate descent at most, and the relative change of every level below which it
+/// stops.
+const SWEEPS: usize = 50;
+const TOLERANCE: f64 = 1e-7;
+
+/// The joint re-level of a channel: one trial per level (its new value, conditional interval and
+/// its part of the change), and the whole change with its information criteria.
+pub(crate) struct Relevel {
+    pub(crate) levels: Vec<Trial>,
+    pub(crate) bic: f64,
+    pub(crate) delta_avar: Vec<f64>,
+}
+
+/// The wrong-level candidates among `trials` that can move together: a term the model has, with its
+/// own shape (an output filter refits its white noise with it and is left out).
+fn joinable(trials: &[Trial]) -> Vec<&Trial> {
+    trials
+        .iter()
+        .filter(|t| t.effect != Effect::OutputFilter && !t.signature.is_empty())
+        .filter(|t| {
+            t.model
+                .is_some_and(|m| m.shape() == t.params.shape() && m.c() > 0.0)
+        })
+        .collect()
+}
+
+/// chi2 of the band changed by `delta` (per tau).
+fn chi2_of(data: &FitData, delta: &[f64]) -> f64 {
+    (0..data.ln_meas.len())
+        .map(|i| {
+            let ln_pred = predicted_ln_adev(data.ln_band[i], data.avar_band[i], delta[i]);
+            ((data.ln_meas[i] - ln_pred) / data.s[i]).powi(2)
+        })
+        .sum()
+}
+
+/// The change of the band's Allan variance at levels `c` (c0 the model's).
+fn change(ts: &[&Trial], c: &[f64], skip: Option<usize>, m: usize) -> Vec<f64> {
+    let mut d = vec![0.0; m];
+    for (j, t) in ts.iter().enumerate() {
+        if Some(j) == skip {
+            continue;
+        }
+        let c0 = t.model.map_or(0.0, |p| p.c());
+        for (di, fi) in d.iter_mut().zip(&t.signature) {
+            *di += (c[j] - c0) * fi;
+        }
+    }
+    d
+}
+
+/// The band moved by `delta`, as the fit sees it (ln adev centre and mean Allan variance).
+fn moved(data: &FitData, delta: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let ln = (0..delta.len())
+        .map(|i| predicted_ln_adev(data.ln_band[i], data.avar_band[i], delta[i]))
+        .collect();
+    let avar = (0..delta.len())
+        .map(|i| data.avar_band[i] + delta[i])
+        .collect();
+    (ln, avar)
+}
+
+/// The joint re-level of the model's own levels on one channel, from its step-4 `trials`; None when
+/// fewer than two levels can move.
+pub(crate) fn joint_relevel(data: &FitData, trials: &[Trial]) -> Option<Relevel> {
+    let ts = joinable(trials);
+    if ts.len() < 2 {
+        return None;
+    }
+    let m = data.ln_meas.len();
+    let c0: Vec<f64> = ts.iter().map(|t| t.model.map_or(0.0, |p| p.c())).collect();
+    let mut c = c0.clone();
+    for _ in 0..SWEEPS {
+        let mut largest: f64 = 0.0;
+        for j in 0..ts.len() {
+            let (ln, avar) = moved(data, &change(&ts, &c, Some(j), m));
+            let shifted = FitData {
+                ln_band: &ln,
+                avar_band: &avar,
+                ..data.clone()
+            };
+            let fit = fit_linear(&shifted, &ts[j].signature, c0[j]);
+            let scale = c[j].abs().max(fit.c.abs()).max(f64::MIN_POSITIVE);
+            largest = largest.max((fit.c - c[j]).abs() / scale);
+            c[j] = fit.c;
+        }
+        if largest < TOLERANCE {
+            break;
+        }
+    }
+    let delta = change(&ts, &c, None, m);
+    let chi2 = chi2_of(data, &delta);
+    let k = ts.len();
+    let scale = birge_scale(chi2, k, m);
+    let levels = (0..ts.len())
+        .map(|j| {
+            let (ln, avar) = moved(data, &change(&ts, &c, Some(j), m));
+            let shifted = FitData {
+                ln_band: &ln,
+                avar_band: &avar,
+                ..data.clone()
+            };
+            let f = &ts[j].signature;
+            let fit = fit_linear(&shifted, f, c0[j]);
+            let (c_lo, c_hi) = linear_interval(&shifted, f, c0[j], &fit, CHI2_1_95 * scale * scale);
+            let t = ts[j];
+            Trial {
+                effect: t.effect,
+                params: t.params.with_c(c[j]),
+                lo: t.params.with_c(c_lo),
+                hi: t.params.with_c(c_hi),
+                model: t.model,
+                bic: bic(chi2, k, m),
+                aic: aic(chi2, k),
+                delta_avar: f.iter().map(|v| (c[j] - c0[j]) * v).collect(),
+                signature: f.clone(),
+            }
+        })
+        .collect();
+    Some(Relevel {
+        levels,
+        bic: bic(chi2, k, m),
+        delta_avar: delta,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::candidates::TermParams;
+
+    fn level_trial(effect: Effect, c0: f64, f: Vec<f64>) -> Trial {
+        Trial {
+            effect,
+            params: TermParams::Level(c0.sqrt()),
+            lo: TermParams::Level(c0.sqrt()),
+            hi: TermParams::Level(c0.sqrt()),
+            model: Some(TermParams::Level(c0.sqrt())),
+            bic: 0.0,
+            aic: 0.0,
+            delta_avar: vec![0.0; f.len()],
+            signature: f,
+        }
+    }
+
+    /// Two levels both wrong (white noise twice, random walk a third): the joint fit finds both
+    /// from data made exactly of the true terms (chi2 0), which no single level can.
+    #[test]
+    fn finds_two_wrong_levels_together() {
+        let tau: Vec<f64> = (0..16).map(|i| 0.1 * 2f64.powi(i)).collect();
+        let white: Vec<f64> = tau.iter().map(|t| 1.0 / t).collect();
+        let rrw: Vec<f64> = tau.iter().map(|t| t / 3.0).collect();
+        let (n2, k2) = (1e-4, 1e-8);
+        let (n2_model, k2_model) = (4.0 * n2, k2 / 9.0);
+        let avar_band: Vec<f64> = (0..tau.len())
+            .map(|i| n2_model * white[i] + k2_model * rrw[i])
+            .collect();
+        let truth: Vec<f64> = (0..tau.len())
+            .map(|i| n2 * white[i] + k2 * rrw[i])
+            .collect();
+        let ln_band: Vec<f64> = avar_band.iter().map(|a| 0.5 * a.ln()).collect();
+        let ln_meas: Vec<f64> = truth.iter().map(|a| 0.5 * a.ln()).collect();
+        let s = vec![0.05; tau.len()];
+        let data = FitData {
+            ln_meas: &ln_meas,
+            ln_band: &ln_band,
+            avar_band: &avar_band,
+            s: &s,
+        };
+        let trials = vec![
+            level_trial(Effect::WhiteNoise, n2_model, white),
+            level_trial(Effect::RateRandomWalk, k2_model, rrw),
+        ];
+        let r = joint_relevel(&data, &trials).expect("two levels");
+        let c: Vec<f64> = r.levels.iter().map(|t| t.params.c()).collect();
+        assert!((c[0] / n2 - 1.0).abs() < 1e-4, "white {c:?}");
+        assert!((c[1] / k2 - 1.0).abs() < 1e-4, "rrw {c:?}");
+        assert!(chi2_of(&data, &r.delta_avar) < 1e-6);
+        // Each interval holds its level.
+        for t in &r.levels {
+            assert!(t.lo.c() <= t.params.c() && t.params.c() <= t.hi.c());
+        }
+    }
+
+    /// One level cannot move jointly: no joint re-level.
+    #[test]
+    fn needs_two_levels() {
+        let f = vec![1.0; 4];
+        let (ln, avar, s) = (vec![0.0; 4], vec![1.0; 4], vec![0.1; 4]);
+        let data = FitData {
+            ln_meas: &ln,
+            ln_band: &ln,
+            avar_band: &avar,
+            s: &s,
+        };
+        assert!(joint_relevel(&data, &[level_trial(Effect::WhiteNoise, 1.0, f)]).is_none());
+    }
+}
