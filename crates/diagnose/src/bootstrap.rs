@@ -35,12 +35,11 @@
 //! too, uncentred, from a unit reference level: its draws are the refits' (0 or above), so that
 //! the levels it trades with (a flicker level against a rate random walk) spread as they would.
 
-use crate::candidates::TermParams;
 use crate::fitted_on::FittedOn;
-use crate::model_terms::{set_term, term_level};
+use crate::model_terms::{fitted_term, set_term, squared_level};
 use crate::simulate::{adev_at, static_log, SimSetup};
 use allan::{EdfMethod, Estimator};
-use noise::{AxisModel, Channel, Effect, SensorModel};
+use noise::{AxisModel, Channel, Effect, SensorModel, Term};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -100,12 +99,14 @@ pub enum BootstrapError {
     TooManyTerms { channel: &'static str, terms: usize },
 }
 
-/// A drawn term: its parameters at the reference level the multipliers refer to (the fitted one,
-/// or a unit squared level for a term fitted at 0), and its fitted squared level.
-#[derive(Clone, Copy)]
+/// A drawn term: the term at the reference level the multipliers refer to (the fitted one, or a
+/// unit squared level for a term fitted at 0), that level with its JSON name, and its fitted
+/// squared level.
+#[derive(Clone)]
 struct DrawnTerm {
     effect: Effect,
-    reference: TermParams,
+    reference: Term,
+    level: (&'static str, f64),
     fitted_c: f64,
 }
 
@@ -152,16 +153,18 @@ impl ChannelFit {
         let terms: Vec<DrawnTerm> = DRAWN
             .iter()
             .filter_map(|&effect| {
-                let p = term_level(model, ch, effect)?;
-                let fitted_c = p.c();
+                let p = fitted_term(model, ch, effect)?;
+                let fitted_c = squared_level(Some(p));
                 let reference = if fitted_c > 0.0 {
-                    p
+                    p.clone()
                 } else {
-                    scaled(p, 0.0, 1.0)
+                    scaled(p, 0.0, 1.0)?
                 };
+                let level = reference.level()?;
                 (fitted_c >= 0.0).then_some(DrawnTerm {
                     effect,
                     reference,
+                    level,
                     fitted_c,
                 })
             })
@@ -172,7 +175,7 @@ impl ChannelFit {
         // The model with every term at its reference level (the basis columns).
         let mut reference = model.clone();
         for t in &terms {
-            set_term(&mut reference, ch, t.effect, &t.reference);
+            set_term(&mut reference, ch, t.reference.clone());
         }
         let dt = fitted.sample_interval_s;
         let n_max = *fitted.samples.iter().max()?;
@@ -329,38 +332,12 @@ fn nnls_small(rows: &[Vec<f64>], y: &[f64], k: usize) -> Vec<f64> {
     best
 }
 
-/// `params` with its level multiplied by `factor` plus `unit` (a squared level multiplied by
-/// factor^2, or set to unit^2 with factor 0).
-fn scaled(params: TermParams, factor: f64, unit: f64) -> TermParams {
-    let f = factor.max(0.0);
-    let level = |v: f64| v * f + unit;
-    match params {
-        TermParams::Level(v) => TermParams::Level(level(v)),
-        TermParams::GaussMarkov { sigma, tau_s } => TermParams::GaussMarkov {
-            sigma: level(sigma),
-            tau_s,
-        },
-        TermParams::Sinusoid {
-            amplitude,
-            frequency_hz,
-        } => TermParams::Sinusoid {
-            amplitude: level(amplitude),
-            frequency_hz,
-        },
-        TermParams::Resonance {
-            sigma,
-            frequency_hz,
-            bandwidth_hz,
-        } => TermParams::Resonance {
-            sigma: level(sigma),
-            frequency_hz,
-            bandwidth_hz,
-        },
-        TermParams::Filter { filter, n } => TermParams::Filter {
-            filter,
-            n: level(n),
-        },
-    }
+/// `term` with its level multiplied by `factor` plus `unit` (a squared level multiplied by
+/// factor^2, or set to unit^2 with factor 0); None when it has no level or the term's constructor
+/// refuses the new one (not a finite number).
+fn scaled(term: &Term, factor: f64, unit: f64) -> Option<Term> {
+    let (_, v) = term.level()?;
+    term.with_level(v * factor.max(0.0) + unit).ok()
 }
 
 /// Simulated logs like the fitted ones: replicate r, log t is run `first_run + r T + t` of `seed`
@@ -548,13 +525,15 @@ pub fn fit_levels(
 }
 
 /// The model with every drawn term at its reference squared level times its multiplier
-/// `s[channel][term]` (a level 0 stays in the model, at 0).
+/// `s[channel][term]` (a level 0 stays in the model, at 0; a multiplier that is not a finite
+/// number leaves the model's level).
 fn drawn_model(model: &SensorModel, fits: &[ChannelFit], s: &[Vec<f64>]) -> SensorModel {
     let mut out = model.clone();
     for (f, mult) in fits.iter().zip(s) {
         for (t, &m) in f.terms.iter().zip(mult) {
-            let params = scaled(t.reference, m.max(0.0).sqrt(), 0.0);
-            set_term(&mut out, f.ch, t.effect, &params);
+            if let Some(term) = scaled(&t.reference, m.max(0.0).sqrt(), 0.0) {
+                set_term(&mut out, f.ch, term);
+            }
         }
     }
     out
@@ -574,7 +553,7 @@ fn spread(
             .iter()
             .enumerate()
             .map(|(j, t)| {
-                let (parameter, reference) = t.reference.named(t.effect)[0];
+                let (parameter, reference) = t.level;
                 let mut v: Vec<f64> = s.iter().map(|r| reference * r[k][j].sqrt()).collect();
                 v.sort_by(f64::total_cmp);
                 LevelSpread {

@@ -2,8 +2,12 @@
 //! parameter, from the noise crate's closed forms (docs/model.md §2; the `_sampled` forms are exact for the
 //! discrete generator at the log's sample interval).
 
+use crate::model_terms::{fitted_term, flicker_band};
 use noise::closed_form as cf;
-use noise::{Effect, FilterKind, Flicker, OutputFilter};
+use noise::{
+    BiasInstability, Channel, Effect, FilterKind, Flicker, ModelError, OutputFilter, Quantization,
+    RateRamp, RateRandomWalk, SensorModel, TemperatureBias, Term, WhiteNoise,
+};
 
 /// Effects diagnose fits to the Allan gap (docs/diagnose.md list; the output filter is tried beside
 /// them). The temperature bias is not among them: it is regressed on the log's temperature column in
@@ -20,124 +24,44 @@ pub const CANDIDATES: [Effect; 8] = [
     Effect::Resonance,
 ];
 
-/// Parameters of a term in diagnose's parameterisation (SI; docs/diagnose.md JSON names).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum TermParams {
-    /// One level: q, n, b, k, r or the temperature coefficient (signed).
-    Level(f64),
-    GaussMarkov {
-        sigma: f64,
-        tau_s: f64,
-    },
-    Sinusoid {
-        amplitude: f64,
-        frequency_hz: f64,
-    },
-    Resonance {
-        sigma: f64,
-        frequency_hz: f64,
-        bandwidth_hz: f64,
-    },
-    /// An output filter with the white-noise density N it is fitted with (the filter reshapes the
-    /// white noise, so the two are fitted together).
-    Filter {
-        filter: OutputFilter,
-        n: f64,
-    },
+/// A one-level candidate `effect` (quantisation, white noise, flicker bias instability, rate random
+/// walk, rate ramp, temperature coefficient) at `level` on channel `ch`: the model's own term at
+/// that level (its other parameters kept, e.g. flicker's band), else a new one (flicker on the
+/// channel's band), through the term's validating constructor.
+pub fn level_term(
+    model: &SensorModel,
+    ch: Channel,
+    effect: Effect,
+    level: f64,
+) -> Result<Term, ModelError> {
+    if let Some(own) = fitted_term(model, ch, effect) {
+        return own.with_level(level);
+    }
+    Ok(match effect {
+        Effect::Quantization => Quantization::new(level)?.into(),
+        Effect::WhiteNoise => WhiteNoise::new(level)?.into(),
+        Effect::BiasInstability => {
+            BiasInstability::Flicker(flicker_band(model, ch).with_level(level)?).into()
+        }
+        Effect::RateRandomWalk => RateRandomWalk::new(level)?.into(),
+        Effect::RateRamp => RateRamp::new(level)?.into(),
+        Effect::TemperatureBias => TemperatureBias::new(level)?.into(),
+        _ => {
+            return Err(ModelError {
+                what: "level",
+                expected: "a one-level effect",
+                found: level,
+            })
+        }
+    })
 }
 
-impl TermParams {
-    /// The squared level the Allan variance is linear in.
-    pub fn c(&self) -> f64 {
-        match *self {
-            TermParams::Level(p) => p * p,
-            TermParams::GaussMarkov { sigma, .. } => sigma * sigma,
-            TermParams::Sinusoid { amplitude, .. } => amplitude * amplitude,
-            TermParams::Resonance { sigma, .. } => sigma * sigma,
-            TermParams::Filter { n, .. } => n * n,
-        }
-    }
-
-    /// The same term at squared level `c` (shape kept).
-    pub fn with_c(&self, c: f64) -> TermParams {
-        let v = c.max(0.0).sqrt();
-        match *self {
-            TermParams::Level(_) => TermParams::Level(v),
-            TermParams::GaussMarkov { tau_s, .. } => TermParams::GaussMarkov { sigma: v, tau_s },
-            TermParams::Sinusoid { frequency_hz, .. } => TermParams::Sinusoid {
-                amplitude: v,
-                frequency_hz,
-            },
-            TermParams::Resonance {
-                frequency_hz,
-                bandwidth_hz,
-                ..
-            } => TermParams::Resonance {
-                sigma: v,
-                frequency_hz,
-                bandwidth_hz,
-            },
-            TermParams::Filter { filter, .. } => TermParams::Filter { filter, n: v },
-        }
-    }
-
-    /// The shape parameter, if any (Gauss-Markov time, sinusoid frequency).
-    pub fn shape(&self) -> Option<f64> {
-        match *self {
-            TermParams::Level(_) | TermParams::Filter { .. } | TermParams::Resonance { .. } => None,
-            TermParams::GaussMarkov { tau_s, .. } => Some(tau_s),
-            TermParams::Sinusoid { frequency_hz, .. } => Some(frequency_hz),
-        }
-    }
-
-    /// (name, value) pairs with the docs/cli.md JSON names.
-    pub fn named(&self, effect: Effect) -> Vec<(&'static str, f64)> {
-        match *self {
-            TermParams::Level(p) => vec![(level_name(effect), p)],
-            TermParams::GaussMarkov { sigma, tau_s } => vec![("sigma", sigma), ("tau_s", tau_s)],
-            TermParams::Sinusoid {
-                amplitude,
-                frequency_hz,
-            } => {
-                vec![("amplitude", amplitude), ("frequency_hz", frequency_hz)]
-            }
-            TermParams::Resonance {
-                sigma,
-                frequency_hz,
-                bandwidth_hz,
-            } => vec![
-                ("sigma", sigma),
-                ("frequency_hz", frequency_hz),
-                ("bandwidth_hz", bandwidth_hz),
-            ],
-            TermParams::Filter { filter, n } => {
-                let mut v = match filter.kind {
-                    FilterKind::MovingAverage { taps } | FilterKind::Bartlett { taps } => {
-                        vec![("taps", f64::from(taps))]
-                    }
-                    FilterKind::LowPass1 { cutoff_hz } | FilterKind::LowPass2 { cutoff_hz } => {
-                        vec![("cutoff_hz", cutoff_hz)]
-                    }
-                };
-                v.push(("decimation", f64::from(filter.decimation)));
-                v.push(("n", n));
-                v
-            }
-        }
-    }
-}
-
-/// JSON name of a one-level term's parameter (docs/cli.md: q, n, b, k, r, coefficient).
-pub fn level_name(effect: Effect) -> &'static str {
-    match effect {
-        Effect::Quantization => "q",
-        Effect::WhiteNoise => "n",
-        Effect::BiasInstability => "b",
-        Effect::RateRandomWalk => "k",
-        Effect::RateRamp => "r",
-        Effect::TemperatureBias => "coefficient",
-        _ => "value",
-    }
+/// The docs/cli.md parameters of a candidate's term, with the white-noise density `n` an output
+/// filter is fitted with (the filter reshapes the white noise, so the two are fitted together).
+pub fn named(term: &Term, white_n: Option<f64>) -> Vec<(&'static str, f64)> {
+    let mut v = term.parameters();
+    v.extend(white_n.map(|n| ("n", n)));
+    v
 }
 
 /// Number of free parameters of a candidate (for the information criterion).

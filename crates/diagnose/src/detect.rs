@@ -209,7 +209,9 @@ pub fn coloured_variance(w: &[f64], dt_s: f64, levels: &NoiseLevels) -> f64 {
         var += levels.k * levels.k * dt_s * s;
     }
     if levels.b > 0.0 {
-        for (tc, sigma) in Flicker::with_b(levels.b).components() {
+        // B is finite and positive here (an IEEE 952 fit); a band refused adds nothing.
+        let band = Flicker::with_b(levels.b).map_or_else(|_| Vec::new(), |f| f.components());
+        for (tc, sigma) in band {
             let phi = (-dt_s / tc).exp();
             let mut f = 0.0;
             let mut s = 0.0;
@@ -573,7 +575,7 @@ mod tests {
         };
         let fast = coloured_variance(&w, dt, &lv);
         let mut brute = 0.09 / dt * w.iter().map(|v| v * v).sum::<f64>();
-        for (tc, s) in Flicker::with_b(0.2).components() {
+        for (tc, s) in Flicker::with_b(0.2).unwrap().components() {
             let phi = (-dt / tc).exp();
             for i in 0..n {
                 for j in 0..n {
@@ -857,10 +859,8 @@ fn outlier_finding(x: &[f64], dt_s: f64) -> Option<(Vec<f64>, Finding)> {
     let n_without = noise_levels(&x, dt_s).n;
     let finding = Finding {
         cannot_tell_from: vec![],
-        term: noise::Term::Outliers(noise::Outliers {
-            rate_per_hour: rate,
-            size,
-        }),
+        // A rate or size that is not a finite number is no finding.
+        term: noise::Outliers::new(rate, size).ok()?.into(),
         parameters: vec![
             ("count", count as f64, count as f64, count as f64),
             ("rate_per_hour", rate, lo, hi),
@@ -930,11 +930,10 @@ fn transient_finding(
     let sd = (tr.amplitude / tr.z).abs();
     let finding = Finding {
         cannot_tell_from: vec![],
-        term: noise::Term::WarmupTransient(noise::WarmupTransient {
-            amplitude: tr.amplitude,
-            tau_s: tr.tau_s,
-            per_run: false,
-        }),
+        // Values the constructor refuses are no finding.
+        term: noise::WarmupTransient::new(tr.amplitude, tr.tau_s, false)
+            .ok()?
+            .into(),
         parameters: vec![
             (
                 "amplitude",
@@ -966,7 +965,7 @@ pub fn model_levels(model: &noise::SensorModel) -> [NoiseLevels; 6] {
     noise::Channel::ALL.map(|c| {
         let a = model.axis(c.sensor(), c.axis());
         let (b, k_bi) = match a.get::<noise::BiasInstability>() {
-            Some(noise::BiasInstability::Flicker(f)) => (f.b, 0.0),
+            Some(noise::BiasInstability::Flicker(f)) => (f.b(), 0.0),
             Some(noise::BiasInstability::RandomWalk {
                 stability,
                 period_s,

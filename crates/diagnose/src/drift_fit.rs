@@ -21,16 +21,18 @@
 //! cost of a searched shape must be below the unchanged model's chi2 by at least that much.
 
 use crate::candidates::{
-    free_parameters, shape_search_penalty, unit_family_signature, unit_signature, TermParams,
+    free_parameters, level_term, shape_search_penalty, unit_family_signature, unit_signature,
 };
 use crate::drift_gap::DriftFit;
 use crate::fit::{aic, bic, FitData, CHI2_1_95};
 use crate::gap::{Band, Curve, Gap};
-use crate::model_terms::{flicker_band, has_random_walk_bias_instability, set_term, term_level};
+use crate::model_terms::{
+    fitted_term, flicker_band, has_random_walk_bias_instability, set_term, squared_level,
+};
 use crate::protocol::{all_segment_errors, Protocol, Quantity};
 use crate::simulate::{static_log, SimSetup};
-use crate::trials::{sqrt_params, Trial};
-use noise::{Channel, Effect, SensorModel};
+use crate::trials::{at_squared_level, Trial};
+use noise::{Channel, Effect, GaussMarkov, ModelError, SensorModel, Term};
 
 /// The candidates of the drift loop, in the order tried.
 pub const DRIFT_CANDIDATES: [Effect; 4] = [
@@ -187,8 +189,9 @@ impl DriftFitInput<'_> {
             {
                 continue;
             }
-            let current = term_level(self.model, self.channel, effect);
-            let shapes: Vec<Option<f64>> = match (effect, current.and_then(|c| c.shape())) {
+            let current = fitted_term(self.model, self.channel, effect);
+            let own_shape = current.and_then(|c| c.parameters().get(1).map(|p| p.1));
+            let shapes: Vec<Option<f64>> = match (effect, own_shape) {
                 (Effect::GaussMarkov, Some(t)) => vec![Some(t)],
                 (Effect::GaussMarkov, None) => GAUSS_MARKOV_TIMES
                     .iter()
@@ -212,7 +215,7 @@ impl DriftFitInput<'_> {
         data: &FitData,
         effect: Effect,
         shape: Option<f64>,
-        current: Option<TermParams>,
+        current: Option<&Term>,
         penalty: f64,
     ) -> Option<DriftTrial> {
         let (tau, dt_s) = (&self.measured.tau_s, self.dt_s);
@@ -224,7 +227,7 @@ impl DriftFitInput<'_> {
                 None => unit_signature(effect, t, dt_s, &flicker),
             })
             .collect();
-        let c0 = current.map_or(0.0, |p| p.c());
+        let c0 = squared_level(current);
         // The unit level: the model's own, else the one at which the term alone would reach the
         // measured Allan variance at the longest tau (the drift is then of a realistic size).
         let last = f.len().checked_sub(1)?;
@@ -236,17 +239,14 @@ impl DriftFitInput<'_> {
         if !(c_unit > 0.0 && c_unit.is_finite()) {
             return None;
         }
-        let params_at = |c: f64| -> TermParams {
-            let level = TermParams::Level(c.sqrt());
+        // The term at squared level c (a Gauss-Markov process at the shape tried).
+        let term_at = |c: f64| -> Result<Term, ModelError> {
             match shape {
-                Some(tau_s) => TermParams::GaussMarkov {
-                    sigma: c.sqrt(),
-                    tau_s,
-                },
-                None => level,
+                Some(tau_s) => Ok(GaussMarkov::new(c.sqrt(), tau_s)?.into()),
+                None => level_term(self.model, self.channel, effect, c.sqrt()),
             }
         };
-        let u = self.unit_drift(effect, &params_at(c_unit), c_unit);
+        let u = self.unit_drift(&term_at(c_unit).ok()?, c_unit);
         let chi = |c: f64| self.chi2(data, &f, &u, c0, c);
         let (c, chi2) = if effect == Effect::RateRamp {
             // A ramp's level is the runs' slope (deterministic, `trials`).
@@ -259,17 +259,20 @@ impl DriftFitInput<'_> {
         let base = chi(c0);
         let bic_new = bic(chi2, k, m) + penalty;
         let (c_lo, c_hi) = interval(&chi, c, chi2 + CHI2_1_95);
-        let mut params = params_at(c);
-        if effect == Effect::RateRamp {
-            params = TermParams::Level(self.ramp_slope);
-        }
+        let term = if effect == Effect::RateRamp {
+            level_term(self.model, self.channel, effect, self.ramp_slope).ok()?
+        } else {
+            term_at(c).ok()?
+        };
+        let named = term.parameters();
         Some(DriftTrial {
             trial: Trial {
                 effect,
-                params,
-                lo: sqrt_params(params, c_lo),
-                hi: sqrt_params(params, c_hi),
-                model: current,
+                lo: at_squared_level(&named, c_lo),
+                hi: at_squared_level(&named, c_hi),
+                term,
+                white_n: None,
+                model: current.map(Term::parameters),
                 bic: bic_new,
                 aic: aic(chi2, k) + penalty,
                 delta_avar: f.iter().map(|v| (c - c0) * v).collect(),
@@ -279,25 +282,15 @@ impl DriftFitInput<'_> {
         })
     }
 
-    /// u[h][q]: each quantity's mean square per unit c of the term at level `params` (c_unit)
-    /// alone on the channel.
-    fn unit_drift(&self, effect: Effect, params: &TermParams, c_unit: f64) -> Vec<[f64; 5]> {
+    /// u[h][q]: each quantity's mean square per unit c of `term` (at squared level c_unit) alone
+    /// on the channel (a flicker term on the channel's own band: `level_term`).
+    fn unit_drift(&self, term: &Term, c_unit: f64) -> Vec<[f64; 5]> {
         let mut alone = SensorModel {
             gyro: Default::default(),
             accel: Default::default(),
             ..self.model.clone()
         };
-        if effect == Effect::BiasInstability {
-            // The channel's own flicker band.
-            let band = flicker_band(self.model, self.channel);
-            let a = alone.axis_mut(self.channel.sensor(), self.channel.axis());
-            a.set_term(noise::BiasInstability::Flicker(noise::Flicker {
-                b: c_unit.sqrt(),
-                ..band
-            }));
-        } else {
-            set_term(&mut alone, self.channel, effect, params);
-        }
+        set_term(&mut alone, self.channel, term.clone());
         self.unit
             .mean_squares(&alone, self.channel)
             .into_iter()

@@ -2,14 +2,13 @@
 //! fitted candidate, the candidates weighed, refinements of an effect named before, stand-ins, and
 //! the channel's verdict.
 
-use crate::candidates::TermParams;
 use crate::detect::Finding;
 use crate::gap::{Band, Gap};
 use crate::measure::Measured;
 use crate::report::{
     BandView, Candidate, CandidateRecord, ChannelCurves, FindingKind, FoundEffect, Parameters,
 };
-use crate::trials::{named_map, Trial};
+use crate::trials::{named_map, Named, Trial};
 use noise::Effect;
 use std::collections::BTreeMap;
 
@@ -74,15 +73,15 @@ pub(crate) fn found_by_fit(
     let best = choice.trial;
     FoundEffect {
         effect: best.effect,
-        parameters: parameters_of(best.effect, &best.params, dt_s),
-        parameters_lo: bounds_of(best.effect, &best.lo, dt_s),
-        parameters_hi: bounds_of(best.effect, &best.hi, dt_s),
+        parameters: parameters_of(best, &best.named(), dt_s),
+        parameters_lo: parameters_of(best, &best.lo, dt_s).values,
+        parameters_hi: parameters_of(best, &best.hi, dt_s).values,
         kind: if best.model.is_some() {
             FindingKind::WrongLevel
         } else {
             FindingKind::Missing
         },
-        model_parameters: best.model.map(|p| named_map(best.effect, &p)),
+        model_parameters: best.model.as_ref().map(named_map),
         gap_before,
         gap_predicted,
         gap_after: f64::NAN,
@@ -114,7 +113,7 @@ pub(crate) fn trial_records(
             },
             delta_bic: base_bic - t.bic,
             delta_aic: chi2_base - t.aic,
-            parameters: named_map(t.effect, &t.params),
+            parameters: named_map(&t.named()),
         })
         .collect()
 }
@@ -240,17 +239,13 @@ pub(crate) fn channel_curves(m: &Measured, initial: &Band, last: Band) -> Channe
     }
 }
 
-/// A bound of a fitted term's parameters; a filter's noise bandwidth is a property of the chosen
-/// filter (its bound is itself: the filter's shape is selected, not interval-estimated).
-fn bounds_of(effect: Effect, params: &TermParams, dt_s: f64) -> BTreeMap<String, f64> {
-    parameters_of(effect, params, dt_s).values
-}
-
-/// The JSON parameters of a fitted term (an output filter's kind and one-sided noise bandwidth added).
-fn parameters_of(effect: Effect, params: &TermParams, dt_s: f64) -> Parameters {
-    let mut p: Parameters = named_map(effect, params).into();
-    if let TermParams::Filter { filter, .. } = params {
-        p.kind = Some(filter.kind.name());
+/// The JSON parameters `named` of a fitted term or a bound of them; an output filter's kind and
+/// one-sided noise bandwidth added (a property of the chosen filter, so a bound's is the filter's
+/// own: its shape is selected, not interval-estimated).
+fn parameters_of(trial: &Trial, named: &Named, dt_s: f64) -> Parameters {
+    let mut p: Parameters = named_map(named).into();
+    if let noise::Term::OutputFilter(filter) = &trial.term {
+        p.kind = Some(filter.kind().name());
         p.values
             .insert("noise_bandwidth_hz".into(), filter.noise_bandwidth_hz(dt_s));
     }

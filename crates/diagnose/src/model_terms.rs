@@ -1,48 +1,26 @@
-//! Reading and changing one term of one channel of a `SensorModel` in diagnose's parameterisation.
+//! Reading and changing one term of one channel of a `SensorModel`, through `noise::Term`: the
+//! term's level, shape and a copy at another level are the noise crate's (`ErrorTerm::level`,
+//! `ErrorTerm::shape`, `Term::with_level`).
 
-use crate::candidates::TermParams;
-use noise::{
-    BiasInstability, Channel, Effect, Flicker, GaussMarkov, OutputFilter, Quantization, RateRamp,
-    RateRandomWalk, SensorModel, Sinusoid, TemperatureBias, Term, WhiteNoise,
-};
+use noise::{BiasInstability, Channel, Effect, Flicker, OutputFilter, SensorModel, Term};
 
-/// The level the model has for `effect` on channel `ch` (None when absent, or when the term is not in a
-/// form diagnose fits: a Woodman random-walk bias instability is read as absent flicker).
-pub fn term_level(model: &SensorModel, ch: Channel, effect: Effect) -> Option<TermParams> {
-    let (sensor, axis) = (ch.sensor(), ch.axis());
-    Some(match model.axis(sensor, axis).term(effect)?.clone() {
-        Term::Quantization(q) => TermParams::Level(q.coefficient()),
-        Term::WhiteNoise(n) => TermParams::Level(n.density()),
-        Term::RateRandomWalk(k) => TermParams::Level(k.density()),
-        Term::RateRamp(r) => TermParams::Level(r.rate()),
-        Term::TemperatureBias(c) => TermParams::Level(c.per_degree()),
-        Term::BiasInstability(BiasInstability::Flicker(f)) => TermParams::Level(f.b),
-        Term::GaussMarkov(g) => TermParams::GaussMarkov {
-            sigma: g.sigma,
-            tau_s: g.tau_s,
-        },
-        Term::Sinusoidal(s) => TermParams::Sinusoid {
-            amplitude: s.amplitude,
-            frequency_hz: s.frequency_hz,
-        },
-        Term::Resonance(r) => TermParams::Resonance {
-            sigma: r.sigma,
-            frequency_hz: r.frequency_hz,
-            bandwidth_hz: r.bandwidth_hz,
-        },
-        Term::OutputFilter(filter) => TermParams::Filter {
-            filter,
-            n: model
-                .axis(sensor, axis)
-                .get::<WhiteNoise>()
-                .map_or(0.0, WhiteNoise::density),
-        },
-        _ => return None,
-    })
+/// The term the model has for `effect` on channel `ch`, if it is in a form diagnose fits: one with
+/// a level (`Term::level`). A Woodman random-walk bias instability is read as absent flicker.
+pub fn fitted_term(model: &SensorModel, ch: Channel, effect: Effect) -> Option<&Term> {
+    let term = model.axis(ch.sensor(), ch.axis()).term(effect)?;
+    match term {
+        Term::BiasInstability(BiasInstability::RandomWalk { .. }) => None,
+        t => t.level().map(|_| t),
+    }
+}
+
+/// The squared level of `term` (what its Allan variance is linear in); 0 without a term.
+pub fn squared_level(term: Option<&Term>) -> f64 {
+    term.and_then(Term::level).map_or(0.0, |(_, v)| v * v)
 }
 
 /// The output filter channel `ch` has, if any.
-pub fn output_filter(model: &SensorModel, ch: Channel) -> Option<noise::OutputFilter> {
+pub fn output_filter(model: &SensorModel, ch: Channel) -> Option<OutputFilter> {
     let (sensor, axis) = (ch.sensor(), ch.axis());
     model.axis(sensor, axis).get::<OutputFilter>().copied()
 }
@@ -56,93 +34,34 @@ pub fn has_random_walk_bias_instability(model: &SensorModel, ch: Channel) -> boo
     )
 }
 
-/// The flicker band the model uses on channel `ch` (its own, or the noise crate's default).
+/// The flicker band the model uses on channel `ch` (its own, or the noise crate's default), at
+/// B = 1.
 pub fn flicker_band(model: &SensorModel, ch: Channel) -> Flicker {
     let (sensor, axis) = (ch.sensor(), ch.axis());
     match model.axis(sensor, axis).get::<BiasInstability>() {
-        Some(BiasInstability::Flicker(f)) => Flicker {
-            b: 1.0,
-            ..f.clone()
-        },
+        Some(BiasInstability::Flicker(f)) => f.with_level(1.0),
         _ => Flicker::with_b(1.0),
+    }
+    .expect("B = 1 is a valid level")
+}
+
+/// Put `term` on channel `ch`, in place of the term of its effect if there is one. The term is
+/// valid by construction (its type's validating constructor made it).
+pub fn set_term(model: &mut SensorModel, ch: Channel, term: Term) {
+    model.axis_mut(ch.sensor(), ch.axis()).set_term(term);
+}
+
+/// Put back `previous` as channel `ch`'s term of `effect` (None: remove the effect).
+pub fn restore_term(model: &mut SensorModel, ch: Channel, effect: Effect, previous: Option<Term>) {
+    match previous {
+        Some(t) => set_term(model, ch, t),
+        None => clear_term(model, ch, effect),
     }
 }
 
-/// Set `effect` on channel `ch` to `params` (adding it if absent); parameters that do not fit the
-/// effect change nothing.
-pub fn set_term(model: &mut SensorModel, ch: Channel, effect: Effect, params: &TermParams) {
-    let band = flicker_band(model, ch);
-    let (sensor, axis) = (ch.sensor(), ch.axis());
-    let a = model.axis_mut(sensor, axis);
-    // A value the term's constructor refuses changes nothing, as a mismatched effect.
-    let level = |v: f64, term: fn(f64) -> Option<Term>| term(v);
-    let term = match (effect, *params) {
-        (Effect::Quantization, TermParams::Level(v)) => {
-            match level(v, |v| Some(Quantization::new(v).ok()?.into())) {
-                Some(t) => t,
-                None => return,
-            }
-        }
-        (Effect::WhiteNoise, TermParams::Level(v)) => {
-            match level(v, |v| Some(WhiteNoise::new(v).ok()?.into())) {
-                Some(t) => t,
-                None => return,
-            }
-        }
-        (Effect::BiasInstability, TermParams::Level(v)) => {
-            Term::BiasInstability(BiasInstability::Flicker(Flicker { b: v, ..band }))
-        }
-        (Effect::RateRandomWalk, TermParams::Level(v)) => {
-            match level(v, |v| Some(RateRandomWalk::new(v).ok()?.into())) {
-                Some(t) => t,
-                None => return,
-            }
-        }
-        (Effect::RateRamp, TermParams::Level(v)) => {
-            match level(v, |v| Some(RateRamp::new(v).ok()?.into())) {
-                Some(t) => t,
-                None => return,
-            }
-        }
-        (Effect::TemperatureBias, TermParams::Level(v)) => {
-            match level(v, |v| Some(TemperatureBias::new(v).ok()?.into())) {
-                Some(t) => t,
-                None => return,
-            }
-        }
-        (Effect::GaussMarkov, TermParams::GaussMarkov { sigma, tau_s }) => {
-            Term::GaussMarkov(GaussMarkov { sigma, tau_s })
-        }
-        (
-            Effect::Sinusoidal,
-            TermParams::Sinusoid {
-                amplitude,
-                frequency_hz,
-            },
-        ) => Term::Sinusoidal(Sinusoid {
-            amplitude,
-            frequency_hz,
-            phase_rad: a.get::<Sinusoid>().and_then(|s| s.phase_rad),
-        }),
-        (
-            Effect::Resonance,
-            TermParams::Resonance {
-                sigma,
-                frequency_hz,
-                bandwidth_hz,
-            },
-        ) => match noise::Resonance::new(sigma, frequency_hz, bandwidth_hz) {
-            Ok(r) => Term::Resonance(r),
-            Err(_) => return,
-        },
-        (Effect::OutputFilter, TermParams::Filter { filter, n }) => {
-            let Ok(n) = WhiteNoise::new(n) else { return };
-            a.set_term(n);
-            Term::OutputFilter(filter)
-        }
-        _ => return,
-    };
-    a.set_term(term);
+/// The term channel `ch` has for `effect` now, whatever its form (to restore it later).
+pub fn current_term(model: &SensorModel, ch: Channel, effect: Effect) -> Option<Term> {
+    model.axis(ch.sensor(), ch.axis()).term(effect).cloned()
 }
 
 /// Remove `effect` from channel `ch`.

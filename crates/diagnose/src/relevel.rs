@@ -21,7 +21,7 @@
 
 use crate::fit::{aic, bic, birge_scale, fit_linear, linear_interval, predicted_ln_adev, FitData};
 use crate::fit::CHI2_1_95;
-use crate::trials::Trial;
+use crate::trials::{at_squared_level, Named, Trial};
 use noise::Effect;
 
 /// Sweeps of the coordinate descent at most, and the relative change of every level below which it
@@ -37,15 +37,29 @@ pub(crate) struct Relevel {
     pub(crate) delta_avar: Vec<f64>,
 }
 
-/// The wrong-level candidates among `trials` that can move together: a term the model has, with its
-/// own shape (an output filter refits its white noise with it and is left out).
+/// The model's squared level of a trial's term (0 when the model lacks it).
+fn c0_of(t: &Trial) -> f64 {
+    t.model
+        .as_ref()
+        .and_then(|m| m.first())
+        .map_or(0.0, |&(_, v)| v * v)
+}
+
+/// The wrong-level candidates among `trials` that can move together: a term the model has, at a
+/// level above 0, with its own shape; not an output filter (it refits its white noise with it),
+/// nor a signed level (a ramp, a temperature coefficient: their squared level loses the sign).
 fn joinable(trials: &[Trial]) -> Vec<&Trial> {
+    let unsigned = |e: Effect| !matches!(e, Effect::RateRamp | Effect::TemperatureBias);
     trials
         .iter()
-        .filter(|t| t.effect != Effect::OutputFilter && !t.signature.is_empty())
+        .filter(|t| t.effect != Effect::OutputFilter && unsigned(t.effect))
+        .filter(|t| !t.signature.is_empty() && t.white_n.is_none())
         .filter(|t| {
+            let fitted: Named = t.term.parameters();
             t.model
-                .is_some_and(|m| m.shape() == t.params.shape() && m.c() > 0.0)
+                .as_ref()
+                .is_some_and(|m| m.len() == fitted.len() && m[1..] == fitted[1..])
+                && c0_of(t) > 0.0
         })
         .collect()
 }
@@ -67,7 +81,7 @@ fn change(ts: &[&Trial], c: &[f64], skip: Option<usize>, m: usize) -> Vec<f64> {
         if Some(j) == skip {
             continue;
         }
-        let c0 = t.model.map_or(0.0, |p| p.c());
+        let c0 = c0_of(t);
         for (di, fi) in d.iter_mut().zip(&t.signature) {
             *di += (c[j] - c0) * fi;
         }
@@ -94,7 +108,7 @@ pub(crate) fn joint_relevel(data: &FitData, trials: &[Trial]) -> Option<Relevel>
         return None;
     }
     let m = data.ln_meas.len();
-    let c0: Vec<f64> = ts.iter().map(|t| t.model.map_or(0.0, |p| p.c())).collect();
+    let c0: Vec<f64> = ts.iter().map(|t| c0_of(t)).collect();
     let mut c = c0.clone();
     for _ in 0..SWEEPS {
         let mut largest: f64 = 0.0;
@@ -118,31 +132,34 @@ pub(crate) fn joint_relevel(data: &FitData, trials: &[Trial]) -> Option<Relevel>
     let chi2 = chi2_of(data, &delta);
     let k = ts.len();
     let scale = birge_scale(chi2, k, m);
-    let levels = (0..ts.len())
-        .map(|j| {
-            let (ln, avar) = moved(data, &change(&ts, &c, Some(j), m));
-            let shifted = FitData {
-                ln_band: &ln,
-                avar_band: &avar,
-                ..data.clone()
-            };
-            let f = &ts[j].signature;
-            let fit = fit_linear(&shifted, f, c0[j]);
-            let (c_lo, c_hi) = linear_interval(&shifted, f, c0[j], &fit, CHI2_1_95 * scale * scale);
-            let t = ts[j];
-            Trial {
-                effect: t.effect,
-                params: t.params.with_c(c[j]),
-                lo: t.params.with_c(c_lo),
-                hi: t.params.with_c(c_hi),
-                model: t.model,
-                bic: bic(chi2, k, m),
-                aic: aic(chi2, k),
-                delta_avar: f.iter().map(|v| (c[j] - c0[j]) * v).collect(),
-                signature: f.clone(),
-            }
-        })
-        .collect();
+    let mut levels = Vec::with_capacity(k);
+    for j in 0..k {
+        let (ln, avar) = moved(data, &change(&ts, &c, Some(j), m));
+        let shifted = FitData {
+            ln_band: &ln,
+            avar_band: &avar,
+            ..data.clone()
+        };
+        let f = &ts[j].signature;
+        let fit = fit_linear(&shifted, f, c0[j]);
+        let (c_lo, c_hi) = linear_interval(&shifted, f, c0[j], &fit, CHI2_1_95 * scale * scale);
+        let t = ts[j];
+        // A level the term's constructor refuses ends the joint re-level (none is taken).
+        let term = t.term.with_level(c[j].max(0.0).sqrt()).ok()?;
+        let named = term.parameters();
+        levels.push(Trial {
+            effect: t.effect,
+            lo: at_squared_level(&named, c_lo),
+            hi: at_squared_level(&named, c_hi),
+            term,
+            white_n: None,
+            model: t.model.clone(),
+            bic: bic(chi2, k, m),
+            aic: aic(chi2, k),
+            delta_avar: f.iter().map(|v| (c[j] - c0[j]) * v).collect(),
+            signature: f.clone(),
+        });
+    }
     Some(Relevel {
         levels,
         bic: bic(chi2, k, m),
@@ -153,15 +170,20 @@ pub(crate) fn joint_relevel(data: &FitData, trials: &[Trial]) -> Option<Relevel>
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::candidates::TermParams;
 
     fn level_trial(effect: Effect, c0: f64, f: Vec<f64>) -> Trial {
+        let term: noise::Term = match effect {
+            Effect::WhiteNoise => noise::WhiteNoise::new(c0.sqrt()).unwrap().into(),
+            _ => noise::RateRandomWalk::new(c0.sqrt()).unwrap().into(),
+        };
+        let named = term.parameters();
         Trial {
             effect,
-            params: TermParams::Level(c0.sqrt()),
-            lo: TermParams::Level(c0.sqrt()),
-            hi: TermParams::Level(c0.sqrt()),
-            model: Some(TermParams::Level(c0.sqrt())),
+            term,
+            white_n: None,
+            lo: named.clone(),
+            hi: named.clone(),
+            model: Some(named),
             bic: 0.0,
             aic: 0.0,
             delta_avar: vec![0.0; f.len()],
@@ -198,13 +220,15 @@ mod tests {
             level_trial(Effect::RateRandomWalk, k2_model, rrw),
         ];
         let r = joint_relevel(&data, &trials).expect("two levels");
-        let c: Vec<f64> = r.levels.iter().map(|t| t.params.c()).collect();
+        let sq = |n: &Named| n[0].1 * n[0].1;
+        let c: Vec<f64> = r.levels.iter().map(|t| sq(&t.term.parameters())).collect();
         assert!((c[0] / n2 - 1.0).abs() < 1e-4, "white {c:?}");
         assert!((c[1] / k2 - 1.0).abs() < 1e-4, "rrw {c:?}");
         assert!(chi2_of(&data, &r.delta_avar) < 1e-6);
         // Each interval holds its level.
         for t in &r.levels {
-            assert!(t.lo.c() <= t.params.c() && t.params.c() <= t.hi.c());
+            let v = sq(&t.term.parameters());
+            assert!(sq(&t.lo) <= v && v <= sq(&t.hi));
         }
     }
 

@@ -5,7 +5,7 @@
 
 use crate::detect::Finding;
 use crate::input::LogInput;
-use noise::{Effect, Term};
+use noise::Effect;
 
 /// Two-sided 95 % normal quantile.
 const Z_95: f64 = 1.959_963_984_540_054;
@@ -85,10 +85,8 @@ fn outliers(found: &[&Finding], hours: f64) -> Finding {
         .fold(f64::NEG_INFINITY, f64::max);
     let n_without = found.iter().map(|f| value(f, "n_without")).sum::<f64>() / found.len() as f64;
     Finding {
-        term: Term::Outliers(noise::Outliers {
-            rate_per_hour: rate,
-            size,
-        }),
+        // A rate or size the constructor refuses keeps the first run's (validated) term.
+        term: noise::Outliers::new(rate, size).map_or_else(|_| found[0].term.clone(), Into::into),
         cannot_tell_from: vec![],
         parameters: vec![
             ("count", count, count, count),
@@ -139,11 +137,9 @@ fn transient(found: &[&Finding]) -> Finding {
             (lo.min(a.abs()), hi.max(a.abs()))
         });
     Finding {
-        term: Term::WarmupTransient(noise::WarmupTransient {
-            amplitude,
-            tau_s,
-            per_run: true,
-        }),
+        // Values the constructor refuses keep the first run's (validated) term.
+        term: noise::WarmupTransient::new(amplitude, tau_s, true)
+            .map_or_else(|_| found[0].term.clone(), Into::into),
         cannot_tell_from: vec![],
         parameters: vec![
             ("amplitude", amplitude, a_lo, a_hi),

@@ -1,9 +1,9 @@
 //! Step 4: every candidate effect fitted to one channel's gap.
 
 use crate::candidates::{
-    filter_grid, free_parameters, resonance_grid, resonance_refinement, resonance_signature,
-    shape_grid, shape_search_penalty, unit_family_signature, unit_signature, white_signature,
-    TermParams, CANDIDATES,
+    filter_grid, free_parameters, level_term, named, resonance_grid, resonance_refinement,
+    resonance_signature, shape_grid, shape_search_penalty, unit_family_signature, unit_signature,
+    white_signature, CANDIDATES,
 };
 use crate::fit::predicted_ln_adev;
 use crate::fit::{
@@ -12,10 +12,10 @@ use crate::fit::{
 };
 use crate::gap::{Band, Curve, Gap};
 use crate::model_terms::{
-    flicker_band, has_random_walk_bias_instability, output_filter, term_level,
+    fitted_term, flicker_band, has_random_walk_bias_instability, output_filter, squared_level,
 };
 use crate::spectrum::SpectralPeak;
-use noise::{Channel, Effect, FilterKind, OutputFilter, SensorModel};
+use noise::{Channel, Effect, FilterKind, GaussMarkov, OutputFilter, SensorModel, Sinusoid, Term};
 use std::collections::BTreeMap;
 
 /// What one channel's candidates are fitted to: its model, measurement, band and gap, and what the
@@ -37,13 +37,22 @@ pub(crate) struct ChannelFit<'a> {
     pub(crate) line_resolution_hz: Option<f64>,
 }
 
+/// Parameters by their docs/cli.md JSON names.
+pub(crate) type Named = Vec<(&'static str, f64)>;
+
 /// A fitted candidate before selection.
 pub(crate) struct Trial {
     pub(crate) effect: Effect,
-    pub(crate) params: TermParams,
-    pub(crate) lo: TermParams,
-    pub(crate) hi: TermParams,
-    pub(crate) model: Option<TermParams>,
+    /// The fitted term.
+    pub(crate) term: Term,
+    /// For an output filter, the white-noise density refitted through it (the filter reshapes the
+    /// white noise, so the two are fitted and named together).
+    pub(crate) white_n: Option<f64>,
+    /// The parameters at the ends of their 95 % intervals.
+    pub(crate) lo: Named,
+    pub(crate) hi: Named,
+    /// The model's own parameters of the effect, if it has the term.
+    pub(crate) model: Option<Named>,
     pub(crate) bic: f64,
     pub(crate) aic: f64,
     /// (c - c0) f(tau): the change of the band's Allan variance.
@@ -56,7 +65,7 @@ pub(crate) struct Trial {
 /// One candidate's fit, before its interval.
 struct Fitted {
     fit: LinearFit,
-    params: TermParams,
+    term: Term,
     /// The 95 % interval of a searched shape.
     shape: ShapeInterval,
     /// The candidate's Allan variance per unit squared level at each tau, f(tau).
@@ -78,33 +87,15 @@ enum ShapeInterval {
     },
 }
 
-pub(crate) fn sqrt_params(p: TermParams, c: f64) -> TermParams {
-    match p {
-        TermParams::Level(v) => {
-            TermParams::Level(c.max(0.0).sqrt().copysign(if v < 0.0 { -1.0 } else { 1.0 }))
-        }
-        TermParams::GaussMarkov { tau_s, .. } => TermParams::GaussMarkov {
-            sigma: c.max(0.0).sqrt(),
-            tau_s,
-        },
-        TermParams::Sinusoid { frequency_hz, .. } => TermParams::Sinusoid {
-            amplitude: c.max(0.0).sqrt(),
-            frequency_hz,
-        },
-        TermParams::Resonance {
-            frequency_hz,
-            bandwidth_hz,
-            ..
-        } => TermParams::Resonance {
-            sigma: c.max(0.0).sqrt(),
-            frequency_hz,
-            bandwidth_hz,
-        },
-        TermParams::Filter { filter, .. } => TermParams::Filter {
-            filter,
-            n: c.max(0.0).sqrt(),
-        },
+/// `named` (a term's parameters, its level first) with the level set to sqrt(c), of the sign the
+/// level has.
+pub(crate) fn at_squared_level(named: &Named, c: f64) -> Named {
+    let mut out = named.clone();
+    if let Some(level) = out.first_mut() {
+        let sign = if level.1 < 0.0 { -1.0 } else { 1.0 };
+        level.1 = c.max(0.0).sqrt().copysign(sign);
     }
+    out
 }
 
 /// Fit every candidate to one channel; the trials are in CANDIDATES order, the output filter last.
@@ -124,11 +115,11 @@ pub(crate) fn trials(input: &ChannelFit) -> Vec<Trial> {
         if effect == Effect::BiasInstability && has_random_walk_bias_instability(input.model, ch) {
             continue;
         }
-        let current = term_level(input.model, ch, effect);
+        let current = fitted_term(input.model, ch, effect);
         let fitted = match effect {
             Effect::GaussMarkov | Effect::Sinusoidal => fit_shaped(input, &data, effect, current),
             Effect::Resonance => fit_resonance(input, &data, current),
-            _ => Some(fit_level(input, &data, effect, current)),
+            _ => fit_level(input, &data, effect, current),
         };
         if let Some(fitted) = fitted {
             out.push(trial(&data, effect, current, fitted));
@@ -145,12 +136,12 @@ fn fit_shaped(
     input: &ChannelFit,
     data: &FitData,
     effect: Effect,
-    current: Option<TermParams>,
+    current: Option<&Term>,
 ) -> Option<Fitted> {
     let (tau, dt_s) = (&input.measured.tau_s, input.dt_s);
     let m = tau.len();
-    let (shapes, penalty, from_lines) = match current.and_then(|c| c.shape()) {
-        Some(s) => (vec![s], 0.0, false),
+    let (shapes, penalty, from_lines) = match current.and_then(|c| c.parameters().get(1).copied()) {
+        Some((_, s)) => (vec![s], 0.0, false),
         None if effect == Effect::Sinusoidal => sinusoid_shapes(input, data)?,
         None => {
             let g = shape_grid(effect, tau[0], tau[m - 1], dt_s);
@@ -166,18 +157,16 @@ fn fit_shaped(
                 .collect()
         })
         .collect();
-    let c0 = current.map(|c| c.c()).unwrap_or(0.0);
+    let c0 = squared_level(current);
     let ff = fit_family(data, &shapes, &sigs, &|_| c0)?;
     let j = shapes.iter().position(|&s| s == ff.shape).unwrap_or(0);
-    let params = match effect {
-        Effect::GaussMarkov => TermParams::GaussMarkov {
-            sigma: ff.fit.c.sqrt(),
-            tau_s: ff.shape,
-        },
-        _ => TermParams::Sinusoid {
-            amplitude: ff.fit.c.sqrt(),
-            frequency_hz: ff.shape,
-        },
+    // The model's own term keeps its shape (and a sinusoid its phase); a new one takes the
+    // shape found.
+    let level = ff.fit.c.sqrt();
+    let term = match (current, effect) {
+        (Some(own), _) => own.with_level(level).ok()?,
+        (None, Effect::GaussMarkov) => GaussMarkov::new(level, ff.shape).ok()?.into(),
+        (None, _) => Sinusoid::new(level, ff.shape, None).ok()?.into(),
     };
     // Shape interval at the 95 % threshold widened by this fit's Birge ratio; a line's frequency
     // is the spectrum's, known to half its resolution.
@@ -188,7 +177,7 @@ fn fit_shaped(
     };
     Some(Fitted {
         fit: ff.fit,
-        params,
+        term,
         shape: ShapeInterval::Scalar(shape_lo, shape_hi),
         signature: sigs[j].clone(),
         penalty,
@@ -246,17 +235,9 @@ fn sinusoid_shapes(input: &ChannelFit, data: &FitData) -> Option<(Vec<f64>, f64,
 /// real peak is seldom the symmetric shape of the model); the shape is then fitted to the Allan
 /// curve on a grid around them (frequency within a peak width, bandwidth 0.15-3 times the peak's),
 /// with the look-elsewhere cost of the shapes tried, through the channel's output filter.
-fn fit_resonance(
-    input: &ChannelFit,
-    data: &FitData,
-    current: Option<TermParams>,
-) -> Option<Fitted> {
+fn fit_resonance(input: &ChannelFit, data: &FitData, current: Option<&Term>) -> Option<Fitted> {
     let own = match current {
-        Some(TermParams::Resonance {
-            frequency_hz,
-            bandwidth_hz,
-            ..
-        }) => Some((frequency_hz, bandwidth_hz)),
+        Some(Term::Resonance(r)) => Some((r.frequency_hz(), r.bandwidth_hz())),
         _ => None,
     };
     let shapes: Vec<(f64, f64)> = match (own, input.peak) {
@@ -269,7 +250,7 @@ fn fit_resonance(
         tau: &input.measured.tau_s,
         dt_s: input.dt_s,
         filter: output_filter(input.model, input.channel),
-        c0: current.map(|c| c.c()).unwrap_or(0.0),
+        c0: squared_level(current),
         peak: input.peak,
     };
     let (shapes, fits) = search.run(shapes, own);
@@ -292,13 +273,12 @@ fn fit_resonance(
                 (a.min(v), b.max(v))
             })
     };
+    let (frequency_hz, bandwidth_hz) = shapes[jb];
     Some(Fitted {
         fit,
-        params: TermParams::Resonance {
-            sigma: fit.c.sqrt(),
-            frequency_hz: shapes[jb].0,
-            bandwidth_hz: shapes[jb].1,
-        },
+        term: noise::Resonance::new(fit.c.sqrt(), frequency_hz, bandwidth_hz)
+            .ok()?
+            .into(),
         shape: ShapeInterval::Resonance {
             frequency_hz: span(|s| s.0),
             bandwidth_hz: span(|s| s.1),
@@ -375,8 +355,8 @@ fn fit_level(
     input: &ChannelFit,
     data: &FitData,
     effect: Effect,
-    current: Option<TermParams>,
-) -> Fitted {
+    current: Option<&Term>,
+) -> Option<Fitted> {
     let (tau, dt_s) = (&input.measured.tau_s, input.dt_s);
     let ch = input.channel;
     let f: Vec<f64> = if effect == Effect::WhiteNoise {
@@ -387,9 +367,9 @@ fn fit_level(
             .map(|&t| unit_signature(effect, t, dt_s, &flicker))
             .collect()
     };
-    let c0 = current.map(|c| c.c()).unwrap_or(0.0);
+    let c0 = squared_level(current);
     let fit = fit_linear(data, &f, c0);
-    let (fit, params) = if effect == Effect::RateRamp {
+    let (fit, level) = if effect == Effect::RateRamp {
         // A ramp is deterministic: its level is the least-squares slope of the log (the ML
         // estimate of a ramp in white noise), not a free Allan parameter. A long-tau rise that is
         // really a random walk then fits as a ramp only if the log does drift that way, which the
@@ -400,31 +380,31 @@ fn fit_level(
             chi2: data.chi2(&f, c - c0),
             ..fit
         };
-        (ramp, TermParams::Level(input.ramp_slope))
+        (ramp, input.ramp_slope)
     } else {
-        (fit, TermParams::Level(fit.c.sqrt()))
+        (fit, fit.c.sqrt())
     };
-    Fitted {
+    Some(Fitted {
         fit,
-        params,
+        term: level_term(input.model, ch, effect, level).ok()?,
         shape: ShapeInterval::None,
         signature: f,
         penalty: 0.0,
-    }
+    })
 }
 
 /// A fitted candidate with its 95 % interval (widened by the Birge ratio of its fit) and
 /// information criteria.
-fn trial(data: &FitData, effect: Effect, current: Option<TermParams>, fitted: Fitted) -> Trial {
+fn trial(data: &FitData, effect: Effect, current: Option<&Term>, fitted: Fitted) -> Trial {
     let Fitted {
         fit,
-        params,
+        term,
         shape,
         signature: f,
         penalty,
     } = fitted;
     let (k, m) = (free_parameters(effect), data.ln_meas.len());
-    let c0 = current.map(|c| c.c()).unwrap_or(0.0);
+    let c0 = squared_level(current);
     let scale = birge_scale(fit.chi2, k, m);
     // (For the ramp: the profile interval of the Allan fit alone, around its own optimum.)
     let allan_fit = if effect == Effect::RateRamp {
@@ -433,13 +413,14 @@ fn trial(data: &FitData, effect: Effect, current: Option<TermParams>, fitted: Fi
         fit
     };
     let (c_lo, c_hi) = linear_interval(data, &f, c0, &allan_fit, CHI2_1_95 * scale * scale);
-    let (lo, hi) = bounds(params, (c_lo, c_hi), &shape);
+    let (lo, hi) = bounds(&term.parameters(), (c_lo, c_hi), &shape);
     Trial {
         effect,
-        params,
+        term,
+        white_n: None,
         lo,
         hi,
-        model: current,
+        model: current.map(Term::parameters),
         bic: bic(fit.chi2, k, m) + penalty,
         aic: aic(fit.chi2, k) + penalty,
         delta_avar: f.iter().map(|v| (fit.c - c0) * v).collect(),
@@ -448,50 +429,36 @@ fn trial(data: &FitData, effect: Effect, current: Option<TermParams>, fitted: Fi
 }
 
 /// The parameters at the ends of the level interval (c_lo, c_hi), with the shape's own interval.
-fn bounds(
-    params: TermParams,
-    (c_lo, c_hi): (f64, f64),
-    shape: &ShapeInterval,
-) -> (TermParams, TermParams) {
-    let mut lo = sqrt_params(params, c_lo);
-    let mut hi = sqrt_params(params, c_hi);
-    if let (TermParams::Level(l), TermParams::Level(h)) = (lo, hi) {
-        if l > h {
-            (lo, hi) = (TermParams::Level(h), TermParams::Level(l));
+fn bounds(params: &Named, (c_lo, c_hi): (f64, f64), shape: &ShapeInterval) -> (Named, Named) {
+    let mut lo = at_squared_level(params, c_lo);
+    let mut hi = at_squared_level(params, c_hi);
+    if let (Some(l), Some(h)) = (lo.first_mut(), hi.first_mut()) {
+        if l.1 > h.1 {
+            std::mem::swap(&mut l.1, &mut h.1);
         }
     }
-    match (shape, &mut lo, &mut hi) {
-        (
-            ShapeInterval::Resonance {
-                frequency_hz: (f_lo, f_hi),
-                bandwidth_hz: (b_lo, b_hi),
-            },
-            TermParams::Resonance {
-                frequency_hz: fl,
-                bandwidth_hz: bl,
-                ..
-            },
-            TermParams::Resonance {
-                frequency_hz: fh,
-                bandwidth_hz: bh,
-                ..
-            },
-        ) => (*fl, *fh, *bl, *bh) = (*f_lo, *f_hi, *b_lo, *b_hi),
-        (
-            ShapeInterval::Scalar(s_lo, s_hi),
-            TermParams::GaussMarkov { tau_s: a, .. },
-            TermParams::GaussMarkov { tau_s: b, .. },
-        )
-        | (
-            ShapeInterval::Scalar(s_lo, s_hi),
-            TermParams::Sinusoid {
-                frequency_hz: a, ..
-            },
-            TermParams::Sinusoid {
-                frequency_hz: b, ..
-            },
-        ) => (*a, *b) = (*s_lo, *s_hi),
-        _ => {}
+    let mut set = |name: &str, (a, b): (f64, f64)| {
+        for (side, v) in [(&mut lo, a), (&mut hi, b)] {
+            if let Some(p) = side.iter_mut().find(|p| p.0 == name) {
+                p.1 = v;
+            }
+        }
+    };
+    match shape {
+        ShapeInterval::Resonance {
+            frequency_hz,
+            bandwidth_hz,
+        } => {
+            set("frequency_hz", *frequency_hz);
+            set("bandwidth_hz", *bandwidth_hz);
+        }
+        // The one shape of a Gauss-Markov process or a sinusoid, after the level.
+        ShapeInterval::Scalar(s_lo, s_hi) => {
+            if let Some(name) = params.get(1).map(|p| p.0) {
+                set(name, (*s_lo, *s_hi));
+            }
+        }
+        ShapeInterval::None => {}
     }
     (lo, hi)
 }
@@ -514,19 +481,16 @@ fn filter_trial(input: &ChannelFit, data: &FitData) -> Option<Trial> {
     let scale = birge_scale(chi2, k, m);
     let lo = (b.fit.c_lo / (scale * scale).max(1.0)).min(b.fit.c);
     let hi = b.fit.c_hi * (scale * scale).max(1.0);
-    let p = |c: f64| TermParams::Filter {
-        filter: b.filter,
-        n: c.max(0.0).sqrt(),
-    };
+    let p = |c: f64| named(&b.filter.into(), Some(c.max(0.0).sqrt()));
     Some(Trial {
         effect: Effect::OutputFilter,
-        params: p(b.fit.c),
+        term: b.filter.into(),
+        white_n: Some(b.fit.c.max(0.0).sqrt()),
         lo: p(lo),
         hi: p(hi),
-        model: search.current.map(|filter| TermParams::Filter {
-            filter,
-            n: search.c0.sqrt(),
-        }),
+        model: search
+            .current
+            .map(|filter| named(&filter.into(), Some(search.c0.sqrt()))),
         bic: bic(chi2, k, m) + penalty,
         aic: aic(chi2, k) + penalty,
         delta_avar: b.delta,
@@ -558,7 +522,7 @@ impl<'a> FilterSearch<'a> {
         let (tau, dt_s) = (input.measured.tau_s.as_slice(), input.dt_s);
         let ch = input.channel;
         let current = output_filter(input.model, ch);
-        let c0 = term_level(input.model, ch, Effect::WhiteNoise).map_or(0.0, |p| p.c());
+        let c0 = squared_level(fitted_term(input.model, ch, Effect::WhiteNoise));
         let fw_cur = white_signature(current.as_ref(), tau, dt_s);
         // The band scaled by closed-form ratios, not shifted by closed-form differences: a filter can
         // take the short-tau variance down 30-fold, and subtracting the unfiltered white noise from a
@@ -629,8 +593,9 @@ impl<'a> FilterSearch<'a> {
         let mut seeds: Vec<OutputFilter> = Vec::new();
         for t in tried.iter() {
             let same = |f: &OutputFilter| {
-                f.decimation == t.1.filter.decimation
-                    && std::mem::discriminant(&f.kind) == std::mem::discriminant(&t.1.filter.kind)
+                f.decimation() == t.1.filter.decimation()
+                    && std::mem::discriminant(&f.kind())
+                        == std::mem::discriminant(&t.1.filter.kind())
             };
             let best_of_family = tried
                 .iter()
@@ -642,7 +607,7 @@ impl<'a> FilterSearch<'a> {
             }
         }
         for f in seeds {
-            match f.kind {
+            match f.kind() {
                 FilterKind::MovingAverage { taps } | FilterKind::Bartlett { taps } => {
                     self.refine_taps(f, taps, tried)
                 }
@@ -658,11 +623,11 @@ impl<'a> FilterSearch<'a> {
         let lo = ((f64::from(taps) / 1.3).floor() as u32).max(2);
         let hi = (f64::from(taps) * 1.3).ceil() as u32;
         for l in lo..=hi {
-            let kind = match f.kind {
+            let kind = match f.kind() {
                 FilterKind::MovingAverage { .. } => FilterKind::MovingAverage { taps: l },
                 _ => FilterKind::Bartlett { taps: l },
             };
-            if let Ok(g) = OutputFilter::new(kind, f.decimation) {
+            if let Ok(g) = OutputFilter::new(kind, f.decimation()) {
                 if !tried.iter().any(|u| u.1.filter == g) {
                     tried.extend(self.try_filter(g));
                 }
@@ -673,11 +638,11 @@ impl<'a> FilterSearch<'a> {
     /// The cutoff by golden section in ln f within one grid step either side of `cutoff_hz`.
     fn refine_cutoff(&self, f: OutputFilter, cutoff_hz: f64) -> Option<(f64, OutputFilterFit)> {
         let with = |fc: f64| {
-            let kind = match f.kind {
+            let kind = match f.kind() {
                 FilterKind::LowPass1 { .. } => FilterKind::LowPass1 { cutoff_hz: fc },
                 _ => FilterKind::LowPass2 { cutoff_hz: fc },
             };
-            OutputFilter::new(kind, f.decimation).ok()
+            OutputFilter::new(kind, f.decimation()).ok()
         };
         let chi = |ln_fc: f64| {
             with(ln_fc.exp())
@@ -711,16 +676,21 @@ impl<'a> FilterSearch<'a> {
             .filter(|t| t.0 <= best_chi2 + alike)
             .min_by(|a, b| {
                 a.1.filter
-                    .decimation
-                    .cmp(&b.1.filter.decimation)
+                    .decimation()
+                    .cmp(&b.1.filter.decimation())
                     .then(a.0.total_cmp(&b.0))
             })
     }
 }
 
-pub(crate) fn named_map(effect: Effect, p: &TermParams) -> BTreeMap<String, f64> {
-    p.named(effect)
-        .into_iter()
-        .map(|(k, v)| (k.to_string(), v))
-        .collect()
+impl Trial {
+    /// The fitted parameters by their docs/cli.md names (an output filter's with its white noise).
+    pub(crate) fn named(&self) -> Named {
+        named(&self.term, self.white_n)
+    }
+}
+
+/// Named parameters as the report's map.
+pub(crate) fn named_map(p: &Named) -> BTreeMap<String, f64> {
+    p.iter().map(|(k, v)| (k.to_string(), *v)).collect()
 }

@@ -3,7 +3,6 @@
 //! the band, locate the gap, fit the candidates, accept the best, re-simulate, repeat; then the drift
 //! consequence and the report.
 
-use crate::candidates::TermParams;
 use crate::detect::Preprocessed;
 use crate::drift::{segment_drift, SegmentDrift};
 use crate::error::DiagnoseError;
@@ -15,7 +14,7 @@ use crate::fit::{bic, predicted_ln_adev, FitData};
 use crate::gap::{gap, Band, Curve, Gap};
 use crate::input::{validate_runs, LogInput};
 use crate::measure::{measure_runs, restrict, Measured, Runs};
-use crate::model_terms::{clear_term, set_term, term_level};
+use crate::model_terms::{current_term, restore_term, set_term};
 use crate::observer::{Observer, Step};
 use crate::report::{
     CandidateRecord, ChannelReport, Diagnosis, DriftRow, FoundEffect, LogBands, RunChannel,
@@ -25,7 +24,7 @@ use crate::settings::Settings;
 use crate::simulate::{simulate_runs, RunPlan, SimResult, SimSetup};
 use crate::spectrum::SpectralPeak;
 use crate::trials::{trials, ChannelFit, Trial};
-use noise::{Channel, Effect, ImuChannels, SensorModel};
+use noise::{Channel, Effect, ImuChannels, SensorModel, Term};
 use std::collections::BTreeMap;
 
 pub use crate::findings::STAND_IN_GAP;
@@ -136,7 +135,7 @@ struct ChannelState {
 /// before, to undo them) and the channel's gap at the round's start.
 struct Pending {
     channel: Channel,
-    changes: Vec<(Effect, Option<TermParams>)>,
+    changes: Vec<(Effect, Option<Term>)>,
     gap_before: f64,
 }
 
@@ -487,29 +486,31 @@ impl<'a> Run<'a> {
             && best.is_none_or(|b| joint.bic - b.trial.bic < settings.ambiguity_delta_bic)
     }
 
-    /// Step 4: put the chosen term into both models; the changes made, each with the level before.
-    fn accept(&mut self, c: Channel, best: &Trial) -> Vec<(Effect, Option<TermParams>)> {
-        let ch = c;
-        let mut changes = Vec::new();
-        if best.effect == Effect::OutputFilter {
+    /// Step 4: put the chosen term into both models; the changes made, each with the term before.
+    /// A trial whose parameters the terms' constructors refuse changes nothing.
+    fn accept(&mut self, c: Channel, best: &Trial) -> Vec<(Effect, Option<Term>)> {
+        let mut terms = vec![best.term.clone()];
+        if let Some(n) = best.white_n {
             // The filter is fitted with the white-noise level: undoing it restores both.
-            let white = term_level(&self.sim_model, ch, Effect::WhiteNoise);
-            changes.push((Effect::WhiteNoise, white));
+            match noise::WhiteNoise::new(n) {
+                Ok(white) => terms.insert(0, white.into()),
+                Err(_) => return Vec::new(),
+            }
         }
-        let previous = term_level(&self.sim_model, ch, best.effect);
-        set_term(&mut self.sim_model, ch, best.effect, &best.params);
-        set_term(&mut self.out_model, ch, best.effect, &best.params);
-        changes.push((best.effect, previous));
+        let mut changes = Vec::new();
+        for term in terms {
+            let effect = term.effect();
+            changes.push((effect, current_term(&self.sim_model, c, effect)));
+            set_term(&mut self.sim_model, c, term.clone());
+            set_term(&mut self.out_model, c, term);
+        }
         changes
     }
 
     /// Undo one change of [`Run::accept`] in both models.
-    fn undo(&mut self, c: Channel, effect: Effect, previous: Option<TermParams>) {
+    fn undo(&mut self, c: Channel, effect: Effect, previous: Option<Term>) {
         for model in [&mut self.sim_model, &mut self.out_model] {
-            match previous {
-                Some(p) => set_term(model, c, effect, &p),
-                None => clear_term(model, c, effect),
-            }
+            restore_term(model, c, effect, previous.clone());
         }
     }
 

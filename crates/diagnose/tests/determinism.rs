@@ -15,7 +15,7 @@ fn run(threads: usize) -> SimResult {
         .chain(model.accel.axes.iter_mut())
     {
         axis.set_term(noise::WhiteNoise::new(1e-3).unwrap());
-        axis.set_term(BiasInstability::Flicker(Flicker::with_b(1e-4)));
+        axis.set_term(BiasInstability::Flicker(Flicker::with_b(1e-4).unwrap()));
         axis.set_term(noise::RateRandomWalk::new(1e-5).unwrap());
     }
     let setup = SimSetup {

@@ -15,11 +15,11 @@
 mod common;
 use common::{base_model, format_z, gap_closed, log_uniform, parameter_ok, run_trials};
 use common::{GeneratedLog, DT_S, SEEDS};
-use diagnose::candidates::TermParams;
+use diagnose::candidates::level_term;
 use diagnose::model_terms::set_term;
 use diagnose::simulate::adev_at;
 use diagnose::{Diagnosis, Settings};
-use noise::{Channel, Effect, SensorModel, TemperatureProfile};
+use noise::{Channel, Effect, SensorModel, TemperatureProfile, Term};
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
@@ -44,12 +44,9 @@ fn cycling() -> TemperatureProfile {
 
 /// Draw the hidden effect's parameters for channel `ch` on top of `base`. Where a term "crosses the base
 /// at tau_c", its Allan variance equals the base model's there and exceeds it beyond.
-fn draw(
-    effect: Effect,
-    base: &SensorModel,
-    ch: Channel,
-    rng: &mut Xoshiro256PlusPlus,
-) -> TermParams {
+fn draw(effect: Effect, base: &SensorModel, ch: Channel, rng: &mut Xoshiro256PlusPlus) -> Term {
+    // A one-level term as diagnose would put it on the base model.
+    let level = |v: f64| level_term(base, ch, effect, v).unwrap();
     let (sensor, axis) = (ch.sensor(), ch.axis());
     let a = base.axis(sensor, axis);
     let n = a
@@ -66,28 +63,28 @@ fn draw(
         // the shortest tau only and its RMS gap over the 15 taus is too small for the gap criterion.
         Effect::Quantization => {
             let lsb = log_uniform(rng, 0.85, 1.0) * n * DT_S.sqrt();
-            TermParams::Level(lsb / 12f64.sqrt())
+            level(lsb / 12f64.sqrt())
         }
         // White-noise level off by a factor 0.5..0.75 or 1.33..2.
         Effect::WhiteNoise => {
             let f = log_uniform(rng, 1.33, 2.0);
-            TermParams::Level(if rng.gen::<bool>() { n * f } else { n / f })
+            level(if rng.gen::<bool>() { n * f } else { n / f })
         }
         // Flicker (base without it) crossing the white noise at 0.5..5 s:
         // gyro B = 6.7e-5..2.1e-4 rad/s (14..44 deg/h), consumer-MEMS grade.
         Effect::BiasInstability => {
             let tc = log_uniform(rng, 0.5, 5.0);
-            TermParams::Level((n * n / tc / noise::closed_form::flicker_plateau_avar(1.0)).sqrt())
+            level((n * n / tc / noise::closed_form::flicker_plateau_avar(1.0)).sqrt())
         }
         // K^2 tau/3 crosses the base at 1..8 s: gyro K = 3e-5..8e-5 rad/s/sqrt(s).
         Effect::RateRandomWalk => {
             let tc = log_uniform(rng, 1.0, 8.0);
-            TermParams::Level((3.0 * base_avar(base, ch, tc) / tc).sqrt())
+            level((3.0 * base_avar(base, ch, tc) / tc).sqrt())
         }
         // R^2 tau^2/2 crosses the base at 3..20 s: gyro R = 3e-6..3e-5 rad/s^2.
         Effect::RateRamp => {
             let tc = log_uniform(rng, 3.0, 20.0);
-            TermParams::Level((2.0 * base_avar(base, ch, tc)).sqrt() / tc)
+            level((2.0 * base_avar(base, ch, tc)).sqrt() / tc)
         }
         // Correlation time 0.3..15 s; ADEV peak (0.6174 sigma at 1.89 T) 3..8 times the base ADEV there.
         Effect::GaussMarkov => {
@@ -95,17 +92,16 @@ fn draw(
             let peak_tau = noise::closed_form::GAUSS_MARKOV_ADEV_PEAK_TAU_PER_TC * t;
             let sigma = log_uniform(rng, 3.0, 8.0) * base_avar(base, ch, peak_tau).sqrt()
                 / noise::closed_form::GAUSS_MARKOV_ADEV_PEAK_PER_SIGMA;
-            TermParams::GaussMarkov { sigma, tau_s: t }
+            noise::GaussMarkov::new(sigma, t).unwrap().into()
         }
         // Period 0.2..20 s; amplitude such that the first Allan lobe (ADEV 0.72 A near tau = 0.37/f0)
         // is 3..8 times the base ADEV there.
         Effect::Sinusoidal => {
             let period = log_uniform(rng, 0.2, 20.0);
             let amp = log_uniform(rng, 3.0, 8.0) * base_avar(base, ch, 0.37 * period).sqrt() / 0.72;
-            TermParams::Sinusoid {
-                amplitude: amp,
-                frequency_hz: 1.0 / period,
-            }
+            noise::Sinusoid::new(amp, 1.0 / period, None)
+                .unwrap()
+                .into()
         }
         // Coefficient (random sign) such that the temperature term's Allan deviation peaks at 3..8 times the base
         // ADEV (gyro: about 2e-6..1e-5 rad/s/degC, 0.0001..0.0006 deg/s/degC).
@@ -119,7 +115,7 @@ fn draw(
                 .map(|(t, &m)| t / base_avar(base, ch, m as f64 * DT_S).sqrt())
                 .fold(0.0, f64::max);
             let k = log_uniform(rng, 3.0, 8.0) / ratio;
-            TermParams::Level(if rng.gen::<bool>() { k } else { -k })
+            level(if rng.gen::<bool>() { k } else { -k })
         }
         _ => unreachable!(),
     }
@@ -128,7 +124,7 @@ fn draw(
 struct Trial {
     effect: Effect,
     channels: Vec<Channel>,
-    truth: Vec<TermParams>,
+    truth: Vec<Term>,
     result: Diagnosis,
 }
 
@@ -167,12 +163,12 @@ fn hidden_trial(effect: Effect, trial: u64) -> Trial {
         channels.push(to_channel(second));
     }
     channels.sort_unstable();
-    let truth: Vec<TermParams> = channels
+    let truth: Vec<Term> = channels
         .iter()
         .map(|&c| draw(effect, &base, c, &mut rng))
         .collect();
     for (&c, p) in channels.iter().zip(&truth) {
-        set_term(&mut model, c, effect, p);
+        set_term(&mut model, c, p.clone());
     }
     let result = run(&model, &base, 1000 + trial, temperature);
     Trial {
@@ -217,7 +213,7 @@ fn check(trial: &Trial) -> Result<(), String> {
                         trial.effect.name()
                     ));
                 }
-                for (key, truth) in trial.truth[j].named(trial.effect) {
+                for (key, truth) in trial.truth[j].parameters() {
                     let truth = truth.abs();
                     let value = found.parameters[key].abs();
                     let (lo, hi) = (
@@ -366,8 +362,7 @@ fn temperature_ramp_cannot_be_told_from_rate_ramp() {
     set_term(
         &mut model,
         Channel::Gy,
-        Effect::TemperatureBias,
-        &TermParams::Level(5e-5),
+        noise::TemperatureBias::new(5e-5).unwrap().into(),
     );
     let d = run(&model, &base, 31, true);
     let gy = &d.channels["gy"];

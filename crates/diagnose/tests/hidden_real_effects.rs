@@ -54,16 +54,22 @@ fn draw(kind: &str, ch: Channel, rng: &mut Xoshiro256PlusPlus) -> Term {
             .unwrap(),
         ),
         // 200..1000 spikes per hour of 15..40 sigma.
-        "outliers" => Term::Outliers(Outliers {
-            rate_per_hour: log_uniform(rng, 200.0, 1000.0),
-            size: log_uniform(rng, 15.0, 40.0) * sigma(ch),
-        }),
+        "outliers" => Term::Outliers(
+            Outliers::new(
+                log_uniform(rng, 200.0, 1000.0),
+                log_uniform(rng, 15.0, 40.0) * sigma(ch),
+            )
+            .unwrap(),
+        ),
         // Settling from 0.3..1 sigma per sample (gyro 3e-4..1e-3 rad/s) with 60..300 s.
-        "transient" => Term::WarmupTransient(WarmupTransient {
-            amplitude: log_uniform(rng, 0.3, 1.0) * sigma(ch) * if rng.gen() { 1.0 } else { -1.0 },
-            tau_s: log_uniform(rng, 60.0, 300.0),
-            per_run: false,
-        }),
+        "transient" => Term::WarmupTransient(
+            WarmupTransient::new(
+                log_uniform(rng, 0.3, 1.0) * sigma(ch) * if rng.gen() { 1.0 } else { -1.0 },
+                log_uniform(rng, 60.0, 300.0),
+                false,
+            )
+            .unwrap(),
+        ),
         // Temperature coefficient such that the 15 degC excursion moves the bias by 0.3..1 sigma.
         "warmup" | "cycling" => Term::TemperatureBias(
             noise::TemperatureBias::new(
@@ -125,14 +131,14 @@ fn key_values(term: &Term, found: &diagnose::report::FoundEffect) -> Vec<(&'stat
         Term::Outliers(o) => vec![
             (
                 "rate_per_hour",
-                o.rate_per_hour,
+                o.rate_per_hour(),
                 found.parameters["rate_per_hour"],
             ),
-            ("size", o.size, found.parameters["size"]),
+            ("size", o.size(), found.parameters["size"]),
         ],
         Term::WarmupTransient(w) => vec![
-            ("amplitude", w.amplitude, found.parameters["amplitude"]),
-            ("tau_s", w.tau_s, found.parameters["tau_s"]),
+            ("amplitude", w.amplitude(), found.parameters["amplitude"]),
+            ("tau_s", w.tau_s(), found.parameters["tau_s"]),
         ],
         Term::TemperatureBias(c) => vec![(
             "coefficient",
@@ -140,15 +146,15 @@ fn key_values(term: &Term, found: &diagnose::report::FoundEffect) -> Vec<(&'stat
             found.parameters["coefficient"],
         )],
         Term::Resonance(r) => vec![
-            ("sigma", r.sigma, found.parameters["sigma"]),
+            ("sigma", r.sigma(), found.parameters["sigma"]),
             (
                 "frequency_hz",
-                r.frequency_hz,
+                r.frequency_hz(),
                 found.parameters["frequency_hz"],
             ),
             (
                 "bandwidth_hz",
-                r.bandwidth_hz,
+                r.bandwidth_hz(),
                 found.parameters["bandwidth_hz"],
             ),
         ],

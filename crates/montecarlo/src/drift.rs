@@ -3,14 +3,11 @@
 //! active terms with the law each one obeys.
 
 use crate::channels::Channel;
-use crate::laws::{Entry, LawContext, Source, Term};
+use crate::laws::{Entry, LawContext, Term};
 use crate::runner::{RunError, RunKernel};
 use crate::scenario::{Alignment, Scenario};
 use nalgebra::Vector3;
-use noise::closed_form as cf;
-use noise::{
-    BiasInstability, ImuErrors, Sensor, SensorModel, TemperatureProfile, Term as NoiseTerm,
-};
+use noise::{ImuErrors, LawSource, LawSourceContext, Sensor, SensorModel};
 use rand_distr::{Distribution, StandardNormal};
 use strapdown::{
     nav_error, AnyTrajectory, Attitude, BodyVector, NavState, Scheme, Strapdown, Trajectory,
@@ -161,8 +158,9 @@ impl RunKernel for DriftKernel {
     }
 }
 
-/// The active terms of `model` with their law sources, and the conditions of the laws, for a
-/// scenario's trajectory and alignment, sampled every `dt_s` (the sinusoid's law depends on it).
+/// The active terms of `model` with their law sources (each term's own,
+/// `noise::ErrorTerm::law_sources`), and the conditions of the laws, for a scenario's trajectory
+/// and alignment, sampled every `dt_s` (the sinusoid's law depends on it).
 pub fn law_terms(
     model: &SensorModel,
     spec: &TrajectorySpec,
@@ -170,11 +168,60 @@ pub fn law_terms(
     gravity_mps2: f64,
     dt_s: f64,
 ) -> (Vec<Term>, LawContext) {
-    let g = gravity_mps2;
-    // Static, level, north-facing: the laws of docs/model.md §4. A constant rate about body z from
-    // level keeps the z gyro error on the yaw channel (rotations about one axis commute): only the
-    // yaw law holds (calibration errors ~ rate x duration, docs/model.md §1.5 Table 2).
-    let (static_level, yaw_rate, reason) = match *spec {
+    let (static_level, yaw_rate, reason) = law_conditions(spec);
+    let mut terms = Vec::new();
+    for sensor in [Sensor::Gyro, Sensor::Accel] {
+        // Ideal readings, static level (a constant yaw rate on the z gyro).
+        let ideal: Vector3<f64> = match sensor {
+            Sensor::Gyro => Vector3::new(0.0, 0.0, yaw_rate.unwrap_or(0.0)),
+            Sensor::Accel => Vector3::new(0.0, 0.0, -gravity_mps2),
+        };
+        for axis in 0..3 {
+            let entry = match sensor {
+                Sensor::Gyro => Entry::Gyro(axis),
+                Sensor::Accel => Entry::Accel(axis),
+            };
+            // The two other axes in misalignment order.
+            let others = match axis {
+                0 => [ideal.y, ideal.z],
+                1 => [ideal.x, ideal.z],
+                _ => [ideal.x, ideal.y],
+            };
+            let cx = LawSourceContext {
+                ideal: ideal[axis],
+                others,
+                dt_s,
+                temperature: &model.temperature,
+                temperature_reference_c: model.temperature_reference_c,
+            };
+            for term in model.axis(sensor, axis).terms() {
+                let name = format!("{}.{}", sensor.name(), term.effect().name());
+                for source in term.as_error_term().law_sources(&cx) {
+                    terms.push(Term {
+                        name: name.clone(),
+                        entry,
+                        source,
+                    });
+                }
+            }
+        }
+    }
+    terms.extend(alignment_terms(alignment));
+    let ctx = LawContext {
+        static_level,
+        yaw_rate_rad_s: yaw_rate,
+        reason,
+        gravity_mps2,
+    };
+    (terms, ctx)
+}
+
+/// Whether the laws hold for a trajectory: static, level and north-facing (the laws of
+/// docs/model.md §4); or a constant rate about body z from level, which keeps the z gyro error on
+/// the yaw channel (rotations about one axis commute), so that only the yaw law holds
+/// (calibration errors ~ rate x duration, docs/model.md §1.5 Table 2), with the rate. Else why not.
+fn law_conditions(spec: &TrajectorySpec) -> (bool, Option<f64>, String) {
+    match *spec {
         TrajectorySpec::Static {
             roll_deg,
             pitch_deg,
@@ -198,118 +245,13 @@ pub fn law_terms(
             "motion".to_string(),
         ),
         _ => (false, None, "motion".to_string()),
-    };
-    let mut terms = Vec::new();
-    for sensor in [Sensor::Gyro, Sensor::Accel] {
-        for axis in 0..3 {
-            let m = model.axis(sensor, axis);
-            let entry = match sensor {
-                Sensor::Gyro => Entry::Gyro(axis),
-                Sensor::Accel => Entry::Accel(axis),
-            };
-            // Ideal reading on this axis and the two others (misalignment order), static level.
-            let ideal: Vector3<f64> = match sensor {
-                Sensor::Gyro => Vector3::new(0.0, 0.0, yaw_rate.unwrap_or(0.0)),
-                Sensor::Accel => Vector3::new(0.0, 0.0, -g),
-            };
-            let others = match axis {
-                0 => [ideal.y, ideal.z],
-                1 => [ideal.x, ideal.z],
-                _ => [ideal.x, ideal.y],
-            };
-            for term in m.terms() {
-                let effect = term.effect();
-                // The output filter has unit DC gain: it adds no error of its own, and the other
-                // terms' laws hold for times much longer than its impulse response.
-                if effect == noise::Effect::OutputFilter {
-                    continue;
-                }
-                let no_law = |why: &str| Source::NoLaw(why.to_string());
-                let source = match term {
-                    // The error of the quantised integrated output is bounded by the LSB and
-                    // depends on the dither the other terms provide; docs/model.md §4 has no closed form.
-                    NoiseTerm::Quantization(_) => no_law(
-                        "quantisation: the error of the quantised integrated output is bounded by the LSB and depends on the dither from the other terms; no closed form in docs/model.md §4",
-                    ),
-                    NoiseTerm::WhiteNoise(n) => Source::White(n.density()),
-                    NoiseTerm::BiasInstability(BiasInstability::RandomWalk {
-                        stability,
-                        period_s,
-                    }) => Source::RandomWalk(cf::woodman_bias_random_walk(*stability, *period_s)),
-                    // Flicker as realised: a sum of stationary Gauss-Markov components.
-                    NoiseTerm::BiasInstability(BiasInstability::Flicker(f)) => {
-                        Source::GaussMarkovSum(f.components())
-                    }
-                    NoiseTerm::RateRandomWalk(k) => Source::RandomWalk(k.density()),
-                    NoiseTerm::RateRamp(r) => Source::Ramp(r.rate()),
-                    NoiseTerm::GaussMarkov(gm) => Source::GaussMarkov {
-                        sigma: gm.sigma,
-                        tc_s: gm.tau_s,
-                    },
-                    NoiseTerm::Sinusoidal(w) => Source::Sinusoid {
-                        amplitude: w.amplitude,
-                        freq_hz: w.frequency_hz,
-                        phase: w.phase_rad,
-                        sample_interval_s: dt_s,
-                    },
-                    NoiseTerm::TemperatureBias(c) => {
-                        let c = c.per_degree();
-                        match model.temperature {
-                            // Table 2: a residual temperature bias integrates like a constant bias.
-                            TemperatureProfile::Constant { temp_c } => {
-                                Source::Bias(c * (temp_c - model.temperature_reference_c))
-                            }
-                            // A steady temperature ramp: a bias plus a rate ramp (the k-fold
-                            // integrals of c (T0 - Tref) and of c r t, docs/model.md §4 bias row).
-                            TemperatureProfile::Ramp {
-                                start_c,
-                                rate_c_per_s,
-                                end_c: None,
-                            } => {
-                                terms.push(Term {
-                                    name: format!("{}.{}", sensor.name(), effect.name()),
-                                    entry,
-                                    source: Source::Ramp(c * rate_c_per_s),
-                                });
-                                Source::Bias(c * (start_c - model.temperature_reference_c))
-                            }
-                            _ => no_law("temperature bias under a varying temperature profile"),
-                        }
-                    }
-                    NoiseTerm::ConstantBias(b) => Source::Bias(b.bias()),
-                    NoiseTerm::TurnOnBias(s) => Source::RandomConstant(s.sigma()),
-                    // Calibration errors act as a bias proportional to the reading (Table 2:
-                    // "drift proportional to rate and duration of motion").
-                    NoiseTerm::ScaleFactor(s) => Source::Bias(s.ratio() * ideal[axis]),
-                    NoiseTerm::Misalignment(mis) => {
-                        let mis = mis.angles_rad();
-                        Source::Bias(mis[0] * others[0] + mis[1] * others[1])
-                    }
-                    // Each output sample is an independent outlier with probability p, size +-a:
-                    // white noise of variance p a^2 per sample, density a sqrt(p dt).
-                    NoiseTerm::Outliers(o) => {
-                        Source::White(o.size * (o.probability(dt_s) * dt_s).sqrt())
-                    }
-                    NoiseTerm::WarmupTransient(w) => Source::Transient {
-                        amplitude: w.amplitude,
-                        tau_s: w.tau_s,
-                        per_run: w.per_run,
-                    },
-                    NoiseTerm::Resonance(r) => Source::Resonance {
-                        sigma: r.sigma,
-                        frequency_hz: r.frequency_hz,
-                        bandwidth_hz: r.bandwidth_hz,
-                    },
-                    NoiseTerm::OutputFilter(_) => unreachable!("skipped above"),
-                };
-                terms.push(Term {
-                    name: format!("{}.{}", sensor.name(), effect.name()),
-                    entry,
-                    source,
-                });
-            }
-        }
     }
+}
+
+/// The initial attitude errors: each axis' fixed part as a bias and its random part as a constant
+/// drawn per run.
+fn alignment_terms(alignment: &Alignment) -> Vec<Term> {
+    let mut terms = Vec::new();
     for axis in 0..3 {
         let (fixed, std) = (alignment.fixed_rad[axis], alignment.std_rad[axis]);
         let name = ["alignment.roll", "alignment.pitch", "alignment.yaw"][axis];
@@ -317,24 +259,18 @@ pub fn law_terms(
             terms.push(Term {
                 name: name.into(),
                 entry: Entry::InitialAttitude(axis),
-                source: Source::Bias(fixed),
+                source: LawSource::Bias(fixed),
             });
         }
         if std != 0.0 {
             terms.push(Term {
                 name: name.into(),
                 entry: Entry::InitialAttitude(axis),
-                source: Source::RandomConstant(std),
+                source: LawSource::RandomConstant(std),
             });
         }
     }
-    let ctx = LawContext {
-        static_level,
-        yaw_rate_rad_s: yaw_rate,
-        reason,
-        gravity_mps2,
-    };
-    (terms, ctx)
+    terms
 }
 
 /// The law sources of `terms` when the bias is calibrated at turn-on (`ImuErrors::with_calibrated_start`):
@@ -346,15 +282,15 @@ pub fn law_terms(
 /// becomes the process referenced to its mean over the window instead.
 pub fn calibrated_at_start(terms: Vec<Term>, window_s: Option<f64>) -> Vec<Term> {
     let referenced = |parts: Vec<(f64, f64)>| match window_s {
-        Some(window_s) => Source::GaussMarkovSumFromWindow { parts, window_s },
-        None => Source::GaussMarkovSumFromStart(parts),
+        Some(window_s) => LawSource::GaussMarkovSumFromWindow { parts, window_s },
+        None => LawSource::GaussMarkovSumFromStart(parts),
     };
     terms
         .into_iter()
         .map(|t| Term {
             source: match t.source {
-                Source::GaussMarkov { sigma, tc_s } => referenced(vec![(tc_s, sigma)]),
-                Source::GaussMarkovSum(parts) => referenced(parts),
+                LawSource::GaussMarkov { sigma, tc_s } => referenced(vec![(tc_s, sigma)]),
+                LawSource::GaussMarkovSum(parts) => referenced(parts),
                 other => other,
             },
             ..t

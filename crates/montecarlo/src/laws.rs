@@ -12,6 +12,7 @@
 
 use crate::channels::Channel;
 use noise::closed_form::{self as cf, Integration};
+use noise::LawSource;
 use serde::{Deserialize, Serialize};
 
 /// Above this predicted attitude error (rad, rms) the small-angle laws are not printed
@@ -30,74 +31,12 @@ pub enum Entry {
     InitialAttitude(usize),
 }
 
-/// The statistical description of one error term on one axis, SI.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub enum Source {
-    /// Known constant (signed).
-    Bias(f64),
-    /// Constant drawn once per run from N(0, sigma^2) (turn-on bias, random alignment).
-    RandomConstant(f64),
-    /// White noise of density N.
-    White(f64),
-    /// Random walk of density K (rate random walk, Woodman's bias random walk), zero start.
-    RandomWalk(f64),
-    /// Stationary first-order Gauss-Markov (sigma, correlation time s).
-    GaussMarkov { sigma: f64, tc_s: f64 },
-    /// A sum of independent stationary Gauss-Markov processes, (correlation time s, sigma) each:
-    /// the flicker bias instability as the noise crate realises it (`noise::Flicker::components`).
-    GaussMarkovSum(Vec<(f64, f64)>),
-    /// The same sum with each component referenced to its value at t = 0, x(t) = b(t) - b(0): the
-    /// bias as seen after a perfect turn-on calibration (scenario `terms.bias_calibrated_at_start`;
-    /// `gauss_markov_from_start_variance`). A single Gauss-Markov term is a sum of one.
-    GaussMarkovSumFromStart(Vec<(f64, f64)>),
-    /// The same sum with each component referenced to its mean over a calibration window of
-    /// `window_s` seconds before t = 0, x(t) = b(t) - m (scenario `terms.bias_calibration_window_s`;
-    /// `gauss_markov_from_window_variance`).
-    GaussMarkovSumFromWindow {
-        parts: Vec<(f64, f64)>,
-        window_s: f64,
-    },
-    /// Rate ramp R (signed), error R t.
-    Ramp(f64),
-    /// Sinusoid `amplitude · sin(2 pi freq_hz t + phase)`, point-sampled at t_k = k dt by the noise
-    /// crate (`sample_interval_s` = dt; each sample held over its interval, a delay of dt/2);
-    /// the phase uniform on [0, 2 pi) per run when `None` (`noise::closed_form::sinusoid_growth`:
-    /// mean 0 and variance A^2 (a_k^2 + b_k^2)/2; fixed phase: the deterministic k-fold integral;
-    /// `sinusoid_growth_sampled` for the sampling). With a random phase the integrals are not
-    /// Gaussian (arcsine distributed), so horizontal magnitudes they feed get an rms law but no
-    /// mean (see `horizontal_law`).
-    Sinusoid {
-        amplitude: f64,
-        freq_hz: f64,
-        phase: Option<f64>,
-        sample_interval_s: f64,
-    },
-    /// Stationary resonance (second-order Gauss-Markov) of std sigma, natural frequency and
-    /// half-power bandwidth (`noise::closed_form::resonance_kfold_variance`). A calibration leaves it
-    /// alone: it averages out over any window much longer than 1 / bandwidth.
-    Resonance {
-        sigma: f64,
-        frequency_hz: f64,
-        bandwidth_hz: f64,
-    },
-    /// Warm-up transient `amplitude e^{-t/tau_s}` after turn-on; with `per_run` the amplitude is
-    /// drawn per run from N(0, amplitude^2) (`noise::closed_form::transient_growth`).
-    Transient {
-        amplitude: f64,
-        tau_s: f64,
-        per_run: bool,
-    },
-    /// Active, but no closed-form growth law exists in docs/model.md §4 (e.g. quantisation): the
-    /// report says so.
-    NoLaw(String),
-}
-
 /// One active term: where it enters, what it is, and its docs/cli.md name (`gyro.white_noise`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Term {
     pub name: String,
     pub entry: Entry,
-    pub source: Source,
+    pub source: LawSource,
 }
 
 /// Law of one channel at one time: signed mean and standard deviation, or why there is none.
@@ -120,31 +59,31 @@ impl Law {
 
 /// Per-channel mean and variance contribution of one term through one integration path.
 /// `folds` = 0 for the quantity itself (initial attitude error), 1, 2 or 3 (through tilt).
-fn moments(source: &Source, t_s: f64, how: Option<Integration>) -> Result<(f64, f64), &str> {
+fn moments(source: &LawSource, t_s: f64, how: Option<Integration>) -> Result<(f64, f64), &str> {
     // A constant error seen without integration (an initial angle) is itself.
     let constant = |b: f64| how.map_or(b, |h| cf::constant_bias_growth(b, t_s, h));
     Ok(match source {
-        Source::Bias(b) => (constant(*b), 0.0),
-        Source::RandomConstant(s) => (0.0, constant(*s).powi(2)),
-        Source::Ramp(r) => match how {
+        LawSource::Bias(b) => (constant(*b), 0.0),
+        LawSource::RandomConstant(s) => (0.0, constant(*s).powi(2)),
+        LawSource::Ramp(r) => match how {
             Some(h) => (cf::rate_ramp_growth(*r, t_s, h), 0.0),
             None => return Err("a ramp needs an integration"),
         },
-        Source::White(n) => match how {
+        LawSource::White(n) => match how {
             Some(h) => (0.0, cf::white_noise_growth_std(*n, t_s, h).powi(2)),
             None => return Err("white noise needs an integration"),
         },
-        Source::RandomWalk(k) => match how {
+        LawSource::RandomWalk(k) => match how {
             Some(h) => (0.0, cf::random_walk_growth_std(*k, t_s, h).powi(2)),
             None => return Err("a random walk needs an integration"),
         },
-        Source::GaussMarkov { sigma, tc_s } => match how {
+        LawSource::GaussMarkov { sigma, tc_s } => match how {
             Some(h) => (0.0, gauss_markov_variance(*sigma, *tc_s, t_s, h)),
             None => return Err("Gauss-Markov needs an integration"),
         },
-        Source::GaussMarkovSum(parts) | Source::GaussMarkovSumFromStart(parts) => match how {
+        LawSource::GaussMarkovSum(parts) | LawSource::GaussMarkovSumFromStart(parts) => match how {
             Some(h) => {
-                let law = if matches!(source, Source::GaussMarkovSum(_)) {
+                let law = if matches!(source, LawSource::GaussMarkovSum(_)) {
                     gauss_markov_variance
                 } else {
                     gauss_markov_from_start_variance
@@ -159,7 +98,7 @@ fn moments(source: &Source, t_s: f64, how: Option<Integration>) -> Result<(f64, 
             }
             None => return Err("Gauss-Markov needs an integration"),
         },
-        Source::GaussMarkovSumFromWindow { parts, window_s } => match how {
+        LawSource::GaussMarkovSumFromWindow { parts, window_s } => match how {
             Some(h) => (
                 0.0,
                 parts
@@ -171,7 +110,7 @@ fn moments(source: &Source, t_s: f64, how: Option<Integration>) -> Result<(f64, 
             ),
             None => return Err("Gauss-Markov needs an integration"),
         },
-        Source::Sinusoid {
+        LawSource::Sinusoid {
             amplitude,
             freq_hz,
             phase,
@@ -187,7 +126,7 @@ fn moments(source: &Source, t_s: f64, how: Option<Integration>) -> Result<(f64, 
             ),
             None => return Err("a sinusoid needs an integration"),
         },
-        Source::Resonance {
+        LawSource::Resonance {
             sigma,
             frequency_hz,
             bandwidth_hz,
@@ -199,7 +138,7 @@ fn moments(source: &Source, t_s: f64, how: Option<Integration>) -> Result<(f64, 
             ),
             None => return Err("a resonance needs an integration"),
         },
-        Source::Transient {
+        LawSource::Transient {
             amplitude,
             tau_s,
             per_run,
@@ -214,14 +153,14 @@ fn moments(source: &Source, t_s: f64, how: Option<Integration>) -> Result<(f64, 
             }
             None => return Err("a transient needs an integration"),
         },
-        Source::NoLaw(why) => return Err(why),
+        LawSource::NoLaw(why) => return Err(why),
     })
 }
 
 /// Whether a term's contribution is random and not Gaussian (a sinusoid of random phase), so the
 /// Rayleigh mean of a horizontal magnitude does not hold for it.
-fn non_gaussian(source: &Source) -> bool {
-    matches!(source, Source::Sinusoid { phase: None, .. })
+fn non_gaussian(source: &LawSource) -> bool {
+    matches!(source, LawSource::Sinusoid { phase: None, .. })
 }
 
 /// The variance gain of an integration path: g^2 (standard gravity) through tilt, else 1.
@@ -321,29 +260,54 @@ pub struct LawContext {
     pub gravity_mps2: f64,
 }
 
+/// The laws of every channel at time `t_s` outside the static level case: none, but the yaw law
+/// of the z gyro terms under a constant rate about body z (`LawContext::yaw_rate_rad_s`).
+fn laws_in_motion(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
+    let why = format!("no closed-form law: {}", ctx.reason);
+    let mut laws: Vec<Law> = Channel::ALL
+        .iter()
+        .map(|_| Law::NotApplicable(why.clone()))
+        .collect();
+    if ctx.yaw_rate_rad_s.is_some() {
+        let static_ctx = LawContext {
+            static_level: true,
+            yaw_rate_rad_s: None,
+            ..ctx.clone()
+        };
+        let yaw_terms: Vec<Term> = terms
+            .iter()
+            .filter(|t| matches!(t.entry, Entry::Gyro(2) | Entry::InitialAttitude(2)))
+            .cloned()
+            .collect();
+        let yaw = Channel::Yaw as usize;
+        laws[yaw] = channel_laws(&yaw_terms, &static_ctx, t_s).swap_remove(yaw);
+    }
+    laws
+}
+
+/// The vertical channels' law is first order; a tilt eps adds g (1 - cos eps) ~ g eps^2/2 to the
+/// vertical specific force (docs/model.md §1.2). Bound its effect with the final tilt mean square
+/// `tilt_ms` (tilt grows with t, so this overestimates) and withhold the law where it exceeds 10 %
+/// of it.
+fn withhold_incomplete_vertical(laws: &mut [Law], tilt_ms: f64, gravity_mps2: f64, t_s: f64) {
+    let second_order = gravity_mps2 * tilt_ms / 2.0;
+    for (ch, growth) in [(Channel::VelDown, t_s), (Channel::PosDown, t_s * t_s / 2.0)] {
+        let i = ch as usize;
+        if let Some(first) = laws[i].rms() {
+            let bound = second_order * growth;
+            if bound > 0.1 * first {
+                laws[i] = Law::NotApplicable(format!(
+                    "first-order law incomplete: the second-order tilt term g(1-cos eps) (docs/model.md §1.2) may reach {bound:.3e}, over 10 % of the law {first:.3e}"
+                ));
+            }
+        }
+    }
+}
+
 /// The laws of every channel at time `t_s`, in [`Channel::ALL`] order.
 pub fn channel_laws(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
     if !ctx.static_level {
-        let why = format!("no closed-form law: {}", ctx.reason);
-        let mut laws: Vec<Law> = Channel::ALL
-            .iter()
-            .map(|_| Law::NotApplicable(why.clone()))
-            .collect();
-        if ctx.yaw_rate_rad_s.is_some() {
-            let static_ctx = LawContext {
-                static_level: true,
-                yaw_rate_rad_s: None,
-                ..ctx.clone()
-            };
-            let yaw_terms: Vec<Term> = terms
-                .iter()
-                .filter(|t| matches!(t.entry, Entry::Gyro(2) | Entry::InitialAttitude(2)))
-                .cloned()
-                .collect();
-            let yaw = Channel::Yaw as usize;
-            laws[yaw] = channel_laws(&yaw_terms, &static_ctx, t_s).swap_remove(yaw);
-        }
-        return laws;
+        return laws_in_motion(terms, ctx, t_s);
     }
     let n = Channel::ALL.len();
     let mut mean = vec![0.0f64; n];
@@ -396,25 +360,11 @@ pub fn channel_laws(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
         }
     };
     let mut laws: Vec<Law> = (0..n).map(single).collect();
-    // The vertical channels' law is first order; a tilt eps adds g (1 - cos eps) ~ g eps^2/2 to the
-    // vertical specific force (docs/model.md §1.2). Bound its effect with the final tilt mean square
-    // (tilt grows with t, so this overestimates) and withhold the law where it exceeds 10 % of it.
     let tilt_ms: f64 = [Channel::Roll, Channel::Pitch]
         .iter()
         .map(|&c| mean[c as usize].powi(2) + var[c as usize])
         .sum();
-    let second_order = ctx.gravity_mps2 * tilt_ms / 2.0;
-    for (ch, growth) in [(Channel::VelDown, t_s), (Channel::PosDown, t_s * t_s / 2.0)] {
-        let i = ch as usize;
-        if let Some(first) = laws[i].rms() {
-            let bound = second_order * growth;
-            if bound > 0.1 * first {
-                laws[i] = Law::NotApplicable(format!(
-                    "first-order law incomplete: the second-order tilt term g(1-cos eps) (docs/model.md §1.2) may reach {bound:.3e}, over 10 % of the law {first:.3e}"
-                ));
-            }
-        }
-    }
+    withhold_incomplete_vertical(&mut laws, tilt_ms, ctx.gravity_mps2, t_s);
     for (h, a, b) in [
         (Channel::PosHorizontal, Channel::PosNorth, Channel::PosEast),
         (Channel::VelHorizontal, Channel::VelNorth, Channel::VelEast),
@@ -515,7 +465,7 @@ mod tests {
             .map(|a| Term {
                 name: "gyro.white_noise".into(),
                 entry: Entry::Gyro(a),
-                source: Source::White(arw[a]),
+                source: LawSource::White(arw[a]),
             })
             .collect();
         let laws = channel_laws(&terms, &ctx(), 60.0);
@@ -849,7 +799,7 @@ mod tests {
         let terms = vec![Term {
             name: "gyro.constant_bias".into(),
             entry: Entry::Gyro(1),
-            source: Source::Bias(b),
+            source: LawSource::Bias(b),
         }];
         let laws = channel_laws(&terms, &ctx(), 10.0);
         let Law::Value { mean, std } = laws[Channel::PosNorth as usize] else {
@@ -865,7 +815,7 @@ mod tests {
         let terms = vec![Term {
             name: "gyro.bias_instability".into(),
             entry: Entry::Gyro(1),
-            source: Source::NoLaw("flicker".into()),
+            source: LawSource::NoLaw("flicker".into()),
         }];
         let laws = channel_laws(&terms, &ctx(), 10.0);
         assert!(matches!(
@@ -883,7 +833,7 @@ mod tests {
         let terms = vec![Term {
             name: "gyro.constant_bias".into(),
             entry: Entry::Gyro(2),
-            source: Source::Bias(0.01),
+            source: LawSource::Bias(0.01),
         }];
         assert!(matches!(
             channel_laws(&terms, &ctx(), 10.0)[0],

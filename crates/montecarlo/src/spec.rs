@@ -205,7 +205,7 @@ pub fn gyro_readback(model: &SensorModel, seed: u64, duration_s: f64, rate_hz: f
 /// band of Gauss-Markov components bends the curve (a model artifact).
 fn plateau_window(m: &noise::AxisModel) -> (f64, f64) {
     match m.get::<BiasInstability>() {
-        Some(BiasInstability::Flicker(f)) => (30.0 * f.tau_min_s, f.tau_max_s / 30.0),
+        Some(BiasInstability::Flicker(f)) => (30.0 * f.tau_min_s(), f.tau_max_s() / 30.0),
         _ => (0.0, f64::INFINITY),
     }
 }

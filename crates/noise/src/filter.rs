@@ -66,7 +66,7 @@ impl FilteredAllan {
         };
         FilteredAllan {
             a_h,
-            decimation: filter.decimation as usize,
+            decimation: filter.decimation() as usize,
             dt_s,
             dt_i: filter.internal_dt(dt_s),
         }
@@ -277,7 +277,7 @@ mod tests {
         for f in &filters {
             let h = f.impulse_response(dt);
             let fa = FilteredAllan::new(f, dt);
-            let d = f.decimation as usize;
+            let d = f.decimation() as usize;
             let dt_i = f.internal_dt(dt);
             for m in [1usize, 2, 3, 5, 8, 13] {
                 let tau = m as f64 * dt;

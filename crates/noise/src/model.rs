@@ -194,38 +194,11 @@ impl SensorModel {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::terms::bias_instability::{BiasInstability, Flicker};
-    use crate::terms::output_filter::FilterKind;
     use crate::terms::*;
 
     #[test]
     fn every_effect_has_one_term_that_round_trips() {
-        let terms: [Term; Effect::COUNT] = [
-            quantization::Quantization::new(1e-3).unwrap().into(),
-            white_noise::WhiteNoise::new(2e-3).unwrap().into(),
-            BiasInstability::Flicker(Flicker::with_b(3e-5)).into(),
-            rate_random_walk::RateRandomWalk::new(4e-6).unwrap().into(),
-            rate_ramp::RateRamp::new(5e-7).unwrap().into(),
-            gauss_markov::GaussMarkov::new(6e-4, 70.0).unwrap().into(),
-            sinusoidal::Sinusoid::new(8e-3, 9.0, Some(0.1))
-                .unwrap()
-                .into(),
-            temperature_bias::TemperatureBias::new(1e-5).unwrap().into(),
-            constant_bias::ConstantBias::new(2e-2).unwrap().into(),
-            turn_on_bias::TurnOnBias::new(3e-2).unwrap().into(),
-            scale_factor::ScaleFactor::new(4e-4).unwrap().into(),
-            misalignment::Misalignment::new([5e-4, 6e-4])
-                .unwrap()
-                .into(),
-            outliers::Outliers::new(60.0, 0.1).unwrap().into(),
-            warmup_transient::WarmupTransient::new(5e-4, 600.0, false)
-                .unwrap()
-                .into(),
-            OutputFilter::new(FilterKind::Bartlett { taps: 8 }, 2)
-                .unwrap()
-                .into(),
-            resonance::Resonance::new(7e-4, 20.0, 0.7).unwrap().into(),
-        ];
+        let terms = crate::terms::samples();
         // One term per effect, in Effect order.
         assert_eq!(terms.clone().map(|t| t.effect()), Effect::ALL);
         let mut axis = AxisModel::default();

@@ -260,7 +260,7 @@ impl ImuErrors {
                     f.check_rate(dt_s).map_err(|error| RateError {
                         axis: format!("{}.{name}", sensor.name()),
                         rate_hz: 1.0 / dt_s,
-                        decimation: f.decimation,
+                        decimation: f.decimation(),
                         internal_hz: 1.0 / f.internal_dt(dt_s),
                         error,
                     })?;

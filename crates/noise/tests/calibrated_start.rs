@@ -47,7 +47,7 @@ fn slow_bias_processes_start_at_zero_and_keep_their_increments() {
     // Default flicker band 0.1 s .. 1e5 s at 100 Hz: the components of T >= 10 s are held
     // (multirate), so both the every-sample and the held parts are referenced.
     let slow = noise::AxisModel::default()
-        .with(BiasInstability::Flicker(Flicker::with_b(1e-3)))
+        .with(BiasInstability::Flicker(Flicker::with_b(1e-3).unwrap()))
         .with(GaussMarkov::new(2e-3, 5.0).unwrap());
     let n = 3000;
     let raw = series(&model(slow.clone()), raw_run, n);
@@ -155,7 +155,7 @@ fn window_mean_moments_match_quadrature() {
 fn window_calibration_subtracts_a_constant_and_keeps_the_draws() {
     let slow = noise::AxisModel::default()
         .with(noise::WhiteNoise::new(1e-3).unwrap())
-        .with(BiasInstability::Flicker(Flicker::with_b(1e-3)))
+        .with(BiasInstability::Flicker(Flicker::with_b(1e-3).unwrap()))
         .with(GaussMarkov::new(2e-3, 5.0).unwrap());
     let m = model(slow);
     let n = 2000;

@@ -20,7 +20,7 @@ fn adev_minimum(axis: &noise::AxisModel) -> f64 {
     let Some(BiasInstability::Flicker(f)) = axis.get::<noise::BiasInstability>() else {
         panic!("flicker expected");
     };
-    let (lo, hi) = (30.0 * f.tau_min_s, f.tau_max_s / 30.0);
+    let (lo, hi) = (30.0 * f.tau_min_s(), f.tau_max_s() / 30.0);
     (0..=1000)
         .map(|i| lo * (hi / lo).powf(i as f64 / 1000.0))
         .map(|tau| axis.allan_variance(tau).sqrt())
@@ -130,6 +130,6 @@ fn honeywell_and_adis_values() {
         else {
             panic!("flicker expected");
         };
-        assert!(rel(f.b * FLICKER_PLATEAU_PER_B, 70.0 * deg_h) < 0.05);
+        assert!(rel(f.b() * FLICKER_PLATEAU_PER_B, 70.0 * deg_h) < 0.05);
     }
 }

@@ -36,7 +36,7 @@ fn check(label: &str, axis: &AxisModel, alphas: &[i32]) {
 fn filtered(kind: FilterKind, decimation: u32) -> AxisModel {
     AxisModel::default()
         .with(noise::WhiteNoise::new(1e-3).unwrap())
-        .with(BiasInstability::Flicker(Flicker::with_b(2e-4)))
+        .with(BiasInstability::Flicker(Flicker::with_b(2e-4).unwrap()))
         .with(GaussMarkov::new(3e-3, 0.05).unwrap())
         .with(OutputFilter::new(kind, decimation).unwrap())
 }

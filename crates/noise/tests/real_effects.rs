@@ -223,7 +223,7 @@ fn white_noise_through_each_filter_has_the_exact_variance_and_correlation() {
     ];
     for (i, f) in cases.iter().enumerate() {
         let h = f.impulse_response(dt);
-        let d = f.decimation as usize;
+        let d = f.decimation() as usize;
         let dt_i = f.internal_dt(dt);
         let var = nd * nd / dt_i * acf(&h, 0);
         // Output autocorrelation at lag k: A_h(kD) / A_h(0).
@@ -233,7 +233,7 @@ fn white_noise_through_each_filter_has_the_exact_variance_and_correlation() {
             .with(noise::WhiteNoise::new(nd).unwrap())
             .with(*f);
         let y = gyro_x_series(&axis, rate, n, 31, i as u64);
-        let label = format!("{:?} decimation {d}", f.kind);
+        let label = format!("{:?} decimation {d}", f.kind());
 
         // Variance (known zero mean).
         let s2: f64 = y.iter().map(|v| v * v).sum::<f64>();
@@ -387,7 +387,7 @@ fn a_ramp_lags_by_the_group_delay() {
             assert!(
                 (y[k] - want).abs() <= 1e-12 * r * (t + 1.0),
                 "{:?}: sample {k}: {} vs r (t - delay) = {want} (delay {delay} s)",
-                f.kind,
+                f.kind(),
                 y[k]
             );
         }
@@ -405,9 +405,9 @@ fn any_block_size_gives_the_same_values_with_every_new_term() {
         noise::AxisModel::default()
             .with(noise::Quantization::new(1e-6).unwrap())
             .with(noise::WhiteNoise::new(1e-3).unwrap())
-            .with(noise::BiasInstability::Flicker(noise::Flicker::with_b(
-                1e-4,
-            )))
+            .with(noise::BiasInstability::Flicker(
+                noise::Flicker::with_b(1e-4).unwrap(),
+            ))
             .with(noise::RateRandomWalk::new(1e-5).unwrap())
             .with(noise::GaussMarkov::new(2e-3, 0.3).unwrap())
             .with(noise::Sinusoid::new(1e-3, 1.3, None).unwrap())

@@ -6,20 +6,19 @@
 //! only if the joint chi2 (the drift gap's and the changed channels' Allan gaps') shrank.
 
 use super::{shifted_band, Run};
-use crate::candidates::TermParams;
 use crate::drift_fit::{DriftFitInput, DriftTrial, UnitDrift};
 use crate::drift_gap::DriftGap;
 use crate::error::DiagnoseError;
 use crate::findings::{found_by_fit, merge_refinements, rejected_record, Choice};
 use crate::gap::gap;
-use crate::model_terms::{set_term, term_level};
+use crate::model_terms::{current_term, set_term};
 use crate::report::{Candidate, CandidateRecord, DriftLoop};
 use crate::simulate::simulate_runs;
 use crate::trials::named_map;
-use noise::{Channel, Effect};
+use noise::{Channel, Effect, Term};
 
-/// A change the drift loop made: the channel, the effect and its level before.
-type Change = (Channel, Effect, Option<TermParams>);
+/// A change the drift loop made: the channel, the effect and its term before.
+type Change = (Channel, Effect, Option<Term>);
 
 impl Run<'_> {
     /// The drift loop (module doc), at most `max_rounds` rounds.
@@ -78,7 +77,7 @@ impl Run<'_> {
                 },
                 delta_bic: t.delta_bic,
                 delta_aic: f64::NAN,
-                parameters: named_map(t.trial.effect, &t.trial.params),
+                parameters: named_map(&t.trial.named()),
             }));
         let best: &DriftTrial = trials
             .iter()
@@ -93,9 +92,9 @@ impl Run<'_> {
             .map(|t| t.trial.effect)
             .collect();
         let effect = best.trial.effect;
-        let previous = term_level(&self.sim_model, c, effect);
-        set_term(&mut self.sim_model, c, effect, &best.trial.params);
-        set_term(&mut self.out_model, c, effect, &best.trial.params);
+        let previous = current_term(&self.sim_model, c, effect);
+        set_term(&mut self.sim_model, c, best.trial.term.clone());
+        set_term(&mut self.out_model, c, best.trial.term.clone());
         let predicted = gap(&curve, &shifted_band(&band, &best.trial.delta_avar)).rms;
         let choice = Choice {
             trial: &best.trial,

@@ -34,7 +34,7 @@ pub fn base_model(with_flicker: bool) -> SensorModel {
         let a = m.axis_mut(sensor, axis);
         a.set_term(WhiteNoise::new(n).unwrap());
         if with_flicker {
-            a.set_term(BiasInstability::Flicker(Flicker::with_b(b)));
+            a.set_term(BiasInstability::Flicker(Flicker::with_b(b).unwrap()));
         }
     }
     m

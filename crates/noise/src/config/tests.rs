@@ -65,7 +65,7 @@ fn allan_minimum_convention_reproduces_the_minimum() {
     assert!((min / 0.010f64.to_radians() - 1.0).abs() < 1e-9);
     // B is smaller than min/0.664: white noise and RRW contribute to the minimum too.
     let min_only = 0.010f64.to_radians() / cf::FLICKER_PLATEAU_PER_B;
-    assert!(f.b < min_only, "B {} vs min/0.664 {}", f.b, min_only);
+    assert!(f.b() < min_only, "B {} vs min/0.664 {}", f.b(), min_only);
 }
 
 #[test]
@@ -117,56 +117,58 @@ resonance = { sigma = "0.5 mg", frequency = "10 Hz", bandwidth = "700 mHz" }
     let g = &m.gyro.axes[1];
     assert_eq!(
         g.get::<crate::OutputFilter>().copied(),
-        Some(OutputFilter {
-            kind: FilterKind::LowPass2 { cutoff_hz: 25.0 },
-            decimation: 4
-        })
+        Some(OutputFilter::new(FilterKind::LowPass2 { cutoff_hz: 25.0 }, 4).unwrap())
     );
     assert_eq!(
         g.get::<crate::Outliers>().copied(),
-        Some(Outliers {
-            rate_per_hour: 60.0,
-            size: 0.02
-        })
+        Some(Outliers::new(60.0, 0.02).unwrap())
     );
     assert_eq!(
         g.get::<crate::WarmupTransient>().copied(),
-        Some(WarmupTransient {
-            amplitude: 5e-4,
-            tau_s: 600.0,
-            per_run: true
-        })
+        Some(WarmupTransient::new(5e-4, 600.0, true).unwrap())
     );
     let [ax, ay, az] = &m.accel.axes;
     assert_eq!(
         ax.get::<crate::OutputFilter>().copied(),
-        Some(OutputFilter {
-            kind: FilterKind::MovingAverage { taps: 5 },
-            decimation: 1
-        })
+        Some(OutputFilter::new(FilterKind::MovingAverage { taps: 5 }, 1).unwrap())
     );
     assert_eq!(
-        ax.get::<crate::Outliers>().copied().unwrap().rate_per_hour,
+        ax.get::<crate::Outliers>()
+            .copied()
+            .unwrap()
+            .rate_per_hour(),
         3.0
     );
     assert_eq!(
-        ay.get::<crate::OutputFilter>().copied().unwrap().kind,
+        ay.get::<crate::OutputFilter>().copied().unwrap().kind(),
         FilterKind::LowPass1 { cutoff_hz: 700.0 }
     );
     assert!(
-        (ay.get::<crate::Outliers>().copied().unwrap().rate_per_hour / (0.013 * 3600.0) - 1.0)
+        (ay.get::<crate::Outliers>()
+            .copied()
+            .unwrap()
+            .rate_per_hour()
+            / (0.013 * 3600.0)
+            - 1.0)
             .abs()
             < 1e-15
     );
     assert!(
-        (az.get::<crate::Outliers>().copied().unwrap().rate_per_hour / 42.0 - 1.0).abs() < 1e-15
+        (az.get::<crate::Outliers>()
+            .copied()
+            .unwrap()
+            .rate_per_hour()
+            / 42.0
+            - 1.0)
+            .abs()
+            < 1e-15
     );
     let r = az.get::<crate::Resonance>().copied().unwrap();
-    assert!((r.sigma / (0.5e-3 * crate::units::STANDARD_GRAVITY_MPS2) - 1.0).abs() < 1e-15);
-    assert_eq!(r.frequency_hz, 10.0);
-    assert!((r.bandwidth_hz / 0.7 - 1.0).abs() < 1e-15);
+    assert!((r.sigma() / (0.5e-3 * crate::units::STANDARD_GRAVITY_MPS2) - 1.0).abs() < 1e-15);
+    assert_eq!(r.frequency_hz(), 10.0);
+    assert!((r.bandwidth_hz() / 0.7 - 1.0).abs() < 1e-15);
     assert!(
-        (az.get::<crate::Outliers>().copied().unwrap().size
+        (az.get::<crate::Outliers>().copied().unwrap().size()
             / (0.5e-3 * crate::units::STANDARD_GRAVITY_MPS2)
             - 1.0)
             .abs()
@@ -174,13 +176,10 @@ resonance = { sigma = "0.5 mg", frequency = "10 Hz", bandwidth = "700 mHz" }
     );
     assert_eq!(
         az.get::<crate::OutputFilter>().copied(),
-        Some(OutputFilter {
-            kind: FilterKind::Bartlett { taps: 8 },
-            decimation: 8
-        })
+        Some(OutputFilter::new(FilterKind::Bartlett { taps: 8 }, 8).unwrap())
     );
     let w = az.get::<crate::WarmupTransient>().copied().unwrap();
-    assert!(w.amplitude < 0.0 && w.tau_s == 600.0 && !w.per_run);
+    assert!(w.amplitude() < 0.0 && w.tau_s() == 600.0 && !w.per_run());
     // Every new term written back, bit for bit, on every axis it is on.
     let written = m.to_toml_string();
     assert_eq!(written.matches("output_filter = ").count(), 6, "{written}");
@@ -409,7 +408,7 @@ fn outlier_rates_in_any_time_unit() {
         .gyro
         .axes[0].get::<crate::Outliers>().copied()
             .unwrap()
-            .rate_per_hour
+            .rate_per_hour()
     };
     for (text, per_hour) in [
         ("60 /h", 60.0),
@@ -528,7 +527,11 @@ output_filter = { kind = "bartlett", taps = 16 }
             .copied()
             .unwrap(),
     );
-    assert!(wb.per_run && wb.tau_s == wm.tau_s && (wb.amplitude / wm.amplitude - 1.0).abs() < 5e-5);
+    assert!(
+        wb.per_run()
+            && wb.tau_s() == wm.tau_s()
+            && (wb.amplitude() / wm.amplitude() - 1.0).abs() < 5e-5
+    );
     let rel = |a: f64, b: f64| (a / b - 1.0).abs();
     for (a, b) in m.gyro.axes.iter().zip(&back.gyro.axes) {
         assert!(

@@ -11,6 +11,7 @@ use crate::config::error::ConfigError;
 use crate::config::read::{in_units_of, ReadContext, Text};
 use crate::discrete::RandomWalk;
 use crate::filter::FilteredAllan;
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model::AxisModel;
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
@@ -23,15 +24,15 @@ use crate::ImuRng;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Flicker {
     /// IEEE coefficient B (signal units); the Allan plateau is 0.6643 B.
-    pub b: f64,
+    b: f64,
     /// Shortest correlation time of the band, s.
-    pub tau_min_s: f64,
+    tau_min_s: f64,
     /// Longest correlation time of the band, s.
-    pub tau_max_s: f64,
+    tau_max_s: f64,
     /// Gauss-Markov components per decade of correlation time. Over averaging times
     /// [30 tau_min, tau_max / 30] the closed-form Allan deviation of the sum stays within
     /// 0.987 .. 1.010 of 0.664 B with 1 per decade and 0.987 .. 1.000 with 2 (checked numerically).
-    pub per_decade: u32,
+    per_decade: u32,
 }
 
 impl Flicker {
@@ -42,6 +43,8 @@ impl Flicker {
     /// One per decade: as flat as two within the plateau (see `per_decade`), at half the cost per sample.
     pub const DEFAULT_PER_DECADE: u32 = 1;
 
+    /// Checks B (finite, >= 0), the band (finite, > 0, end after start) and 1 to 20 components
+    /// per decade.
     pub fn new(
         b: f64,
         tau_min_s: f64,
@@ -73,14 +76,42 @@ impl Flicker {
         })
     }
 
-    /// With the default band.
-    pub fn with_b(b: f64) -> Flicker {
-        Flicker {
+    /// With the default band (B checked as in [`Flicker::new`]).
+    pub fn with_b(b: f64) -> Result<Flicker, ModelError> {
+        Flicker::new(
             b,
-            tau_min_s: Self::DEFAULT_TAU_MIN_S,
-            tau_max_s: Self::DEFAULT_TAU_MAX_S,
-            per_decade: Self::DEFAULT_PER_DECADE,
-        }
+            Self::DEFAULT_TAU_MIN_S,
+            Self::DEFAULT_TAU_MAX_S,
+            Self::DEFAULT_PER_DECADE,
+        )
+    }
+
+    /// The same band with coefficient `b` (checked as in [`Flicker::new`]).
+    pub fn with_level(&self, b: f64) -> Result<Flicker, ModelError> {
+        Ok(Flicker {
+            b: check("flicker B", b, false)?,
+            ..self.clone()
+        })
+    }
+
+    /// IEEE coefficient B (signal units); the Allan plateau is 0.6643 B.
+    pub fn b(&self) -> f64 {
+        self.b
+    }
+
+    /// Shortest correlation time of the band, s.
+    pub fn tau_min_s(&self) -> f64 {
+        self.tau_min_s
+    }
+
+    /// Longest correlation time of the band, s.
+    pub fn tau_max_s(&self) -> f64 {
+        self.tau_max_s
+    }
+
+    /// Gauss-Markov components per decade of correlation time.
+    pub fn per_decade(&self) -> u32 {
+        self.per_decade
     }
 
     /// The Gauss-Markov components as (correlation time s, stationary std), shortest first.
@@ -462,6 +493,35 @@ fn flicker_band(
 }
 
 impl ErrorTerm for BiasInstability {
+    /// Flicker as realised, a sum of stationary Gauss-Markov components; Woodman's bias random
+    /// walk as a random walk of density stability / sqrt(period).
+    fn law_sources(&self, _cx: &LawSourceContext) -> Vec<LawSource> {
+        vec![match self {
+            BiasInstability::Flicker(f) => LawSource::GaussMarkovSum(f.components()),
+            BiasInstability::RandomWalk {
+                stability,
+                period_s,
+            } => LawSource::RandomWalk(cf::woodman_bias_random_walk(*stability, *period_s)),
+        }]
+    }
+
+    /// Flicker's B, named `b` (docs/cli.md; its band is a convention, not a shape), or the random
+    /// walk's stability, named `stability`.
+    fn level(&self) -> Option<(&'static str, f64)> {
+        Some(match self {
+            BiasInstability::Flicker(f) => ("b", f.b),
+            BiasInstability::RandomWalk { stability, .. } => ("stability", *stability),
+        })
+    }
+
+    /// The random walk's period, named `period_s`; flicker has none.
+    fn shape(&self) -> Vec<(&'static str, f64)> {
+        match self {
+            BiasInstability::Flicker(_) => Vec::new(),
+            BiasInstability::RandomWalk { period_s, .. } => vec![("period_s", *period_s)],
+        }
+    }
+
     fn allan_variance(&self, tau_s: f64) -> Option<f64> {
         Some(self.avar(tau_s))
     }
@@ -515,6 +575,17 @@ impl TermKind for BiasInstability {
     type Raw = toml::Spanned<RawBiasField>;
     /// The `allan_minimum` convention solves B against the axis' other terms.
     const READS_OTHER_TERMS: bool = true;
+
+    /// Flicker's band, or the random walk's period, kept.
+    fn with_level(&self, level: f64) -> Result<BiasInstability, ModelError> {
+        Ok(match self {
+            BiasInstability::Flicker(f) => BiasInstability::Flicker(f.with_level(level)?),
+            BiasInstability::RandomWalk { period_s, .. } => BiasInstability::RandomWalk {
+                stability: check("bias random walk stability", level, false)?,
+                period_s: *period_s,
+            },
+        })
+    }
 
     /// Flicker (`model` absent or `"flicker"`) or Woodman's random walk (`model = "random_walk"`).
     fn from_raw(
@@ -595,6 +666,12 @@ impl Generate for BiasInstabilityGenerator {
             g.calibrate_window(window_s, rng);
         }
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> BiasInstability {
+    BiasInstability::Flicker(Flicker::with_b(3e-5).unwrap())
 }
 
 #[cfg(test)]

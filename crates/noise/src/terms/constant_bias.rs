@@ -5,6 +5,7 @@ use super::term::{
 };
 use crate::config::error::ConfigError;
 use crate::config::read::{ReadContext, Text};
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check_finite, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -30,6 +31,10 @@ impl ConstantBias {
 }
 
 impl ErrorTerm for ConstantBias {
+    fn law_sources(&self, _cx: &LawSourceContext) -> Vec<LawSource> {
+        vec![LawSource::Bias(self.bias)]
+    }
+
     fn config_value(&self, cx: &WriteContext) -> String {
         cx.quoted(self.bias, Quantity::Signal(cx.sig))
     }
@@ -72,4 +77,10 @@ impl Generate for ConstantBiasGenerator {
     fn input(&self, _row: &mut [f64; 3], bias: &mut f64) {
         *bias += self.bias;
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> ConstantBias {
+    ConstantBias::new(2e-2).unwrap()
 }

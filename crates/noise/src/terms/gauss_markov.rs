@@ -6,6 +6,7 @@ use crate::config::error::ConfigError;
 use crate::config::read::{ReadContext, Text};
 use crate::discrete::GaussMarkovBank;
 use crate::filter::FilteredAllan;
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -13,16 +14,27 @@ use crate::ImuRng;
 /// First-order Gauss-Markov bias: stationary std `sigma`, correlation time `tau_s`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GaussMarkov {
-    pub sigma: f64,
-    pub tau_s: f64,
+    sigma: f64,
+    tau_s: f64,
 }
 
 impl GaussMarkov {
+    /// Checks sigma (finite, >= 0) and the correlation time (finite, > 0).
     pub fn new(sigma: f64, tau_s: f64) -> Result<GaussMarkov, ModelError> {
         Ok(GaussMarkov {
             sigma: check("Gauss-Markov sigma", sigma, false)?,
             tau_s: check("Gauss-Markov correlation time", tau_s, true)?,
         })
+    }
+
+    /// Stationary standard deviation (signal units).
+    pub fn sigma(&self) -> f64 {
+        self.sigma
+    }
+
+    /// Correlation time, s.
+    pub fn tau_s(&self) -> f64 {
+        self.tau_s
     }
 }
 
@@ -35,6 +47,23 @@ pub struct RawGaussMarkov {
 }
 
 impl ErrorTerm for GaussMarkov {
+    fn law_sources(&self, _cx: &LawSourceContext) -> Vec<LawSource> {
+        vec![LawSource::GaussMarkov {
+            sigma: self.sigma,
+            tc_s: self.tau_s,
+        }]
+    }
+
+    /// Sigma, named `sigma` (docs/cli.md).
+    fn level(&self) -> Option<(&'static str, f64)> {
+        Some(("sigma", self.sigma))
+    }
+
+    /// The correlation time, named `tau_s`.
+    fn shape(&self) -> Vec<(&'static str, f64)> {
+        vec![("tau_s", self.tau_s)]
+    }
+
     /// Hou 4.60 (docs/model.md §2).
     fn allan_variance(&self, tau_s: f64) -> Option<f64> {
         Some(cf::gauss_markov_avar(self.sigma, self.tau_s, tau_s))
@@ -63,6 +92,11 @@ impl TermKind for GaussMarkov {
     const STOCHASTIC: bool = true;
     const SHOWS_IN_STATIC_LOG: bool = true;
     type Raw = RawGaussMarkov;
+
+    /// The correlation time kept.
+    fn with_level(&self, level: f64) -> Result<GaussMarkov, ModelError> {
+        GaussMarkov::new(level, self.tau_s)
+    }
 
     fn from_raw(raw: &RawGaussMarkov, cx: &ReadContext) -> Result<GaussMarkov, ConfigError> {
         let sigma = cx.sub_value("sigma", &raw.sigma, Quantity::Signal(cx.sig), true)?;
@@ -122,4 +156,10 @@ impl Generate for BankGenerator {
     fn calibrate_window(&mut self, window_s: f64, rng: &dyn Fn() -> ImuRng) {
         self.bank.reference_to_window_mean(window_s, &mut rng());
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> GaussMarkov {
+    GaussMarkov::new(6e-4, 70.0).unwrap()
 }

@@ -3,6 +3,7 @@
 use super::term::{ErrorTerm, GenContext, Generate, Stage, TermKind, WriteContext};
 use crate::config::error::ConfigError;
 use crate::config::read::{ReadContext, Text};
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check_finite, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -29,6 +30,12 @@ impl Misalignment {
 }
 
 impl ErrorTerm for Misalignment {
+    /// A bias from the two other axes' readings (docs/model.md §1.5 Table 2, as the scale factor).
+    fn law_sources(&self, cx: &LawSourceContext) -> Vec<LawSource> {
+        let [a, b] = self.angles_rad;
+        vec![LawSource::Bias(a * cx.others[0] + b * cx.others[1])]
+    }
+
     fn config_value(&self, cx: &WriteContext) -> String {
         let [a, b] = self.angles_rad;
         format!(
@@ -97,4 +104,10 @@ impl Generate for MisalignmentGenerator {
         row[others[0]] = self.angles_rad[0];
         row[others[1]] = self.angles_rad[1];
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> Misalignment {
+    Misalignment::new([5e-4, 6e-4]).unwrap()
 }

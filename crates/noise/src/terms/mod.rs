@@ -149,12 +149,37 @@ macro_rules! registry {
                 }
             }
 
+            /// Its level with the level's JSON name ([`ErrorTerm::level`]).
+            pub fn level(&self) -> Option<(&'static str, f64)> {
+                self.as_error_term().level()
+            }
+
+            /// Its level, then its shape parameters, with their JSON names ([`ErrorTerm::level`],
+            /// [`ErrorTerm::shape`]).
+            pub fn parameters(&self) -> Vec<(&'static str, f64)> {
+                let t = self.as_error_term();
+                t.level().into_iter().chain(t.shape()).collect()
+            }
+
+            /// The same term at another level ([`TermKind::with_level`]).
+            pub fn with_level(&self, level: f64) -> Result<Term, crate::ModelError> {
+                match self {
+                    $(Term::$effect(t) => t.with_level(level).map(Term::$effect),)+
+                }
+            }
+
             /// This run's generator of the term ([`TermKind::generator`]).
             pub fn generator(&self, cx: &GenContext, rng: &dyn Fn() -> crate::ImuRng) -> Generator {
                 match self {
                     $(Term::$effect(t) => Generator::$effect(t.generator(cx, rng)),)+
                 }
             }
+        }
+
+        /// One valid term of each effect, in registry order (each file's `sample`), for tests.
+        #[cfg(test)]
+        pub(crate) fn samples() -> [Term; Effect::COUNT] {
+            [$(Term::$effect($file::sample()),)+]
         }
 
         /// The per-run generator of one term: a closed enum, so the per-sample calls are static.

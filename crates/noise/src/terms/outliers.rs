@@ -5,6 +5,7 @@ use super::term::{
 };
 use crate::config::error::ConfigError;
 use crate::config::read::{ReadContext, Text};
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -17,17 +18,29 @@ use rand::Rng;
 /// p size^2 per sample (independent, zero mean): p size^2 / m at tau = m dt.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Outliers {
-    pub rate_per_hour: f64,
-    pub size: f64,
+    rate_per_hour: f64,
+    size: f64,
 }
 
 impl Outliers {
+    /// Checks the rate and the size (finite, >= 0).
     pub fn new(rate_per_hour: f64, size: f64) -> Result<Outliers, ModelError> {
         Ok(Outliers {
             rate_per_hour: check("outlier rate", rate_per_hour, false)?,
             size: check("outlier size", size, false)?,
         })
     }
+
+    /// Mean number of outliers per hour.
+    pub fn rate_per_hour(&self) -> f64 {
+        self.rate_per_hour
+    }
+
+    /// The displacement of one outlier (signal units).
+    pub fn size(&self) -> f64 {
+        self.size
+    }
+
     /// Probability that one output sample of interval `dt_s` is an outlier.
     pub fn probability(&self, dt_s: f64) -> f64 {
         (self.rate_per_hour * dt_s / 3600.0).min(1.0)
@@ -48,6 +61,14 @@ pub struct RawOutliers {
 }
 
 impl ErrorTerm for Outliers {
+    /// Each output sample is an independent outlier with probability p, size +-a: white noise of
+    /// variance p a^2 per sample, density a sqrt(p dt).
+    fn law_sources(&self, cx: &LawSourceContext) -> Vec<LawSource> {
+        vec![LawSource::White(
+            self.size * (self.probability(cx.dt_s) * cx.dt_s).sqrt(),
+        )]
+    }
+
     /// White noise of variance p size^2 per output sample (no continuous form: p needs dt).
     fn allan_variance_sampled(&self, tau_s: f64, dt_s: f64) -> Option<f64> {
         Some(self.avar_sampled(tau_s, dt_s))
@@ -145,4 +166,10 @@ impl Generate for OutlierState {
     fn output(&mut self, k0: u64, _dt_s: f64, out: &mut [f64]) {
         self.add(k0, out);
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> Outliers {
+    Outliers::new(60.0, 0.1).unwrap()
 }

@@ -25,6 +25,7 @@
 use super::term::{note_value_units, ErrorTerm, GenContext, NoGenerator, TermKind, WriteContext};
 use crate::config::error::ConfigError;
 use crate::config::read::{Integer, ReadContext, Text};
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -59,8 +60,8 @@ pub const MAX_RESPONSE: usize = 8192;
 /// every `decimation`-th filtered sample kept (1: no decimation).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct OutputFilter {
-    pub kind: FilterKind,
-    pub decimation: u32,
+    kind: FilterKind,
+    decimation: u32,
 }
 
 impl OutputFilter {
@@ -90,6 +91,16 @@ impl OutputFilter {
             });
         }
         Ok(OutputFilter { kind, decimation })
+    }
+
+    /// Which filter, with its taps or cutoff.
+    pub fn kind(&self) -> FilterKind {
+        self.kind
+    }
+
+    /// Internal samples per output sample (1: no decimation).
+    pub fn decimation(&self) -> u32 {
+        self.decimation
     }
 
     /// Internal sample interval for output interval `dt_s`.
@@ -250,6 +261,26 @@ pub struct RawOutputFilter {
 /// The filter adds no error of its own; it changes the other terms' Allan variances
 /// (`crate::filter::FilteredAllan`, used by `AxisModel`).
 impl ErrorTerm for OutputFilter {
+    /// None: unit DC gain adds no error of its own, and the other terms' laws hold for times much
+    /// longer than its impulse response.
+    fn law_sources(&self, _cx: &LawSourceContext) -> Vec<LawSource> {
+        Vec::new()
+    }
+
+    /// The taps (`taps`) or the cutoff (`cutoff_hz`), and the decimation (`decimation`); a filter
+    /// has no level.
+    fn shape(&self) -> Vec<(&'static str, f64)> {
+        let first = match self.kind {
+            FilterKind::MovingAverage { taps } | FilterKind::Bartlett { taps } => {
+                ("taps", f64::from(taps))
+            }
+            FilterKind::LowPass1 { cutoff_hz } | FilterKind::LowPass2 { cutoff_hz } => {
+                ("cutoff_hz", cutoff_hz)
+            }
+        };
+        vec![first, ("decimation", f64::from(self.decimation))]
+    }
+
     fn config_value(&self, cx: &WriteContext) -> String {
         let parameter = match self.kind {
             FilterKind::MovingAverage { taps } | FilterKind::Bartlett { taps } => {
@@ -480,4 +511,10 @@ impl FilterState {
         }
         self.raw_done = start + raw.len() as u64;
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> OutputFilter {
+    OutputFilter::new(FilterKind::Bartlett { taps: 8 }, 2).unwrap()
 }

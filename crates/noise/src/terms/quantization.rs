@@ -6,6 +6,7 @@ use super::term::{
 use crate::closed_form as cf;
 use crate::config::error::ConfigError;
 use crate::config::read::{ReadContext, Text};
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -33,6 +34,19 @@ impl Quantization {
 }
 
 impl ErrorTerm for Quantization {
+    /// No law: the error of the quantised integrated output is bounded by the LSB and depends on
+    /// the dither the other terms provide; docs/model.md §4 has no closed form.
+    fn law_sources(&self, _cx: &LawSourceContext) -> Vec<LawSource> {
+        vec![LawSource::NoLaw(
+            "quantisation: the error of the quantised integrated output is bounded by the LSB and depends on the dither from the other terms; no closed form in docs/model.md §4".into(),
+        )]
+    }
+
+    /// Q, named `q` (docs/cli.md).
+    fn level(&self) -> Option<(&'static str, f64)> {
+        Some(("q", self.q))
+    }
+
     /// sigma^2 = 3 Q^2 / tau^2 (Hou 4.29), sampled or not; the output filter does not act on it
     /// (quantisation is of the output register).
     fn allan_variance(&self, tau_s: f64) -> Option<f64> {
@@ -49,6 +63,10 @@ impl TermKind for Quantization {
     const SHOWS_IN_STATIC_LOG: bool = true;
     type Raw = Text;
     const EXAMPLE: Option<&'static str> = Some("quantization = \"0.001 deg\"");
+
+    fn with_level(&self, level: f64) -> Result<Quantization, ModelError> {
+        Quantization::new(level)
+    }
 
     fn from_raw(raw: &Text, cx: &ReadContext) -> Result<Quantization, ConfigError> {
         let value = cx.value(raw, Quantity::Integrated(cx.sig), true)?;
@@ -102,4 +120,10 @@ impl Generate for Quantizer {
     fn output(&mut self, _k0: u64, dt_s: f64, out: &mut [f64]) {
         out.iter_mut().for_each(|v| *v = self.apply(*v, dt_s));
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> Quantization {
+    Quantization::new(1e-3).unwrap()
 }

@@ -6,6 +6,7 @@ use super::term::{
 use crate::closed_form as cf;
 use crate::config::error::ConfigError;
 use crate::config::read::{ReadContext, Text};
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check_finite, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -31,6 +32,15 @@ impl RateRamp {
 }
 
 impl ErrorTerm for RateRamp {
+    fn law_sources(&self, _cx: &LawSourceContext) -> Vec<LawSource> {
+        vec![LawSource::Ramp(self.rate)]
+    }
+
+    /// R (signed), named `r` (docs/cli.md).
+    fn level(&self) -> Option<(&'static str, f64)> {
+        Some(("r", self.rate))
+    }
+
     /// sigma^2 = R^2 tau^2 / 2 (Hou 4.56), exact for samples too; unit DC gain keeps it through
     /// the output filter.
     fn allan_variance(&self, tau_s: f64) -> Option<f64> {
@@ -47,6 +57,10 @@ impl TermKind for RateRamp {
     const SHOWS_IN_STATIC_LOG: bool = true;
     type Raw = Text;
     const EXAMPLE: Option<&'static str> = Some("rate_ramp = \"0.01 deg/h/h\"");
+
+    fn with_level(&self, level: f64) -> Result<RateRamp, ModelError> {
+        RateRamp::new(level)
+    }
 
     fn from_raw(raw: &Text, cx: &ReadContext) -> Result<RateRamp, ConfigError> {
         let value = cx.value(raw, Quantity::Ramp(cx.sig), false)?;
@@ -85,4 +99,10 @@ impl Generate for RampGenerator {
                 .for_each(|(i, v)| *v += ramp * clock.t(i));
         }
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> RateRamp {
+    RateRamp::new(5e-7).unwrap()
 }

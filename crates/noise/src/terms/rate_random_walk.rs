@@ -8,6 +8,7 @@ use crate::config::error::ConfigError;
 use crate::config::read::{ReadContext, Text};
 use crate::discrete::RandomWalk;
 use crate::filter::FilteredAllan;
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -33,6 +34,15 @@ impl RateRandomWalk {
 }
 
 impl ErrorTerm for RateRandomWalk {
+    fn law_sources(&self, _cx: &LawSourceContext) -> Vec<LawSource> {
+        vec![LawSource::RandomWalk(self.density)]
+    }
+
+    /// K, named `k` (docs/cli.md).
+    fn level(&self) -> Option<(&'static str, f64)> {
+        Some(("k", self.density))
+    }
+
     /// sigma^2 = K^2 tau / 3 (Hou 4.53).
     fn allan_variance(&self, tau_s: f64) -> Option<f64> {
         Some(cf::rate_random_walk_avar(self.density, tau_s))
@@ -56,6 +66,10 @@ impl TermKind for RateRandomWalk {
     const SHOWS_IN_STATIC_LOG: bool = true;
     type Raw = Text;
     const EXAMPLE: Option<&'static str> = Some("rate_random_walk = \"0.5 deg/h/sqrt(h)\"");
+
+    fn with_level(&self, level: f64) -> Result<RateRandomWalk, ModelError> {
+        RateRandomWalk::new(level)
+    }
 
     fn from_raw(raw: &Text, cx: &ReadContext) -> Result<RateRandomWalk, ConfigError> {
         let value = cx.value(raw, Quantity::RandomWalk(cx.sig), true)?;
@@ -92,4 +106,10 @@ impl Generate for RandomWalkGenerator {
     fn add_raw(&mut self, _clock: RawClock, out: &mut [f64], scratch: &mut Vec<f64>) {
         self.walk.add_block(&mut self.rng, out, scratch);
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> RateRandomWalk {
+    RateRandomWalk::new(4e-6).unwrap()
 }

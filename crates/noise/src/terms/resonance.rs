@@ -8,6 +8,7 @@ use crate::config::error::ConfigError;
 use crate::config::read::{ReadContext, Text};
 use crate::discrete::{draws, normal};
 use crate::filter::FilteredAllan;
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -19,12 +20,14 @@ use rand::Rng;
 /// (bandwidth below twice the frequency). Closed forms in [`cf::resonance_exponent`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Resonance {
-    pub sigma: f64,
-    pub frequency_hz: f64,
-    pub bandwidth_hz: f64,
+    sigma: f64,
+    frequency_hz: f64,
+    bandwidth_hz: f64,
 }
 
 impl Resonance {
+    /// Checks sigma (finite, >= 0), the frequency and bandwidth (finite, > 0) and that the
+    /// bandwidth is below twice the frequency (underdamped).
     pub fn new(sigma: f64, frequency_hz: f64, bandwidth_hz: f64) -> Result<Resonance, ModelError> {
         check("resonance sigma", sigma, false)?;
         check("resonance frequency", frequency_hz, true)?;
@@ -43,6 +46,21 @@ impl Resonance {
         })
     }
 
+    /// Stationary standard deviation (signal units).
+    pub fn sigma(&self) -> f64 {
+        self.sigma
+    }
+
+    /// Natural frequency, Hz.
+    pub fn frequency_hz(&self) -> f64 {
+        self.frequency_hz
+    }
+
+    /// Half-power (-3 dB) bandwidth, Hz.
+    pub fn bandwidth_hz(&self) -> f64 {
+        self.bandwidth_hz
+    }
+
     /// Damping ratio zeta = bandwidth / (2 frequency).
     pub fn damping(&self) -> f64 {
         self.bandwidth_hz / (2.0 * self.frequency_hz)
@@ -59,6 +77,27 @@ pub struct RawResonance {
 }
 
 impl ErrorTerm for Resonance {
+    fn law_sources(&self, _cx: &LawSourceContext) -> Vec<LawSource> {
+        vec![LawSource::Resonance {
+            sigma: self.sigma,
+            frequency_hz: self.frequency_hz,
+            bandwidth_hz: self.bandwidth_hz,
+        }]
+    }
+
+    /// Sigma, named `sigma` (docs/cli.md).
+    fn level(&self) -> Option<(&'static str, f64)> {
+        Some(("sigma", self.sigma))
+    }
+
+    /// The frequency and bandwidth, named `frequency_hz` and `bandwidth_hz`.
+    fn shape(&self) -> Vec<(&'static str, f64)> {
+        vec![
+            ("frequency_hz", self.frequency_hz),
+            ("bandwidth_hz", self.bandwidth_hz),
+        ]
+    }
+
     /// [`cf::resonance_avar`].
     fn allan_variance(&self, tau_s: f64) -> Option<f64> {
         let (s, f, b) = (self.sigma, self.frequency_hz, self.bandwidth_hz);
@@ -90,6 +129,11 @@ impl TermKind for Resonance {
     type Raw = RawResonance;
     const EXAMPLE: Option<&'static str> =
         Some("resonance = { sigma = \"0.5 mg\", frequency = \"10 Hz\", bandwidth = \"0.7 Hz\" }");
+
+    /// The frequency and bandwidth kept.
+    fn with_level(&self, level: f64) -> Result<Resonance, ModelError> {
+        Resonance::new(level, self.frequency_hz, self.bandwidth_hz)
+    }
 
     /// Stationary std `sigma`, natural `frequency`, half-power `bandwidth` (below twice the
     /// frequency).
@@ -205,4 +249,10 @@ impl Generate for ResonanceGenerator {
     fn add_raw(&mut self, _clock: RawClock, out: &mut [f64], scratch: &mut Vec<f64>) {
         self.resonator.add_block(&mut self.rng, out, scratch);
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> Resonance {
+    Resonance::new(7e-4, 20.0, 0.7).unwrap()
 }

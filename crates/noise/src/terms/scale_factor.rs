@@ -5,6 +5,7 @@ use super::term::{
 };
 use crate::config::error::ConfigError;
 use crate::config::read::{ReadContext, Text};
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check_finite, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -30,6 +31,12 @@ impl ScaleFactor {
 }
 
 impl ErrorTerm for ScaleFactor {
+    /// A bias proportional to the reading (docs/model.md §1.5 Table 2: "drift proportional to
+    /// rate and duration of motion").
+    fn law_sources(&self, cx: &LawSourceContext) -> Vec<LawSource> {
+        vec![LawSource::Bias(self.ratio * cx.ideal)]
+    }
+
     fn config_value(&self, cx: &WriteContext) -> String {
         cx.quoted(self.ratio, Quantity::Ratio)
     }
@@ -75,4 +82,10 @@ impl Generate for ScaleFactorGenerator {
     fn input(&self, row: &mut [f64; 3], _bias: &mut f64) {
         row[self.axis] += self.ratio;
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> ScaleFactor {
+    ScaleFactor::new(4e-4).unwrap()
 }

@@ -5,6 +5,7 @@ use crate::closed_form as cf;
 use crate::config::error::ConfigError;
 use crate::config::read::{ReadContext, Text};
 use crate::filter::FilteredAllan;
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -14,12 +15,13 @@ use rand::Rng;
 /// uniformly per run (the phase average is what the Allan closed form describes).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sinusoid {
-    pub amplitude: f64,
-    pub frequency_hz: f64,
-    pub phase_rad: Option<f64>,
+    amplitude: f64,
+    frequency_hz: f64,
+    phase_rad: Option<f64>,
 }
 
 impl Sinusoid {
+    /// Checks the amplitude (finite, >= 0), the frequency (finite, > 0) and the phase (finite).
     pub fn new(
         amplitude: f64,
         frequency_hz: f64,
@@ -42,6 +44,21 @@ impl Sinusoid {
             phase_rad,
         })
     }
+
+    /// Amplitude (signal units).
+    pub fn amplitude(&self) -> f64 {
+        self.amplitude
+    }
+
+    /// Frequency, Hz.
+    pub fn frequency_hz(&self) -> f64 {
+        self.frequency_hz
+    }
+
+    /// The fixed phase, rad; None: drawn per run.
+    pub fn phase_rad(&self) -> Option<f64> {
+        self.phase_rad
+    }
 }
 
 /// `sinusoidal = { amplitude, frequency, phase? }` as written.
@@ -54,6 +71,27 @@ pub struct RawSinusoid {
 }
 
 impl ErrorTerm for Sinusoid {
+    /// Point-sampled at the run's interval.
+    fn law_sources(&self, cx: &LawSourceContext) -> Vec<LawSource> {
+        vec![LawSource::Sinusoid {
+            amplitude: self.amplitude,
+            freq_hz: self.frequency_hz,
+            phase: self.phase_rad,
+            sample_interval_s: cx.dt_s,
+        }]
+    }
+
+    /// The amplitude, named `amplitude` (docs/cli.md).
+    fn level(&self) -> Option<(&'static str, f64)> {
+        Some(("amplitude", self.amplitude))
+    }
+
+    /// The frequency, named `frequency_hz` (a fixed phase moves no Allan variance, which is the
+    /// phase average: not a shape).
+    fn shape(&self) -> Vec<(&'static str, f64)> {
+        vec![("frequency_hz", self.frequency_hz)]
+    }
+
     /// Phase averaged (Hou 4.64).
     fn allan_variance(&self, tau_s: f64) -> Option<f64> {
         Some(cf::sinusoid_avar(self.amplitude, self.frequency_hz, tau_s))
@@ -89,6 +127,11 @@ impl TermKind for Sinusoid {
     const STOCHASTIC: bool = false;
     const SHOWS_IN_STATIC_LOG: bool = true;
     type Raw = RawSinusoid;
+
+    /// The frequency and phase kept.
+    fn with_level(&self, level: f64) -> Result<Sinusoid, ModelError> {
+        Sinusoid::new(level, self.frequency_hz, self.phase_rad)
+    }
 
     fn from_raw(raw: &RawSinusoid, cx: &ReadContext) -> Result<Sinusoid, ConfigError> {
         let amplitude =
@@ -180,4 +223,10 @@ impl Generate for SinusoidGenerator {
             .enumerate()
             .for_each(|(i, v)| *v += a * (omega * (k0 + i as u64) as f64 * dt_s + phase).sin());
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> Sinusoid {
+    Sinusoid::new(8e-3, 9.0, Some(0.1)).unwrap()
 }

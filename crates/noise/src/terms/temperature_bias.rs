@@ -6,6 +6,7 @@ use super::term::{
 };
 use crate::config::error::ConfigError;
 use crate::config::read::{ReadContext, Text};
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check_finite, ModelError};
 use crate::temperature::TemperatureProfile;
 use crate::units::{Quantity, Signal};
@@ -32,6 +33,35 @@ impl TemperatureBias {
 }
 
 impl ErrorTerm for TemperatureBias {
+    /// A constant temperature: a constant bias c (T - Tref) (docs/model.md §1.5 Table 2: a
+    /// residual temperature bias integrates like a constant bias). A steady ramp: a rate ramp c r
+    /// and a bias c (T0 - Tref) (the k-fold integrals of c (T0 - Tref) and of c r t, docs/model.md
+    /// §4 bias row), in that order. Any other profile: no law.
+    fn law_sources(&self, cx: &LawSourceContext) -> Vec<LawSource> {
+        let (c, reference) = (self.per_degree, cx.temperature_reference_c);
+        match *cx.temperature {
+            TemperatureProfile::Constant { temp_c } => {
+                vec![LawSource::Bias(c * (temp_c - reference))]
+            }
+            TemperatureProfile::Ramp {
+                start_c,
+                rate_c_per_s,
+                end_c: None,
+            } => vec![
+                LawSource::Ramp(c * rate_c_per_s),
+                LawSource::Bias(c * (start_c - reference)),
+            ],
+            _ => vec![LawSource::NoLaw(
+                "temperature bias under a varying temperature profile".into(),
+            )],
+        }
+    }
+
+    /// The coefficient (signed), named `coefficient` (docs/cli.md).
+    fn level(&self) -> Option<(&'static str, f64)> {
+        Some(("coefficient", self.per_degree))
+    }
+
     fn config_value(&self, cx: &WriteContext) -> String {
         cx.quoted(self.per_degree, Quantity::PerDegree(cx.sig))
     }
@@ -42,6 +72,10 @@ impl TermKind for TemperatureBias {
     const SHOWS_IN_STATIC_LOG: bool = false;
     type Raw = Text;
     const EXAMPLE: Option<&'static str> = Some("temperature_bias = \"0.01 deg/s/degC\"");
+
+    fn with_level(&self, level: f64) -> Result<TemperatureBias, ModelError> {
+        TemperatureBias::new(level)
+    }
 
     fn from_raw(raw: &Text, cx: &ReadContext) -> Result<TemperatureBias, ConfigError> {
         let value = cx.value(raw, Quantity::PerDegree(cx.sig), false)?;
@@ -83,4 +117,10 @@ impl Generate for TemperatureBiasGenerator {
             .enumerate()
             .for_each(|(i, v)| *v += c * (self.profile.at(clock.t(i)) - reference));
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> TemperatureBias {
+    TemperatureBias::new(1e-5).unwrap()
 }

@@ -5,6 +5,8 @@
 use crate::config::error::ConfigError;
 use crate::config::read::ReadContext;
 use crate::filter::FilteredAllan;
+use crate::law_source::{LawSource, LawSourceContext};
+use crate::model_error::ModelError;
 use crate::temperature::TemperatureProfile;
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -30,6 +32,26 @@ pub trait ErrorTerm: fmt::Debug {
     /// output register, and unit DC gain keeps a ramp a ramp).
     fn allan_variance_filtered(&self, tau_s: f64, dt_s: f64, _fa: &FilteredAllan) -> Option<f64> {
         self.allan_variance_sampled(tau_s, dt_s)
+    }
+
+    /// Its growth-law sources (docs/model.md §4) under the laws' conditions `cx`, in the order
+    /// the laws add them: usually one; none for a term that adds no error of its own (the output
+    /// filter); [`LawSource::NoLaw`] for one without a closed form.
+    fn law_sources(&self, cx: &LawSourceContext) -> Vec<LawSource>;
+
+    /// The level its Allan variance is quadratic in, with its docs/cli.md JSON name (`q`, `n`, `b`,
+    /// `k`, `r`, `coefficient`, `sigma`, `amplitude`): what a fit of the term's size estimates.
+    /// Signed where the term is (a rate ramp, a temperature coefficient). None for a term without
+    /// one.
+    fn level(&self) -> Option<(&'static str, f64)> {
+        None
+    }
+
+    /// The parameters that set the shape of its Allan signature, with their docs/cli.md JSON names
+    /// (a Gauss-Markov correlation time, a frequency, a filter's taps): what a fit searches or
+    /// keeps beside the level. Conventions fixed in the config (flicker's band) are not among them.
+    fn shape(&self) -> Vec<(&'static str, f64)> {
+        Vec::new()
     }
 
     /// The value of the term's config key as the sensor TOML writes it (the text after
@@ -98,6 +120,16 @@ pub trait TermKind: ErrorTerm + Sized {
 
     /// An example of the key for messages about a value of the wrong shape.
     const EXAMPLE: Option<&'static str> = None;
+
+    /// The same term at another [`ErrorTerm::level`], its shape kept, through the validating
+    /// constructor; an error for a term without a level.
+    fn with_level(&self, level: f64) -> Result<Self, ModelError> {
+        Err(ModelError {
+            what: "level",
+            expected: "a term with a level",
+            found: level,
+        })
+    }
 
     /// The validated term from its key's value: units converted to SI, ranges checked, errors
     /// naming the file, line and key.

@@ -6,6 +6,7 @@ use super::term::{
 use crate::config::error::ConfigError;
 use crate::config::read::{ReadContext, Text};
 use crate::discrete::normal;
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -31,6 +32,10 @@ impl TurnOnBias {
 }
 
 impl ErrorTerm for TurnOnBias {
+    fn law_sources(&self, _cx: &LawSourceContext) -> Vec<LawSource> {
+        vec![LawSource::RandomConstant(self.sigma)]
+    }
+
     fn config_value(&self, cx: &WriteContext) -> String {
         cx.quoted(self.sigma, Quantity::Signal(cx.sig))
     }
@@ -75,4 +80,10 @@ impl Generate for TurnOnBiasGenerator {
     fn input(&self, _row: &mut [f64; 3], bias: &mut f64) {
         *bias += self.bias;
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> TurnOnBias {
+    TurnOnBias::new(3e-2).unwrap()
 }

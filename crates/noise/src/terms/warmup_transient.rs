@@ -6,6 +6,7 @@ use super::term::{
 use crate::config::error::ConfigError;
 use crate::config::read::{ReadContext, Text};
 use crate::discrete::normal;
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -14,12 +15,13 @@ use crate::ImuRng;
 /// `per_run` is set, drawn per run from N(0, amplitude^2) (turn-on to turn-on).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WarmupTransient {
-    pub amplitude: f64,
-    pub tau_s: f64,
-    pub per_run: bool,
+    amplitude: f64,
+    tau_s: f64,
+    per_run: bool,
 }
 
 impl WarmupTransient {
+    /// Checks the amplitude (finite, any sign) and the time constant (finite, > 0).
     pub fn new(amplitude: f64, tau_s: f64, per_run: bool) -> Result<WarmupTransient, ModelError> {
         if !amplitude.is_finite() {
             return Err(ModelError {
@@ -34,6 +36,21 @@ impl WarmupTransient {
             per_run,
         })
     }
+
+    /// Amplitude at t = 0 (signal units, signed), or the standard deviation of the per-run draw.
+    pub fn amplitude(&self) -> f64 {
+        self.amplitude
+    }
+
+    /// Time constant, s.
+    pub fn tau_s(&self) -> f64 {
+        self.tau_s
+    }
+
+    /// Is the amplitude drawn per run from N(0, amplitude^2)?
+    pub fn per_run(&self) -> bool {
+        self.per_run
+    }
 }
 
 /// `warmup_transient = { amplitude, time_constant, per_run? }` as written.
@@ -46,6 +63,14 @@ pub struct RawWarmupTransient {
 }
 
 impl ErrorTerm for WarmupTransient {
+    fn law_sources(&self, _cx: &LawSourceContext) -> Vec<LawSource> {
+        vec![LawSource::Transient {
+            amplitude: self.amplitude,
+            tau_s: self.tau_s,
+            per_run: self.per_run,
+        }]
+    }
+
     fn config_value(&self, cx: &WriteContext) -> String {
         format!(
             "{{ amplitude = {}, time_constant = {}, per_run = {} }}",
@@ -113,4 +138,10 @@ impl Generate for TransientGenerator {
             .enumerate()
             .for_each(|(i, v)| *v += a * (-clock.t(i).max(0.0) / tau).exp());
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> WarmupTransient {
+    WarmupTransient::new(5e-4, 600.0, false).unwrap()
 }

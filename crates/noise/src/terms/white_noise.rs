@@ -8,6 +8,7 @@ use crate::config::error::ConfigError;
 use crate::config::read::{ReadContext, Text};
 use crate::discrete::{draws, normal};
 use crate::filter::FilteredAllan;
+use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -34,6 +35,15 @@ impl WhiteNoise {
 }
 
 impl ErrorTerm for WhiteNoise {
+    fn law_sources(&self, _cx: &LawSourceContext) -> Vec<LawSource> {
+        vec![LawSource::White(self.density)]
+    }
+
+    /// N, named `n` (docs/cli.md).
+    fn level(&self) -> Option<(&'static str, f64)> {
+        Some(("n", self.density))
+    }
+
     /// sigma^2 = N^2 / tau (Hou 4.36), exact for the sampled sequence too.
     fn allan_variance(&self, tau_s: f64) -> Option<f64> {
         Some(cf::white_noise_avar(self.density, tau_s))
@@ -54,6 +64,10 @@ impl TermKind for WhiteNoise {
     type Raw = Text;
     const EXAMPLE: Option<&'static str> =
         Some("white_noise = \"0.05 deg/s/sqrt(Hz)\" (gyro) or \"40 ug/sqrt(Hz)\" (accelerometer)");
+
+    fn with_level(&self, level: f64) -> Result<WhiteNoise, ModelError> {
+        WhiteNoise::new(level)
+    }
 
     fn from_raw(raw: &Text, cx: &ReadContext) -> Result<WhiteNoise, ConfigError> {
         let value = cx.value(raw, Quantity::NoiseDensity(cx.sig), true)?;
@@ -117,4 +131,10 @@ impl Generate for WhiteNoiseGenerator {
     fn add_raw(&mut self, _clock: RawClock, out: &mut [f64], scratch: &mut Vec<f64>) {
         self.sampler.add_block(&mut self.rng, out, scratch);
     }
+}
+
+/// A valid term of the effect, for the registry's tests (`terms::samples`).
+#[cfg(test)]
+pub(crate) fn sample() -> WhiteNoise {
+    WhiteNoise::new(2e-3).unwrap()
 }
