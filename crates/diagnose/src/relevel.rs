@@ -17,10 +17,13 @@
 //! model's own terms before a new one, as for a single re-level).
 //!
 //! The intervals reported for each level are conditional on the others' fitted values (the profile
-//! of that level alone, widened by the Birge ratio of the joint fit as for every candidate).
+//! of that level alone, widened by the Birge ratio of the joint fit as for every candidate). A level
+//! is wrong when holding it at the model's value, the others refitted, costs at least the BIC gain
+//! naming an effect needs (`min_delta_bic`); the others are held and the rest refitted, so only levels the data call
+//! wrong are changed and named.
 
-use crate::fit::{aic, bic, birge_scale, fit_linear, linear_interval, predicted_ln_adev, FitData};
 use crate::fit::CHI2_1_95;
+use crate::fit::{aic, bic, birge_scale, fit_linear, linear_interval, predicted_ln_adev, FitData};
 use crate::trials::{at_squared_level, Named, Trial};
 use noise::Effect;
 
@@ -100,20 +103,14 @@ fn moved(data: &FitData, delta: &[f64]) -> (Vec<f64>, Vec<f64>) {
     (ln, avar)
 }
 
-/// The joint re-level of the model's own levels on one channel, from its step-4 `trials`; None when
-/// fewer than two levels can move.
-pub(crate) fn joint_relevel(data: &FitData, trials: &[Trial]) -> Option<Relevel> {
-    let ts = joinable(trials);
-    if ts.len() < 2 {
-        return None;
-    }
+/// The levels of `ts` fitted together (cyclic coordinate descent from the model's levels `c0`).
+fn descend(data: &FitData, ts: &[&Trial], c0: &[f64]) -> Vec<f64> {
     let m = data.ln_meas.len();
-    let c0: Vec<f64> = ts.iter().map(|t| c0_of(t)).collect();
-    let mut c = c0.clone();
+    let mut c = c0.to_vec();
     for _ in 0..SWEEPS {
         let mut largest: f64 = 0.0;
         for j in 0..ts.len() {
-            let (ln, avar) = moved(data, &change(&ts, &c, Some(j), m));
+            let (ln, avar) = moved(data, &change(ts, &c, Some(j), m));
             let shifted = FitData {
                 ln_band: &ln,
                 avar_band: &avar,
@@ -128,43 +125,92 @@ pub(crate) fn joint_relevel(data: &FitData, trials: &[Trial]) -> Option<Relevel>
             break;
         }
     }
-    let delta = change(&ts, &c, None, m);
-    let chi2 = chi2_of(data, &delta);
-    let k = ts.len();
-    let scale = birge_scale(chi2, k, m);
-    let mut levels = Vec::with_capacity(k);
-    for j in 0..k {
-        let (ln, avar) = moved(data, &change(&ts, &c, Some(j), m));
-        let shifted = FitData {
-            ln_band: &ln,
-            avar_band: &avar,
-            ..data.clone()
-        };
-        let f = &ts[j].signature;
-        let fit = fit_linear(&shifted, f, c0[j]);
-        let (c_lo, c_hi) = linear_interval(&shifted, f, c0[j], &fit, CHI2_1_95 * scale * scale);
-        let t = ts[j];
-        // A level the term's constructor refuses ends the joint re-level (none is taken).
-        let term = t.term.with_level(c[j].max(0.0).sqrt()).ok()?;
-        let named = term.parameters();
-        levels.push(Trial {
-            effect: t.effect,
-            lo: at_squared_level(&named, c_lo),
-            hi: at_squared_level(&named, c_hi),
-            term,
-            white_n: None,
-            model: t.model.clone(),
+    c
+}
+
+/// Level j's 95 % interval (squared level) at the others' fitted values, widened by `scale`.
+fn interval(data: &FitData, ts: &[&Trial], c: &[f64], c0: f64, j: usize, scale: f64) -> (f64, f64) {
+    let (ln, avar) = moved(data, &change(ts, c, Some(j), data.ln_meas.len()));
+    let shifted = FitData {
+        ln_band: &ln,
+        avar_band: &avar,
+        ..data.clone()
+    };
+    let f = &ts[j].signature;
+    let fit = fit_linear(&shifted, f, c0);
+    linear_interval(&shifted, f, c0, &fit, CHI2_1_95 * scale * scale)
+}
+
+/// The joint re-level of the model's own levels on one channel, from its step-4 `trials`. A level
+/// the profile likelihood does not call wrong is held at the model's value and the others
+/// refitted, until every level that moves is wrong. None when fewer than two
+/// levels are left (one is the single wrong-level candidate's case).
+pub(crate) fn joint_relevel(
+    data: &FitData,
+    trials: &[Trial],
+    min_delta_bic: f64,
+) -> Option<Relevel> {
+    let mut ts = joinable(trials);
+    let m = data.ln_meas.len();
+    loop {
+        if ts.len() < 2 {
+            return None;
+        }
+        let c0: Vec<f64> = ts.iter().map(|t| c0_of(t)).collect();
+        let c = descend(data, &ts, &c0);
+        let delta = change(&ts, &c, None, m);
+        let chi2 = chi2_of(data, &delta);
+        let k = ts.len();
+        let scale = birge_scale(chi2, k, m);
+        let intervals: Vec<(f64, f64)> = (0..k)
+            .map(|j| interval(data, &ts, &c, c0[j], j, scale))
+            .collect();
+        // Level j is wrong when holding it at the model's value, the others refitted, costs more
+        // BIC than naming an effect must gain (`min_delta_bic`, the evidence every step asks): the
+        // profile likelihood of that level (Wilks 1938), not its conditional interval, which would
+        // ignore how the levels trade with each other.
+        let wrong: Vec<bool> = (0..k)
+            .map(|j| {
+                let held: Vec<&Trial> = (0..k).filter(|&i| i != j).map(|i| ts[i]).collect();
+                let held_c0: Vec<f64> = (0..k).filter(|&i| i != j).map(|i| c0[i]).collect();
+                let held_c = descend(data, &held, &held_c0);
+                let chi2_held = chi2_of(data, &change(&held, &held_c, None, m));
+                bic(chi2_held, k - 1, m) - bic(chi2, k, m) >= min_delta_bic
+            })
+            .collect();
+        if wrong.iter().any(|w| !w) {
+            ts = ts
+                .into_iter()
+                .zip(&wrong)
+                .filter(|(_, &w)| w)
+                .map(|(t, _)| t)
+                .collect();
+            continue;
+        }
+        let mut levels = Vec::with_capacity(k);
+        for (j, t) in ts.iter().enumerate() {
+            // A level the term's constructor refuses ends the joint re-level (none is taken).
+            let term = t.term.with_level(c[j].max(0.0).sqrt()).ok()?;
+            let named = term.parameters();
+            levels.push(Trial {
+                effect: t.effect,
+                lo: at_squared_level(&named, intervals[j].0),
+                hi: at_squared_level(&named, intervals[j].1),
+                term,
+                white_n: None,
+                model: t.model.clone(),
+                bic: bic(chi2, k, m),
+                aic: aic(chi2, k),
+                delta_avar: t.signature.iter().map(|v| (c[j] - c0[j]) * v).collect(),
+                signature: t.signature.clone(),
+            });
+        }
+        return Some(Relevel {
+            levels,
             bic: bic(chi2, k, m),
-            aic: aic(chi2, k),
-            delta_avar: f.iter().map(|v| (c[j] - c0[j]) * v).collect(),
-            signature: f.clone(),
+            delta_avar: delta,
         });
     }
-    Some(Relevel {
-        levels,
-        bic: bic(chi2, k, m),
-        delta_avar: delta,
-    })
 }
 
 #[cfg(test)]
@@ -219,7 +265,7 @@ mod tests {
             level_trial(Effect::WhiteNoise, n2_model, white),
             level_trial(Effect::RateRandomWalk, k2_model, rrw),
         ];
-        let r = joint_relevel(&data, &trials).expect("two levels");
+        let r = joint_relevel(&data, &trials, 16.0).expect("two levels");
         let sq = |n: &Named| n[0].1 * n[0].1;
         let c: Vec<f64> = r.levels.iter().map(|t| sq(&t.term.parameters())).collect();
         assert!((c[0] / n2 - 1.0).abs() < 1e-4, "white {c:?}");
@@ -243,6 +289,6 @@ mod tests {
             avar_band: &avar,
             s: &s,
         };
-        assert!(joint_relevel(&data, &[level_trial(Effect::WhiteNoise, 1.0, f)]).is_none());
+        assert!(joint_relevel(&data, &[level_trial(Effect::WhiteNoise, 1.0, f)], 16.0).is_none());
     }
 }

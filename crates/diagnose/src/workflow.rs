@@ -387,8 +387,9 @@ impl<'a> Run<'a> {
             let records = trial_records(round, &ts, base_bic, data.chi2_base());
             self.channels[c].records.extend(records);
             let choice = self.select(c, &ts, base_bic);
-            if let Some(joint) = crate::relevel::joint_relevel(&data, &ts)
-                .filter(|j| self.prefer_joint(j, choice.as_ref(), base_bic))
+            if let Some(joint) =
+                crate::relevel::joint_relevel(&data, &ts, self.settings.min_delta_bic)
+                    .filter(|j| self.prefer_joint(j, choice.as_ref(), base_bic))
             {
                 for t in &joint.levels {
                     changes.extend(self.accept(c, t));
