@@ -387,10 +387,12 @@ impl<'a> Run<'a> {
             let records = trial_records(round, &ts, base_bic, data.chi2_base());
             self.channels[c].records.extend(records);
             let choice = self.select(c, &ts, base_bic);
-            if let Some(joint) =
-                crate::relevel::joint_relevel(&data, &ts, self.settings.min_delta_bic)
-                    .filter(|j| self.prefer_joint(j, choice.as_ref(), base_bic))
-            {
+            // The joint re-level is of the model as given (round 1): later rounds refine the levels
+            // of the terms they name one at a time, as before.
+            let joint = (round == 1)
+                .then(|| crate::relevel::joint_relevel(&data, &ts, self.settings.min_delta_bic))
+                .flatten();
+            if let Some(joint) = joint.filter(|j| self.prefer_joint(j, choice.as_ref(), base_bic)) {
                 for t in &joint.levels {
                     changes.extend(self.accept(c, t));
                 }
@@ -474,17 +476,15 @@ impl<'a> Run<'a> {
     }
 
     /// Step 4: is the joint re-level of the model's own levels (module `relevel`) the step to take?
-    /// When it gains `min_delta_bic` and is within the ambiguity margin of the best single candidate
-    /// or better (Occam, as in `select`: the model's own terms before a new one).
+    /// When it gains `min_delta_bic` and has a lower BIC than the best single candidate.
     fn prefer_joint(
         &self,
         joint: &crate::relevel::Relevel,
         best: Option<&Choice>,
         base_bic: f64,
     ) -> bool {
-        let settings = self.settings;
-        base_bic - joint.bic >= settings.min_delta_bic
-            && best.is_none_or(|b| joint.bic - b.trial.bic < settings.ambiguity_delta_bic)
+        base_bic - joint.bic >= self.settings.min_delta_bic
+            && best.is_none_or(|b| joint.bic < b.trial.bic)
     }
 
     /// Step 4: put the chosen term into both models; the changes made, each with the term before.
