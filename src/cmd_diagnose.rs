@@ -524,30 +524,13 @@ fn drift_check_text(result: &Diagnosis) -> String {
         "drift check ({}): drift gap {:.2} -> {:.2} ({} -> {} outside the 95 % band)",
         d.protocol_text, d.before.gap, d.after.gap, d.before.outside, d.after.outside
     );
-    for (h0, h1) in d.before.horizons.iter().zip(&d.after.horizons) {
-        for (q, z0) in &h0.quantities {
-            let Some(z1) = h1.quantities.get(q) else {
-                continue;
-            };
-            let v = |x: f64| crate::fmt::quantity_value(q, x);
-            let _ = writeln!(
-                s,
-                "  {:>8} {:<18} measured {:>11}  model before {:>11} [{}, {}] {:<6} z {:>6.2}  after {:>11} [{}, {}] {:<6} z {:>6.2}",
-                crate::fmt::time(h0.t_s),
-                q,
-                v(z0.measured_rms),
-                v(z0.model_rms),
-                v(z0.band_lo),
-                v(z0.band_hi),
-                z0.verdict.name(),
-                z0.z,
-                v(z1.model_rms),
-                v(z1.band_lo),
-                v(z1.band_hi),
-                z1.verdict.name(),
-                z1.z
-            );
-        }
+    for r in drift_check_rows(d) {
+        let _ = writeln!(
+            s,
+            "  {:>8} {:<18} measured {:>11}  model before {:>11} [{}, {}] {:<6} z {:>6.2}  after {:>11} [{}, {}] {:<6} z {:>6.2}",
+            r.time, r.quantity, r.measured, r.before.model, r.before.lo, r.before.hi,
+            r.before.verdict, r.before.z, r.after.model, r.after.lo, r.after.hi, r.after.verdict, r.after.z
+        );
     }
     s
 }
@@ -692,6 +675,52 @@ fn json_document(
     serde_json::to_string_pretty(&v).context("cannot serialise the diagnosis")
 }
 
+/// One side (before or after) of a drift-check row, formatted in the quantity's units.
+struct DriftSide {
+    model: String,
+    lo: String,
+    hi: String,
+    verdict: &'static str,
+    z: f64,
+}
+
+/// One row of the drift check (a horizon and a quantity), for the text and report.md tables.
+struct DriftCheckRow {
+    time: String,
+    quantity: String,
+    measured: String,
+    before: DriftSide,
+    after: DriftSide,
+}
+
+/// The drift check's rows: each horizon's quantities found both before and after.
+fn drift_check_rows(d: &diagnose::report::DriftLoop) -> Vec<DriftCheckRow> {
+    let mut rows = Vec::new();
+    for (h0, h1) in d.before.horizons.iter().zip(&d.after.horizons) {
+        for (q, z0) in &h0.quantities {
+            let Some(z1) = h1.quantities.get(q) else {
+                continue;
+            };
+            let v = |x: f64| crate::fmt::quantity_value(q, x);
+            let side = |z: &diagnose::drift_gap::DriftZ| DriftSide {
+                model: v(z.model_rms),
+                lo: v(z.band_lo),
+                hi: v(z.band_hi),
+                verdict: z.verdict.name(),
+                z: z.z,
+            };
+            rows.push(DriftCheckRow {
+                time: crate::fmt::time(h0.t_s),
+                quantity: q.to_string(),
+                measured: v(z0.measured_rms),
+                before: side(z0),
+                after: side(z1),
+            });
+        }
+    }
+    rows
+}
+
 /// The drift check's section of report.md: per horizon and quantity the measured RMS against the
 /// model's 95 % band before and after, beside the Allan gaps of the table above.
 fn drift_check_markdown(result: &Diagnosis) -> String {
@@ -708,29 +737,24 @@ fn drift_check_markdown(result: &Diagnosis) -> String {
         s,
         "| horizon | quantity | measured | model before [95 %] | verdict (z) | model after [95 %] | verdict (z) |\n|---|---|---|---|---|---|---|"
     );
-    for (h0, h1) in d.before.horizons.iter().zip(&d.after.horizons) {
-        for (q, z0) in &h0.quantities {
-            let Some(z1) = h1.quantities.get(q) else {
-                continue;
-            };
-            let v = |x: f64| crate::fmt::quantity_value(q, x);
-            let _ = writeln!(
-                s,
-                "| {} | {q} | {} | {} [{}, {}] | {} ({:.2}) | {} [{}, {}] | {} ({:.2}) |",
-                crate::fmt::time(h0.t_s),
-                v(z0.measured_rms),
-                v(z0.model_rms),
-                v(z0.band_lo),
-                v(z0.band_hi),
-                z0.verdict.name(),
-                z0.z,
-                v(z1.model_rms),
-                v(z1.band_lo),
-                v(z1.band_hi),
-                z1.verdict.name(),
-                z1.z
-            );
-        }
+    for r in drift_check_rows(d) {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} [{}, {}] | {} ({:.2}) | {} [{}, {}] | {} ({:.2}) |",
+            r.time,
+            r.quantity,
+            r.measured,
+            r.before.model,
+            r.before.lo,
+            r.before.hi,
+            r.before.verdict,
+            r.before.z,
+            r.after.model,
+            r.after.lo,
+            r.after.hi,
+            r.after.verdict,
+            r.after.z
+        );
     }
     s
 }

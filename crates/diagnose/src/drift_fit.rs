@@ -275,6 +275,7 @@ impl DriftFitInput<'_> {
                 bic: bic_new,
                 aic: aic(chi2, k) + penalty,
                 delta_avar: f.iter().map(|v| (c - c0) * v).collect(),
+                signature: f.to_vec(),
             },
             delta_bic: base - bic_new,
         })

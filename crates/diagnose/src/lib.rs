@@ -26,6 +26,7 @@ mod measure;
 pub mod model_terms;
 pub mod observer;
 pub mod protocol;
+mod relevel;
 pub mod report;
 mod runs;
 pub mod settings;

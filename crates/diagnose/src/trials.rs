@@ -57,6 +57,9 @@ pub(crate) struct Trial {
     pub(crate) aic: f64,
     /// (c - c0) f(tau): the change of the band's Allan variance.
     pub(crate) delta_avar: Vec<f64>,
+    /// f(tau), the Allan variance per unit squared level (empty where the change is not of that
+    /// form, the output filter's).
+    pub(crate) signature: Vec<f64>,
 }
 
 /// One candidate's fit, before its interval.
@@ -421,6 +424,7 @@ fn trial(data: &FitData, effect: Effect, current: Option<&Term>, fitted: Fitted)
         bic: bic(fit.chi2, k, m) + penalty,
         aic: aic(fit.chi2, k) + penalty,
         delta_avar: f.iter().map(|v| (fit.c - c0) * v).collect(),
+        signature: f,
     }
 }
 
@@ -490,6 +494,7 @@ fn filter_trial(input: &ChannelFit, data: &FitData) -> Option<Trial> {
         bic: bic(chi2, k, m) + penalty,
         aic: aic(chi2, k) + penalty,
         delta_avar: b.delta,
+        signature: Vec::new(),
     })
 }
 

@@ -383,7 +383,30 @@ impl<'a> Run<'a> {
             let base_bic = bic(data.chi2_base(), 0, ln_meas.len());
             let records = trial_records(round, &ts, base_bic, data.chi2_base());
             self.channels[c].records.extend(records);
-            let Some(choice) = self.select(c, &ts, base_bic) else {
+            let choice = self.select(c, &ts, base_bic);
+            // The joint re-level is of the model as given (round 1): later rounds refine the levels
+            // of the terms they name one at a time, as before.
+            let joint = (round == 1)
+                .then(|| crate::relevel::joint_relevel(&data, &ts, self.settings.min_delta_bic))
+                .flatten();
+            if let Some(joint) = joint.filter(|j| self.prefer_joint(j, choice.as_ref(), base_bic)) {
+                for t in &joint.levels {
+                    changes.extend(self.accept(c, t));
+                }
+                predicted = shifted_band(&predicted, &joint.delta_avar);
+                g_pred = gap(&curve, &predicted);
+                for trial in &joint.levels {
+                    let choice = Choice {
+                        trial,
+                        delta_bic: base_bic - joint.bic,
+                        cannot_tell_from: Vec::new(),
+                    };
+                    let found = found_by_fit(choice, round, g.rms, g_pred.rms, self.dt_s());
+                    self.channels[c].effects.push(found);
+                }
+                continue;
+            }
+            let Some(choice) = choice else {
                 break;
             };
             changes.extend(self.accept(c, choice.trial));
@@ -447,6 +470,18 @@ impl<'a> Run<'a> {
             delta_bic,
             cannot_tell_from,
         })
+    }
+
+    /// Step 4: is the joint re-level of the model's own levels (module `relevel`) the step to take?
+    /// When it gains `min_delta_bic` and has a lower BIC than the best single candidate.
+    fn prefer_joint(
+        &self,
+        joint: &crate::relevel::Relevel,
+        best: Option<&Choice>,
+        base_bic: f64,
+    ) -> bool {
+        base_bic - joint.bic >= self.settings.min_delta_bic
+            && best.is_none_or(|b| joint.bic < b.trial.bic)
     }
 
     /// Step 4: put the chosen term into both models; the changes made, each with the term before.
