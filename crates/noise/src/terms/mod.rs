@@ -201,7 +201,7 @@ macro_rules! registry {
                 }
             }
 
-            #[inline]
+            #[inline(always)]
             fn add_raw(&mut self, clock: RawClock, out: &mut [f64], scratch: &mut Vec<f64>) {
                 match self {
                     $(Generator::$effect(g) => g.add_raw(clock, out, scratch),)+
