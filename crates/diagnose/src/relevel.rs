@@ -13,8 +13,9 @@
 //! the one-level fit of `fit::fit_linear` against the band moved by the others; Wright 2015,
 //! "Coordinate descent algorithms", Math. Program. 151, 3-34), which converges for this smooth
 //! objective over a box. It is weighed by the same BIC (k = one per level) against the single
-//! candidates; where it is within the ambiguity margin of the best one, it is preferred (Occam: the
-//! model's own terms before a new one, as for a single re-level).
+//! candidates, on the model as given (round 1 only: later rounds refine the levels of the terms they
+//! name one at a time), and taken when it gains `min_delta_bic` and its BIC is below the best single
+//! candidate's (workflow `prefer_joint`).
 //!
 //! The intervals reported for each level are conditional on the others' fitted values (the profile
 //! of that level alone, widened by the Birge ratio of the joint fit as for every candidate). A level
