@@ -598,18 +598,23 @@ impl<'a> Run<'a> {
         self.dirty = true;
     }
 
+    /// The corrected model simulated on the whole plan (every run's length), as the band is.
+    fn simulate_whole(&self) -> Result<SimResult, DiagnoseError> {
+        let settings = self.settings;
+        Ok(simulate_runs(
+            &self.sim_model,
+            &self.setup,
+            &self.plan,
+            settings.seed,
+            settings.seeds,
+        )?)
+    }
+
     /// After the rounds: the corrected model's drift, simulated again when the last full
     /// simulation is stale (a partial or rejected round).
     fn settle_drift(&mut self) -> Result<(), DiagnoseError> {
         if self.dirty {
-            let settings = self.settings;
-            let sim = simulate_runs(
-                &self.sim_model,
-                &self.setup,
-                &self.plan,
-                settings.seed,
-                settings.seeds,
-            )?;
+            let sim = self.simulate_whole()?;
             self.last_drift = sim.drift;
             self.last_protocol = sim.protocol_errors;
             self.dirty = false;

@@ -13,7 +13,6 @@ use crate::findings::{found_by_fit, merge_refinements, rejected_record, Choice};
 use crate::gap::gap;
 use crate::model_terms::{current_term, set_term};
 use crate::report::{Candidate, CandidateRecord, DriftLoop};
-use crate::simulate::simulate_runs;
 use crate::trials::named_map;
 use noise::{Channel, Effect, ImuChannels, Term};
 
@@ -117,14 +116,7 @@ impl Run<'_> {
     ) -> Result<bool, DiagnoseError> {
         self.observer
             .step(crate::observer::Step::Resimulate { round });
-        let settings = self.settings;
-        let sim = simulate_runs(
-            &self.sim_model,
-            &self.setup,
-            &self.plan,
-            settings.seed,
-            settings.seeds,
-        )?;
+        let sim = self.simulate_whole()?;
         let (_, of_run) = self.plan.lengths();
         let after = crate::drift_gap::drift_gap(
             &self.drift_measured,
