@@ -211,7 +211,11 @@ fn fill_moving_gives_the_bits_of_corrupt() {
         let (g, acc) = a.corrupt(k as u64, &gyro[k], &accel[k]);
         for c in 0..6 {
             let got = if c < 3 { g[c] } else { acc[c - 3] };
-            assert_eq!(got.to_bits(), cols[c][k].to_bits(), "channel {c}, sample {k}");
+            assert_eq!(
+                got.to_bits(),
+                cols[c][k].to_bits(),
+                "channel {c}, sample {k}"
+            );
         }
     }
 }
