@@ -1217,3 +1217,26 @@ fn endless_streams_are_read_with_a_bound() {
     }
     writer.join().unwrap();
 }
+
+/// Found by the mutation run (scripts/mutate_inputs.py): a channel of values near 1e90 (below
+/// the 1e100 a log may hold) had an IEEE 952 fit with no term at all and `allan` exited 0 with
+/// every coefficient null (the fit's squared weights overflowed); values near 1e-90 likewise.
+#[test]
+fn channels_far_from_unit_scale_get_a_fit() {
+    let dir = tempfile::tempdir().unwrap();
+    for scale in ["1e90", "1e-90"] {
+        let mut text = String::from("t,gx\n");
+        for line in log_text(3000, "\n").lines().skip(1) {
+            let (t, v) = line.split_once(',').unwrap();
+            text += &format!("{t},{v}e{}\n", &scale[2..]);
+        }
+        let log = write(dir.path(), "scaled.csv", text.as_bytes());
+        let out = ok(imudrift(&["allan", &log, "--json"]));
+        let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let n = &json["channels"]["gx"]["fit"]["n"];
+        assert!(
+            n.as_f64().is_some_and(f64::is_finite),
+            "{scale}: fit.n = {n}"
+        );
+    }
+}
