@@ -404,9 +404,14 @@ def commands(path, threads):
 
 def json_paths(value, path=""):
     """(path, value) of every leaf; array indices are written [] (one path for every element)
-    and channel names * (`.channels.*.fit.q`: a renamed column gives the same paths)."""
+    and channel names * (`.channels.*.fit.q`: a renamed column gives the same paths). The nulls
+    of an entry that says it has no value (`"verdict": "not_informed"`: drift's quantities the
+    logs lack a channel for, with a note naming it) are not leaves."""
     if isinstance(value, dict):
+        declared = value.get("verdict") == "not_informed"
         for k, v in value.items():
+            if declared and v is None:
+                continue
             yield from json_paths(v, f"{path}.{'*' if path.endswith('.channels') else k}")
     elif isinstance(value, list):
         for v in value:
