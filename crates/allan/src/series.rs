@@ -72,6 +72,14 @@ impl<'a> Series<'a> {
             .collect()
     }
 
+    /// The deviation curve on `grid` with the intervals `opts` asks for ([`crate::deviation_with`]).
+    pub fn deviation(&self, est: Estimator, grid: &TauGrid, opts: &Options) -> Vec<AllanPoint> {
+        let ms = self.grid_m(est, grid, opts.stable32_stop);
+        let mut points = self.raw_points(est, &ms);
+        self.attach_intervals(est, &mut points, opts);
+        points
+    }
+
     /// The deviation at averaging factor `m` without interval (`None` if fewer than 2 terms).
     pub fn raw_point(&self, est: Estimator, m: usize) -> Option<AllanPoint> {
         let (sum_sq, n_terms) = estimator_sum_fast(&self.phase, est, m)?;
