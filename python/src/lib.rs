@@ -66,7 +66,11 @@ fn samples(data: &PyReadonlyArray1<'_, f64>) -> PyResult<Vec<f64>> {
             data[i]
         )));
     }
-    Ok(data.to_vec())
+    // One spare slot: the phase of n rate samples has n + 1 points and is built in this buffer
+    // (`Series::from_rate`), which would otherwise be reallocated and copied for the last one.
+    let mut owned = Vec::with_capacity(data.len() + 1);
+    owned.extend_from_slice(data);
+    Ok(owned)
 }
 
 /// Averaging factors of averaging times in seconds: allantools `tau_generator`,
