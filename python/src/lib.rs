@@ -20,6 +20,13 @@ create_exception!(
     "Input an imudrift function cannot use (empty or non-finite data, a bad rate, an unknown name)."
 );
 
+create_exception!(
+    imudrift,
+    LogUnreadable,
+    pyo3::exceptions::PyOSError,
+    "A log file or directory that cannot be read or mapped (an OSError)."
+);
+
 fn invalid(msg: String) -> PyErr {
     InvalidInput::new_err(msg)
 }
@@ -311,6 +318,119 @@ fn allan_analysis<'py>(
     Ok(d)
 }
 
+/// The reader's settings by the names of `imudrift.read_log`'s arguments (the CLI names its flags).
+fn read_log_argument(setting: logio::Setting) -> &'static str {
+    use logio::Setting;
+    match setting {
+        Setting::Rate => "rate",
+        Setting::Columns => "columns",
+        Setting::GyroUnit => "gyro_unit",
+        Setting::AccelUnit => "accel_unit",
+        Setting::TimeUnit => "time_unit",
+        Setting::Topic => "topic",
+    }
+}
+
+fn unit<U: Copy>(
+    arg: &str,
+    text: Option<&str>,
+    all: &[U],
+    name: fn(U) -> &'static str,
+) -> PyResult<Option<U>> {
+    let Some(text) = text else { return Ok(None) };
+    all.iter()
+        .copied()
+        .find(|&u| name(u) == text)
+        .map(Some)
+        .ok_or_else(|| {
+            let names: Vec<&str> = all.iter().map(|&u| name(u)).collect();
+            invalid(format!(
+                "{arg} {text:?}: expected one of {}",
+                names.join(", ")
+            ))
+        })
+}
+
+/// A log file read by the CLI's reader ([`logio::read_log`]): CSV or gzip CSV, ROS 1 bag, ROS 2
+/// MCAP. Returns `source`, `rate_hz`, `t` (s, or None) and `channels`: (name, SI array) pairs in
+/// the log's order.
+#[pyfunction]
+#[pyo3(signature = (path, rate, gyro_unit, accel_unit, time_unit, columns, topic))]
+#[allow(clippy::too_many_arguments)]
+fn read_log_columns<'py>(
+    py: Python<'py>,
+    path: std::path::PathBuf,
+    rate: Option<f64>,
+    gyro_unit: Option<&str>,
+    accel_unit: Option<&str>,
+    time_unit: Option<&str>,
+    columns: Option<Vec<(String, String)>>,
+    topic: Option<String>,
+) -> PyResult<Bound<'py, PyDict>> {
+    if let Some(rate_hz) = rate.filter(|&r| !logio::valid_rate_hz(r)) {
+        return Err(invalid(
+            logio::Problem::BadRate { rate_hz }.render(&read_log_argument),
+        ));
+    }
+    let opts = logio::ReadOptions {
+        rate_hz: rate,
+        units: logio::UnitOptions {
+            gyro: unit(
+                "gyro_unit",
+                gyro_unit,
+                &logio::GyroUnit::ALL,
+                logio::GyroUnit::name,
+            )?,
+            accel: unit(
+                "accel_unit",
+                accel_unit,
+                &logio::AccelUnit::ALL,
+                logio::AccelUnit::name,
+            )?,
+            time: unit(
+                "time_unit",
+                time_unit,
+                &logio::TimeUnit::ALL,
+                logio::TimeUnit::name,
+            )?,
+        },
+        columns: columns.unwrap_or_default(),
+        topic,
+    };
+    let log = py.detach(|| logio::read_log(&path, &opts)).map_err(|e| {
+        let msg = e.render(&read_log_argument);
+        match *e.problem {
+            logio::Problem::Unreadable
+            | logio::Problem::UnreadableDirectory
+            | logio::Problem::Unmappable => LogUnreadable::new_err(match &e.cause {
+                Some(c) => format!("{msg}: {c}"),
+                None => msg,
+            }),
+            _ => invalid(msg),
+        }
+    })?;
+    let logio::Log {
+        source,
+        rate_hz,
+        t_s,
+        mut channels,
+        order,
+        ..
+    } = log;
+    let d = PyDict::new(py);
+    d.set_item("source", source)?;
+    d.set_item("rate_hz", rate_hz)?;
+    d.set_item("t", t_s.map(|t| t.into_pyarray(py)))?;
+    let mut cols = Vec::new();
+    for name in order {
+        if let Some(v) = channels.remove(&name) {
+            cols.push((name, v.into_pyarray(py)));
+        }
+    }
+    d.set_item("channels", cols)?;
+    Ok(d)
+}
+
 /// The module `imudrift._imudrift`.
 #[pymodule]
 fn _imudrift(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -318,5 +438,7 @@ fn _imudrift(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("InvalidInput", m.py().get_type::<InvalidInput>())?;
     m.add_function(wrap_pyfunction!(allantools_dev, m)?)?;
     m.add_function(wrap_pyfunction!(allan_analysis, m)?)?;
+    m.add("LogUnreadable", m.py().get_type::<LogUnreadable>())?;
+    m.add_function(wrap_pyfunction!(read_log_columns, m)?)?;
     Ok(())
 }
