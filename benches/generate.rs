@@ -65,15 +65,7 @@ fn bench(c: &mut Criterion) {
             |mut e| {
                 for k0 in (0..SAMPLES).step_by(BLOCK) {
                     let n = (SAMPLES - k0).min(BLOCK as u64) as usize;
-                    let [b0, b1, b2, b3, b4, b5] = &mut block;
-                    let out = [
-                        &mut b0[..n],
-                        &mut b1[..n],
-                        &mut b2[..n],
-                        &mut b3[..n],
-                        &mut b4[..n],
-                        &mut b5[..n],
-                    ];
+                    let out = block.each_mut().map(|b| &mut b[..n]);
                     e.fill_moving(k0, &gyro[..n], &accel[..n], out);
                     black_box(&block);
                 }

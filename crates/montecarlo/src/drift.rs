@@ -113,15 +113,7 @@ impl RunKernel for DriftKernel {
         for (cp, &until) in self.checkpoint_steps.iter().enumerate() {
             while k < until {
                 let n = (until - k).min(BLOCK as u64) as usize;
-                let [b0, b1, b2, b3, b4, b5] = &mut block;
-                let out = [
-                    &mut b0[..n],
-                    &mut b1[..n],
-                    &mut b2[..n],
-                    &mut b3[..n],
-                    &mut b4[..n],
-                    &mut b5[..n],
-                ];
+                let out = block.each_mut().map(|b| &mut b[..n]);
                 match &still {
                     Some((gyro, accel)) => errors.fill_static(k, &gyro.0, &accel.0, out),
                     None => {
