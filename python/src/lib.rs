@@ -431,6 +431,84 @@ fn read_log_columns<'py>(
     Ok(d)
 }
 
+/// Highest sample rate of a generated log, Hz (the `generate` command's limit).
+const MAX_GENERATE_RATE_HZ: f64 = 1e6;
+
+/// A static, level IMU log generated from a sensor model ([`noise::ImuErrors::fill_static`]), the
+/// values `imudrift generate` writes for the same model, seed and run: `t` (k / rate, s), the six
+/// channels gx..az (rad/s, m/s^2) and `temp` (degC), and the model's name.
+#[pyfunction]
+#[pyo3(signature = (sensor_text, source, duration_s, rate_hz, seed, run))]
+fn generate_columns<'py>(
+    py: Python<'py>,
+    sensor_text: &str,
+    source: &str,
+    duration_s: f64,
+    rate_hz: f64,
+    seed: u64,
+    run: u64,
+) -> PyResult<Bound<'py, PyDict>> {
+    if !(rate_hz.is_finite() && rate_hz > 0.0 && rate_hz <= MAX_GENERATE_RATE_HZ) {
+        return Err(invalid(format!(
+            "rate_hz {rate_hz}: expected a rate in Hz, > 0 and at most {MAX_GENERATE_RATE_HZ:e}"
+        )));
+    }
+    let samples = (duration_s * rate_hz).round();
+    if !(1.0..=1e12).contains(&samples) {
+        return Err(invalid(format!(
+            "duration_s {duration_s} at rate_hz {rate_hz} gives {samples} samples; expected 1 to 1e12"
+        )));
+    }
+    // Eight float64 columns, held twice at most (here and in the DataFrame).
+    let need = samples * 8.0 * 8.0 * 2.0;
+    if let Some(free) = logio::available_memory_bytes() {
+        if need > free as f64 {
+            return Err(invalid(format!(
+                "{samples} samples need about {:.1} GiB and {:.1} GiB are available: generate a shorter log or at a lower rate",
+                need / 1073741824.0,
+                free as f64 / 1073741824.0
+            )));
+        }
+    }
+    let model =
+        noise::SensorModel::from_text(sensor_text, source).map_err(|e| invalid(e.to_string()))?;
+    let dt_s = 1.0 / rate_hz;
+    noise::ImuErrors::check_rate(&model, dt_s)
+        .map_err(|e| invalid(format!("{source}: {e}; lower the cutoff or raise rate_hz")))?;
+    let n = samples as usize;
+    let (cols, temp) = py.detach(|| {
+        let mut errors = noise::ImuErrors::new(&model, dt_s, seed, run);
+        let ideal = noise::StaticLevel::STANDARD;
+        let mut cols: [Vec<f64>; 6] = std::array::from_fn(|_| vec![0.0; n]);
+        errors.fill_static(
+            0,
+            &ideal.triad(noise::Sensor::Gyro),
+            &ideal.triad(noise::Sensor::Accel),
+            cols.each_mut().map(|c| c.as_mut_slice()),
+        );
+        let temp: Vec<f64> = (0..n as u64).map(|k| errors.temperature_c(k)).collect();
+        (cols, temp)
+    });
+    for (name, c) in noise::CHANNEL_NAMES.iter().zip(&cols) {
+        if let Some(k) = c.iter().position(|v| !v.is_finite()) {
+            return Err(invalid(format!(
+                "channel {name} is {} at sample {k}: the model's values overflow; check their units",
+                c[k]
+            )));
+        }
+    }
+    let d = PyDict::new(py);
+    d.set_item("sensor", &model.name)?;
+    // t = k / rate from the integer index (docs/architecture.md: never t += dt).
+    let t: Vec<f64> = (0..n as u64).map(|k| k as f64 / rate_hz).collect();
+    d.set_item("t", t.into_pyarray(py))?;
+    for (name, c) in noise::CHANNEL_NAMES.iter().zip(cols) {
+        d.set_item(*name, c.into_pyarray(py))?;
+    }
+    d.set_item("temp", temp.into_pyarray(py))?;
+    Ok(d)
+}
+
 /// The module `imudrift._imudrift`.
 #[pymodule]
 fn _imudrift(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -440,5 +518,6 @@ fn _imudrift(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(allan_analysis, m)?)?;
     m.add("LogUnreadable", m.py().get_type::<LogUnreadable>())?;
     m.add_function(wrap_pyfunction!(read_log_columns, m)?)?;
+    m.add_function(wrap_pyfunction!(generate_columns, m)?)?;
     Ok(())
 }
