@@ -350,7 +350,7 @@ fn corrected_model(
         );
     }
     // In the units and conventions of the input model (spec-sheet units where it has none).
-    let style = crate::files::read_text(model_path)
+    let style = crate::files::read_config(model_path)
         .map(|file| noise::UnitStyle::from_config_text(&file.text))
         .unwrap_or_default();
     out.push_str(&result.model_final.to_toml_string_styled(&style));
