@@ -123,6 +123,29 @@ class AllanResult:
         return pd.DataFrame({c: getattr(self, c) for c in self._COLUMNS})
 
 
+    def plot(self, ax=None, label=None):
+        """The curve with its interval band on log-log axes, and the IEEE 952 fit when there is
+        one (matplotlib is optional). Returns the matplotlib ``Axes``."""
+        try:
+            import matplotlib.pyplot as plt
+        except ImportError:
+            raise ImportError(
+                "AllanResult.plot() needs matplotlib: pip install matplotlib"
+            ) from None
+        if ax is None:
+            _, ax = plt.subplots()
+        line = ax.loglog(self.tau, self.deviation, "o-", ms=3, label=label or self.estimator)[0]
+        ax.fill_between(self.tau, self.lo, self.hi, color=line.get_color(), alpha=0.2, lw=0)
+        if self._fit is not None:
+            # The fitted model's deviation (crate allan, Fit::model_dev), sampled by the library.
+            ax.loglog(self._fit["model_tau"], self._fit["model_dev"], "k--", lw=1, label="IEEE 952 fit")
+        ax.set_xlabel("tau (s)")
+        ax.set_ylabel(f"{self.estimator} (unit of the samples)")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend()
+        return ax
+
+
 def allan(
     data,
     rate,

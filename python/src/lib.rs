@@ -222,8 +222,25 @@ fn edf_method(name: &str) -> PyResult<EdfMethod> {
     }
 }
 
-fn fit_dict<'py>(py: Python<'py>, fit: &Fit) -> PyResult<Bound<'py, PyDict>> {
+/// Points of a fitted model curve drawn between the first and the last tau.
+const MODEL_CURVE_POINTS: usize = 100;
+
+fn fit_dict<'py>(
+    py: Python<'py>,
+    fit: &Fit,
+    points: &[AllanPoint],
+) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
+    if let (Some(first), Some(last)) = (points.first(), points.last()) {
+        let (a, b) = (first.tau_s.ln(), last.tau_s.ln());
+        let steps = (MODEL_CURVE_POINTS - 1) as f64;
+        let tau: Vec<f64> = (0..MODEL_CURVE_POINTS)
+            .map(|i| (a + (b - a) * i as f64 / steps).exp())
+            .collect();
+        let dev: Vec<f64> = tau.iter().map(|&t| fit.model_dev(t)).collect();
+        d.set_item("model_tau", tau.into_pyarray(py))?;
+        d.set_item("model_dev", dev.into_pyarray(py))?;
+    }
     let terms = PyDict::new(py);
     for (name, t) in TERM_NAMES.iter().zip(fit.terms()) {
         terms.set_item(name, t.map(|t| (t.value, t.sigma)))?;
@@ -312,7 +329,7 @@ fn allan_analysis<'py>(
     d.set_item("n_terms", ints(&|p| p.n_terms as i64).into_pyarray(py))?;
     d.set_item("bins", ints(&|p| p.bins as i64).into_pyarray(py))?;
     match &fit {
-        Some(f) => d.set_item("fit", fit_dict(py, f)?)?,
+        Some(f) => d.set_item("fit", fit_dict(py, f, &points)?)?,
         None => d.set_item("fit", py.None())?,
     }
     Ok(d)
