@@ -177,8 +177,8 @@ impl std::str::FromStr for Requirement {
         };
         let quantity = NavQuantity::from_name(quantity_name).ok_or_else(|| {
             fail(format!(
-                "unknown channel `{quantity_name}` (one of {})",
-                NavQuantity::ALL.map(|c| c.name()).join(", ")
+                "unknown channel `{quantity_name}` (one of {}; `yaw_rad` is accepted for heading_rad)",
+                NavQuantity::ALL.map(|c| c.label()).join(", ")
             ))
         })?;
         let rhs = rhs.trim();
@@ -197,7 +197,7 @@ impl std::str::FromStr for Requirement {
                 fail(format!(
                     "unit `{}` does not fit channel {}",
                     unit.trim(),
-                    quantity.name()
+                    quantity.label()
                 ))
             })?
         };
