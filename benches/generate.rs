@@ -1,8 +1,10 @@
 //! Sample generation: ns per 6-axis sample of the full MTx model (configs/sensors/mtx.toml:
 //! white noise, flicker bias instability as 7 Gauss-Markov components (0.1 s .. 1e5 s, one per decade)
 //! and rate random walk on each
-//! gyro, white noise on each accelerometer), through `ImuErrors::corrupt` and channel by channel
-//! (`ChannelErrors::fill_static`, what `imudrift generate` runs in parallel).
+//! gyro, white noise on each accelerometer), through `ImuErrors::corrupt` (sample by sample),
+//! `ImuErrors::fill_moving` (blocks of a moving IMU, what the Monte Carlo runner runs for a
+//! trajectory with motion) and channel by channel (`ChannelErrors::fill_static`, what
+//! `imudrift generate` runs in parallel).
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
 use noise::{Channel, ImuErrors, Sensor, SensorModel, StaticLevel};
@@ -46,6 +48,26 @@ fn bench(c: &mut Criterion) {
             |mut e| {
                 for k in 0..SAMPLES {
                     black_box(e.corrupt(k, &ideal_g, &ideal_a));
+                }
+            },
+            BatchSize::LargeInput,
+        )
+    });
+    // A moving IMU the way the runner generates it: 256 samples at a time, each with its own
+    // ideal input (`ImuErrors::fill_moving`; the same values as `corrupt` sample by sample).
+    group.bench_function("fill_moving_6axis", |b| {
+        const BLOCK: usize = 256;
+        let gyro = [ideal_g; BLOCK];
+        let accel = [ideal_a; BLOCK];
+        let mut block = [[0.0f64; BLOCK]; 6];
+        b.iter_batched(
+            || ImuErrors::new(&model, 0.01, 1, 0),
+            |mut e| {
+                for k0 in (0..SAMPLES).step_by(BLOCK) {
+                    let n = (SAMPLES - k0).min(BLOCK as u64) as usize;
+                    let out = block.each_mut().map(|b| &mut b[..n]);
+                    e.fill_moving(k0, &gyro[..n], &accel[..n], out);
+                    black_box(&block);
                 }
             },
             BatchSize::LargeInput,

@@ -309,6 +309,7 @@ fn text(r: &DriftCheck, logs: &[String], model: &std::path::Path, elapsed_s: f64
         "ratio"
     );
     let mut causes = Vec::new();
+    let mut differ = Vec::new();
     for h in &r.horizons {
         for q in Quantity::ALL {
             let c = &h.channels[q.name()];
@@ -326,6 +327,16 @@ fn text(r: &DriftCheck, logs: &[String], model: &std::path::Path, elapsed_s: f64
                 (Verdict::NotInformed, Some(n)) => format!("not informed ({n})"),
                 (v, _) => v.name().to_string(),
             };
+            if let Some(b) = c.between_logs.filter(|b| b.runs_differ) {
+                differ.push(format!(
+                    "{} {}: sd of ln(rms) over the logs {} against the model's {} (p = {})",
+                    crate::fmt::time(h.t_s),
+                    q.name(),
+                    crate::fmt::sig(b.sd_ln_rms, 3),
+                    crate::fmt::sig(b.model_sd_ln_rms, 3),
+                    crate::fmt::sig(b.p_value, 2)
+                ));
+            }
             if let Some(cause) = &c.likely_cause {
                 causes.push(format!("{} {}: {cause}", crate::fmt::time(h.t_s), q.name()));
             }
@@ -339,6 +350,16 @@ fn text(r: &DriftCheck, logs: &[String], model: &std::path::Path, elapsed_s: f64
                 model,
                 ratio
             );
+        }
+    }
+    if !differ.is_empty() {
+        let _ = writeln!(
+            s,
+            "the logs differ among themselves beyond the model's randomness (a run-to-run variation \
+             one model cannot hold; docs/drift.md):"
+        );
+        for d in differ {
+            let _ = writeln!(s, "  {d}");
         }
     }
     if !causes.is_empty() {

@@ -17,6 +17,16 @@
 //! measured RMS lies in the band, "above" or "below" otherwise, "not_informed" when a log lacks a
 //! channel the quantity comes from or no log is as long as the horizon.
 //!
+//! Runs that differ among themselves: with two logs or more, the spread of the logs' own RMS,
+//! D = the sample variance over the logs of ln(mean square of the log's segments), is set beside
+//! its distribution under the model, the same D of each simulated experiment's logs (one sensor
+//! model for every log of an experiment). Its p-value (1 + #{D_r >= D}) / (R + 1) is the Monte
+//! Carlo test's (the rank of the measured D among R exchangeable replicates; Davison & Hinkley,
+//! Bootstrap Methods and their Application, 1997, §4.2.5), at least 1 / (R + 1). Below 0.05 the runs differ beyond the model's own
+//! randomness: a run-to-run variation of the sensor (its bias wander, its temperature) that one
+//! model with fixed levels cannot hold, whatever its levels; a band from one group of runs then
+//! says little about another.
+//!
 //! Parameter uncertainty: a model that records the data it was fitted on (`FittedOn`) gives each
 //! replicate its own levels, drawn by the parametric bootstrap of `bootstrap` (docs/drift.md,
 //! "Parameter uncertainty"), so that the band holds the fit's uncertainty too; a model that does
@@ -102,10 +112,45 @@ pub struct QuantityCheck {
     /// Why a quantity is not informed.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub note: Option<String>,
+    /// With two logs or more: how far the logs' own RMS differ among themselves, against the
+    /// model's randomness (module doc).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub between_logs: Option<BetweenLogs>,
     /// For a measurement outside the band: the likely cause, from the channels the quantity
     /// comes from, the horizon and the model's terms (a pointer for `diagnose`, not a proof).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub likely_cause: Option<String>,
+}
+
+/// The spread of the logs' RMS among themselves against the model's (module doc).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct BetweenLogs {
+    /// Standard deviation over the logs of ln(RMS of the log's segments): measured, and the
+    /// median over the simulated experiments.
+    pub sd_ln_rms: f64,
+    pub model_sd_ln_rms: f64,
+    /// Share of simulated experiments whose logs spread as far or further, (1 + k) / (R + 1).
+    pub p_value: f64,
+    /// p < 0.05: the runs differ beyond the model's randomness.
+    pub runs_differ: bool,
+}
+
+/// Level of the between-log test (module doc).
+const BETWEEN_LOGS_LEVEL: f64 = 0.05;
+
+/// D of the module doc over logs' segment values `per_log` (None with fewer than two logs that
+/// hold a segment with a non-zero mean square).
+fn ln_ms_variance<'a>(per_log: impl Iterator<Item = &'a [f64]>) -> Option<f64> {
+    let ln: Vec<f64> = per_log
+        .filter(|v| !v.is_empty())
+        .map(|v| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).ln())
+        .filter(|x| x.is_finite())
+        .collect();
+    if ln.len() < 2 {
+        return None;
+    }
+    let m = ln.iter().sum::<f64>() / ln.len() as f64;
+    Some(ln.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (ln.len() - 1) as f64)
 }
 
 /// The likely cause of a verdict outside the band (module doc): which channels, which kind of
@@ -409,7 +454,9 @@ impl Experiment<'_> {
                 let measured =
                     measured_stats(&pooled, per_log, q, self.settings.protocol.overlapping);
                 let model = self.model_stats(hi, q)?;
-                compare(q, h, measured, model, self.model)
+                let mut check = compare(q, h, measured, model, self.model);
+                check.between_logs = self.between_logs(hi, q, per_log);
+                check
             };
             channels.insert(q.name(), check);
         }
@@ -417,6 +464,34 @@ impl Experiment<'_> {
             t_s: h,
             segments,
             channels,
+        })
+    }
+
+    /// The between-log test of quantity `q` at horizon `hi` (module doc).
+    fn between_logs(
+        &self,
+        hi: usize,
+        q: Quantity,
+        per_log: &[SegmentErrors],
+    ) -> Option<BetweenLogs> {
+        let d = ln_ms_variance(per_log.iter().map(|s| s.values(q)))?;
+        let mut null: Vec<f64> = self
+            .simulated
+            .chunks(self.logs.len())
+            .filter_map(|rep| ln_ms_variance(rep.iter().map(|s| s[hi].values(q))))
+            .collect();
+        if null.is_empty() {
+            return None;
+        }
+        null.sort_by(f64::total_cmp);
+        let k = null.iter().filter(|&&x| x >= d).count();
+        let p_value = (1 + k) as f64 / (null.len() + 1) as f64;
+        // D is a variance of ln(mean square) = 2 ln(RMS): sd of ln(RMS) = sqrt(D) / 2.
+        Some(BetweenLogs {
+            sd_ln_rms: d.sqrt() / 2.0,
+            model_sd_ln_rms: stats::quantile(&null, 0.5).sqrt() / 2.0,
+            p_value,
+            runs_differ: p_value < BETWEEN_LOGS_LEVEL,
         })
     }
 
@@ -467,6 +542,7 @@ fn not_informed(p: &Protocol, h: f64, missing: &[&str]) -> QuantityCheck {
         verdict: Verdict::NotInformed,
         ratio: None,
         likely_cause: None,
+        between_logs: None,
         note: Some(if missing.is_empty() {
             match p.lead_s() {
                 w if w > 0.0 => format!("no log holds a {h} s segment after the {w} s window"),
@@ -533,6 +609,7 @@ fn compare(
         model: Some(model),
         verdict,
         note: None,
+        between_logs: None,
         likely_cause: likely_cause(q, h, verdict, model_sensor),
     }
 }

@@ -18,9 +18,9 @@ use strapdown::{
 /// (`noise::extra_rng`: disjoint from every sensor-term stream by construction).
 pub const ALIGNMENT_STREAM: u32 = 0;
 
-/// Samples of sensor error generated at a time for a static trajectory (any value gives the same
-/// result; this one keeps the six channel buffers, 12 KB, in L1).
-const STATIC_BLOCK: usize = 256;
+/// Samples of sensor error generated at a time (any value gives the same result; this one keeps
+/// the six channel buffers, 12 KB, and a moving IMU's ideal inputs, 12 KB, in L1).
+const BLOCK: usize = 256;
 
 /// A ready-to-run drift experiment (immutable, shared by all runs).
 #[derive(Debug, Clone)]
@@ -103,44 +103,34 @@ impl RunKernel for DriftKernel {
             .trajectory
             .is_static()
             .then(|| self.trajectory.ideal_imu(0, self.dt_s));
-        // Static: the sensor errors come in blocks (each term over a whole block, the same values
-        // as sample by sample; noise's `ImuErrors::fill_static`), then the block is integrated.
-        let mut block = [[0.0f64; STATIC_BLOCK]; 6];
+        // The sensor errors come in blocks (each term over a whole block, the same values as
+        // sample by sample; noise's `ImuErrors::fill_static` / `fill_moving`), then the block is
+        // integrated.
+        let mut block = [[0.0f64; BLOCK]; 6];
+        let mut ideal_g = [Vector3::zeros(); BLOCK];
+        let mut ideal_a = [Vector3::zeros(); BLOCK];
         let mut k = 0u64;
         for (cp, &until) in self.checkpoint_steps.iter().enumerate() {
             while k < until {
+                let n = (until - k).min(BLOCK as u64) as usize;
+                let out = block.each_mut().map(|b| &mut b[..n]);
                 match &still {
-                    Some((gyro, accel)) => {
-                        let n = (until - k).min(STATIC_BLOCK as u64) as usize;
-                        let [b0, b1, b2, b3, b4, b5] = &mut block;
-                        errors.fill_static(
-                            k,
-                            &gyro.0,
-                            &accel.0,
-                            [
-                                &mut b0[..n],
-                                &mut b1[..n],
-                                &mut b2[..n],
-                                &mut b3[..n],
-                                &mut b4[..n],
-                                &mut b5[..n],
-                            ],
-                        );
-                        #[allow(clippy::needless_range_loop)] // six buffers, one index
-                        for i in 0..n {
-                            let g = Vector3::new(block[0][i], block[1][i], block[2][i]);
-                            let a = Vector3::new(block[3][i], block[4][i], block[5][i]);
-                            nav.step(&BodyVector(g), &BodyVector(a), self.dt_s);
-                        }
-                        k += n as u64;
-                    }
+                    Some((gyro, accel)) => errors.fill_static(k, &gyro.0, &accel.0, out),
                     None => {
-                        let (gyro, accel) = self.trajectory.ideal_imu(k, self.dt_s);
-                        let (g, a) = errors.corrupt(k, &gyro.0, &accel.0);
-                        nav.step(&BodyVector(g), &BodyVector(a), self.dt_s);
-                        k += 1;
+                        for i in 0..n {
+                            let (gyro, accel) = self.trajectory.ideal_imu(k + i as u64, self.dt_s);
+                            (ideal_g[i], ideal_a[i]) = (gyro.0, accel.0);
+                        }
+                        errors.fill_moving(k, &ideal_g[..n], &ideal_a[..n], out);
                     }
                 }
+                #[allow(clippy::needless_range_loop)] // six buffers, one index
+                for i in 0..n {
+                    let g = Vector3::new(block[0][i], block[1][i], block[2][i]);
+                    let a = Vector3::new(block[3][i], block[4][i], block[5][i]);
+                    nav.step(&BodyVector(g), &BodyVector(a), self.dt_s);
+                }
+                k += n as u64;
             }
             let truth = self.trajectory.truth(k as f64 * self.dt_s);
             let e = nav_error(nav.state(), &truth);

@@ -219,4 +219,27 @@ mod tests {
         }
         assert_eq!(axis, AxisModel::default());
     }
+
+    /// Every effect at level 0 (a level the bootstrap of `drift` can draw) generates finite
+    /// values: zero added, or the values passed unchanged.
+    #[test]
+    fn every_effect_at_level_zero_generates_finite_values() {
+        for t in crate::terms::samples() {
+            let Some(zero) = t.level().and_then(|_| t.with_level(0.0).ok()) else {
+                continue;
+            };
+            let mut model = SensorModel::default();
+            model.gyro.axes[0].set_term(zero);
+            model.gyro.axes[0].set_term(white_noise::WhiteNoise::new(1e-3).unwrap());
+            let mut e = crate::ImuErrors::new(&model, 0.01, 1, 0);
+            let mut out = vec![0.0; 2_000];
+            e.channels_mut()[0].fill_static(0, &nalgebra::Vector3::zeros(), &mut out);
+            assert!(
+                out.iter().all(|v| v.is_finite()),
+                "{:?} at level 0 gives {:?}",
+                t.effect(),
+                out.iter().find(|v| !v.is_finite())
+            );
+        }
+    }
 }

@@ -3,6 +3,7 @@
 //! order, behind the axis' output filter where it has one. One random sub-stream per (channel,
 //! term), so adding a term does not reshuffle others.
 
+use crate::channel::Channel;
 use crate::effect::Sensor;
 use crate::model::SensorModel;
 use crate::temperature::TemperatureProfile;
@@ -139,6 +140,17 @@ impl ChannelErrors {
         // Sub-blocks keep the draws of one sub-block (`scratch`) in L1.
         for (c, chunk) in out.chunks_mut(FILL_CHUNK).enumerate() {
             self.fill_with(k0 + (c * FILL_CHUNK) as u64, chunk, |_| ideal);
+        }
+    }
+
+    /// Samples `k0 .. k0 + out.len()` for a moving IMU, sample `k0 + i` with ideal input
+    /// `ideal[i]` (`ideal.len() >= out.len()`). The same values, bit for bit, as `sample` called for
+    /// each k in turn with those inputs; a block is faster, as for [`ChannelErrors::fill_static`].
+    pub fn fill_moving(&mut self, k0: u64, ideal: &[Vector3<f64>], out: &mut [f64]) {
+        assert!(ideal.len() >= out.len(), "one ideal input per sample");
+        for (c, chunk) in out.chunks_mut(FILL_CHUNK).enumerate() {
+            let first = c * FILL_CHUNK;
+            self.fill_with(k0 + first as u64, chunk, |i| &ideal[first + i]);
         }
     }
 
@@ -344,8 +356,23 @@ impl ImuErrors {
         ideal_accel: &Vector3<f64>,
         out: [&mut [f64]; 6],
     ) {
-        for (c, (channel, o)) in self.channels.iter_mut().zip(out).enumerate() {
-            channel.fill_static(k0, if c < 3 { ideal_gyro } else { ideal_accel }, o);
+        for ((c, channel), o) in Channel::ALL.into_iter().zip(&mut self.channels).zip(out) {
+            channel.fill_static(k0, if c.is_gyro() { ideal_gyro } else { ideal_accel }, o);
+        }
+    }
+
+    /// Samples `k0 .. k0 + n` of a moving IMU, sample `k0 + i` with ideal inputs `ideal_gyro[i]`,
+    /// `ideal_accel[i]`, channel by channel into `out[c][..n]` (gx gy gz ax ay az): the same
+    /// values, bit for bit, as `corrupt` for each k, with each term run over the whole block.
+    pub fn fill_moving(
+        &mut self,
+        k0: u64,
+        ideal_gyro: &[Vector3<f64>],
+        ideal_accel: &[Vector3<f64>],
+        out: [&mut [f64]; 6],
+    ) {
+        for ((c, channel), o) in Channel::ALL.into_iter().zip(&mut self.channels).zip(out) {
+            channel.fill_moving(k0, if c.is_gyro() { ideal_gyro } else { ideal_accel }, o);
         }
     }
 

@@ -164,3 +164,58 @@ fn corrupt_and_channel_fill_give_the_same_bits() {
         }
     }
 }
+
+/// A moving IMU in blocks (`fill_moving`, what the Monte Carlo runner runs) gives the bits of
+/// `corrupt` sample by sample, with inputs that change every sample reaching the scale factor
+/// and the output filter's zero-order hold (raw samples at 4x the output rate).
+#[test]
+fn fill_moving_gives_the_bits_of_corrupt() {
+    let mut model = common::shipped_model("mtx.toml");
+    for triad in [&mut model.gyro, &mut model.accel] {
+        for axis in &mut triad.axes {
+            axis.set_term(noise::ScaleFactor::new(3e-3).unwrap());
+            axis.set_term(
+                noise::OutputFilter::new(noise::FilterKind::Bartlett { taps: 9 }, 4).unwrap(),
+            );
+        }
+    }
+    const N: usize = 5_000;
+    let input = |k: usize, s: f64| {
+        let t = k as f64 * 0.01;
+        Vector3::new(s * (0.7 * t).sin(), s * (1.3 * t).cos(), s + 0.1 * t)
+    };
+    let gyro: Vec<_> = (0..N).map(|k| input(k, 0.5)).collect();
+    let accel: Vec<_> = (0..N).map(|k| input(k, 9.8)).collect();
+    let mut a = ImuErrors::new(&model, 0.01, 42, 1);
+    let mut b = a.clone();
+    let mut cols = vec![vec![0.0; N]; 6];
+    let mut k0 = 0;
+    for len in [1, 255, 256, 3, 2_000, 2_485] {
+        let [c0, c1, c2, c3, c4, c5] = &mut cols[..] else {
+            unreachable!()
+        };
+        let r = k0..k0 + len;
+        let out = [
+            &mut c0[r.clone()],
+            &mut c1[r.clone()],
+            &mut c2[r.clone()],
+            &mut c3[r.clone()],
+            &mut c4[r.clone()],
+            &mut c5[r.clone()],
+        ];
+        b.fill_moving(k0 as u64, &gyro[r.clone()], &accel[r], out);
+        k0 += len;
+    }
+    assert_eq!(k0, N);
+    for k in 0..N {
+        let (g, acc) = a.corrupt(k as u64, &gyro[k], &accel[k]);
+        for c in 0..6 {
+            let got = if c < 3 { g[c] } else { acc[c - 3] };
+            assert_eq!(
+                got.to_bits(),
+                cols[c][k].to_bits(),
+                "channel {c}, sample {k}"
+            );
+        }
+    }
+}

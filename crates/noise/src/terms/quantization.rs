@@ -117,8 +117,12 @@ impl Generate for Quantizer {
         Stage::Output
     }
 
+    /// Q = 0 is a continuous output (no grid): the values pass unchanged. (Q = 0 is a valid
+    /// level: `drift`'s parametric bootstrap can draw it.)
     fn output(&mut self, _k0: u64, dt_s: f64, out: &mut [f64]) {
-        out.iter_mut().for_each(|v| *v = self.apply(*v, dt_s));
+        if self.lsb > 0.0 {
+            out.iter_mut().for_each(|v| *v = self.apply(*v, dt_s));
+        }
     }
 }
 
@@ -126,4 +130,21 @@ impl Generate for Quantizer {
 #[cfg(test)]
 pub(crate) fn sample() -> Quantization {
     Quantization::new(1e-3).unwrap()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A quantiser of Q = 0 leaves every value as it is (it once gave 0/0 = NaN).
+    #[test]
+    fn zero_q_passes_values_unchanged() {
+        let mut g = Quantizer::new(
+            0.0,
+            &mut crate::term_rng(1, 0, 0, crate::Effect::Quantization),
+        );
+        let mut out = [0.25, -3.0, 1e-9];
+        g.output(0, 0.01, &mut out);
+        assert_eq!(out, [0.25, -3.0, 1e-9]);
+    }
 }
