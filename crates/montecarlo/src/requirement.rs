@@ -364,12 +364,25 @@ mod tests {
     }
 
     #[test]
+    fn heading_has_one_name_and_the_old_ones_still_work() {
+        for text in [
+            "p50 heading_rad < 2 deg @ 10 min",
+            "p50 yaw_rad < 2 deg @ 10 min",
+            "p50 heading < 2 deg @ 10 min",
+        ] {
+            let r: Requirement = text.parse().unwrap();
+            assert_eq!(r.quantity, NavQuantity::Yaw, "{text}");
+            assert_eq!(r.quantity.label(), "heading_rad");
+        }
+    }
+
+    #[test]
     fn bad_strings_name_the_problem_and_show_the_form() {
         for (text, needle) in [
             ("pos_horizontal_m < 10", "no `@ TIME`"),
             ("pos_horizontal_m = 10 @ 300", "no `<`"),
             ("p97 pos_horizontal_m < 10 @ 300", "unknown statistic"),
-            ("heading < 10 @ 300", "unknown channel"),
+            ("bearing < 10 @ 300", "unknown channel"),
             ("pos_horizontal_m < 10 deg @ 300", "does not fit"),
             ("pos_horizontal_m < -1 @ 300", "> 0"),
             ("pos_horizontal_m < 10 @ 0 s", "time > 0"),
