@@ -280,3 +280,46 @@ fn white_noise_readings_are_right_and_claim_no_bias_instability() {
         "{text}"
     );
 }
+
+/// Unit plausibility (issue 24): a gyro logged in deg/s under the name `gx` (read as rad/s, the
+/// canonical name's default) and an accelerometer logged in g read as m/s^2 each draw a warning
+/// naming the flag that fixes it; the analysis still runs. The noise (0.5 deg/s per sample at
+/// 100 Hz: 0.05 deg/s/sqrt(Hz), 2.9 "deg/s/sqrt(Hz)" when read as rad/s) and the magnitude (1 g
+/// read as 1 m/s^2) are each far beyond the warning's thresholds (1 deg/s/sqrt(Hz); a factor
+/// 1.25 around standard gravity), so no tolerance question arises.
+#[test]
+fn wrong_units_draw_a_plausibility_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("units.csv");
+    let mut rng = testkit::SplitMix64::new(3);
+    let mut text = String::from("gx,ax,ay,az\n");
+    for _ in 0..20_000 {
+        let n = 0.002 * rng.normal();
+        text.push_str(&format!("{},{n},{n},{}\n", 0.5 * rng.normal(), -1.0 + n));
+    }
+    std::fs::write(&path, text).unwrap();
+    let o = command()
+        .args(["allan", path.to_str().unwrap(), "--rate", "100"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("warning:")
+            && err.contains("gx reads a white noise of")
+            && err.contains("--gyro-unit deg/s"),
+        "{err}"
+    );
+    assert!(
+        err.contains("near 1, as a log in g reads") && err.contains("--accel-unit g"),
+        "{err}"
+    );
+    // Stated right, no warning.
+    let o = command()
+        .args(["allan", path.to_str().unwrap(), "--rate", "100"])
+        .args(["--gyro-unit", "deg/s", "--accel-unit", "g"])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("warning:"));
+}
