@@ -4,7 +4,7 @@
 //!
 //! Grammar: `[STAT] CHANNEL (<|<=) VALUE [UNIT] @ TIME [UNIT]`, where STAT is `p50`, `p68`, `p95`,
 //! `p99`, `rms` or `mean` (default `p95`: a requirement usually bounds what 95 % of runs stay
-//! under), CHANNEL a quantity's name (`yaw_rad`, `pos_horizontal_m`, ...), VALUE in the
+//! under), CHANNEL a quantity's name (`heading_rad`, `pos_horizontal_m`, ...), VALUE in the
 //! quantity's SI unit unless a unit is given (angles: rad, mrad, deg, arcmin, arcsec; positions:
 //! m, km, cm, mm, ft, nmi; velocities: m/s, mm/s, cm/s, km/h, ft/s, kn), and TIME in s, ms, min
 //! or h. Statistics are of |error| over the runs.
@@ -18,7 +18,7 @@ const Z_95: f64 = 1.959_963_984_540_054;
 
 /// Why a requirement string could not be read.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("requirement \"{text}\": {problem}; expected `[p50|p68|p95|p99|rms|mean] CHANNEL < VALUE [UNIT] @ TIME`, e.g. \"pos_horizontal_m < 10 m @ 300 s\" or \"p50 yaw_rad < 2 deg @ 10 min\"")]
+#[error("requirement \"{text}\": {problem}; expected `[p50|p68|p95|p99|rms|mean] CHANNEL < VALUE [UNIT] @ TIME`, e.g. \"pos_horizontal_m < 10 m @ 300 s\" or \"p50 heading_rad < 2 deg @ 10 min\"")]
 pub struct RequirementError {
     pub text: String,
     pub problem: String,
