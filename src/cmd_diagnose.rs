@@ -350,10 +350,8 @@ fn corrected_model(
         );
     }
     // In the units and conventions of the input model (spec-sheet units where it has none).
-    let text = crate::files::read_text(model_path).map(|file| file.text);
-    let style = text
-        .as_ref()
-        .map(|t| noise::UnitStyle::from_config_text(t))
+    let style = crate::files::read_config(model_path)
+        .map(|file| noise::UnitStyle::from_config_text(&file.text))
         .unwrap_or_default();
     let m = &result.model_final;
     if [&m.gyro, &m.accel]

@@ -193,7 +193,7 @@ fn fitted_on(args: &Args, model_file: &TextFile) -> Result<Option<FittedOn>> {
 }
 
 fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
-    let model_file = files::read_text(&args.model)?;
+    let model_file = files::read_config(&args.model)?;
     let model = files::sensor_model_of(&model_file)?;
     crate::model_notes::print(&model, args.horizons.iter().copied().reduce(f64::max));
     let fitted = fitted_on(args, &model_file)?;

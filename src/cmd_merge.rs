@@ -65,11 +65,19 @@ pub fn run(args: Args) -> Result<()> {
     )
 }
 
-/// Read every shard file; each must be one (its `format` key).
+/// Read every shard file; each must be one (its `format` key). Together they are read with one
+/// bound (`files::shard_bytes`): each file's size is checked before it is read.
 fn read_shards(paths: &[PathBuf]) -> Result<Vec<(&PathBuf, ShardFile)>> {
     let mut files = Vec::new();
+    let mut left = crate::files::shard_bytes();
     for path in paths {
-        let text = crate::files::read_text(path)?.text;
+        let text = crate::files::read_text(
+            path,
+            "an imudrift shard file (the shards together at most a third of the memory available)",
+            left,
+        )?
+        .text;
+        left = left.saturating_sub(text.len() as u64);
         let file: ShardFile = serde_json::from_str(&text)
             .with_context(|| format!("{}: not an imudrift shard file", path.display()))?;
         if file.format != SHARD_FORMAT {

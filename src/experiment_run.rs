@@ -86,7 +86,7 @@ fn edit_scenario_toml(text: &str, source: &str, edits: &ScenarioEdits) -> Result
 /// Read the scenario and its sensor (path relative to the scenario file). A sensor TOML given in
 /// place of a scenario gets the default static scenario.
 pub fn read_inputs(path: &Path, edits: &ScenarioEdits) -> Result<(Inputs, Scenario)> {
-    let TextFile { name: given, text } = files::read_text(path)?;
+    let TextFile { name: given, text } = files::read_config(path)?;
     let (scenario_source, scenario_toml) =
         if is_sensor_toml(&text) || noise::is_noise_file_text(&text, &given) {
             let file = path
@@ -112,7 +112,7 @@ pub fn read_inputs(path: &Path, edits: &ScenarioEdits) -> Result<(Inputs, Scenar
     };
     crate::output::note_inputs([&sensor_path]);
     let sensor_source = sensor_path.display().to_string();
-    let sensor_toml = files::read_text(&sensor_path)
+    let sensor_toml = files::read_config(&sensor_path)
         .with_context(|| format!("{scenario_source}: key `sensor`: the sensor file"))?
         .text;
     Ok((
@@ -192,9 +192,12 @@ pub fn refuse_other_experiments(dir: &Path, file: &ShardFile, exp: &Experiment) 
             continue;
         }
         let path = entry.path();
-        let Ok(text) = std::fs::read_to_string(&path) else {
-            continue;
-        };
+        let text = files::read_text(
+            &path,
+            "an imudrift shard file (in the --out directory)",
+            files::shard_bytes(),
+        )?
+        .text;
         let Ok(other) = serde_json::from_str::<ShardFile>(&text) else {
             continue;
         };

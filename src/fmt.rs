@@ -86,23 +86,9 @@ pub fn time(t_s: f64) -> String {
     }
 }
 
-/// A size in bytes for people, binary units: "512 bytes", "3.5 KiB", "1.2 GiB" (never "0.0 GB").
-pub fn bytes(b: f64) -> String {
-    const UNITS: [&str; 6] = ["KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
-    if b.is_nan() || b < 1024.0 {
-        return format!("{b} bytes");
-    }
-    let mut v = b;
-    let mut unit = "bytes";
-    for u in UNITS {
-        if v < 1024.0 {
-            break;
-        }
-        v /= 1024.0;
-        unit = u;
-    }
-    format!("{} {unit}", sig(v, 3))
-}
+/// A size in bytes for people, binary units: "512 bytes", "3.5 KiB", "1.2 GiB" (never "0.0 GB";
+/// one definition, shared with the log reader's messages).
+pub use logio::byte_size as bytes;
 
 /// Angle random walk (rad/sqrt(s)) as spec sheets write it, deg/sqrt(h).
 pub fn arw(v_rad_per_sqrt_s: f64) -> String {

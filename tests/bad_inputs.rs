@@ -1,6 +1,10 @@
 //! Input the commands cannot analyse meaningfully is refused with a message that says what is
 //! needed (exit status 1, never a panic, never an empty result presented as one). Each case here
 //! was accepted or crashed before its fix.
+//!
+//! To see them fail on an older build, point `IMUDRIFT_TEST_BIN` at its binary (the tests run it
+//! in place of the one cargo builds): `IMUDRIFT_TEST_BIN=/path/to/old/imudrift cargo test
+//! --release --test bad_inputs` (the outcome of commit 91afd1a is in docs/bad-inputs.md).
 
 use std::path::Path;
 use std::process::Command;
@@ -1059,4 +1063,180 @@ fn devices_and_pipes_are_read_with_a_bound() {
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(err.contains("not a regular file"), "{err}");
     assert!(started.elapsed().as_secs() < 30, "{:?}", started.elapsed());
+}
+
+/// Issue 27, item 10: a file of 10 GiB (sparse: it takes no disk) given as a sensor model, a
+/// scenario's sensor, a noise file or a shard is refused from its size before a byte is read
+/// (`simulate`, `spec`, `plan`, `merge`, `diagnose --model` allocated over 6 GB first); a device
+/// given as a config is read with the same 16 MiB bound.
+#[cfg(target_os = "linux")]
+#[test]
+fn files_beyond_their_size_bound_are_refused_before_reading() {
+    let dir = tempfile::tempdir().unwrap();
+    let sparse = |name: &str| {
+        let p = dir.path().join(name);
+        std::fs::File::create(&p)
+            .unwrap()
+            .set_len(10 << 30)
+            .unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let toml = sparse("big.toml");
+    let yaml = sparse("big.yaml");
+    let shard = sparse("shard-0-of-2.json");
+    let scenario = write(
+        dir.path(),
+        "scenario.toml",
+        b"name = \"s\"\nsensor = \"big.toml\"\n",
+    );
+    let log = write(dir.path(), "ok.csv", log_text(3000, "\n").as_bytes());
+    let started = std::time::Instant::now();
+    let too_big = ["10.0 GiB, more than the 16.0 MiB read at most"];
+    for model in [&toml, &yaml] {
+        refused(&["simulate", model, "--json"], &too_big);
+        refused(&["spec", model, "--json"], &too_big);
+        refused(&["plan", model, "--json"], &too_big);
+        refused(&["diagnose", &log, "--model", model, "--json"], &too_big);
+        refused(&["drift", &log, &log, "--model", model, "--json"], &too_big);
+    }
+    refused(
+        &["simulate", &scenario, "--json"],
+        &["key `sensor`", "big.toml"],
+    );
+    refused(
+        &["simulate", "/dev/zero", "--json"],
+        &["not a regular file", "16.0 MiB"],
+    );
+    let out = command()
+        .args(["merge", &shard, "--json"])
+        .env("IMUDRIFT_MEMORY_LIMIT", "3000000000")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("shard-0-of-2.json") && err.contains("10.0 GiB"),
+        "{err}"
+    );
+    // A simulate writing shards into a directory holding a 10 GiB `shard-*.json`.
+    let out = command()
+        .args([
+            "simulate",
+            "configs/sensors/mtx.toml",
+            "--runs",
+            "4",
+            "--duration",
+            "5",
+            "--shard",
+            "0/2",
+            "--out",
+            dir.path().to_str().unwrap(),
+        ])
+        .env("IMUDRIFT_MEMORY_LIMIT", "3000000000")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("10.0 GiB"), "{err}");
+    assert!(started.elapsed().as_secs() < 30, "{:?}", started.elapsed());
+}
+
+/// Issue 27, item 10: a gzip log that expands more than 100 times (a "gzip bomb": 64 MiB of
+/// zeros in 64 KiB) is refused while it is decompressed, after 16 MiB, not after a third of the
+/// memory (a 20 GiB bomb used 7.3 GiB before it was refused).
+#[test]
+fn gzip_bombs_are_refused_while_decompressing() {
+    use std::io::Write as _;
+    let dir = tempfile::tempdir().unwrap();
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
+    gz.write_all(b"t,gx\n").unwrap();
+    let zeros = vec![b'0'; 1 << 20];
+    for _ in 0..64 {
+        gz.write_all(&zeros).unwrap();
+    }
+    let bomb = write(dir.path(), "bomb.csv.gz", &gz.finish().unwrap());
+    refused(
+        &["allan", &bomb, "--json"],
+        &[
+            "bomb.csv.gz",
+            "decompresses to more than 100 times its compressed size",
+            "16.0 MiB",
+        ],
+    );
+    // A log of many rows found too large for the memory while it is decompressed.
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
+    gz.write_all(b"t,gx,gy,gz,ax,ay,az\n").unwrap();
+    for i in 0..300_000 {
+        writeln!(gz, "{i},1,2,3,4,5,6").unwrap();
+    }
+    let rows = write(dir.path(), "rows.csv.gz", &gz.finish().unwrap());
+    let out = command()
+        .args(["allan", &rows, "--json"])
+        .env("IMUDRIFT_MEMORY_LIMIT", "20000000")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("rows x 7 columns need at least about"),
+        "{err}"
+    );
+}
+
+/// Issue 27, item 10: `/dev/urandom` and a pipe that never ends, given as a log, are read with a
+/// bound (a third of the memory available, here lowered) and refused past it.
+#[cfg(target_os = "linux")]
+#[test]
+fn endless_streams_are_read_with_a_bound() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("fifo.csv");
+    let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+    // SAFETY: a NUL-terminated path; mkfifo only creates the FIFO.
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    let writer_path = fifo.clone();
+    let writer = std::thread::spawn(move || {
+        use std::io::Write as _;
+        let mut f = std::fs::OpenOptions::new()
+            .write(true)
+            .open(writer_path)
+            .unwrap();
+        let mut block = b"t,gx\n".to_vec();
+        block.extend_from_slice(&vec![b'0'; 1 << 16]);
+        // Until the reader closes the pipe (a write error: EPIPE).
+        while f.write_all(&block).is_ok() {}
+    });
+    for path in ["/dev/urandom", fifo.to_str().unwrap()] {
+        let out = command()
+            .args(["allan", path, "--rate", "100", "--json"])
+            .env("IMUDRIFT_MEMORY_LIMIT", "30000000")
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{path}: {err}");
+        assert!(err.contains("not a regular file"), "{path}: {err}");
+    }
+    writer.join().unwrap();
+}
+
+/// Found by the mutation run (scripts/mutate_inputs.py): a channel of values near 1e90 (below
+/// the 1e100 a log may hold) had an IEEE 952 fit with no term at all and `allan` exited 0 with
+/// every coefficient null (the fit's squared weights overflowed); values near 1e-90 likewise.
+#[test]
+fn channels_far_from_unit_scale_get_a_fit() {
+    let dir = tempfile::tempdir().unwrap();
+    for scale in ["1e90", "1e-90"] {
+        let mut text = String::from("t,gx\n");
+        for line in log_text(3000, "\n").lines().skip(1) {
+            let (t, v) = line.split_once(',').unwrap();
+            text += &format!("{t},{v}e{}\n", &scale[2..]);
+        }
+        let log = write(dir.path(), "scaled.csv", text.as_bytes());
+        let out = ok(imudrift(&["allan", &log, "--json"]));
+        let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let n = &json["channels"]["gx"]["fit"]["n"];
+        assert!(
+            n.as_f64().is_some_and(f64::is_finite),
+            "{scale}: fit.n = {n}"
+        );
+    }
 }

@@ -242,3 +242,39 @@ fn non_finite_or_huge_values_in_bags_and_mcap_are_refused() {
         }
     }
 }
+
+/// Found by the `bag_reader` fuzz target: an MCAP channel record whose topic length says 4 GiB
+/// (in a record of a few bytes) was a 4 GiB allocation by the `mcap` crate before its read
+/// failed; the length prefixes are checked against the record first. Here run under a 4 GiB
+/// address-space limit (`prlimit`), where that allocation aborted the command.
+#[cfg(target_os = "linux")]
+#[test]
+fn mcap_lengths_past_their_record_are_refused_before_allocating() {
+    let dir = tempfile::tempdir().unwrap();
+    let record = |b: &mut Vec<u8>, op: u8, content: &[u8]| {
+        b.push(op);
+        b.extend_from_slice(&(content.len() as u64).to_le_bytes());
+        b.extend_from_slice(content);
+    };
+    let string = |x: &[u8]| [(x.len() as u32).to_le_bytes().as_slice(), x].concat();
+    let mut b = b"\x89MCAP0\r\n".to_vec();
+    record(&mut b, 0x01, &[string(b"ros2"), string(b"")].concat());
+    let mut channel = vec![1, 0, 1, 0];
+    channel.extend_from_slice(&0xFFFF_FFF0u32.to_le_bytes());
+    channel.extend_from_slice(b"/imu");
+    record(&mut b, 0x04, &channel);
+    record(&mut b, 0x0F, &[0; 4]);
+    record(&mut b, 0x02, &[0; 20]);
+    b.extend_from_slice(b"\x89MCAP0\r\n");
+    let path = dir.path().join("long-topic.mcap");
+    std::fs::write(&path, &b).unwrap();
+    let out = std::process::Command::new("prlimit")
+        .arg("--as=4294967296")
+        .arg(common::binary())
+        .args(["allan", path.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("runs past the record"), "{err}");
+}

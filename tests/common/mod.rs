@@ -20,9 +20,20 @@ pub fn ok(out: Output) -> Output {
     out
 }
 
+/// The `imudrift` binary under test: the one cargo built with the tests, or the one the
+/// environment variable `IMUDRIFT_TEST_BIN` names (to run the same tests against another build,
+/// e.g. an older commit's, and see which fail there: `IMUDRIFT_TEST_BIN=/path/to/imudrift cargo
+/// test --release --test bad_inputs`).
+pub fn binary() -> PathBuf {
+    match std::env::var_os("IMUDRIFT_TEST_BIN") {
+        Some(path) => PathBuf::from(path),
+        None => PathBuf::from(env!("CARGO_BIN_EXE_imudrift")),
+    }
+}
+
 /// The `imudrift` binary as a command to complete, run in the workspace root.
 pub fn command() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_imudrift"));
+    let mut c = Command::new(binary());
     c.current_dir(root());
     c
 }

@@ -34,6 +34,17 @@ pub fn analyse_rate(
 ) -> Analysis {
     let series = Series::from_rate(data, dt_s);
     stage("phase");
+    analyse(&series, est, grid, opts, stage)
+}
+
+/// [`analyse_rate`] of a prepared series (rate or phase samples): every stage after the phase.
+pub fn analyse(
+    series: &Series,
+    est: Estimator,
+    grid: &TauGrid,
+    opts: &Options,
+    stage: &(dyn Fn(&str) + Sync),
+) -> Analysis {
     let ms = series.grid_m(est, grid, opts.stable32_stop);
     let identify = opts.edf != EdfMethod::None && opts.alpha.is_none();
     let d = est.difference_order();

@@ -150,7 +150,14 @@ pub fn fit_ieee952_terms(points: &[AllanPoint], allowed: FitTerms) -> Fit {
         .iter()
         .filter(|p| p.dev.is_finite() && p.dev > 0.0)
         .collect();
+    // The weights below are 1 / (var_ln avar^2), and the normal equations square them again:
+    // an Allan variance beyond about 1e+-75 overflows or underflows f64 there (IEEE 754: 1.8e308,
+    // 4.9e-324; a log of values near 1e90 got a fit with no term at all). Such a curve is fitted
+    // scaled by 4^-m into range and its terms scaled back by 2^m: powers of two, exact in binary
+    // floating point, and a curve already in range (every sensor's) is not scaled at all.
     let y: Vec<f64> = pts.iter().map(|p| p.dev * p.dev).collect();
+    let m = range_exponent(&y);
+    let y: Vec<f64> = y.iter().map(|v| v * 0.25f64.powi(m)).collect();
     let edf: Vec<f64> = pts.iter().map(|p| capped_edf(p)).collect();
     let g: Vec<[f64; 5]> = pts.iter().map(|p| basis(p.tau_s)).collect();
 
@@ -202,7 +209,12 @@ pub fn fit_ieee952_terms(points: &[AllanPoint], allowed: FitTerms) -> Fit {
     let dof = pts.len().saturating_sub(n_active).max(1);
     let inflate = (best.rss / dof as f64).max(1.0) * correlation_inflation(&pts);
     let reduced_chi2 = raw_reduced_chi2;
-    let terms = best.terms(inflate);
+    let terms = best.terms(inflate).map(|t| {
+        t.map(|t| Term {
+            value: t.value * 2f64.powi(m),
+            sigma: t.sigma * 2f64.powi(m),
+        })
+    });
     Fit {
         q: terms[0],
         n: terms[1],
@@ -213,6 +225,16 @@ pub fn fit_ieee952_terms(points: &[AllanPoint], allowed: FitTerms) -> Fit {
         model_error,
         readings: readings(points),
     }
+}
+
+/// The m by which a curve of Allan variances `y` is scaled (by 4^-m) for the fit: 0 when its
+/// largest value lies within 1e-50 ..= 1e50, else the one bringing it near 1.
+fn range_exponent(y: &[f64]) -> i32 {
+    let top = y.iter().copied().fold(0.0f64, f64::max);
+    if top == 0.0 || (1e-50..=1e50).contains(&top) {
+        return 0;
+    }
+    (top.log2() / 2.0).round() as i32
 }
 
 /// Variance inflation for the correlation of Allan estimates at neighbouring taus (the
@@ -608,6 +630,30 @@ mod tests {
             assert!(((got - want) / want).abs() < 1e-6, "{got} vs {want}");
         }
         assert!(fit.reduced_chi2 < 1e-12);
+    }
+
+    /// A curve of deviations near 1e90 (or 1e-90) is fitted as the same curve near 1: its
+    /// squared weights overflowed (underflowed) and the fit had no term at all.
+    #[test]
+    fn curves_far_from_unit_scale_are_fitted_alike() {
+        let truth = [2e-4, 1e-3, 1e-4, 3e-6, 1e-8];
+        for scale in [1e90, 1e-90, 1e60] {
+            let pts: Vec<AllanPoint> = (0..40)
+                .map(|i| {
+                    let tau = 0.01 * 10f64.powf(i as f64 / 7.0);
+                    let var: f64 = basis(tau).iter().zip(&truth).map(|(g, c)| g * c * c).sum();
+                    point(tau, var.sqrt() * scale, 1000.0)
+                })
+                .collect();
+            let fit = fit_ieee952(&pts);
+            for (t, want) in fit.terms().iter().zip(truth) {
+                let got = t.expect("every term present").value / scale;
+                assert!(
+                    ((got - want) / want).abs() < 1e-6,
+                    "{scale}: {got} vs {want}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -115,8 +115,10 @@ pub(crate) fn estimator_sum(x: &[f64], est: Estimator, m: usize) -> Option<(f64,
         Estimator::Total => {
             // SP 1065 eq (25) with the doubly reflected series of allantools `totdev`:
             // x*_{-j} = 2 x_0 - x_j, x*_{n-1+j} = 2 x_{n-1} - x_{n-1-j}, j = 1..n-2;
-            // sum over i = 1..n-2 of (x*_{i-m} - 2 x*_i + x*_{i+m})^2.
-            if n < 3 || m > n - 2 {
+            // sum over i = 1..n-2 of (x*_{i-m} - 2 x*_i + x*_{i+m})^2. The reflections reach
+            // i - m = 2 - n and i + m = 2n - 3 for m = n - 1, the largest factor (allantools and
+            // SP 1065 eq 25 both allow it).
+            if n < 3 || m >= n {
                 return None;
             }
             let last = n - 1;

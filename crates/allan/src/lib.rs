@@ -42,7 +42,7 @@ mod phase;
 mod series;
 mod sum;
 
-pub use analysis::{analyse_rate, Analysis};
+pub use analysis::{analyse, analyse_rate, Analysis};
 pub use grid::TauGrid;
 pub use phase::{rate_to_phase, rate_to_phase_in_place};
 pub use series::Series;
@@ -226,11 +226,7 @@ pub fn deviation_with(
     grid: &TauGrid,
     opts: &Options,
 ) -> Vec<AllanPoint> {
-    let series = Series::new(data, kind, tau0_s);
-    let ms = series.grid_m(est, grid, opts.stable32_stop);
-    let mut points = series.raw_points(est, &ms);
-    series.attach_intervals(est, &mut points, opts);
-    points
+    Series::new(data, kind, tau0_s).deviation(est, grid, opts)
 }
 
 #[cfg(test)]

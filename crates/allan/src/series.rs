@@ -72,6 +72,14 @@ impl<'a> Series<'a> {
             .collect()
     }
 
+    /// The deviation curve on `grid` with the intervals `opts` asks for ([`crate::deviation_with`]).
+    pub fn deviation(&self, est: Estimator, grid: &TauGrid, opts: &Options) -> Vec<AllanPoint> {
+        let ms = self.grid_m(est, grid, opts.stable32_stop);
+        let mut points = self.raw_points(est, &ms);
+        self.attach_intervals(est, &mut points, opts);
+        points
+    }
+
     /// The deviation at averaging factor `m` without interval (`None` if fewer than 2 terms).
     pub fn raw_point(&self, est: Estimator, m: usize) -> Option<AllanPoint> {
         let (sum_sq, n_terms) = estimator_sum_fast(&self.phase, est, m)?;
@@ -100,13 +108,24 @@ impl<'a> Series<'a> {
         // Factors whose reuse window fits in cache go through the blocked kernel together.
         let (small, large): (Vec<usize>, Vec<usize>) =
             valid.iter().partition(|&&m| m <= BLOCKED_MAX_M);
-        let sums = blocked_diff_sums_fast(&self.phase, &small, order);
+        // The blocked pass and the one-pass-per-factor sums run side by side (each sum is still
+        // computed by one thread in a fixed order: the result does not depend on the threads).
+        use rayon::prelude::*;
+        let (sums, large_points) = rayon::join(
+            || blocked_diff_sums_fast(&self.phase, &small, order),
+            || {
+                large
+                    .par_iter()
+                    .filter_map(|&m| self.raw_point(est, m))
+                    .collect::<Vec<_>>()
+            },
+        );
         let mut out: Vec<AllanPoint> = small
             .iter()
             .zip(sums)
             .filter_map(|(&m, s)| self.point_from_sum(est, m, s, n - order * m))
             .collect();
-        out.extend(large.iter().filter_map(|&m| self.raw_point(est, m)));
+        out.extend(large_points);
         out
     }
 

@@ -287,3 +287,29 @@ fn woodman_bins_rule() {
         assert_eq!(q.woodman_ok(), q.m <= 111);
     }
 }
+
+#[test]
+fn total_deviation_reaches_the_largest_factor() {
+    // SP 1065 eq (25) on the explicitly built 3N - 4 point reflected series (allantools `totdev`),
+    // for every m up to N - 1, the largest factor the reflections cover.
+    // Reason for 1e-12: the same sums in another order; the difference is rounding only.
+    const REL_TOL: f64 = 1e-12;
+    let x = series(40, 11);
+    let n = x.len();
+    let mut star: Vec<f64> = (1..n - 1).rev().map(|j| 2.0 * x[0] - x[j]).collect();
+    star.extend_from_slice(&x);
+    star.extend((1..n - 1).map(|j| 2.0 * x[n - 1] - x[n - 1 - j]));
+    let mid = n - 2;
+    for m in 1..n {
+        let s: f64 = (1..n - 1)
+            .map(|i| {
+                let d = star[mid + i - m] - 2.0 * star[mid + i] + star[mid + i + m];
+                d * d
+            })
+            .sum();
+        let (fast, terms) = estimator_sum(&x, Estimator::Total, m).expect("m < N");
+        assert_eq!(terms, n - 2);
+        assert!((fast - s).abs() <= REL_TOL * s, "m={m}: {fast} vs {s}");
+    }
+    assert!(estimator_sum(&x, Estimator::Total, n).is_none());
+}

@@ -332,6 +332,11 @@ fn read_mcap(path: &Path, source: &str, topic: Option<&str>) -> Result<ImuSeries
                 if past_data_end || !matches!(opcode, 0x03 | 0x04 | 0x05 | 0x0F) {
                     continue;
                 }
+                if !prefixes_fit(opcode, data) {
+                    return Err(bad(
+                        &"a length in a schema or channel record runs past the record",
+                    ));
+                }
                 match mcap::parse_record(opcode, data).map_err(|e| bad(&e))? {
                     Record::DataEnd(_) => past_data_end = true,
                     Record::Schema { header, .. } => {
@@ -446,6 +451,47 @@ impl Reader<'_> {
         self.skip(8 * 9)?;
         Some(ImuSample { t_ns, gyro, accel })
     }
+}
+
+/// Whether the length prefixes of an MCAP schema (0x03) or channel (0x04) record fit in the
+/// record (mcap.dev/spec: strings and byte arrays are prefixed by their u32 length, the
+/// channel's metadata map by its u32 byte length). The `mcap` crate reserves a prefix's length
+/// before it reads: a damaged length of 4 GiB was a 4 GiB allocation (found by the `bag_reader`
+/// fuzz target). Other records are read without such prefixes, or not at all.
+fn prefixes_fit(opcode: u8, data: &[u8]) -> bool {
+    fn field(r: &mut Reader) -> Option<()> {
+        let n = r.u32()? as usize;
+        r.skip(n)
+    }
+    let mut r = Reader {
+        b: data,
+        pos: 0,
+        origin: 0,
+        big_endian: false,
+    };
+    let fits = match opcode {
+        // id; name, encoding, data
+        0x03 => r
+            .skip(2)
+            .and_then(|_| field(&mut r))
+            .and_then(|_| field(&mut r))
+            .and_then(|_| field(&mut r)),
+        // id, schema id; topic, message encoding; metadata: byte length, then key-value strings
+        0x04 => (|| {
+            r.skip(4)?;
+            field(&mut r)?;
+            field(&mut r)?;
+            let end = (r.u32()? as usize).checked_add(r.pos)?;
+            (end <= data.len()).then_some(())?;
+            while r.pos < end {
+                field(&mut r)?;
+                field(&mut r)?;
+            }
+            Some(())
+        })(),
+        _ => Some(()),
+    };
+    fits.is_some()
 }
 
 /// A ROS 1 serialised sensor_msgs/Imu.

@@ -324,5 +324,24 @@ pub fn sig(v: f64, digits: usize) -> String {
     format!("{v:.decimals$}")
 }
 
+/// A size in bytes for people, binary units (IEC 80000-13 prefixes): "512 bytes", "3.5 KiB",
+/// "1.2 GiB" (never "0.0 GB").
+pub fn byte_size(b: f64) -> String {
+    const UNITS: [&str; 6] = ["KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
+    if b.is_nan() || b < 1024.0 {
+        return format!("{b} bytes");
+    }
+    let mut v = b;
+    let mut unit = "bytes";
+    for u in UNITS {
+        if v < 1024.0 {
+            break;
+        }
+        v /= 1024.0;
+        unit = u;
+    }
+    format!("{} {unit}", sig(v, 3))
+}
+
 /// The reader's results.
 pub type Result<T> = std::result::Result<T, LogError>;

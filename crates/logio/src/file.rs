@@ -1,6 +1,6 @@
 //! A file's bytes (mapped or read) and the memory check made before parsing them.
 
-use crate::error::{LogError, Result};
+use crate::error::{byte_size, LogError, Result};
 use std::io::Read;
 use std::path::Path;
 
@@ -29,20 +29,53 @@ impl FileBytes {
             // A device or a pipe (/dev/zero, a FIFO) has no size to check: read it with a bound.
             let limit = available_memory_bytes()
                 .map_or(MAX_STREAM_BYTES, |a| (a / 3).min(MAX_STREAM_BYTES));
-            let mut buf = Vec::new();
-            (&file).take(limit + 1).read_to_end(&mut buf)?;
-            if buf.len() as u64 > limit {
-                return Err(std::io::Error::other(format!(
-                    "not a regular file (a device or a pipe) and it gives more than {:.2} GiB (the most read from a stream, at most a third of the memory available); save the log to a file",
-                    limit as f64 / GIB
-                )));
-            }
-            return Ok(FileBytes::Read(buf));
+            return read_open_capped(&file, &meta, limit).map(FileBytes::Read);
         }
         let mut buf = Vec::with_capacity(meta.len() as usize + 1);
         (&file).read_to_end(&mut buf)?;
         Ok(FileBytes::Read(buf))
     }
+}
+
+/// A file's bytes, at most `max_bytes` of them: a regular file larger than that is refused from
+/// its size before a byte is read (a sparse 10 GB file allocates nothing); a device or a pipe,
+/// which has no size, is read up to the bound and refused past it (`/dev/zero` never ends). The
+/// error says which, with the bound; the caller names the file and what it is.
+pub fn read_capped(path: &Path, max_bytes: u64) -> std::io::Result<Vec<u8>> {
+    let file = std::fs::File::open(path)?;
+    let meta = file.metadata()?;
+    read_open_capped(&file, &meta, max_bytes)
+}
+
+fn read_open_capped(
+    file: &std::fs::File,
+    meta: &std::fs::Metadata,
+    max_bytes: u64,
+) -> std::io::Result<Vec<u8>> {
+    if meta.is_file() && meta.len() > max_bytes {
+        return Err(std::io::Error::other(format!(
+            "it is {}, more than the {} read at most",
+            byte_size(meta.len() as f64),
+            byte_size(max_bytes as f64)
+        )));
+    }
+    let capacity = if meta.is_file() { meta.len() + 1 } else { 0 };
+    let mut buf = Vec::with_capacity(capacity as usize);
+    // A regular file that grows while it is read is bounded too.
+    file.take(max_bytes.saturating_add(1))
+        .read_to_end(&mut buf)?;
+    if buf.len() as u64 > max_bytes {
+        let what = if meta.is_file() {
+            "it grew while being read"
+        } else {
+            "not a regular file (a device or a pipe)"
+        };
+        return Err(std::io::Error::other(format!(
+            "{what} and it gives more than {} (the most read from it); save it to a file",
+            byte_size(max_bytes as f64)
+        )));
+    }
+    Ok(buf)
 }
 
 impl std::ops::Deref for FileBytes {
@@ -80,8 +113,6 @@ pub(crate) fn advise_huge_pages<T>(buf: &[T]) {
     }
 }
 
-pub(crate) const GIB: f64 = (1u64 << 30) as f64;
-
 /// Most bytes read from a file that is not a regular file (a device, a pipe): 1 GiB.
 const MAX_STREAM_BYTES: u64 = 1 << 30;
 
@@ -105,6 +136,99 @@ pub fn available_memory_bytes() -> Option<u64> {
     }
 }
 
+/// Largest ratio of decompressed to compressed size a gzip log may have once
+/// [`GZ_RATIO_FROM_BYTES`] are out: CSV logs of real sensors compress 2.4 to 7.3 times
+/// (measured with gzip -9 on the ADIS16405, MTi-G and Galaxy S5 logs of docs/validation.md),
+/// a log of constant columns some tens of times; deflate reaches 1032 (RFC 1951's longest match
+/// of 258 bytes coded in 2 bits), which only a file made to expand (a "gzip bomb") does.
+const MAX_GZ_RATIO: u64 = 100;
+
+/// Decompressed bytes below which the ratio is not checked (a small file may compress well).
+const GZ_RATIO_FROM_BYTES: u64 = 16 << 20;
+
+/// Decompress a gzip log (RFC 1952, members one after the other), checking while it
+/// decompresses, every MiB: the text within a third of the memory available, the ratio within
+/// [`MAX_GZ_RATIO`], and the parsed columns' estimate of [`check_fits`] on the rows so far. A
+/// file that fails one is refused after at most one MiB past the bound, never after the whole.
+pub(crate) fn gunzip(raw: &[u8], source: &str, available: Option<u64>) -> Result<Vec<u8>> {
+    const STEP: u64 = 1 << 20;
+    let limit = available.map_or(u64::MAX, |a| a / 3);
+    let mut decoder = flate2::bufread::MultiGzDecoder::new(raw);
+    let mut out = Vec::with_capacity(raw.len().saturating_mul(4).min(limit as usize));
+    let mut rows = Rows::default();
+    loop {
+        let before = out.len();
+        let n = (&mut decoder)
+            .take(STEP)
+            .read_to_end(&mut out)
+            .map_err(|e| LogError::content(source, "not a valid gzip file").caused_by(e))?;
+        if n == 0 {
+            return Ok(out);
+        }
+        let done = out.len() as u64;
+        let consumed = (raw.len() - decoder.get_ref().len()).max(1) as u64;
+        let problem = if done > limit {
+            format!(
+                "decompresses to more than {}, a third of the memory available ({}): split the log or analyse it on a larger machine",
+                byte_size(limit as f64),
+                byte_size(available.unwrap_or(0) as f64)
+            )
+        } else if done >= GZ_RATIO_FROM_BYTES && done > MAX_GZ_RATIO * consumed {
+            format!(
+                "decompresses to more than {MAX_GZ_RATIO} times its compressed size ({} from {}, where logs compress less than 10 times): not a log; if it is one, decompress it (gunzip) and give the CSV",
+                byte_size(done as f64),
+                byte_size(consumed as f64)
+            )
+        } else {
+            rows.add(&out, before);
+            match (rows.cols, available) {
+                (Some(cols), Some(a)) if need_bytes(rows.rows, cols) > a => {
+                    too_big(rows.rows, cols, need_bytes(rows.rows, cols), a, " at least")
+                }
+                _ => continue,
+            }
+        };
+        return Err(LogError::content(source, problem));
+    }
+}
+
+/// The rows and columns of a text seen so far (lines, and fields of the first line).
+#[derive(Default)]
+struct Rows {
+    rows: u64,
+    cols: Option<u64>,
+}
+
+impl Rows {
+    fn add(&mut self, text: &[u8], from: usize) {
+        self.rows += memchr::memchr_iter(b'\n', &text[from..]).count() as u64;
+        if self.cols.is_none() {
+            if let Some(end) = memchr::memchr(b'\n', text) {
+                self.cols = Some(columns_of(&text[..end]));
+            }
+        }
+    }
+}
+
+/// Bytes `rows` x `cols` parsed values take to analyse: 8 bytes each and as much again for the
+/// analyses' working copies (saturating: a count beyond u64 is refused all the same).
+fn need_bytes(rows: u64, cols: u64) -> u64 {
+    rows.saturating_mul(cols).saturating_mul(16)
+}
+
+fn columns_of(first_line: &[u8]) -> u64 {
+    first_line.iter().filter(|&&b| b == b',').count() as u64 + 1
+}
+
+/// The message of a log too large to analyse (`at_least` when counted before the end).
+fn too_big(rows: u64, cols: u64, need: u64, available: u64, at_least: &str) -> String {
+    format!(
+        "{rows} rows x {cols} columns need{at_least} about {} to analyse, and {} is available: split the log, or drop columns you do not need",
+        byte_size(need as f64),
+        byte_size(available as f64)
+    )
+}
+
 /// Refuse a log whose parsed columns (8 bytes per value, and as much again for the analyses'
 /// working copies) would not fit in the memory available.
 pub(crate) fn check_fits(bytes: &[u8], source: &str, available: Option<u64>) -> Result<()> {
@@ -121,14 +245,10 @@ pub(crate) fn check_fits(bytes: &[u8], source: &str, available: Option<u64>) -> 
         .iter()
         .position(|&b| b == b'\n')
         .unwrap_or(bytes.len());
-    let cols = bytes[..first].iter().filter(|&&b| b == b',').count() as u64 + 1;
-    let need = rows * cols * 16;
+    let cols = columns_of(&bytes[..first]);
+    let need = need_bytes(rows, cols);
     if need > available {
-        let problem = format!(
-            "{rows} rows x {cols} columns need about {:.1} GiB to analyse, and {:.1} GiB is available: split the log, or drop columns you do not need",
-            need as f64 / GIB,
-            available as f64 / GIB
-        );
+        let problem = too_big(rows, cols, need, available, "");
         return Err(LogError::content(source, problem));
     }
     Ok(())

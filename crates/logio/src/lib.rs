@@ -30,18 +30,17 @@ mod units;
 
 pub use columns::{ColumnUse, SkipReason, Skipped, Source, UnitOptions};
 pub use csv::parse_log;
-pub use error::{sig, At, LogError, Problem, Result, Setting, SettingNames};
-pub use file::available_memory_bytes;
+pub use error::{byte_size, sig, At, LogError, Problem, Result, Setting, SettingNames};
+pub use file::{available_memory_bytes, read_capped};
 pub use limits::{
     quote_prefix, valid_rate_hz, valid_value, MAX_ABS_VALUE, MAX_LOG_RATE_HZ, MIN_LOG_RATE_HZ,
 };
 pub use log::{Log, ReadOptions};
 pub use units::{AccelUnit, GyroUnit, TimeUnit};
 
-use file::{check_fits, FileBytes, GIB};
+use file::{check_fits, gunzip, FileBytes};
 use noise::{Channel, Sensor};
 use std::collections::BTreeMap;
-use std::io::Read;
 use std::path::Path;
 
 /// Standard gravity for `g` units (m/s^2): the noise crate's one definition.
@@ -121,20 +120,7 @@ pub fn read_log(path: &Path, opts: &ReadOptions) -> Result<Log> {
     // before it starts rather than ending in an out-of-memory kill.
     let available = available_memory_bytes();
     if raw.starts_with(&[0x1f, 0x8b]) {
-        let limit = available.map_or(u64::MAX, |a| a / 3);
-        let mut out = Vec::with_capacity(raw.len().saturating_mul(4).min(limit as usize));
-        flate2::read::MultiGzDecoder::new(&raw[..])
-            .take(limit)
-            .read_to_end(&mut out)
-            .map_err(|e| LogError::content(&source, "not a valid gzip file").caused_by(e))?;
-        if out.len() as u64 == limit {
-            let problem = format!(
-                "decompresses to more than {:.1} GiB, a third of the memory available ({:.1} GiB): split the log or analyse it on a larger machine",
-                limit as f64 / GIB,
-                available.unwrap_or(0) as f64 / GIB
-            );
-            return Err(LogError::content(&source, problem));
-        }
+        let out = gunzip(&raw, &source, available)?;
         check_fits(&out, &source, available)?;
         parse_log(&out, &source, opts)
     } else {

@@ -351,9 +351,14 @@ impl Collector {
                 key: key @ None, ..
             }) => *key = Some(value),
             Some(Frame::Map { key, .. }) => {
-                let mut path = self.path[1..].to_vec();
-                path.extend(key.take());
-                self.entries.push(Entry { path, value, line });
+                let key = key.take();
+                // Only a key at the top level or one level down can be the IMU's (`find`): a
+                // deeper one is not kept, so deep nesting copies no long paths (linear time).
+                if self.path.len() <= 2 {
+                    let mut path = self.path[1..].to_vec();
+                    path.extend(key);
+                    self.entries.push(Entry { path, value, line });
+                }
             }
             _ => {}
         }

@@ -1,0 +1,37 @@
+"""Type stubs of the compiled module imudrift._imudrift (python/src/lib.rs)."""
+
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+class InvalidInput(ValueError): ...
+class LogUnreadable(OSError): ...
+
+_F64 = npt.NDArray[np.float64]
+_Taus = Union[str, Sequence[float], _F64]
+
+def allantools_dev(
+    data: _F64, rate: float, data_type: str, function: str, taus: Optional[_Taus] = None
+) -> Tuple[_F64, _F64, _F64, _F64]: ...
+def allan_analysis(
+    data: _F64,
+    rate: float,
+    data_type: str,
+    estimator: str,
+    taus: _Taus,
+    confidence: float,
+    edf: str,
+    stable32_stop: bool,
+) -> Dict[str, Any]: ...
+def read_log_columns(
+    path: str,
+    rate: Optional[float],
+    gyro_unit: Optional[str],
+    accel_unit: Optional[str],
+    time_unit: Optional[str],
+    columns: Optional[List[Tuple[str, str]]],
+    topic: Optional[str],
+) -> Dict[str, Any]: ...

@@ -1,0 +1,39 @@
+"""``imudrift.read_log``: a log file read by the command line's reader, as a pandas DataFrame."""
+
+from ._imudrift import read_log_columns as _read
+
+
+def read_log(path, rate=None, gyro_unit=None, accel_unit=None, time_unit=None, columns=None, topic=None):
+    """Read an IMU log as ``imudrift`` commands do (crate ``logio``): CSV or gzip CSV (``#``
+    comment lines, a header row, columns found by name with their units), a ROS 1 bag or a ROS 2
+    MCAP file (``sensor_msgs/Imu``). Returns a ``pandas.DataFrame`` with ``t`` (s, when the log
+    has times) and the channels ``gx gy gz`` (rad/s), ``ax ay az`` (m/s^2), ``temp`` (degC) in
+    the log's order; ``df.attrs`` holds ``rate_hz`` and ``source``.
+
+    ``rate``: Hz, needed when the log has no time column. ``gyro_unit`` (rad/s, deg/s, deg/h),
+    ``accel_unit`` (m/s^2, g, mg), ``time_unit`` (s, ms, us, ns): units that column names do not
+    state. ``columns``: ``{"gx": "my_gyro_column", ...}`` maps columns by hand. ``topic``: the IMU
+    topic of a bag with several.
+
+    Errors: :class:`imudrift.LogUnreadable` (an ``OSError``) when the file cannot be read,
+    :class:`imudrift.InvalidInput` (a ``ValueError``) with the reader's message otherwise.
+    """
+    try:
+        import pandas as pd
+    except ImportError:
+        raise ImportError("imudrift.read_log needs pandas: pip install pandas") from None
+    raw = _read(
+        str(path),
+        None if rate is None else float(rate),
+        gyro_unit,
+        accel_unit,
+        time_unit,
+        None if columns is None else [(str(k), str(v)) for k, v in dict(columns).items()],
+        topic,
+    )
+    data = {} if raw["t"] is None else {"t": raw["t"]}
+    data.update(raw["channels"])
+    df = pd.DataFrame(data)
+    df.attrs["rate_hz"] = raw["rate_hz"]
+    df.attrs["source"] = raw["source"]
+    return df

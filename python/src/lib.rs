@@ -1,0 +1,444 @@
+//! `imudrift._imudrift`: the compiled half of the Python package `imudrift` (python/imudrift/).
+//! Thin: every number comes from the library crates the CLI uses (`allan`); this crate turns
+//! numpy arrays and Python arguments into their types, releases the GIL while the library
+//! works, and turns bad input into `imudrift.InvalidInput` (a `ValueError`).
+//!
+//! Units: deviations carry the unit of the samples, averaging times are seconds, `rate` is Hz.
+
+use allan::fit::{Fit, TERM_NAMES};
+use allan::{AllanPoint, DataKind, EdfMethod, Estimator, Options, Series, TauGrid};
+use numpy::{IntoPyArray, PyReadonlyArray1};
+use pyo3::create_exception;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+create_exception!(
+    imudrift,
+    InvalidInput,
+    PyValueError,
+    "Input an imudrift function cannot use (empty or non-finite data, a bad rate, an unknown name)."
+);
+
+create_exception!(
+    imudrift,
+    LogUnreadable,
+    pyo3::exceptions::PyOSError,
+    "A log file or directory that cannot be read or mapped (an OSError)."
+);
+
+fn invalid(msg: String) -> PyErr {
+    InvalidInput::new_err(msg)
+}
+
+/// A tau list as allantools takes it: a keyword or averaging times in seconds.
+#[derive(FromPyObject)]
+enum TausArg {
+    Name(String),
+    Seconds(Vec<f64>),
+}
+
+fn data_kind(data_type: &str) -> PyResult<DataKind> {
+    match data_type {
+        "phase" => Ok(DataKind::Phase),
+        "freq" => Ok(DataKind::Rate),
+        _ => Err(invalid(format!(
+            "unknown data_type {data_type:?}: expected \"phase\" or \"freq\""
+        ))),
+    }
+}
+
+fn check_rate(rate: f64) -> PyResult<()> {
+    if rate.is_finite() && rate > 0.0 {
+        Ok(())
+    } else {
+        Err(invalid(format!(
+            "rate {rate}: expected a sampling rate in Hz, finite and > 0"
+        )))
+    }
+}
+
+/// The samples, copied out of the numpy array while the GIL is held (the library then works on
+/// its own buffer with the GIL released, so no Python thread can change the data under it).
+fn samples(data: &PyReadonlyArray1<'_, f64>) -> PyResult<Vec<f64>> {
+    let data = data
+        .as_slice()
+        .map_err(|_| invalid("data: expected a contiguous 1-D float64 array".into()))?;
+    if data.is_empty() {
+        return Err(invalid("data is empty: expected samples".into()));
+    }
+    if let Some(i) = data.iter().position(|v| !v.is_finite()) {
+        return Err(invalid(format!(
+            "data[{i}] is {}: every sample must be finite (a NaN gap is not bridged)",
+            data[i]
+        )));
+    }
+    // One spare slot: the phase of n rate samples has n + 1 points and is built in this buffer
+    // (`Series::from_rate`), which would otherwise be reallocated and copied for the last one.
+    let mut owned = Vec::with_capacity(data.len() + 1);
+    owned.extend_from_slice(data);
+    Ok(owned)
+}
+
+/// Averaging factors of averaging times in seconds: allantools `tau_generator`,
+/// m = round(tau * rate) (half to even, numpy's `round`), kept when 0 < m < `n_phase`.
+fn factors_of_seconds(taus: &[f64], rate: f64, n_phase: usize) -> TauGrid {
+    let ms = taus
+        .iter()
+        .map(|t| (t * rate).round_ties_even())
+        .filter(|&m| m > 0.0 && m < n_phase as f64)
+        .map(|m| m as usize)
+        .collect();
+    TauGrid::Explicit(ms)
+}
+
+/// Number of phase points the data gives (rate samples are integrated from x_0 = 0).
+fn phase_len(n: usize, kind: DataKind) -> usize {
+    match kind {
+        DataKind::Rate => n + 1,
+        DataKind::Phase => n,
+    }
+}
+
+fn estimator(name: &str) -> PyResult<Estimator> {
+    Estimator::from_name(name).ok_or_else(|| {
+        invalid(format!(
+            "unknown estimator {name:?}: expected one of {}",
+            Estimator::ALL.map(Estimator::name).join(", ")
+        ))
+    })
+}
+
+/// The deviation curve from `allan`, computed with the GIL released.
+fn curve(
+    py: Python<'_>,
+    data: Vec<f64>,
+    kind: DataKind,
+    rate: f64,
+    est: Estimator,
+    grid: TauGrid,
+    opts: Options,
+) -> Vec<AllanPoint> {
+    py.detach(move || {
+        let tau0_s = 1.0 / rate;
+        match kind {
+            DataKind::Rate => Series::from_rate(data, tau0_s).deviation(est, &grid, &opts),
+            DataKind::Phase => Series::new(&data, kind, tau0_s).deviation(est, &grid, &opts),
+        }
+    })
+}
+
+type Columns<'py> = (
+    Bound<'py, numpy::PyArray1<f64>>,
+    Bound<'py, numpy::PyArray1<f64>>,
+    Bound<'py, numpy::PyArray1<f64>>,
+    Bound<'py, numpy::PyArray1<f64>>,
+);
+
+/// allantools' `adev, oadev, mdev, tdev, hdev, ohdev, totdev`: `(taus, devs, errs, ns)`.
+/// Its conventions: tau grid from the phase length, no Stable32 stop ratio, no total-variance
+/// bias correction, `errs = dev / sqrt(n)`, points with fewer than 2 terms dropped.
+#[pyfunction]
+#[pyo3(signature = (data, rate, data_type, function, taus=None))]
+fn allantools_dev<'py>(
+    py: Python<'py>,
+    data: PyReadonlyArray1<'py, f64>,
+    rate: f64,
+    data_type: &str,
+    function: &str,
+    taus: Option<TausArg>,
+) -> PyResult<Columns<'py>> {
+    check_rate(rate)?;
+    let kind = data_kind(data_type)?;
+    // tdev is the modified deviation scaled: TVAR = tau^2/3 MVAR, SP 1065 eq (15).
+    let time_dev = function == "tdev";
+    let est = if time_dev {
+        Estimator::Modified
+    } else {
+        estimator(function)?
+    };
+    let data = samples(&data)?;
+    let n_phase = phase_len(data.len(), kind);
+    let grid = match taus {
+        None => TauGrid::Octave,
+        Some(TausArg::Seconds(s)) if s.is_empty() => TauGrid::Octave,
+        Some(TausArg::Seconds(s)) => factors_of_seconds(&s, rate, n_phase),
+        Some(TausArg::Name(name)) => match name.as_str() {
+            "octave" => TauGrid::Octave,
+            "decade" => TauGrid::Decade,
+            "all" => TauGrid::All,
+            _ => {
+                return Err(invalid(format!(
+                    "taus {name:?}: expected \"all\", \"octave\", \"decade\" or averaging times in seconds"
+                )))
+            }
+        },
+    };
+    let opts = Options {
+        edf: EdfMethod::None,
+        stable32_stop: false,
+        totvar_bias_correction: false,
+        ..Options::default()
+    };
+    let n = data.len();
+    let points = curve(py, data, kind, rate, est, grid, opts);
+    if points.is_empty() {
+        return Err(invalid(format!(
+            "{function}: {n} samples leave no averaging time of the tau list with 2 or more terms"
+        )));
+    }
+    // allantools reports tau = m / rate.
+    let taus: Vec<f64> = points.iter().map(|p| p.m as f64 / rate).collect();
+    let devs: Vec<f64> = points
+        .iter()
+        .zip(&taus)
+        .map(|(p, tau)| {
+            if time_dev {
+                tau * p.dev / 3f64.sqrt()
+            } else {
+                p.dev
+            }
+        })
+        .collect();
+    let ns: Vec<f64> = points.iter().map(|p| p.n_terms as f64).collect();
+    // allantools' error bar: dev / sqrt(n), not a confidence interval.
+    let errs: Vec<f64> = devs.iter().zip(&ns).map(|(d, n)| d / n.sqrt()).collect();
+    Ok((
+        taus.into_pyarray(py),
+        devs.into_pyarray(py),
+        errs.into_pyarray(py),
+        ns.into_pyarray(py),
+    ))
+}
+
+fn edf_method(name: &str) -> PyResult<EdfMethod> {
+    match name {
+        "greenhall" => Ok(EdfMethod::Greenhall),
+        "simple" => Ok(EdfMethod::Simple),
+        "none" => Ok(EdfMethod::None),
+        _ => Err(invalid(format!(
+            "edf {name:?}: expected \"greenhall\", \"simple\" or \"none\""
+        ))),
+    }
+}
+
+fn fit_dict<'py>(py: Python<'py>, fit: &Fit) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let terms = PyDict::new(py);
+    for (name, t) in TERM_NAMES.iter().zip(fit.terms()) {
+        terms.set_item(name, t.map(|t| (t.value, t.sigma)))?;
+    }
+    d.set_item("terms", terms)?;
+    d.set_item("reduced_chi2", fit.reduced_chi2)?;
+    d.set_item("model_error", fit.model_error)?;
+    let r = &fit.readings;
+    let readings = PyDict::new(py);
+    for (k, v) in [
+        ("arw_at_1s", r.arw_at_1s),
+        ("arw_tau_s", r.arw_tau_s),
+        ("bi_min", r.bi_min),
+        ("bi_min_tau_s", r.bi_min_tau_s),
+        ("bi_ieee", r.bi_ieee),
+        ("rrw_at_3s", r.rrw_at_3s),
+        ("rrw_tau_s", r.rrw_tau_s),
+        ("q_at_sqrt3s", r.q_at_sqrt3s),
+    ] {
+        readings.set_item(k, v)?;
+    }
+    d.set_item("readings", readings)?;
+    Ok(d)
+}
+
+/// The analysis `imudrift allan` does for one channel ([`allan::analyse`]): deviations, noise
+/// type and EDF per tau, chi-squared intervals, and the IEEE 952 fit (Allan-variance estimators).
+#[pyfunction]
+#[pyo3(signature = (data, rate, data_type, estimator, taus, confidence, edf, stable32_stop))]
+#[allow(clippy::too_many_arguments)]
+fn allan_analysis<'py>(
+    py: Python<'py>,
+    data: PyReadonlyArray1<'py, f64>,
+    rate: f64,
+    data_type: &str,
+    estimator: &str,
+    taus: TausArg,
+    confidence: f64,
+    edf: &str,
+    stable32_stop: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    check_rate(rate)?;
+    let kind = data_kind(data_type)?;
+    let est = self::estimator(estimator)?;
+    if !(confidence > 0.0 && confidence < 1.0) {
+        return Err(invalid(format!(
+            "confidence {confidence}: expected a level between 0 and 1"
+        )));
+    }
+    let opts = Options {
+        edf: edf_method(edf)?,
+        confidence,
+        stable32_stop,
+        ..Options::default()
+    };
+    let data = samples(&data)?;
+    let n_phase = phase_len(data.len(), kind);
+    let grid = match &taus {
+        TausArg::Name(text) => TauGrid::parse(text).ok_or_else(|| {
+            invalid(format!(
+                "taus {text:?}: expected octave, decade, all, N/decade, or averaging times in seconds"
+            ))
+        })?,
+        TausArg::Seconds(s) => factors_of_seconds(s, rate, n_phase),
+    };
+    let allan::Analysis { points, fit, .. } = py.detach(move || {
+        let tau0_s = 1.0 / rate;
+        let quiet = |_: &str| {};
+        match kind {
+            DataKind::Rate => allan::analyse_rate(data, tau0_s, est, &grid, &opts, &quiet),
+            DataKind::Phase => {
+                allan::analyse(&Series::new(&data, kind, tau0_s), est, &grid, &opts, &quiet)
+            }
+        }
+    });
+    let d = PyDict::new(py);
+    let col = |f: &dyn Fn(&AllanPoint) -> f64| -> Vec<f64> { points.iter().map(f).collect() };
+    d.set_item("tau", col(&|p| p.tau_s).into_pyarray(py))?;
+    d.set_item("deviation", col(&|p| p.dev).into_pyarray(py))?;
+    d.set_item("lo", col(&|p| p.lo).into_pyarray(py))?;
+    d.set_item("hi", col(&|p| p.hi).into_pyarray(py))?;
+    d.set_item("edf", col(&|p| p.edf).into_pyarray(py))?;
+    let ints = |f: &dyn Fn(&AllanPoint) -> i64| -> Vec<i64> { points.iter().map(f).collect() };
+    d.set_item("alpha", ints(&|p| p.alpha.into()).into_pyarray(py))?;
+    d.set_item("m", ints(&|p| p.m as i64).into_pyarray(py))?;
+    d.set_item("n_terms", ints(&|p| p.n_terms as i64).into_pyarray(py))?;
+    d.set_item("bins", ints(&|p| p.bins as i64).into_pyarray(py))?;
+    match &fit {
+        Some(f) => d.set_item("fit", fit_dict(py, f)?)?,
+        None => d.set_item("fit", py.None())?,
+    }
+    Ok(d)
+}
+
+/// The reader's settings by the names of `imudrift.read_log`'s arguments (the CLI names its flags).
+fn read_log_argument(setting: logio::Setting) -> &'static str {
+    use logio::Setting;
+    match setting {
+        Setting::Rate => "rate",
+        Setting::Columns => "columns",
+        Setting::GyroUnit => "gyro_unit",
+        Setting::AccelUnit => "accel_unit",
+        Setting::TimeUnit => "time_unit",
+        Setting::Topic => "topic",
+    }
+}
+
+fn unit<U: Copy>(
+    arg: &str,
+    text: Option<&str>,
+    all: &[U],
+    name: fn(U) -> &'static str,
+) -> PyResult<Option<U>> {
+    let Some(text) = text else { return Ok(None) };
+    all.iter()
+        .copied()
+        .find(|&u| name(u) == text)
+        .map(Some)
+        .ok_or_else(|| {
+            let names: Vec<&str> = all.iter().map(|&u| name(u)).collect();
+            invalid(format!(
+                "{arg} {text:?}: expected one of {}",
+                names.join(", ")
+            ))
+        })
+}
+
+/// A log file read by the CLI's reader ([`logio::read_log`]): CSV or gzip CSV, ROS 1 bag, ROS 2
+/// MCAP. Returns `source`, `rate_hz`, `t` (s, or None) and `channels`: (name, SI array) pairs in
+/// the log's order.
+#[pyfunction]
+#[pyo3(signature = (path, rate, gyro_unit, accel_unit, time_unit, columns, topic))]
+#[allow(clippy::too_many_arguments)]
+fn read_log_columns<'py>(
+    py: Python<'py>,
+    path: std::path::PathBuf,
+    rate: Option<f64>,
+    gyro_unit: Option<&str>,
+    accel_unit: Option<&str>,
+    time_unit: Option<&str>,
+    columns: Option<Vec<(String, String)>>,
+    topic: Option<String>,
+) -> PyResult<Bound<'py, PyDict>> {
+    if let Some(rate_hz) = rate.filter(|&r| !logio::valid_rate_hz(r)) {
+        return Err(invalid(
+            logio::Problem::BadRate { rate_hz }.render(&read_log_argument),
+        ));
+    }
+    let opts = logio::ReadOptions {
+        rate_hz: rate,
+        units: logio::UnitOptions {
+            gyro: unit(
+                "gyro_unit",
+                gyro_unit,
+                &logio::GyroUnit::ALL,
+                logio::GyroUnit::name,
+            )?,
+            accel: unit(
+                "accel_unit",
+                accel_unit,
+                &logio::AccelUnit::ALL,
+                logio::AccelUnit::name,
+            )?,
+            time: unit(
+                "time_unit",
+                time_unit,
+                &logio::TimeUnit::ALL,
+                logio::TimeUnit::name,
+            )?,
+        },
+        columns: columns.unwrap_or_default(),
+        topic,
+    };
+    let log = py.detach(|| logio::read_log(&path, &opts)).map_err(|e| {
+        let msg = e.render(&read_log_argument);
+        match *e.problem {
+            logio::Problem::Unreadable
+            | logio::Problem::UnreadableDirectory
+            | logio::Problem::Unmappable => LogUnreadable::new_err(match &e.cause {
+                Some(c) => format!("{msg}: {c}"),
+                None => msg,
+            }),
+            _ => invalid(msg),
+        }
+    })?;
+    let logio::Log {
+        source,
+        rate_hz,
+        t_s,
+        mut channels,
+        order,
+        ..
+    } = log;
+    let d = PyDict::new(py);
+    d.set_item("source", source)?;
+    d.set_item("rate_hz", rate_hz)?;
+    d.set_item("t", t_s.map(|t| t.into_pyarray(py)))?;
+    let mut cols = Vec::new();
+    for name in order {
+        if let Some(v) = channels.remove(&name) {
+            cols.push((name, v.into_pyarray(py)));
+        }
+    }
+    d.set_item("channels", cols)?;
+    Ok(d)
+}
+
+/// The module `imudrift._imudrift`.
+#[pymodule]
+fn _imudrift(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("InvalidInput", m.py().get_type::<InvalidInput>())?;
+    m.add_function(wrap_pyfunction!(allantools_dev, m)?)?;
+    m.add_function(wrap_pyfunction!(allan_analysis, m)?)?;
+    m.add("LogUnreadable", m.py().get_type::<LogUnreadable>())?;
+    m.add_function(wrap_pyfunction!(read_log_columns, m)?)?;
+    Ok(())
+}

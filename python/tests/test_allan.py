@@ -1,0 +1,147 @@
+"""imudrift.allan: the analysis of `imudrift allan` for one channel, with intervals and the fit."""
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import imudrift
+import imudrift.allantools as ia
+
+from conftest import synthetic
+
+RATE_HZ = 100.0
+SIGMA = 0.01  # rad/s, white rate noise of the synthetic gyro
+# Reason for 1e-9: the same sums as allantools', differing only in rounding (test_allantools.py).
+REL_TOL = 1e-9
+
+
+@pytest.fixture(scope="module")
+def white_gyro():
+    return np.random.default_rng(7).normal(0.0, SIGMA, 360_000)
+
+
+def test_deviations_are_allantools_up_to_the_stable32_stop(adis_gz):
+    r = imudrift.allan(adis_gz, RATE_HZ)
+    taus, devs, _, ns = pytest.importorskip("allantools").oadev(adis_gz, RATE_HZ, "freq", "octave")
+    # Stable32's stop ratio for oadev: largest m = N / 4 (crate allan, Estimator::stable32_stop_ratio).
+    keep = taus * RATE_HZ <= len(adis_gz) / 4
+    np.testing.assert_allclose(r.tau, taus[keep], rtol=1e-15)
+    np.testing.assert_allclose(r.deviation, devs[keep], rtol=REL_TOL)
+    np.testing.assert_array_equal(r.n_terms, ns[keep])
+
+
+def test_intervals_bracket_the_deviation(white_gyro):
+    r = imudrift.allan(white_gyro, RATE_HZ)
+    lo, hi = r.interval
+    assert np.all(lo < r.deviation) and np.all(r.deviation < hi)
+    assert np.all(r.edf > 0)
+    # White rate noise is alpha = 0 (rate PSD flat) at every tau with enough averages.
+    assert np.all(r.alpha[:10] == 0)
+    assert len(r) == len(r.tau) and r.m[0] == 1 and r.tau[0] == 1 / RATE_HZ
+
+
+def test_fit_reads_back_white_noise(white_gyro):
+    f = imudrift.allan(white_gyro, RATE_HZ).fit()
+    n = f.terms["n"]
+    # IEEE 952: N = sigma * sqrt(dt) for white rate noise of standard deviation sigma.
+    expected = SIGMA / np.sqrt(RATE_HZ)
+    # 4 standard errors: a false alarm below 1e-4 if the fit's sigma is right (fixed seed anyway).
+    assert abs(n.value - expected) < 4 * n.sigma, (n, expected)
+    assert n.interval[0] < n.value < n.interval[1]
+    assert f.terms["r"] is None or f.terms["r"].value < 1e-6
+    assert set(f.readings) >= {"arw_at_1s", "bi_min", "bi_ieee", "rrw_at_3s"}
+
+
+def test_only_allan_variance_estimators_have_a_fit(white_gyro):
+    with pytest.raises(ValueError, match="no IEEE 952 fit for mdev"):
+        imudrift.allan(white_gyro, RATE_HZ, estimator="mdev").fit()
+    assert imudrift.allan(white_gyro, RATE_HZ, estimator="totdev").fit().terms["n"] is not None
+
+
+def test_to_dict_is_json_and_to_pandas(white_gyro, monkeypatch):
+    r = imudrift.allan(white_gyro, RATE_HZ, taus="decade")
+    d = json.loads(json.dumps(r.to_dict()))
+    assert d["tau"] == r.tau.tolist() and d["estimator"] == "oadev"
+    assert d["fit"]["terms"]["n"]["value"] == r.fit().terms["n"].value
+    monkeypatch.setitem(sys.modules, "pandas", None)
+    with pytest.raises(ImportError, match="pip install pandas"):
+        r.to_pandas()
+
+
+def test_to_pandas(white_gyro):
+    pytest.importorskip("pandas")
+    df = imudrift.allan(white_gyro, RATE_HZ).to_pandas()
+    assert list(df["tau"]) == list(imudrift.allan(white_gyro, RATE_HZ).tau)
+    assert {"deviation", "lo", "hi", "edf", "alpha"} <= set(df.columns)
+
+
+def cli_binary():
+    here = os.path.dirname(os.path.abspath(__file__))
+    built = os.path.join(here, "..", "..", "target", "release", "imudrift")
+    return os.environ.get("IMUDRIFT_BIN") or (built if os.path.exists(built) else shutil.which("imudrift"))
+
+
+def test_same_as_the_cli(tmp_path):
+    exe = cli_binary()
+    if exe is None:
+        pytest.skip("no imudrift binary (cargo build --release, or set IMUDRIFT_BIN)")
+    gx = synthetic(50_000) * 1e-3
+    path = tmp_path / "log.csv"
+    np.savetxt(path, gx, fmt="%.17g", header="gx", comments="")
+    out = subprocess.run(
+        [exe, "allan", str(path), "--rate", "100", "--json"], capture_output=True, text=True, check=True
+    )
+    ch = json.loads(out.stdout)["channels"]["gx"]
+    r = imudrift.allan(gx, RATE_HZ)
+    # Reason for 1e-12: the same code on the same samples (the CSV keeps 17 significant digits).
+    for ours, cli in [(r.tau, "tau_s"), (r.deviation, "adev"), (r.lo, "adev_lo"), (r.hi, "adev_hi"), (r.edf, "edf")]:
+        np.testing.assert_allclose(ours, ch[cli], rtol=1e-12, err_msg=cli)
+    np.testing.assert_array_equal(r.alpha, ch["alpha"])
+    for k, t in r.fit().terms.items():
+        assert (t is None) == (ch["fit"][k] is None)
+        if t is not None:
+            assert t.value == pytest.approx(ch["fit"][k], rel=1e-9), k
+
+
+def test_the_gil_is_released_while_computing():
+    # While a thread is inside mdev (hundreds of ms), the main thread wakes from a 10 ms sleep:
+    # it could not if the call held the GIL.
+    data = synthetic(4_320_000)
+    done = {}
+
+    def work():
+        ia.mdev(data, RATE_HZ, "freq", "octave")
+        done["end"] = time.perf_counter()
+
+    t = threading.Thread(target=work)
+    t.start()
+    time.sleep(0.01)
+    woke = time.perf_counter()
+    t.join()
+    assert woke < done["end"]
+
+
+@pytest.mark.parametrize(
+    "bad,message",
+    [
+        (dict(confidence=1.5), "confidence 1.5"),
+        (dict(edf="exact"), "edf \"exact\""),
+        (dict(estimator="xdev"), "unknown estimator \"xdev\""),
+        (dict(taus="weekly"), "taus \"weekly\""),
+        (dict(data_type="angle"), "unknown data_type"),
+        (dict(rate=0.0), "rate 0"),
+        (dict(data=[]), "empty"),
+    ],
+)
+def test_bad_input(bad, message):
+    args = dict(data=synthetic(1000), rate=RATE_HZ)
+    args.update(bad)
+    with pytest.raises(imudrift.InvalidInput, match=message):
+        imudrift.allan(**args)
