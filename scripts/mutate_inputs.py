@@ -404,9 +404,16 @@ def commands(path, threads):
 
 def json_paths(value, path=""):
     """(path, value) of every leaf; array indices are written [] (one path for every element)
-    and channel names * (`.channels.*.fit.q`: a renamed column gives the same paths)."""
+    and channel names * (`.channels.*.fit.q`: a renamed column gives the same paths). The nulls
+    of an entry that says it has no value are not leaves: `"verdict": "not_informed"` (drift's
+    quantities the logs lack a channel for, or a horizon no log is as long as, with a note
+    saying which) and `"segments": 0` (diagnose's drift at a horizon longer than the log: an RMS
+    over no segments, printed "-" with "segments: 0" in the text)."""
     if isinstance(value, dict):
+        declared = value.get("verdict") == "not_informed" or value.get("segments") == 0
         for k, v in value.items():
+            if declared and v is None:
+                continue
             yield from json_paths(v, f"{path}.{'*' if path.endswith('.channels') else k}")
     elif isinstance(value, list):
         for v in value:
@@ -445,6 +452,8 @@ def main():
     ap.add_argument("--threads", type=int, default=1, help="--threads of each command")
     ap.add_argument("--jobs", type=int, default=1, help="files checked at a time")
     ap.add_argument("--keep", default=None, help="directory for the failing inputs")
+    ap.add_argument("--recheck", default=None,
+                    help="instead of mutating, run the inputs a --keep directory holds again")
     args = ap.parse_args()
     rng = random.Random(args.seed)
     work = tempfile.mkdtemp(prefix="imudrift-mutate-")
@@ -489,6 +498,15 @@ def main():
         print(f"seeds: {len(bag_seeds)} bags/MCAP, {len(csv_seeds)} CSV; paths null in the seeds' outputs: {sorted(nullable)}")
 
         plan = [("bag", i) for i in range(args.bags)] + [("csv", i) for i in range(args.csvs)]
+        if args.recheck:
+            plan = []
+            for name in sorted(os.listdir(args.recheck)):
+                if name.endswith(".txt"):
+                    continue
+                src = os.path.join(args.recheck, name)
+                path = os.path.join(work, name)
+                shutil.copy(src, path)
+                plan.append(("kept", path))
 
         def check(n, path, how):
             """Run the three commands on one file: (counts, failures) of its runs."""
@@ -529,7 +547,10 @@ def main():
         with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
             pending = []
             for n, (family, i) in enumerate(plan):
-                if family == "bag":
+                if family == "kept":
+                    counts["files"] += 1
+                    pending.append(pool.submit(check, n, i, f"kept {os.path.basename(i)}"))
+                elif family == "bag":
                     seed = bag_seeds[rng.randrange(len(bag_seeds))]
                     data, how = bag_mutation(rng, seed)
                     ext = "bag" if seed[2] == "ros1" else "mcap"
@@ -537,11 +558,12 @@ def main():
                 else:
                     text, how = csv_mutation(rng, csv_seeds[rng.randrange(len(csv_seeds))])
                     data, ext = csv_bytes(text), "csv"
-                path = os.path.join(work, f"m{n:05d}.{ext}")
-                with open(path, "wb") as f:
-                    f.write(data)
-                counts["files"] += 1
-                pending.append(pool.submit(check, n, path, how))
+                if family != "kept":
+                    path = os.path.join(work, f"m{n:05d}.{ext}")
+                    with open(path, "wb") as f:
+                        f.write(data)
+                    counts["files"] += 1
+                    pending.append(pool.submit(check, n, path, how))
                 if len(pending) >= 4 * args.jobs or n + 1 == len(plan):
                     for fut in pending:
                         c, found = fut.result()
@@ -557,7 +579,8 @@ def main():
                           f"{time.monotonic() - started:.0f} s", flush=True)
     finally:
         shutil.rmtree(work, ignore_errors=True)
-    print(f"seed {args.seed}: {args.bags} bag/MCAP files and {args.csvs} CSV logs, "
+    what = f"the inputs of {args.recheck}" if args.recheck else f"{args.bags} bag/MCAP files and {args.csvs} CSV logs"
+    print(f"seed {args.seed}: {what}, "
           f"{counts['runs']} runs in {time.monotonic() - started:.0f} s")
     for k, v in list(counts.items()) + list(kinds.items()):
         print(f"  {k}: {v}")
