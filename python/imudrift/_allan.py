@@ -40,13 +40,15 @@ class Fit:
     """The IEEE 952 fit of a curve (crate ``allan``, module ``fit``): weighted non-negative least
     squares of sigma^2(tau) = 3Q^2/tau^2 + N^2/tau + (2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2
     (IEEE 952-1997 Annex C). ``terms`` maps q, n, b, k, r to a :class:`Term` or ``None`` (term
-    not present); ``readings`` are the spec-sheet readings of the curve (slope lines touching it,
-    the minimum and B = minimum / 0.664)."""
+    not present); ``readings`` are the spec-sheet readings of the curve as ``imudrift allan --json``
+    gives them: the -1/2 (-1, +1/2) line fitted where its term dominates, the minimum only where
+    the curve rises significantly after it, B = minimum / 0.664; a reading the curve does not
+    resolve is ``None`` with ``<name>_bound`` beside it (docs/allan.md, "Readings")."""
 
     terms: Dict[str, Optional[Term]]
     reduced_chi2: float
     model_error: float
-    readings: Dict[str, float]
+    readings: Dict[str, Optional[float]]
 
     def to_dict(self):
         return {

@@ -225,10 +225,15 @@ fn edf_method(name: &str) -> PyResult<EdfMethod> {
 /// Points of a fitted model curve drawn between the first and the last tau.
 const MODEL_CURVE_POINTS: usize = 100;
 
+/// The fit, its model curve (`model_tau`, `model_dev`) and the spec-sheet readings as
+/// `imudrift allan --json` gives them (docs/cli.md): a reading the curve does not resolve is
+/// `None`, with `<name>_bound` beside it; a resolved one has `<name>_lo` / `<name>_hi`
+/// (`allan::sheet`).
 fn fit_dict<'py>(
     py: Python<'py>,
     fit: &Fit,
     points: &[AllanPoint],
+    sheet: Option<&allan::sheet::SheetReadings>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     if let (Some(first), Some(last)) = (points.first(), points.last()) {
@@ -248,19 +253,28 @@ fn fit_dict<'py>(
     d.set_item("terms", terms)?;
     d.set_item("reduced_chi2", fit.reduced_chi2)?;
     d.set_item("model_error", fit.model_error)?;
-    let r = &fit.readings;
     let readings = PyDict::new(py);
-    for (k, v) in [
-        ("arw_at_1s", r.arw_at_1s),
-        ("arw_tau_s", r.arw_tau_s),
-        ("bi_min", r.bi_min),
-        ("bi_min_tau_s", r.bi_min_tau_s),
-        ("bi_ieee", r.bi_ieee),
-        ("rrw_at_3s", r.rrw_at_3s),
-        ("rrw_tau_s", r.rrw_tau_s),
-        ("q_at_sqrt3s", r.q_at_sqrt3s),
-    ] {
-        readings.set_item(k, v)?;
+    if let Some(sh) = sheet {
+        let ieee = 1.0 / allan::fit::BI_PLATEAU_FACTOR;
+        for (name, rd, scale) in [
+            ("arw_at_1s", &sh.arw, 1.0),
+            ("bi_min", &sh.bi_min, 1.0),
+            ("bi_ieee", &sh.bi_min, ieee),
+            ("rrw_at_3s", &sh.rrw, 1.0),
+            ("q_at_sqrt3s", &sh.q, 1.0),
+        ] {
+            let resolved = rd.value.is_some();
+            readings.set_item(name, rd.value.map(|v| v * scale))?;
+            readings.set_item(format!("{name}_lo"), resolved.then_some(rd.lo * scale))?;
+            readings.set_item(format!("{name}_hi"), resolved.then_some(rd.hi * scale))?;
+            readings.set_item(
+                format!("{name}_bound"),
+                (!resolved).then_some(rd.bound * scale),
+            )?;
+        }
+        readings.set_item("arw_tau_s", sh.arw.value.map(|_| sh.arw.tau_s[0]))?;
+        readings.set_item("bi_min_tau_s", sh.bi_min.value.map(|_| sh.bi_min.tau_s[0]))?;
+        readings.set_item("rrw_tau_s", sh.rrw.value.map(|_| sh.rrw.tau_s[0]))?;
     }
     d.set_item("readings", readings)?;
     Ok(d)
@@ -306,7 +320,9 @@ fn allan_analysis<'py>(
         })?,
         TausArg::Seconds(s) => factors_of_seconds(s, rate, n_phase),
     };
-    let allan::Analysis { points, fit } = py.detach(move || {
+    let allan::Analysis {
+        points, fit, sheet, ..
+    } = py.detach(move || {
         let tau0_s = 1.0 / rate;
         let quiet = |_: &str| {};
         match kind {
@@ -329,7 +345,7 @@ fn allan_analysis<'py>(
     d.set_item("n_terms", ints(&|p| p.n_terms as i64).into_pyarray(py))?;
     d.set_item("bins", ints(&|p| p.bins as i64).into_pyarray(py))?;
     match &fit {
-        Some(f) => d.set_item("fit", fit_dict(py, f, &points)?)?,
+        Some(f) => d.set_item("fit", fit_dict(py, f, &points, sheet.as_ref())?)?,
         None => d.set_item("fit", py.None())?,
     }
     Ok(d)
