@@ -7,6 +7,7 @@ use crate::log_input::{self, LogArgs};
 use crate::output;
 use crate::plot::{Band, LogLogPlot, Series, PALETTE};
 use allan::fit::{Fit, TERM_NAMES};
+use allan::sheet::{Reading, SheetReadings, TermStatus};
 use allan::{AllanPoint, Estimator, Options, TauGrid};
 use anyhow::{bail, Result};
 use logio::Log;
@@ -32,8 +33,8 @@ pub struct Args {
     /// Channels to analyse (default: every channel except temp)
     #[arg(long, value_delimiter = ',')]
     pub channels: Vec<String>,
-    /// Confidence level of the interval (default one sigma, 0.6827)
-    #[arg(long, default_value_t = allan::ONE_SIGMA_CI)]
+    /// Confidence level of the intervals: 1sigma (68.27 %), a fraction (0.95) or a percentage (95%)
+    #[arg(long, default_value = "1sigma", value_parser = crate::cli::confidence)]
     pub confidence: f64,
     /// EDF method: greenhall (noise identified per tau), simple (SP 1065 Table 5), none
     #[arg(long, value_enum, default_value = "greenhall")]
@@ -95,6 +96,10 @@ pub struct ChannelResult {
     /// The IEEE 952 fit: only for Allan-variance estimators (adev, oadev, totdev), whose
     /// per-term closed forms the model uses.
     pub fit: Option<Fit>,
+    /// The spec-sheet readings (with the fit only).
+    pub sheet: Option<SheetReadings>,
+    /// Which fitted terms are resolved, and each one's bound (with the fit only).
+    pub terms: Option<[TermStatus; 5]>,
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -136,6 +141,7 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
     };
     let log = args.log_args.read(&args.log)?;
     eprintln!("{}: {}", log.source, log_input::mapping_text(&log));
+    crate::plausibility::print(&log);
     stage("read + parse");
     let names = channel_names(args, &log)?;
     crate::log_input::refuse_constant(
@@ -159,7 +165,7 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
         .collect();
     stage("all channels");
     check_usable(&log, samples, &results)?;
-    let table = tables(&log, samples, &results, est);
+    let table = tables(&log, samples, &results, est, opts.confidence);
     let doc = json_document(
         &log,
         samples,
@@ -168,12 +174,8 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
         &args.grid.text,
         opts.confidence,
     );
-    if args.json {
-        eprint!("{table}");
-        output::print_stdout(&format!("{}\n", serde_json::to_string_pretty(&doc)?))?;
-    } else {
-        output::print_stdout(&table)?;
-    }
+    let json = format!("{}\n", serde_json::to_string_pretty(&doc)?);
+    output::answer(&table, args.json.then_some(json.as_str()))?;
     stage("printed");
     let per_channel: [Option<(AxisValue, AxisValue)>; 6] = std::array::from_fn(|c| {
         let r = results.iter().find(|r| r.name == noise::CHANNEL_NAMES[c])?;
@@ -271,7 +273,12 @@ pub fn analyse(
     opts: &Options,
     stage: &(dyn Fn(&str) + Sync),
 ) -> ChannelResult {
-    let allan::Analysis { points, fit } = allan::analyse_rate(data, dt_s, est, grid, opts, &|s| {
+    let allan::Analysis {
+        points,
+        fit,
+        sheet,
+        terms,
+    } = allan::analyse_rate(data, dt_s, est, grid, opts, &|s| {
         stage(&format!("{name}: {s}"))
     });
     ChannelResult {
@@ -279,18 +286,27 @@ pub fn analyse(
         unit: Log::unit_of(name),
         points,
         fit,
+        sheet,
+        terms,
     }
 }
 
-fn tables(log: &Log, samples: usize, results: &[ChannelResult], est: Estimator) -> String {
+fn tables(
+    log: &Log,
+    samples: usize,
+    results: &[ChannelResult],
+    est: Estimator,
+    confidence: f64,
+) -> String {
+    let level = crate::fmt::confidence(confidence);
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "{}: {} samples at {} Hz ({:.1} s), {} with 1-sigma bounds",
+        "{}: {} samples at {} ({}), {} with {level} bounds",
         log.source,
         samples,
-        log.rate_hz,
-        samples as f64 / log.rate_hz,
+        crate::fmt::rate(log.rate_hz),
+        crate::fmt::time(samples as f64 / log.rate_hz),
         est.name()
     );
     for r in results {
@@ -301,7 +317,7 @@ fn tables(log: &Log, samples: usize, results: &[ChannelResult], est: Estimator) 
             r.name, units[0].1, r.unit
         );
         points_table(&mut s, r, est, &units);
-        fit_lines(&mut s, r, est, &units);
+        fit_lines(&mut s, r, est, &units, &level);
     }
     s
 }
@@ -336,10 +352,17 @@ fn points_table(s: &mut String, r: &ChannelResult, est: Estimator, units: &[(f64
     }
 }
 
-/// One channel's IEEE 952 fit (each coefficient in its spec-sheet unit and in SI), its warnings
-/// and the spec-sheet readings; only the Allan-variance estimators have one.
-fn fit_lines(s: &mut String, r: &ChannelResult, est: Estimator, units: &[(f64, String); 6]) {
-    let Some(f) = &r.fit else {
+/// One channel's IEEE 952 fit (each resolved coefficient in its spec-sheet unit and in SI, the
+/// others as the bound the curve sets), its warnings and the spec-sheet readings; only the
+/// Allan-variance estimators have one.
+fn fit_lines(
+    s: &mut String,
+    r: &ChannelResult,
+    est: Estimator,
+    units: &[(f64, String); 6],
+    level: &str,
+) {
+    let (Some(f), Some(status), Some(sheet)) = (&r.fit, &r.terms, &r.sheet) else {
         let _ = writeln!(
             s,
             "IEEE 952 fit: not done for {} (the model's closed forms are those of the Allan variance)",
@@ -350,7 +373,7 @@ fn fit_lines(s: &mut String, r: &ChannelResult, est: Estimator, units: &[(f64, S
     let unit = r.unit;
     let _ = writeln!(
         s,
-        "IEEE 952 fit (weighted NNLS in ln avar, 1-sigma; reduced chi2 {:.2}, model error {:.1}%):",
+        "IEEE 952 fit (weighted NNLS in ln avar, 1-sigma; reduced chi2 {:.2}, model error {:.1}%; a term whose interval includes zero is given as the bound the curve sets):",
         f.reduced_chi2,
         100.0 * f.model_error
     );
@@ -368,40 +391,129 @@ fn fit_lines(s: &mut String, r: &ChannelResult, est: Estimator, units: &[(f64, S
         "K rate random walk",
         "R rate ramp",
     ];
-    for (i, (t, label)) in f.terms().iter().zip(labels).enumerate() {
+    for (i, ((t, label), st)) in f.terms().iter().zip(labels).zip(status).enumerate() {
         let (scale, shown) = (&units[i + 1].0, &units[i + 1].1);
-        match t {
-            Some(t) => {
-                let _ = writeln!(
-                    s,
-                    "  {label:<20} {} +- {} {shown}   ({:.4e} {})",
-                    crate::fmt::sig(t.value * scale, 4),
-                    crate::fmt::sig(t.sigma * scale, 2),
-                    t.value,
-                    si_units[i]
-                );
-            }
-            None => {
-                let _ = writeln!(s, "  {label:<20} not present");
-            }
-        }
+        let alt = if i == 1 {
+            crate::fmt::noise_density_alt(unit, t.map_or(st.bound, |t| t.value))
+                .map_or(String::new(), |a| format!(" (= {a})"))
+        } else {
+            String::new()
+        };
+        let _ = match t {
+            Some(t) if st.resolved => writeln!(
+                s,
+                "  {label:<20} {} +- {} {shown}{alt}   ({:.4e} {})",
+                crate::fmt::sig(t.value * scale, 4),
+                crate::fmt::sig(t.sigma * scale, 2),
+                t.value,
+                si_units[i]
+            ),
+            Some(t) => writeln!(
+                s,
+                "  {label:<20} not resolved: < {} {shown} (fitted {} +- {})",
+                crate::fmt::sig(st.bound * scale, 3),
+                crate::fmt::sig(t.value * scale, 2),
+                crate::fmt::sig(t.sigma * scale, 2),
+            ),
+            None => writeln!(
+                s,
+                "  {label:<20} not fitted: < {} {shown}",
+                crate::fmt::sig(st.bound * scale, 3)
+            ),
+        };
     }
     for w in warnings(r) {
         let _ = writeln!(s, "warning: {}: {w}", r.name);
     }
-    let rd = &f.readings;
+    reading_lines(s, unit, sheet, units, level);
+}
+
+/// The spec-sheet readings of one channel, each a value with its interval or a bound.
+fn reading_lines(
+    s: &mut String,
+    unit: &str,
+    sheet: &SheetReadings,
+    units: &[(f64, String); 6],
+    level: &str,
+) {
     let _ = writeln!(
         s,
-        "readings: ARW (-1/2 line at 1 s) {} {}; bias instability min {} {} at tau = {} (IEEE B = min/0.664 = {} {}); RRW (+1/2 line at 3 s) {} {}",
-        crate::fmt::sig(rd.arw_at_1s * units[2].0, 4),
-        units[2].1,
-        crate::fmt::sig(rd.bi_min * units[3].0, 4),
-        units[3].1,
-        crate::fmt::time(rd.bi_min_tau_s),
-        crate::fmt::sig(rd.bi_ieee * units[3].0, 4),
-        units[3].1,
-        crate::fmt::sig(rd.rrw_at_3s * units[4].0, 4),
-        units[4].1
+        "readings (IEEE 952 / Kalibr practice, {level} intervals; a reading the curve does not resolve is given as a bound):"
+    );
+    let value = |rd: &Reading, (scale, shown): &(f64, String)| -> String {
+        match rd.value {
+            Some(v) => format!(
+                "{} {shown} [{}, {}]",
+                crate::fmt::sig(v * scale, 4),
+                crate::fmt::sig(rd.lo * scale, 4),
+                crate::fmt::sig(rd.hi * scale, 4)
+            ),
+            None => format!(
+                "not resolved: < {} {shown} ({})",
+                crate::fmt::sig(rd.bound * scale, 3),
+                rd.why
+            ),
+        }
+    };
+    let range = |rd: &Reading| -> String {
+        match rd.value {
+            Some(_) if rd.tau_s[0] == rd.tau_s[1] => {
+                format!(
+                    "; from the one point at tau = {}",
+                    crate::fmt::time(rd.tau_s[0])
+                )
+            }
+            Some(_) => format!(
+                "; line over tau = {} .. {}",
+                crate::fmt::time(rd.tau_s[0]),
+                crate::fmt::time(rd.tau_s[1])
+            ),
+            None => String::new(),
+        }
+    };
+    let alt = sheet
+        .arw
+        .value
+        .and_then(|v| crate::fmt::noise_density_alt(unit, v))
+        .map_or(String::new(), |a| format!(" (= {a})"));
+    let _ = writeln!(
+        s,
+        "  {:<26} {}{alt}{}",
+        if unit == "m/s^2" {
+            "VRW (-1/2 line at 1 s)"
+        } else {
+            "ARW (-1/2 line at 1 s)"
+        },
+        value(&sheet.arw, &units[2]),
+        range(&sheet.arw)
+    );
+    let bi = &sheet.bi_min;
+    let b_scale = &units[3];
+    let ieee = match bi.value {
+        Some(v) => format!(
+            "; IEEE B = min/0.664 = {} {}; at tau = {}",
+            crate::fmt::sig(allan::sheet::ieee_b(v) * b_scale.0, 4),
+            b_scale.1,
+            crate::fmt::time(bi.tau_s[0])
+        ),
+        None => format!(
+            "; IEEE B < {} {}",
+            crate::fmt::sig(allan::sheet::ieee_b(bi.bound) * b_scale.0, 3),
+            b_scale.1
+        ),
+    };
+    let _ = writeln!(
+        s,
+        "  {:<26} {}{ieee}",
+        "bias instability (minimum)",
+        value(bi, b_scale)
+    );
+    let _ = writeln!(
+        s,
+        "  {:<26} {}{}",
+        "RRW (+1/2 line at 3 s)",
+        value(&sheet.rrw, &units[4]),
+        range(&sheet.rrw)
     );
 }
 
@@ -433,19 +545,18 @@ fn json_document(
             fit.insert(name.to_string(), t.map_or(Value::Null, |t| num(t.value)));
             sigma.insert(name.to_string(), t.map_or(Value::Null, |t| num(t.sigma)));
         }
-        let readings = r.fit.as_ref().map_or(Value::Null, |f| {
-            let rd = &f.readings;
-            json!({
-                "arw_at_1s": num(rd.arw_at_1s),
-                "arw_tau_s": num(rd.arw_tau_s),
-                "bi_min": num(rd.bi_min),
-                "bi_min_tau_s": num(rd.bi_min_tau_s),
-                "bi_ieee": num(rd.bi_ieee),
-                "rrw_at_3s": num(rd.rrw_at_3s),
-                "rrw_tau_s": num(rd.rrw_tau_s),
-                "q_at_sqrt3s": num(rd.q_at_sqrt3s),
-            })
-        });
+        let readings = r.sheet.as_ref().map_or(Value::Null, readings_json);
+        let (mut resolved, mut bound) = (Map::new(), Map::new());
+        if let (Some(f), Some(status)) = (&r.fit, &r.terms) {
+            for ((name, t), st) in TERM_NAMES.iter().zip(f.terms()).zip(status) {
+                resolved.insert(name.to_string(), json!(t.is_some() && st.resolved));
+                let shown = !(t.is_some() && st.resolved);
+                bound.insert(
+                    name.to_string(),
+                    if shown { num(st.bound) } else { Value::Null },
+                );
+            }
+        }
         channels.insert(
             r.name.clone(),
             json!({
@@ -461,6 +572,8 @@ fn json_document(
                 "edf": col(&|p| p.edf),
                 "fit": fit,
                 "fit_sigma": sigma,
+                "fit_resolved": resolved,
+                "fit_bound": bound,
                 "fit_reduced_chi2": r.fit.as_ref().map_or(Value::Null, |f| num(f.reduced_chi2)),
                 "fit_model_error": r.fit.as_ref().map_or(Value::Null, |f| num(f.model_error)),
                 "readings": readings,
@@ -482,36 +595,91 @@ fn json_document(
     })
 }
 
+/// The readings in JSON: each under its name, `null` when the curve does not resolve it, with
+/// `<name>_bound` (the largest value the curve allows) beside it; `_lo` / `_hi` the interval of a
+/// resolved reading; `not_resolved{name: why}`.
+fn readings_json(sheet: &SheetReadings) -> Value {
+    let mut o = Map::new();
+    let mut why = Map::new();
+    let mut put = |name: &str, rd: &Reading, scale: f64| {
+        let v = |x: f64| num(x * scale);
+        o.insert(name.into(), rd.value.map_or(Value::Null, v));
+        o.insert(
+            format!("{name}_lo"),
+            rd.value.map_or(Value::Null, |_| v(rd.lo)),
+        );
+        o.insert(
+            format!("{name}_hi"),
+            rd.value.map_or(Value::Null, |_| v(rd.hi)),
+        );
+        o.insert(
+            format!("{name}_bound"),
+            if rd.value.is_some() {
+                Value::Null
+            } else {
+                v(rd.bound)
+            },
+        );
+        if rd.value.is_none() {
+            why.insert(name.into(), json!(rd.why));
+        }
+    };
+    put("arw_at_1s", &sheet.arw, 1.0);
+    put("bi_min", &sheet.bi_min, 1.0);
+    put(
+        "bi_ieee",
+        &sheet.bi_min,
+        1.0 / allan::fit::BI_PLATEAU_FACTOR,
+    );
+    put("rrw_at_3s", &sheet.rrw, 1.0);
+    put("q_at_sqrt3s", &sheet.q, 1.0);
+    let tau = |rd: &Reading, i: usize| rd.value.map_or(Value::Null, |_| num(rd.tau_s[i]));
+    o.insert("arw_tau_s".into(), tau(&sheet.arw, 0));
+    o.insert(
+        "arw_tau_range_s".into(),
+        json!([tau(&sheet.arw, 0), tau(&sheet.arw, 1)]),
+    );
+    o.insert("bi_min_tau_s".into(), tau(&sheet.bi_min, 0));
+    o.insert("rrw_tau_s".into(), tau(&sheet.rrw, 0));
+    o.insert(
+        "rrw_tau_range_s".into(),
+        json!([tau(&sheet.rrw, 0), tau(&sheet.rrw, 1)]),
+    );
+    o.insert("not_resolved".into(), Value::Object(why));
+    Value::Object(o)
+}
+
 /// A channel's noise density and random walk for a noise file: the IEEE 952 fit's N and K with
 /// their standard errors; where the fit has no such term, the spec-sheet reading (the slope line
 /// touching the curve: for K an upper bound, the largest random walk the curve allows).
 fn noise_file_values(r: &ChannelResult) -> Option<(AxisValue, AxisValue)> {
-    let fit = r.fit.as_ref()?;
-    let rd = &fit.readings;
-    let n = match fit.n {
-        Some(t) => AxisValue {
+    let (fit, sheet, status) = (r.fit.as_ref()?, r.sheet.as_ref()?, r.terms.as_ref()?);
+    let n = match (fit.n, &sheet.arw.value) {
+        (Some(t), _) => AxisValue {
             value: t.value,
             how: format!("fit, sigma {:.2e}", t.sigma),
         },
-        None => AxisValue {
-            value: rd.arw_at_1s,
+        (None, Some(v)) => AxisValue {
+            value: *v,
             how: format!(
-                "-1/2 line touching the curve at {}",
-                crate::fmt::time(rd.arw_tau_s)
+                "-1/2 line over tau = {} .. {}",
+                crate::fmt::time(sheet.arw.tau_s[0]),
+                crate::fmt::time(sheet.arw.tau_s[1])
             ),
+        },
+        (None, None) => AxisValue {
+            value: sheet.arw.bound,
+            how: "not resolved; bound: -1/2 line touching the curve".into(),
         },
     };
     let k = match fit.k {
-        Some(t) => AxisValue {
+        Some(t) if status[3].resolved => AxisValue {
             value: t.value,
             how: format!("fit, sigma {:.2e}", t.sigma),
         },
-        None => AxisValue {
-            value: rd.rrw_at_3s,
-            how: format!(
-                "not resolved; bound: +1/2 line touching the curve at {}",
-                crate::fmt::time(rd.rrw_tau_s)
-            ),
+        _ => AxisValue {
+            value: status[3].bound,
+            how: "not resolved; bound: +1/2 line touching the curve's upper interval ends".into(),
         },
     };
     Some((n, k))
@@ -534,14 +702,11 @@ fn csv(results: &[ChannelResult]) -> String {
 fn plot(r: &ChannelResult, est: Estimator, source: &str) -> LogLogPlot {
     let x: Vec<f64> = r.points.iter().map(|p| p.tau_s).collect();
     let mut p = LogLogPlot {
-        title: format!(
-            "{} {} of {}",
-            r.name,
-            est.name(),
-            std::path::Path::new(source)
-                .file_name()
-                .map_or(source.into(), |f| f.to_string_lossy())
-        ),
+        title: format!("{} {}", r.name, est.name()),
+        subtitle: std::path::Path::new(source)
+            .file_name()
+            .map_or(source.into(), |f| f.to_string_lossy().into_owned()),
+        notes: Vec::new(),
         x_label: "tau (s)".into(),
         y_label: format!("{} ({})", est.name(), r.unit),
         series: vec![Series::new(
@@ -566,7 +731,7 @@ fn plot(r: &ChannelResult, est: Estimator, source: &str) -> LogLogPlot {
             .map(|i| 10f64.powf(a + (b - a) * i as f64 / 100.0))
             .collect()
     };
-    let Some(fit) = &r.fit else {
+    let (Some(fit), Some(status), Some(sheet)) = (&r.fit, &r.terms, &r.sheet) else {
         return p.in_spec_sheet_units(est.name(), r.unit);
     };
     p.series.push(Series::dashed(
@@ -582,8 +747,9 @@ fn plot(r: &ChannelResult, est: Estimator, source: &str) -> LogLogPlot {
         "K (tau^+1/2)",
         "R (tau^+1)",
     ];
+    // Only resolved terms are drawn; the others are named with their bound below the plot.
     for (j, name) in names.iter().enumerate() {
-        if fit.terms()[j].is_some() {
+        if fit.terms()[j].is_some() && status[j].resolved {
             p.series.push(Series::dashed(
                 name,
                 fine.clone(),
@@ -594,6 +760,14 @@ fn plot(r: &ChannelResult, est: Estimator, source: &str) -> LogLogPlot {
             ));
         }
     }
+    let units = crate::fmt::allan_units(r.unit);
+    let mut notes = String::new();
+    reading_lines(&mut notes, r.unit, sheet, &units, "");
+    p.notes = notes
+        .lines()
+        .skip(1)
+        .map(|l| l.split_whitespace().collect::<Vec<_>>().join(" "))
+        .collect();
     p.in_spec_sheet_units(est.name(), r.unit)
 }
 

@@ -37,7 +37,7 @@ pub struct Args {
     #[arg(long, default_value_t = 6)]
     pub rounds: usize,
     /// Drift horizons: a comma list of times, e.g. 60,3600 or 1min,1h (a bare number is seconds)
-    #[arg(long, value_delimiter = ',', default_value = "60,3600", value_parser = crate::cli::duration_s)]
+    #[arg(long, value_delimiter = ',', default_value = "1min,1h", value_parser = crate::cli::duration_s)]
     pub horizons: Vec<f64>,
     /// BIC improvement an effect needs to be named (> 10 is "very strong" evidence, Kass & Raftery
     /// 1995; 16 keeps false alarms near 1e-3 per clean 6-channel log)
@@ -177,10 +177,12 @@ fn log_channels(log: &logio::Log) -> Result<LogInput<'_>> {
 
 fn run_inner(args: &Args) -> Result<()> {
     let model = crate::files::sensor_model(&args.model)?;
+    crate::model_notes::print(&model, args.horizons.iter().copied().reduce(f64::max));
     let mut logs = Vec::with_capacity(args.logs.len());
     for path in &args.logs {
         let log = args.log_args.read(path)?;
         eprintln!("{}: {}", log.source, log_input::mapping_text(&log));
+        crate::plausibility::print(&log);
         logs.push(log);
     }
     let log = &logs[0];
@@ -218,9 +220,9 @@ fn run_inner(args: &Args) -> Result<()> {
     // An output filter in the model must fit the log's rate.
     noise::ImuErrors::check_rate(&model, input.dt_s).map_err(|e| {
         anyhow::anyhow!(
-            "{}: {e}; the log is at {:.6} Hz",
+            "{}: {e}; the log is at {}",
             args.model.display(),
-            1.0 / input.dt_s
+            crate::fmt::rate(1.0 / input.dt_s)
         )
     })?;
     let settings = Settings {
@@ -243,7 +245,7 @@ fn run_inner(args: &Args) -> Result<()> {
     let elapsed_s = started.elapsed().as_secs_f64();
     let fitted_on = diagnose::fitted_on::FittedOn::from_logs(&inputs, settings.tau_min_s);
     let corrected = corrected_model(&result, &model, &args.model, fitted_on.as_ref());
-    eprint!("{}", text_report(&result, &sources, &args.model, elapsed_s));
+    let mut human = text_report(&result, &sources, &args.model, elapsed_s);
     let mut checks = Vec::new();
     for path in &args.check {
         let held = args.log_args.read(path)?;
@@ -260,7 +262,7 @@ fn run_inner(args: &Args) -> Result<()> {
         checks.push((held.source.clone(), gaps));
     }
     if !checks.is_empty() {
-        eprint!("{}", checks_text(&checks));
+        human.push_str(&checks_text(&checks));
     }
     let doc = json_document(&result, &logs, &args.model, &corrected, &checks)?;
     let per_channel: [Option<(AxisValue, AxisValue)>; 6] = noise::Channel::ALL.map(|c| {
@@ -280,9 +282,7 @@ fn run_inner(args: &Args) -> Result<()> {
         ),
         log.topic.as_deref(),
     )?;
-    if args.json {
-        crate::output::print_stdout(&format!("{doc}\n"))?;
-    }
+    crate::output::answer(&human, args.json.then_some(format!("{doc}\n").as_str()))?;
     if let Some(dir) = &args.out {
         let _set = crate::output::begin_set(dir)?;
         let toml_name = format!("{}-diagnosed.toml", file_stem(&args.model));
@@ -333,7 +333,7 @@ fn corrected_model(
                 "# {name}: {} {} {}",
                 e.kind,
                 e.effect,
-                params_text(e, name)
+                crate::effect_text::params_text(e, name)
             );
         }
     }
@@ -353,49 +353,27 @@ fn corrected_model(
     let style = crate::files::read_config(model_path)
         .map(|file| noise::UnitStyle::from_config_text(&file.text))
         .unwrap_or_default();
+    let m = &result.model_final;
+    if [&m.gyro, &m.accel]
+        .iter()
+        .any(|t| t.axes.iter().any(|a| a.has(noise::Effect::BiasInstability)))
+    {
+        let _ = writeln!(
+            out,
+            "# The b values above are IEEE 952 coefficients B (Allan plateau 0.664 B); the model below writes\n\
+             # bias_instability in the input's convention{}.",
+            if style.keeps_allan_minimum() {
+                " (allan_minimum: the minimum of the axis' Allan deviation, as spec sheets quote it)"
+            } else {
+                " (ieee: the coefficient B)"
+            }
+        );
+    }
     out.push_str(&result.model_final.to_toml_string_styled(&style));
     if let Some(f) = fitted_on {
         out.push_str(&f.to_toml());
     }
     out
-}
-
-/// `n = 1.2e-4 [1.1e-4, 1.3e-4]` for every parameter.
-/// An effect's parameters: SI with their interval, and for the IEEE 952 coefficients also in the
-/// units spec sheets use (deg/sqrt(h), deg/h, ug ...) for a channel `ch` (gx.. gyro, ax.. accel).
-fn params_text(e: &FoundEffect, ch: &str) -> String {
-    let gyro = noise::Channel::from_name(ch).is_some_and(noise::Channel::is_gyro);
-    let units = crate::fmt::allan_units(if gyro { "rad/s" } else { "m/s^2" });
-    let values = e
-        .parameters
-        .iter()
-        .map(|(k, v)| {
-            let shown = match k.as_str() {
-                "q" => Some(&units[1]),
-                "n" | "n_without" => Some(&units[2]),
-                "b" => Some(&units[3]),
-                "k" => Some(&units[4]),
-                "r" => Some(&units[5]),
-                _ => None,
-            }
-            .map_or(String::new(), |(scale, unit)| {
-                format!(" ({} {unit})", crate::fmt::sig(v * scale, 4))
-            });
-            format!(
-                "{k} = {v:.4e}{shown} [{:.3e}, {:.3e}]",
-                e.parameters_lo.get(k).copied().unwrap_or(f64::NAN),
-                e.parameters_hi.get(k).copied().unwrap_or(f64::NAN)
-            )
-        })
-        .collect::<Vec<_>>();
-    // An output filter's kind first.
-    e.parameters
-        .kind
-        .map(|k| format!("kind = {k}"))
-        .into_iter()
-        .chain(values)
-        .collect::<Vec<_>>()
-        .join(", ")
 }
 
 /// Whether the log can inform a drift quantity (it has every channel it comes from).
@@ -424,8 +402,8 @@ fn drift_line(d: &DriftRow, heading: bool, horizontal: bool) -> String {
         }
     };
     format!(
-        "{:>8.0} s  {}  {}  {}  (segments: {} measured)",
-        d.horizon_s,
+        "{:>10}  {}  {}  {}  (segments: {} measured)",
+        crate::fmt::time(d.horizon_s),
         cell(&d.measured),
         cell(&d.model_initial),
         cell(&d.model_final),
@@ -437,10 +415,11 @@ fn text_report(result: &Diagnosis, log: &str, model: &Path, elapsed_s: f64) -> S
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "diagnose {log} against {} ({} samples at {:.6} s; {} simulated logs per band, seed {}, {} round(s), {:.1} s)",
+        "diagnose {log} against {} ({} samples at {}, {}; {} simulated logs per band, seed {}, {} round(s), {:.1} s)",
         model.display(),
         result.samples,
-        result.dt_s,
+        crate::fmt::rate(1.0 / result.dt_s),
+        crate::fmt::time(result.samples as f64 * result.dt_s),
         result.seeds,
         result.seed,
         result.rounds,
@@ -460,14 +439,14 @@ fn text_report(result: &Diagnosis, log: &str, model: &Path, elapsed_s: f64) -> S
         for e in &r.effects {
             let _ = writeln!(
                 s,
-                "       {} {} ({}): {}; gap {:.2} -> {:.2}, dBIC {:.0}{}{}",
+                "       {} {} ({}): {}; gap {:.2} -> {:.2}, {}{}{}",
                 e.kind,
                 e.effect,
-                model_text(e),
-                params_text(e, name),
+                crate::effect_text::model_text(e, name),
+                crate::effect_text::params_text(e, name),
                 e.gap_before,
                 e.gap_after,
-                e.delta_bic,
+                crate::effect_text::evidence_text(e),
                 drift_gap_text(e),
                 if e.cannot_tell_from.is_empty() {
                     String::new()
@@ -561,7 +540,12 @@ fn runs_text(result: &Diagnosis) -> String {
         );
         for (ch, found) in &run.findings {
             for e in found {
-                let _ = writeln!(s, "       {ch}: {} {}", e.effect, params_text(e, ch));
+                let _ = writeln!(
+                    s,
+                    "       {ch}: {} {}",
+                    e.effect,
+                    crate::effect_text::params_text(e, ch)
+                );
             }
         }
     }
@@ -573,19 +557,6 @@ fn drift_gap_text(e: &FoundEffect) -> String {
     match (e.drift_gap_before, e.drift_gap_after) {
         (Some(b), Some(a)) => format!("; drift gap {b:.2} -> {a:.2}"),
         _ => String::new(),
-    }
-}
-
-fn model_text(e: &FoundEffect) -> String {
-    match &e.model_parameters {
-        Some(p) => format!(
-            "model had {}",
-            p.iter()
-                .map(|(k, v)| format!("{k} = {v:.4e}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        ),
-        None => "not in the model".into(),
     }
 }
 
@@ -784,8 +755,13 @@ fn runs_markdown(result: &Diagnosis) -> String {
             .findings
             .iter()
             .flat_map(|(ch, f)| {
-                f.iter()
-                    .map(move |e| format!("{ch}: {} {}", e.effect, params_text(e, ch)))
+                f.iter().map(move |e| {
+                    format!(
+                        "{ch}: {} {}",
+                        e.effect,
+                        crate::effect_text::params_text(e, ch)
+                    )
+                })
             })
             .collect();
         let _ = writeln!(
@@ -804,6 +780,48 @@ fn runs_markdown(result: &Diagnosis) -> String {
     s
 }
 
+/// report.md's drift table: heading and horizontal position, measured and both models.
+fn drift_markdown(result: &Diagnosis) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "\n## Drift (RMS over segments, bias removed by the log mean)\n"
+    );
+    let _ = writeln!(s, "| horizon | measured heading | model before | model after | measured horizontal | model before | model after |\n|---|---|---|---|---|---|---|");
+    let (heading, horizontal) = (
+        informed(result, diagnose::protocol::Quantity::Heading),
+        informed(result, diagnose::protocol::Quantity::PosHorizontal),
+    );
+    for d in &result.drift {
+        let ang = |v: f64| {
+            if heading {
+                crate::effect_text::degrees(v)
+            } else {
+                "n/a".into()
+            }
+        };
+        let len = |v: f64| {
+            if horizontal {
+                crate::effect_text::metres(v)
+            } else {
+                "n/a".into()
+            }
+        };
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} | {} | {} |",
+            crate::fmt::time(d.horizon_s),
+            ang(d.measured.heading_rms_rad),
+            ang(d.model_initial.heading_rms_rad),
+            ang(d.model_final.heading_rms_rad),
+            len(d.measured.horizontal_rms_m),
+            len(d.model_initial.horizontal_rms_m),
+            len(d.model_final.horizontal_rms_m),
+        );
+    }
+    s
+}
+
 fn markdown_report(
     result: &Diagnosis,
     log: &str,
@@ -815,9 +833,10 @@ fn markdown_report(
     let _ = writeln!(s, "# imudrift diagnose\n");
     let _ = writeln!(
         s,
-        "Log `{log}` ({} samples, dt = {} s) against model `{}`; {} simulated logs per band, seed {}, {} round(s). Corrected model: `{toml_name}`.\n",
+        "Log `{log}` ({} samples at {}, {}) against model `{}`; {} simulated logs per band, seed {}, {} round(s). Corrected model: `{toml_name}`. Parameters in spec-sheet units with their 95 % intervals (discrete choices have none); `diagnose.json` has them in SI.\n",
         result.samples,
-        result.dt_s,
+        crate::fmt::rate(1.0 / result.dt_s),
+        crate::fmt::time(result.samples as f64 * result.dt_s),
         model.display(),
         result.seeds,
         result.seed,
@@ -834,12 +853,17 @@ fn markdown_report(
             .iter()
             .map(|e| {
                 format!(
-                    "{} {} ({}): {}{}",
+                    "{} {} ({}): {}{}{}",
                     e.kind,
                     e.effect,
-                    model_text(e),
-                    params_text(e, name),
-                    drift_gap_text(e)
+                    crate::effect_text::model_text(e, name),
+                    crate::effect_text::params_text(e, name),
+                    drift_gap_text(e),
+                    if e.round == 0 {
+                        format!("; {}", crate::effect_text::evidence_text(e))
+                    } else {
+                        String::new()
+                    }
                 )
             })
             .collect();
@@ -877,38 +901,7 @@ fn markdown_report(
         }
     }
     s.push_str(&drift_check_markdown(result));
-    let _ = writeln!(
-        s,
-        "\n## Drift (RMS over segments, bias removed by the log mean)\n"
-    );
-    let _ = writeln!(s, "| horizon | measured heading | model before | model after | measured horizontal | model before | model after |\n|---|---|---|---|---|---|---|");
-    let (heading, horizontal) = (
-        informed(result, diagnose::protocol::Quantity::Heading),
-        informed(result, diagnose::protocol::Quantity::PosHorizontal),
-    );
-    for d in &result.drift {
-        let f = |v: f64, scale: f64| {
-            if (scale != 1.0 && !heading) || (scale == 1.0 && !horizontal) {
-                "n/a".into()
-            } else if v.is_finite() {
-                format!("{:.4}", v * scale)
-            } else {
-                "-".into()
-            }
-        };
-        let deg = 180.0 / std::f64::consts::PI;
-        let _ = writeln!(
-            s,
-            "| {} s | {} deg | {} deg | {} deg | {} m | {} m | {} m |",
-            d.horizon_s,
-            f(d.measured.heading_rms_rad, deg),
-            f(d.model_initial.heading_rms_rad, deg),
-            f(d.model_final.heading_rms_rad, deg),
-            f(d.measured.horizontal_rms_m, 1.0),
-            f(d.model_initial.horizontal_rms_m, 1.0),
-            f(d.model_final.horizontal_rms_m, 1.0),
-        );
-    }
+    s.push_str(&drift_markdown(result));
     let _ = writeln!(s, "\n## Plots\n");
     for name in result.channels.keys() {
         let _ = writeln!(s, "![{name}](diagnose_{name}.svg)");
@@ -966,6 +959,8 @@ fn plot(name: &str, r: &ChannelReport, result: &Diagnosis) -> String {
             "{name}: measured vs model band (gap {:.2} -> {:.2})",
             r.gap_initial, r.gap_final
         ),
+        subtitle: String::new(),
+        notes: Vec::new(),
         x_label: "tau (s)".into(),
         y_label: format!("Allan deviation ({unit})"),
         series,

@@ -53,7 +53,7 @@ pub struct Args {
     #[arg(long, default_value = "perfect", value_name = "HOW", value_parser = initialisation)]
     pub init: Initialisation,
     /// Horizons (segment lengths): a comma list of times, e.g. 10,60,10min,1h
-    #[arg(long, value_delimiter = ',', default_value = "10,60,600,3600", value_parser = crate::cli::duration_s)]
+    #[arg(long, value_delimiter = ',', default_value = "10s,1min,10min,1h", value_parser = crate::cli::duration_s)]
     pub horizons: Vec<f64>,
     /// Half-overlapping segments instead of consecutive ones
     #[arg(long)]
@@ -195,12 +195,14 @@ fn fitted_on(args: &Args, model_file: &TextFile) -> Result<Option<FittedOn>> {
 fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
     let model_file = files::read_config(&args.model)?;
     let model = files::sensor_model_of(&model_file)?;
+    crate::model_notes::print(&model, args.horizons.iter().copied().reduce(f64::max));
     let fitted = fitted_on(args, &model_file)?;
     let opts = args.log_args.options()?;
     let mut logs = Vec::new();
     for path in &args.logs {
         let log = log_input::read_log(path, &opts)?;
         eprintln!("{}: {}", log.source, log_input::mapping_text(&log));
+        crate::plausibility::print(&log);
         log_input::refuse_constant(
             &log,
             CHANNELS,
@@ -224,9 +226,9 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
     if let Some(first) = inputs.first() {
         noise::ImuErrors::check_rate(&model, first.dt_s).map_err(|e| {
             anyhow!(
-                "{}: {e}; the logs are at {:.6} Hz",
+                "{}: {e}; the logs are at {}",
                 args.model.display(),
-                1.0 / first.dt_s
+                crate::fmt::rate(1.0 / first.dt_s)
             )
         })?;
     }
@@ -259,17 +261,15 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
     })?;
     let elapsed_s = started.elapsed().as_secs_f64();
     let sources: Vec<String> = logs.iter().map(|l| l.source.clone()).collect();
-    eprint!("{}", text(&result, &sources, &args.model, elapsed_s));
-    eprint!("{}", parameters_text(&result, args.exact_parameters));
+    let human = text(&result, &sources, &args.model, elapsed_s)
+        + &parameters_text(&result, args.exact_parameters);
     let mut doc = serde_json::to_value(&result).context("cannot serialise the drift check")?;
     if let Some(o) = doc.as_object_mut() {
         o.insert("logs".into(), sources.clone().into());
         o.insert("model".into(), args.model.display().to_string().into());
     }
     let doc = serde_json::to_string_pretty(&doc)?;
-    if args.json {
-        crate::output::print_stdout(&format!("{doc}\n"))?;
-    }
+    crate::output::answer(&human, args.json.then_some(format!("{doc}\n").as_str()))?;
     if let Some(dir) = &args.out {
         let _set = crate::output::begin_set(dir)?;
         write_string(&dir.join("drift.json"), &doc)?;
@@ -385,10 +385,10 @@ fn parameters_text(r: &DriftCheck, exact_flag: bool) -> String {
     };
     let f = &p.fitted_on;
     let mut s = format!(
-        "model levels: drawn per simulated experiment by a parametric bootstrap on data like the {} log(s) of {} at {} Hz they were fitted on (docs/drift.md); 95 % of the draws:\n",
+        "model levels: drawn per simulated experiment by a parametric bootstrap on data like the {} log(s) of {} at {} they were fitted on (docs/drift.md); 95 % of the draws:\n",
         f.samples.len(),
         crate::fmt::time(f.duration_s()),
-        crate::fmt::sig(1.0 / f.sample_interval_s, 4)
+        crate::fmt::rate(1.0 / f.sample_interval_s)
     );
     for (ch, levels) in &p.levels {
         let parts: Vec<String> = levels
@@ -446,7 +446,12 @@ fn plot(r: &DriftCheck, q: Quantity) -> Option<String> {
     ) -> f64| { rows.iter().map(|r| f(r) * scale).collect::<Vec<f64>>() };
     Some(
         LogLogPlot {
-            title: format!("{}: measured vs model ({})", q.name(), r.protocol_text),
+            title: format!(
+                "{}: measured vs model drift",
+                crate::fmt::quantity_label(q.name())
+            ),
+            subtitle: r.protocol_text.clone(),
+            notes: Vec::new(),
             x_label: "horizon (s)".into(),
             y_label: format!("RMS error ({unit})"),
             series: vec![

@@ -122,6 +122,7 @@ fn plan(args: &Args) -> Result<Plan> {
     }
     // An output filter must fit the rate (a low-pass cutoff below the internal Nyquist frequency).
     let model = model.filtered(&filter);
+    crate::model_notes::print(&model, None);
     ImuErrors::check_rate(&model, 1.0 / args.rate).map_err(|e| {
         anyhow::anyhow!(
             "{}: {e}; lower the cutoff or raise --rate",
@@ -150,10 +151,10 @@ pub fn run(args: Args) -> Result<()> {
     progress.finish();
     let elapsed_s = started.elapsed().as_secs_f64();
     eprintln!(
-        "wrote {} samples ({} s at {} Hz) of {} to {} in {elapsed_s:.2} s (seed {}, run {})",
+        "wrote {} samples ({} at {}) of {} to {} in {elapsed_s:.2} s (seed {}, run {})",
         plan.samples,
-        plan.samples as f64 / plan.rate_hz,
-        plan.rate_hz,
+        crate::fmt::time(plan.samples as f64 / plan.rate_hz),
+        crate::fmt::rate(plan.rate_hz),
         plan.model.name,
         args.output.display(),
         args.seed,

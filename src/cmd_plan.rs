@@ -150,10 +150,8 @@ pub fn run(args: Args) -> Result<()> {
         required_duration_s,
         axes,
     };
-    eprint!("{}", text(&doc));
-    if args.json {
-        crate::output::print_stdout(&(serde_json::to_string_pretty(&doc)? + "\n"))?;
-    }
+    let json = serde_json::to_string_pretty(&doc)? + "\n";
+    crate::output::answer(&text(&doc), args.json.then_some(json.as_str()))?;
     Ok(())
 }
 
@@ -175,9 +173,9 @@ fn text(doc: &PlanDoc) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "{}: static log at {} Hz; each term read where it dominates the Allan deviation, to {} % (1 sigma)",
+        "{}: static log at {}; each term read where it dominates the Allan deviation, to {} % (1 sigma)",
         doc.sensor,
-        doc.rate_hz,
+        fmt::rate(doc.rate_hz),
         fmt::sig(100.0 * doc.target_uncertainty, 3)
     );
     let _ = writeln!(
@@ -220,10 +218,10 @@ fn text(doc: &PlanDoc) -> String {
     if let Some(d) = doc.required_duration_s {
         let _ = writeln!(
             s,
-            "\na static log of {} ({} samples at {} Hz) reads every readable term above to {} %",
+            "\na static log of {} ({} samples at {}) reads every readable term above to {} %",
             human_duration(d),
             (d * doc.rate_hz).ceil(),
-            doc.rate_hz,
+            fmt::rate(doc.rate_hz),
             fmt::sig(100.0 * doc.target_uncertainty, 3)
         );
     }

@@ -212,6 +212,8 @@ struct JsonOut<'a> {
     reference: Option<ReferenceOut>,
     #[serde(skip_serializing_if = "Option::is_none")]
     ablation: Option<&'a [AblationRow]>,
+    /// The `*` flags over every checkpoint and quantity, with their expected count.
+    ratio_flags: FlagCount,
 }
 
 #[derive(Serialize)]
@@ -234,7 +236,9 @@ fn reference_out(report: &DriftReport, exp: &Experiment) -> Option<ReferenceOut>
         .checkpoints
         .iter()
         .min_by(|a, b| (a.t_s - r.t_s).abs().total_cmp(&(b.t_s - r.t_s).abs()))?;
-    let c = cp.quantities.get(&r.quantity)?;
+    let c = cp
+        .quantities
+        .get(NavQuantity::from_name(&r.quantity)?.name())?;
     let simulated = match r.statistic.as_str() {
         "mean" => c.mean,
         "rms" => c.rms,
@@ -272,18 +276,25 @@ pub fn emit(
         );
     }
     crate::experiment_run::check_finite(report)?;
+    crate::model_notes::print(&exp.model, Some(exp.scenario.duration_s));
     let reference = reference_out(report, exp);
-    eprint!("{}", table(report, reference.as_ref(), ablation));
     report_failures(&report.failed_runs);
+    let human = table(report, reference.as_ref(), ablation);
     let doc = JsonOut {
         report,
         reference,
         ablation,
+        ratio_flags: FlagCount::of(
+            report
+                .checkpoints
+                .iter()
+                .flat_map(|cp| cp.quantities.values()),
+        ),
     };
-    let text = serde_json::to_string_pretty(&doc)? + "\n";
-    if json {
-        crate::output::print_stdout(&text)?;
-    }
+    let mut value = serde_json::to_value(&doc)?;
+    with_heading_alias(&mut value);
+    let text = serde_json::to_string_pretty(&value)? + "\n";
+    crate::output::answer(&human, json.then_some(text.as_str()))?;
     if let Some(dir) = out {
         let _set = crate::output::begin_set(dir)?;
         write_string(&dir.join("drift.json"), &text)?;
@@ -295,6 +306,28 @@ pub fn emit(
         eprintln!("wrote {}/drift.{{json,csv,svg}}", dir.display());
     }
     Ok(())
+}
+
+/// Every checkpoint's `channels` gains `heading_rad` beside `yaw_rad` (the same values): one name
+/// for the heading error in every command (`drift` says `heading_rad`), the old key kept for the
+/// scripts that read it (docs/cli.md, "Contract changes").
+fn with_heading_alias(doc: &mut serde_json::Value) {
+    let Some(cps) = doc
+        .get_mut("checkpoints")
+        .and_then(serde_json::Value::as_array_mut)
+    else {
+        return;
+    };
+    for cp in cps {
+        if let Some(ch) = cp
+            .get_mut("channels")
+            .and_then(serde_json::Value::as_object_mut)
+        {
+            if let Some(yaw) = ch.get(NavQuantity::Yaw.name()).cloned() {
+                ch.insert(NavQuantity::Yaw.label().into(), yaw);
+            }
+        }
+    }
 }
 
 fn opt(x: Option<f64>) -> String {
@@ -335,6 +368,46 @@ fn write_csv(w: &mut dyn Write, r: &DriftReport) -> Result<()> {
     Ok(())
 }
 
+/// Probability that a correct model's ratio falls outside its 99.9 % interval.
+const FLAG_PROBABILITY: f64 = 0.001;
+
+/// The `*` flags of a set of ratio intervals: how many there are, how many are outside, and how
+/// many a correct model gives on average (each interval misses with probability 0.1 %; the
+/// intervals share their runs, so the count is not binomial, but its mean is n x 0.001 and the
+/// chance of at least one is at most that, by the union bound).
+#[derive(Serialize, Clone, Copy, Debug, Default, PartialEq)]
+struct FlagCount {
+    intervals: usize,
+    outside: usize,
+    expected_outside: f64,
+}
+
+impl FlagCount {
+    fn of<'a>(cs: impl Iterator<Item = &'a montecarlo::report::QuantityReport>) -> FlagCount {
+        let mut f = FlagCount::default();
+        for c in cs {
+            if let (Some(_), Some(lo), Some(hi)) = (c.ratio, c.ratio_lo, c.ratio_hi) {
+                f.intervals += 1;
+                f.outside += usize::from(!(lo <= 1.0 && 1.0 <= hi));
+            }
+        }
+        f.expected_outside = f.intervals as f64 * FLAG_PROBABILITY;
+        f
+    }
+
+    /// "2 of 36 intervals are marked *; a correct model marks 0.036 on average (at least one in
+    /// at most 3.6 % of seeds)".
+    fn text(&self) -> String {
+        format!(
+            "{} of the {} ratio intervals above are marked *; under a correct model each is outside with probability 0.1 %, so {} are expected on average (at least one in at most {} % of seeds, the union bound)",
+            self.outside,
+            self.intervals,
+            crate::fmt::trimmed(self.expected_outside, 3),
+            crate::fmt::trimmed((100.0 * self.expected_outside).min(100.0), 3)
+        )
+    }
+}
+
 fn fmt_ratio(c: &montecarlo::report::QuantityReport) -> String {
     match (c.ratio, c.ratio_lo, c.ratio_hi) {
         (Some(r), Some(lo), Some(hi)) => {
@@ -350,9 +423,20 @@ fn table(
     reference: Option<&ReferenceOut>,
     ablation: Option<&[AblationRow]>,
 ) -> String {
+    use std::fmt::Write as _;
     let mut s = String::new();
     horizontal_table(&mut s, r);
     last_checkpoint_table(&mut s, r);
+    let h = NavQuantity::PosHorizontal.name();
+    let shown = r.checkpoints.iter().map(|cp| &cp.quantities[h]).chain(
+        r.checkpoints.last().into_iter().flat_map(|cp| {
+            NavQuantity::ALL
+                .into_iter()
+                .filter(|q| *q != NavQuantity::PosHorizontal)
+                .map(move |q| &cp.quantities[q.name()])
+        }),
+    );
+    let _ = writeln!(s, "{}", FlagCount::of(shown).text());
     if let Some(rf) = reference {
         reference_line(&mut s, rf);
     }
@@ -367,14 +451,14 @@ fn horizontal_table(s: &mut String, r: &DriftReport) {
     use std::fmt::Write as _;
     let _ = writeln!(
         s,
-        "{}: sensor {}, {} runs ({} ok), seed {}, {} Hz, {} s, scheme {}; terms: {}",
+        "{}: sensor {}, {} runs ({} ok), seed {}, {}, {}, scheme {}; terms: {}",
         r.scenario,
         r.sensor,
         r.runs,
         r.runs_ok,
         r.seed,
-        r.rate_hz,
-        r.duration_s,
+        fmt::rate(r.rate_hz),
+        fmt::time(r.duration_s),
         r.scheme,
         if r.active_terms.is_empty() {
             "none".to_string()
@@ -430,7 +514,7 @@ fn last_checkpoint_table(s: &mut String, r: &DriftReport) {
             let _ = writeln!(
                 s,
                 "{:>20} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}  {}",
-                q.name(),
+                q.label(),
                 v(c.mean),
                 v(c.std),
                 v(c.rms),
@@ -510,6 +594,8 @@ fn svg(r: &DriftReport, q: NavQuantity) -> String {
             r.runs_ok,
             r.seed
         ),
+        subtitle: String::new(),
+        notes: Vec::new(),
         x_label: "t (s)".into(),
         y_label: q.name().into(),
         series: vec![

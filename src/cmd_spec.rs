@@ -36,7 +36,7 @@ pub struct Args {
     #[arg(required = true)]
     pub sensors: Vec<PathBuf>,
     /// A requirement to answer per sensor, e.g. "pos_horizontal_m < 10 m @ 300 s" or
-    /// "p50 yaw_rad < 2 deg @ 10 min" (statistic of |error|: p50, p68, p95 (default), p99, rms,
+    /// "p50 heading_rad < 2 deg @ 10 min" (statistic of |error|: p50, p68, p95 (default), p99, rms,
     /// mean); repeat for several
     #[arg(long, value_name = "REQ")]
     pub require: Vec<String>,
@@ -103,18 +103,6 @@ fn has_any(model: &SensorModel, sensor: Sensor) -> bool {
     Effect::ALL.iter().any(|&e| model.has(sensor, e))
 }
 
-/// What the model cannot tell, as notes for the reader.
-fn model_notes(model: &SensorModel) -> Vec<String> {
-    let mut notes = Vec::new();
-    if !has_any(model, Sensor::Accel) {
-        notes.push("the model has no accelerometer error terms: perfect accelerometers are assumed, so position and velocity drift come only through tilt from the gyros (optimistic)".into());
-    }
-    if !has_any(model, Sensor::Gyro) {
-        notes.push("the model has no gyro error terms: perfect gyros are assumed, so attitude does not drift".into());
-    }
-    notes
-}
-
 /// Whether the model has a term that drives `quantity`.
 fn informs(model: &SensorModel, quantity: NavQuantity) -> bool {
     let gyro = has_any(model, Sensor::Gyro);
@@ -148,17 +136,35 @@ pub fn run(args: Args) -> Result<()> {
         drift_rate_hz: args.rate,
         sensors,
     };
-    eprint!("{}", table(&doc));
     let text = serde_json::to_string_pretty(&doc)? + "\n";
-    if args.json {
-        crate::output::print_stdout(&text)?;
-    }
+    crate::output::answer(&table(&doc), args.json.then_some(text.as_str()))?;
     if let Some(dir) = &args.out {
         let _set = crate::output::begin_set(dir)?;
         write_string(&dir.join("spec.json"), &text)?;
         write_spec_csv(dir, &doc)?;
         write_drift_csv(dir, &doc)?;
-        eprintln!("wrote {}/spec.json, spec.csv, drift.csv", dir.display());
+        let sensors: Vec<crate::spec_plot::SensorDrift> = doc
+            .sensors
+            .iter()
+            .map(|s| crate::spec_plot::SensorDrift {
+                name: &s.spec.name,
+                drift: &s.spec.drift,
+                requirements: &s.requirements,
+            })
+            .collect();
+        let plots = crate::spec_plot::plots(&sensors);
+        for (name, svg) in &plots {
+            write_string(&dir.join(name), svg)?;
+        }
+        eprintln!(
+            "wrote {}/spec.json, spec.csv, drift.csv, {}",
+            dir.display(),
+            plots
+                .iter()
+                .map(|p| p.0.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
     }
     Ok(())
 }
@@ -291,10 +297,10 @@ fn compare_sensor(
     let gyro = match readback_duration {
         Some(d) => {
             eprintln!(
-                "{}: reading back a {}, {} Hz static log ...",
+                "{}: reading back a {}, {} static log ...",
                 model.name,
                 fmt::time(d),
-                READBACK_RATE_HZ
+                fmt::rate(READBACK_RATE_HZ)
             );
             pool.install(|| gyro_readback(&model, seed, d, READBACK_RATE_HZ))
         }
@@ -339,7 +345,7 @@ fn compare_sensor(
             drift: drift_rows(&report),
             drift_runs: report.runs_ok,
         },
-        model_notes: model_notes(&model),
+        model_notes: crate::model_notes::notes(&model, checkpoint_times.last().copied()),
         requirements,
     })
 }
@@ -419,9 +425,9 @@ fn spec_table(s: &mut String, doc: &SpecDoc) {
     if let Some(d) = doc.readback_duration_s {
         let _ = writeln!(
             s,
-            "\nspec vs readback (simulated {}, {} Hz static log; Woodman's method; {:.0} % intervals)",
+            "\nspec vs readback (simulated {}, {} static log; Woodman's method; {:.0} % intervals)",
             fmt::time(d),
-            doc.readback_rate_hz,
+            fmt::rate(doc.readback_rate_hz),
             100.0 * doc.readback_confidence
         );
     } else {
@@ -500,8 +506,8 @@ fn drift_table(s: &mut String, doc: &SpecDoc) {
     use std::fmt::Write as _;
     let _ = writeln!(
         s,
-        "\ndrift, static and level ({} Hz Monte Carlo, {} runs): heading rms and horizontal position, simulation / law",
-        doc.drift_rate_hz,
+        "\ndrift, static and level ({} Monte Carlo, {} runs): heading rms and horizontal position, simulation / law",
+        fmt::rate(doc.drift_rate_hz),
         doc.sensors.first().map_or(0, |x| x.spec.drift_runs)
     );
     let _ = writeln!(

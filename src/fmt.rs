@@ -48,6 +48,22 @@ pub fn quantity_value(quantity: &str, v_si: f64) -> String {
     }
 }
 
+/// A navigation-error quantity's name (as in the JSON) for titles: "heading" for `heading_rad`
+/// and `yaw_rad`, "horizontal position" for `pos_horizontal_m` ...; other names as they are.
+pub fn quantity_label(name: &str) -> String {
+    let base = name
+        .trim_end_matches("_rad")
+        .trim_end_matches("_mps")
+        .trim_end_matches("_m");
+    let words: Vec<&str> = base.split('_').collect();
+    match words.as_slice() {
+        ["yaw"] | ["heading"] => "heading".into(),
+        ["pos", axis] => format!("{axis} position"),
+        ["vel", axis] => format!("{axis} velocity"),
+        _ => base.replace('_', " "),
+    }
+}
+
 /// An optional quantity value ("n/a" when absent).
 pub fn quantity_opt(quantity: &str, v_si: Option<f64>) -> String {
     v_si.map_or_else(|| "n/a".into(), |v| quantity_value(quantity, v))
@@ -88,15 +104,16 @@ pub fn gyro_bias(v_rad_per_s: f64) -> String {
 }
 
 /// Display scale and unit for an Allan deviation and the five IEEE 952 coefficients (Q, N, B, K,
-/// R) of a channel whose SI unit is `si_unit`, as spec sheets write them: gyro deg/h, deg/sqrt(h),
-/// deg/h/sqrt(h); accelerometer ug, m/s/sqrt(h). A value in SI times the scale is in the unit.
+/// R) of a channel whose SI unit is `si_unit`, as spec sheets write them: gyro deg/h, arcsec,
+/// deg/sqrt(h), deg/h, deg/h/sqrt(h), deg/h^2; accelerometer ug, m/s, m/s/sqrt(h), ug. A value in SI times the scale is in the unit.
 pub fn allan_units(si_unit: &str) -> [(f64, String); 6] {
     let deg = 180.0 / std::f64::consts::PI;
     let g = noise::units::STANDARD_GRAVITY_MPS2;
     match si_unit {
         "rad/s" => [
             (deg * 3600.0, "deg/h".into()),
-            (deg * 3600.0, "deg/h*s".into()),
+            // Q (rad): deg/h x s is deg/3600, an arcsecond (IEEE 952 gives Q in arcsec).
+            (deg * 3600.0, "arcsec".into()),
             (deg * 60.0, "deg/sqrt(h)".into()),
             (deg * 3600.0, "deg/h".into()),
             (deg * 3600.0 * 60.0, "deg/h/sqrt(h)".into()),
@@ -118,6 +135,48 @@ pub fn allan_units(si_unit: &str) -> [(f64, String); 6] {
             (1.0, format!("{other}/sqrt(s)")),
             (1.0, format!("{other}/s")),
         ],
+    }
+}
+
+/// A white-noise coefficient N (SI: rad/sqrt(s) or m/s^2*sqrt(s), i.e. per sqrt(Hz)) as the other
+/// unit datasheets use for it: a gyro's rate noise density in deg/s/sqrt(Hz), an accelerometer's
+/// noise density in ug/sqrt(Hz) (1 ug = 9.80665e-6 m/s^2, the standard gravity of
+/// noise::units). `None` for other units.
+pub fn noise_density_alt(si_unit: &str, v: f64) -> Option<String> {
+    match si_unit {
+        "rad/s" => Some(format!("{} deg/s/sqrt(Hz)", sig(v.to_degrees(), 4))),
+        "m/s^2" => Some(format!(
+            "{} ug/sqrt(Hz)",
+            sig(v / noise::units::STANDARD_GRAVITY_MPS2 * 1e6, 4)
+        )),
+        _ => None,
+    }
+}
+
+/// A number with at most `digits` significant digits and no trailing zeros after the point
+/// ("200" for 199.99999995867375, "0.6827" for 0.6826894921370859 with 4).
+pub fn trimmed(v: f64, digits: usize) -> String {
+    let text = sig(v, digits);
+    if text.contains('.') && !text.contains('e') {
+        text.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        text
+    }
+}
+
+/// A sample rate as people write it: 7 significant digits at most ("200 Hz", "99.8 Hz"); a
+/// rate from timestamps carries their rounding far below that.
+pub fn rate(hz: f64) -> String {
+    format!("{} Hz", trimmed(hz, 7))
+}
+
+/// A confidence level: "1-sigma (68.27 %)" for the one-sigma level, else "95 %".
+pub fn confidence(level: f64) -> String {
+    let pct = trimmed(100.0 * level, 4);
+    if (level - allan::ONE_SIGMA_CI).abs() < 1e-9 {
+        format!("1-sigma ({pct} %)")
+    } else {
+        format!("{pct} %")
     }
 }
 
@@ -156,6 +215,14 @@ mod tests {
         assert_eq!(time(3600.0), "1 h");
         assert_eq!(time(0.1), "0.1 s");
         assert_eq!(time(45.96), "45.96 s");
+        assert_eq!(rate(199.99999995867375), "200 Hz");
+        assert_eq!(rate(99.8), "99.8 Hz");
+        assert_eq!(confidence(allan::ONE_SIGMA_CI), "1-sigma (68.27 %)");
+        assert_eq!(confidence(0.95), "95 %");
+        assert_eq!(
+            noise_density_alt("m/s^2", 9.80665e-4).as_deref(),
+            Some("100.0 ug/sqrt(Hz)")
+        );
         // Woodman Table 4 (MTx): 0.075 deg/sqrt(s) = 4.5 deg/sqrt(h).
         assert_eq!(arw(0.075f64.to_radians()), "4.50 deg/sqrt(h)");
         assert_eq!(gyro_bias(0.01f64.to_radians()), "36.0 deg/h");

@@ -8,7 +8,7 @@
 use imudrift::*;
 
 use clap::error::ErrorKind;
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, Parser, Subcommand};
 
 #[derive(Parser)]
 #[command(
@@ -39,6 +39,51 @@ enum Command {
     Merge(cmd_merge::Args),
     /// Drift measured on static logs against the model's prediction under one protocol, with a verdict
     Drift(cmd_drift::Args),
+    /// Print a shell completion script on stdout (e.g. `imudrift completions bash > /etc/bash_completion.d/imudrift`)
+    Completions {
+        /// The shell
+        shell: clap_complete::Shell,
+    },
+    /// Print the man page (roff) on stdout, or write imudrift.1 and one page per command into DIR
+    Man {
+        /// Write imudrift.1 and imudrift-<command>.1 into this directory
+        #[arg(long, value_name = "DIR")]
+        out: Option<std::path::PathBuf>,
+    },
+}
+
+/// `imudrift completions SHELL`: clap_complete's script for the whole command line.
+fn completions(shell: clap_complete::Shell) -> anyhow::Result<()> {
+    let mut buf = Vec::new();
+    clap_complete::generate(shell, &mut Cli::command(), "imudrift", &mut buf);
+    output::print_stdout(&String::from_utf8_lossy(&buf))
+}
+
+/// `imudrift man [--out DIR]`: clap_mangen's pages, the command's and one per subcommand.
+fn man(out: Option<&std::path::Path>) -> anyhow::Result<()> {
+    let cmd = Cli::command();
+    let render = |c: clap::Command| -> anyhow::Result<String> {
+        let mut buf = Vec::new();
+        clap_mangen::Man::new(c).render(&mut buf)?;
+        Ok(String::from_utf8_lossy(&buf).into_owned())
+    };
+    let Some(dir) = out else {
+        return output::print_stdout(&render(cmd)?);
+    };
+    let _lock = output::prepare_dir(dir)?;
+    let mut pages = vec![("imudrift.1".to_string(), render(cmd.clone())?)];
+    for sub in cmd.get_subcommands() {
+        // clap takes a command's name as a static string (without its `string` feature): the
+        // few page names live until the process ends anyway.
+        let name: &'static str = Box::leak(format!("imudrift-{}", sub.get_name()).into_boxed_str());
+        pages.push((format!("{name}.1"), render(sub.clone().name(name))?));
+    }
+    let _set = output::begin_set(dir)?;
+    for (name, text) in &pages {
+        output::write_string(&dir.join(name), text)?;
+    }
+    eprintln!("wrote {} man pages to {}", pages.len(), dir.display());
+    Ok(())
 }
 
 fn main() -> std::process::ExitCode {
@@ -70,6 +115,8 @@ fn main() -> std::process::ExitCode {
         Command::Diagnose(a) => cmd_diagnose::run(a),
         Command::Merge(a) => cmd_merge::run(a),
         Command::Drift(a) => cmd_drift::run(a),
+        Command::Completions { shell } => completions(shell),
+        Command::Man { out } => man(out.as_deref()),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -255,6 +255,19 @@ pub fn print_stdout(text: &str) -> Result<()> {
         .context("cannot write to standard output")
 }
 
+/// A command's answer, by the one convention of every command (docs/cli.md, "Output streams"):
+/// the human text on stdout, or with `--json` the JSON document on stdout and the text on stderr
+/// (so a person watching still reads it). Progress, notes and warnings go to stderr elsewhere.
+pub fn answer(text: &str, json: Option<&str>) -> Result<()> {
+    match json {
+        Some(doc) => {
+            eprint!("{text}");
+            print_stdout(doc)
+        }
+        None => print_stdout(text),
+    }
+}
+
 /// Write a string atomically.
 pub fn write_string(path: &Path, text: &str) -> Result<()> {
     write_atomic(path, |w| Ok(w.write_all(text.as_bytes())?))
@@ -265,6 +278,18 @@ pub fn write_string(path: &Path, text: &str) -> Result<()> {
 #[must_use = "the directory is locked only while this value lives"]
 pub struct OutLock {
     _file: Option<std::fs::File>,
+    /// The lock file, removed when the lock is dropped (no `.imudrift.lock` is left behind).
+    path: Option<std::path::PathBuf>,
+}
+
+impl Drop for OutLock {
+    /// Remove the lock file while still holding the lock: a run waiting on the same file finds,
+    /// once it holds it, that the path no longer names it, and starts over ([`prepare_dir`]).
+    fn drop(&mut self) {
+        if let Some(path) = self.path.take() {
+            let _ = std::fs::remove_file(path);
+        }
+    }
 }
 
 /// Check a directory shared by design (shard files): create it and make sure a file can be
@@ -275,7 +300,10 @@ pub fn prepare_shared_dir(dir: &Path) -> Result<OutLock> {
     tempfile::NamedTempFile::new_in(dir)
         .map(drop)
         .with_context(|| format!("--out {}: cannot write files there", dir.display()))?;
-    Ok(OutLock { _file: None })
+    Ok(OutLock {
+        _file: None,
+        path: None,
+    })
 }
 
 /// Check an `--out` directory before any work: create it (and parents), make sure a file can be
@@ -284,21 +312,54 @@ pub fn prepare_dir(dir: &Path) -> Result<OutLock> {
     ensure_dir(dir)?;
     refuse_inputs_in_out_dir(dir)?;
     let path = dir.join(".imudrift.lock");
-    let file = std::fs::OpenOptions::new()
-        .create(true)
-        .truncate(false)
-        .write(true)
-        .open(&path)
-        .with_context(|| format!("--out {}: cannot write files there", dir.display()))?;
-    match file.try_lock() {
-        Ok(()) => Ok(OutLock { _file: Some(file) }),
-        Err(std::fs::TryLockError::WouldBlock) => bail!(
-            "--out {}: another imudrift is writing to this directory; wait for it or choose another --out",
-            dir.display()
-        ),
-        Err(std::fs::TryLockError::Error(e)) => {
-            Err(e).with_context(|| format!("--out {}: cannot lock the directory", dir.display()))
+    // A lock file another run removed after we opened it locks nothing: retry on a fresh one
+    // (a few times: each retry means another run finished in between).
+    for _ in 0..100 {
+        let file = std::fs::OpenOptions::new()
+            .create(true)
+            .truncate(false)
+            .write(true)
+            .open(&path)
+            .with_context(|| format!("--out {}: cannot write files there", dir.display()))?;
+        match file.try_lock() {
+            Ok(()) => {}
+            Err(std::fs::TryLockError::WouldBlock) => bail!(
+                "--out {}: another imudrift is writing to this directory; wait for it or choose another --out",
+                dir.display()
+            ),
+            Err(std::fs::TryLockError::Error(e)) => {
+                return Err(e).with_context(|| {
+                    format!("--out {}: cannot lock the directory", dir.display())
+                })
+            }
         }
+        if same_file(&file, &path) {
+            return Ok(OutLock {
+                _file: Some(file),
+                path: Some(path),
+            });
+        }
+    }
+    bail!(
+        "--out {}: cannot lock the directory (its lock file keeps being replaced)",
+        dir.display()
+    )
+}
+
+/// Whether the open `file` is the one `path` names now (same device and inode).
+fn same_file(file: &std::fs::File, path: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        match (file.metadata(), std::fs::metadata(path)) {
+            (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
+            _ => false,
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = (file, path);
+        true
     }
 }
 

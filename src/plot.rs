@@ -1,6 +1,10 @@
 //! A small dependency-free SVG writer for log-log plots: line/marker series, shaded bands
-//! (confidence intervals, Monte Carlo envelopes) and a legend. Used by `allan`, `diagnose`
-//! and `simulate`.
+//! (confidence intervals, Monte Carlo envelopes) and a legend. Used by `allan`, `diagnose`,
+//! `drift`, `simulate` and `spec`.
+//!
+//! Every text stays inside the canvas: titles, subtitles and notes are wrapped to its width by a
+//! conservative width estimate ([`text_width`]), the canvas grows by the lines they take, and the
+//! legend goes to the corner of the plot area where it covers the fewest data points.
 
 use std::fmt::Write;
 
@@ -55,6 +59,10 @@ pub struct Band {
 #[derive(Clone, Debug, Default)]
 pub struct LogLogPlot {
     pub title: String,
+    /// A second, smaller title line (the protocol, the source), wrapped like the title.
+    pub subtitle: String,
+    /// Lines written under the plot (readings, bounds), wrapped to the width.
+    pub notes: Vec<String>,
     pub x_label: String,
     pub y_label: String,
     pub series: Vec<Series>,
@@ -67,11 +75,77 @@ pub const PALETTE: [&str; 8] = [
 ];
 
 const W: f64 = 820.0;
-const H: f64 = 560.0;
+/// Height of the plot area plus the axis labels; the canvas adds the title and note lines.
+const BASE_H: f64 = 510.0;
 const LEFT: f64 = 90.0;
 const RIGHT: f64 = 30.0;
-const TOP: f64 = 50.0;
 const BOTTOM: f64 = 70.0;
+const TITLE_SIZE: f64 = 16.0;
+const TEXT_SIZE: f64 = 12.0;
+/// Margin kept free at each side of a wrapped line.
+const MARGIN: f64 = 10.0;
+
+/// A conservative width (px) of `text` in a sans-serif font of `size` px: per character the
+/// widest of DejaVu Sans / Arial / Helvetica in its class, rounded up (digits and lower case
+/// 0.65 em, upper case 0.8 em, `m` `w` `M` `W` and non-ASCII 1.0 em, space and narrow marks
+/// 0.42 em), so a real renderer draws the text no wider.
+pub fn text_width(text: &str, size: f64) -> f64 {
+    text.chars()
+        .map(|c| match c {
+            'm' | 'w' | 'M' | 'W' => 1.0,
+            'i' | 'j' | 'l' | 't' | 'f' | 'r' | '.' | ',' | ':' | ';' | '\'' | '!' | '|' | ' '
+            | '(' | ')' | '[' | ']' => 0.42,
+            c if c.is_ascii_uppercase() => 0.8,
+            c if c.is_ascii() => 0.65,
+            _ => 1.0,
+        })
+        .sum::<f64>()
+        * size
+}
+
+/// `text` broken at spaces into lines no wider than `width` px at `size` (a word longer than
+/// the width is cut into pieces).
+pub fn wrap(text: &str, size: f64, width: f64) -> Vec<String> {
+    let mut lines: Vec<String> = Vec::new();
+    let mut line = String::new();
+    for word in text.split(' ') {
+        let trial = if line.is_empty() {
+            word.to_string()
+        } else {
+            format!("{line} {word}")
+        };
+        if text_width(&trial, size) <= width || line.is_empty() && word.is_empty() {
+            line = trial;
+            continue;
+        }
+        if !line.is_empty() {
+            lines.push(std::mem::take(&mut line));
+        }
+        let mut piece = String::new();
+        for c in word.chars() {
+            piece.push(c);
+            if text_width(&piece, size) > width {
+                piece.pop();
+                lines.push(std::mem::take(&mut piece));
+                piece.push(c);
+            }
+        }
+        line = piece;
+    }
+    if !line.is_empty() {
+        lines.push(line);
+    }
+    lines
+}
+
+/// The canvas's text lines and the plot area's place.
+struct Layout {
+    title: Vec<String>,
+    subtitle: Vec<String>,
+    notes: Vec<String>,
+    top: f64,
+    height: f64,
+}
 
 impl LogLogPlot {
     /// The same plot with its y values (an Allan deviation in `si_unit`, rad/s or m/s^2) in the
@@ -96,32 +170,77 @@ impl LogLogPlot {
         self
     }
 
+    /// The title, subtitle and note lines wrapped to the canvas, and the heights they leave.
+    fn layout(&self) -> Layout {
+        let width = W - 2.0 * MARGIN;
+        let title = wrap(&self.title, TITLE_SIZE, width);
+        let subtitle = if self.subtitle.is_empty() {
+            Vec::new()
+        } else {
+            wrap(&self.subtitle, TEXT_SIZE, width)
+        };
+        let notes: Vec<String> = self
+            .notes
+            .iter()
+            .flat_map(|n| wrap(n, TEXT_SIZE, width))
+            .collect();
+        let top = 12.0 + 20.0 * title.len() as f64 + 16.0 * subtitle.len() as f64 + 12.0;
+        let height = top + BASE_H - 50.0 + 16.0 * notes.len() as f64 + 6.0;
+        Layout {
+            title,
+            subtitle,
+            notes,
+            top,
+            height,
+        }
+    }
+
     /// Render to an SVG document. Non-positive and non-finite values are skipped.
     pub fn to_svg(&self) -> String {
-        let frame = self.frame();
+        let layout = self.layout();
+        let frame = self.frame(&layout);
+        let h = layout.height;
         let mut s = String::new();
         let _ = writeln!(
             s,
-            r#"<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" viewBox="0 0 {W} {H}" font-family="sans-serif" font-size="12">"#
+            r#"<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{h}" viewBox="0 0 {W} {h}" font-family="sans-serif" font-size="12">"#
         );
-        let _ = writeln!(s, r#"<rect width="{W}" height="{H}" fill="white"/>"#);
-        let _ = writeln!(
-            s,
-            r#"<text x="{}" y="28" text-anchor="middle" font-size="16">{}</text>"#,
-            W / 2.0,
-            esc(&self.title)
-        );
+        let _ = writeln!(s, r#"<rect width="{W}" height="{h}" fill="white"/>"#);
+        let mut y = 12.0;
+        for line in &layout.title {
+            y += 20.0;
+            let _ = writeln!(
+                s,
+                r#"<text x="{}" y="{y}" text-anchor="middle" font-size="16">{}</text>"#,
+                W / 2.0,
+                esc(line)
+            );
+        }
+        for line in &layout.subtitle {
+            y += 16.0;
+            let _ = writeln!(
+                s,
+                r#"<text x="{}" y="{y}" text-anchor="middle">{}</text>"#,
+                W / 2.0,
+                esc(line)
+            );
+        }
         frame.write_grid(&mut s);
         self.write_axes(&mut s, &frame);
         self.write_bands(&mut s, &frame);
         self.write_series(&mut s, &frame);
         self.write_legend(&mut s, &frame);
+        let mut y = frame.top + frame.ph + BOTTOM - 4.0;
+        for line in &layout.notes {
+            y += 16.0;
+            let _ = writeln!(s, r#"<text x="{MARGIN}" y="{y}">{}</text>"#, esc(line));
+        }
         s.push_str("</svg>\n");
         s
     }
 
     /// The decades the plotted values span, on both axes.
-    fn frame(&self) -> Frame {
+    fn frame(&self, layout: &Layout) -> Frame {
         let mut xs = Vec::new();
         let mut ys = Vec::new();
         for s in &self.series {
@@ -160,31 +279,40 @@ impl LogLogPlot {
             x1,
             y0,
             y1,
+            top: layout.top,
             pw: W - LEFT - RIGHT,
-            ph: H - TOP - BOTTOM,
+            ph: BASE_H - 50.0 - BOTTOM,
         }
     }
 
     /// The plot area's border and the axis labels.
     fn write_axes(&self, s: &mut String, f: &Frame) {
-        let (pw, ph) = (f.pw, f.ph);
+        let (pw, ph, top) = (f.pw, f.ph, f.top);
         let _ = writeln!(
             s,
-            r#"<rect x="{LEFT}" y="{TOP}" width="{pw}" height="{ph}" fill="none" stroke="black"/>"#
+            r#"<rect x="{LEFT}" y="{top}" width="{pw}" height="{ph}" fill="none" stroke="black"/>"#
         );
         let _ = writeln!(
             s,
             r#"<text x="{:.2}" y="{:.2}" text-anchor="middle">{}</text>"#,
             LEFT + pw / 2.0,
-            H - 20.0,
+            top + ph + BOTTOM - 20.0,
             esc(&self.x_label)
         );
+        // The y label runs along the plot's height: shortened with an ellipsis if longer.
+        let mut label = self.y_label.clone();
+        if text_width(&label, TEXT_SIZE) > ph {
+            while !label.is_empty() && text_width(&format!("{label}…"), TEXT_SIZE) > ph {
+                label.pop();
+            }
+            label.push('…');
+        }
         let _ = writeln!(
             s,
             r#"<text x="20" y="{:.2}" text-anchor="middle" transform="rotate(-90 20 {:.2})">{}</text>"#,
-            TOP + ph / 2.0,
-            TOP + ph / 2.0,
-            esc(&self.y_label)
+            top + ph / 2.0,
+            top + ph / 2.0,
+            esc(&label)
         );
     }
 
@@ -257,19 +385,73 @@ impl LogLogPlot {
         }
     }
 
-    /// The legend, top right: bands first, then series.
+    /// The legend's size (px): wide enough for its longest name.
+    fn legend_size(&self) -> (f64, f64) {
+        let names = self
+            .bands
+            .iter()
+            .map(|b| b.name.as_str())
+            .chain(self.series.iter().map(|s| s.name.as_str()));
+        let longest = names
+            .map(|n| text_width(n, TEXT_SIZE))
+            .fold(0.0f64, f64::max);
+        let entries = self.bands.len() + self.series.len();
+        (longest + 48.0, entries as f64 * 18.0 + 8.0)
+    }
+
+    /// The legend's top-left corner: of the plot area's four corners, the one whose box covers
+    /// the fewest plotted points (series points and band edges, and the midpoints between
+    /// neighbours); top right on a tie.
+    fn legend_place(&self, f: &Frame, (lw, lh): (f64, f64)) -> (f64, f64) {
+        let mut pts: Vec<(f64, f64)> = Vec::new();
+        let mut add = |x: &[f64], y: &[f64]| {
+            let p: Vec<(f64, f64)> = x
+                .iter()
+                .zip(y)
+                .filter(|(x, y)| plottable(**x) && plottable(**y))
+                .map(|(x, y)| (f.px(*x), f.py(*y)))
+                .collect();
+            for w in p.windows(2) {
+                pts.push(((w[0].0 + w[1].0) / 2.0, (w[0].1 + w[1].1) / 2.0));
+            }
+            pts.extend(p);
+        };
+        for ser in &self.series {
+            add(&ser.x, &ser.y);
+        }
+        for b in &self.bands {
+            add(&b.x, &b.lo);
+            add(&b.x, &b.hi);
+        }
+        let (right, bottom) = (LEFT + f.pw - lw - 8.0, f.top + f.ph - lh - 8.0);
+        let corners = [
+            (right, f.top + 8.0),
+            (LEFT + 8.0, f.top + 8.0),
+            (right, bottom),
+            (LEFT + 8.0, bottom),
+        ];
+        let covered = |(x, y): (f64, f64)| {
+            pts.iter()
+                .filter(|(px, py)| *px >= x && *px <= x + lw && *py >= y && *py <= y + lh)
+                .count()
+        };
+        corners
+            .into_iter()
+            .min_by_key(|c| covered(*c))
+            .unwrap_or(corners[0])
+    }
+
+    /// The legend, in the emptiest corner: bands first, then series.
     fn write_legend(&self, s: &mut String, f: &Frame) {
         let entries = self.bands.len() + self.series.len();
         if entries == 0 {
             return;
         }
-        let lw = 230.0;
-        let lx = LEFT + f.pw - lw - 8.0;
-        let ly = TOP + 8.0;
+        let (lw, lh) = self.legend_size();
+        let (lx, ly) = self.legend_place(f, (lw, lh));
         let _ = writeln!(
             s,
-            r##"<rect x="{lx:.2}" y="{ly:.2}" width="{lw}" height="{:.2}" fill="white" fill-opacity="0.85" stroke="#999999"/>"##,
-            entries as f64 * 18.0 + 8.0
+            r##"<rect x="{lx:.2}" y="{ly:.2}" width="{lw:.2}" height="{lh:.2}" fill="white" fill-opacity="0.85" stroke="#999999"/>"##
         );
         let label = |s: &mut String, y: f64, name: &str| {
             let _ = writeln!(
@@ -329,6 +511,8 @@ fn plottable(v: f64) -> bool {
 
 /// The plot area: the decades shown (log10 of the ends) and its size in pixels.
 struct Frame {
+    /// The plot area's top edge, px.
+    top: f64,
     x0: f64,
     x1: f64,
     y0: f64,
@@ -343,7 +527,7 @@ impl Frame {
     }
 
     fn py(&self, y: f64) -> f64 {
-        TOP + self.ph - (y.log10() - self.y0) / (self.y1 - self.y0) * self.ph
+        self.top + self.ph - (y.log10() - self.y0) / (self.y1 - self.y0) * self.ph
     }
 
     /// Grid lines at 1..9 times each decade (the decades solid and labelled, the rest light),
@@ -354,14 +538,15 @@ impl Frame {
             let (c, w) = grid_stroke(k);
             let _ = writeln!(
                 s,
-                r#"<line x1="{x:.2}" y1="{TOP}" x2="{x:.2}" y2="{:.2}" stroke="{c}" stroke-width="{w}"/>"#,
-                TOP + self.ph
+                r#"<line x1="{x:.2}" y1="{}" x2="{x:.2}" y2="{:.2}" stroke="{c}" stroke-width="{w}"/>"#,
+                self.top,
+                self.top + self.ph
             );
             if k == 1 {
                 let _ = writeln!(
                     s,
                     r#"<text x="{x:.2}" y="{:.2}" text-anchor="middle">1e{d}</text>"#,
-                    TOP + self.ph + 18.0
+                    self.top + self.ph + 18.0
                 );
             }
         }
@@ -424,6 +609,8 @@ mod tests {
     fn svg_has_series_band_and_legend() {
         let p = LogLogPlot {
             title: "t <1>".into(),
+            subtitle: String::new(),
+            notes: Vec::new(),
             x_label: "tau (s)".into(),
             y_label: "dev".into(),
             series: vec![Series::new(
@@ -447,5 +634,23 @@ mod tests {
         assert!(svg.contains(r#"fill-opacity="0.2""#));
         // x axis spans 1e-1 .. 1e1: tick labels of the decades
         assert!(svg.contains(">1e-1<") && svg.contains(">1e1<"));
+    }
+
+    #[test]
+    fn wrap_keeps_every_line_within_the_width() {
+        let text = "heading_rad: measured vs model (bias = each channel's mean over the log; attitude perfect at each segment's start)";
+        let lines = wrap(text, 16.0, 400.0);
+        assert!(lines.len() >= 2, "{lines:?}");
+        assert!(
+            lines.iter().all(|l| text_width(l, 16.0) <= 400.0),
+            "{lines:?}"
+        );
+        assert_eq!(lines.join(" "), text);
+        // A word longer than the width is cut, not left sticking out.
+        let long = wrap(&"x".repeat(100), 12.0, 100.0);
+        assert!(
+            long.iter().all(|l| text_width(l, 12.0) <= 100.0),
+            "{long:?}"
+        );
     }
 }

@@ -204,3 +204,122 @@ fn adis16405_log_through_the_command() {
     // octave grid up to N/4 (Stable32 stop ratio): m = 1 .. 2^17 on 6 channels
     assert_eq!(compared, 6 * 18);
 }
+
+/// The issue-24 case through the commands: a white-noise-only sensor (N = 0.5833 deg/sqrt(h) on
+/// every gyro, 0.12 m/s/sqrt(h) on every accelerometer), `imudrift generate` 10 min at 200 Hz,
+/// then `imudrift allan --json`: every white-noise reading holds its truth within its stated
+/// interval, and no bias-instability or random-walk value is claimed, only bounds (`null` with
+/// `<name>_bound`), in the JSON and the text alike. Tolerance: the intervals are asked at the
+/// level 1 - 0.01/6 for the 6 readings (Bonferroni: family-wise false-positive rate 1 %).
+#[test]
+fn white_noise_readings_are_right_and_claim_no_bias_instability() {
+    let dir = tempfile::tempdir().unwrap();
+    let sensor = dir.path().join("white.toml");
+    std::fs::write(
+        &sensor,
+        "name = \"white\"\n[gyro.all]\nwhite_noise = \"0.5833 deg/sqrt(h)\"\n[accel.all]\nwhite_noise = \"0.12 m/s/sqrt(h)\"\n",
+    )
+    .unwrap();
+    let log = dir.path().join("white.csv");
+    let o = command()
+        .args(["generate", sensor.to_str().unwrap()])
+        .args(["--duration", "10min", "--rate", "200", "--seed", "5", "-o"])
+        .arg(&log)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let confidence = format!("{}", 1.0 - 0.01 / 6.0);
+    let o = command()
+        .args(["allan", log.to_str().unwrap(), "--json", "--confidence"])
+        .arg(&confidence)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let doc: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let truth = |ch: &str| {
+        if ch.starts_with('g') {
+            (0.5833f64 / 60.0).to_radians()
+        } else {
+            0.12 / 60.0
+        }
+    };
+    for ch in ["gx", "gy", "gz", "ax", "ay", "az"] {
+        let r = &doc["channels"][ch]["readings"];
+        let (v, lo, hi) = (
+            r["arw_at_1s"].as_f64().unwrap(),
+            r["arw_at_1s_lo"].as_f64().unwrap(),
+            r["arw_at_1s_hi"].as_f64().unwrap(),
+        );
+        assert!(
+            lo <= truth(ch) && truth(ch) <= hi,
+            "{ch}: {v} [{lo}, {hi}] vs {}",
+            truth(ch)
+        );
+        for name in ["bi_min", "bi_ieee", "rrw_at_3s"] {
+            assert!(r[name].is_null(), "{ch}: {name} = {} claimed", r[name]);
+            assert!(
+                r[format!("{name}_bound")].as_f64().unwrap() > 0.0,
+                "{ch}: {r}"
+            );
+        }
+        for term in ["b", "k", "r"] {
+            let resolved = &doc["channels"][ch]["fit_resolved"][term];
+            assert_eq!(
+                resolved,
+                &serde_json::json!(false),
+                "{ch}: fitted {term} given as a value"
+            );
+        }
+    }
+    // The text (on stderr with --json) says the same: bounds, no minimum.
+    let text = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        text.matches("bias instability (minimum) not resolved: <")
+            .count()
+            == 6,
+        "{text}"
+    );
+}
+
+/// Unit plausibility (issue 24): a gyro logged in deg/s under the name `gx` (read as rad/s, the
+/// canonical name's default) and an accelerometer logged in g read as m/s^2 each draw a warning
+/// naming the flag that fixes it; the analysis still runs. The noise (0.5 deg/s per sample at
+/// 100 Hz: 0.05 deg/s/sqrt(Hz), 2.9 "deg/s/sqrt(Hz)" when read as rad/s) and the magnitude (1 g
+/// read as 1 m/s^2) are each far beyond the warning's thresholds (1 deg/s/sqrt(Hz); a factor
+/// 1.25 around standard gravity), so no tolerance question arises.
+#[test]
+fn wrong_units_draw_a_plausibility_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("units.csv");
+    let mut rng = testkit::SplitMix64::new(3);
+    let mut text = String::from("gx,ax,ay,az\n");
+    for _ in 0..20_000 {
+        let n = 0.002 * rng.normal();
+        text.push_str(&format!("{},{n},{n},{}\n", 0.5 * rng.normal(), -1.0 + n));
+    }
+    std::fs::write(&path, text).unwrap();
+    let o = command()
+        .args(["allan", path.to_str().unwrap(), "--rate", "100"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("warning:")
+            && err.contains("gx reads a white noise of")
+            && err.contains("--gyro-unit deg/s"),
+        "{err}"
+    );
+    assert!(
+        err.contains("near 1, as a log in g reads") && err.contains("--accel-unit g"),
+        "{err}"
+    );
+    // Stated right, no warning.
+    let o = command()
+        .args(["allan", path.to_str().unwrap(), "--rate", "100"])
+        .args(["--gyro-unit", "deg/s", "--accel-unit", "g"])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("warning:"));
+}

@@ -40,13 +40,15 @@ class Fit:
     """The IEEE 952 fit of a curve (crate ``allan``, module ``fit``): weighted non-negative least
     squares of sigma^2(tau) = 3Q^2/tau^2 + N^2/tau + (2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2
     (IEEE 952-1997 Annex C). ``terms`` maps q, n, b, k, r to a :class:`Term` or ``None`` (term
-    not present); ``readings`` are the spec-sheet readings of the curve (slope lines touching it,
-    the minimum and B = minimum / 0.664)."""
+    not present); ``readings`` are the spec-sheet readings of the curve as ``imudrift allan --json``
+    gives them: the -1/2 (-1, +1/2) line fitted where its term dominates, the minimum only where
+    the curve rises significantly after it, B = minimum / 0.664; a reading the curve does not
+    resolve is ``None`` with ``<name>_bound`` beside it (docs/allan.md, "Readings")."""
 
     terms: Dict[str, Optional[Term]]
     reduced_chi2: float
     model_error: float
-    readings: Dict[str, float]
+    readings: Dict[str, Optional[float]]
 
     def to_dict(self):
         return {
@@ -121,6 +123,29 @@ class AllanResult:
                 "AllanResult.to_pandas() needs pandas: pip install pandas (or use .to_dict())"
             ) from None
         return pd.DataFrame({c: getattr(self, c) for c in self._COLUMNS})
+
+
+    def plot(self, ax=None, label=None):
+        """The curve with its interval band on log-log axes, and the IEEE 952 fit when there is
+        one (matplotlib is optional). Returns the matplotlib ``Axes``."""
+        try:
+            import matplotlib.pyplot as plt
+        except ImportError:
+            raise ImportError(
+                "AllanResult.plot() needs matplotlib: pip install matplotlib"
+            ) from None
+        if ax is None:
+            _, ax = plt.subplots()
+        line = ax.loglog(self.tau, self.deviation, "o-", ms=3, label=label or self.estimator)[0]
+        ax.fill_between(self.tau, self.lo, self.hi, color=line.get_color(), alpha=0.2, lw=0)
+        if self._fit is not None:
+            # The fitted model's deviation (crate allan, Fit::model_dev), sampled by the library.
+            ax.loglog(self._fit["model_tau"], self._fit["model_dev"], "k--", lw=1, label="IEEE 952 fit")
+        ax.set_xlabel("tau (s)")
+        ax.set_ylabel(f"{self.estimator} (unit of the samples)")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend()
+        return ax
 
 
 def allan(

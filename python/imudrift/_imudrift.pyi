@@ -35,3 +35,6 @@ def read_log_columns(
     columns: Optional[List[Tuple[str, str]]],
     topic: Optional[str],
 ) -> Dict[str, Any]: ...
+def generate_columns(
+    sensor_text: str, source: str, duration_s: float, rate_hz: float, seed: int, run: int
+) -> Dict[str, Any]: ...

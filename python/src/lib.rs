@@ -222,8 +222,30 @@ fn edf_method(name: &str) -> PyResult<EdfMethod> {
     }
 }
 
-fn fit_dict<'py>(py: Python<'py>, fit: &Fit) -> PyResult<Bound<'py, PyDict>> {
+/// Points of a fitted model curve drawn between the first and the last tau.
+const MODEL_CURVE_POINTS: usize = 100;
+
+/// The fit, its model curve (`model_tau`, `model_dev`) and the spec-sheet readings as
+/// `imudrift allan --json` gives them (docs/cli.md): a reading the curve does not resolve is
+/// `None`, with `<name>_bound` beside it; a resolved one has `<name>_lo` / `<name>_hi`
+/// (`allan::sheet`).
+fn fit_dict<'py>(
+    py: Python<'py>,
+    fit: &Fit,
+    points: &[AllanPoint],
+    sheet: Option<&allan::sheet::SheetReadings>,
+) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
+    if let (Some(first), Some(last)) = (points.first(), points.last()) {
+        let (a, b) = (first.tau_s.ln(), last.tau_s.ln());
+        let steps = (MODEL_CURVE_POINTS - 1) as f64;
+        let tau: Vec<f64> = (0..MODEL_CURVE_POINTS)
+            .map(|i| (a + (b - a) * i as f64 / steps).exp())
+            .collect();
+        let dev: Vec<f64> = tau.iter().map(|&t| fit.model_dev(t)).collect();
+        d.set_item("model_tau", tau.into_pyarray(py))?;
+        d.set_item("model_dev", dev.into_pyarray(py))?;
+    }
     let terms = PyDict::new(py);
     for (name, t) in TERM_NAMES.iter().zip(fit.terms()) {
         terms.set_item(name, t.map(|t| (t.value, t.sigma)))?;
@@ -231,19 +253,28 @@ fn fit_dict<'py>(py: Python<'py>, fit: &Fit) -> PyResult<Bound<'py, PyDict>> {
     d.set_item("terms", terms)?;
     d.set_item("reduced_chi2", fit.reduced_chi2)?;
     d.set_item("model_error", fit.model_error)?;
-    let r = &fit.readings;
     let readings = PyDict::new(py);
-    for (k, v) in [
-        ("arw_at_1s", r.arw_at_1s),
-        ("arw_tau_s", r.arw_tau_s),
-        ("bi_min", r.bi_min),
-        ("bi_min_tau_s", r.bi_min_tau_s),
-        ("bi_ieee", r.bi_ieee),
-        ("rrw_at_3s", r.rrw_at_3s),
-        ("rrw_tau_s", r.rrw_tau_s),
-        ("q_at_sqrt3s", r.q_at_sqrt3s),
-    ] {
-        readings.set_item(k, v)?;
+    if let Some(sh) = sheet {
+        let ieee = 1.0 / allan::fit::BI_PLATEAU_FACTOR;
+        for (name, rd, scale) in [
+            ("arw_at_1s", &sh.arw, 1.0),
+            ("bi_min", &sh.bi_min, 1.0),
+            ("bi_ieee", &sh.bi_min, ieee),
+            ("rrw_at_3s", &sh.rrw, 1.0),
+            ("q_at_sqrt3s", &sh.q, 1.0),
+        ] {
+            let resolved = rd.value.is_some();
+            readings.set_item(name, rd.value.map(|v| v * scale))?;
+            readings.set_item(format!("{name}_lo"), resolved.then_some(rd.lo * scale))?;
+            readings.set_item(format!("{name}_hi"), resolved.then_some(rd.hi * scale))?;
+            readings.set_item(
+                format!("{name}_bound"),
+                (!resolved).then_some(rd.bound * scale),
+            )?;
+        }
+        readings.set_item("arw_tau_s", sh.arw.value.map(|_| sh.arw.tau_s[0]))?;
+        readings.set_item("bi_min_tau_s", sh.bi_min.value.map(|_| sh.bi_min.tau_s[0]))?;
+        readings.set_item("rrw_tau_s", sh.rrw.value.map(|_| sh.rrw.tau_s[0]))?;
     }
     d.set_item("readings", readings)?;
     Ok(d)
@@ -289,7 +320,9 @@ fn allan_analysis<'py>(
         })?,
         TausArg::Seconds(s) => factors_of_seconds(s, rate, n_phase),
     };
-    let allan::Analysis { points, fit } = py.detach(move || {
+    let allan::Analysis {
+        points, fit, sheet, ..
+    } = py.detach(move || {
         let tau0_s = 1.0 / rate;
         let quiet = |_: &str| {};
         match kind {
@@ -312,7 +345,7 @@ fn allan_analysis<'py>(
     d.set_item("n_terms", ints(&|p| p.n_terms as i64).into_pyarray(py))?;
     d.set_item("bins", ints(&|p| p.bins as i64).into_pyarray(py))?;
     match &fit {
-        Some(f) => d.set_item("fit", fit_dict(py, f)?)?,
+        Some(f) => d.set_item("fit", fit_dict(py, f, &points, sheet.as_ref())?)?,
         None => d.set_item("fit", py.None())?,
     }
     Ok(d)
@@ -431,6 +464,84 @@ fn read_log_columns<'py>(
     Ok(d)
 }
 
+/// Highest sample rate of a generated log, Hz (the `generate` command's limit).
+const MAX_GENERATE_RATE_HZ: f64 = 1e6;
+
+/// A static, level IMU log generated from a sensor model ([`noise::ImuErrors::fill_static`]), the
+/// values `imudrift generate` writes for the same model, seed and run: `t` (k / rate, s), the six
+/// channels gx..az (rad/s, m/s^2) and `temp` (degC), and the model's name.
+#[pyfunction]
+#[pyo3(signature = (sensor_text, source, duration_s, rate_hz, seed, run))]
+fn generate_columns<'py>(
+    py: Python<'py>,
+    sensor_text: &str,
+    source: &str,
+    duration_s: f64,
+    rate_hz: f64,
+    seed: u64,
+    run: u64,
+) -> PyResult<Bound<'py, PyDict>> {
+    if !(rate_hz.is_finite() && rate_hz > 0.0 && rate_hz <= MAX_GENERATE_RATE_HZ) {
+        return Err(invalid(format!(
+            "rate_hz {rate_hz}: expected a rate in Hz, > 0 and at most {MAX_GENERATE_RATE_HZ:e}"
+        )));
+    }
+    let samples = (duration_s * rate_hz).round();
+    if !(1.0..=1e12).contains(&samples) {
+        return Err(invalid(format!(
+            "duration_s {duration_s} at rate_hz {rate_hz} gives {samples} samples; expected 1 to 1e12"
+        )));
+    }
+    // Eight float64 columns, held twice at most (here and in the DataFrame).
+    let need = samples * 8.0 * 8.0 * 2.0;
+    if let Some(free) = logio::available_memory_bytes() {
+        if need > free as f64 {
+            return Err(invalid(format!(
+                "{samples} samples need about {:.1} GiB and {:.1} GiB are available: generate a shorter log or at a lower rate",
+                need / 1073741824.0,
+                free as f64 / 1073741824.0
+            )));
+        }
+    }
+    let model =
+        noise::SensorModel::from_text(sensor_text, source).map_err(|e| invalid(e.to_string()))?;
+    let dt_s = 1.0 / rate_hz;
+    noise::ImuErrors::check_rate(&model, dt_s)
+        .map_err(|e| invalid(format!("{source}: {e}; lower the cutoff or raise rate_hz")))?;
+    let n = samples as usize;
+    let (cols, temp) = py.detach(|| {
+        let mut errors = noise::ImuErrors::new(&model, dt_s, seed, run);
+        let ideal = noise::StaticLevel::STANDARD;
+        let mut cols: [Vec<f64>; 6] = std::array::from_fn(|_| vec![0.0; n]);
+        errors.fill_static(
+            0,
+            &ideal.triad(noise::Sensor::Gyro),
+            &ideal.triad(noise::Sensor::Accel),
+            cols.each_mut().map(|c| c.as_mut_slice()),
+        );
+        let temp: Vec<f64> = (0..n as u64).map(|k| errors.temperature_c(k)).collect();
+        (cols, temp)
+    });
+    for (name, c) in noise::CHANNEL_NAMES.iter().zip(&cols) {
+        if let Some(k) = c.iter().position(|v| !v.is_finite()) {
+            return Err(invalid(format!(
+                "channel {name} is {} at sample {k}: the model's values overflow; check their units",
+                c[k]
+            )));
+        }
+    }
+    let d = PyDict::new(py);
+    d.set_item("sensor", &model.name)?;
+    // t = k / rate from the integer index (docs/architecture.md: never t += dt).
+    let t: Vec<f64> = (0..n as u64).map(|k| k as f64 / rate_hz).collect();
+    d.set_item("t", t.into_pyarray(py))?;
+    for (name, c) in noise::CHANNEL_NAMES.iter().zip(cols) {
+        d.set_item(*name, c.into_pyarray(py))?;
+    }
+    d.set_item("temp", temp.into_pyarray(py))?;
+    Ok(d)
+}
+
 /// The module `imudrift._imudrift`.
 #[pymodule]
 fn _imudrift(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -440,5 +551,6 @@ fn _imudrift(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(allan_analysis, m)?)?;
     m.add("LogUnreadable", m.py().get_type::<LogUnreadable>())?;
     m.add_function(wrap_pyfunction!(read_log_columns, m)?)?;
+    m.add_function(wrap_pyfunction!(generate_columns, m)?)?;
     Ok(())
 }

@@ -145,3 +145,25 @@ def test_bad_input(bad, message):
     args.update(bad)
     with pytest.raises(imudrift.InvalidInput, match=message):
         imudrift.allan(**args)
+
+
+def test_plot(white_gyro, monkeypatch):
+    r = imudrift.allan(white_gyro, RATE_HZ)
+    plt = pytest.importorskip("matplotlib.pyplot")
+    ax = r.plot()
+    lines = ax.get_lines()
+    assert len(lines) == 2  # the curve and the fit
+    np.testing.assert_array_equal(lines[0].get_xdata(), r.tau)
+    # The fit's curve is the IEEE 952 model (Annex C) of the fitted terms:
+    # sigma^2 = 3Q^2/tau^2 + N^2/tau + (2 ln 2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2.
+    tau, fit_y = lines[1].get_xdata(), lines[1].get_ydata()
+    assert tau[0] == pytest.approx(r.tau[0]) and tau[-1] == pytest.approx(r.tau[-1])
+    c = {k: 0.0 if t is None else t.value**2 for k, t in r.fit().terms.items()}
+    var = 3 * c["q"] / tau**2 + c["n"] / tau + 2 * np.log(2) / np.pi * c["b"] + c["k"] * tau / 3 + c["r"] * tau**2 / 2
+    # Reason for 1e-12: the same closed form evaluated in another order.
+    np.testing.assert_allclose(fit_y, np.sqrt(var), rtol=1e-12)
+    plt.close("all")
+    monkeypatch.setitem(sys.modules, "matplotlib", None)
+    monkeypatch.setitem(sys.modules, "matplotlib.pyplot", None)
+    with pytest.raises(ImportError, match="pip install matplotlib"):
+        r.plot()

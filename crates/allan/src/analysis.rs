@@ -2,6 +2,7 @@
 //! for Allan-variance estimators, the IEEE 952 term fit.
 
 use crate::fit::{fit_ieee952, Fit};
+use crate::sheet::{sheet_readings, term_status, SheetReadings, TermStatus};
 use crate::{AllanPoint, EdfMethod, Estimator, Options, Series, TauGrid};
 use rayon::prelude::*;
 
@@ -11,6 +12,10 @@ pub struct Analysis {
     pub points: Vec<AllanPoint>,
     /// The IEEE 952 fit (Allan-variance estimators only: non-overlapping, overlapping, total).
     pub fit: Option<Fit>,
+    /// The spec-sheet readings (with the fit only), intervals at the options' confidence.
+    pub sheet: Option<SheetReadings>,
+    /// Which fitted terms are resolved, and each one's bound (with the fit only).
+    pub terms: Option<[TermStatus; 5]>,
 }
 
 /// Analyse rate samples taken every `dt_s` seconds: the deviation at every tau of `grid`, each
@@ -72,6 +77,17 @@ pub fn analyse(
         Estimator::NonOverlapping | Estimator::Overlapping | Estimator::Total
     );
     let fit = allan_variance.then(|| fit_ieee952(&points));
+    let sheet = fit
+        .as_ref()
+        .map(|f| sheet_readings(&points, f, opts.confidence));
+    let terms = fit
+        .as_ref()
+        .map(|f| term_status(f, &points, opts.confidence));
     stage("fit");
-    Analysis { points, fit }
+    Analysis {
+        points,
+        fit,
+        sheet,
+        terms,
+    }
 }

@@ -111,6 +111,23 @@ pub fn basis(tau_s: f64) -> [f64; 5] {
     ]
 }
 
+/// A point's degrees of freedom for the fit and the readings: its EDF (without one, the number of
+/// terms), at most the white-FM value 1.5 (bins + 1). Greenhall's EDF of the Allan variance of
+/// rate noise with alpha <= 0 (white, flicker and random-walk FM, the noises of an IMU's rate
+/// at averaging times of many samples) is at most about 1.5 N/m (NIST SP 1065 Table 5, white FM:
+/// edf = [3(N-1)/(2m) - 2(N-2)/N] 4m^2/(4m^2+5)); only PM-type noise (alpha > 0) has more. The
+/// lag-1 ACF identification with few blocks can return alpha = 1 on white rate noise (seen:
+/// 10-minute white-noise logs at 100 Hz, 58 and 117 blocks), whose EDF is then several times too
+/// large; the cap keeps such a point from weighing more than white noise allows.
+pub fn capped_edf(p: &AllanPoint) -> f64 {
+    let edf = if p.edf.is_finite() && p.edf > 0.0 {
+        p.edf
+    } else {
+        p.n_terms.max(1) as f64
+    };
+    edf.min(1.5 * (p.bins as f64 + 1.0))
+}
+
 /// Which terms the fit may use (all by default).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FitTerms(pub [bool; 5]);
@@ -141,16 +158,7 @@ pub fn fit_ieee952_terms(points: &[AllanPoint], allowed: FitTerms) -> Fit {
     let y: Vec<f64> = pts.iter().map(|p| p.dev * p.dev).collect();
     let m = range_exponent(&y);
     let y: Vec<f64> = y.iter().map(|v| v * 0.25f64.powi(m)).collect();
-    let edf: Vec<f64> = pts
-        .iter()
-        .map(|p| {
-            if p.edf.is_finite() && p.edf > 0.0 {
-                p.edf
-            } else {
-                p.n_terms.max(1) as f64
-            }
-        })
-        .collect();
+    let edf: Vec<f64> = pts.iter().map(|p| capped_edf(p)).collect();
     let g: Vec<[f64; 5]> = pts.iter().map(|p| basis(p.tau_s)).collect();
 
     // Start: linear NNLS with weights from the measured variances; then the maximum-likelihood

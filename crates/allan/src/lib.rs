@@ -26,13 +26,15 @@
 //! the differenced orders only where order 0 does not decide. The hot kernels also exist
 //! compiled for AVX2 and AVX-512, chosen at run time, with identical results.
 //! Intervals: `edf` (Greenhall, SP 1065 Tables 5 and 7, lag-1 ACF noise identification) and
-//! `chi2` (SP 1065 eq 45); the IEEE 952 term fit and spec-sheet readings: `fit`.
+//! `chi2` (SP 1065 eq 45); the IEEE 952 term fit: `fit`; the spec-sheet readings, each a value
+//! where the curve resolves it and a bound where not: `sheet`.
 
 pub mod chi2;
 pub mod edf;
 pub mod fit;
 mod grid;
 pub mod plan;
+pub mod sheet;
 
 mod analysis;
 mod kernels;

@@ -49,8 +49,25 @@ impl NavQuantity {
         }
     }
 
+    /// The one name people read for the quantity (tables, messages, requirements): `heading_rad`
+    /// for the heading error, whose JSON key stays `yaw_rad` (with `heading_rad` beside it);
+    /// the others as [`NavQuantity::name`].
+    pub fn label(self) -> &'static str {
+        match self {
+            NavQuantity::Yaw => "heading_rad",
+            q => q.name(),
+        }
+    }
+
+    /// The quantity of a name: its JSON name or label, and for the heading also `heading` and
+    /// `yaw` (scripts written for the older `yaw_rad` keep working).
     pub fn from_name(name: &str) -> Option<NavQuantity> {
-        NavQuantity::ALL.into_iter().find(|c| c.name() == name)
+        if matches!(name, "heading" | "yaw") {
+            return Some(NavQuantity::Yaw);
+        }
+        NavQuantity::ALL
+            .into_iter()
+            .find(|c| c.name() == name || c.label() == name)
     }
 
     /// The quantities' values of one navigation error, in [`NavQuantity::ALL`] order.

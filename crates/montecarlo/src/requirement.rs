@@ -4,7 +4,7 @@
 //!
 //! Grammar: `[STAT] CHANNEL (<|<=) VALUE [UNIT] @ TIME [UNIT]`, where STAT is `p50`, `p68`, `p95`,
 //! `p99`, `rms` or `mean` (default `p95`: a requirement usually bounds what 95 % of runs stay
-//! under), CHANNEL a quantity's name (`yaw_rad`, `pos_horizontal_m`, ...), VALUE in the
+//! under), CHANNEL a quantity's name (`heading_rad`, `pos_horizontal_m`, ...), VALUE in the
 //! quantity's SI unit unless a unit is given (angles: rad, mrad, deg, arcmin, arcsec; positions:
 //! m, km, cm, mm, ft, nmi; velocities: m/s, mm/s, cm/s, km/h, ft/s, kn), and TIME in s, ms, min
 //! or h. Statistics are of |error| over the runs.
@@ -18,7 +18,7 @@ const Z_95: f64 = 1.959_963_984_540_054;
 
 /// Why a requirement string could not be read.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("requirement \"{text}\": {problem}; expected `[p50|p68|p95|p99|rms|mean] CHANNEL < VALUE [UNIT] @ TIME`, e.g. \"pos_horizontal_m < 10 m @ 300 s\" or \"p50 yaw_rad < 2 deg @ 10 min\"")]
+#[error("requirement \"{text}\": {problem}; expected `[p50|p68|p95|p99|rms|mean] CHANNEL < VALUE [UNIT] @ TIME`, e.g. \"pos_horizontal_m < 10 m @ 300 s\" or \"p50 heading_rad < 2 deg @ 10 min\"")]
 pub struct RequirementError {
     pub text: String,
     pub problem: String,
@@ -177,8 +177,8 @@ impl std::str::FromStr for Requirement {
         };
         let quantity = NavQuantity::from_name(quantity_name).ok_or_else(|| {
             fail(format!(
-                "unknown channel `{quantity_name}` (one of {})",
-                NavQuantity::ALL.map(|c| c.name()).join(", ")
+                "unknown channel `{quantity_name}` (one of {}; `yaw_rad` is accepted for heading_rad)",
+                NavQuantity::ALL.map(|c| c.label()).join(", ")
             ))
         })?;
         let rhs = rhs.trim();
@@ -197,7 +197,7 @@ impl std::str::FromStr for Requirement {
                 fail(format!(
                     "unit `{}` does not fit channel {}",
                     unit.trim(),
-                    quantity.name()
+                    quantity.label()
                 ))
             })?
         };
@@ -364,12 +364,25 @@ mod tests {
     }
 
     #[test]
+    fn heading_has_one_name_and_the_old_ones_still_work() {
+        for text in [
+            "p50 heading_rad < 2 deg @ 10 min",
+            "p50 yaw_rad < 2 deg @ 10 min",
+            "p50 heading < 2 deg @ 10 min",
+        ] {
+            let r: Requirement = text.parse().unwrap();
+            assert_eq!(r.quantity, NavQuantity::Yaw, "{text}");
+            assert_eq!(r.quantity.label(), "heading_rad");
+        }
+    }
+
+    #[test]
     fn bad_strings_name_the_problem_and_show_the_form() {
         for (text, needle) in [
             ("pos_horizontal_m < 10", "no `@ TIME`"),
             ("pos_horizontal_m = 10 @ 300", "no `<`"),
             ("p97 pos_horizontal_m < 10 @ 300", "unknown statistic"),
-            ("heading < 10 @ 300", "unknown channel"),
+            ("bearing < 10 @ 300", "unknown channel"),
             ("pos_horizontal_m < 10 deg @ 300", "does not fit"),
             ("pos_horizontal_m < -1 @ 300", "> 0"),
             ("pos_horizontal_m < 10 @ 0 s", "time > 0"),

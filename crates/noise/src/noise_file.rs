@@ -154,7 +154,7 @@ pub fn write_noise_file(v: &NoiseValues, flavor: Flavor, inflation: Inflation<'_
     }
     if flavor != Flavor::VinsFusion {
         let _ = writeln!(s, "{indent}rostopic: {}", v.rostopic);
-        let _ = writeln!(s, "{indent}update_rate: {}", v.update_rate_hz);
+        let _ = writeln!(s, "{indent}update_rate: {}", rate_text(v.update_rate_hz));
     }
     if flavor == Flavor::OpenVins {
         write_openvins_intrinsics(&mut s);
@@ -204,6 +204,21 @@ fn write_header(
     }
 }
 
+/// A rate for a noise file: 7 significant digits at most, no trailing zeros (`200` for a rate
+/// of 199.99999995867375 Hz measured from timestamps, whose rounding lies far below).
+fn rate_text(hz: f64) -> String {
+    if !(hz.is_finite() && hz > 0.0) {
+        return format!("{hz}");
+    }
+    let decimals = (6 - hz.log10().floor() as i32).max(0) as usize;
+    let text = format!("{hz:.decimals$}");
+    if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        text
+    }
+}
+
 /// VINS-Fusion's preintegration adds (value * dt)^2 per sample (mid-point rule: half of it for
 /// the white noise), so a continuous density acts smaller there; the comment gives the values that
 /// make it carry the continuous model, for users who want that (docs/noise-files.md).
@@ -213,7 +228,7 @@ fn write_vins_fusion_note(s: &mut String, v: &NoiseValues, inflate: f64) {
         let _ = writeln!(
             s,
             "# VINS-Fusion applies these per sample; to make its propagation carry the continuous model at {} Hz use\n# gyr_n {}, acc_n {}, gyr_w {}, acc_w {} (sqrt(2/dt) N and K/sqrt(dt), worst axis).",
-            v.update_rate_hz,
+            rate_text(v.update_rate_hz),
             sci(worst(&v.gyro_noise_density) * inflate * (2.0 / dt).sqrt()),
             sci(worst(&v.accel_noise_density) * inflate * (2.0 / dt).sqrt()),
             sci(worst(&v.gyro_random_walk) * inflate / dt.sqrt()),

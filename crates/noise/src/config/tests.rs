@@ -557,6 +557,23 @@ output_filter = { kind = "bartlett", taps = 16 }
                 .unwrap()
         ) < 5e-5
     );
+    // The input's allan_minimum convention is kept (issue 24) and reads back to the same B: the
+    // minimum is written to 5 digits (5e-5) and B moves by min^2 / (0.664 B)^2 times as much
+    // (the other terms share the minimum; about 3 here), so 5e-4.
+    assert!(
+        styled.contains("convention = \"allan_minimum\""),
+        "{styled}"
+    );
+    let flicker_b = |m: &SensorModel| match m.gyro.axes[0].get::<crate::BiasInstability>() {
+        Some(crate::BiasInstability::Flicker(f)) => f.b(),
+        _ => f64::NAN,
+    };
+    assert!(
+        rel(flicker_b(&m), flicker_b(&back)) < 5e-4,
+        "{} vs {}",
+        flicker_b(&m),
+        flicker_b(&back)
+    );
     // Quantities the input does not use are written in spec-sheet units.
     let mut k = m.clone();
     k.gyro.axes[0].set_term(crate::RateRandomWalk::new(1e-5).unwrap());

@@ -4,6 +4,7 @@ use super::signal_of;
 use crate::effect::Sensor;
 use crate::model::*;
 use crate::temperature::TemperatureProfile;
+use crate::terms::bias_instability::{model_adev_minimum, BiasInstability, Flicker};
 use crate::terms::{Effect, WriteContext, WRITE_ORDER};
 use crate::units::{format_si, Quantity, Signal};
 use crate::AXIS_NAMES;
@@ -106,7 +107,7 @@ fn toml_str(text: &str) -> String {
 
 fn write_axis(s: &mut String, a: &AxisModel, sig: Signal) {
     // `{:?}`: the shortest text that parses back to the same bits.
-    write_axis_with(s, a, sig, &format_si, &|v| format!("{v:?}"));
+    write_axis_with(s, a, sig, &format_si, &|v| format!("{v:?}"), false);
 }
 
 /// The keys of one axis in [`WRITE_ORDER`], each value written by its term with `format_si`
@@ -117,6 +118,7 @@ fn write_axis_with(
     sig: Signal,
     format_si: &dyn Fn(f64, Quantity) -> String,
     number: &dyn Fn(f64) -> String,
+    bi_as_minimum: bool,
 ) {
     let cx = WriteContext {
         sig,
@@ -125,10 +127,50 @@ fn write_axis_with(
     };
     for effect in WRITE_ORDER {
         if let Some(term) = a.term(effect) {
-            let value = term.as_error_term().config_value(&cx);
+            let minimum = match a.get::<BiasInstability>() {
+                Some(BiasInstability::Flicker(f))
+                    if bias_instability_minimum_wanted(bi_as_minimum, effect) =>
+                {
+                    allan_minimum_value(a, f, &cx)
+                }
+                _ => None,
+            };
+            let value = minimum.unwrap_or_else(|| term.as_error_term().config_value(&cx));
             let _ = writeln!(s, "{} = {value}", effect.name());
         }
     }
+}
+
+/// Whether the bias instability is written in the `allan_minimum` convention.
+fn bias_instability_minimum_wanted(bi_as_minimum: bool, effect: Effect) -> bool {
+    bi_as_minimum && effect == Effect::BiasInstability
+}
+
+/// A flicker bias instability in the `allan_minimum` convention: the minimum of the axis' closed-
+/// form Allan deviation over the plateau, as the reader takes it (`solve_b_for_minimum` against
+/// the terms read before it: every term but those that read the others), so the value reads back
+/// to the same B up to the printed digits. `None` when B adds less than 0.1 % to the minimum of the
+/// other terms (a minimum that could not be read back to B): the `ieee` form is written then.
+fn allan_minimum_value(a: &AxisModel, f: &Flicker, cx: &WriteContext) -> Option<String> {
+    let mut others = a.clone();
+    for e in Effect::ALL {
+        if e.reads_other_terms() {
+            others.remove(e);
+        }
+    }
+    let floor = model_adev_minimum(&others, f).0;
+    others.set_term(BiasInstability::Flicker(f.clone()));
+    let minimum = model_adev_minimum(&others, f).0;
+    if !(minimum.is_finite() && minimum - floor > 1e-3 * minimum) {
+        return None;
+    }
+    Some(format!(
+        "{{ value = {}, convention = \"allan_minimum\", band = [{}, {}], per_decade = {} }}",
+        cx.quoted(minimum, Quantity::Signal(cx.sig)),
+        cx.quoted(f.tau_min_s(), Quantity::Time),
+        cx.quoted(f.tau_max_s(), Quantity::Time),
+        f.per_decade()
+    ))
 }
 
 /// The units a written config uses for each quantity: those of an existing config where it has
@@ -137,12 +179,16 @@ fn write_axis_with(
 pub struct UnitStyle {
     /// (quantity, unit text) found in the config, first occurrence.
     units: Vec<(Quantity, String)>,
+    /// The config gives a bias instability in the `allan_minimum` convention (stated, or a plain
+    /// value, which means it): the written model keeps that convention.
+    bi_allan_minimum: bool,
 }
 
 impl UnitStyle {
     /// The units of a config's text (a sensor TOML); unknown or unreadable parts are ignored.
     pub fn from_config_text(text: &str) -> UnitStyle {
         let mut units: Vec<(Quantity, String)> = Vec::new();
+        let mut bi_allan_minimum = false;
         let Ok(doc) = text.parse::<toml::Table>() else {
             return UnitStyle::default();
         };
@@ -164,13 +210,27 @@ impl UnitStyle {
             };
             for axis in tables.values().filter_map(|v| v.as_table()) {
                 for (key, v) in axis {
+                    if key == Effect::BiasInstability.name() {
+                        bi_allan_minimum |= v.is_str()
+                            || v.get("convention").and_then(|c| c.as_str())
+                                == Some("allan_minimum");
+                    }
                     if let Some(effect) = Effect::from_name(key) {
                         effect.note_units(v, sig, &mut note);
                     }
                 }
             }
         }
-        UnitStyle { units }
+        UnitStyle {
+            units,
+            bi_allan_minimum,
+        }
+    }
+
+    /// Whether a model written in this style gives its bias instability as the Allan minimum
+    /// (the config it was read from did).
+    pub fn keeps_allan_minimum(&self) -> bool {
+        self.bi_allan_minimum
     }
 
     /// The unit for a quantity.
@@ -254,14 +314,14 @@ impl SensorModel {
             if axes[0] == axes[1] && axes[1] == axes[2] {
                 if axes[0] != AxisModel::default() {
                     let _ = writeln!(s, "\n[{}.all]", sensor.name());
-                    write_axis_with(&mut s, &axes[0], sig, &f, &sig5);
+                    write_axis_with(&mut s, &axes[0], sig, &f, &sig5, style.bi_allan_minimum);
                 }
                 continue;
             }
             for (axis, name) in axes.iter().zip(AXIS_NAMES) {
                 if *axis != AxisModel::default() {
                     let _ = writeln!(s, "\n[{}.{}]", sensor.name(), name);
-                    write_axis_with(&mut s, axis, sig, &f, &sig5);
+                    write_axis_with(&mut s, axis, sig, &f, &sig5, style.bi_allan_minimum);
                 }
             }
         }
