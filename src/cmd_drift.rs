@@ -385,7 +385,7 @@ fn parameters_text(r: &DriftCheck, exact_flag: bool) -> String {
     };
     let f = &p.fitted_on;
     let mut s = format!(
-        "model levels: drawn per simulated experiment by a parametric bootstrap on data like the {} log(s) of {} at {} they were fitted on (docs/drift.md); 95 % of the draws:\n",
+        "model levels: drawn per simulated experiment by a parametric bootstrap on data like the {} log(s) ({} in all, at {}) they were fitted on (docs/drift.md); 95 % of the draws:\n",
         f.samples.len(),
         crate::fmt::time(f.duration_s()),
         crate::fmt::rate(1.0 / f.sample_interval_s)
