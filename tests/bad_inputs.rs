@@ -14,7 +14,20 @@ use common::{command, imudrift, ok, root};
 
 /// The command fails with exit status 1 and every `needle` in its message; nothing on stdout.
 fn refused(args: &[&str], needles: &[&str]) {
-    let out = imudrift(args);
+    refused_out(imudrift(args), args, needles);
+}
+
+/// [`refused`] with the memory limit lowered to `limit` bytes (`IMUDRIFT_MEMORY_LIMIT`).
+fn refused_with_memory(args: &[&str], limit: &str, needles: &[&str]) {
+    let out = command()
+        .args(args)
+        .env("IMUDRIFT_MEMORY_LIMIT", limit)
+        .output()
+        .expect("run imudrift");
+    refused_out(out, args, needles);
+}
+
+fn refused_out(out: std::process::Output, args: &[&str], needles: &[&str]) {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
     assert!(out.stdout.is_empty(), "{args:?} printed a result");
@@ -1030,8 +1043,8 @@ fn environment_variables_are_validated() {
         );
         assert!(!err.contains("panicked"), "{err}");
     }
-    let out = command()
-        .args([
+    refused_with_memory(
+        &[
             "simulate",
             model,
             "--runs",
@@ -1039,13 +1052,10 @@ fn environment_variables_are_validated() {
             "--duration",
             "5",
             "--json",
-        ])
-        .env("IMUDRIFT_MEMORY_LIMIT", "1000")
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{err}");
-    assert!(err.contains("the memory available"), "{err}");
+        ],
+        "1000",
+        &["the memory available"],
+    );
 }
 
 /// Issue 27, item 10: a device or a pipe given as a log is read with a bound (`/dev/zero` took
@@ -1054,14 +1064,11 @@ fn environment_variables_are_validated() {
 #[test]
 fn devices_and_pipes_are_read_with_a_bound() {
     let started = std::time::Instant::now();
-    let out = command()
-        .args(["allan", "/dev/zero", "--rate", "100", "--json"])
-        .env("IMUDRIFT_MEMORY_LIMIT", "300000000")
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{err}");
-    assert!(err.contains("not a regular file"), "{err}");
+    refused_with_memory(
+        &["allan", "/dev/zero", "--rate", "100", "--json"],
+        "300000000",
+        &["not a regular file"],
+    );
     assert!(started.elapsed().as_secs() < 30, "{:?}", started.elapsed());
 }
 
@@ -1107,20 +1114,14 @@ fn files_beyond_their_size_bound_are_refused_before_reading() {
         &["simulate", "/dev/zero", "--json"],
         &["not a regular file", "16.0 MiB"],
     );
-    let out = command()
-        .args(["merge", &shard, "--json"])
-        .env("IMUDRIFT_MEMORY_LIMIT", "3000000000")
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{err}");
-    assert!(
-        err.contains("shard-0-of-2.json") && err.contains("10.0 GiB"),
-        "{err}"
+    refused_with_memory(
+        &["merge", &shard, "--json"],
+        "3000000000",
+        &["shard-0-of-2.json", "10.0 GiB"],
     );
     // A simulate writing shards into a directory holding a 10 GiB `shard-*.json`.
-    let out = command()
-        .args([
+    refused_with_memory(
+        &[
             "simulate",
             "configs/sensors/mtx.toml",
             "--runs",
@@ -1131,13 +1132,10 @@ fn files_beyond_their_size_bound_are_refused_before_reading() {
             "0/2",
             "--out",
             dir.path().to_str().unwrap(),
-        ])
-        .env("IMUDRIFT_MEMORY_LIMIT", "3000000000")
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{err}");
-    assert!(err.contains("10.0 GiB"), "{err}");
+        ],
+        "3000000000",
+        &["10.0 GiB"],
+    );
     assert!(started.elapsed().as_secs() < 30, "{:?}", started.elapsed());
 }
 
@@ -1170,16 +1168,10 @@ fn gzip_bombs_are_refused_while_decompressing() {
         writeln!(gz, "{i},1,2,3,4,5,6").unwrap();
     }
     let rows = write(dir.path(), "rows.csv.gz", &gz.finish().unwrap());
-    let out = command()
-        .args(["allan", &rows, "--json"])
-        .env("IMUDRIFT_MEMORY_LIMIT", "20000000")
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{err}");
-    assert!(
-        err.contains("rows x 7 columns need at least about"),
-        "{err}"
+    refused_with_memory(
+        &["allan", &rows, "--json"],
+        "20000000",
+        &["rows x 7 columns need at least about"],
     );
 }
 
