@@ -2,7 +2,7 @@
 //! bank of first-order Gauss-Markov processes (flicker's band, the Gauss-Markov term) and the
 //! random walk (rate random walk, Woodman's bias random walk). Each takes its RNG as an argument.
 
-use crate::ImuRng;
+use crate::wide::NormalStream;
 use rand::Rng;
 
 /// One standard normal (rand_distr's `StandardNormal`, bit for bit; inlined, see `ziggurat`).
@@ -11,22 +11,16 @@ pub(crate) fn normal<R: Rng + ?Sized>(rng: &mut R) -> f64 {
     crate::ziggurat::standard_normal(rng)
 }
 
-/// `out.len()` standard normals from `rng`, in order: the same values as that many `normal` calls.
-/// One tight loop with the ziggurat inlined (perf: about 2.0 ns per draw with Xoshiro256++ on the
-/// 2-core CI machine, against 2.6 ns for rand_distr's out-of-line sampler).
-#[inline(never)]
-fn fill_normals(rng: &mut ImuRng, out: &mut [f64]) {
-    for w in out {
-        *w = crate::ziggurat::standard_normal(rng);
-    }
-}
-
-/// `n` fresh normals of `rng` in `scratch` (grown as needed).
-pub(crate) fn draws<'a>(rng: &mut ImuRng, scratch: &'a mut Vec<f64>, n: usize) -> &'a [f64] {
+/// `n` fresh normals of `stream` in `scratch` (grown as needed).
+pub(crate) fn draws<'a>(
+    stream: &mut NormalStream,
+    scratch: &'a mut Vec<f64>,
+    n: usize,
+) -> &'a [f64] {
     if scratch.len() < n {
         scratch.resize(n, 0.0);
     }
-    fill_normals(rng, &mut scratch[..n]);
+    stream.fill(&mut scratch[..n]);
     &scratch[..n]
 }
 
@@ -237,7 +231,12 @@ impl GaussMarkovBank {
 
     /// Add the next `out.len()` values to `out`: the values of as many `next` calls, from the same
     /// draws in the same order (the block's draws are made first, then consumed in that order).
-    pub(crate) fn add_block(&mut self, rng: &mut ImuRng, out: &mut [f64], scratch: &mut Vec<f64>) {
+    pub(crate) fn add_block(
+        &mut self,
+        rng: &mut NormalStream,
+        out: &mut [f64],
+        scratch: &mut Vec<f64>,
+    ) {
         let n = out.len();
         // Held updates within the block: component h is next due in left - (span - until) samples.
         let elapsed = self.event_span - self.until_event;
@@ -287,7 +286,12 @@ impl RandomWalk {
         b
     }
     /// Add the next `out.len()` values to `out` (the values of as many `next` calls).
-    pub(crate) fn add_block(&mut self, rng: &mut ImuRng, out: &mut [f64], scratch: &mut Vec<f64>) {
+    pub(crate) fn add_block(
+        &mut self,
+        rng: &mut NormalStream,
+        out: &mut [f64],
+        scratch: &mut Vec<f64>,
+    ) {
         let n = out.len();
         for (v, w) in out.iter_mut().zip(draws(rng, scratch, n)) {
             *v += self.state;

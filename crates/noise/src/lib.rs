@@ -29,6 +29,7 @@ mod static_level;
 mod temperature;
 pub mod terms;
 pub mod units;
+mod wide;
 mod ziggurat;
 
 pub use channel::{Channel, ImuChannels, AXIS_NAMES};
@@ -57,6 +58,7 @@ pub use terms::turn_on_bias::TurnOnBias;
 pub use terms::warmup_transient::WarmupTransient;
 pub use terms::white_noise::WhiteNoise;
 pub use terms::{Effect, ErrorTerm, Registered, Term, TermKind};
+pub use wide::NormalStream;
 
 use rand::SeedableRng;
 

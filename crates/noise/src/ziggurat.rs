@@ -16,7 +16,7 @@ use rand::RngCore;
 
 /// `f64` in [2^exponent, 2^(exponent+1)) from 52 fraction bits (rand 0.8 `IntoFloat`).
 #[inline(always)]
-fn with_exponent(fraction: u64, exponent: i32) -> f64 {
+pub(crate) fn with_exponent(fraction: u64, exponent: i32) -> f64 {
     f64::from_bits(fraction | (((1023 + exponent) as u64) << 52))
 }
 
@@ -45,6 +45,23 @@ pub fn standard_normal<R: RngCore + ?Sized>(rng: &mut R) -> f64 {
     }
 }
 
+/// The rest of one standard normal after its first 64 bits were rejected by the fast test
+/// (`|x| >= X[i + 1]`): the base strip's tail (i = 0) or the wedge test, and on failure a fresh
+/// draw, each from `rng` (the same steps as the loop of [`standard_normal`] after its first pass,
+/// with the further bits taken from `rng`; used by the wide sampler, `crate::wide`).
+#[cold]
+#[inline(never)]
+pub(crate) fn finish_rejected<R: RngCore + ?Sized>(rng: &mut R, i: usize, u: f64, x: f64) -> f64 {
+    if i == 0 {
+        return tail(rng, u);
+    }
+    let uniform = (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
+    if ZIG_NORM_F[i + 1] + (ZIG_NORM_F[i] - ZIG_NORM_F[i + 1]) * uniform < (-x * x / 2.0).exp() {
+        return x;
+    }
+    standard_normal(rng)
+}
+
 /// The base strip's tail beyond R (Marsaglia 1964, as rand_distr's `zero_case`).
 #[cold]
 #[inline(never)]
@@ -66,7 +83,7 @@ fn tail<R: RngCore + ?Sized>(rng: &mut R, u: f64) -> f64 {
 
 const ZIG_NORM_R: f64 = 3.654152885361008796;
 #[rustfmt::skip]
-static ZIG_NORM_X: [f64; 257] =
+pub(crate) static ZIG_NORM_X: [f64; 257] =
     [3.910757959537090045, 3.654152885361008796, 3.449278298560964462, 3.320244733839166074,
      3.224575052047029100, 3.147889289517149969, 3.083526132001233044, 3.027837791768635434,
      2.978603279880844834, 2.934366867207854224, 2.894121053612348060, 2.857138730872132548,

@@ -663,7 +663,7 @@ impl TermKind for BiasInstability {
                 period_s,
             }) => BiasInstabilityGenerator::RandomWalk(RandomWalkGenerator {
                 walk: RandomWalk::new(stability / period_s.sqrt(), cx.dt_raw_s),
-                rng: rng(),
+                rng: crate::NormalStream::new(rng()),
             }),
         }
     }

@@ -10,6 +10,7 @@ use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
+use crate::NormalStream;
 
 /// First-order Gauss-Markov bias: stationary std `sigma`, correlation time `tau_s`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -125,7 +126,7 @@ impl TermKind for GaussMarkov {
 #[derive(Clone, Debug)]
 pub struct BankGenerator {
     bank: GaussMarkovBank,
-    rng: ImuRng,
+    rng: NormalStream,
 }
 
 impl BankGenerator {
@@ -134,7 +135,7 @@ impl BankGenerator {
     pub(crate) fn new(components: &[(f64, f64)], dt_s: f64, mut rng: ImuRng) -> BankGenerator {
         BankGenerator {
             bank: GaussMarkovBank::multirate(components, dt_s, &mut rng),
-            rng,
+            rng: NormalStream::new(rng),
         }
     }
 }

@@ -12,6 +12,7 @@ use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
+use crate::NormalStream;
 
 /// Rate random walk K (rad/s/sqrt(s), m/s^2/sqrt(s)).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -85,7 +86,7 @@ impl TermKind for RateRandomWalk {
     fn generator(&self, cx: &GenContext, rng: &dyn Fn() -> ImuRng) -> RandomWalkGenerator {
         RandomWalkGenerator {
             walk: RandomWalk::new(self.density, cx.dt_raw_s),
-            rng: rng(),
+            rng: NormalStream::new(rng()),
         }
     }
 }
@@ -94,7 +95,7 @@ impl TermKind for RateRandomWalk {
 #[derive(Clone, Debug)]
 pub struct RandomWalkGenerator {
     pub(crate) walk: RandomWalk,
-    pub(crate) rng: ImuRng,
+    pub(crate) rng: NormalStream,
 }
 
 impl Generate for RandomWalkGenerator {

@@ -12,6 +12,7 @@ use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
+use crate::NormalStream;
 use rand::Rng;
 
 /// A resonance: a narrow-band random vibration, white noise through a damped oscillator (a
@@ -168,7 +169,7 @@ impl TermKind for Resonance {
         let mut rng = rng();
         ResonanceGenerator {
             resonator: Resonator::new(self, cx.dt_raw_s, &mut rng),
-            rng,
+            rng: NormalStream::new(rng),
         }
     }
 }
@@ -218,7 +219,7 @@ impl Resonator {
 
     /// Add the next `out.len()` values (two normals per sample, in sample order).
     #[inline]
-    fn add_block(&mut self, rng: &mut ImuRng, out: &mut [f64], scratch: &mut Vec<f64>) {
+    fn add_block(&mut self, rng: &mut NormalStream, out: &mut [f64], scratch: &mut Vec<f64>) {
         let n = out.len();
         let w = draws(rng, scratch, 2 * n);
         let (l11, l21, l22) = self.chol;
@@ -237,7 +238,7 @@ impl Resonator {
 #[derive(Clone, Debug)]
 pub struct ResonanceGenerator {
     resonator: Resonator,
-    rng: ImuRng,
+    rng: NormalStream,
 }
 
 impl Generate for ResonanceGenerator {

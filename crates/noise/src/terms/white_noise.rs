@@ -12,6 +12,7 @@ use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
+use crate::NormalStream;
 use rand::Rng;
 
 /// White-noise density N (ARW rad/sqrt(s), VRW m/s/sqrt(s)).
@@ -83,7 +84,7 @@ impl TermKind for WhiteNoise {
     fn generator(&self, cx: &GenContext, rng: &dyn Fn() -> ImuRng) -> WhiteNoiseGenerator {
         WhiteNoiseGenerator {
             sampler: WhiteNoiseSampler::new(self.density, cx.dt_raw_s),
-            rng: rng(),
+            rng: NormalStream::new(rng()),
         }
     }
 }
@@ -107,7 +108,7 @@ impl WhiteNoiseSampler {
     }
     /// Add the next `out.len()` values to `out` (the values of as many `sample` calls).
     #[inline]
-    fn add_block(&self, rng: &mut ImuRng, out: &mut [f64], scratch: &mut Vec<f64>) {
+    fn add_block(&self, rng: &mut NormalStream, out: &mut [f64], scratch: &mut Vec<f64>) {
         let n = out.len();
         for (v, w) in out.iter_mut().zip(draws(rng, scratch, n)) {
             *v += self.sd * w;
@@ -119,7 +120,7 @@ impl WhiteNoiseSampler {
 #[derive(Clone, Debug)]
 pub struct WhiteNoiseGenerator {
     sampler: WhiteNoiseSampler,
-    rng: ImuRng,
+    rng: NormalStream,
 }
 
 impl Generate for WhiteNoiseGenerator {

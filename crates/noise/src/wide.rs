@@ -1,0 +1,349 @@
+//! The wide normal sampler of the hot path: one term's stream of standard normals, drawn eight at
+//! a time.
+//!
+//! A [`NormalStream`] holds eight Xoshiro256++ generators (Blackman & Vigna 2021, "Scrambled
+//! linear pseudorandom number generators", ACM TOMS 47(4); the same step as `rand_xoshiro`'s
+//! `Xoshiro256PlusPlus::next_u64`), advanced in lockstep (lane l gives draws 8k + l), and a
+//! ninth, sequential one (the term's own stream, [`crate::ImuRng`]) whose first 32 outputs seeded
+//! the eight lanes. Each 64-bit lane output goes through the first pass of the ziggurat of
+//! `crate::ziggurat` (Doornik 2005, ZIGNOR, 256 layers: layer i from the low 8 bits, u in [-1, 1)
+//! from the high 52, x = u X_i, accepted when |x| < X_{i+1}, about 98.8 % of draws); a draw that
+//! fails that test is finished by the rest of the same algorithm (the base strip's tail, the
+//! wedge test, a fresh draw) with further bits from the sequential generator, in draw order.
+//! So every value has exactly the ziggurat's distribution (the bits the algorithm consumes are
+//! independent uniform bits, only their source differs), and draw k is a pure function of the
+//! stream and k: the values do not depend on how the caller splits its requests into blocks
+//! (a partial group is kept in a buffer), which the block path and the sample-by-sample path
+//! rely on (tested below).
+//!
+//! Why: one Xoshiro256++ generator is a serial dependency chain (about 2 ns per normal with the
+//! ziggurat on the CI machine); eight independent lanes are eight chains the CPU runs side by
+//! side, and with AVX2 / AVX-512 (chosen at run time) one instruction advances four or eight
+//! lanes. The vector width changes only how many lanes an instruction does: integer steps,
+//! one multiplication and one comparison per draw, the same bits at every width.
+
+use crate::ziggurat::{finish_rejected, with_exponent, ZIG_NORM_X};
+use crate::ImuRng;
+use rand::RngCore;
+
+/// Lanes of a [`NormalStream`]: draws made per group.
+pub(crate) const LANES: usize = 8;
+
+/// One term's stream of standard normals (see the module docs).
+#[derive(Clone, Debug)]
+pub struct NormalStream {
+    /// The four state words of each lane's Xoshiro256++ (word w of lane l at `state[w][l]`).
+    state: [[u64; LANES]; 4],
+    /// The sequential generator: the bits of the draws the first ziggurat pass rejects.
+    fallback: ImuRng,
+    /// The last group drawn and how many of its values were handed out.
+    buffer: [f64; LANES],
+    used: usize,
+}
+
+impl NormalStream {
+    /// The stream of the sequential generator `rng`: its next 32 outputs seed the eight lanes
+    /// (lane l, word w from output 4l + w; an all-zero state, which Xoshiro cannot leave, is
+    /// replaced, with probability 2^-256), then it supplies the bits of the rejected draws.
+    pub fn new(mut rng: ImuRng) -> NormalStream {
+        let mut state = [[0u64; LANES]; 4];
+        for lane in 0..LANES {
+            for word in &mut state {
+                word[lane] = rng.next_u64();
+            }
+            if state.iter().all(|w| w[lane] == 0) {
+                state[0][lane] = 1;
+            }
+        }
+        NormalStream {
+            state,
+            fallback: rng,
+            buffer: [0.0; LANES],
+            used: LANES,
+        }
+    }
+
+    /// The next standard normal.
+    #[inline]
+    pub fn normal(&mut self) -> f64 {
+        if self.used == LANES {
+            groups_fast(&mut self.state, &mut self.fallback, &mut self.buffer);
+            self.used = 0;
+        }
+        self.used += 1;
+        self.buffer[self.used - 1]
+    }
+
+    /// The next `out.len()` standard normals, in order: the values of as many [`Self::normal`] calls.
+    pub fn fill(&mut self, out: &mut [f64]) {
+        let take = (LANES - self.used).min(out.len());
+        out[..take].copy_from_slice(&self.buffer[self.used..self.used + take]);
+        self.used += take;
+        let rest = &mut out[take..];
+        let whole = rest.len() / LANES * LANES;
+        let (bulk, tail) = rest.split_at_mut(whole);
+        groups_fast(&mut self.state, &mut self.fallback, bulk);
+        if !tail.is_empty() {
+            groups_fast(&mut self.state, &mut self.fallback, &mut self.buffer);
+            tail.copy_from_slice(&self.buffer[..tail.len()]);
+            self.used = tail.len();
+        }
+    }
+}
+
+/// Fill `out` (a multiple of [`LANES`] long) with whole groups: the lanes' next outputs through
+/// the ziggurat's first pass, the rejected ones finished from `fallback` in draw order.
+#[inline(always)]
+fn groups(state: &mut [[u64; LANES]; 4], fallback: &mut ImuRng, out: &mut [f64]) {
+    let [s0, s1, s2, s3] = state;
+    for group in out.chunks_exact_mut(LANES) {
+        let mut bits = [0u64; LANES];
+        for l in 0..LANES {
+            // Xoshiro256++ (Blackman & Vigna 2021, xoshiro256plusplus.c): output, then advance.
+            bits[l] = s0[l]
+                .wrapping_add(s3[l])
+                .rotate_left(23)
+                .wrapping_add(s0[l]);
+            let t = s1[l] << 17;
+            s2[l] ^= s0[l];
+            s3[l] ^= s1[l];
+            s1[l] ^= s2[l];
+            s0[l] ^= s3[l];
+            s2[l] ^= t;
+            s3[l] = s3[l].rotate_left(45);
+        }
+        let mut rejected = 0u32;
+        for l in 0..LANES {
+            // The ziggurat's first pass (crate::ziggurat::standard_normal): layer, u in [-1, 1).
+            let i = (bits[l] & 0xff) as usize;
+            let x = (with_exponent(bits[l] >> 12, 1) - 3.0) * ZIG_NORM_X[i];
+            group[l] = x;
+            rejected |= u32::from(x.abs() >= ZIG_NORM_X[i + 1]) << l;
+        }
+        while rejected != 0 {
+            let l = rejected.trailing_zeros() as usize;
+            rejected &= rejected - 1;
+            let i = (bits[l] & 0xff) as usize;
+            let u = with_exponent(bits[l] >> 12, 1) - 3.0;
+            group[l] = finish_rejected(fallback, i, u, group[l]);
+        }
+    }
+}
+
+/// [`groups`] with AVX-512 where the CPU has it (chosen at run time; [`avx512::groups`], the same
+/// bits), else compiled with AVX2 enabled where available, else as is.
+fn groups_fast(state: &mut [[u64; LANES]; 4], fallback: &mut ImuRng, out: &mut [f64]) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU supports AVX-512F (checked just above).
+            return unsafe { avx512::groups(state, fallback, out) };
+        }
+        #[target_feature(enable = "avx2")]
+        fn avx2(state: &mut [[u64; LANES]; 4], fallback: &mut ImuRng, out: &mut [f64]) {
+            groups(state, fallback, out)
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2 (checked just above).
+            return unsafe { avx2(state, fallback, out) };
+        }
+    }
+    groups(state, fallback, out)
+}
+
+/// [`groups`] written with AVX-512F intrinsics: the eight lanes' state words in four registers,
+/// the two table lookups as gathers. The same operations on the same values in the same order as
+/// [`groups`] (integer steps, one rounded multiplication, one comparison), so the same bits.
+#[cfg(target_arch = "x86_64")]
+mod avx512 {
+    use super::{finish_rejected, with_exponent, ImuRng, LANES, ZIG_NORM_X};
+    use std::arch::x86_64::*;
+    use std::mem::MaybeUninit;
+
+    /// Draws per pass: the first ziggurat pass runs over this many, the rejected ones (about
+    /// 1.5 %) are collected and finished after it, in draw order, so the main loop has no branch.
+    const PASS: usize = 512;
+
+    /// As [`super::groups`]. Safety: the CPU must support AVX-512F.
+    #[target_feature(enable = "avx512f")]
+    pub(super) fn groups(state: &mut [[u64; LANES]; 4], fallback: &mut ImuRng, out: &mut [f64]) {
+        // SAFETY (every unsafe block below): unaligned loads and stores of exactly eight u64 /
+        // f64 inside `state` and `group` (each LANES = 8 long); compressed stores of at most
+        // eight values at `count`, which stays below PASS - 8 + 1 before each (at most eight
+        // per group, PASS / LANES groups per pass).
+        let load = |w: &[u64; LANES]| unsafe { _mm512_loadu_si512(w.as_ptr().cast()) };
+        let (mut s0, mut s1, mut s2, mut s3) = (
+            load(&state[0]),
+            load(&state[1]),
+            load(&state[2]),
+            load(&state[3]),
+        );
+        let low8 = _mm512_set1_epi64(0xff);
+        let exponent = _mm512_set1_epi64(1024 << 52);
+        let three = _mm512_set1_pd(3.0);
+        let abs_mask = _mm512_set1_epi64(i64::MAX);
+        let lane_index = _mm512_set_epi64(7, 6, 5, 4, 3, 2, 1, 0);
+        // Not initialised (a memset of both on every call cost more than the draws of a short
+        // request): only the first `count` entries, stored below, are read.
+        let mut rejected_at = [MaybeUninit::<u64>::uninit(); PASS + LANES];
+        let mut rejected_bits = [MaybeUninit::<u64>::uninit(); PASS + LANES];
+        for pass in out.chunks_mut(PASS) {
+            let mut count = 0usize;
+            for (g, group) in pass.chunks_exact_mut(LANES).enumerate() {
+                // Xoshiro256++: output rotl(s0 + s3, 23) + s0, then advance.
+                let bits = _mm512_add_epi64(_mm512_rol_epi64::<23>(_mm512_add_epi64(s0, s3)), s0);
+                let t = _mm512_slli_epi64::<17>(s1);
+                s2 = _mm512_xor_si512(s2, s0);
+                s3 = _mm512_xor_si512(s3, s1);
+                s1 = _mm512_xor_si512(s1, s2);
+                s0 = _mm512_xor_si512(s0, s3);
+                s2 = _mm512_xor_si512(s2, t);
+                s3 = _mm512_rol_epi64::<45>(s3);
+                // The ziggurat's first pass: i = low 8 bits, u = [2, 4) - 3, x = u X_i,
+                // accepted when |x| < X_{i+1}. The table is read with scalar loads (faster than
+                // a gather on the CPUs measured, docs/performance.md).
+                let mut layer = [0u64; LANES];
+                unsafe {
+                    _mm512_storeu_si512(layer.as_mut_ptr().cast(), _mm512_and_si512(bits, low8))
+                };
+                let (mut lo, mut hi) = ([0.0f64; LANES], [0.0f64; LANES]);
+                for l in 0..LANES {
+                    let k = layer[l] as usize & 0xff;
+                    lo[l] = ZIG_NORM_X[k];
+                    hi[l] = ZIG_NORM_X[k + 1];
+                }
+                let u = _mm512_sub_pd(
+                    _mm512_castsi512_pd(_mm512_or_si512(_mm512_srli_epi64::<12>(bits), exponent)),
+                    three,
+                );
+                let x = _mm512_mul_pd(u, unsafe { _mm512_loadu_pd(lo.as_ptr()) });
+                let abs = _mm512_castsi512_pd(_mm512_and_si512(_mm512_castpd_si512(x), abs_mask));
+                let accepted =
+                    _mm512_cmp_pd_mask::<_CMP_LT_OQ>(abs, unsafe { _mm512_loadu_pd(hi.as_ptr()) });
+                unsafe { _mm512_storeu_pd(group.as_mut_ptr(), x) };
+                // Collect the rejected lanes' positions and bits, in lane order.
+                let at = _mm512_add_epi64(lane_index, _mm512_set1_epi64((g * LANES) as i64));
+                // (Compressed in a register, then stored whole: a compressing store to memory is
+                // microcoded and slow on AMD Zen 4; the lanes past `count` are overwritten later.)
+                unsafe {
+                    let rejected = !accepted;
+                    _mm512_storeu_si512(
+                        rejected_at.as_mut_ptr().add(count).cast(),
+                        _mm512_maskz_compress_epi64(rejected, at),
+                    );
+                    _mm512_storeu_si512(
+                        rejected_bits.as_mut_ptr().add(count).cast(),
+                        _mm512_maskz_compress_epi64(rejected, bits),
+                    );
+                }
+                count += (!accepted).count_ones() as usize;
+            }
+            for k in 0..count {
+                // SAFETY: entries below `count` were stored above.
+                let (at, bits) =
+                    unsafe { (rejected_at[k].assume_init(), rejected_bits[k].assume_init()) };
+                let (i, u) = ((bits & 0xff) as usize, with_exponent(bits >> 12, 1) - 3.0);
+                let at = at as usize;
+                pass[at] = finish_rejected(fallback, i, u, pass[at]);
+            }
+        }
+        let store =
+            |w: &mut [u64; LANES], v| unsafe { _mm512_storeu_si512(w.as_mut_ptr().cast(), v) };
+        store(&mut state[0], s0);
+        store(&mut state[1], s1);
+        store(&mut state[2], s2);
+        store(&mut state[3], s3);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+
+    fn stream(seed: u64) -> NormalStream {
+        NormalStream::new(ImuRng::seed_from_u64(seed))
+    }
+
+    #[test]
+    fn lanes_follow_rand_xoshiro() {
+        // Lane l is rand_xoshiro's Xoshiro256++ seeded with the parent's outputs 4l..4l+3, and
+        // draw 8k + l is its k-th output through the ziggurat (its first pass where that accepts).
+        let mut parent = ImuRng::seed_from_u64(3);
+        let words: Vec<u64> = (0..4 * LANES).map(|_| parent.next_u64()).collect();
+        let mut lanes: Vec<ImuRng> = (0..LANES)
+            .map(|l| {
+                let mut seed = [0u8; 32];
+                for w in 0..4 {
+                    seed[8 * w..8 * w + 8].copy_from_slice(&words[4 * l + w].to_le_bytes());
+                }
+                ImuRng::from_seed(seed)
+            })
+            .collect();
+        let mut out = vec![0.0; 8 * 1000];
+        stream(3).fill(&mut out);
+        let mut compared = 0;
+        for (k, &v) in out.iter().enumerate() {
+            let bits = lanes[k % LANES].next_u64();
+            let i = (bits & 0xff) as usize;
+            let x = (with_exponent(bits >> 12, 1) - 3.0) * ZIG_NORM_X[i];
+            if x.abs() < ZIG_NORM_X[i + 1] {
+                assert_eq!(v.to_bits(), x.to_bits(), "draw {k}");
+                compared += 1;
+            }
+        }
+        // About 98.5 % pass the first test (1.5 % rejection, computed from the table).
+        assert!(compared > 7_700, "{compared}");
+    }
+
+    #[test]
+    fn values_do_not_depend_on_the_block_split() {
+        let n = 5_000;
+        let mut whole = vec![0.0; n];
+        stream(11).fill(&mut whole);
+        // Uneven blocks, single draws and empty requests in between.
+        let mut parts = Vec::with_capacity(n);
+        let mut s = stream(11);
+        let sizes = [1usize, 0, 3, 7, 8, 9, 15, 16, 17, 256, 1, 255, 2];
+        let mut k = 0;
+        while parts.len() < n {
+            let m = sizes[k % sizes.len()].min(n - parts.len());
+            if k % 5 == 4 && m > 0 {
+                parts.push(s.normal());
+            } else {
+                let mut b = vec![0.0; m];
+                s.fill(&mut b);
+                parts.extend_from_slice(&b);
+            }
+            k += 1;
+        }
+        for (j, (a, b)) in whole.iter().zip(&parts).enumerate() {
+            assert_eq!(a.to_bits(), b.to_bits(), "draw {j}");
+        }
+    }
+
+    #[test]
+    fn every_width_gives_the_same_bits() {
+        let mut a = stream(17);
+        let mut b = a.clone();
+        let mut x = vec![0.0; 80_000];
+        let mut y = vec![0.0; 80_000];
+        groups_fast(&mut a.state, &mut a.fallback, &mut x);
+        groups(&mut b.state, &mut b.fallback, &mut y);
+        // The AVX2 build of the generic code too, where the CPU has it.
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            #[target_feature(enable = "avx2")]
+            fn avx2(state: &mut [[u64; LANES]; 4], fallback: &mut ImuRng, out: &mut [f64]) {
+                groups(state, fallback, out)
+            }
+            let mut c = stream(17);
+            let mut z = vec![0.0; 80_000];
+            // SAFETY: the CPU supports AVX2 (checked just above).
+            unsafe { avx2(&mut c.state, &mut c.fallback, &mut z) };
+            assert!(z.iter().zip(&y).all(|(p, q)| p.to_bits() == q.to_bits()));
+        }
+        assert!(x.iter().zip(&y).all(|(p, q)| p.to_bits() == q.to_bits()));
+        assert_eq!(a.fallback.next_u64(), b.fallback.next_u64());
+    }
+}
