@@ -365,7 +365,7 @@ fn segment_errors_with(
             let accel = BodyVector::new(value(3, k), value(4, k), value(5, k));
             nav.step(&gyro, &accel, dt_s);
         }
-        let e = nav_error(nav.state(), &truth);
+        let e = nav_error(&nav.state(), &truth);
         out.heading_rad.push(e.yaw_rad);
         out.roll_rad.push(e.roll_rad);
         out.pitch_rad.push(e.pitch_rad);

@@ -10,7 +10,7 @@ use nalgebra::Vector3;
 use noise::{ImuErrors, LawSource, LawSourceContext, Sensor, SensorModel};
 use rand_distr::{Distribution, StandardNormal};
 use strapdown::{
-    nav_error, AnyTrajectory, Attitude, BodyVector, NavState, Scheme, Strapdown, Trajectory,
+    nav_error, AnyTrajectory, Attitude, NavState, Scheme, StrapdownLanes, Trajectory,
     TrajectorySpec,
 };
 
@@ -86,18 +86,64 @@ impl RunKernel for DriftKernel {
     }
 
     fn run(&self, run: u64, out: &mut [f64]) -> Result<(), RunError> {
-        let mut errors = ImuErrors::new(&self.model, self.dt_s, self.seed, run);
-        if let Some(w) = self.bias_calibration_window_s {
-            errors = errors.with_calibration_window(w, self.seed, run);
-        } else if self.bias_calibrated_at_start {
-            errors = errors.with_calibrated_start();
+        let mut results = [Ok(())];
+        self.simulate::<1>(run, out, &mut results);
+        let [result] = results;
+        result
+    }
+
+    fn lanes(&self) -> usize {
+        LANES
+    }
+
+    fn run_lanes(&self, first: u64, out: &mut [f64], results: &mut [Result<(), RunError>]) {
+        if let Ok(group) = <&mut [_; LANES]>::try_from(&mut *results) {
+            return self.simulate::<LANES>(first, out, group);
         }
-        let mut nav = Strapdown::new(self.scheme, self.initial_estimate(run), self.gravity_mps2);
+        // A partial group (the end of a range): one run at a time.
+        let width = out.len() / results.len().max(1);
+        for (i, (row, result)) in out.chunks_mut(width).zip(results).enumerate() {
+            *result = self.run(first + i as u64, row);
+        }
+    }
+}
+
+/// Runs a [`DriftKernel`] advances together: the lanes of one [`StrapdownLanes`] step (eight
+/// doubles fill an AVX-512 register).
+const LANES: usize = 8;
+
+impl DriftKernel {
+    /// The sensor errors of run `run`, with the scenario's bias calibration.
+    fn errors(&self, run: u64) -> ImuErrors {
+        let errors = ImuErrors::new(&self.model, self.dt_s, self.seed, run);
+        if let Some(w) = self.bias_calibration_window_s {
+            errors.with_calibration_window(w, self.seed, run)
+        } else if self.bias_calibrated_at_start {
+            errors.with_calibrated_start()
+        } else {
+            errors
+        }
+    }
+
+    /// Runs `first .. first + L` in the lanes of one integrator: run `first + l` writes row l of
+    /// `out` (checkpoints x quantities) and its outcome in `results[l]`. Each lane's numbers are
+    /// those of the run alone (`StrapdownLanes` lanes are independent, the errors are per run).
+    fn simulate<const L: usize>(
+        &self,
+        first: u64,
+        out: &mut [f64],
+        results: &mut [Result<(), RunError>; L],
+    ) {
+        let mut errors: [ImuErrors; L] = std::array::from_fn(|l| self.errors(first + l as u64));
+        let initial: [NavState; L] =
+            std::array::from_fn(|l| self.initial_estimate(first + l as u64));
+        let mut nav = StrapdownLanes::<L>::new(self.scheme, &initial, self.gravity_mps2);
         // Prime the coning correction with the (ideal) motion before t = 0 (the trajectory holds
         // its initial rate there), so a constant-rate start is not a spurious step.
         let (g_prev, _) = self.trajectory.imu_average(-self.dt_s, 0.0);
-        nav.set_previous_gyro(&g_prev, self.dt_s);
+        nav.set_previous_gyro(&g_prev.0, self.dt_s);
         let width = NavQuantity::ALL.len();
+        let row = self.checkpoints() * width;
         // A static IMU's ideal outputs do not change: compute them once (hot loop).
         let still = self
             .trajectory
@@ -106,46 +152,115 @@ impl RunKernel for DriftKernel {
         // The sensor errors come in blocks (each term over a whole block, the same values as
         // sample by sample; noise's `ImuErrors::fill_static` / `fill_moving`), then the block is
         // integrated.
-        let mut block = [[0.0f64; BLOCK]; 6];
+        let mut block = vec![[[0.0f64; BLOCK]; 6]; L];
         let mut ideal_g = [Vector3::zeros(); BLOCK];
         let mut ideal_a = [Vector3::zeros(); BLOCK];
         let mut k = 0u64;
         for (cp, &until) in self.checkpoint_steps.iter().enumerate() {
             while k < until {
                 let n = (until - k).min(BLOCK as u64) as usize;
-                let out = block.each_mut().map(|b| &mut b[..n]);
-                match &still {
-                    Some((gyro, accel)) => errors.fill_static(k, &gyro.0, &accel.0, out),
-                    None => {
-                        for i in 0..n {
-                            let (gyro, accel) = self.trajectory.ideal_imu(k + i as u64, self.dt_s);
-                            (ideal_g[i], ideal_a[i]) = (gyro.0, accel.0);
-                        }
-                        errors.fill_moving(k, &ideal_g[..n], &ideal_a[..n], out);
+                if still.is_none() {
+                    for i in 0..n {
+                        let (gyro, accel) = self.trajectory.ideal_imu(k + i as u64, self.dt_s);
+                        (ideal_g[i], ideal_a[i]) = (gyro.0, accel.0);
                     }
                 }
-                #[allow(clippy::needless_range_loop)] // six buffers, one index
-                for i in 0..n {
-                    let g = Vector3::new(block[0][i], block[1][i], block[2][i]);
-                    let a = Vector3::new(block[3][i], block[4][i], block[5][i]);
-                    nav.step(&BodyVector(g), &BodyVector(a), self.dt_s);
+                for (lane, e) in block.iter_mut().zip(&mut errors) {
+                    let out = lane.each_mut().map(|b| &mut b[..n]);
+                    match &still {
+                        Some((gyro, accel)) => e.fill_static(k, &gyro.0, &accel.0, out),
+                        None => e.fill_moving(k, &ideal_g[..n], &ideal_a[..n], out),
+                    }
                 }
+                integrate_fast(&mut nav, &block, n, self.dt_s);
                 k += n as u64;
             }
-            let truth = self.trajectory.truth(k as f64 * self.dt_s);
-            let e = nav_error(nav.state(), &truth);
-            let values = NavQuantity::values(&e);
-            if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-                return Err(RunError::NonFinite {
-                    run,
-                    quantity: NavQuantity::ALL[i].name().to_string(),
-                    t_s: k as f64 * self.dt_s,
-                });
+            let t_s = k as f64 * self.dt_s;
+            let truth = self.trajectory.truth(t_s);
+            for (l, result) in results.iter_mut().enumerate() {
+                if result.is_err() {
+                    continue;
+                }
+                let values = NavQuantity::values(&nav_error(&nav.state(l), &truth));
+                if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+                    *result = Err(RunError::NonFinite {
+                        run: first + l as u64,
+                        quantity: NavQuantity::ALL[i].name().to_string(),
+                        t_s,
+                    });
+                    continue;
+                }
+                out[l * row + cp * width..l * row + (cp + 1) * width].copy_from_slice(&values);
             }
-            out[cp * width..(cp + 1) * width].copy_from_slice(&values);
         }
-        Ok(())
     }
+}
+
+/// Integrate `n` samples of every lane's block (`block[lane][channel][sample]`, gyro x y z then
+/// accelerometer x y z). Compiled as is and with AVX-512F / AVX2 enabled, the widest the CPU has
+/// chosen at run time: the lanes' operations are the same at every width (no fused
+/// multiply-add), so the same bits.
+fn integrate_fast<const L: usize>(
+    nav: &mut StrapdownLanes<L>,
+    block: &[[[f64; BLOCK]; 6]],
+    n: usize,
+    dt_s: f64,
+) {
+    #[inline(always)]
+    fn integrate<const L: usize>(
+        nav: &mut StrapdownLanes<L>,
+        block: &[[[f64; BLOCK]; 6]],
+        n: usize,
+        dt_s: f64,
+    ) {
+        // Sample-major copy first (sample i: channel c of every lane contiguous), in chunks of
+        // eight samples so both sides stay in the first-level cache.
+        const CHUNK: usize = 8;
+        let mut samples = [[[0.0f64; L]; 6]; CHUNK];
+        for start in (0..n).step_by(CHUNK) {
+            let m = CHUNK.min(n - start);
+            for (l, lane) in block.iter().enumerate() {
+                for (c, channel) in lane.iter().enumerate() {
+                    for (j, s) in samples[..m].iter_mut().enumerate() {
+                        s[c][l] = channel[start + j];
+                    }
+                }
+            }
+            for s in &samples[..m] {
+                nav.step(&[s[0], s[1], s[2]], &[s[3], s[4], s[5]], dt_s);
+            }
+        }
+    }
+    #[cfg(target_arch = "x86_64")]
+    {
+        #[target_feature(enable = "avx512f")]
+        fn avx512<const L: usize>(
+            nav: &mut StrapdownLanes<L>,
+            block: &[[[f64; BLOCK]; 6]],
+            n: usize,
+            dt_s: f64,
+        ) {
+            integrate(nav, block, n, dt_s)
+        }
+        #[target_feature(enable = "avx2")]
+        fn avx2<const L: usize>(
+            nav: &mut StrapdownLanes<L>,
+            block: &[[[f64; BLOCK]; 6]],
+            n: usize,
+            dt_s: f64,
+        ) {
+            integrate(nav, block, n, dt_s)
+        }
+        if L > 1 && std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU supports AVX-512F (checked just above).
+            return unsafe { avx512(nav, block, n, dt_s) };
+        }
+        if L > 1 && std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2 (checked just above).
+            return unsafe { avx2(nav, block, n, dt_s) };
+        }
+    }
+    integrate(nav, block, n, dt_s)
 }
 
 /// The active terms of `model` with their law sources (each term's own,

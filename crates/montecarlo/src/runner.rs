@@ -22,6 +22,20 @@ pub trait RunKernel: Sync {
     fn quantities(&self) -> usize;
     /// Simulate run `run`; the error says what went wrong (e.g. a non-finite state).
     fn run(&self, run: u64, out: &mut [f64]) -> Result<(), RunError>;
+    /// How many runs [`RunKernel::run_lanes`] advances together (1: one at a time).
+    fn lanes(&self) -> usize {
+        1
+    }
+    /// Simulate runs `first .. first + results.len()` (at most [`RunKernel::lanes`]) together:
+    /// run `first + i` writes row i of `out` (checkpoints x quantities values per row) and its
+    /// outcome in `results[i]`. Each run's numbers must be exactly those of [`RunKernel::run`],
+    /// so results do not depend on how runs are grouped. The default runs them one by one.
+    fn run_lanes(&self, first: u64, out: &mut [f64], results: &mut [Result<(), RunError>]) {
+        let width = out.len() / results.len().max(1);
+        for (i, (row, result)) in out.chunks_mut(width).zip(results).enumerate() {
+            *result = self.run(first + i as u64, row);
+        }
+    }
 }
 
 /// Why a run did not finish (recorded as a [`RunFailure`], never the end of the batch).
@@ -59,23 +73,61 @@ pub struct BatchResult {
     pub failures: Vec<RunFailure>,
 }
 
+/// A run's row, or why it failed: a kernel error, a non-finite output value.
+fn checked_row<K: RunKernel>(
+    kernel: &K,
+    result: Result<(), RunError>,
+    row: Vec<f64>,
+) -> Result<Vec<f64>, RunError> {
+    result?;
+    match row.iter().position(|v| !v.is_finite()) {
+        None => Ok(row),
+        Some(i) => Err(RunError::NonFiniteOutput {
+            checkpoint: i / kernel.quantities().max(1),
+            quantity: i % kernel.quantities().max(1),
+        }),
+    }
+}
+
+fn panicked(panic: Box<dyn std::any::Any + Send>) -> RunError {
+    RunError::Panicked(
+        panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned()),
+    )
+}
+
 fn run_one<K: RunKernel>(kernel: &K, run: u64, width: usize) -> Result<Vec<f64>, RunError> {
     let mut out = vec![f64::NAN; width];
     match catch_unwind(AssertUnwindSafe(|| kernel.run(run, &mut out))) {
-        Ok(Ok(())) => match out.iter().position(|v| !v.is_finite()) {
-            None => Ok(out),
-            Some(i) => Err(RunError::NonFiniteOutput {
-                checkpoint: i / kernel.quantities().max(1),
-                quantity: i % kernel.quantities().max(1),
-            }),
-        },
-        Ok(Err(e)) => Err(e),
-        Err(panic) => Err(RunError::Panicked(
-            panic
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| panic.downcast_ref::<String>().cloned()),
-        )),
+        Ok(result) => checked_row(kernel, result, out),
+        Err(panic) => Err(panicked(panic)),
+    }
+}
+
+/// Runs `runs` through [`RunKernel::run_lanes`]; if that panics, each run again alone (so a
+/// panic is charged to its own run only).
+fn run_group<K: RunKernel>(
+    kernel: &K,
+    runs: Range<u64>,
+    width: usize,
+) -> Vec<Result<Vec<f64>, RunError>> {
+    let count = (runs.end - runs.start) as usize;
+    if count == 1 {
+        return vec![run_one(kernel, runs.start, width)];
+    }
+    let mut out = vec![f64::NAN; width * count];
+    let mut results: Vec<Result<(), RunError>> = vec![Ok(()); count];
+    match catch_unwind(AssertUnwindSafe(|| {
+        kernel.run_lanes(runs.start, &mut out, &mut results)
+    })) {
+        Ok(()) => results
+            .into_iter()
+            .zip(out.chunks(width.max(1)))
+            .map(|(result, row)| checked_row(kernel, result, row.to_vec()))
+            .collect(),
+        Err(_) => runs.map(|run| run_one(kernel, run, width)).collect(),
     }
 }
 
@@ -93,10 +145,17 @@ pub fn run_range<K: RunKernel>(
     while start < runs.end {
         let end = (start + BLOCK_RUNS).min(runs.end);
         // Ordered collect: element i of the block is run start + i whatever thread computed it.
-        let block: Vec<Result<Vec<f64>, RunError>> = (start..end)
+        // Groups of `lanes` runs from the block's start (each run's numbers are the same in any
+        // group, RunKernel::run_lanes).
+        let lanes = kernel.lanes().max(1) as u64;
+        let groups: Vec<Vec<Result<Vec<f64>, RunError>>> = (0..(end - start).div_ceil(lanes))
             .into_par_iter()
-            .map(|run| run_one(kernel, run, width))
+            .map(|g| {
+                let first = start + g * lanes;
+                run_group(kernel, first..(first + lanes).min(end), width)
+            })
             .collect();
+        let block = groups.into_iter().flatten();
         for (run, result) in (start..end).zip(block) {
             match result {
                 Ok(row) => matrix.push(run, &row),

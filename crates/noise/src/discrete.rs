@@ -253,14 +253,57 @@ impl GaussMarkovBank {
             })
             .sum();
         let w = draws(rng, scratch, n * self.state.len() + held_draws);
+        // The usual banks (flicker's band has 2-4 components advanced every sample) with their
+        // states in registers; the same operations in the same order as `step`.
+        let used = match self.state.len() {
+            1 => self.add_block_fixed::<1>(w, out),
+            2 => self.add_block_fixed::<2>(w, out),
+            3 => self.add_block_fixed::<3>(w, out),
+            4 => self.add_block_fixed::<4>(w, out),
+            _ => {
+                let mut j = 0;
+                for v in out.iter_mut() {
+                    *v += self.step(|| {
+                        j += 1;
+                        w[j - 1]
+                    });
+                }
+                j
+            }
+        };
+        debug_assert_eq!(used, w.len());
+    }
+
+    /// [`Self::step`] over a block for a bank of `N` every-sample components, the draws taken
+    /// from `w` in order; returns how many it used.
+    #[inline(always)]
+    fn add_block_fixed<const N: usize>(&mut self, w: &[f64], out: &mut [f64]) -> usize {
+        let mut x: [f64; N] = std::array::from_fn(|c| self.state[c]);
+        let phi: [f64; N] = std::array::from_fn(|c| self.phi[c]);
+        let drive: [f64; N] = std::array::from_fn(|c| self.drive[c]);
         let mut j = 0;
         for v in out.iter_mut() {
-            *v += self.step(|| {
-                j += 1;
-                w[j - 1]
-            });
+            let mut sum = 0.0;
+            for c in 0..N {
+                sum += x[c];
+                x[c] = phi[c] * x[c] + drive[c] * w[j + c];
+            }
+            j += N;
+            sum += self.held_sum;
+            sum -= self.offset;
+            *v += sum;
+            if !self.held.is_empty() {
+                self.until_event -= 1;
+                if self.until_event == 0 {
+                    self.sync_held_with(self.event_span, || {
+                        j += 1;
+                        w[j - 1]
+                    });
+                }
+            }
         }
-        debug_assert_eq!(j, w.len());
+        self.state.copy_from_slice(&x);
+        j
     }
 }
 

@@ -128,20 +128,7 @@ impl Attitude {
 #[inline]
 pub(crate) fn rodrigues_coefficients(s2: f64) -> (f64, f64) {
     if s2 < 1e-2 {
-        // Horner form with constant coefficients (multiplications only: a chain of divisions would
-        // dominate the cost of a mechanisation step). sin s/s = sum (-s^2)^n/(2n+1)!,
-        // (1 - cos s)/s^2 = sum (-s^2)^n/(2n+2)!.
-        const A: [f64; 5] = [1.0, -1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362_880.0];
-        const B: [f64; 5] = [
-            0.5,
-            -1.0 / 24.0,
-            1.0 / 720.0,
-            -1.0 / 40_320.0,
-            1.0 / 3_628_800.0,
-        ];
-        let a = A[0] + s2 * (A[1] + s2 * (A[2] + s2 * (A[3] + s2 * A[4])));
-        let b = B[0] + s2 * (B[1] + s2 * (B[2] + s2 * (B[3] + s2 * B[4])));
-        (a, b)
+        rodrigues_series(s2)
     } else {
         // Half-angle forms avoid the cancellation in 1 - cos s: sin s = 2 sin(s/2) cos(s/2),
         // 1 - cos s = 2 sin^2(s/2).
@@ -149,6 +136,24 @@ pub(crate) fn rodrigues_coefficients(s2: f64) -> (f64, f64) {
         let (sh, ch) = (0.5 * s).sin_cos();
         (2.0 * sh * ch / s, 2.0 * sh * sh / s2)
     }
+}
+
+/// [`rodrigues_coefficients`] for `s^2 < 1e-2`: the series in Horner form with constant
+/// coefficients (multiplications only: a chain of divisions would dominate the cost of a
+/// mechanisation step). sin s/s = sum (-s^2)^n/(2n+1)!, (1 - cos s)/s^2 = sum (-s^2)^n/(2n+2)!.
+#[inline(always)]
+pub(crate) fn rodrigues_series(s2: f64) -> (f64, f64) {
+    const A: [f64; 5] = [1.0, -1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362_880.0];
+    const B: [f64; 5] = [
+        0.5,
+        -1.0 / 24.0,
+        1.0 / 720.0,
+        -1.0 / 40_320.0,
+        1.0 / 3_628_800.0,
+    ];
+    let a = A[0] + s2 * (A[1] + s2 * (A[2] + s2 * (A[3] + s2 * A[4])));
+    let b = B[0] + s2 * (B[1] + s2 * (B[2] + s2 * (B[3] + s2 * B[4])));
+    (a, b)
 }
 
 /// `exp([phi x]) = I + (sin s/s) B + ((1 - cos s)/s^2) B^2` with `B = [phi x]`, `s = |phi|` (Woodman eq 41).

@@ -25,12 +25,14 @@
 //! **Error** ([`nav_error`]): estimate minus truth, in the navigation frame.
 
 mod frames;
+mod lanes;
 mod mechanisation;
 mod nav_error;
 pub mod spec;
 pub mod trajectory;
 
 pub use frames::{Attitude, BodyVector, NavVector};
+pub use lanes::StrapdownLanes;
 pub use mechanisation::{NavState, Scheme, Strapdown};
 pub use nav_error::{nav_error, NavError};
 pub use spec::{TrajectoryError, TrajectorySpec};

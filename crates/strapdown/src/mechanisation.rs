@@ -6,8 +6,8 @@
 //! the rate itself; [`crate::Trajectory::ideal_imu`] produces exactly these averages. The sample that
 //! covers `[t_k, t_{k+1}]` is delivered at `t_{k+1}`, so it is Woodman's `a_b(t + dt)` of eq 45.
 
-use crate::frames::{so3_exp, Attitude, BodyVector, NavVector};
-use nalgebra::{Matrix3, Vector3};
+use crate::frames::{Attitude, BodyVector, NavVector};
+use crate::lanes::StrapdownLanes;
 
 /// The navigation solution (or the truth): attitude, velocity and position, all in the navigation frame.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
@@ -55,112 +55,54 @@ impl Scheme {
 
 /// How often the direction cosine matrix is re-orthonormalised (steps). Rounding makes `C^T C` drift
 /// from `I` by ~1e-16 per step; renormalising every 256 steps keeps it at that level for negligible cost.
-const RENORMALISE_EVERY: u32 = 256;
+pub(crate) const RENORMALISE_EVERY: u32 = 256;
 
 /// A strapdown integrator. Allocation-free, fixed-size state; one [`Strapdown::step`] per IMU sample.
+/// The one-lane case of [`StrapdownLanes`] (the mechanisation is written once, there).
 #[derive(Clone, Debug)]
-pub struct Strapdown {
-    scheme: Scheme,
-    state: NavState,
-    /// Gravity acceleration in the navigation frame, `(0, 0, +g)` in NED (so `C f + gamma = 0` at rest).
-    gravity_nav: Vector3<f64>,
-    /// Previous gyro increment `w_{k-1} dt_{k-1}` (rad), for the coning correction.
-    previous_dtheta: Vector3<f64>,
-    steps_since_renormalise: u32,
-}
+pub struct Strapdown(StrapdownLanes<1>);
 
 impl Strapdown {
     /// A new integrator starting at `initial`, with gravity magnitude `gravity_mps2` pointing down.
     /// The coning correction of the first step assumes a zero previous increment unless
     /// [`Strapdown::set_previous_gyro`] provides it.
     pub fn new(scheme: Scheme, initial: NavState, gravity_mps2: f64) -> Strapdown {
-        Strapdown {
-            scheme,
-            state: initial,
-            gravity_nav: Vector3::new(0.0, 0.0, gravity_mps2),
-            previous_dtheta: Vector3::zeros(),
-            steps_since_renormalise: 0,
-        }
+        Strapdown(StrapdownLanes::new(scheme, &[initial], gravity_mps2))
     }
 
     /// Provide the gyro sample of the interval before the first step (for the coning correction of the
     /// first step of [`Scheme::Accurate`]); ignored by [`Scheme::Woodman`].
     pub fn set_previous_gyro(&mut self, gyro: &BodyVector, dt_s: f64) {
-        self.previous_dtheta = gyro.0 * dt_s;
+        self.0.set_previous_gyro(&gyro.0, dt_s);
     }
 
     /// The scheme in use.
     pub fn scheme(&self) -> Scheme {
-        self.scheme
+        self.0.scheme()
     }
 
     /// The current navigation solution.
-    pub fn state(&self) -> &NavState {
-        &self.state
+    pub fn state(&self) -> NavState {
+        self.0.state(0)
     }
 
     /// Advance by one sample: `gyro` (rad/s) and `accel` (specific force, m/s^2), body frame, interval
-    /// averages over `[t_k, t_k + dt_s]`.
+    /// averages over `[t_k, t_k + dt_s]`. Woodman: `C <- C exp(B)` (eq 41), `a_nav = C_{k+1} f`
+    /// (eq 42), `v += dt (a_nav + gamma)` (eq 45), `p += dt v_{k+1}` (eq 46); Accurate: the coning
+    /// correction, the exact rotation, trapezoidal velocity and position ([`Scheme`]); the DCM
+    /// re-orthonormalised every 256 steps (`renormalise`).
     #[inline]
     pub fn step(&mut self, gyro: &BodyVector, accel: &BodyVector, dt_s: f64) {
-        let dtheta = gyro.0 * dt_s;
-        let c_old = self.state.attitude.0;
-        match self.scheme {
-            Scheme::Woodman => {
-                // Woodman eq 41: C(t+dt) = C(t) (I + (sin s/s) B + ((1-cos s)/s^2) B^2), B = [w dt x].
-                let c_new = c_old * so3_exp(&dtheta);
-                // Eq 42 with the newly rotated sample, eq 45 (gravity added as +g down, i.e. eq 45's
-                // `- g_g` with g_g the gravity the accelerometer reads at rest), eq 46 with v(t+dt).
-                let a_nav = c_new * accel.0;
-                let v_new = self.state.velocity.0 + dt_s * (a_nav + self.gravity_nav);
-                self.state.position.0 += dt_s * v_new;
-                self.state.velocity.0 = v_new;
-                self.state.attitude.0 = c_new;
-            }
-            Scheme::Accurate => {
-                // One-plus-previous-sample coning correction phi = dtheta + (1/12) dtheta_prev x dtheta
-                // (not in docs/model.md; source: G. Yan's PSINS toolbox `cnscl.m`, branch "single sample +
-                // previous sample", `dphim = 1/12*cros(wm_1, wm)`, public copy in
-                // BohemianRhapsodyz/IMMKF-INS base/base1/cnscl.m; the algorithm class is Savage 1998,
-                // JGCD 21(1) 19-28). Its order is measured by tests/order on classical coning.
-                let phi = dtheta + self.previous_dtheta.cross(&dtheta) * (1.0 / 12.0);
-                self.previous_dtheta = dtheta;
-                // Exact rotation for the (corrected) constant-rate increment, Woodman eq 41.
-                let c_new = c_old * so3_exp(&phi);
-                // Trapezoidal rule for eq 43: the specific force rotated with C at both ends of the step.
-                // (C_k + C_{k+1}) f / 2: one matrix-vector product instead of two.
-                let a_nav = 0.5 * ((c_old + c_new) * accel.0);
-                let v_old = self.state.velocity.0;
-                let v_new = v_old + dt_s * (a_nav + self.gravity_nav);
-                // Trapezoidal rule for eq 44.
-                self.state.position.0 += (0.5 * dt_s) * (v_old + v_new);
-                self.state.velocity.0 = v_new;
-                self.state.attitude.0 = c_new;
-            }
-        }
-        self.steps_since_renormalise += 1;
-        if self.steps_since_renormalise >= RENORMALISE_EVERY {
-            self.steps_since_renormalise = 0;
-            self.state.attitude.0 = renormalise(&self.state.attitude.0);
-        }
+        let g = [[gyro.0.x], [gyro.0.y], [gyro.0.z]];
+        let a = [[accel.0.x], [accel.0.y], [accel.0.z]];
+        self.0.step(&g, &a, dt_s);
     }
-}
-
-/// First-order symmetric orthonormalisation `C <- C - C (C^T C - I) / 2`: the first term of the nearest
-/// orthonormal matrix `C (C^T C)^(-1/2) = C (I + D)^(-1/2)`, `D = C^T C - I` (I. Bar-Itzhack, "Strapdown
-/// matrix orthogonalization: the dual iterative algorithm", IEEE TAES 1976; the same series is spelled
-/// out in M. Jah's public `orthodcm.m`). With `|D| ~ 1e-14` the neglected `3/8 D^2` is below rounding.
-/// Exact identity stays exact identity.
-#[inline]
-fn renormalise(c: &Matrix3<f64>) -> Matrix3<f64> {
-    let e = c.tr_mul(c) - Matrix3::identity();
-    c - 0.5 * (c * e)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nalgebra::Rotation3;
+    use nalgebra::{Matrix3, Rotation3, Vector3};
 
     #[test]
     fn scheme_names_round_trip() {

@@ -25,7 +25,7 @@ fn final_error<T: Trajectory>(traj: &T, scheme: Scheme, t_end_s: f64, n: u64) ->
         let (gyro, accel) = traj.ideal_imu(k, dt);
         sd.step(&gyro, &accel, dt);
     }
-    nav_error(sd.state(), &traj.truth(t_end_s))
+    nav_error(&sd.state(), &traj.truth(t_end_s))
 }
 
 fn norm3(v: [f64; 3]) -> f64 {

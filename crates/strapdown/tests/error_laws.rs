@@ -30,7 +30,7 @@ fn run_static(
         corrupt(&mut gyro, &mut accel);
         sd.step(&gyro, &accel, dt_s);
     }
-    nav_error(sd.state(), &traj.truth(steps as f64 * dt_s))
+    nav_error(&sd.state(), &traj.truth(steps as f64 * dt_s))
 }
 
 fn assert_within(what: &str, got: f64, law: f64, tol: f64) {

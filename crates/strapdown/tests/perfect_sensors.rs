@@ -10,7 +10,7 @@ fn run<T: Trajectory>(traj: &T, scheme: Scheme, dt_s: f64, steps: u64) -> strapd
         let (gyro, accel) = traj.ideal_imu(k, dt_s);
         sd.step(&gyro, &accel, dt_s);
     }
-    nav_error(sd.state(), &traj.truth(steps as f64 * dt_s))
+    nav_error(&sd.state(), &traj.truth(steps as f64 * dt_s))
 }
 
 #[test]

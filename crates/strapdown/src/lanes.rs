@@ -1,0 +1,257 @@
+//! `L` strapdown integrators advanced in lockstep, one per lane (structure of arrays): the
+//! mechanisation of [`crate::Scheme`] written once, over lanes. [`crate::Strapdown`] is the
+//! one-lane case; the Monte Carlo runner advances several runs at a time, and with the loops over
+//! lanes compiled for a wide vector unit one instruction does the same operation for every run.
+//!
+//! Every lane performs exactly the operations of a one-lane integrator in the same order (no
+//! fused multiply-add, no reassociation), so a run's numbers do not depend on the lane it ran in
+//! nor on how many runs shared the step (tested in `tests/lanes.rs`).
+
+// Index loops over components and lanes state the arithmetic as written in the sources (and let
+// the compiler see the lane loops whole): clearer here than iterator chains.
+#![allow(clippy::needless_range_loop)]
+
+use crate::frames::{rodrigues_coefficients, rodrigues_series, Attitude, NavVector};
+use crate::mechanisation::{NavState, Scheme, RENORMALISE_EVERY};
+use nalgebra::{Matrix3, Vector3};
+
+/// `[[f64; L]; N]`: component `k` of every lane at `[k][lane]`.
+type Lanes<const N: usize, const L: usize> = [[f64; L]; N];
+
+/// `L` strapdown integrators (see the module docs).
+#[derive(Clone, Debug)]
+pub struct StrapdownLanes<const L: usize> {
+    scheme: Scheme,
+    /// Body-to-navigation direction cosine matrices, row-major: entry (i, j) at `[3 i + j]`.
+    c: Lanes<9, L>,
+    /// Velocity and position, NED.
+    v: Lanes<3, L>,
+    p: Lanes<3, L>,
+    /// Previous gyro increment `w_{k-1} dt` (rad), for the coning correction.
+    previous: Lanes<3, L>,
+    /// Gravity in the navigation frame, `(0, 0, +g)`.
+    gravity_nav: [f64; 3],
+    steps_since_renormalise: u32,
+}
+
+impl<const L: usize> StrapdownLanes<L> {
+    /// Integrators starting at `initial` (one state per lane), gravity `gravity_mps2` down.
+    pub fn new(scheme: Scheme, initial: &[NavState; L], gravity_mps2: f64) -> Self {
+        let mut s = StrapdownLanes {
+            scheme,
+            c: [[0.0; L]; 9],
+            v: [[0.0; L]; 3],
+            p: [[0.0; L]; 3],
+            previous: [[0.0; L]; 3],
+            gravity_nav: [0.0, 0.0, gravity_mps2],
+            steps_since_renormalise: 0,
+        };
+        for (l, state) in initial.iter().enumerate() {
+            let c = state.attitude.matrix();
+            for i in 0..3 {
+                for j in 0..3 {
+                    s.c[3 * i + j][l] = c[(i, j)];
+                }
+                s.v[i][l] = state.velocity.0[i];
+                s.p[i][l] = state.position.0[i];
+            }
+        }
+        s
+    }
+
+    /// The gyro sample (rad/s) of the interval before the first step, the same for every lane
+    /// (the coning correction of [`Scheme::Accurate`]'s first step).
+    pub fn set_previous_gyro(&mut self, gyro: &Vector3<f64>, dt_s: f64) {
+        for k in 0..3 {
+            self.previous[k] = [gyro[k] * dt_s; L];
+        }
+    }
+
+    /// The scheme in use.
+    pub fn scheme(&self) -> Scheme {
+        self.scheme
+    }
+
+    /// Lane `lane`'s navigation solution.
+    pub fn state(&self, lane: usize) -> NavState {
+        NavState {
+            attitude: Attitude(Matrix3::from_fn(|i, j| self.c[3 * i + j][lane])),
+            velocity: NavVector(Vector3::from_fn(|i, _| self.v[i][lane])),
+            position: NavVector(Vector3::from_fn(|i, _| self.p[i][lane])),
+        }
+    }
+
+    /// Advance every lane by one sample: `gyro[k][lane]` (rad/s) and `accel[k][lane]` (specific
+    /// force, m/s^2), body axis k, interval averages over `[t_k, t_k + dt_s]` (the input
+    /// convention of [`crate::Strapdown::step`]).
+    #[inline(always)]
+    pub fn step(&mut self, gyro: &Lanes<3, L>, accel: &Lanes<3, L>, dt_s: f64) {
+        let mut dtheta = [[0.0; L]; 3];
+        for k in 0..3 {
+            for l in 0..L {
+                dtheta[k][l] = gyro[k][l] * dt_s;
+            }
+        }
+        let c_old = self.c;
+        let rotation = match self.scheme {
+            // Woodman eq 41: C(t+dt) = C(t) exp(B), B = [w dt x].
+            Scheme::Woodman => so3_exp_lanes(&dtheta),
+            Scheme::Accurate => {
+                // One-plus-previous-sample coning correction phi = dtheta + (1/12) dtheta_prev x
+                // dtheta (G. Yan's PSINS `cnscl.m`, "single sample + previous sample"; Savage 1998,
+                // JGCD 21(1) 19-28); its order is measured by tests/order on classical coning.
+                let mut phi = [[0.0; L]; 3];
+                let q = &self.previous;
+                let d = &dtheta;
+                for l in 0..L {
+                    let cross = [
+                        q[1][l] * d[2][l] - q[2][l] * d[1][l],
+                        q[2][l] * d[0][l] - q[0][l] * d[2][l],
+                        q[0][l] * d[1][l] - q[1][l] * d[0][l],
+                    ];
+                    for k in 0..3 {
+                        phi[k][l] = d[k][l] + cross[k] * (1.0 / 12.0);
+                    }
+                }
+                self.previous = dtheta;
+                // Exact rotation for the (corrected) constant-rate increment, Woodman eq 41.
+                so3_exp_lanes(&phi)
+            }
+        };
+        self.c = mat_mul(&c_old, &rotation);
+        match self.scheme {
+            Scheme::Woodman => {
+                // Eq 42 with the newly rotated sample, eq 45 (gravity +g down), eq 46 with v(t+dt).
+                let a_nav = mat_vec(&self.c, accel);
+                for k in 0..3 {
+                    for l in 0..L {
+                        let v_new = self.v[k][l] + dt_s * (a_nav[k][l] + self.gravity_nav[k]);
+                        self.p[k][l] += dt_s * v_new;
+                        self.v[k][l] = v_new;
+                    }
+                }
+            }
+            Scheme::Accurate => {
+                // Trapezoidal rule for eq 43, (C_k + C_{k+1}) f / 2 (one matrix-vector product),
+                // and for eq 44.
+                let mut sum = [[0.0; L]; 9];
+                for e in 0..9 {
+                    for l in 0..L {
+                        sum[e][l] = c_old[e][l] + self.c[e][l];
+                    }
+                }
+                let a = mat_vec(&sum, accel);
+                for k in 0..3 {
+                    for l in 0..L {
+                        let v_old = self.v[k][l];
+                        let v_new = v_old + dt_s * (0.5 * a[k][l] + self.gravity_nav[k]);
+                        self.p[k][l] += (0.5 * dt_s) * (v_old + v_new);
+                        self.v[k][l] = v_new;
+                    }
+                }
+            }
+        }
+        self.steps_since_renormalise += 1;
+        if self.steps_since_renormalise >= RENORMALISE_EVERY {
+            self.steps_since_renormalise = 0;
+            self.c = renormalise(&self.c);
+        }
+    }
+}
+
+/// Row-major 3x3 product per lane: (A B)_ij = (A_i0 B_0j + A_i1 B_1j) + A_i2 B_2j.
+#[inline(always)]
+fn mat_mul<const L: usize>(a: &Lanes<9, L>, b: &Lanes<9, L>) -> Lanes<9, L> {
+    let mut out = [[0.0; L]; 9];
+    for i in 0..3 {
+        for j in 0..3 {
+            for l in 0..L {
+                out[3 * i + j][l] = a[3 * i][l] * b[j][l]
+                    + a[3 * i + 1][l] * b[3 + j][l]
+                    + a[3 * i + 2][l] * b[6 + j][l];
+            }
+        }
+    }
+    out
+}
+
+/// Row-major 3x3 times vector per lane: (A x)_i = (A_i0 x_0 + A_i1 x_1) + A_i2 x_2.
+#[inline(always)]
+fn mat_vec<const L: usize>(a: &Lanes<9, L>, x: &Lanes<3, L>) -> Lanes<3, L> {
+    let mut out = [[0.0; L]; 3];
+    for i in 0..3 {
+        for l in 0..L {
+            out[i][l] =
+                a[3 * i][l] * x[0][l] + a[3 * i + 1][l] * x[1][l] + a[3 * i + 2][l] * x[2][l];
+        }
+    }
+    out
+}
+
+/// `exp([phi x])` per lane (Woodman eq 41; the Rodrigues form of `crate::frames::so3_exp`):
+/// `I + a B + b B^2`, `B^2 = phi phi^T - s^2 I`. The coefficients come from their series when
+/// every lane's angle is below 0.1 rad (the usual case, vectorised), else lane by lane.
+#[inline(always)]
+fn so3_exp_lanes<const L: usize>(phi: &Lanes<3, L>) -> Lanes<9, L> {
+    let [x, y, z] = phi;
+    let mut s2 = [0.0; L];
+    for l in 0..L {
+        s2[l] = x[l] * x[l] + y[l] * y[l] + z[l] * z[l];
+    }
+    let (mut a, mut b) = ([0.0; L], [0.0; L]);
+    if s2.iter().all(|&s| s < 1e-2) {
+        for l in 0..L {
+            (a[l], b[l]) = rodrigues_series(s2[l]);
+        }
+    } else {
+        for l in 0..L {
+            (a[l], b[l]) = rodrigues_coefficients(s2[l]);
+        }
+    }
+    let mut e = [[0.0; L]; 9];
+    for l in 0..L {
+        let (a, b, x, y, z) = (a[l], b[l], x[l], y[l], z[l]);
+        let d = 1.0 - b * s2[l];
+        let m = [
+            d + b * x * x,
+            b * x * y - a * z,
+            b * x * z + a * y,
+            b * y * x + a * z,
+            d + b * y * y,
+            b * y * z - a * x,
+            b * z * x - a * y,
+            b * z * y + a * x,
+            d + b * z * z,
+        ];
+        for k in 0..9 {
+            e[k][l] = m[k];
+        }
+    }
+    e
+}
+
+/// First-order symmetric orthonormalisation `C <- C - C (C^T C - I) / 2` per lane: the first term of
+/// the nearest orthonormal matrix `C (C^T C)^(-1/2) = C (I + D)^(-1/2)`, `D = C^T C - I`
+/// (I. Bar-Itzhack, "Strapdown matrix orthogonalization: the dual iterative algorithm", IEEE TAES
+/// 1976; the same series is spelled out in M. Jah's public `orthodcm.m`). With `|D| ~ 1e-14` the
+/// neglected `3/8 D^2` is below rounding. Exact identity stays exact identity.
+#[inline(always)]
+fn renormalise<const L: usize>(c: &Lanes<9, L>) -> Lanes<9, L> {
+    let mut e = [[0.0; L]; 9];
+    for i in 0..3 {
+        for j in 0..3 {
+            for l in 0..L {
+                let g = c[i][l] * c[j][l] + c[3 + i][l] * c[3 + j][l] + c[6 + i][l] * c[6 + j][l];
+                e[3 * i + j][l] = g - if i == j { 1.0 } else { 0.0 };
+            }
+        }
+    }
+    let ce = mat_mul(c, &e);
+    let mut out = [[0.0; L]; 9];
+    for k in 0..9 {
+        for l in 0..L {
+            out[k][l] = c[k][l] - 0.5 * ce[k][l];
+        }
+    }
+    out
+}
