@@ -139,5 +139,33 @@ fn bench(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench);
+/// The standard-normal draws every stochastic term makes: the wide sampler (`NormalStream`, eight
+/// Xoshiro256++ lanes, the ziggurat's first pass vectorised) against one Xoshiro256++ through
+/// rand_distr's `StandardNormal` (the same ziggurat, ZIGNOR; the sampler before issue 26).
+fn bench_normals(c: &mut Criterion) {
+    use rand::{Rng, SeedableRng};
+    const N: usize = 4096;
+    let mut group = c.benchmark_group("normals");
+    group.throughput(Throughput::Elements(N as u64));
+    let mut out = vec![0.0; N];
+    let mut wide = noise::NormalStream::new(noise::ImuRng::seed_from_u64(1));
+    group.bench_function("normal_stream_fill", |b| {
+        b.iter(|| {
+            wide.fill(&mut out);
+            black_box(&out);
+        })
+    });
+    let mut rng = noise::ImuRng::seed_from_u64(1);
+    group.bench_function("xoshiro256pp_rand_distr", |b| {
+        b.iter(|| {
+            for w in out.iter_mut() {
+                *w = rng.sample(rand_distr::StandardNormal);
+            }
+            black_box(&out);
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench, bench_normals);
 criterion_main!(benches);
