@@ -91,43 +91,56 @@ impl NormalStream {
     }
 }
 
+/// Draws per pass: the first ziggurat pass runs over this many, the rejected ones (about 1.5 %)
+/// are collected and finished after it, in draw order, so the main loop has no branch.
+const PASS: usize = 512;
+
 /// Fill `out` (a multiple of [`LANES`] long) with whole groups: the lanes' next outputs through
 /// the ziggurat's first pass, the rejected ones finished from `fallback` in draw order.
 #[inline(always)]
 fn groups(state: &mut [[u64; LANES]; 4], fallback: &mut ImuRng, out: &mut [f64]) {
-    let [s0, s1, s2, s3] = state;
-    for group in out.chunks_exact_mut(LANES) {
-        let mut bits = [0u64; LANES];
-        for l in 0..LANES {
-            // Xoshiro256++ (Blackman & Vigna 2021, xoshiro256plusplus.c): output, then advance.
-            bits[l] = s0[l]
-                .wrapping_add(s3[l])
-                .rotate_left(23)
-                .wrapping_add(s0[l]);
-            let t = s1[l] << 17;
-            s2[l] ^= s0[l];
-            s3[l] ^= s1[l];
-            s1[l] ^= s2[l];
-            s0[l] ^= s3[l];
-            s2[l] ^= t;
-            s3[l] = s3[l].rotate_left(45);
+    let [mut s0, mut s1, mut s2, mut s3] = *state;
+    let mut rejected_at = [0u16; PASS];
+    for pass in out.chunks_mut(PASS) {
+        let mut count = 0usize;
+        for (g, group) in pass.chunks_exact_mut(LANES).enumerate() {
+            let mut bits = [0u64; LANES];
+            for l in 0..LANES {
+                // Xoshiro256++ (Blackman & Vigna 2021, xoshiro256plusplus.c): output, then advance.
+                bits[l] = s0[l]
+                    .wrapping_add(s3[l])
+                    .rotate_left(23)
+                    .wrapping_add(s0[l]);
+                let t = s1[l] << 17;
+                s2[l] ^= s0[l];
+                s3[l] ^= s1[l];
+                s1[l] ^= s2[l];
+                s0[l] ^= s3[l];
+                s2[l] ^= t;
+                s3[l] = s3[l].rotate_left(45);
+            }
+            for l in 0..LANES {
+                // The ziggurat's first pass (crate::ziggurat::standard_normal): layer, u in
+                // [-1, 1), x = u X_i, accepted when |x| < X_{i+1}. The bits of a draw are kept
+                // in place of its value until it is finished (below); a rejected draw's position
+                // is appended without a branch.
+                let i = (bits[l] & 0xff) as usize;
+                let x = (with_exponent(bits[l] >> 12, 1) - 3.0) * ZIG_NORM_X[i];
+                let rejected = x.abs() >= ZIG_NORM_X[i + 1];
+                group[l] = if rejected { f64::from_bits(bits[l]) } else { x };
+                rejected_at[count] = (g * LANES + l) as u16;
+                count += usize::from(rejected);
+            }
         }
-        let mut rejected = 0u32;
-        for l in 0..LANES {
-            // The ziggurat's first pass (crate::ziggurat::standard_normal): layer, u in [-1, 1).
-            let i = (bits[l] & 0xff) as usize;
-            let x = (with_exponent(bits[l] >> 12, 1) - 3.0) * ZIG_NORM_X[i];
-            group[l] = x;
-            rejected |= u32::from(x.abs() >= ZIG_NORM_X[i + 1]) << l;
-        }
-        while rejected != 0 {
-            let l = rejected.trailing_zeros() as usize;
-            rejected &= rejected - 1;
-            let i = (bits[l] & 0xff) as usize;
-            let u = with_exponent(bits[l] >> 12, 1) - 3.0;
-            group[l] = finish_rejected(fallback, i, u, group[l]);
+        for &at in &rejected_at[..count] {
+            let at = usize::from(at);
+            let bits = pass[at].to_bits();
+            let i = (bits & 0xff) as usize;
+            let u = with_exponent(bits >> 12, 1) - 3.0;
+            pass[at] = finish_rejected(fallback, i, u, u * ZIG_NORM_X[i]);
         }
     }
+    *state = [s0, s1, s2, s3];
 }
 
 /// [`groups`] with AVX-512 where the CPU has it (chosen at run time; [`avx512::groups`], the same
@@ -156,13 +169,9 @@ fn groups_fast(state: &mut [[u64; LANES]; 4], fallback: &mut ImuRng, out: &mut [
 /// [`groups`] (integer steps, one rounded multiplication, one comparison), so the same bits.
 #[cfg(target_arch = "x86_64")]
 mod avx512 {
-    use super::{finish_rejected, with_exponent, ImuRng, LANES, ZIG_NORM_X};
+    use super::{finish_rejected, with_exponent, ImuRng, LANES, PASS, ZIG_NORM_X};
     use std::arch::x86_64::*;
     use std::mem::MaybeUninit;
-
-    /// Draws per pass: the first ziggurat pass runs over this many, the rejected ones (about
-    /// 1.5 %) are collected and finished after it, in draw order, so the main loop has no branch.
-    const PASS: usize = 512;
 
     /// As [`super::groups`]. Safety: the CPU must support AVX-512F.
     #[target_feature(enable = "avx512f")]
