@@ -518,7 +518,7 @@ fn nnls_subsets(g: &[[f64; 5]], y: &[f64], w: &[f64], allowed: [bool; 5]) -> Sol
 }
 
 /// Gauss–Jordan inverse with partial pivoting; `None` if singular.
-fn invert(a: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
+pub(crate) fn invert(a: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
     let k = a.len();
     let mut m: Vec<Vec<f64>> = a
         .iter()

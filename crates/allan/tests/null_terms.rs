@@ -1,0 +1,94 @@
+//! The resolved-term rule on logs of its null model (issue 24): on white rate noise of known N,
+//! no quantisation, bias instability, rate random walk or ramp term is claimed beyond the
+//! family-wise rate the thresholds are drawn for (crate::null), and the white-noise reading
+//! holds its interval.
+//!
+//! Generator: the noise crate's white rate noise N/sqrt(dt) w_k (docs/model.md §3).
+//!
+//! Tolerances: the CI test draws its thresholds for a family of 4 claims (Q, B, K, R) per log
+//! over all its logs at 1 %, so it fails falsely with probability at most 1 % (Bonferroni; the
+//! seeds are fixed, so a run is reproducible). The ignored test measures the false-claim rate
+//! at the command's level (1 % per log of 6 channels x 5 terms) on 200 seeds at 100 and 200 Hz
+//! and fails only beyond 6 false claims in its 400 logs: at the stated per-log rate of at most
+//! 4/30 % per channel, 0.53 are expected, and P(Poisson(0.53) > 6) < 1e-5.
+
+use allan::null::ClaimLevel;
+use allan::{analyse_rate, Estimator, Options, TauGrid};
+use noise::process::WhiteNoiseSampler;
+use rand::SeedableRng;
+use rand_xoshiro::Xoshiro256PlusPlus;
+
+/// 0.5833 deg/sqrt(h) in rad/sqrt(s).
+fn n_true() -> f64 {
+    (0.5833f64 / 60.0).to_radians()
+}
+
+/// The false claims (Q, B, K, R resolved) on `seeds` 10-minute white-noise logs at `rate_hz`,
+/// and the ARW intervals that miss the truth.
+fn false_claims(rate_hz: f64, seeds: std::ops::Range<u64>, claims: ClaimLevel) -> (usize, usize) {
+    let dt = 1.0 / rate_hz;
+    let len = (600.0 * rate_hz).round() as usize;
+    let white = WhiteNoiseSampler::new(n_true(), dt);
+    let opts = Options {
+        confidence: 0.999,
+        claims,
+        ..Options::default()
+    };
+    let (mut claimed, mut missed) = (0, 0);
+    for seed in seeds {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+        let data: Vec<f64> = (0..len).map(|_| white.sample(&mut rng)).collect();
+        let a = analyse_rate(
+            data,
+            dt,
+            Estimator::Overlapping,
+            &TauGrid::Octave,
+            &opts,
+            &|_| {},
+        );
+        let (terms, sheet) = (a.terms.unwrap(), a.sheet.unwrap());
+        for j in [0, 2, 3, 4] {
+            if terms[j].resolved {
+                claimed += 1;
+                eprintln!("{rate_hz} Hz seed {seed}: term {j} claimed: {:?}", terms[j]);
+            }
+        }
+        assert!(
+            sheet.bi_min.value.is_none() && sheet.rrw.value.is_none() && sheet.q.value.is_none()
+        );
+        let arw = &sheet.arw;
+        if !(arw.value.is_some() && arw.lo <= n_true() && n_true() <= arw.hi) {
+            missed += 1;
+        }
+    }
+    (claimed, missed)
+}
+
+#[test]
+fn ten_minute_white_logs_claim_no_term() {
+    let seeds = 10;
+    let claims = ClaimLevel {
+        rate: 0.01,
+        family: 4 * 2 * seeds as usize,
+        ..ClaimLevel::default()
+    };
+    for rate in [100.0, 200.0] {
+        let (claimed, _) = false_claims(rate, 100..100 + seeds, claims);
+        assert_eq!(claimed, 0, "{rate} Hz: {claimed} false claims");
+    }
+}
+
+#[test]
+#[ignore = "400 ten-minute logs: ~15 s; run with --ignored --nocapture"]
+fn false_claim_rate_over_200_seeds() {
+    let mut total = 0;
+    for rate in [100.0, 200.0] {
+        let (claimed, missed) = false_claims(rate, 1000..1200, ClaimLevel::default());
+        eprintln!(
+            "{rate} Hz: {claimed} false claims (Q, B, K, R) in 200 logs; ARW interval (99.9 %) missed N in {missed}"
+        );
+        assert!(missed <= 3, "{rate} Hz: ARW missed {missed} of 200");
+        total += claimed;
+    }
+    assert!(total <= 6, "{total} false claims in 400 logs");
+}
