@@ -214,7 +214,10 @@ impl<'a> Series<'a> {
         for (p, alpha) in points.iter_mut().zip(alphas) {
             let alpha = match (*alpha, last) {
                 (None, held) => held.unwrap_or(first_known),
-                (Some(a), Some(held)) if a != held => self.held_noise_id(p.m, d, held),
+                (Some(a), Some(held)) if a != held => {
+                    let edf = |al| edf::edf_for(est, opts.edf, al, p.m, n_phase, p.n_terms);
+                    self.held_noise_id(p.m, d, held, a, edf)
+                }
                 (Some(a), _) => a,
             };
             last = Some(alpha);
@@ -229,18 +232,28 @@ impl<'a> Series<'a> {
         }
     }
 
-    /// The noise type at averaging factor m when its identification differs from the shorter
-    /// tau's `held` one: the new identification only when it departs from `held` significantly
-    /// ([`edf::NoiseId::departs_from`] at [`NOISE_ID_CHANGE_Z`]), else `held`. With few blocks
-    /// the lag-1 ACF scatters by 1/sqrt(n) (0.18 at the method's minimum of 30 points): white
-    /// rate noise then reads as flicker PM (alpha = 1, r1 < -0.2) on about a quarter of the
-    /// longest taus, and those points got Greenhall's EDF for alpha = 1, several times too
-    /// large. A noise type persists over neighbouring taus (each power law dominates a range of
-    /// tau, IEEE 952 Annex C), so the shorter tau's identification, made on more blocks, is kept
-    /// unless this tau's evidence rejects it.
-    fn held_noise_id(&self, m: usize, d_max: u32, held: i32) -> i32 {
+    /// The noise type at averaging factor m when its identification `found` differs from the
+    /// shorter tau's `held` one: `found` where it departs from `held` significantly
+    /// ([`edf::NoiseId::departs_from`] at [`NOISE_ID_CHANGE_Z`]); where it does not, the data
+    /// cannot tell the two types apart, and the one with fewer degrees of freedom (`edf` of a
+    /// type: the wider interval) is taken. With few blocks the lag-1 ACF scatters by 1/sqrt(n)
+    /// (0.18 at the method's minimum of 30 points): white rate noise then reads as flicker PM
+    /// (alpha = 1, r1 < -0.2) on about a quarter of the longest taus, and those points got
+    /// Greenhall's EDF for alpha = 1, several times too large. A noise type persists over
+    /// neighbouring taus (each power law dominates a range of tau, IEEE 952 Annex C), which is
+    /// why the shorter tau's type, identified on more blocks, is the alternative; taking the
+    /// smaller EDF of the two never narrows an interval below what either type gives.
+    fn held_noise_id(
+        &self,
+        m: usize,
+        d_max: u32,
+        held: i32,
+        found: i32,
+        edf: impl Fn(i32) -> f64,
+    ) -> i32 {
         match self.noise_id_detail(m, d_max) {
             Some(id) if id.departs_from(held, NOISE_ID_CHANGE_Z) => id.alpha,
+            _ if edf(found) < edf(held) => found,
             _ => held,
         }
     }

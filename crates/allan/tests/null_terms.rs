@@ -92,3 +92,31 @@ fn false_claim_rate_over_200_seeds() {
     }
     assert!(total <= 6, "{total} false claims in 400 logs");
 }
+
+/// The noise identification on white rate noise (alpha = 0): a point reads as a PM type
+/// (alpha > 0, whose Greenhall EDF is larger than white FM's) only where its lag-1 ACF departs
+/// from the shorter tau's type by more than 2.576 standard errors beyond the rounding band: at
+/// most 0.5 % of points (one side of the two-sided 1 %), so at most 0.005 x 700 = 3.5 of the
+/// ~700 points of 50 logs on average; the test fails beyond 12 (P(Poisson(3.5) > 12) < 1e-4).
+/// Before the rule, the longest taus (30-120 blocks) read alpha = 1 on about a quarter of logs.
+#[test]
+fn white_noise_is_not_read_as_phase_noise() {
+    let (dt, len) = (0.01, 60_000);
+    let white = WhiteNoiseSampler::new(n_true(), dt);
+    let (mut points, mut pm, mut other) = (0, 0, 0);
+    for seed in 0..50u64 {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(7000 + seed);
+        let data: Vec<f64> = (0..len).map(|_| white.sample(&mut rng)).collect();
+        let s = allan::Series::from_rate(data, dt);
+        let pts = s.deviation(
+            Estimator::Overlapping,
+            &TauGrid::Octave,
+            &Options::default(),
+        );
+        points += pts.len();
+        pm += pts.iter().filter(|p| p.alpha > 0).count();
+        other += pts.iter().filter(|p| p.alpha < 0).count();
+    }
+    eprintln!("white noise: {pm} of {points} points read alpha > 0, {other} alpha < 0");
+    assert!(pm <= 12, "{pm} of {points} points read as phase noise");
+}
