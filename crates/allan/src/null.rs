@@ -29,7 +29,7 @@
 //! computed once per combination in a process and shared by the log's channels.
 
 pub use crate::claims::ClaimLevel;
-use crate::fit::{basis, capped_edf, invert, Fit};
+use crate::fit::{basis, capped_edf, scaled_ls, Fit, ScaledLs};
 use crate::{AllanPoint, Estimator, Options, Series, TauGrid};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
@@ -86,39 +86,15 @@ pub fn term_statistics(points: &[AllanPoint], fit: &Fit) -> [f64; 5] {
     })
 }
 
-/// c_j / sd(c_j) of the weighted least squares of y on the columns `idx` (column-scaled).
+/// c_j / sd(c_j) of the weighted least squares of y on the columns `idx` (crate::fit's
+/// column-scaled system: the ratio is the same in scaled variables).
 fn wald(g: &[[f64; 5]], y: &[f64], w: &[f64], idx: &[usize], j: usize) -> Option<f64> {
-    let k = idx.len();
-    if k > y.len() {
+    if idx.len() > y.len() {
         return None;
     }
-    let scale: Vec<f64> = idx
-        .iter()
-        .map(|&c| {
-            g.iter()
-                .zip(w)
-                .map(|(gi, wi)| wi * gi[c] * gi[c])
-                .sum::<f64>()
-                .sqrt()
-        })
-        .collect();
-    if scale.iter().any(|s| !s.is_finite() || *s <= 0.0) {
-        return None;
-    }
-    let mut ata = vec![vec![0.0f64; k]; k];
-    let mut atb = vec![0.0f64; k];
-    for ((gi, yi), wi) in g.iter().zip(y).zip(w) {
-        for a in 0..k {
-            let ga = gi[idx[a]] / scale[a];
-            atb[a] += wi * ga * yi;
-            for b in 0..k {
-                ata[a][b] += wi * ga * gi[idx[b]] / scale[b];
-            }
-        }
-    }
-    let inv = invert(&ata)?;
+    let ScaledLs { inv, atb, .. } = scaled_ls(g, y, w, idx)?;
     let a = idx.iter().position(|&c| c == j)?;
-    let c: f64 = (0..k).map(|b| inv[a][b] * atb[b]).sum();
+    let c: f64 = (0..idx.len()).map(|b| inv[a][b] * atb[b]).sum();
     let sd = inv[a][a].sqrt();
     (sd > 0.0).then(|| c / sd)
 }

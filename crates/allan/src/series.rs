@@ -262,12 +262,8 @@ impl<'a> Series<'a> {
     /// where the identification changes).
     pub fn noise_id_detail(&self, m: usize, d_max: u32) -> Option<edf::NoiseId> {
         match (self.rate_len, self.source_phase) {
-            (Some(rate_len), _) => {
-                let m = m.max(1);
-                let blocks = rate_len / m;
-                if blocks < 30 {
-                    return None;
-                }
+            (Some(_), _) => {
+                let (m, blocks) = self.rate_blocks(m)?;
                 let x = &self.phase;
                 edf::rate_noise_id_detail_fn(blocks, |j| x[(j + 1) * m] - x[j * m], d_max)
             }
@@ -276,21 +272,24 @@ impl<'a> Series<'a> {
         }
     }
 
+    /// The averaging factor (at least 1) and the number of block averages of the rate at m,
+    /// `None` under the 30 the lag-1 ACF method needs (Riley 2004) or for phase input. The block
+    /// averages of the rate are phase differences at stride m (x_{(j+1)m} - x_{jm} = tau0 * sum
+    /// of the block, mean removed): no pass over the m samples of each block. Scale and offset
+    /// do not change the ACF.
+    fn rate_blocks(&self, m: usize) -> Option<(usize, usize)> {
+        let m = m.max(1);
+        let blocks = self.rate_len? / m;
+        (blocks >= 30).then_some((m, blocks))
+    }
+
     /// Lag-1 autocorrelation noise identification at averaging factor m (Riley 2004),
     /// on the data as given (rate or phase); `None` when too few points.
     pub fn noise_id(&self, m: usize, d_max: u32) -> Option<i32> {
         match (self.rate_len, self.source_phase) {
-            (Some(rate_len), _) => {
-                // The block averages of the rate are phase differences at stride m
-                // (x_{(j+1)m} - x_{jm} = tau0 * sum of the block, mean removed): no pass over
-                // the m samples of each block. Scale and offset do not change the ACF.
-                let m = m.max(1);
-                let blocks = rate_len / m;
-                if blocks < 30 {
-                    return None;
-                }
-                let x = &self.phase;
-                rate_noise_id_fast(x, m, blocks, d_max)
+            (Some(_), _) => {
+                let (m, blocks) = self.rate_blocks(m)?;
+                rate_noise_id_fast(&self.phase, m, blocks, d_max)
             }
             (None, Some(x)) => edf::autocorr_noise_id(x, m, DataKind::Phase, d_max),
             _ => None,

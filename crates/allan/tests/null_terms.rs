@@ -3,7 +3,7 @@
 //! family-wise rate the thresholds are drawn for (crate::null), and the white-noise reading
 //! holds its interval.
 //!
-//! Generator: the noise crate's white rate noise N/sqrt(dt) w_k (docs/model.md §3).
+//! Generator: tests/common (the noise crate's white rate noise).
 //!
 //! Tolerances: the CI test draws its thresholds for a family of 4 claims (Q, B, K, R) per log
 //! over all its logs at 1 %, so it fails falsely with probability at most 1 % (Bonferroni; the
@@ -12,23 +12,14 @@
 //! and fails only beyond 6 false claims in its 400 logs: at the stated per-log rate of at most
 //! 4/30 % per channel, 0.53 are expected, and P(Poisson(0.53) > 6) < 1e-5.
 
+mod common;
 use allan::null::ClaimLevel;
-use allan::{analyse_rate, Estimator, Options, TauGrid};
-use noise::process::WhiteNoiseSampler;
-use rand::SeedableRng;
-use rand_xoshiro::Xoshiro256PlusPlus;
-
-/// 0.5833 deg/sqrt(h) in rad/sqrt(s).
-fn n_true() -> f64 {
-    (0.5833f64 / 60.0).to_radians()
-}
+use allan::{Estimator, Options, TauGrid};
+use common::{n_true, white_analysis, white_log};
 
 /// The false claims (Q, B, K, R resolved) on `seeds` 10-minute white-noise logs at `rate_hz`,
 /// and the ARW intervals that miss the truth.
 fn false_claims(rate_hz: f64, seeds: std::ops::Range<u64>, claims: ClaimLevel) -> (usize, usize) {
-    let dt = 1.0 / rate_hz;
-    let len = (600.0 * rate_hz).round() as usize;
-    let white = WhiteNoiseSampler::new(n_true(), dt);
     let opts = Options {
         confidence: 0.999,
         claims,
@@ -36,16 +27,7 @@ fn false_claims(rate_hz: f64, seeds: std::ops::Range<u64>, claims: ClaimLevel) -
     };
     let (mut claimed, mut missed) = (0, 0);
     for seed in seeds {
-        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
-        let data: Vec<f64> = (0..len).map(|_| white.sample(&mut rng)).collect();
-        let a = analyse_rate(
-            data,
-            dt,
-            Estimator::Overlapping,
-            &TauGrid::Octave,
-            &opts,
-            &|_| {},
-        );
+        let a = white_analysis(rate_hz, 600.0, seed, &opts);
         let (terms, sheet) = (a.terms.unwrap(), a.sheet.unwrap());
         for j in [0, 2, 3, 4] {
             if terms[j].resolved {
@@ -102,11 +84,9 @@ fn false_claim_rate_over_200_seeds() {
 #[test]
 fn white_noise_is_not_read_as_phase_noise() {
     let (dt, len) = (0.01, 60_000);
-    let white = WhiteNoiseSampler::new(n_true(), dt);
     let (mut points, mut pm, mut other) = (0, 0, 0);
     for seed in 0..50u64 {
-        let mut rng = Xoshiro256PlusPlus::seed_from_u64(7000 + seed);
-        let data: Vec<f64> = (0..len).map(|_| white.sample(&mut rng)).collect();
+        let data = white_log(dt, len, 7000 + seed);
         let s = allan::Series::from_rate(data, dt);
         let pts = s.deviation(
             Estimator::Overlapping,
