@@ -12,7 +12,8 @@ def generate(sensor, duration_s, rate_hz, seed=1, run=0):
     force: az about -9.81), ``temp`` (degC). ``df.attrs`` holds ``sensor``, ``seed``, ``run`` and
     ``rate_hz``.
 
-    ``sensor``: the path of a sensor TOML (or a Kalibr / OpenVINS noise file) or its text
+    ``sensor``: an :class:`imudrift.Sensor`, or the path of a sensor TOML (or a Kalibr / OpenVINS
+    noise file) or its text
     (configs/sensors/ has examples; docs/model.md the keys and units).
 
     >>> df = imudrift.generate("configs/sensors/mtx.toml", duration_s=60, rate_hz=100, seed=7)
@@ -21,7 +22,9 @@ def generate(sensor, duration_s, rate_hz, seed=1, run=0):
         import pandas as pd
     except ImportError:
         raise ImportError("imudrift.generate needs pandas: pip install pandas") from None
-    if isinstance(sensor, os.PathLike) or (isinstance(sensor, str) and "\n" not in sensor and os.path.isfile(sensor)):
+    if getattr(sensor, "_text", None) is not None:
+        source, text = sensor._source, sensor._text
+    elif isinstance(sensor, os.PathLike) or (isinstance(sensor, str) and "\n" not in sensor and os.path.isfile(sensor)):
         source = os.fspath(sensor)
         with open(source, encoding="utf-8") as f:
             text = f.read()

@@ -27,6 +27,9 @@ create_exception!(
     "A log file or directory that cannot be read or mapped (an OSError)."
 );
 
+mod sensor;
+mod sim;
+
 fn invalid(msg: String) -> PyErr {
     InvalidInput::new_err(msg)
 }
@@ -552,5 +555,11 @@ fn _imudrift(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("LogUnreadable", m.py().get_type::<LogUnreadable>())?;
     m.add_function(wrap_pyfunction!(read_log_columns, m)?)?;
     m.add_function(wrap_pyfunction!(generate_columns, m)?)?;
+    m.add_function(wrap_pyfunction!(sim::simulate_run, m)?)?;
+    m.add_function(wrap_pyfunction!(sim::simulate_shard_bytes, m)?)?;
+    m.add_function(wrap_pyfunction!(sim::merge_shards, m)?)?;
+    m.add_function(wrap_pyfunction!(sensor::sensor_parse, m)?)?;
+    m.add_function(wrap_pyfunction!(sensor::sensor_toml_of_json, m)?)?;
+    m.add_function(wrap_pyfunction!(sensor::sensor_noise_file, m)?)?;
     Ok(())
 }

@@ -8,6 +8,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::ops::Range;
 use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Runs per parallel block. Any value gives the same result; this one keeps both cores busy and
 /// the progress callback frequent.
@@ -86,6 +87,22 @@ pub fn run_range<K: RunKernel>(
     runs: Range<u64>,
     progress: &(dyn Fn(u64) + Sync),
 ) -> BatchResult {
+    let never = AtomicBool::new(false);
+    run_range_until(kernel, runs, progress, &never).unwrap_or_else(|| BatchResult {
+        matrix: RunMatrix::new(kernel.checkpoints(), kernel.quantities()),
+        failures: Vec::new(),
+    })
+}
+
+/// [`run_range`] that a front end can stop (an interrupt): once `stop` is set, no further run
+/// starts, the runs under way finish, and the result is `None` (a partial batch is never
+/// reported). The same runs give the same values as [`run_range`].
+pub fn run_range_until<K: RunKernel>(
+    kernel: &K,
+    runs: Range<u64>,
+    progress: &(dyn Fn(u64) + Sync),
+    stop: &AtomicBool,
+) -> Option<BatchResult> {
     let width = kernel.checkpoints() * kernel.quantities();
     let mut matrix = RunMatrix::new(kernel.checkpoints(), kernel.quantities());
     let mut failures = Vec::new();
@@ -93,12 +110,12 @@ pub fn run_range<K: RunKernel>(
     while start < runs.end {
         let end = (start + BLOCK_RUNS).min(runs.end);
         // Ordered collect: element i of the block is run start + i whatever thread computed it.
-        let block: Vec<Result<Vec<f64>, RunError>> = (start..end)
+        let block: Vec<Option<Result<Vec<f64>, RunError>>> = (start..end)
             .into_par_iter()
-            .map(|run| run_one(kernel, run, width))
+            .map(|run| (!stop.load(Ordering::Relaxed)).then(|| run_one(kernel, run, width)))
             .collect();
         for (run, result) in (start..end).zip(block) {
-            match result {
+            match result? {
                 Ok(row) => matrix.push(run, &row),
                 Err(e) => failures.push(RunFailure {
                     run,
@@ -106,10 +123,13 @@ pub fn run_range<K: RunKernel>(
                 }),
             }
         }
+        if stop.load(Ordering::Relaxed) {
+            return None;
+        }
         progress(end - runs.start);
         start = end;
     }
-    BatchResult { matrix, failures }
+    Some(BatchResult { matrix, failures })
 }
 
 /// A deterministic slice `index/count` of the runs (0 <= index < count): contiguous ranges whose
@@ -214,6 +234,21 @@ mod tests {
                 .collect()
         };
         assert_eq!(bits(&merged), bits(&one.matrix));
+    }
+
+    #[test]
+    fn a_stopped_range_reports_nothing() {
+        let stop = AtomicBool::new(false);
+        let whole = run_range_until(&Walk, 0..200, &|_| {}, &stop);
+        assert_eq!(whole, Some(run_range(&Walk, 0..200, &|_| {})));
+        // Stopped from the progress callback after the first block: no partial result.
+        let stopped = run_range_until(
+            &Walk,
+            0..200,
+            &|_| stop.store(true, Ordering::Relaxed),
+            &stop,
+        );
+        assert_eq!(stopped, None);
     }
 
     #[test]
