@@ -112,22 +112,47 @@ fn estimator(name: &str) -> PyResult<Estimator> {
     })
 }
 
-/// The deviation curve from `allan`, computed with the GIL released.
+/// The first non-finite sample of `data`, as the error that names it.
+fn non_finite(data: &[f64]) -> Option<PyErr> {
+    let i = data.iter().position(|v| !v.is_finite())?;
+    Some(invalid(format!(
+        "data[{i}] is {}: every sample must be finite (a NaN gap is not bridged)",
+        data[i]
+    )))
+}
+
+/// The deviation curve from `allan`, computed with the GIL released on the numpy array in place
+/// (no copy: as numpy's own functions do, the array is read while other Python threads run, so
+/// it must not be changed meanwhile). Non-finite samples are refused: phase data by a scan
+/// first, rate data by its integral (any NaN or infinity makes the phase's mean, and so its
+/// last point, non-finite; the scan then finds it).
 fn curve(
     py: Python<'_>,
-    data: Vec<f64>,
+    data: &[f64],
     kind: DataKind,
     rate: f64,
     est: Estimator,
     grid: TauGrid,
     opts: Options,
-) -> Vec<AllanPoint> {
+) -> PyResult<Vec<AllanPoint>> {
+    if data.is_empty() {
+        return Err(invalid("data is empty: expected samples".into()));
+    }
     py.detach(move || {
-        let tau0_s = 1.0 / rate;
-        match kind {
-            DataKind::Rate => Series::from_rate(data, tau0_s).deviation(est, &grid, &opts),
-            DataKind::Phase => Series::new(&data, kind, tau0_s).deviation(est, &grid, &opts),
+        if kind == DataKind::Phase {
+            if let Some(e) = non_finite(data) {
+                return Err(e);
+            }
         }
+        let series = Series::new(data, kind, 1.0 / rate);
+        if !series.phase().last().is_some_and(|x| x.is_finite()) {
+            return Err(non_finite(data).unwrap_or_else(|| {
+                invalid(
+                    "the samples' sum overflows: their values are too large to integrate".into(),
+                )
+            }));
+        }
+        Ok(series.deviation(est, &grid, &opts))
     })
 }
 
@@ -160,7 +185,9 @@ fn allantools_dev<'py>(
     } else {
         estimator(function)?
     };
-    let data = samples(&data)?;
+    let data = data
+        .as_slice()
+        .map_err(|_| invalid("data: expected a contiguous 1-D float64 array".into()))?;
     let n_phase = phase_len(data.len(), kind);
     let grid = match taus {
         None => TauGrid::Octave,
@@ -184,7 +211,7 @@ fn allantools_dev<'py>(
         ..Options::default()
     };
     let n = data.len();
-    let points = curve(py, data, kind, rate, est, grid, opts);
+    let points = curve(py, data, kind, rate, est, grid, opts)?;
     if points.is_empty() {
         return Err(invalid(format!(
             "{function}: {n} samples leave no averaging time of the tau list with 2 or more terms"
