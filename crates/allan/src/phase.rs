@@ -15,15 +15,29 @@ pub fn rate_to_phase(rate: &[f64], tau0_s: f64) -> Vec<f64> {
     let plan = PhasePlan::of(rate);
     // Zeroed by the allocator (fresh pages of a large array cost no pass here).
     let mut out = vec![0.0f64; rate.len() + 1];
+    // Two blocks per task, their recursions interleaved: each is a chain of dependent additions,
+    // and two chains keep the adder busy where one waits on its latency (each block's additions
+    // are unchanged, so the values are too).
     out[..rate.len()]
-        .par_chunks_mut(PHASE_BLOCK)
-        .zip(rate.par_chunks(PHASE_BLOCK))
-        .zip(plan.starts.par_iter())
-        .for_each(|((dst, src), &(mut sum, mut comp))| {
-            for (d, &v) in dst.iter_mut().zip(src) {
-                let y = v - plan.mean;
-                *d = (sum + comp) * tau0_s;
-                two_sum_acc(&mut sum, &mut comp, y);
+        .par_chunks_mut(2 * PHASE_BLOCK)
+        .zip(rate.par_chunks(2 * PHASE_BLOCK))
+        .zip(plan.starts.par_chunks(2))
+        .for_each(|((dst, src), starts)| {
+            let (d0, d1) = dst.split_at_mut(PHASE_BLOCK.min(dst.len()));
+            let (s0, s1) = src.split_at(PHASE_BLOCK.min(src.len()));
+            let (mut a, mut b) = (starts[0], starts.get(1).copied().unwrap_or_default());
+            let both = d1.len();
+            for i in 0..both {
+                let (ya, yb) = (s0[i] - plan.mean, s1[i] - plan.mean);
+                d0[i] = (a.0 + a.1) * tau0_s;
+                d1[i] = (b.0 + b.1) * tau0_s;
+                two_sum_acc(&mut a.0, &mut a.1, ya);
+                two_sum_acc(&mut b.0, &mut b.1, yb);
+            }
+            for i in both..d0.len() {
+                let y = s0[i] - plan.mean;
+                d0[i] = (a.0 + a.1) * tau0_s;
+                two_sum_acc(&mut a.0, &mut a.1, y);
             }
         });
     out[rate.len()] = (plan.total.0 + plan.total.1) * tau0_s;
