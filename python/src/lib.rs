@@ -7,7 +7,7 @@
 
 use allan::fit::{Fit, TERM_NAMES};
 use allan::{AllanPoint, DataKind, EdfMethod, Estimator, Options, Series, TauGrid};
-use numpy::{IntoPyArray, PyReadonlyArray1};
+use numpy::{IntoPyArray, PyArrayMethods, PyReadonlyArray1};
 use pyo3::create_exception;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -138,20 +138,44 @@ fn curve(
     if data.is_empty() {
         return Err(invalid("data is empty: expected samples".into()));
     }
+    let tau0_s = 1.0 / rate;
+    // Rate data: its phase goes into a numpy array (numpy backs large arrays with huge pages:
+    // fewer page faults than a fresh Vec), dropped after the call.
+    let phase_array = match kind {
+        DataKind::Rate => Some(numpy::PyArray1::<f64>::zeros(py, data.len() + 1, false)),
+        DataKind::Phase => None,
+    };
+    let mut phase_rw = phase_array.as_ref().map(|a| a.readwrite());
+    let phase_out = match phase_rw.as_mut() {
+        Some(rw) => Some(
+            rw.as_slice_mut()
+                .map_err(|_| invalid("cannot lay out the phase array".into()))?,
+        ),
+        None => None,
+    };
     py.detach(move || {
-        if kind == DataKind::Phase {
-            if let Some(e) = non_finite(data) {
-                return Err(e);
+        let series = match phase_out {
+            None => {
+                if let Some(e) = non_finite(data) {
+                    return Err(e);
+                }
+                Series::new(data, DataKind::Phase, tau0_s)
             }
-        }
-        let series = Series::new(data, kind, 1.0 / rate);
-        if !series.phase().last().is_some_and(|x| x.is_finite()) {
-            return Err(non_finite(data).unwrap_or_else(|| {
-                invalid(
-                    "the samples' sum overflows: their values are too large to integrate".into(),
-                )
-            }));
-        }
+            Some(out) => {
+                allan::rate_to_phase_into(data, tau0_s, out);
+                if !out.last().is_some_and(|x| x.is_finite()) {
+                    return Err(non_finite(data).unwrap_or_else(|| {
+                        invalid(
+                            "the samples' sum overflows: their values are too large to integrate"
+                                .into(),
+                        )
+                    }));
+                }
+                // The estimators' sums need only the phase (allantools' functions identify no
+                // noise type): the integrated rate is used as phase data.
+                Series::new(out, DataKind::Phase, tau0_s)
+            }
+        };
         Ok(series.deviation(est, &grid, &opts))
     })
 }

@@ -11,10 +11,22 @@ use crate::sum::{pairwise_lanes, two_sum_acc};
 /// Reads `rate` in place (two read passes and the pass that writes the phase into a new array:
 /// no copy of the rate); the same values as [`rate_to_phase_in_place`].
 pub fn rate_to_phase(rate: &[f64], tau0_s: f64) -> Vec<f64> {
-    use rayon::prelude::*;
-    let plan = PhasePlan::of(rate);
     // Zeroed by the allocator (fresh pages of a large array cost no pass here).
     let mut out = vec![0.0f64; rate.len() + 1];
+    rate_to_phase_into(rate, tau0_s, &mut out);
+    out
+}
+
+/// [`rate_to_phase`] into `out`, of `rate.len() + 1` points (a caller's array, e.g. one its
+/// allocator backs with huge pages). Panics on another length (a programming error).
+pub fn rate_to_phase_into(rate: &[f64], tau0_s: f64, out: &mut [f64]) {
+    use rayon::prelude::*;
+    assert_eq!(
+        out.len(),
+        rate.len() + 1,
+        "the phase has one point more than the rate"
+    );
+    let plan = PhasePlan::of(rate);
     // Two blocks per task, their recursions interleaved: each is a chain of dependent additions,
     // and two chains keep the adder busy where one waits on its latency (each block's additions
     // are unchanged, so the values are too).
@@ -41,7 +53,6 @@ pub fn rate_to_phase(rate: &[f64], tau0_s: f64) -> Vec<f64> {
             }
         });
     out[rate.len()] = (plan.total.0 + plan.total.1) * tau0_s;
-    out
 }
 
 /// Samples per block of the phase conversion. Fixed, not per thread: the result does not
