@@ -14,7 +14,7 @@ from ._imudrift import InvalidInput, LogUnreadable, __version__
 from ._allan import AllanResult, Fit, Term, allan
 from ._log import read_log
 from ._generate import generate
-from ._sensor import Sensor
+from ._sensor import Sensor, plan
 from ._simulate import SimulateResult, merge, simulate, simulate_shard
 from . import allantools
 
@@ -34,4 +34,5 @@ __all__ = [
     "simulate_shard",
     "merge",
     "SimulateResult",
+    "plan",
 ]

@@ -77,3 +77,28 @@ class Sensor:
 
     def __repr__(self):
         return f"Sensor({self.name!r}, source={self._source!r})"
+
+
+def plan(sensor, uncertainty=0.1, duration_s=None, rate_hz=100.0):
+    """``imudrift plan SENSOR --json``: how long a static log must be to read each noise term of
+    each axis off its Allan deviation to a relative standard uncertainty ``uncertainty`` (a
+    fraction, or a percentage such as ``"10%"``), and what a log of ``duration_s`` gives, at
+    ``rate_hz``. ``sensor``: an :class:`imudrift.Sensor` or anything ``Sensor()`` takes. Returns
+    the CLI's JSON document as a dict (``required_duration_s``, per axis and term ``tau_s``,
+    ``share``, ``required_duration_s``, ``uncertainty_at_duration``, ``note``).
+
+    >>> imudrift.plan("configs/sensors/mtx.toml", uncertainty="10%")["required_duration_s"]
+    """
+    from ._imudrift import sensor_plan as _plan
+
+    s = sensor if isinstance(sensor, Sensor) else Sensor(sensor)
+    if isinstance(uncertainty, str):
+        t = uncertainty.strip()
+        try:
+            u = float(t[:-1]) / 100.0 if t.endswith("%") else float(t)
+        except ValueError:
+            u = float("nan")
+    else:
+        u = float(uncertainty)
+    d = None if duration_s is None else float(duration_s)
+    return json.loads(_plan(s._text, s._source, u, d, float(rate_hz)))

@@ -612,5 +612,6 @@ fn _imudrift(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sensor::sensor_parse, m)?)?;
     m.add_function(wrap_pyfunction!(sensor::sensor_toml_of_json, m)?)?;
     m.add_function(wrap_pyfunction!(sensor::sensor_noise_file, m)?)?;
+    m.add_function(wrap_pyfunction!(sensor::sensor_plan, m)?)?;
     Ok(())
 }

@@ -114,3 +114,39 @@ pub fn sensor_noise_file(
     };
     Ok(write_noise_file(&values, flavor, Inflation::NONE))
 }
+
+/// `imudrift plan SENSOR --json`: the log plan of a model (`diagnose::log_plan`), as its JSON text.
+#[pyfunction]
+pub fn sensor_plan(
+    text: &str,
+    source: &str,
+    uncertainty: f64,
+    duration_s: Option<f64>,
+    rate_hz: f64,
+) -> PyResult<String> {
+    use diagnose::log_plan::{MAX_DURATION_S, MAX_RATE_HZ, MIN_RATE_HZ};
+    let m = model(text, source)?;
+    if !(uncertainty.is_finite() && uncertainty > 0.0 && uncertainty < 1.0) {
+        return Err(invalid(format!(
+            "uncertainty: expected a fraction in (0, 1) or a percentage such as \"10%\", found {uncertainty}"
+        )));
+    }
+    if !(rate_hz.is_finite() && (MIN_RATE_HZ..=MAX_RATE_HZ).contains(&rate_hz)) {
+        return Err(invalid(format!(
+            "rate_hz: expected {MIN_RATE_HZ} to {MAX_RATE_HZ} Hz, found {rate_hz}"
+        )));
+    }
+    if let Some(d) = duration_s {
+        if !(d.is_finite() && d <= MAX_DURATION_S && d * rate_hz >= 3.0) {
+            return Err(invalid(format!(
+                "duration_s: expected at least 3 samples and at most {MAX_DURATION_S:e} s (about 300 years), found {d:e} s"
+            )));
+        }
+    }
+    let doc = diagnose::log_plan::plan(&m, rate_hz, uncertainty, duration_s).ok_or_else(|| {
+        invalid(format!(
+            "{source}: the model has no white noise, bias instability or rate random walk to plan for"
+        ))
+    })?;
+    serde_json::to_string(&doc).map_err(|e| invalid(format!("plan: {e}")))
+}

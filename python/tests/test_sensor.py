@@ -62,3 +62,23 @@ def test_generate_and_simulate_take_a_sensor():
     np.testing.assert_array_equal(a.to_numpy(), b.to_numpy())
     r = imudrift.simulate(s, runs=8, duration_s=2, rate_hz=50)
     assert r.values.shape[0] == 8 and r.sensor == "Xsens MTx"
+
+
+@pytest.mark.parametrize("sensor", ["mtx.toml", "adis16405.toml"])
+def test_plan_equals_the_cli(sensor):
+    import json
+    import subprocess
+
+    from test_allan import cli_binary
+
+    exe = cli_binary()
+    if exe is None:
+        pytest.skip("no imudrift binary (cargo build --release, or set IMUDRIFT_BIN)")
+    path = os.path.join(ROOT, "configs", "sensors", sensor)
+    out = subprocess.run([exe, "plan", path, "--uncertainty", "5%", "--duration", "3600",
+                          "--rate", "200", "--json"], check=True, capture_output=True)
+    ours = imudrift.plan(imudrift.Sensor(path), uncertainty="5%", duration_s=3600, rate_hz=200)
+    assert ours == json.loads(out.stdout)
+    assert ours["required_duration_s"] > 0
+    with pytest.raises(imudrift.InvalidInput, match="uncertainty"):
+        imudrift.plan(path, uncertainty=1.5)

@@ -336,16 +336,20 @@ fn fused<const K: usize>(
     }
 }
 
+/// The whole block of `x` at `from`.
+#[inline(always)]
+fn window(x: &[f64], from: usize) -> &[f64; BLOCK] {
+    x[from..from + BLOCK]
+        .try_into()
+        .expect("a whole block lies inside the record")
+}
+
 /// `block_second` over the whole block at `start` for K factors at once.
 // Indexed lanes: the shape the compiler turns into one vector register per factor.
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
 fn fused_second<const K: usize>(x: &[f64], ms: [usize; K], start: usize, acc: &mut [[f64; 8]; K]) {
-    let win = |off: usize| -> &[f64; BLOCK] {
-        x[start + off..start + off + BLOCK]
-            .try_into()
-            .expect("a whole block lies inside the record")
-    };
+    let win = |off: usize| window(x, start + off);
     let a = win(0);
     let b: [&[f64; BLOCK]; K] = ms.map(&win);
     let c: [&[f64; BLOCK]; K] = ms.map(|m| win(2 * m));
@@ -364,11 +368,7 @@ fn fused_second<const K: usize>(x: &[f64], ms: [usize; K], start: usize, acc: &m
 #[allow(clippy::needless_range_loop)]
 #[inline(always)]
 fn fused_third<const K: usize>(x: &[f64], ms: [usize; K], start: usize, acc: &mut [[f64; 8]; K]) {
-    let win = |off: usize| -> &[f64; BLOCK] {
-        x[start + off..start + off + BLOCK]
-            .try_into()
-            .expect("a whole block lies inside the record")
-    };
+    let win = |off: usize| window(x, start + off);
     let a = win(0);
     let b: [&[f64; BLOCK]; K] = ms.map(&win);
     let c: [&[f64; BLOCK]; K] = ms.map(|m| win(2 * m));
