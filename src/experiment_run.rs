@@ -8,7 +8,6 @@ use anyhow::{bail, Context, Result};
 use montecarlo::ablation;
 use montecarlo::experiment::{Experiment, ExperimentError, Overrides};
 use montecarlo::job::{self, JobError};
-use montecarlo::nav_quantity::NavQuantity;
 use montecarlo::report::DriftReport;
 use montecarlo::runner::{run_range, BatchResult};
 use montecarlo::scenario::Scenario;
@@ -127,21 +126,7 @@ pub fn refuse_other_experiments(dir: &Path, file: &ShardFile, exp: &Experiment) 
     Ok(())
 }
 
-/// Most samples a command may compute (runs x steps x the largest output-filter decimation:
-/// every internal sample of the noise processes and every mechanisation step counts), about 3 h
-/// on 2 cores at 1e7 steps/s per core: work beyond it is refused before it starts.
-pub const MAX_WORK_SAMPLES: f64 = 1e11;
-
-/// The largest output-filter decimation of `model` (1 without a filter): the internal samples
-/// per output sample.
-pub fn max_decimation(model: &SensorModel) -> f64 {
-    noise::Sensor::ALL
-        .iter()
-        .flat_map(|&s| model.triad(s).axes.iter())
-        .filter_map(|axis| axis.get::<noise::OutputFilter>())
-        .map(|f| f64::from(f.decimation()))
-        .fold(1.0, f64::max)
-}
+pub use montecarlo::job::{max_decimation, MAX_WORK_SAMPLES};
 
 /// Refuse `runs` runs of `samples` output samples of `model` when they are more work than
 /// [`MAX_WORK_SAMPLES`]; `what` names the job and `remedy` the options that shrink it.
@@ -179,12 +164,11 @@ pub fn check_experiment_work(exp: &Experiment, runs: u64) -> Result<()> {
 }
 
 /// Memory for the per-run values above which `simulate` asks for shards instead (8 GiB).
-const MAX_VALUE_BYTES: u64 = 8 << 30;
+use montecarlo::job::MAX_VALUE_BYTES;
 
 /// Refuse a run range whose per-run values (8 bytes per run, checkpoint and quantity) would not fit.
 pub fn check_memory(exp: &Experiment, runs: u64) -> Result<()> {
-    let per_run = (exp.scenario.checkpoint_steps.len() * NavQuantity::ALL.len() * 8) as u64;
-    let bytes = runs.saturating_mul(per_run);
+    let bytes = job::value_bytes(exp, runs);
     let limit = logio::available_memory_bytes().map_or(MAX_VALUE_BYTES, |a| a.min(MAX_VALUE_BYTES));
     if bytes > limit {
         bail!(

@@ -196,6 +196,33 @@ fn job_of(subject: &Subject, s: &Settings) -> PyResult<Job> {
     })
 }
 
+/// Refuse `runs` runs of the job (its ablation sub-runs counted) whose per-run values would not
+/// fit in memory or whose work is beyond the CLI's limit (`montecarlo::job`), before any work.
+fn check_size(job: &Job, runs: u64) -> PyResult<()> {
+    let gib = |b: f64| b / f64::from(1u32 << 30);
+    let bytes = job::value_bytes(&job.exp, runs);
+    let limit = logio::available_memory_bytes()
+        .map_or(job::MAX_VALUE_BYTES, |a| a.min(job::MAX_VALUE_BYTES));
+    if bytes > limit {
+        return Err(invalid(format!(
+            "runs: {runs} runs x {} checkpoints keep {:.2} GiB of per-run values (limit {:.2} GiB); split them with simulate_shard and merge, or use fewer checkpoints",
+            job.exp.scenario.checkpoint_steps.len(),
+            gib(bytes as f64),
+            gib(limit as f64)
+        )));
+    }
+    let all_runs = runs * (1 + 2 * job.subs.as_ref().map_or(0, Vec::len) as u64);
+    let work = job::work_samples(&job.exp, all_runs);
+    if work.is_nan() || work > job::MAX_WORK_SAMPLES {
+        return Err(invalid(format!(
+            "{}: {all_runs} run(s) are {work:.2e} samples of work (limit {:.0e}, about 3 h on 2 cores): use fewer runs, a shorter duration_s or a lower rate_hz (or split the runs with simulate_shard)",
+            job.exp.scenario.name,
+            job::MAX_WORK_SAMPLES
+        )));
+    }
+    Ok(())
+}
+
 /// Run `work` on a thread pool of `threads` workers (None or 0: one per core) with the GIL
 /// released, checking for Ctrl-C meanwhile: a `KeyboardInterrupt` (or any error a signal handler
 /// raises) stops the runs and is returned.
@@ -295,6 +322,7 @@ pub fn simulate_run<'py>(
     settings: Settings,
 ) -> PyResult<Bound<'py, PyDict>> {
     let job = job_of(&subject, &settings)?;
+    check_size(&job, job.exp.runs)?;
     let sim = run_job(py, settings.threads, |run| {
         job::simulate(&job.exp, job.subs.as_deref(), run)
     })?;
@@ -318,6 +346,8 @@ pub fn simulate_shard_bytes<'py>(
     }
     let job = job_of(&subject, &settings)?;
     let shard = Shard { index, count };
+    let range = shard.runs(job.exp.runs);
+    check_size(&job, range.end - range.start)?;
     let mut file = job::empty_shard(
         job.inputs.clone(),
         &job.overrides,

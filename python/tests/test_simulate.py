@@ -235,3 +235,12 @@ def test_a_forked_child_simulates():
     p.join(timeout=60)
     assert p.exitcode == 0
     assert value == parent.checkpoints[-1]["channels"]["pos_horizontal_m"]["mean"]
+
+
+def test_too_much_work_is_refused_before_it_starts():
+    t0 = time.perf_counter()
+    with pytest.raises(imudrift.InvalidInput, match="per-run values"):
+        imudrift.simulate(SCENARIO, runs=10**9)
+    with pytest.raises(imudrift.InvalidInput, match="samples of work"):
+        imudrift.simulate(SCENARIO, runs=500, duration_s=1e7, ablation=False)
+    assert time.perf_counter() - t0 < 5

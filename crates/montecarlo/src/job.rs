@@ -164,6 +164,38 @@ pub fn shard_experiment(f: &ShardFile) -> Result<(Inputs, Overrides, Experiment)
     Ok((inputs, overrides, exp))
 }
 
+/// Most samples a front end lets a job compute (runs x steps x the largest output-filter
+/// decimation: every internal sample of the noise processes and every mechanisation step
+/// counts), about 3 h on 2 cores at 1e7 steps/s per core: work beyond it is refused before it
+/// starts.
+pub const MAX_WORK_SAMPLES: f64 = 1e11;
+
+/// The largest output-filter decimation of `model` (1 without a filter): the internal samples
+/// per output sample.
+pub fn max_decimation(model: &SensorModel) -> f64 {
+    noise::Sensor::ALL
+        .iter()
+        .flat_map(|&s| model.triad(s).axes.iter())
+        .filter_map(|axis| axis.get::<noise::OutputFilter>())
+        .map(|f| f64::from(f.decimation()))
+        .fold(1.0, f64::max)
+}
+
+/// The work of `runs` runs of `exp`, in samples as [`MAX_WORK_SAMPLES`] counts them.
+pub fn work_samples(exp: &Experiment, runs: u64) -> f64 {
+    runs as f64 * exp.scenario.duration_s * exp.scenario.rate_hz * max_decimation(&exp.model)
+}
+
+/// Most memory a front end lets the per-run values of one job take (8 GiB; less where less is
+/// available).
+pub const MAX_VALUE_BYTES: u64 = 8 << 30;
+
+/// Bytes of the per-run values of `runs` runs of `exp` (8 per run, checkpoint and quantity).
+pub fn value_bytes(exp: &Experiment, runs: u64) -> u64 {
+    let per_run = (exp.scenario.checkpoint_steps.len() * NavQuantity::ALL.len() * 8) as u64;
+    runs.saturating_mul(per_run)
+}
+
 /// Runs a range of an experiment's runs (the front end's pool, progress and interrupt; the label
 /// names the job in progress output); `None` when it was stopped.
 pub type RunRange<'a> = dyn Fn(&Experiment, Range<u64>, &str) -> Option<BatchResult> + 'a;
