@@ -32,6 +32,8 @@ class Sensor:
             src = os.fspath(x)
             with open(src, encoding="utf-8") as f:
                 text = f.read()
+        elif isinstance(x, str) and "\n" not in x and x.strip().lower().endswith((".toml", ".yaml", ".yml")):
+            raise FileNotFoundError(f"cannot read {x} as a sensor model: no such file")
         elif isinstance(x, str):
             text, src = x, "<sensor text>"
         else:

@@ -45,6 +45,11 @@ def test_noise_file_round_trip(tmp_path, flavor, name):
     assert imudrift.Sensor.from_kalibr(str(path)).to_toml() == k.to_toml()
 
 
+def test_a_missing_file_is_an_os_error(tmp_path):
+    with pytest.raises(OSError, match="no such file"):
+        imudrift.Sensor(str(tmp_path / "missing.toml"))
+
+
 def test_bad_sensors_raise_value_errors():
     with pytest.raises(imudrift.InvalidInput, match="white_noise"):
         imudrift.Sensor('name = "x"\n[gyro.x]\nwhite_noise = "-1 rad/s/sqrt(Hz)"\n')
