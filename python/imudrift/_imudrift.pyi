@@ -36,7 +36,14 @@ def read_log_columns(
     topic: Optional[str],
 ) -> Dict[str, Any]: ...
 def generate_columns(
-    sensor_text: str, source: str, duration_s: float, rate_hz: float, seed: int, run: int
+    sensor_text: str,
+    source: str,
+    duration_s: float,
+    rate_hz: float,
+    seed: int,
+    run: int,
+    only: Optional[List[str]] = None,
+    without: List[str] = ...,
 ) -> Dict[str, Any]: ...
 
 # A scenario or sensor file path, or (sensor text, its source name).

@@ -525,7 +525,8 @@ const MAX_GENERATE_RATE_HZ: f64 = 1e6;
 /// values `imudrift generate` writes for the same model, seed and run: `t` (k / rate, s), the six
 /// channels gx..az (rad/s, m/s^2) and `temp` (degC), and the model's name.
 #[pyfunction]
-#[pyo3(signature = (sensor_text, source, duration_s, rate_hz, seed, run))]
+#[pyo3(signature = (sensor_text, source, duration_s, rate_hz, seed, run, only=None, without=Vec::new()))]
+#[allow(clippy::too_many_arguments)]
 fn generate_columns<'py>(
     py: Python<'py>,
     sensor_text: &str,
@@ -534,6 +535,8 @@ fn generate_columns<'py>(
     rate_hz: f64,
     seed: u64,
     run: u64,
+    only: Option<Vec<String>>,
+    without: Vec<String>,
 ) -> PyResult<Bound<'py, PyDict>> {
     if !(rate_hz.is_finite() && rate_hz > 0.0 && rate_hz <= MAX_GENERATE_RATE_HZ) {
         return Err(invalid(format!(
@@ -559,6 +562,10 @@ fn generate_columns<'py>(
     }
     let model =
         noise::SensorModel::from_text(sensor_text, source).map_err(|e| invalid(e.to_string()))?;
+    // The CLI's --only / --without (`noise::TermFilter`).
+    let only = only.as_deref().map(|t| sim::terms("only", t)).transpose()?;
+    let without = sim::terms("without", &without)?;
+    let model = model.filtered(&noise::TermFilter::new(only.as_deref(), &without));
     let dt_s = 1.0 / rate_hz;
     noise::ImuErrors::check_rate(&model, dt_s)
         .map_err(|e| invalid(format!("{source}: {e}; lower the cutoff or raise rate_hz")))?;

@@ -159,7 +159,8 @@ pub struct Settings {
     threads: Option<usize>,
 }
 
-fn terms(arg: &str, texts: &[String]) -> PyResult<Vec<noise::TermSelector>> {
+/// Term selectors (`gyro.white_noise`, `accel`) named by the argument that gave them.
+pub fn terms(arg: &str, texts: &[String]) -> PyResult<Vec<noise::TermSelector>> {
     texts
         .iter()
         .map(|t| noise::TermSelector::parse(t).map_err(|e| invalid(format!("{arg}: {e}"))))
