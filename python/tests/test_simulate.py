@@ -209,7 +209,7 @@ def test_two_threads_run_at_once():
           f"two processes at once {procs:.3f} s (ratio {procs / one:.2f}), load {os.getloadavg()[0]:.1f}")
     # Serialised by the GIL the threads' ratio would be 2 where the processes' is 1; where other
     # work holds a core, the processes show it too.
-    assert two / one < 1.5 or two < 1.3 * procs
+    assert two / one < 1.5 or two < 1.5 * procs
 
 
 CTRL_C_CHILD = r"""
