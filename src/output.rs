@@ -113,17 +113,23 @@ static SETS_OPEN: AtomicUsize = AtomicUsize::new(0);
 /// A termination signal arrived while a set was being written.
 static EXIT_PENDING: AtomicBool = AtomicBool::new(false);
 
+/// The `--out` lock files held now (removed on a termination signal, as on a normal exit).
+static HELD_LOCKS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
 fn exit_interrupted() -> ! {
-    if let Ok(list) = TEMPORARIES.lock() {
-        for p in list.iter() {
-            let _ = std::fs::remove_file(p);
+    for list in [&TEMPORARIES, &HELD_LOCKS] {
+        if let Ok(list) = list.lock() {
+            for p in list.iter() {
+                let _ = std::fs::remove_file(p);
+            }
         }
     }
     eprintln!("interrupted");
     std::process::exit(130);
 }
 
-/// Remove the registered temporary files when SIGINT, SIGTERM or SIGHUP arrives, then exit with
+/// Remove the registered temporary files and the `--out` lock files held (the lock is released
+/// by the exit itself) when SIGINT, SIGTERM or SIGHUP arrives, then exit with
 /// 128 + 2 as a shell does for an interrupt; while a set of output files is being moved into
 /// place, the exit waits until the set is complete, so `--out` never holds files of two runs.
 /// Called once at start-up.
@@ -287,6 +293,9 @@ impl Drop for OutLock {
     /// once it holds it, that the path no longer names it, and starts over ([`prepare_dir`]).
     fn drop(&mut self) {
         if let Some(path) = self.path.take() {
+            if let Ok(mut list) = HELD_LOCKS.lock() {
+                list.retain(|p| p != &path);
+            }
             let _ = std::fs::remove_file(path);
         }
     }
@@ -334,6 +343,9 @@ pub fn prepare_dir(dir: &Path) -> Result<OutLock> {
             }
         }
         if same_file(&file, &path) {
+            if let Ok(mut list) = HELD_LOCKS.lock() {
+                list.push(path.clone());
+            }
             return Ok(OutLock {
                 _file: Some(file),
                 path: Some(path),

@@ -1232,3 +1232,41 @@ fn channels_far_from_unit_scale_get_a_fit() {
         );
     }
 }
+
+/// A run stopped by Ctrl-C (SIGINT) or SIGTERM removes its `--out` lock file too (issue 24:
+/// no `.imudrift.lock` is left behind), and exits with 130.
+#[cfg(unix)]
+#[test]
+fn a_signal_leaves_no_lock_file() {
+    for signal in ["-INT", "-TERM"] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out");
+        // About 3.6e10 samples of work: minutes, so the signal arrives while it runs.
+        let mut child = command()
+            .args(["simulate", "configs/sensors/mtx.toml", "--runs", "100000"])
+            .args(["--duration", "1h", "--out", out.to_str().unwrap()])
+            .stderr(std::process::Stdio::null())
+            .stdout(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        let lock = out.join(".imudrift.lock");
+        let started = std::time::Instant::now();
+        while !lock.exists() && started.elapsed().as_secs() < 20 {
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        assert!(lock.exists(), "{signal}: the run never locked --out");
+        std::thread::sleep(std::time::Duration::from_millis(200));
+        let sent = Command::new("kill")
+            .args([signal, &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(sent.success());
+        let status = child.wait().unwrap();
+        assert_eq!(status.code(), Some(130), "{signal}: {status:?}");
+        let left: Vec<_> = std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert!(left.is_empty(), "{signal}: left behind in --out: {left:?}");
+    }
+}

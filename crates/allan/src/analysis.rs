@@ -1,10 +1,11 @@
 //! One call for a channel's whole analysis: deviation curve, noise identification, intervals and,
 //! for Allan-variance estimators, the IEEE 952 term fit.
 
-use crate::fit::{fit_ieee952, Fit};
+use crate::curve;
+use crate::fit::Fit;
+use crate::null::null_thresholds;
 use crate::sheet::{sheet_readings, term_status, SheetReadings, TermStatus};
-use crate::{AllanPoint, EdfMethod, Estimator, Options, Series, TauGrid};
-use rayon::prelude::*;
+use crate::{AllanPoint, Estimator, Options, Series, TauGrid};
 
 /// A channel's analysis.
 #[derive(Clone, Debug)]
@@ -38,6 +39,8 @@ pub fn analyse_rate(
 }
 
 /// [`analyse_rate`] of a prepared series (rate or phase samples): every stage after the phase.
+/// The fitted terms' status needs the null simulation of [`crate::null`] (cached per log
+/// length, interval, grid and options).
 pub fn analyse(
     series: &Series,
     est: Estimator,
@@ -45,45 +48,25 @@ pub fn analyse(
     opts: &Options,
     stage: &(dyn Fn(&str) + Sync),
 ) -> Analysis {
-    let ms = series.grid_m(est, grid, opts.stable32_stop);
-    let identify = opts.edf != EdfMethod::None && opts.alpha.is_none();
-    let d = est.difference_order();
-    let (mut points, alphas) = rayon::join(
-        || {
-            let r = series.raw_points(est, &ms);
-            stage("deviations");
-            r
-        },
-        || -> Vec<(usize, Option<i32>)> {
-            if identify {
-                let r = ms.par_iter().map(|&m| (m, series.noise_id(m, d))).collect();
-                stage("noise identification");
-                r
-            } else {
-                ms.iter().map(|&m| (m, opts.alpha)).collect()
-            }
-        },
-    );
-    if opts.edf != EdfMethod::None {
-        let alphas: Vec<Option<i32>> = points
-            .iter()
-            .map(|p| alphas.iter().find(|(m, _)| *m == p.m).and_then(|(_, a)| *a))
-            .collect();
-        series.attach_intervals_with_alphas(est, &mut points, &alphas, opts);
-    }
-    stage("intervals");
     let allan_variance = matches!(
         est,
         Estimator::NonOverlapping | Estimator::Overlapping | Estimator::Total
     );
-    let fit = allan_variance.then(|| fit_ieee952(&points));
+    let (points, fit) = if allan_variance {
+        let (p, f) = curve::curve_and_fit(series, est, grid, opts, stage);
+        (p, Some(f))
+    } else {
+        (curve::curve(series, est, grid, opts, stage), None)
+    };
+    let terms = fit.as_ref().map(|f| {
+        let null = null_thresholds(series.rate_len(), series.tau0_s(), est, grid, opts);
+        term_status(f, &points, opts.confidence, &null)
+    });
     let sheet = fit
         .as_ref()
-        .map(|f| sheet_readings(&points, f, opts.confidence));
-    let terms = fit
-        .as_ref()
-        .map(|f| term_status(f, &points, opts.confidence));
-    stage("fit");
+        .zip(terms.as_ref())
+        .map(|(f, t)| sheet_readings(&points, f, opts.confidence, t));
+    stage("resolved terms");
     Analysis {
         points,
         fit,

@@ -289,10 +289,54 @@ pub fn totvar_bias(alpha: i32, m: usize, n_rate: usize) -> f64 {
     1.0 - a * m as f64 / n_rate as f64
 }
 
+/// A lag-1 ACF noise identification with its evidence: the integer alpha, the continuous
+/// estimate p = -2 (rho + d) (+2 for phase data) it is rounded from (Riley & Greenhall 2004,
+/// allantools `autocorr_noise_id`'s `alpha`), and the standard error of p.
+///
+/// Standard error: under white noise the lag-1 autocorrelation r1 of n values has standard
+/// deviation 1/sqrt(n) (Bartlett 1946; Box, Jenkins & Reinsel, Time Series Analysis, §6.2.1;
+/// Riley & Greenhall use the same 1/sqrt(N) scatter to explain why the method needs N >= 30);
+/// rho = r1 / (1 + r1) and p = -2 rho - 2 d carry it as se(p) = 2 / ((1 + r1)^2 sqrt(n)) (delta
+/// method), n the number of values of the differenced series the decision was made on.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NoiseId {
+    pub alpha: i32,
+    pub estimate: f64,
+    pub se: f64,
+}
+
+impl NoiseId {
+    /// The identification from rho at difference order d on `len` values.
+    fn new(rho: f64, d: usize, len: usize, phase_add: i32) -> NoiseId {
+        let r1 = rho / (1.0 - rho);
+        NoiseId {
+            alpha: -(2.0 * rho).round_ties_even() as i32 - 2 * d as i32 + phase_add,
+            estimate: -2.0 * (rho + d as f64) + phase_add as f64,
+            se: 2.0 / ((1.0 + r1).powi(2) * (len as f64).sqrt()),
+        }
+    }
+
+    /// Whether this identification departs significantly from `held`: its estimate lies
+    /// outside held's rounding band (+-1/2) by more than `z` standard errors.
+    pub fn departs_from(&self, held: i32, z: f64) -> bool {
+        (self.estimate - held as f64).abs() > 0.5 + z * self.se
+    }
+}
+
 /// Lag-1 autocorrelation noise identification (Riley & Greenhall 2004, allantools
 /// `autocorr_noise_id` with dmin = 0): returns the integer alpha, or `None` when fewer than 30
 /// points remain after averaging / decimating by `m`.
 pub fn autocorr_noise_id(data: &[f64], m: usize, kind: DataKind, d_max: u32) -> Option<i32> {
+    autocorr_noise_id_detail(data, m, kind, d_max).map(|id| id.alpha)
+}
+
+/// [`autocorr_noise_id`] with its evidence ([`NoiseId`]).
+pub fn autocorr_noise_id_detail(
+    data: &[f64],
+    m: usize,
+    kind: DataKind,
+    d_max: u32,
+) -> Option<NoiseId> {
     let mut x: Vec<f64> = match kind {
         DataKind::Phase => {
             let x: Vec<f64> = data.iter().step_by(m.max(1)).copied().collect();
@@ -320,7 +364,7 @@ pub fn autocorr_noise_id(data: &[f64], m: usize, kind: DataKind, d_max: u32) -> 
                     .collect();
                 &averaged
             };
-            return rate_noise_id(y, d_max);
+            return rate_noise_id_detail_fn(y.len(), |k| y[k], d_max);
         }
     };
     let phase_add = if kind == DataKind::Phase { 2 } else { 0 };
@@ -330,7 +374,7 @@ pub fn autocorr_noise_id(data: &[f64], m: usize, kind: DataKind, d_max: u32) -> 
         let rho = r1 / (1.0 + r1);
         if rho < 0.25 || d >= d_max {
             // alpha = -round(2 rho) - 2 d (+2 for phase); numpy rounds half to even.
-            return Some(-(2.0 * rho).round_ties_even() as i32 - 2 * d as i32 + phase_add);
+            return Some(NoiseId::new(rho, d as usize, x.len(), phase_add));
         }
         x = x.windows(2).map(|w| w[1] - w[0]).collect();
         d += 1;
@@ -346,6 +390,12 @@ pub fn autocorr_noise_id(data: &[f64], m: usize, kind: DataKind, d_max: u32) -> 
 /// accumulates the ACF sums of every difference order at once.
 #[inline(always)]
 pub fn rate_noise_id_fn(n: usize, y: impl Fn(usize) -> f64, d_max: u32) -> Option<i32> {
+    rate_noise_id_detail_fn(n, y, d_max).map(|id| id.alpha)
+}
+
+/// [`rate_noise_id_fn`] with its evidence ([`NoiseId`]).
+#[inline(always)]
+pub fn rate_noise_id_detail_fn(n: usize, y: impl Fn(usize) -> f64, d_max: u32) -> Option<NoiseId> {
     let d_max = d_max.min(3) as usize;
     if n < d_max + 2 {
         return None;
@@ -392,7 +442,7 @@ pub fn rate_noise_id_fn(n: usize, y: impl Fn(usize) -> f64, d_max: u32) -> Optio
         let r1 = num / den;
         r1 / (1.0 + r1)
     };
-    let alpha = |rho: f64, d: usize| Some(-(2.0 * rho).round_ties_even() as i32 - 2 * d as i32);
+    let alpha = |rho: f64, d: usize| Some(NoiseId::new(rho, d, n - d, 0));
     let rho = rho_of(&acf_sums::<1>(n, e), 0);
     if rho < 0.25 || d_max == 0 {
         return alpha(rho, 0);
@@ -496,10 +546,6 @@ fn acf_sums<const D: usize>(n: usize, e: impl Fn(usize) -> f64) -> AcfSums {
     (s1, s2, p, first, prev)
 }
 
-fn rate_noise_id(y: &[f64], d_max: u32) -> Option<i32> {
-    rate_noise_id_fn(y.len(), |k| y[k], d_max)
-}
-
 /// Riley 2004 eq (2): lag-1 autocorrelation about the mean.
 fn lag1_acf(x: &[f64]) -> f64 {
     let mu = stats::mean(x);
@@ -569,6 +615,10 @@ fn solve_small(mut a: [[f64; 3]; 3], mut b: [f64; 3], k: usize) -> [f64; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn rate_noise_id(y: &[f64], d_max: u32) -> Option<i32> {
+        rate_noise_id_fn(y.len(), |k| y[k], d_max)
+    }
 
     /// allantools' allocation-based procedure, for comparison.
     fn reference_rate_id(y: &[f64], d_max: u32) -> i32 {

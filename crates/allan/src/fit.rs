@@ -436,6 +436,48 @@ fn refine_log(g: &[[f64; 5]], y: &[f64], var_ln: &[f64], start: Solution) -> Sol
     }
 }
 
+/// A weighted least-squares system in column-scaled variables u_a = c_{idx a} * scale_a.
+pub(crate) struct ScaledLs {
+    /// s_a = sqrt(sum_i w_i g_i[idx a]^2) (column scaling for conditioning).
+    pub scale: Vec<f64>,
+    /// (A^T W A)^-1 in the scaled variables.
+    pub inv: Vec<Vec<f64>>,
+    /// A^T W y in the scaled variables.
+    pub atb: Vec<f64>,
+}
+
+/// The normal equations of y on the columns `idx` of g with weights w, column-scaled and
+/// inverted; `None` when a column is empty or the system singular.
+pub(crate) fn scaled_ls(g: &[[f64; 5]], y: &[f64], w: &[f64], idx: &[usize]) -> Option<ScaledLs> {
+    let k = idx.len();
+    let scale: Vec<f64> = idx
+        .iter()
+        .map(|&j| {
+            g.iter()
+                .zip(w)
+                .map(|(gi, wi)| wi * gi[j] * gi[j])
+                .sum::<f64>()
+                .sqrt()
+        })
+        .collect();
+    if scale.iter().any(|s| s.is_nan() || *s <= 0.0) {
+        return None;
+    }
+    let mut ata = vec![vec![0.0f64; k]; k];
+    let mut atb = vec![0.0f64; k];
+    for ((gi, yi), wi) in g.iter().zip(y).zip(w) {
+        for a in 0..k {
+            let ga = gi[idx[a]] / scale[a];
+            atb[a] += wi * ga * yi;
+            for b in 0..k {
+                ata[a][b] += wi * ga * gi[idx[b]] / scale[b];
+            }
+        }
+    }
+    let inv = invert(&ata)?;
+    Some(ScaledLs { scale, inv, atb })
+}
+
 /// Exact NNLS over 5 columns by enumerating the active sets.
 fn nnls_subsets(g: &[[f64; 5]], y: &[f64], w: &[f64], allowed: [bool; 5]) -> Solution {
     let mut best = Solution::empty();
@@ -457,32 +499,9 @@ fn nnls_subsets(g: &[[f64; 5]], y: &[f64], w: &[f64], allowed: [bool; 5]) -> Sol
         let mut coef = [0.0f64; 5];
         let mut cov = [[0.0f64; 5]; 5];
         if k > 0 {
-            // Column scaling for conditioning: s_j = sqrt(sum w g_j^2).
-            let scale: Vec<f64> = idx
-                .iter()
-                .map(|&j| {
-                    g.iter()
-                        .zip(w)
-                        .map(|(gi, wi)| wi * gi[j] * gi[j])
-                        .sum::<f64>()
-                        .sqrt()
-                })
-                .collect();
-            if scale.iter().any(|s| s.is_nan() || *s <= 0.0) {
+            let Some(ScaledLs { scale, inv, atb }) = scaled_ls(g, y, w, &idx) else {
                 continue;
-            }
-            let mut ata = vec![vec![0.0f64; k]; k];
-            let mut atb = vec![0.0f64; k];
-            for ((gi, yi), wi) in g.iter().zip(y).zip(w) {
-                for a in 0..k {
-                    let ga = gi[idx[a]] / scale[a];
-                    atb[a] += wi * ga * yi;
-                    for b in 0..k {
-                        ata[a][b] += wi * ga * gi[idx[b]] / scale[b];
-                    }
-                }
-            }
-            let Some(inv) = invert(&ata) else { continue };
+            };
             let sol: Vec<f64> = (0..k)
                 .map(|a| (0..k).map(|b| inv[a][b] * atb[b]).sum())
                 .collect();

@@ -30,9 +30,12 @@
 //! where the curve resolves it and a bound where not: `sheet`.
 
 pub mod chi2;
+pub mod claims;
+mod curve;
 pub mod edf;
 pub mod fit;
 mod grid;
+pub mod null;
 pub mod plan;
 pub mod sheet;
 
@@ -192,6 +195,8 @@ pub struct Options {
     /// Divide the total variance by its flicker / random-walk FM bias (SP 1065 §5.2.11), as
     /// Stable32 does, once the noise type is known (default true).
     pub totvar_bias_correction: bool,
+    /// The family-wise level at which a fitted term counts as resolved ([`null`]).
+    pub claims: claims::ClaimLevel,
 }
 
 impl Default for Options {
@@ -202,6 +207,7 @@ impl Default for Options {
             alpha: None,
             stable32_stop: true,
             totvar_bias_correction: true,
+            claims: claims::ClaimLevel::default(),
         }
     }
 }

@@ -9,6 +9,11 @@ use crate::phase::{rate_to_phase, rate_to_phase_in_place};
 use crate::{chi2, edf, AllanPoint, DataKind, EdfMethod, Estimator, Options, TauGrid};
 use std::borrow::Cow;
 
+/// A noise identification differs from the shorter tau's only when its estimate lies this many
+/// standard errors beyond the held type's rounding band (the normal 99.5 % point: a per-tau
+/// false change of at most 0.5 % each way, 1 % in all, where the held type is right).
+pub const NOISE_ID_CHANGE_Z: f64 = 2.575_829_303_548_901;
+
 /// A time series prepared once for many deviations: the phase array (phase input is used in
 /// place, rate input integrated into an array of its own), and for phase input the samples for
 /// noise identification.
@@ -59,6 +64,12 @@ impl<'a> Series<'a> {
     /// The phase points (s, or the unit of phase input).
     pub fn phase(&self) -> &[f64] {
         &self.phase
+    }
+
+    /// Number of rate samples (for phase input, one less than the phase samples).
+    pub fn rate_len(&self) -> usize {
+        self.rate_len
+            .unwrap_or_else(|| self.phase.len().saturating_sub(1))
     }
 
     /// Sample interval, seconds.
@@ -206,10 +217,18 @@ impl<'a> Series<'a> {
         }
         let first_known = alphas.iter().flatten().next().copied().unwrap_or(0);
         let n_phase = self.phase.len();
-        let mut last = first_known;
+        let d = est.difference_order();
+        let mut last: Option<i32> = None;
         for (p, alpha) in points.iter_mut().zip(alphas) {
-            let alpha = alpha.unwrap_or(last);
-            last = alpha;
+            let alpha = match (*alpha, last) {
+                (None, held) => held.unwrap_or(first_known),
+                (Some(a), Some(held)) if a != held => {
+                    let edf = |al| edf::edf_for(est, opts.edf, al, p.m, n_phase, p.n_terms);
+                    self.held_noise_id(p.m, d, held, a, edf)
+                }
+                (Some(a), _) => a,
+            };
+            last = Some(alpha);
             p.alpha = alpha;
             if est == Estimator::Total && opts.totvar_bias_correction {
                 p.dev /= edf::totvar_bias(alpha, p.m, n_phase - 1).sqrt();
@@ -221,21 +240,64 @@ impl<'a> Series<'a> {
         }
     }
 
+    /// The noise type at averaging factor m when its identification `found` differs from the
+    /// shorter tau's `held` one: `found` where it departs from `held` significantly
+    /// ([`edf::NoiseId::departs_from`] at [`NOISE_ID_CHANGE_Z`]); where it does not, the data
+    /// cannot tell the two types apart, and the one with fewer degrees of freedom (`edf` of a
+    /// type: the wider interval) is taken. With few blocks the lag-1 ACF scatters by 1/sqrt(n)
+    /// (0.18 at the method's minimum of 30 points): white rate noise then reads as flicker PM
+    /// (alpha = 1, r1 < -0.2) on about a quarter of the longest taus, and those points got
+    /// Greenhall's EDF for alpha = 1, several times too large. A noise type persists over
+    /// neighbouring taus (each power law dominates a range of tau, IEEE 952 Annex C), which is
+    /// why the shorter tau's type, identified on more blocks, is the alternative; taking the
+    /// smaller EDF of the two never narrows an interval below what either type gives.
+    fn held_noise_id(
+        &self,
+        m: usize,
+        d_max: u32,
+        held: i32,
+        found: i32,
+        edf: impl Fn(i32) -> f64,
+    ) -> i32 {
+        match self.noise_id_detail(m, d_max) {
+            Some(id) if id.departs_from(held, NOISE_ID_CHANGE_Z) => id.alpha,
+            _ if edf(found) < edf(held) => found,
+            _ => held,
+        }
+    }
+
+    /// [`Series::noise_id`] with its evidence (computed without the vector kernels: called only
+    /// where the identification changes).
+    pub fn noise_id_detail(&self, m: usize, d_max: u32) -> Option<edf::NoiseId> {
+        match (self.rate_len, self.source_phase) {
+            (Some(_), _) => {
+                let (m, blocks) = self.rate_blocks(m)?;
+                let x = &self.phase;
+                edf::rate_noise_id_detail_fn(blocks, |j| x[(j + 1) * m] - x[j * m], d_max)
+            }
+            (None, Some(x)) => edf::autocorr_noise_id_detail(x, m, DataKind::Phase, d_max),
+            _ => None,
+        }
+    }
+
+    /// The averaging factor (at least 1) and the number of block averages of the rate at m,
+    /// `None` under the 30 the lag-1 ACF method needs (Riley 2004) or for phase input. The block
+    /// averages of the rate are phase differences at stride m (x_{(j+1)m} - x_{jm} = tau0 * sum
+    /// of the block, mean removed): no pass over the m samples of each block. Scale and offset
+    /// do not change the ACF.
+    fn rate_blocks(&self, m: usize) -> Option<(usize, usize)> {
+        let m = m.max(1);
+        let blocks = self.rate_len? / m;
+        (blocks >= 30).then_some((m, blocks))
+    }
+
     /// Lag-1 autocorrelation noise identification at averaging factor m (Riley 2004),
     /// on the data as given (rate or phase); `None` when too few points.
     pub fn noise_id(&self, m: usize, d_max: u32) -> Option<i32> {
         match (self.rate_len, self.source_phase) {
-            (Some(rate_len), _) => {
-                // The block averages of the rate are phase differences at stride m
-                // (x_{(j+1)m} - x_{jm} = tau0 * sum of the block, mean removed): no pass over
-                // the m samples of each block. Scale and offset do not change the ACF.
-                let m = m.max(1);
-                let blocks = rate_len / m;
-                if blocks < 30 {
-                    return None;
-                }
-                let x = &self.phase;
-                rate_noise_id_fast(x, m, blocks, d_max)
+            (Some(_), _) => {
+                let (m, blocks) = self.rate_blocks(m)?;
+                rate_noise_id_fast(&self.phase, m, blocks, d_max)
             }
             (None, Some(x)) => edf::autocorr_noise_id(x, m, DataKind::Phase, d_max),
             _ => None,

@@ -6,7 +6,8 @@
 //!   coefficient (tau = 1 s, sqrt 3 s, 3 s; IEEE Std 952-1997 Annex C, Figure C.2; Woodman TR-696
 //!   §5.1; the Kalibr / allan_variance_ros practice of fitting the -1/2 and +1/2 lines). "Dominates"
 //!   means the term is at least [`DOMINANT_SHARE`] of the fitted IEEE 952 Allan variance there
-//!   (crate::fit), and the fitted term itself is resolved ([`term_resolved`]). The first points
+//!   (crate::fit), and the fitted term itself is resolved (its statistic beyond the null
+//!   simulation's threshold, crate::null). The first points
 //!   (tau < [`MIN_LINE_FACTOR`] sample intervals) are left out when others remain: there the
 //!   curve carries the sensor's filter and the correlation of neighbouring samples.
 //!   The line in log-log coordinates with a fixed slope is the weighted mean of
@@ -22,7 +23,8 @@
 //!   term's Allan variance is at most the whole (IEEE 952 Annex C: the terms add in variance).
 
 use crate::chi2::{confidence_interval, normal_ppf};
-use crate::fit::{basis, capped_edf, Fit, Term, BI_PLATEAU_FACTOR};
+use crate::fit::{basis, capped_edf, Fit, BI_PLATEAU_FACTOR};
+use crate::null::{term_statistics, NullThresholds};
 use crate::AllanPoint;
 use serde::{Deserialize, Serialize};
 
@@ -37,10 +39,6 @@ pub const MIN_LINE_FACTOR: usize = 10;
 /// Confidence of the intervals that decide whether a minimum is resolved (two-sided 99 % each:
 /// a white-noise curve shows a false minimum on a given later point with probability < 0.5 %).
 pub const RESOLUTION_CONFIDENCE: f64 = 0.99;
-
-/// A fitted term is resolved when its standard error is at most this share of its value: its
-/// two-sigma interval excludes zero and spans less than a factor of three.
-pub const RESOLVED_RELATIVE_SIGMA: f64 = 0.5;
 
 /// A reading: a value with its interval where the curve resolves it, else an upper bound.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -93,31 +91,47 @@ pub struct TermStatus {
     pub resolved: bool,
     /// The largest value of the coefficient the curve allows (SI).
     pub bound: f64,
+    /// The term's Wald statistic on the curve ([`crate::null::term_statistics`]).
+    pub statistic: f64,
+    /// The statistic's threshold from the null simulation ([`crate::null`]).
+    pub threshold: f64,
 }
 
-/// Whether a fitted coefficient is resolved ([`RESOLVED_RELATIVE_SIGMA`]).
-pub fn term_resolved(t: &Term) -> bool {
-    t.value > 0.0 && t.sigma.is_finite() && t.sigma <= RESOLVED_RELATIVE_SIGMA * t.value
-}
-
-/// The status of the five fitted terms (q, n, b, k, r) of `fit` on `points`, bounds from the
-/// intervals at `confidence`.
-pub fn term_status(fit: &Fit, points: &[AllanPoint], confidence: f64) -> [TermStatus; 5] {
+/// The status of the five fitted terms (q, n, b, k, r) of `fit` on `points`: resolved when the
+/// fit has the term, its statistic exceeds the null's threshold and its one-sigma interval
+/// excludes zero (a value quoted as v +- s with s >= v would show an interval containing zero,
+/// issue 24); bounds from the intervals at `confidence`.
+pub fn term_status(
+    fit: &Fit,
+    points: &[AllanPoint],
+    confidence: f64,
+    null: &NullThresholds,
+) -> [TermStatus; 5] {
     let usable = usable(points);
+    let stat = term_statistics(points, fit);
     std::array::from_fn(|j| TermStatus {
-        resolved: fit.terms()[j].is_some_and(|t| term_resolved(&t)),
+        resolved: fit.terms()[j].is_some_and(|t| t.sigma < t.value) && stat[j] > null.threshold[j],
         bound: tangent_bound(&usable, j, confidence),
+        statistic: stat[j],
+        threshold: null.threshold[j],
     })
 }
 
-/// The readings of `points` with the fit made of them, intervals at `confidence`.
-pub fn sheet_readings(points: &[AllanPoint], fit: &Fit, confidence: f64) -> SheetReadings {
+/// The readings of `points` with the fit made of them and its terms' status, intervals at
+/// `confidence`.
+pub fn sheet_readings(
+    points: &[AllanPoint],
+    fit: &Fit,
+    confidence: f64,
+    status: &[TermStatus; 5],
+) -> SheetReadings {
     let usable = usable(points);
+    let line = |j: usize| line_reading(&usable, fit, j, confidence, status[j].resolved);
     SheetReadings {
-        q: line_reading(&usable, fit, 0, confidence),
-        arw: line_reading(&usable, fit, 1, confidence),
+        q: line(0),
+        arw: line(1),
         bi_min: minimum_reading(&usable, confidence),
-        rrw: line_reading(&usable, fit, 3, confidence),
+        rrw: line(3),
     }
 }
 
@@ -161,17 +175,30 @@ fn share(fit: &Fit, j: usize, tau_s: f64) -> f64 {
 }
 
 /// The line of term j (slope of its basis) through the points it dominates.
-fn line_reading(points: &[&AllanPoint], fit: &Fit, j: usize, confidence: f64) -> Reading {
+fn line_reading(
+    points: &[&AllanPoint],
+    fit: &Fit,
+    j: usize,
+    confidence: f64,
+    resolved: bool,
+) -> Reading {
     let z = normal_ppf(0.5 + 0.5 * confidence);
     let bound = tangent_bound(points, j, confidence);
     let name = ["quantisation", "white noise", "", "rate random walk"][j];
-    let Some(term) = fit.terms()[j] else {
+    if fit.terms()[j].is_none() {
         return Reading::bound(bound, format!("the IEEE 952 fit has no {name} term"));
-    };
-    if !term_resolved(&term) {
+    }
+    if !resolved {
         return Reading::bound(
             bound,
-            format!("the fitted {name} term is not resolved (its interval includes zero)"),
+            format!(
+                "the fitted {name} term is within what logs of {} alone give",
+                if j == 1 {
+                    "quantisation noise"
+                } else {
+                    "white noise"
+                }
+            ),
         );
     }
     let dominated: Vec<&AllanPoint> = points

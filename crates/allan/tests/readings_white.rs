@@ -11,37 +11,19 @@
 //! is at most 1 % per test (the seeds are fixed, so a run is reproducible). The long logs (2 h at
 //! 100 and 200 Hz) are in the ignored test `two_hour_logs` (run with --ignored; ~20 s).
 
-use allan::{analyse_rate, Estimator, Options, TauGrid};
-use noise::process::WhiteNoiseSampler;
-use rand::SeedableRng;
-use rand_xoshiro::Xoshiro256PlusPlus;
-
-/// 0.5833 deg/sqrt(h) in rad/sqrt(s).
-fn n_true() -> f64 {
-    (0.5833f64 / 60.0).to_radians()
-}
+mod common;
+use allan::Options;
+use common::{n_true, white_analysis};
 
 /// Analyse `seeds.len()` white-noise logs of `duration_s` at `rate_hz` and check every reading.
 fn check(rate_hz: f64, duration_s: f64, seeds: &[u64], readings_in_test: usize) {
     let confidence = 1.0 - 0.01 / readings_in_test as f64;
-    let dt = 1.0 / rate_hz;
-    let len = (duration_s * rate_hz).round() as usize;
-    let white = WhiteNoiseSampler::new(n_true(), dt);
     for &seed in seeds {
-        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
-        let data: Vec<f64> = (0..len).map(|_| white.sample(&mut rng)).collect();
         let opts = Options {
             confidence,
             ..Options::default()
         };
-        let a = analyse_rate(
-            data,
-            dt,
-            Estimator::Overlapping,
-            &TauGrid::Octave,
-            &opts,
-            &|_| {},
-        );
+        let a = white_analysis(rate_hz, duration_s, seed, &opts);
         let (fit, sheet, terms) = (a.fit.unwrap(), a.sheet.unwrap(), a.terms.unwrap());
         let what = format!("{rate_hz} Hz, {duration_s} s, seed {seed}");
         let arw = &sheet.arw;

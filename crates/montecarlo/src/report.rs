@@ -100,6 +100,15 @@ pub struct ReportMeta {
     pub checkpoint_steps: Vec<u64>,
 }
 
+/// The chi-square degrees of freedom one run gives a quantity's square when its errors are
+/// Gaussian: 1 for a component, 2 for a horizontal magnitude (north^2 + east^2).
+fn dof_per_run(q: NavQuantity) -> f64 {
+    match q {
+        NavQuantity::PosHorizontal | NavQuantity::VelHorizontal => 2.0,
+        _ => 1.0,
+    }
+}
+
 fn finite(x: f64) -> Option<f64> {
     x.is_finite().then_some(x)
 }
@@ -151,7 +160,8 @@ pub fn build_report(
                             r.law_std = finite(*std);
                             r.law_rms = finite(law_rms);
                             if law_rms > 0.0 && s.count > 1 {
-                                let (lo, hi) = ratio_interval(&s, law_rms, Z_999, allowance);
+                                let (lo, hi) =
+                                    ratio_interval(&s, law_rms, Z_999, allowance, dof_per_run(q));
                                 r.ratio = finite(s.rms / law_rms);
                                 r.ratio_lo = finite(lo);
                                 r.ratio_hi = finite(hi);
