@@ -581,35 +581,12 @@ fn checks_text(checks: &Checks) -> String {
 /// which covers its bias instability there).
 fn model_noise_values(result: &Diagnosis, c: noise::Channel) -> Option<(AxisValue, AxisValue)> {
     let a = result.model_final.axis(c.sensor(), c.axis());
-    let n = AxisValue {
-        value: a.get::<noise::WhiteNoise>()?.density(),
-        how: "corrected model".into(),
-    };
-    let k = match a
-        .get::<noise::RateRandomWalk>()
-        .map(noise::RateRandomWalk::density)
-    {
-        Some(k) => AxisValue {
-            value: k,
-            how: "corrected model".into(),
-        },
-        None => {
-            let (k, tau) = result
-                .grid_m
-                .iter()
-                .map(|&m| m as f64 * result.dt_s)
-                .map(|tau| ((a.allan_variance(tau) * 3.0 / tau).sqrt(), tau))
-                .min_by(|x, y| x.0.total_cmp(&y.0))?;
-            AxisValue {
-                value: k,
-                how: format!(
-                    "no rate random walk in the model; bound: +1/2 line touching its Allan curve at {}",
-                    crate::fmt::time(tau)
-                ),
-            }
-        }
-    };
-    Some((n, k))
+    let taus: Vec<f64> = result
+        .grid_m
+        .iter()
+        .map(|&m| m as f64 * result.dt_s)
+        .collect();
+    noise::noise_file::axis_noise_values(a, &taus, "corrected model", &crate::fmt::time)
 }
 
 fn json_document(

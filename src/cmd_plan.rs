@@ -4,20 +4,9 @@
 
 use crate::cli::check_rate_hz;
 use crate::fmt;
-use allan::plan::{plan_term, Curve, PlanTerm, TermPlan};
 use anyhow::{bail, Context, Result};
-use noise::closed_form::rate_random_walk_avar_sampled;
-use noise::{Sensor, SensorModel};
-use serde::Serialize;
+use diagnose::log_plan::{PlanDoc, MAX_DURATION_S, MAX_RATE_HZ, MIN_RATE_HZ};
 use std::path::PathBuf;
-
-/// Longest averaging time searched for a reading, s (about 12 days).
-const MAX_TAU_S: f64 = 1e6;
-/// Sample rates a plan accepts, Hz (the reading of white noise needs samples well below 1 s).
-const MIN_RATE_HZ: f64 = 1e-2;
-const MAX_RATE_HZ: f64 = 1e6;
-/// Longest log a plan reasons about, s.
-const MAX_DURATION_S: f64 = 1e10;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -37,24 +26,6 @@ pub struct Args {
     pub json: bool,
 }
 
-#[derive(Serialize)]
-struct AxisPlan {
-    sensor: &'static str,
-    axis: &'static str,
-    terms: Vec<TermPlan>,
-}
-
-#[derive(Serialize)]
-struct PlanDoc {
-    sensor: String,
-    rate_hz: f64,
-    target_uncertainty: f64,
-    duration_s: Option<f64>,
-    /// The longest of the required durations: a log this long reads every readable term.
-    required_duration_s: Option<f64>,
-    axes: Vec<AxisPlan>,
-}
-
 fn parse_fraction(text: &str) -> Result<f64> {
     let t = text.trim();
     let v = match t.strip_suffix('%') {
@@ -66,43 +37,6 @@ fn parse_fraction(text: &str) -> Result<f64> {
     v.with_context(|| {
         format!("--uncertainty: expected a fraction in (0, 1) or a percentage such as 10%, found \"{text}\"")
     })
-}
-
-/// The plan of one axis of `model`.
-fn plan_axis(
-    model: &SensorModel,
-    sensor: Sensor,
-    axis: usize,
-    dt_s: f64,
-    target: f64,
-    duration_s: Option<f64>,
-) -> Vec<TermPlan> {
-    let m = model.axis(sensor, axis);
-    let total = |t: f64| m.allan_variance_sampled(t, dt_s);
-    let mut out = Vec::new();
-    let mut term = |kind: PlanTerm, f: &dyn Fn(f64) -> f64| {
-        let curve = Curve {
-            total: &total,
-            term: f,
-        };
-        out.push(plan_term(kind, &curve, dt_s, target, duration_s, MAX_TAU_S));
-    };
-    if let Some(n) = m.get::<noise::WhiteNoise>().map(noise::WhiteNoise::density) {
-        // The Allan variance of sampled white noise is exactly N^2 / tau (IEEE 952 annex C).
-        term(PlanTerm::WhiteNoise, &|t| n * n / t);
-    }
-    if let Some(bi) = m.get::<noise::BiasInstability>() {
-        term(PlanTerm::BiasInstability, &|t| bi.avar_sampled(t, dt_s));
-    }
-    if let Some(k) = m
-        .get::<noise::RateRandomWalk>()
-        .map(noise::RateRandomWalk::density)
-    {
-        term(PlanTerm::RateRandomWalk, &|t| {
-            rate_random_walk_avar_sampled(k, t, dt_s)
-        });
-    }
-    out
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -118,37 +52,11 @@ pub fn run(args: Args) -> Result<()> {
             bail!("--duration: expected at least 3 samples and at most {MAX_DURATION_S:e} s (about 300 years), found {d:e} s");
         }
     }
-    let dt_s = 1.0 / rate_hz;
-    let mut axes = Vec::new();
-    for (sensor, name) in [(Sensor::Gyro, "gyro"), (Sensor::Accel, "accel")] {
-        for (axis, axis_name) in ["x", "y", "z"].into_iter().enumerate() {
-            let terms = plan_axis(&model, sensor, axis, dt_s, target, duration_s);
-            if !terms.is_empty() {
-                axes.push(AxisPlan {
-                    sensor: name,
-                    axis: axis_name,
-                    terms,
-                });
-            }
-        }
-    }
-    if axes.is_empty() {
+    let Some(doc) = diagnose::log_plan::plan(&model, rate_hz, target, duration_s) else {
         bail!(
             "{}: the model has no white noise, bias instability or rate random walk to plan for",
             args.sensor.display()
         );
-    }
-    let required_duration_s = axes
-        .iter()
-        .flat_map(|a| a.terms.iter().filter_map(|t| t.required_duration_s))
-        .max_by(f64::total_cmp);
-    let doc = PlanDoc {
-        sensor: model.name.clone(),
-        rate_hz,
-        target_uncertainty: target,
-        duration_s,
-        required_duration_s,
-        axes,
     };
     let json = serde_json::to_string_pretty(&doc)? + "\n";
     crate::output::answer(&text(&doc), args.json.then_some(json.as_str()))?;

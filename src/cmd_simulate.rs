@@ -3,7 +3,7 @@
 
 use crate::cli::pool;
 use crate::experiment_run::{
-    ablation_experiments, check_memory, execute, experiment_from, read_inputs, ScenarioEdits,
+    ablation_experiments, check_memory, execute, experiment_from, read_inputs, scenario_edits,
 };
 use crate::fmt;
 use crate::output::{ensure_dir, write_atomic, write_string};
@@ -11,11 +11,10 @@ use crate::plot::{Band, LogLogPlot, Series, PALETTE};
 use anyhow::{bail, Context, Result};
 use montecarlo::ablation::{self, AblationRow};
 use montecarlo::experiment::{Experiment, Overrides};
+use montecarlo::job::{self, reference_out, FlagCount, ReferenceOut};
 use montecarlo::nav_quantity::NavQuantity;
 use montecarlo::report::DriftReport;
 use montecarlo::runner::Shard;
-use montecarlo::shard::{ShardFile, SHARD_FORMAT};
-use serde::Serialize;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -73,7 +72,7 @@ pub fn run(args: Args) -> Result<()> {
         (Some(dir), Some(_)) => Some(crate::output::prepare_shared_dir(dir)?),
         (None, _) => None,
     };
-    let edits = ScenarioEdits::from_flags(args.duration, args.rate)?;
+    let edits = scenario_edits(args.duration, args.rate)?;
     let (inputs, _) = read_inputs(&args.scenario, &edits)?;
     let overrides = Overrides {
         runs: args.runs,
@@ -89,31 +88,23 @@ pub fn run(args: Args) -> Result<()> {
     } else {
         Vec::new()
     };
+    let subs = with_ablation.then_some(subs.as_slice());
+    let run = |e: &Experiment, runs: std::ops::Range<u64>, label: &str| {
+        Some(pool.install(|| execute(e, runs, label)))
+    };
     if let Some(text) = &args.shard {
-        let subs = with_ablation.then_some(subs.as_slice());
-        return run_shard(&args, text, inputs, &exp, subs, &pool);
+        return run_shard(&args, text, inputs, &overrides, &exp, subs, &run);
     }
+    let n_subs = subs.map_or(0, <[_]>::len) as u64;
     check_memory(&exp, exp.runs)?;
-    crate::experiment_run::check_experiment_work(&exp, exp.runs * (1 + 2 * subs.len() as u64))?;
-    let result = pool.install(|| execute(&exp, 0..exp.runs, "simulate"));
-    let report = exp.report(&result.matrix, &result.failures);
-    let ablation = with_ablation.then(|| {
-        let per_term: Vec<_> = subs
-            .iter()
-            .map(|t| {
-                let run = |e: &Experiment| {
-                    let r = pool.install(|| execute(e, 0..e.runs, &t.term));
-                    e.report(&r.matrix, &r.failures)
-                };
-                (t.term.clone(), run(&t.only), run(&t.without))
-            })
-            .collect();
-        ablation::rows(&report, &per_term)
-    });
+    crate::experiment_run::check_experiment_work(&exp, exp.runs * (1 + 2 * n_subs))?;
+    let Some(sim) = job::simulate(&exp, subs, &run) else {
+        bail!("interrupted");
+    };
     emit(
-        &report,
+        &sim.report,
         &exp,
-        ablation.as_deref(),
+        sim.ablation.as_deref(),
         args.json,
         args.out.as_deref(),
     )
@@ -125,9 +116,10 @@ fn run_shard(
     args: &Args,
     text: &str,
     inputs: crate::experiment_run::Inputs,
+    overrides: &Overrides,
     exp: &Experiment,
     subs: Option<&[ablation::TermExperiments]>,
-    pool: &rayon::ThreadPool,
+    run: &job::RunRange<'_>,
 ) -> Result<()> {
     let shard = Shard::parse(text).context("--shard")?;
     let Some(dir) = &args.out else {
@@ -139,42 +131,11 @@ fn run_shard(
     crate::experiment_run::check_experiment_work(exp, shard_runs)?;
     // The file without its values yet: its experiment is checked against the directory's other
     // shards before any work.
-    let mut file = ShardFile {
-        format: SHARD_FORMAT.into(),
-        scenario_source: inputs.scenario_source,
-        scenario_toml: inputs.scenario_toml,
-        sensor_source: inputs.sensor_source,
-        sensor_toml: inputs.sensor_toml,
-        runs: args.runs,
-        seed: args.seed,
-        only: args.only.clone(),
-        without: args.without.clone(),
-        shard,
-        matrix: montecarlo::RunMatrix::new(0, 0),
-        failures: Vec::new(),
-        ablation: subs.map(|_| Vec::new()),
-    };
+    let mut file = job::empty_shard(inputs, overrides, shard, subs.is_some());
     crate::experiment_run::refuse_other_experiments(dir, &file, exp)?;
-    let result = pool.install(|| execute(exp, range.clone(), "shard"));
-    // The shard's slice of every ablation sub-experiment, so `merge` rebuilds the table.
-    let batch = |e: &Experiment, label: &str| {
-        let r = pool.install(|| execute(e, range.clone(), label));
-        ablation::Batch {
-            matrix: r.matrix,
-            failures: r.failures,
-        }
-    };
-    file.ablation = subs.map(|subs| {
-        subs.iter()
-            .map(|t| ablation::TermBatches {
-                term: t.term.clone(),
-                only: batch(&t.only, &t.term),
-                without: batch(&t.without, &t.term),
-            })
-            .collect()
-    });
-    file.matrix = result.matrix;
-    file.failures = result.failures;
+    if job::fill_shard(&mut file, exp, subs, run).is_none() {
+        bail!("interrupted");
+    }
     ensure_dir(dir)?;
     let path = dir.join(format!("shard-{}-of-{}.json", shard.index, shard.count));
     write_atomic(&path, |w| Ok(serde_json::to_writer(w, &file)?))?;
@@ -204,58 +165,6 @@ fn report_failures(failures: &[montecarlo::RunFailure]) {
     }
 }
 
-#[derive(Serialize)]
-struct JsonOut<'a> {
-    #[serde(flatten)]
-    report: &'a DriftReport,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    reference: Option<ReferenceOut>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    ablation: Option<&'a [AblationRow]>,
-    /// The `*` flags over every checkpoint and quantity, with their expected count.
-    ratio_flags: FlagCount,
-}
-
-#[derive(Serialize)]
-struct ReferenceOut {
-    /// The quantity's name (JSON key `channel`, docs/cli.md).
-    #[serde(rename = "channel")]
-    quantity: String,
-    statistic: String,
-    t_s: f64,
-    value: f64,
-    source: String,
-    simulated: f64,
-    #[serde(skip)]
-    note: Option<String>,
-}
-
-fn reference_out(report: &DriftReport, exp: &Experiment) -> Option<ReferenceOut> {
-    let r = exp.scenario.reference.as_ref()?;
-    let cp = report
-        .checkpoints
-        .iter()
-        .min_by(|a, b| (a.t_s - r.t_s).abs().total_cmp(&(b.t_s - r.t_s).abs()))?;
-    let c = cp
-        .quantities
-        .get(NavQuantity::from_name(&r.quantity)?.name())?;
-    let simulated = match r.statistic.as_str() {
-        "mean" => c.mean,
-        "rms" => c.rms,
-        "p50" => c.p50,
-        _ => c.p95,
-    };
-    Some(ReferenceOut {
-        quantity: r.quantity.clone(),
-        statistic: r.statistic.clone(),
-        t_s: cp.t_s,
-        value: r.value,
-        source: r.source.clone(),
-        simulated,
-        note: r.note.clone(),
-    })
-}
-
 /// Print the table on stderr and write --json / --out outputs (shared with `merge`).
 pub fn emit(
     report: &DriftReport,
@@ -264,35 +173,16 @@ pub fn emit(
     json: bool,
     out: Option<&Path>,
 ) -> Result<()> {
-    if report.runs_ok == 0 {
+    if let Err(e) = job::check_some_runs(report) {
         report_failures(&report.failed_runs);
-        bail!(
-            "every one of the {} runs failed ({}): no drift statistics to report; the model's values are probably far too large (check their units)",
-            report.runs,
-            report
-                .failed_runs
-                .first()
-                .map_or("no run finished".to_string(), |f| f.message.clone())
-        );
+        bail!(e);
     }
     crate::experiment_run::check_finite(report)?;
     crate::model_notes::print(&exp.model, Some(exp.scenario.duration_s));
     let reference = reference_out(report, exp);
     report_failures(&report.failed_runs);
     let human = table(report, reference.as_ref(), ablation);
-    let doc = JsonOut {
-        report,
-        reference,
-        ablation,
-        ratio_flags: FlagCount::of(
-            report
-                .checkpoints
-                .iter()
-                .flat_map(|cp| cp.quantities.values()),
-        ),
-    };
-    let mut value = serde_json::to_value(&doc)?;
-    with_heading_alias(&mut value);
+    let value = job::document(report, exp, ablation);
     let text = serde_json::to_string_pretty(&value)? + "\n";
     crate::output::answer(&human, json.then_some(text.as_str()))?;
     if let Some(dir) = out {
@@ -306,28 +196,6 @@ pub fn emit(
         eprintln!("wrote {}/drift.{{json,csv,svg}}", dir.display());
     }
     Ok(())
-}
-
-/// Every checkpoint's `channels` gains `heading_rad` beside `yaw_rad` (the same values): one name
-/// for the heading error in every command (`drift` says `heading_rad`), the old key kept for the
-/// scripts that read it (docs/cli.md, "Contract changes").
-fn with_heading_alias(doc: &mut serde_json::Value) {
-    let Some(cps) = doc
-        .get_mut("checkpoints")
-        .and_then(serde_json::Value::as_array_mut)
-    else {
-        return;
-    };
-    for cp in cps {
-        if let Some(ch) = cp
-            .get_mut("channels")
-            .and_then(serde_json::Value::as_object_mut)
-        {
-            if let Some(yaw) = ch.get(NavQuantity::Yaw.name()).cloned() {
-                ch.insert(NavQuantity::Yaw.label().into(), yaw);
-            }
-        }
-    }
 }
 
 fn opt(x: Option<f64>) -> String {
@@ -368,35 +236,15 @@ fn write_csv(w: &mut dyn Write, r: &DriftReport) -> Result<()> {
     Ok(())
 }
 
-/// Probability that a correct model's ratio falls outside its 99.9 % interval.
-const FLAG_PROBABILITY: f64 = 0.001;
-
-/// The `*` flags of a set of ratio intervals: how many there are, how many are outside, and how
-/// many a correct model gives on average (each interval misses with probability 0.1 %; the
-/// intervals share their runs, so the count is not binomial, but its mean is n x 0.001 and the
-/// chance of at least one is at most that, by the union bound).
-#[derive(Serialize, Clone, Copy, Debug, Default, PartialEq)]
-struct FlagCount {
-    intervals: usize,
-    outside: usize,
-    expected_outside: f64,
-}
-
-impl FlagCount {
-    fn of<'a>(cs: impl Iterator<Item = &'a montecarlo::report::QuantityReport>) -> FlagCount {
-        let mut f = FlagCount::default();
-        for c in cs {
-            if let (Some(_), Some(lo), Some(hi)) = (c.ratio, c.ratio_lo, c.ratio_hi) {
-                f.intervals += 1;
-                f.outside += usize::from(!(lo <= 1.0 && 1.0 <= hi));
-            }
-        }
-        f.expected_outside = f.intervals as f64 * FLAG_PROBABILITY;
-        f
-    }
-
+/// The text of the ratio flags: how many intervals are outside and how many a correct model
+/// marks on average.
+trait FlagText {
     /// "2 of 36 intervals are marked *; a correct model marks 0.036 on average (at least one in
     /// at most 3.6 % of seeds)".
+    fn text(&self) -> String;
+}
+
+impl FlagText for FlagCount {
     fn text(&self) -> String {
         format!(
             "{} of the {} ratio intervals above are marked *; under a correct model each is outside with probability 0.1 %, so {} are expected on average (at least one in at most {} % of seeds, the union bound)",

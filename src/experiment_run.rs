@@ -7,7 +7,7 @@ use crate::files::{self, TextFile};
 use anyhow::{bail, Context, Result};
 use montecarlo::ablation;
 use montecarlo::experiment::{Experiment, ExperimentError, Overrides};
-use montecarlo::nav_quantity::NavQuantity;
+use montecarlo::job::{self, JobError};
 use montecarlo::report::DriftReport;
 use montecarlo::runner::{run_range, BatchResult};
 use montecarlo::scenario::Scenario;
@@ -15,101 +15,27 @@ use montecarlo::shard::ShardFile;
 use noise::SensorModel;
 use std::path::Path;
 
-/// Scenario and sensor texts as read, with their names (kept verbatim for shard files).
-pub struct Inputs {
-    pub scenario_source: String,
-    pub scenario_toml: String,
-    pub sensor_source: String,
-    pub sensor_toml: String,
-}
+pub use montecarlo::job::{Inputs, ScenarioEdits};
 
-/// Scenario keys set from the command line (`--duration`, `--rate`).
-#[derive(Debug, Clone, Copy, Default)]
-pub struct ScenarioEdits {
-    pub duration_s: Option<f64>,
-    pub rate_hz: Option<f64>,
-}
-
-impl ScenarioEdits {
-    pub fn from_flags(duration_s: Option<f64>, rate_hz: Option<f64>) -> Result<Self> {
-        Ok(ScenarioEdits {
-            duration_s,
-            rate_hz: rate_hz
-                .map(|r| crate::cli::check_rate_hz("--rate", r))
-                .transpose()?,
-        })
-    }
-}
-
-/// Whether a TOML text is a sensor model rather than a scenario: no `sensor` key, and sensor
-/// tables (`[gyro]`, `[accel]`, `[temperature]`) or nothing but a name and a description (an
-/// ideal sensor).
-fn is_sensor_toml(text: &str) -> bool {
-    text.parse::<toml::Table>().is_ok_and(|t| {
-        !t.contains_key("sensor")
-            && (["gyro", "accel", "temperature"]
-                .iter()
-                .any(|k| t.contains_key(*k))
-                || (t.contains_key("name") && t.keys().all(|k| k == "name" || k == "description")))
+/// [`ScenarioEdits`] from `--duration` / `--rate` (the rate checked).
+pub fn scenario_edits(duration_s: Option<f64>, rate_hz: Option<f64>) -> Result<ScenarioEdits> {
+    Ok(ScenarioEdits {
+        duration_s,
+        rate_hz: rate_hz
+            .map(|r| crate::cli::check_rate_hz("--rate", r))
+            .transpose()?,
     })
-}
-
-/// The default static scenario for a sensor file (every other key takes its documented default).
-fn default_scenario_toml(sensor_file: &str, stem: &str) -> String {
-    format!(
-        "# The default static scenario of `imudrift simulate SENSOR.toml`: the sensor lying still and level.\n\
-         name = {name:?}\n\
-         description = {desc:?}\n\
-         sensor = {sensor_file:?}\n",
-        name = format!("{stem}-static"),
-        desc = format!("{stem}: default static scenario (still and level)"),
-    )
-}
-
-/// Apply `--duration` / `--rate` to a scenario text (the edited text is what a shard stores).
-fn edit_scenario_toml(text: &str, source: &str, edits: &ScenarioEdits) -> Result<String> {
-    if edits.duration_s.is_none() && edits.rate_hz.is_none() {
-        return Ok(text.to_string());
-    }
-    let mut table: toml::Table = text
-        .parse()
-        .with_context(|| format!("cannot read scenario {source} as TOML"))?;
-    if let Some(d) = edits.duration_s {
-        table.insert("duration_s".into(), toml::Value::Float(d));
-    }
-    if let Some(r) = edits.rate_hz {
-        table.insert("rate_hz".into(), toml::Value::Float(r));
-    }
-    Ok(toml::to_string(&table)?)
 }
 
 /// Read the scenario and its sensor (path relative to the scenario file). A sensor TOML given in
 /// place of a scenario gets the default static scenario.
 pub fn read_inputs(path: &Path, edits: &ScenarioEdits) -> Result<(Inputs, Scenario)> {
     let TextFile { name: given, text } = files::read_config(path)?;
-    let (scenario_source, scenario_toml) =
-        if is_sensor_toml(&text) || noise::is_noise_file_text(&text, &given) {
-            let file = path
-                .file_name()
-                .map(|f| f.to_string_lossy().into_owned())
-                .unwrap_or_else(|| given.clone());
-            let stem = path
-                .file_stem()
-                .map(|f| f.to_string_lossy().into_owned())
-                .unwrap_or_else(|| "sensor".into());
-            (
-                format!("default static scenario for {given}"),
-                default_scenario_toml(&file, &stem),
-            )
-        } else {
-            (given, text)
-        };
-    let scenario_toml = edit_scenario_toml(&scenario_toml, &scenario_source, edits)?;
+    let (scenario_source, scenario_toml) = job::scenario_for_file(path, &given, &text);
+    let scenario_toml = job::edit_scenario_toml(&scenario_toml, edits)
+        .with_context(|| format!("cannot read scenario {scenario_source} as TOML"))?;
     let scenario = Scenario::from_toml_str(&scenario_toml, &scenario_source)?;
-    let sensor_path = match path.parent() {
-        Some(dir) if scenario.sensor.is_relative() => dir.join(&scenario.sensor),
-        _ => scenario.sensor.clone(),
-    };
+    let sensor_path = job::sensor_path(path, &scenario);
     crate::output::note_inputs([&sensor_path]);
     let sensor_source = sensor_path.display().to_string();
     let sensor_toml = files::read_config(&sensor_path)
@@ -136,16 +62,15 @@ pub fn parse_inputs(
     inputs: &Inputs,
     overrides: &Overrides,
 ) -> Result<(Scenario, SensorModel, Experiment)> {
-    let scenario = Scenario::from_toml_str(&inputs.scenario_toml, &inputs.scenario_source)?;
-    let model = SensorModel::from_text(&inputs.sensor_toml, &inputs.sensor_source)?;
-    let exp = Experiment::new(scenario.clone(), &model, overrides).map_err(with_flag)?;
-    Ok((scenario, model, exp))
+    job::parse_inputs(inputs, overrides).map_err(with_flag)
 }
 
-/// An experiment error with the command-line option it comes from, when it comes from one.
-fn with_flag(e: ExperimentError) -> anyhow::Error {
+/// A job error with the command-line option it comes from, when it comes from one.
+pub fn with_flag(e: JobError) -> anyhow::Error {
     match e {
-        ExperimentError::NoRuns => anyhow::anyhow!("--runs: expected an integer >= 1"),
+        JobError::Experiment(ExperimentError::NoRuns) => {
+            anyhow::anyhow!("--runs: expected an integer >= 1")
+        }
         other => anyhow::Error::new(other),
     }
 }
@@ -155,28 +80,14 @@ pub fn ablation_experiments(
     inputs: &Inputs,
     overrides: &Overrides,
 ) -> Result<Vec<ablation::TermExperiments>> {
-    let (scenario, model, exp) = parse_inputs(inputs, overrides)?;
-    ablation::experiments(&scenario, &model, overrides, &exp).map_err(with_flag)
+    job::ablation_experiments(inputs, overrides).map_err(with_flag)
 }
 
 /// A shard file's experiment, resolved against its stored scenario (so that runs and seed
 /// compare by value: an explicit `--seed` equal to the scenario's own is the same experiment),
 /// with the inputs and overrides it was built from.
 pub fn shard_experiment(f: &ShardFile) -> Result<(Inputs, Overrides, Experiment)> {
-    let inputs = Inputs {
-        scenario_source: f.scenario_source.clone(),
-        scenario_toml: f.scenario_toml.clone(),
-        sensor_source: f.sensor_source.clone(),
-        sensor_toml: f.sensor_toml.clone(),
-    };
-    let overrides = Overrides {
-        runs: f.runs,
-        seed: f.seed,
-        only: f.only.clone(),
-        without: f.without.clone(),
-    };
-    let exp = experiment_from(&inputs, &overrides)?;
-    Ok((inputs, overrides, exp))
+    job::shard_experiment(f).map_err(with_flag)
 }
 
 /// Refuse to write shard `file` (of experiment `exp`) into `dir` when the directory holds a
@@ -215,21 +126,7 @@ pub fn refuse_other_experiments(dir: &Path, file: &ShardFile, exp: &Experiment) 
     Ok(())
 }
 
-/// Most samples a command may compute (runs x steps x the largest output-filter decimation:
-/// every internal sample of the noise processes and every mechanisation step counts), about 3 h
-/// on 2 cores at 1e7 steps/s per core: work beyond it is refused before it starts.
-pub const MAX_WORK_SAMPLES: f64 = 1e11;
-
-/// The largest output-filter decimation of `model` (1 without a filter): the internal samples
-/// per output sample.
-pub fn max_decimation(model: &SensorModel) -> f64 {
-    noise::Sensor::ALL
-        .iter()
-        .flat_map(|&s| model.triad(s).axes.iter())
-        .filter_map(|axis| axis.get::<noise::OutputFilter>())
-        .map(|f| f64::from(f.decimation()))
-        .fold(1.0, f64::max)
-}
+pub use montecarlo::job::{max_decimation, MAX_WORK_SAMPLES};
 
 /// Refuse `runs` runs of `samples` output samples of `model` when they are more work than
 /// [`MAX_WORK_SAMPLES`]; `what` names the job and `remedy` the options that shrink it.
@@ -267,12 +164,11 @@ pub fn check_experiment_work(exp: &Experiment, runs: u64) -> Result<()> {
 }
 
 /// Memory for the per-run values above which `simulate` asks for shards instead (8 GiB).
-const MAX_VALUE_BYTES: u64 = 8 << 30;
+use montecarlo::job::MAX_VALUE_BYTES;
 
 /// Refuse a run range whose per-run values (8 bytes per run, checkpoint and quantity) would not fit.
 pub fn check_memory(exp: &Experiment, runs: u64) -> Result<()> {
-    let per_run = (exp.scenario.checkpoint_steps.len() * NavQuantity::ALL.len() * 8) as u64;
-    let bytes = runs.saturating_mul(per_run);
+    let bytes = job::value_bytes(exp, runs);
     let limit = logio::available_memory_bytes().map_or(MAX_VALUE_BYTES, |a| a.min(MAX_VALUE_BYTES));
     if bytes > limit {
         bail!(

@@ -4,7 +4,9 @@ The numbers come from the same Rust library as the ``imudrift`` command line (no
 implementation): :mod:`imudrift.allantools` (allantools' API and results),
 :func:`imudrift.allan` (deviations with confidence intervals, noise types and the IEEE 952 fit),
 :func:`imudrift.read_log` (the CLI's log reader) and :func:`imudrift.generate` (a synthetic
-log). Bad input raises :class:`InvalidInput`, a ``ValueError``; an unreadable file
+log), :class:`Sensor` (a sensor model from TOML, a dict or a Kalibr / OpenVINS file),
+:func:`simulate` (the Monte Carlo drift run) and its shards (:func:`simulate_shard`,
+:func:`merge`). Bad input raises :class:`InvalidInput`, a ``ValueError``; an unreadable file
 :class:`LogUnreadable`, an ``OSError``.
 """
 
@@ -12,6 +14,8 @@ from ._imudrift import InvalidInput, LogUnreadable, __version__
 from ._allan import AllanResult, Fit, Term, allan
 from ._log import read_log
 from ._generate import generate
+from ._sensor import Sensor, plan
+from ._simulate import SimulateResult, merge, simulate, simulate_shard
 from . import allantools
 
 __all__ = [
@@ -25,4 +29,10 @@ __all__ = [
     "allantools",
     "read_log",
     "generate",
+    "Sensor",
+    "simulate",
+    "simulate_shard",
+    "merge",
+    "SimulateResult",
+    "plan",
 ]

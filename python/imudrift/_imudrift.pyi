@@ -36,5 +36,29 @@ def read_log_columns(
     topic: Optional[str],
 ) -> Dict[str, Any]: ...
 def generate_columns(
-    sensor_text: str, source: str, duration_s: float, rate_hz: float, seed: int, run: int
+    sensor_text: str,
+    source: str,
+    duration_s: float,
+    rate_hz: float,
+    seed: int,
+    run: int,
+    only: Optional[List[str]] = None,
+    without: List[str] = ...,
 ) -> Dict[str, Any]: ...
+
+# A scenario or sensor file path, or (sensor text, its source name).
+_Subject = Union[str, Tuple[str, str]]
+
+def simulate_run(subject: _Subject, settings: Dict[str, Any]) -> Dict[str, Any]: ...
+def simulate_shard_bytes(
+    subject: _Subject, index: int, count: int, settings: Dict[str, Any]
+) -> bytes: ...
+def merge_shards(shards: List[bytes]) -> Dict[str, Any]: ...
+def sensor_parse(text: str, source: str) -> Dict[str, str]: ...
+def sensor_toml_of_json(json: str) -> str: ...
+def sensor_noise_file(
+    text: str, source: str, flavor: str, rate_hz: float, rostopic: str
+) -> str: ...
+def sensor_plan(
+    text: str, source: str, uncertainty: float, duration_s: Optional[float], rate_hz: float
+) -> str: ...

@@ -7,7 +7,7 @@
 
 use allan::fit::{Fit, TERM_NAMES};
 use allan::{AllanPoint, DataKind, EdfMethod, Estimator, Options, Series, TauGrid};
-use numpy::{IntoPyArray, PyReadonlyArray1};
+use numpy::{IntoPyArray, PyArrayMethods, PyReadonlyArray1};
 use pyo3::create_exception;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -26,6 +26,9 @@ create_exception!(
     pyo3::exceptions::PyOSError,
     "A log file or directory that cannot be read or mapped (an OSError)."
 );
+
+mod sensor;
+mod sim;
 
 fn invalid(msg: String) -> PyErr {
     InvalidInput::new_err(msg)
@@ -109,22 +112,71 @@ fn estimator(name: &str) -> PyResult<Estimator> {
     })
 }
 
-/// The deviation curve from `allan`, computed with the GIL released.
+/// The first non-finite sample of `data`, as the error that names it.
+fn non_finite(data: &[f64]) -> Option<PyErr> {
+    let i = data.iter().position(|v| !v.is_finite())?;
+    Some(invalid(format!(
+        "data[{i}] is {}: every sample must be finite (a NaN gap is not bridged)",
+        data[i]
+    )))
+}
+
+/// The deviation curve from `allan`, computed with the GIL released on the numpy array in place
+/// (no copy: as numpy's own functions do, the array is read while other Python threads run, so
+/// it must not be changed meanwhile). Non-finite samples are refused: phase data by a scan
+/// first, rate data by its integral (any NaN or infinity makes the phase's mean, and so its
+/// last point, non-finite; the scan then finds it).
 fn curve(
     py: Python<'_>,
-    data: Vec<f64>,
+    data: &[f64],
     kind: DataKind,
     rate: f64,
     est: Estimator,
     grid: TauGrid,
     opts: Options,
-) -> Vec<AllanPoint> {
+) -> PyResult<Vec<AllanPoint>> {
+    if data.is_empty() {
+        return Err(invalid("data is empty: expected samples".into()));
+    }
+    let tau0_s = 1.0 / rate;
+    // Rate data: its phase goes into a numpy array (numpy backs large arrays with huge pages:
+    // fewer page faults than a fresh Vec), dropped after the call.
+    let phase_array = match kind {
+        DataKind::Rate => Some(numpy::PyArray1::<f64>::zeros(py, data.len() + 1, false)),
+        DataKind::Phase => None,
+    };
+    let mut phase_rw = phase_array.as_ref().map(|a| a.readwrite());
+    let phase_out = match phase_rw.as_mut() {
+        Some(rw) => Some(
+            rw.as_slice_mut()
+                .map_err(|_| invalid("cannot lay out the phase array".into()))?,
+        ),
+        None => None,
+    };
     py.detach(move || {
-        let tau0_s = 1.0 / rate;
-        match kind {
-            DataKind::Rate => Series::from_rate(data, tau0_s).deviation(est, &grid, &opts),
-            DataKind::Phase => Series::new(&data, kind, tau0_s).deviation(est, &grid, &opts),
-        }
+        let series = match phase_out {
+            None => {
+                if let Some(e) = non_finite(data) {
+                    return Err(e);
+                }
+                Series::new(data, DataKind::Phase, tau0_s)
+            }
+            Some(out) => {
+                allan::rate_to_phase_into(data, tau0_s, out);
+                if !out.last().is_some_and(|x| x.is_finite()) {
+                    return Err(non_finite(data).unwrap_or_else(|| {
+                        invalid(
+                            "the samples' sum overflows: their values are too large to integrate"
+                                .into(),
+                        )
+                    }));
+                }
+                // The estimators' sums need only the phase (allantools' functions identify no
+                // noise type): the integrated rate is used as phase data.
+                Series::new(out, DataKind::Phase, tau0_s)
+            }
+        };
+        Ok(series.deviation(est, &grid, &opts))
     })
 }
 
@@ -157,7 +209,9 @@ fn allantools_dev<'py>(
     } else {
         estimator(function)?
     };
-    let data = samples(&data)?;
+    let data = data
+        .as_slice()
+        .map_err(|_| invalid("data: expected a contiguous 1-D float64 array".into()))?;
     let n_phase = phase_len(data.len(), kind);
     let grid = match taus {
         None => TauGrid::Octave,
@@ -181,7 +235,7 @@ fn allantools_dev<'py>(
         ..Options::default()
     };
     let n = data.len();
-    let points = curve(py, data, kind, rate, est, grid, opts);
+    let points = curve(py, data, kind, rate, est, grid, opts)?;
     if points.is_empty() {
         return Err(invalid(format!(
             "{function}: {n} samples leave no averaging time of the tau list with 2 or more terms"
@@ -471,7 +525,8 @@ const MAX_GENERATE_RATE_HZ: f64 = 1e6;
 /// values `imudrift generate` writes for the same model, seed and run: `t` (k / rate, s), the six
 /// channels gx..az (rad/s, m/s^2) and `temp` (degC), and the model's name.
 #[pyfunction]
-#[pyo3(signature = (sensor_text, source, duration_s, rate_hz, seed, run))]
+#[pyo3(signature = (sensor_text, source, duration_s, rate_hz, seed, run, only=None, without=Vec::new()))]
+#[allow(clippy::too_many_arguments)]
 fn generate_columns<'py>(
     py: Python<'py>,
     sensor_text: &str,
@@ -480,6 +535,8 @@ fn generate_columns<'py>(
     rate_hz: f64,
     seed: u64,
     run: u64,
+    only: Option<Vec<String>>,
+    without: Vec<String>,
 ) -> PyResult<Bound<'py, PyDict>> {
     if !(rate_hz.is_finite() && rate_hz > 0.0 && rate_hz <= MAX_GENERATE_RATE_HZ) {
         return Err(invalid(format!(
@@ -505,6 +562,10 @@ fn generate_columns<'py>(
     }
     let model =
         noise::SensorModel::from_text(sensor_text, source).map_err(|e| invalid(e.to_string()))?;
+    // The CLI's --only / --without (`noise::TermFilter`).
+    let only = only.as_deref().map(|t| sim::terms("only", t)).transpose()?;
+    let without = sim::terms("without", &without)?;
+    let model = model.filtered(&noise::TermFilter::new(only.as_deref(), &without));
     let dt_s = 1.0 / rate_hz;
     noise::ImuErrors::check_rate(&model, dt_s)
         .map_err(|e| invalid(format!("{source}: {e}; lower the cutoff or raise rate_hz")))?;
@@ -552,5 +613,12 @@ fn _imudrift(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("LogUnreadable", m.py().get_type::<LogUnreadable>())?;
     m.add_function(wrap_pyfunction!(read_log_columns, m)?)?;
     m.add_function(wrap_pyfunction!(generate_columns, m)?)?;
+    m.add_function(wrap_pyfunction!(sim::simulate_run, m)?)?;
+    m.add_function(wrap_pyfunction!(sim::simulate_shard_bytes, m)?)?;
+    m.add_function(wrap_pyfunction!(sim::merge_shards, m)?)?;
+    m.add_function(wrap_pyfunction!(sensor::sensor_parse, m)?)?;
+    m.add_function(wrap_pyfunction!(sensor::sensor_toml_of_json, m)?)?;
+    m.add_function(wrap_pyfunction!(sensor::sensor_noise_file, m)?)?;
+    m.add_function(wrap_pyfunction!(sensor::sensor_plan, m)?)?;
     Ok(())
 }

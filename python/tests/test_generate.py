@@ -15,23 +15,29 @@ pd = pytest.importorskip("pandas")
 SENSORS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "configs", "sensors")
 
 
-@pytest.mark.parametrize("sensor,seed,run", [("mtx.toml", 7, 0), ("adis16405.toml", 3, 2)])
-def test_same_as_the_cli(tmp_path, sensor, seed, run):
+@pytest.mark.parametrize("sensor,seed,run,switches", [
+    ("mtx.toml", 7, 0, {}),
+    ("adis16405.toml", 3, 2, {}),
+    ("mtx.toml", 4, 1, {"without": ["gyro.white_noise"]}),
+    ("mtx.toml", 4, 1, {"only": ["accel", "gyro.bias_instability"]}),
+])
+def test_same_as_the_cli(tmp_path, sensor, seed, run, switches):
     exe = cli_binary()
     if exe is None:
         pytest.skip("no imudrift binary (cargo build --release, or set IMUDRIFT_BIN)")
     path = os.path.join(SENSORS, sensor)
     out = tmp_path / "log.csv"
+    flags = [f for k, v in switches.items() for f in (f"--{k}", ",".join(v))]
     subprocess.run(
         [exe, "generate", path, "--duration", "100", "--rate", "200", "--seed", str(seed),
-         "--run", str(run), "-o", str(out)],
+         "--run", str(run), "-o", str(out), *flags],
         check=True, capture_output=True,
     )
     with open(out) as f:
         header = next(line for line in f if not line.startswith("#")).strip().split(",")
         values = np.loadtxt(f, delimiter=",", comments="#")
     cli = {c: values[:, i] for i, c in enumerate(header)}
-    df = imudrift.generate(path, duration_s=100, rate_hz=200, seed=seed, run=run)
+    df = imudrift.generate(path, duration_s=100, rate_hz=200, seed=seed, run=run, **switches)
     assert list(df.columns) == header == ["t", "gx", "gy", "gz", "ax", "ay", "az", "temp"]
     assert len(df) == len(values) == 20_000
     for c in df.columns:

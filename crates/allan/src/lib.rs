@@ -47,7 +47,7 @@ mod sum;
 
 pub use analysis::{analyse, analyse_rate, Analysis};
 pub use grid::TauGrid;
-pub use phase::{rate_to_phase, rate_to_phase_in_place};
+pub use phase::{rate_to_phase, rate_to_phase_in_place, rate_to_phase_into};
 pub use series::Series;
 pub use sum::compensated_sum;
 

@@ -2,20 +2,23 @@
 //! estimators' sums (SP 1065), and the confidence intervals attached to each point.
 
 use crate::kernels::{
-    blocked_diff_sums_fast, estimator_sum_fast, rate_noise_id_fast, BLOCKED_MAX_M,
+    blocked_diff_sums_fast, estimator_sum_fast, rate_noise_id_fast, streamed_diff_sums_fast,
+    BLOCKED_MAX_M,
 };
 use crate::phase::{rate_to_phase, rate_to_phase_in_place};
 use crate::{chi2, edf, AllanPoint, DataKind, EdfMethod, Estimator, Options, TauGrid};
+use std::borrow::Cow;
 
 /// A noise identification differs from the shorter tau's only when its estimate lies this many
 /// standard errors beyond the held type's rounding band (the normal 99.5 % point: a per-tau
 /// false change of at most 0.5 % each way, 1 % in all, where the held type is right).
 pub const NOISE_ID_CHANGE_Z: f64 = 2.575_829_303_548_901;
 
-/// A time series prepared once for many deviations: the phase array (and, for phase input,
-/// the original samples for noise identification).
+/// A time series prepared once for many deviations: the phase array (phase input is used in
+/// place, rate input integrated into an array of its own), and for phase input the samples for
+/// noise identification.
 pub struct Series<'a> {
-    phase: Vec<f64>,
+    phase: Cow<'a, [f64]>,
     /// Number of rate samples, for rate input.
     rate_len: Option<usize>,
     source_phase: Option<&'a [f64]>,
@@ -27,13 +30,13 @@ impl<'a> Series<'a> {
     pub fn new(data: &'a [f64], kind: DataKind, tau0_s: f64) -> Series<'a> {
         match kind {
             DataKind::Rate => Series {
-                phase: rate_to_phase(data, tau0_s),
+                phase: Cow::Owned(rate_to_phase(data, tau0_s)),
                 rate_len: Some(data.len()),
                 source_phase: None,
                 tau0_s,
             },
             DataKind::Phase => Series {
-                phase: data.to_vec(),
+                phase: Cow::Borrowed(data),
                 rate_len: None,
                 source_phase: Some(data),
                 tau0_s,
@@ -46,7 +49,7 @@ impl<'a> Series<'a> {
     pub fn from_rate(data: Vec<f64>, tau0_s: f64) -> Series<'static> {
         let rate_len = data.len();
         Series {
-            phase: rate_to_phase_in_place(data, tau0_s),
+            phase: Cow::Owned(rate_to_phase_in_place(data, tau0_s)),
             rate_len: Some(rate_len),
             source_phase: None,
             tau0_s,
@@ -56,6 +59,11 @@ impl<'a> Series<'a> {
     /// Number of phase points (rate samples + 1).
     pub fn phase_len(&self) -> usize {
         self.phase.len()
+    }
+
+    /// The phase points (s, or the unit of phase input).
+    pub fn phase(&self) -> &[f64] {
+        &self.phase
     }
 
     /// Number of rate samples (for phase input, one less than the phase samples).
@@ -119,18 +127,18 @@ impl<'a> Series<'a> {
         // Factors whose reuse window fits in cache go through the blocked kernel together.
         let (small, large): (Vec<usize>, Vec<usize>) =
             valid.iter().partition(|&&m| m <= BLOCKED_MAX_M);
-        // The blocked pass and the one-pass-per-factor sums run side by side (each sum is still
-        // computed by one thread in a fixed order: the result does not depend on the threads).
-        use rayon::prelude::*;
-        let (sums, large_points) = rayon::join(
+        // The blocked pass over the small factors and the streamed pass over the large ones run
+        // side by side (each sum is computed by one thread in a fixed order: the result does not
+        // depend on the threads; the large factors' sums are those of `raw_point`, bit for bit).
+        let (sums, large_sums) = rayon::join(
             || blocked_diff_sums_fast(&self.phase, &small, order),
-            || {
-                large
-                    .par_iter()
-                    .filter_map(|&m| self.raw_point(est, m))
-                    .collect::<Vec<_>>()
-            },
+            || streamed_diff_sums_fast(&self.phase, &large, order),
         );
+        let large_points: Vec<AllanPoint> = large
+            .iter()
+            .zip(large_sums)
+            .filter_map(|(&m, s)| self.point_from_sum(est, m, s, n - order * m))
+            .collect();
         let mut out: Vec<AllanPoint> = small
             .iter()
             .zip(sums)

@@ -313,3 +313,61 @@ fn total_deviation_reaches_the_largest_factor() {
     }
     assert!(estimator_sum(&x, Estimator::Total, n).is_none());
 }
+
+#[test]
+fn phase_from_a_slice_equals_phase_in_place() {
+    // Several blocks of the phase conversion and a remainder (not a multiple of 8).
+    let y = series(3 * (1 << 16) + 5, 21);
+    let a = rate_to_phase(&y, 0.01);
+    let b = crate::rate_to_phase_in_place(y.clone(), 0.01);
+    assert_eq!(a.len(), y.len() + 1);
+    assert!(a.iter().zip(&b).all(|(p, q)| p.to_bits() == q.to_bits()));
+}
+
+#[test]
+fn streamed_kernel_gives_the_single_factor_sums_bit_for_bit() {
+    // The large factors of a grid in one streamed pass: exactly `estimator_sum`'s sums (the
+    // blocks and the lane-0 tail reproduce its order of additions), for records whose term
+    // counts leave every remainder mod 8.
+    for n in [70_001usize, 70_004, 81_923] {
+        let x = rate_to_phase(&series(n, 5), 0.01);
+        let ms = [1000usize, 2048, 4096, 8192, 9000, 16384];
+        for (order, est) in [
+            (2, Estimator::Overlapping),
+            (3, Estimator::OverlappingHadamard),
+        ] {
+            let streamed = crate::kernels::streamed_diff_sums_fast(&x, &ms, order);
+            for (&m, s) in ms.iter().zip(&streamed) {
+                let (single, _) = crate::kernels::estimator_sum(&x, est, m).unwrap();
+                assert_eq!(s.to_bits(), single.to_bits(), "n {n} order {order} m {m}");
+            }
+        }
+    }
+}
+
+#[test]
+fn blocked_kernel_sums_each_lane_in_index_order() {
+    // The blocked kernel (factors fused four at a time over whole blocks) against the plain
+    // loop it stands for: lane i mod 8, additions in index order, lanes added pairwise.
+    let x = rate_to_phase(&series(50_001, 17), 0.01);
+    let ms: Vec<usize> = (0..13)
+        .map(|k| 1usize << k)
+        .chain([3, 5, 7, 1000])
+        .collect();
+    for order in [2usize, 3] {
+        let fast = blocked_diff_sums_fast(&x, &ms, order);
+        for (&m, s) in ms.iter().zip(&fast) {
+            let mut acc = [0.0f64; 8];
+            for i in 0..x.len() - order * m {
+                let v = if order == 2 {
+                    x[i + 2 * m] - 2.0 * x[i + m] + x[i]
+                } else {
+                    x[i + 3 * m] - 3.0 * x[i + 2 * m] + 3.0 * x[i + m] - x[i]
+                };
+                acc[i % 8] += v * v;
+            }
+            let plain = crate::sum::pairwise_lanes(&acc);
+            assert_eq!(s.to_bits(), plain.to_bits(), "order {order} m {m}");
+        }
+    }
+}

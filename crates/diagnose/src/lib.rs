@@ -22,6 +22,7 @@ pub mod fitted_on;
 pub mod gap;
 mod held_out;
 pub mod input;
+pub mod log_plan;
 mod measure;
 pub mod model_terms;
 pub mod observer;

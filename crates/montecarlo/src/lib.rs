@@ -8,7 +8,8 @@
 //! of its active error terms.
 //!
 //! Modules: [`scenario`] (the scenario TOML, validated), [`experiment`] (scenario + sensor +
-//! overrides), [`drift`] (the per-run kernel and the active terms), [`runner`] (parallel blocks,
+//! overrides), [`job`] (a `simulate` job from its texts: shards, merge, the JSON document, shared by the
+//! CLI and the Python package), [`drift`] (the per-run kernel and the active terms), [`runner`] (parallel blocks,
 //! ordered merge, shards, failed runs), [`stats`] (run matrix, Welford moments, exact quantiles,
 //! ratio intervals), [`laws`], [`report`] (the `simulate` JSON), [`shard`] (shard files for
 //! `merge`), [`spec`] (spec-sheet readback and drift table), [`nav_quantity`] (the
@@ -21,6 +22,7 @@
 pub mod ablation;
 pub mod drift;
 pub mod experiment;
+pub mod job;
 pub mod laws;
 pub mod nav_quantity;
 pub mod report;
@@ -32,5 +34,5 @@ pub mod spec;
 pub mod stats;
 
 pub use nav_quantity::NavQuantity;
-pub use runner::{run_range, BatchResult, RunError, RunFailure, RunKernel, Shard};
+pub use runner::{run_range, run_range_until, BatchResult, RunError, RunFailure, RunKernel, Shard};
 pub use stats::{RunMatrix, Summary};

@@ -8,6 +8,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::ops::Range;
 use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Runs per parallel block. Any value gives the same result; this one keeps both cores busy and
 /// the progress callback frequent.
@@ -72,6 +73,9 @@ pub struct BatchResult {
     pub matrix: RunMatrix,
     pub failures: Vec<RunFailure>,
 }
+
+/// A run's values (checkpoints x quantities), or why it failed.
+type RunRow = Result<Vec<f64>, RunError>;
 
 /// A run's row, or why it failed: a kernel error, a non-finite output value.
 fn checked_row<K: RunKernel>(
@@ -138,6 +142,22 @@ pub fn run_range<K: RunKernel>(
     runs: Range<u64>,
     progress: &(dyn Fn(u64) + Sync),
 ) -> BatchResult {
+    let never = AtomicBool::new(false);
+    run_range_until(kernel, runs, progress, &never).unwrap_or_else(|| BatchResult {
+        matrix: RunMatrix::new(kernel.checkpoints(), kernel.quantities()),
+        failures: Vec::new(),
+    })
+}
+
+/// [`run_range`] that a front end can stop (an interrupt): once `stop` is set, no further run
+/// starts, the runs under way finish, and the result is `None` (a partial batch is never
+/// reported). The same runs give the same values as [`run_range`].
+pub fn run_range_until<K: RunKernel>(
+    kernel: &K,
+    runs: Range<u64>,
+    progress: &(dyn Fn(u64) + Sync),
+    stop: &AtomicBool,
+) -> Option<BatchResult> {
     let width = kernel.checkpoints() * kernel.quantities();
     let mut matrix = RunMatrix::new(kernel.checkpoints(), kernel.quantities());
     let mut failures = Vec::new();
@@ -146,18 +166,25 @@ pub fn run_range<K: RunKernel>(
         let end = (start + BLOCK_RUNS).min(runs.end);
         // Ordered collect: element i of the block is run start + i whatever thread computed it.
         // Groups of `lanes` runs from the block's start (each run's numbers are the same in any
-        // group, RunKernel::run_lanes).
+        // group, RunKernel::run_lanes); a group not started before `stop` is `None`.
         let lanes = kernel.lanes().max(1) as u64;
-        let groups: Vec<Vec<Result<Vec<f64>, RunError>>> = (0..(end - start).div_ceil(lanes))
+        let groups: Vec<Vec<Option<RunRow>>> = (0..(end - start).div_ceil(lanes))
             .into_par_iter()
             .map(|g| {
                 let first = start + g * lanes;
-                run_group(kernel, first..(first + lanes).min(end), width)
+                let last = (first + lanes).min(end);
+                if stop.load(Ordering::Relaxed) {
+                    return vec![None; (last - first) as usize];
+                }
+                run_group(kernel, first..last, width)
+                    .into_iter()
+                    .map(Some)
+                    .collect()
             })
             .collect();
         let block = groups.into_iter().flatten();
         for (run, result) in (start..end).zip(block) {
-            match result {
+            match result? {
                 Ok(row) => matrix.push(run, &row),
                 Err(e) => failures.push(RunFailure {
                     run,
@@ -165,10 +192,13 @@ pub fn run_range<K: RunKernel>(
                 }),
             }
         }
+        if stop.load(Ordering::Relaxed) {
+            return None;
+        }
         progress(end - runs.start);
         start = end;
     }
-    BatchResult { matrix, failures }
+    Some(BatchResult { matrix, failures })
 }
 
 /// A deterministic slice `index/count` of the runs (0 <= index < count): contiguous ranges whose
@@ -273,6 +303,21 @@ mod tests {
                 .collect()
         };
         assert_eq!(bits(&merged), bits(&one.matrix));
+    }
+
+    #[test]
+    fn a_stopped_range_reports_nothing() {
+        let stop = AtomicBool::new(false);
+        let whole = run_range_until(&Walk, 0..200, &|_| {}, &stop);
+        assert_eq!(whole, Some(run_range(&Walk, 0..200, &|_| {})));
+        // Stopped from the progress callback after the first block: no partial result.
+        let stopped = run_range_until(
+            &Walk,
+            0..200,
+            &|_| stop.store(true, Ordering::Relaxed),
+            &stop,
+        );
+        assert_eq!(stopped, None);
     }
 
     #[test]

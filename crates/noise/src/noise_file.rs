@@ -125,6 +125,44 @@ fn worst(axes: &[AxisValue; 3]) -> f64 {
     axes.iter().map(|x| x.value).fold(f64::NAN, f64::max)
 }
 
+/// A model axis's noise density and random walk for a noise file: its white noise N, and its rate
+/// random walk K or, where it has none, the largest random walk its Allan curve allows over the
+/// averaging times `taus_s` (the +1/2 line sigma^2 = K^2 tau / 3, IEEE 952 Table C.1, touching
+/// the model's curve, which covers its bias instability there; `how_tau(tau)` names the tau of
+/// contact in the value's comment). `None` without white noise or averaging times. `how` says
+/// where the values come from (e.g. "corrected model").
+pub fn axis_noise_values(
+    axis: &AxisModel,
+    taus_s: &[f64],
+    how: &str,
+    how_tau: &dyn Fn(f64) -> String,
+) -> Option<(AxisValue, AxisValue)> {
+    let n = AxisValue {
+        value: axis.get::<WhiteNoise>()?.density(),
+        how: how.into(),
+    };
+    let k = match axis.get::<RateRandomWalk>().map(RateRandomWalk::density) {
+        Some(k) => AxisValue {
+            value: k,
+            how: how.into(),
+        },
+        None => {
+            let (k, tau) = taus_s
+                .iter()
+                .map(|&tau| ((axis.allan_variance(tau) * 3.0 / tau).sqrt(), tau))
+                .min_by(|x, y| x.0.total_cmp(&y.0))?;
+            AxisValue {
+                value: k,
+                how: format!(
+                    "no rate random walk in the model; bound: +1/2 line touching its Allan curve at {}",
+                    how_tau(tau)
+                ),
+            }
+        }
+    };
+    Some((n, k))
+}
+
 /// Write a noise file. `inflation` multiplies the four written values (factor 1 = as measured);
 /// the measured values stay in the comments.
 pub fn write_noise_file(v: &NoiseValues, flavor: Flavor, inflation: Inflation<'_>) -> String {

@@ -1,0 +1,136 @@
+"""``imudrift.simulate``, ``simulate_shard`` and ``merge``: the Monte Carlo drift run of
+``imudrift simulate`` (and its shards and ``imudrift merge``) from Python."""
+
+import json
+import os
+
+from ._imudrift import merge_shards as _merge
+from ._imudrift import simulate_run as _simulate
+from ._imudrift import simulate_shard_bytes as _shard
+
+
+class SimulateResult:
+    """The result of :func:`simulate` or :func:`merge`.
+
+    - ``values``: per-run values, a numpy array runs x checkpoints x quantities (the runs that
+      finished, in run-index order; ``run_ids`` gives their indices);
+    - ``t``: checkpoint times (s); ``quantities``: the navigation-error quantities' names
+      (``pos_north_m``, ..., the docs/cli.md names; angles in rad);
+    - ``seed``, ``runs``, ``runs_ok``, ``scenario``, ``sensor``;
+    - ``checkpoints``: per checkpoint ``t_s`` and ``channels`` {quantity: statistics and law:
+      ``mean std rms p5 p50 p95 law_mean law_std law_rms ratio ratio_lo ratio_hi ...``};
+    - ``to_dict()``: the document ``imudrift simulate --json`` prints, equal key by key;
+    - ``to_pandas()``: one row per checkpoint and quantity (the columns of drift.csv).
+    """
+
+    def __init__(self, raw):
+        self._doc = json.loads(raw["document"])
+        self.values = raw["values"]
+        self.run_ids = raw["run_ids"]
+        self.t = raw["t_s"]
+        self.quantities = list(raw["quantities"])
+
+    def to_dict(self):
+        """The ``imudrift simulate --json`` document (a fresh copy)."""
+        return json.loads(json.dumps(self._doc))
+
+    def __getattr__(self, name):
+        doc = self.__dict__.get("_doc", {})
+        if name in doc:
+            return doc[name]
+        raise AttributeError(name)
+
+    def to_pandas(self):
+        """One row per checkpoint and quantity: ``t_s, quantity, mean, std, rms, p5, p50, p95,
+        law_mean, law_std, law_rms, ratio, ratio_lo, ratio_hi, law_note`` (None where there is no
+        law). Needs pandas."""
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError("SimulateResult.to_pandas needs pandas: pip install pandas") from None
+        cols = ["mean", "std", "rms", "p5", "p50", "p95", "law_mean", "law_std", "law_rms",
+                "ratio", "ratio_lo", "ratio_hi", "law_note"]
+        rows = []
+        for cp in self._doc["checkpoints"]:
+            for q in self.quantities:
+                c = cp["channels"][q]
+                rows.append([cp["t_s"], q] + [c.get(k) for k in cols])
+        return pd.DataFrame(rows, columns=["t_s", "quantity"] + cols)
+
+    def __repr__(self):
+        return (f"SimulateResult(scenario={self.scenario!r}, sensor={self.sensor!r}, "
+                f"runs={self.runs}, runs_ok={self.runs_ok}, seed={self.seed}, "
+                f"values shape {tuple(self.values.shape)})")
+
+
+def _subject(x):
+    """A scenario or sensor file path, or a :class:`Sensor` (its text and name)."""
+    text = getattr(x, "_text", None)
+    if text is not None:
+        return (text, x._source)
+    if isinstance(x, (str, os.PathLike)):
+        return os.fspath(x)
+    raise TypeError(
+        f"expected a scenario or sensor file path or an imudrift.Sensor, got {type(x).__name__}")
+
+
+def _settings(runs, seed, duration_s, rate_hz, only, without, ablation, threads):
+    as_list = lambda t: [t] if isinstance(t, str) else list(t)
+    return {
+        "runs": None if runs is None else int(runs),
+        "seed": None if seed is None else int(seed),
+        "duration_s": None if duration_s is None else float(duration_s),
+        "rate_hz": None if rate_hz is None else float(rate_hz),
+        "only": None if only is None else as_list(only),
+        "without": [] if without is None else as_list(without),
+        "ablation": ablation,
+        "threads": None if threads is None else int(threads),
+    }
+
+
+def simulate(scenario, runs=None, seed=None, threads=None, duration_s=None, rate_hz=None,
+             only=None, without=None, ablation=None):
+    """``imudrift simulate SCENARIO``: the Monte Carlo drift run, the same numbers as the CLI.
+
+    ``scenario``: a scenario TOML path (configs/scenarios/), a sensor file path (TOML, Kalibr or
+    OpenVINS YAML) or an :class:`imudrift.Sensor`; a sensor is simulated lying still and level
+    (the default static scenario: 60 s at 100 Hz, 500 runs, seed 1). ``runs``, ``seed``,
+    ``duration_s``, ``rate_hz`` override the scenario's; ``only`` / ``without`` switch error
+    terms (``"gyro.white_noise"``, lists accepted); ``ablation`` adds each term alone and the model
+    without it (None: as the scenario says); ``threads``: worker threads (None: every core; the
+    results do not depend on it). The GIL is released while the runs go on and Ctrl-C stops them.
+
+    >>> r = imudrift.simulate("configs/scenarios/mtx-static-60s.toml", runs=200, seed=3)
+    >>> r.values.shape                    # runs x checkpoints x quantities
+    >>> r.to_pandas().query("quantity == 'pos_horizontal_m'")
+    """
+    s = _settings(runs, seed, duration_s, rate_hz, only, without, ablation, threads)
+    return SimulateResult(_simulate(_subject(scenario), s))
+
+
+def simulate_shard(scenario, index, count, runs=None, seed=None, threads=None, duration_s=None,
+                   rate_hz=None, only=None, without=None, ablation=None):
+    """``imudrift simulate SCENARIO --shard index/count``: the runs of slice ``index`` of
+    ``count`` (0 <= index < count), as the bytes of a shard file (the JSON ``imudrift merge``
+    reads; write them to ``shard-i-of-k.json`` for the CLI). Give every shard the same arguments;
+    :func:`merge` of all ``count`` shards equals :func:`simulate` exactly.
+
+    >>> shards = [imudrift.simulate_shard(path, i, 4, runs=400) for i in range(4)]
+    >>> imudrift.merge(shards).to_dict() == imudrift.simulate(path, runs=400).to_dict()
+    True
+    """
+    s = _settings(runs, seed, duration_s, rate_hz, only, without, ablation, threads)
+    return _shard(_subject(scenario), int(index), int(count), s)
+
+
+def merge(shards):
+    """``imudrift merge``: the shard files' bytes of :func:`simulate_shard` (or the CLI's shard
+    files, read as bytes or given as paths), all ``count`` of them in any order, merged into the
+    :class:`SimulateResult` a single :func:`simulate` gives."""
+    data = []
+    for s in shards:
+        if isinstance(s, (str, os.PathLike)):
+            with open(s, "rb") as f:
+                s = f.read()
+        data.append(bytes(s))
+    return SimulateResult(_merge(data))
