@@ -11,7 +11,7 @@
 // the compiler see the lane loops whole): clearer here than iterator chains.
 #![allow(clippy::needless_range_loop)]
 
-use crate::frames::{rodrigues_coefficients, rodrigues_series, Attitude, NavVector};
+use crate::frames::{rodrigues_coefficients, rodrigues_series, Attitude, BodyVector, NavVector};
 use crate::mechanisation::{NavState, Scheme, RENORMALISE_EVERY};
 use nalgebra::{Matrix3, Vector3};
 
@@ -254,4 +254,46 @@ fn renormalise<const L: usize>(c: &Lanes<9, L>) -> Lanes<9, L> {
         }
     }
     out
+}
+
+/// A strapdown integrator. Allocation-free, fixed-size state; one [`Strapdown::step`] per IMU sample.
+/// The one-lane case of [`StrapdownLanes`] (the mechanisation is written once, there).
+#[derive(Clone, Debug)]
+pub struct Strapdown(StrapdownLanes<1>);
+
+impl Strapdown {
+    /// A new integrator starting at `initial`, with gravity magnitude `gravity_mps2` pointing down.
+    /// The coning correction of the first step assumes a zero previous increment unless
+    /// [`Strapdown::set_previous_gyro`] provides it.
+    pub fn new(scheme: Scheme, initial: NavState, gravity_mps2: f64) -> Strapdown {
+        Strapdown(StrapdownLanes::new(scheme, &[initial], gravity_mps2))
+    }
+
+    /// Provide the gyro sample of the interval before the first step (for the coning correction of the
+    /// first step of [`Scheme::Accurate`]); ignored by [`Scheme::Woodman`].
+    pub fn set_previous_gyro(&mut self, gyro: &BodyVector, dt_s: f64) {
+        self.0.set_previous_gyro(&gyro.0, dt_s);
+    }
+
+    /// The scheme in use.
+    pub fn scheme(&self) -> Scheme {
+        self.0.scheme()
+    }
+
+    /// The current navigation solution.
+    pub fn state(&self) -> NavState {
+        self.0.state(0)
+    }
+
+    /// Advance by one sample: `gyro` (rad/s) and `accel` (specific force, m/s^2), body frame, interval
+    /// averages over `[t_k, t_k + dt_s]`. Woodman: `C <- C exp(B)` (eq 41), `a_nav = C_{k+1} f`
+    /// (eq 42), `v += dt (a_nav + gamma)` (eq 45), `p += dt v_{k+1}` (eq 46); Accurate: the coning
+    /// correction, the exact rotation, trapezoidal velocity and position ([`Scheme`]); the DCM
+    /// re-orthonormalised every 256 steps (`renormalise`).
+    #[inline]
+    pub fn step(&mut self, gyro: &BodyVector, accel: &BodyVector, dt_s: f64) {
+        let g = [[gyro.0.x], [gyro.0.y], [gyro.0.z]];
+        let a = [[accel.0.x], [accel.0.y], [accel.0.z]];
+        self.0.step(&g, &a, dt_s);
+    }
 }

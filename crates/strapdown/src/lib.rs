@@ -32,8 +32,8 @@ pub mod spec;
 pub mod trajectory;
 
 pub use frames::{Attitude, BodyVector, NavVector};
-pub use lanes::StrapdownLanes;
-pub use mechanisation::{NavState, Scheme, Strapdown};
+pub use lanes::{Strapdown, StrapdownLanes};
+pub use mechanisation::{NavState, Scheme};
 pub use nav_error::{nav_error, NavError};
 pub use spec::{TrajectoryError, TrajectorySpec};
 pub use trajectory::{AnyTrajectory, Coning, ConstantRate, Profile, Segment, Static, Trajectory};
