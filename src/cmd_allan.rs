@@ -421,6 +421,13 @@ fn fit_lines(
                 t.value,
                 si_units[i]
             ),
+            // A fitted value whose standard error is over ten times itself says nothing: only
+            // the bound is shown (the "R = 0.018 +- 2299848 deg/h^2").
+            Some(t) if t.sigma > 10.0 * t.value.abs() => writeln!(
+                s,
+                "  {label:<20} not resolved: < {} {shown} (the fit does not determine it)",
+                crate::fmt::sig(st.bound * scale, 3),
+            ),
             Some(t) => writeln!(
                 s,
                 "  {label:<20} not resolved: < {} {shown} (fitted {} +- {})",
