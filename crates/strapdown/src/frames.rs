@@ -163,9 +163,15 @@ pub(crate) fn rodrigues_series(s2: f64) -> (f64, f64) {
 pub(crate) fn so3_exp(phi: &Vector3<f64>) -> Matrix3<f64> {
     let s2 = phi.norm_squared();
     let (a, b) = rodrigues_coefficients(s2);
+    Matrix3::from_row_slice(&rodrigues_entries(a, b, s2, phi.x, phi.y, phi.z))
+}
+
+/// The entries of `I + a B + b B^2` row by row, `B = [phi x]`, `phi = (x, y, z)`, `s2 = |phi|^2`,
+/// with `B^2 = phi phi^T - s2 I` written out (see [`so3_exp`]); shared with the lanes' step.
+#[inline(always)]
+pub(crate) fn rodrigues_entries(a: f64, b: f64, s2: f64, x: f64, y: f64, z: f64) -> [f64; 9] {
     let d = 1.0 - b * s2;
-    let (x, y, z) = (phi.x, phi.y, phi.z);
-    Matrix3::new(
+    [
         d + b * x * x,
         b * x * y - a * z,
         b * x * z + a * y,
@@ -175,7 +181,7 @@ pub(crate) fn so3_exp(phi: &Vector3<f64>) -> Matrix3<f64> {
         b * z * x - a * y,
         b * z * y + a * x,
         d + b * z * z,
-    )
+    ]
 }
 
 /// Rotation vector of a rotation matrix near or far from identity, accurate for tiny angles.

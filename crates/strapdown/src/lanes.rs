@@ -11,7 +11,9 @@
 // the compiler see the lane loops whole): clearer here than iterator chains.
 #![allow(clippy::needless_range_loop)]
 
-use crate::frames::{rodrigues_coefficients, rodrigues_series, Attitude, BodyVector, NavVector};
+use crate::frames::{
+    rodrigues_coefficients, rodrigues_entries, rodrigues_series, Attitude, BodyVector, NavVector,
+};
 use crate::mechanisation::{NavState, Scheme, RENORMALISE_EVERY};
 use nalgebra::{Matrix3, Vector3};
 
@@ -210,19 +212,7 @@ fn so3_exp_lanes<const L: usize>(phi: &Lanes<3, L>) -> Lanes<9, L> {
     }
     let mut e = [[0.0; L]; 9];
     for l in 0..L {
-        let (a, b, x, y, z) = (a[l], b[l], x[l], y[l], z[l]);
-        let d = 1.0 - b * s2[l];
-        let m = [
-            d + b * x * x,
-            b * x * y - a * z,
-            b * x * z + a * y,
-            b * y * x + a * z,
-            d + b * y * y,
-            b * y * z - a * x,
-            b * z * x - a * y,
-            b * z * y + a * x,
-            d + b * z * z,
-        ];
+        let m = rodrigues_entries(a[l], b[l], s2[l], x[l], y[l], z[l]);
         for k in 0..9 {
             e[k][l] = m[k];
         }
