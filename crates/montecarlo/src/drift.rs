@@ -451,3 +451,63 @@ mod tests {
         assert!((ve / expected - 1.0).abs() < 1e-9, "{ve} vs {expected}");
     }
 }
+
+#[cfg(test)]
+mod lane_tests {
+    use super::*;
+
+    /// A noisy model on a turning trajectory with random alignment errors: every term kind the
+    /// runner's static and moving paths use.
+    fn noisy_kernel(scheme: &str, trajectory: &str) -> DriftKernel {
+        let scenario = Scenario::from_toml_str(
+            &format!(
+                "sensor = \"x\"\nduration_s = 5.0\nrate_hz = 100.0\nruns = 1\nseed = 11\nscheme = \"{scheme}\"\n\
+                 [alignment]\nroll_std_deg = 0.1\nyaw_std_deg = 0.5\n{trajectory}"
+            ),
+            "t.toml",
+        )
+        .unwrap();
+        let model = SensorModel::from_toml_str(
+            "name = \"noisy\"\n[gyro.all]\nwhite_noise = \"0.1 deg/sqrt(h)\"\nbias_instability = \"5 deg/h\"\n\
+             rate_random_walk = \"1 deg/h/sqrt(h)\"\nsinusoidal = { amplitude = \"0.01 deg/s\", frequency = \"3 Hz\" }\n\
+             [accel.all]\nwhite_noise = \"50 ug/sqrt(Hz)\"\n",
+            "noisy.toml",
+        )
+        .unwrap();
+        DriftKernel::new(&scenario, model, 11)
+    }
+
+    /// Each of eight runs advanced together gives, bit for bit, the row of the run alone, for
+    /// both schemes, static and turning; a partial group (3 runs) too.
+    #[test]
+    fn eight_lanes_give_the_rows_of_single_runs() {
+        for (scheme, trajectory) in [
+            ("woodman", ""),
+            (
+                "accurate",
+                "[trajectory]\nkind = \"constant_rate\"\nrate_deg_s = [0.0, 0.0, 30.0]\n",
+            ),
+        ] {
+            let k = noisy_kernel(scheme, trajectory);
+            let width = k.checkpoints() * k.quantities();
+            for count in [LANES, 3] {
+                let mut together = vec![f64::NAN; width * count];
+                let mut results = vec![Ok(()); count];
+                k.run_lanes(40, &mut together, &mut results);
+                assert!(results.iter().all(|r| r.is_ok()), "{results:?}");
+                for (l, row) in together.chunks(width).enumerate() {
+                    let mut alone = vec![f64::NAN; width];
+                    k.run(40 + l as u64, &mut alone).unwrap();
+                    assert!(
+                        row.iter()
+                            .zip(&alone)
+                            .all(|(a, b)| a.to_bits() == b.to_bits()),
+                        "{scheme} {trajectory:?}: run {} of {count}",
+                        40 + l
+                    );
+                    assert!(row.iter().any(|&v| v != 0.0), "the run drifts");
+                }
+            }
+        }
+    }
+}

@@ -270,6 +270,41 @@ mod tests {
         }
     }
 
+    /// The walk, with a panic at run 9 as well, advanced in groups of `lanes` (the trait's
+    /// default `run_lanes`, so the panic leaves the group's other runs unfinished).
+    struct GroupedWalk {
+        lanes: usize,
+    }
+    impl RunKernel for GroupedWalk {
+        fn checkpoints(&self) -> usize {
+            Walk.checkpoints()
+        }
+        fn quantities(&self) -> usize {
+            Walk.quantities()
+        }
+        fn run(&self, run: u64, out: &mut [f64]) -> Result<(), RunError> {
+            if run == 9 {
+                panic!("boom 9");
+            }
+            Walk.run(run, out)
+        }
+        fn lanes(&self) -> usize {
+            self.lanes
+        }
+    }
+
+    #[test]
+    fn a_panicking_group_is_run_again_one_by_one() {
+        // Groups of four: run 9 panics inside the group 8..12, whose runs are then run alone.
+        let grouped = run_range(&GroupedWalk { lanes: 4 }, 0..30, &|_| {});
+        let single = run_range(&GroupedWalk { lanes: 1 }, 0..30, &|_| {});
+        assert_eq!(grouped, single);
+        let failed: Vec<u64> = grouped.failures.iter().map(|f| f.run).collect();
+        assert_eq!(failed, vec![5, 7, 9]);
+        assert_eq!(grouped.failures[2].message, "run panicked: boom 9");
+        assert_eq!(grouped.matrix.runs(), 27);
+    }
+
     fn with_threads<T: Send>(n: usize, f: impl FnOnce() -> T + Send) -> T {
         rayon::ThreadPoolBuilder::new()
             .num_threads(n)
