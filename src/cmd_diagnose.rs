@@ -7,11 +7,10 @@ use crate::output::write_string;
 use crate::plot::{Band, LogLogPlot, Series};
 use anyhow::{anyhow, bail, Context, Result};
 use diagnose::drift::CHANNELS;
-use diagnose::report::{ChannelReport, DriftRow, FoundEffect, HeldOutGap};
+use diagnose::report::{ChannelReport, DriftRow, FoundEffect};
 use diagnose::{diagnose_runs, DiagnoseError, Diagnosis, LogInput, Settings};
 use noise::noise_file::AxisValue;
 use noise::SensorModel;
-use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -111,9 +110,7 @@ fn drift_protocol(args: &Args) -> Option<diagnose::protocol::Protocol> {
     })
 }
 
-/// Most simulated logs per band and add-and-resimulate rounds a diagnose run may ask for.
-const MAX_SEEDS: usize = 4096;
-const MAX_ROUNDS: usize = 100;
+use diagnose::settings::{MAX_ROUNDS, MAX_SEEDS};
 
 pub fn run(args: Args) -> Result<()> {
     crate::output::note_inputs(args.logs.iter().chain([&args.model]).chain(&args.check));
@@ -312,68 +309,18 @@ fn file_stem(path: &Path) -> String {
         .unwrap_or_else(|| "sensor".into())
 }
 
-/// The corrected model as TOML, with a header saying where it came from and, at the end, the
-/// data its levels were fitted on (for `drift`'s parametric bootstrap, docs/drift.md).
+/// The corrected model as TOML (`diagnose::document`), in the units and conventions of the
+/// input model's file (spec-sheet units where it has none).
 fn corrected_model(
     result: &Diagnosis,
     model: &SensorModel,
     model_path: &Path,
     fitted_on: Option<&diagnose::fitted_on::FittedOn>,
 ) -> String {
-    let mut out = String::new();
-    let _ = writeln!(
-        out,
-        "# Written by `imudrift diagnose` (seed {}, {} simulated logs per band) from {:?}.",
-        result.seed, result.seeds, model.name
-    );
-    for (name, report) in &result.channels {
-        for e in &report.effects {
-            let _ = writeln!(
-                out,
-                "# {name}: {} {} {}",
-                e.kind,
-                e.effect,
-                crate::effect_text::params_text(e, name)
-            );
-        }
-    }
-    let temperature_found = result.channels.values().any(|r| {
-        r.effects
-            .iter()
-            .any(|e| e.effect == noise::Effect::TemperatureBias)
-    });
-    if temperature_found {
-        let _ = writeln!(
-            out,
-            "# temperature_bias was fitted against the log's measured temperature column; simulations of this\n\
-             # model apply it to the [temperature] profile below, so set that profile to the conditions of interest."
-        );
-    }
-    // In the units and conventions of the input model (spec-sheet units where it has none).
     let style = crate::files::read_config(model_path)
         .map(|file| noise::UnitStyle::from_config_text(&file.text))
         .unwrap_or_default();
-    let m = &result.model_final;
-    if [&m.gyro, &m.accel]
-        .iter()
-        .any(|t| t.axes.iter().any(|a| a.has(noise::Effect::BiasInstability)))
-    {
-        let _ = writeln!(
-            out,
-            "# The b values above are IEEE 952 coefficients B (Allan plateau 0.664 B); the model below writes\n\
-             # bias_instability in the input's convention{}.",
-            if style.keeps_allan_minimum() {
-                " (allan_minimum: the minimum of the axis' Allan deviation, as spec sheets quote it)"
-            } else {
-                " (ieee: the coefficient B)"
-            }
-        );
-    }
-    out.push_str(&result.model_final.to_toml_string_styled(&style));
-    if let Some(f) = fitted_on {
-        out.push_str(&f.to_toml());
-    }
-    out
+    diagnose::document::corrected_model_toml(result, model, &style, fitted_on)
 }
 
 /// Whether the log can inform a drift quantity (it has every channel it comes from).
@@ -560,7 +507,7 @@ fn drift_gap_text(e: &FoundEffect) -> String {
     }
 }
 
-type Checks = Vec<(String, BTreeMap<String, HeldOutGap>)>;
+type Checks = diagnose::document::HeldOutChecks;
 
 fn checks_text(checks: &Checks) -> String {
     let mut s =
@@ -596,30 +543,15 @@ fn json_document(
     corrected: &str,
     checks: &Checks,
 ) -> Result<String> {
-    let mut v = serde_json::to_value(result).context("cannot serialise the diagnosis")?;
-    let obj = v
-        .as_object_mut()
-        .ok_or_else(|| anyhow!("diagnosis is not a JSON object"))?;
-    let checks: Vec<serde_json::Value> = checks
-        .iter()
-        .map(|(log, gaps)| serde_json::json!({ "log": log, "channels": gaps }))
-        .collect();
-    obj.insert("checks".into(), checks.into());
-    // Several runs: each run's entry names its log (`log` is the first run's, as for one log).
-    if let Some(runs) = obj.get_mut("runs").and_then(|r| r.as_array_mut()) {
-        for (run, log) in runs.iter_mut().zip(logs) {
-            if let Some(run) = run.as_object_mut() {
-                run.insert("log".into(), log.source.clone().into());
-            }
-        }
-    }
-    let log = &logs[0];
-    obj.insert("log".into(), log.source.clone().into());
-    let (columns, skipped) = log_input::columns_json(log);
-    obj.insert("columns".into(), columns);
-    obj.insert("skipped_columns".into(), skipped);
-    obj.insert("model".into(), model.display().to_string().into());
-    obj.insert("corrected_model_toml".into(), corrected.into());
+    let names: Vec<String> = logs.iter().map(|l| l.source.clone()).collect();
+    let model = model.display().to_string();
+    let sources = diagnose::document::DiagnoseSources {
+        logs: &names,
+        columns: log_input::columns_json(&logs[0]),
+        model: &model,
+    };
+    let v = diagnose::document::diagnose_document(result, sources, corrected, checks)
+        .context("cannot serialise the diagnosis")?;
     serde_json::to_string_pretty(&v).context("cannot serialise the diagnosis")
 }
 

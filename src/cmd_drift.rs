@@ -7,6 +7,7 @@ use crate::log_input::{self, LogArgs};
 use crate::output::write_string;
 use crate::plot::{Band, LogLogPlot, Series};
 use anyhow::{anyhow, bail, Context, Result};
+use diagnose::document::ProtocolSetting;
 use diagnose::drift::CHANNELS;
 use diagnose::drift_check::{
     check_drift_fitted, simulated_logs, CheckError, CheckSettings, DriftCheck, Verdict,
@@ -106,53 +107,20 @@ pub(crate) fn initialisation(text: &str) -> std::result::Result<Initialisation, 
     }
 }
 
-/// Refuse horizons and windows the logs' sampling cannot carry, naming the option, the value and
-/// the sample interval: a horizon must be a whole number of samples (0.014 s at 100 Hz is not:
-/// it was computed as one sample and reported as 0.014 s), a window at least one sample and at
-/// most the longest log (a shorter one panicked, a longer one overflowed).
+/// The flag of each protocol setting.
+fn protocol_flag(setting: ProtocolSetting) -> &'static str {
+    match setting {
+        ProtocolSetting::Horizons => "--horizons",
+        ProtocolSetting::CalibrationWindow => "--calibration window:",
+        ProtocolSetting::LevelWindow => "--init level:",
+    }
+}
+
+/// Refuse horizons and windows the logs' sampling cannot carry (`diagnose::document`), naming
+/// the option.
 pub(crate) fn check_sampling(protocol: &Protocol, dt_s: f64, samples: usize) -> Result<()> {
-    let rate = format!(
-        "{}, a sample every {}",
-        crate::fmt::si(1.0 / dt_s, "Hz"),
-        crate::fmt::time(dt_s)
-    );
-    for &h in &protocol.horizons_s {
-        let n = h / dt_s;
-        let whole = n.round();
-        if whole < 1.0 {
-            bail!("--horizons {h}: shorter than one sample of the logs ({rate})");
-        }
-        if (n - whole).abs() > 1e-6 * whole {
-            bail!(
-                "--horizons {h}: {} samples of the logs ({rate}); a horizon is a whole number of samples, e.g. {}",
-                crate::fmt::sig(n, 4).trim_end_matches('0'),
-                crate::fmt::time(whole * dt_s)
-            );
-        }
-    }
-    let longest_s = samples as f64 * dt_s;
-    let windows = [
-        match protocol.calibration {
-            Calibration::Window { window_s } => Some(("--calibration window:", window_s)),
-            _ => None,
-        },
-        match protocol.initialisation {
-            Initialisation::Levelled { window_s } => Some(("--init level:", window_s)),
-            Initialisation::Perfect => None,
-        },
-    ];
-    for (flag, w) in windows.into_iter().flatten() {
-        if (w / dt_s).round() < 1.0 {
-            bail!("{flag}{w}: the window is shorter than one sample of the logs ({rate})");
-        }
-        if w > longest_s {
-            bail!(
-                "{flag}{w}: the window is longer than the longest log ({})",
-                crate::fmt::time(longest_s)
-            );
-        }
-    }
-    Ok(())
+    diagnose::document::check_sampling(protocol, dt_s, samples)
+        .map_err(|e| anyhow!(e.render(&protocol_flag)))
 }
 
 fn protocol(args: &Args) -> Protocol {
@@ -182,14 +150,11 @@ pub fn run(args: Args) -> Result<()> {
     pool.install(|| run_inner(&args, protocol))
 }
 
-/// The data the model's levels were fitted on, from its `[fitted_on]` table (None for a noise
-/// file, a model without the table, or with `--exact-parameters`).
+/// The data the model's levels were fitted on (`diagnose::document::fitted_on_of`).
 fn fitted_on(args: &Args, model_file: &TextFile) -> Result<Option<FittedOn>> {
     let TextFile { name, text } = model_file;
-    if args.exact_parameters || noise::is_noise_file_text(text, name) {
-        return Ok(None);
-    }
-    FittedOn::from_model_text(text).with_context(|| name.clone())
+    diagnose::document::fitted_on_of(text, name, args.exact_parameters)
+        .with_context(|| name.clone())
 }
 
 fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
@@ -263,11 +228,9 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
     let sources: Vec<String> = logs.iter().map(|l| l.source.clone()).collect();
     let human = text(&result, &sources, &args.model, elapsed_s)
         + &parameters_text(&result, args.exact_parameters);
-    let mut doc = serde_json::to_value(&result).context("cannot serialise the drift check")?;
-    if let Some(o) = doc.as_object_mut() {
-        o.insert("logs".into(), sources.clone().into());
-        o.insert("model".into(), args.model.display().to_string().into());
-    }
+    let doc =
+        diagnose::document::drift_document(&result, &sources, &args.model.display().to_string())
+            .context("cannot serialise the drift check")?;
     let doc = serde_json::to_string_pretty(&doc)?;
     crate::output::answer(&human, args.json.then_some(format!("{doc}\n").as_str()))?;
     if let Some(dir) = &args.out {

@@ -10,25 +10,12 @@ use crate::fmt;
 use crate::output::{write_atomic, write_string};
 use anyhow::{Context, Result};
 use montecarlo::nav_quantity::NavQuantity;
-use montecarlo::requirement::{evaluate, Requirement, RequirementResult, Verdict};
-use montecarlo::spec::{
-    drift_experiment, drift_rows, gyro_readback, gyro_spec_values, SensorSpec, READBACK_CONFIDENCE,
-    READBACK_DURATION_S, READBACK_RATE_HZ,
+use montecarlo::requirement::Verdict;
+use montecarlo::spec::READBACK_RATE_HZ;
+use montecarlo::spec_job::{
+    self, SensorOut, SpecDoc, SpecError, SpecRequest, SpecSetting, SpecSettings,
 };
-use noise::{Effect, Sensor, SensorModel};
-use serde::Serialize;
 use std::path::PathBuf;
-
-/// Drift times when neither --times nor --require gives any, s.
-const DEFAULT_TIMES_S: [f64; 3] = [60.0, 600.0, 3600.0];
-/// Monte Carlo runs per sensor: enough for the table (200), more when a requirement's p95 must be
-/// placed against a threshold (500 runs: the p95's 95 % interval spans about ranks 465-485).
-const DEFAULT_RUNS: u64 = 200;
-const DEFAULT_RUNS_REQUIRE: u64 = 500;
-/// Highest drift sample rate accepted, Hz.
-const MAX_RATE_HZ: f64 = 1e6;
-/// Most mechanisation steps (runs x samples) per sensor a spec run may ask for.
-const MAX_STEPS_PER_SENSOR: f64 = 1e11;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -76,42 +63,19 @@ pub struct Args {
     pub out: Option<PathBuf>,
 }
 
-#[derive(Serialize)]
-struct SpecDoc {
-    seed: u64,
-    /// `null` when no readback was asked for.
-    readback_duration_s: Option<f64>,
-    readback_rate_hz: f64,
-    readback_confidence: f64,
-    drift_rate_hz: f64,
-    sensors: Vec<SensorOut>,
-}
-
-/// One sensor's comparison with what the CLI adds: notes on what the model lacks, requirements.
-#[derive(Serialize)]
-struct SensorOut {
-    #[serde(flatten)]
-    spec: SensorSpec,
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    model_notes: Vec<String>,
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    requirements: Vec<RequirementResult>,
-}
-
-/// Whether any axis of `sensor` has any error term.
-fn has_any(model: &SensorModel, sensor: Sensor) -> bool {
-    Effect::ALL.iter().any(|&e| model.has(sensor, e))
-}
-
-/// Whether the model has a term that drives `quantity`.
-fn informs(model: &SensorModel, quantity: NavQuantity) -> bool {
-    let gyro = has_any(model, Sensor::Gyro);
-    let accel = has_any(model, Sensor::Accel);
-    if quantity.name().ends_with("_rad") {
-        gyro
-    } else {
-        gyro || accel
+/// The flag that sets each setting of the comparison.
+fn flag(setting: SpecSetting) -> &'static str {
+    match setting {
+        SpecSetting::Require => "--require",
+        SpecSetting::Times => "--times",
+        SpecSetting::Rate => "--rate",
+        SpecSetting::Runs => "--runs",
+        SpecSetting::ReadbackDuration => "--readback-duration",
     }
+}
+
+fn with_flags(e: SpecError) -> anyhow::Error {
+    anyhow::anyhow!(e.render(&flag))
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -121,22 +85,24 @@ pub fn run(args: Args) -> Result<()> {
         .as_deref()
         .map(crate::output::prepare_dir)
         .transpose()?;
-    let settings = Settings::from_args(&args)?;
+    let settings = SpecSettings::new(&SpecRequest {
+        require: args.require.clone(),
+        times_s: args.times.clone(),
+        rate_hz: args.rate,
+        runs: args.runs,
+        readback: args.readback,
+        readback_duration_s: args.readback_duration,
+        available_memory_bytes: logio::available_memory_bytes(),
+    })
+    .map_err(with_flags)?;
     let filter = noise::TermFilter::new(args.only.as_deref(), &args.without);
     let pool = pool(args.threads)?;
     let mut sensors = Vec::new();
     for path in &args.sensors {
         sensors.push(compare_sensor(path, &settings, &filter, &pool, args.seed)?);
     }
-    let doc = SpecDoc {
-        seed: args.seed,
-        readback_duration_s: settings.readback_duration_s,
-        readback_rate_hz: READBACK_RATE_HZ,
-        readback_confidence: READBACK_CONFIDENCE,
-        drift_rate_hz: args.rate,
-        sensors,
-    };
-    let text = serde_json::to_string_pretty(&doc)? + "\n";
+    let doc = SpecDoc::new(args.seed, &settings, sensors);
+    let text = doc.to_json();
     crate::output::answer(&table(&doc), args.json.then_some(text.as_str()))?;
     if let Some(dir) = &args.out {
         let _set = crate::output::begin_set(dir)?;
@@ -169,185 +135,42 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-/// The command's settings, checked before any work.
-struct Settings {
-    requirements: Vec<Requirement>,
-    /// Drift times (the requirements' included), rounded to whole samples, sorted, s.
-    times_s: Vec<f64>,
-    rate_hz: f64,
-    runs: u64,
-    /// Length of the readback log, s (`None`: spec values only).
-    readback_duration_s: Option<f64>,
-}
-
-impl Settings {
-    fn from_args(args: &Args) -> Result<Settings> {
-        let requirements = args
-            .require
-            .iter()
-            .map(|r| r.parse::<Requirement>())
-            .collect::<Result<Vec<_>, _>>()
-            .context("--require")?;
-        let mut times: Vec<f64> = match &args.times {
-            Some(t) => t.clone(),
-            None if !requirements.is_empty() => Vec::new(),
-            None => DEFAULT_TIMES_S.to_vec(),
-        };
-        let rate = crate::cli::check_rate_hz("--rate", args.rate)?;
-        if rate > MAX_RATE_HZ {
-            anyhow::bail!("--rate: expected at most {MAX_RATE_HZ} Hz, found {rate}");
-        }
-        times.extend(requirements.iter().map(|r| r.t_s));
-        // Drift is recorded at whole samples: each time is rounded to the nearest sample.
-        for t in &mut times {
-            let k = (*t * rate).round();
-            if k < 1.0 {
-                anyhow::bail!(
-                    "--times / --require: {t} s is shorter than one sample at --rate {rate} Hz"
-                );
-            }
-            *t = k / rate;
-        }
-        times.sort_by(f64::total_cmp);
-        times.dedup();
-        if times.is_empty() {
-            anyhow::bail!("--times: expected positive times in seconds, e.g. 60,600,3600");
-        }
-        let runs = args.runs.unwrap_or(if requirements.is_empty() {
-            DEFAULT_RUNS
-        } else {
-            DEFAULT_RUNS_REQUIRE
-        });
-        if runs == 0 {
-            anyhow::bail!("--runs: expected an integer >= 1");
-        }
-        // Refuse work that would run for hours before starting it (about 1e7 steps/s per core).
-        let steps = runs as f64 * times.last().copied().unwrap_or(0.0) * rate;
-        if steps > MAX_STEPS_PER_SENSOR {
-            anyhow::bail!(
-            "{runs} runs of {} at {rate} Hz are {steps:.2e} mechanisation steps per sensor (limit {MAX_STEPS_PER_SENSOR:.0e}, about 3 h on 2 cores): use fewer --runs, a lower --rate or an earlier time",
-            crate::fmt::time(times.last().copied().unwrap_or(0.0))
-        );
-        }
-        let readback_duration = match args.readback_duration {
-            Some(d) => Some(d),
-            None => args.readback.then_some(READBACK_DURATION_S),
-        };
-        if let Some(d) = readback_duration {
-            check_readback_duration(d)?;
-        }
-        Ok(Settings {
-            requirements,
-            times_s: times,
-            rate_hz: rate,
-            runs,
-            readback_duration_s: readback_duration,
-        })
-    }
-}
-
-/// A readback log of `d` s must be long enough to read, and fit in memory.
-fn check_readback_duration(d: f64) -> Result<()> {
-    if !(d.is_finite() && d * READBACK_RATE_HZ >= 1000.0) {
-        anyhow::bail!("--readback-duration: expected at least 10 s");
-    }
-    // 8 bytes per sample per axis; refuse before allocating what the machine cannot hold.
-    if d * READBACK_RATE_HZ > 2e9 {
-        anyhow::bail!(
-            "--readback-duration: {d:e} s at {READBACK_RATE_HZ} Hz is more than 2e9 samples (16 GB per axis); use at most 5.5e6 s (64 days)"
-        );
-    }
-    // The three axes are generated and analysed at once: each holds its samples and their
-    // integral (16 bytes a sample).
-    let need = 3.0 * 16.0 * d * READBACK_RATE_HZ;
-    if let Some(available) = logio::available_memory_bytes() {
-        if need > available as f64 {
-            anyhow::bail!(
-                "--readback-duration: a {} readback log needs about {:.1} GiB and {:.1} GiB is available: use a shorter --readback-duration",
-                crate::fmt::time(d),
-                need / (1u64 << 30) as f64,
-                available as f64 / (1u64 << 30) as f64
-            );
-        }
-    }
-    Ok(())
-}
-
-/// One sensor: its spec values (or read back from a simulated log), drift runs, requirements.
+/// One sensor (`montecarlo::spec_job`): its spec values (or read back from a simulated log),
+/// drift runs with progress, requirements.
 fn compare_sensor(
     path: &std::path::Path,
-    settings: &Settings,
+    settings: &SpecSettings,
     filter: &noise::TermFilter,
     pool: &rayon::ThreadPool,
     seed: u64,
 ) -> Result<SensorOut> {
-    let Settings {
-        requirements,
-        times_s: times,
-        rate_hz: rate,
-        runs,
-        readback_duration_s: readback_duration,
-    } = settings;
-    let (rate, runs, readback_duration) = (*rate, *runs, *readback_duration);
+    let name = path.display().to_string();
     let model = crate::files::sensor_model(path)?.filtered(filter);
-    let exp = drift_experiment(&model, times, rate, runs, seed)
-        .with_context(|| path.display().to_string())?;
+    let exp = spec_job::experiment(&model, settings, seed, &name).map_err(with_flags)?;
     check_memory(&exp, exp.runs)?;
     crate::experiment_run::check_experiment_work(&exp, exp.runs)?;
-    let gyro = match readback_duration {
-        Some(d) => {
-            eprintln!(
-                "{}: reading back a {}, {} static log ...",
-                model.name,
-                fmt::time(d),
-                fmt::rate(READBACK_RATE_HZ)
-            );
-            pool.install(|| gyro_readback(&model, seed, d, READBACK_RATE_HZ))
-        }
-        None => gyro_spec_values(&model, READBACK_RATE_HZ),
-    };
-    let batch = pool.install(|| execute(&exp, 0..exp.runs, &model.name));
-    if batch.matrix.runs() == 0 {
-        anyhow::bail!(
-            "{}: every one of the {runs} drift runs failed ({}); the model's values are probably far too large (check their units)",
-            path.display(),
-            batch
-                .failures
-                .first()
-                .map_or("no run finished".to_string(), |f| f.message.clone())
+    if let Some(d) = settings.readback_duration_s() {
+        eprintln!(
+            "{}: reading back a {}, {} static log ...",
+            model.name,
+            fmt::time(d),
+            fmt::rate(READBACK_RATE_HZ)
         );
     }
-    let report = exp.report(&batch.matrix, &batch.failures);
-    crate::experiment_run::check_finite(&report)
-        .with_context(|| format!("{}: drift of {}", path.display(), model.name))?;
-    for f in &batch.failures {
+    let run = |e: &montecarlo::experiment::Experiment, runs: std::ops::Range<u64>, label: &str| {
+        Some(execute(e, runs, label))
+    };
+    let (out, failures) = pool
+        .install(|| spec_job::compare(&model, &exp, settings, seed, &name, &run))
+        .map_err(with_flags)?
+        .context("the drift runs were stopped")?;
+    for f in &failures {
         eprintln!(
             "warning: {}: drift run {} failed: {}",
             model.name, f.run, f.message
         );
     }
-    let checkpoint_times = exp.scenario.checkpoint_times_s();
-    let requirements = requirements
-        .iter()
-        .map(|req| {
-            let cp = checkpoint_times
-                .iter()
-                .position(|&t| (t - req.t_s).abs() <= 0.5 / rate)
-                .context("a requirement's time is not a checkpoint")?;
-            let values = batch.matrix.series(cp, req.quantity as usize);
-            Ok(evaluate(req, values, informs(&model, req.quantity)))
-        })
-        .collect::<Result<Vec<_>>>()?;
-    Ok(SensorOut {
-        spec: SensorSpec {
-            name: model.name.clone(),
-            gyro,
-            drift: drift_rows(&report),
-            drift_runs: report.runs_ok,
-        },
-        model_notes: crate::model_notes::notes(&model, checkpoint_times.last().copied()),
-        requirements,
-    })
+    Ok(out)
 }
 
 /// spec.csv: the gyro spec values against the simulated readback, per axis.

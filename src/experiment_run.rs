@@ -194,44 +194,8 @@ pub fn execute(exp: &Experiment, runs: std::ops::Range<u64>, label: &str) -> Bat
     result
 }
 
-/// Refuse a report with a statistic that is not a number (the runs' values were finite, but
-/// their squares or sums overflowed, e.g. a bias of 1e200 mg): an error naming the statistic,
-/// the navigation-error quantity and the time, never a table of NaN or a JSON of nulls.
+/// Refuse a report with a statistic that is not a number (`montecarlo::job::check_finite`): an
+/// error naming the statistic, the navigation-error quantity and the time.
 pub fn check_finite(report: &DriftReport) -> Result<()> {
-    for cp in &report.checkpoints {
-        for (name, c) in &cp.quantities {
-            let optional = [
-                ("law_mean", c.law_mean),
-                ("law_std", c.law_std),
-                ("law_rms", c.law_rms),
-                ("ratio", c.ratio),
-                ("ratio_lo", c.ratio_lo),
-                ("ratio_hi", c.ratio_hi),
-                ("mean_ratio", c.mean_ratio),
-                ("mean_ratio_lo", c.mean_ratio_lo),
-                ("mean_ratio_hi", c.mean_ratio_hi),
-            ];
-            let values = [
-                ("mean", Some(c.mean)),
-                ("std", Some(c.std)),
-                ("rms", Some(c.rms)),
-                ("p5", Some(c.p5)),
-                ("p50", Some(c.p50)),
-                ("p95", Some(c.p95)),
-            ];
-            let bad = values
-                .into_iter()
-                .chain(optional)
-                .find_map(|(s, v)| v.filter(|v| !v.is_finite()).map(|v| (s, v)));
-            if let Some((statistic, v)) = bad {
-                bail!(
-                    "the {statistic} of {name} at t = {} s over the {} runs is {v}: the runs' values (mean {}) overflow the statistics; the model's values are probably far too large (check their units)",
-                    cp.t_s,
-                    report.runs_ok,
-                    crate::fmt::sig(c.mean, 3)
-                );
-            }
-        }
-    }
-    Ok(())
+    Ok(job::check_finite(report)?)
 }

@@ -6,33 +6,9 @@
 /// reader's messages).
 pub use logio::sig;
 
-/// `v` (in `unit`) in engineering notation with an SI prefix (femto to kilo) and 4 significant digits:
-/// `si(2.2667e2, "m")` = "226.7 m", `si(1.0224e-4, "m")` = "102.2 µm".
-pub fn si(v: f64, unit: &str) -> String {
-    const PREFIXES: [(i32, &str); 9] = [
-        (-15, "f"),
-        (-12, "p"),
-        (-9, "n"),
-        (-6, "µ"),
-        (-3, "m"),
-        (0, ""),
-        (3, "k"),
-        (6, "M"),
-        (9, "G"),
-    ];
-    if !v.is_finite() || v == 0.0 {
-        return format!("{} {unit}", sig(v, 4));
-    }
-    // Kilo is the largest prefix: "22360 km" reads better than "22.36 Mm" (easily taken for mm).
-    let exp3 = ((v.abs().log10() / 3.0).floor() as i32 * 3).clamp(-15, 3);
-    let prefix = PREFIXES
-        .iter()
-        .find(|(e, _)| *e == exp3)
-        .map_or("", |(_, p)| p);
-    let scaled = v / 10f64.powi(exp3);
-    // Rounding can carry 999.95 to 1000.0: print it as 1000 rather than switch prefix mid-table.
-    format!("{} {prefix}{unit}", sig(scaled, 4))
-}
+/// Engineering notation, times, trimmed numbers, rates and the Allan units of spec sheets: one
+/// definition in the noise crate (its messages and the libraries' use them too).
+pub use noise::text::{allan_units, noise_density_alt, rate, si, time, trimmed};
 
 /// A navigation-error quantity's value (SI, named as in the JSON: `_rad`, `_m`, `_mps`) as a person reads
 /// it: angles in degrees, positions and velocities with SI prefixes.
@@ -69,23 +45,6 @@ pub fn quantity_opt(quantity: &str, v_si: Option<f64>) -> String {
     v_si.map_or_else(|| "n/a".into(), |v| quantity_value(quantity, v))
 }
 
-/// A time in seconds, compactly: "0.1 s", "60 s", "10 min", "1 h".
-pub fn time(t_s: f64) -> String {
-    if t_s >= 3600.0 && (t_s / 3600.0).fract() == 0.0 {
-        format!("{} h", t_s / 3600.0)
-    } else if t_s >= 60.0 && (t_s / 60.0).fract() == 0.0 && t_s < 3600.0 {
-        format!("{} min", t_s / 60.0)
-    } else {
-        let text = sig(t_s, 4);
-        let text = if text.contains('.') && !text.contains('e') {
-            text.trim_end_matches('0').trim_end_matches('.').to_string()
-        } else {
-            text
-        };
-        format!("{text} s")
-    }
-}
-
 /// A size in bytes for people, binary units: "512 bytes", "3.5 KiB", "1.2 GiB" (never "0.0 GB";
 /// one definition, shared with the log reader's messages).
 pub use logio::byte_size as bytes;
@@ -101,73 +60,6 @@ pub fn arw(v_rad_per_sqrt_s: f64) -> String {
 /// Gyro bias (rad/s) as spec sheets write it, deg/h.
 pub fn gyro_bias(v_rad_per_s: f64) -> String {
     format!("{} deg/h", sig(v_rad_per_s.to_degrees() * 3600.0, 3))
-}
-
-/// Display scale and unit for an Allan deviation and the five IEEE 952 coefficients (Q, N, B, K,
-/// R) of a channel whose SI unit is `si_unit`, as spec sheets write them: gyro deg/h, arcsec,
-/// deg/sqrt(h), deg/h, deg/h/sqrt(h), deg/h^2; accelerometer ug, m/s, m/s/sqrt(h), ug. A value in SI times the scale is in the unit.
-pub fn allan_units(si_unit: &str) -> [(f64, String); 6] {
-    let deg = 180.0 / std::f64::consts::PI;
-    let g = noise::units::STANDARD_GRAVITY_MPS2;
-    match si_unit {
-        "rad/s" => [
-            (deg * 3600.0, "deg/h".into()),
-            // Q (rad): deg/h x s is deg/3600, an arcsecond (IEEE 952 gives Q in arcsec).
-            (deg * 3600.0, "arcsec".into()),
-            (deg * 60.0, "deg/sqrt(h)".into()),
-            (deg * 3600.0, "deg/h".into()),
-            (deg * 3600.0 * 60.0, "deg/h/sqrt(h)".into()),
-            (deg * 3600.0 * 3600.0, "deg/h^2".into()),
-        ],
-        "m/s^2" => [
-            (1e6 / g, "ug".into()),
-            (1.0, "m/s".into()),
-            (60.0, "m/s/sqrt(h)".into()),
-            (1e6 / g, "ug".into()),
-            (1e6 / g, "ug/sqrt(s)".into()),
-            (1e6 / g, "ug/s".into()),
-        ],
-        other => [
-            (1.0, other.to_string()),
-            (1.0, format!("{other}*s")),
-            (1.0, format!("{other}*sqrt(s)")),
-            (1.0, other.to_string()),
-            (1.0, format!("{other}/sqrt(s)")),
-            (1.0, format!("{other}/s")),
-        ],
-    }
-}
-
-/// A white-noise coefficient N (SI: rad/sqrt(s) or m/s^2*sqrt(s), i.e. per sqrt(Hz)) as the other
-/// unit datasheets use for it: a gyro's rate noise density in deg/s/sqrt(Hz), an accelerometer's
-/// noise density in ug/sqrt(Hz) (1 ug = 9.80665e-6 m/s^2, the standard gravity of
-/// noise::units). `None` for other units.
-pub fn noise_density_alt(si_unit: &str, v: f64) -> Option<String> {
-    match si_unit {
-        "rad/s" => Some(format!("{} deg/s/sqrt(Hz)", sig(v.to_degrees(), 4))),
-        "m/s^2" => Some(format!(
-            "{} ug/sqrt(Hz)",
-            sig(v / noise::units::STANDARD_GRAVITY_MPS2 * 1e6, 4)
-        )),
-        _ => None,
-    }
-}
-
-/// A number with at most `digits` significant digits and no trailing zeros after the point
-/// ("200" for 199.99999995867375, "0.6827" for 0.6826894921370859 with 4).
-pub fn trimmed(v: f64, digits: usize) -> String {
-    let text = sig(v, digits);
-    if text.contains('.') && !text.contains('e') {
-        text.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        text
-    }
-}
-
-/// A sample rate as people write it: 7 significant digits at most ("200 Hz", "99.8 Hz"); a
-/// rate from timestamps carries their rounding far below that.
-pub fn rate(hz: f64) -> String {
-    format!("{} Hz", trimmed(hz, 7))
 }
 
 /// A confidence level: "1-sigma (68.27 %)" for the one-sigma level, else "95 %".

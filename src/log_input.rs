@@ -127,28 +127,7 @@ pub fn mapping_text(log: &Log) -> String {
     log.mapping_text(&flag)
 }
 
-/// `columns[]` and `skipped_columns[]` of the JSON (docs/cli.md, "Log files").
+/// `columns[]` and `skipped_columns[]` of the JSON (docs/cli.md, "Log files"), with the flags.
 pub fn columns_json(log: &Log) -> (serde_json::Value, serde_json::Value) {
-    let columns = log
-        .columns
-        .iter()
-        .map(|c| {
-            serde_json::json!({
-                "column": c.column,
-                "channel": c.channel,
-                "unit": c.unit,
-                "channel_from": c.channel_from.render(&flag),
-                "unit_from": c.unit_from.render(&flag),
-            })
-        })
-        .collect();
-    let skipped = log
-        .skipped
-        .iter()
-        .map(|s| serde_json::json!({"column": s.column, "reason": s.reason_text(&flag)}))
-        .collect();
-    (
-        serde_json::Value::Array(columns),
-        serde_json::Value::Array(skipped),
-    )
+    log.columns_json(&flag)
 }

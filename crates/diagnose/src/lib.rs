@@ -11,10 +11,12 @@
 pub mod bootstrap;
 pub mod candidates;
 pub mod detect;
+pub mod document;
 pub mod drift;
 pub mod drift_check;
 mod drift_fit;
 pub mod drift_gap;
+pub mod effect_text;
 pub mod error;
 mod findings;
 pub mod fit;

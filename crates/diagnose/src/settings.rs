@@ -1,5 +1,12 @@
 //! How diagnose works: its settings and their defaults.
 
+/// Most simulated logs per band a front end lets a diagnosis ask for: the band's own error falls
+/// as 1/sqrt(seeds), so beyond a few thousand logs it is negligible and the run only takes longer
+/// (each log is as long as the measured one).
+pub const MAX_SEEDS: usize = 4096;
+/// Most add-and-resimulate rounds a front end lets a diagnosis ask for.
+pub const MAX_ROUNDS: usize = 100;
+
 /// Settings of the workflow. Errors about a setting name its field (e.g. `tau_min_s`); a front end
 /// maps the field to its own option name when it reports them.
 #[derive(Clone, Debug)]

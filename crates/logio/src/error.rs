@@ -306,23 +306,7 @@ impl LogError {
     }
 }
 
-/// `v` with `digits` significant digits as a plain decimal ("0.0259", "226.7", "1480"), falling
-/// back to scientific notation outside 1e-4 ..= 1e7. NaN prints as "NaN" (never as 0). The
-/// reader's messages use it; so do the command line's tables.
-pub fn sig(v: f64, digits: usize) -> String {
-    if !v.is_finite() {
-        return format!("{v}");
-    }
-    if v == 0.0 {
-        return "0".into();
-    }
-    let mag = v.abs().log10().floor() as i32;
-    if !(-4..7).contains(&mag) {
-        return format!("{:.*e}", digits.saturating_sub(1), v);
-    }
-    let decimals = (digits as i32 - 1 - mag).max(0) as usize;
-    format!("{v:.decimals$}")
-}
+pub use noise::text::sig;
 
 /// A size in bytes for people, binary units (IEC 80000-13 prefixes): "512 bytes", "3.5 KiB",
 /// "1.2 GiB" (never "0.0 GB").

@@ -73,6 +73,34 @@ impl Log {
         s
     }
 
+    /// `columns[]` and `skipped_columns[]` of the commands' JSON (docs/cli.md, "Log files"):
+    /// each used column's channel and unit and where they came from, each skipped column's
+    /// reason; settings named by `names`.
+    pub fn columns_json(&self, names: SettingNames) -> (serde_json::Value, serde_json::Value) {
+        let columns = self
+            .columns
+            .iter()
+            .map(|c| {
+                serde_json::json!({
+                    "column": c.column,
+                    "channel": c.channel,
+                    "unit": c.unit,
+                    "channel_from": c.channel_from.render(names),
+                    "unit_from": c.unit_from.render(names),
+                })
+            })
+            .collect();
+        let skipped = self
+            .skipped
+            .iter()
+            .map(|s| serde_json::json!({"column": s.column, "reason": s.reason_text(names)}))
+            .collect();
+        (
+            serde_json::Value::Array(columns),
+            serde_json::Value::Array(skipped),
+        )
+    }
+
     /// SI unit of a channel, for tables and plots.
     pub fn unit_of(name: &str) -> &'static str {
         match Channel::from_name(name).map(Channel::sensor) {

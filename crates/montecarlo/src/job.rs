@@ -493,6 +493,62 @@ pub fn check_some_runs(report: &DriftReport) -> Result<(), AllRunsFailed> {
     })
 }
 
+/// A statistic of a report that is not a number: the runs' values were finite, but their
+/// squares or sums overflowed (e.g. a bias of 1e200 mg).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("the {statistic} of {quantity} at t = {t_s} s over the {runs} runs is {value}: the runs' values (mean {}) overflow the statistics; the model's values are probably far too large (check their units)", noise::text::sig(*.mean, 3))]
+pub struct NotFinite {
+    pub statistic: &'static str,
+    pub quantity: String,
+    pub t_s: f64,
+    pub runs: u64,
+    pub value: f64,
+    pub mean: f64,
+}
+
+/// `Err` naming the first statistic of `report` that is not a number (never a table of NaN or
+/// a JSON of nulls).
+pub fn check_finite(report: &DriftReport) -> Result<(), NotFinite> {
+    for cp in &report.checkpoints {
+        for (name, c) in &cp.quantities {
+            let optional = [
+                ("law_mean", c.law_mean),
+                ("law_std", c.law_std),
+                ("law_rms", c.law_rms),
+                ("ratio", c.ratio),
+                ("ratio_lo", c.ratio_lo),
+                ("ratio_hi", c.ratio_hi),
+                ("mean_ratio", c.mean_ratio),
+                ("mean_ratio_lo", c.mean_ratio_lo),
+                ("mean_ratio_hi", c.mean_ratio_hi),
+            ];
+            let values = [
+                ("mean", Some(c.mean)),
+                ("std", Some(c.std)),
+                ("rms", Some(c.rms)),
+                ("p5", Some(c.p5)),
+                ("p50", Some(c.p50)),
+                ("p95", Some(c.p95)),
+            ];
+            let bad = values
+                .into_iter()
+                .chain(optional)
+                .find_map(|(s, v)| v.filter(|v| !v.is_finite()).map(|v| (s, v)));
+            if let Some((statistic, value)) = bad {
+                return Err(NotFinite {
+                    statistic,
+                    quantity: name.to_string(),
+                    t_s: cp.t_s,
+                    runs: report.runs_ok,
+                    value,
+                    mean: c.mean,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
 /// The scenario's published reference value beside the simulated one (JSON key `reference`).
 #[derive(Serialize, Debug, Clone)]
 pub struct ReferenceOut {

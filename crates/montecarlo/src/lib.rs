@@ -31,6 +31,7 @@ pub mod runner;
 pub mod scenario;
 pub mod shard;
 pub mod spec;
+pub mod spec_job;
 pub mod stats;
 
 pub use nav_quantity::NavQuantity;
