@@ -6,7 +6,9 @@ implementation): :mod:`imudrift.allantools` (allantools' API and results),
 :func:`imudrift.read_log` (the CLI's log reader) and :func:`imudrift.generate` (a synthetic
 log), :class:`Sensor` (a sensor model from TOML, a dict or a Kalibr / OpenVINS file),
 :func:`simulate` (the Monte Carlo drift run) and its shards (:func:`simulate_shard`,
-:func:`merge`). Bad input raises :class:`InvalidInput`, a ``ValueError``; an unreadable file
+:func:`merge`), :func:`spec` (sensors side by side), :func:`diagnose` (a model against a measured
+log: the effects it misses and the corrected model) and :func:`drift` (measured drift against the
+model's). Bad input raises :class:`InvalidInput`, a ``ValueError``; an unreadable file
 :class:`LogUnreadable`, an ``OSError``.
 """
 
@@ -16,6 +18,7 @@ from ._log import read_log
 from ._generate import generate
 from ._sensor import Sensor, plan
 from ._simulate import SimulateResult, merge, simulate, simulate_shard
+from ._analyse import DiagnoseResult, DriftResult, SpecResult, diagnose, drift, spec
 from . import allantools
 
 __all__ = [
@@ -35,4 +38,10 @@ __all__ = [
     "merge",
     "SimulateResult",
     "plan",
+    "spec",
+    "SpecResult",
+    "diagnose",
+    "DiagnoseResult",
+    "drift",
+    "DriftResult",
 ]

@@ -27,6 +27,7 @@ create_exception!(
     "A log file or directory that cannot be read or mapped (an OSError)."
 );
 
+mod analyse;
 mod sensor;
 mod sim;
 
@@ -438,28 +439,21 @@ fn unit<U: Copy>(
         })
 }
 
-/// A log file read by the CLI's reader ([`logio::read_log`]): CSV or gzip CSV, ROS 1 bag, ROS 2
-/// MCAP. Returns `source`, `rate_hz`, `t` (s, or None) and `channels`: (name, SI array) pairs in
-/// the log's order.
-#[pyfunction]
-#[pyo3(signature = (path, rate, gyro_unit, accel_unit, time_unit, columns, topic))]
-#[allow(clippy::too_many_arguments)]
-fn read_log_columns<'py>(
-    py: Python<'py>,
-    path: std::path::PathBuf,
+/// The reader's settings from `read_log`'s arguments (checked, named by them in errors).
+fn read_options(
     rate: Option<f64>,
     gyro_unit: Option<&str>,
     accel_unit: Option<&str>,
     time_unit: Option<&str>,
     columns: Option<Vec<(String, String)>>,
     topic: Option<String>,
-) -> PyResult<Bound<'py, PyDict>> {
+) -> PyResult<logio::ReadOptions> {
     if let Some(rate_hz) = rate.filter(|&r| !logio::valid_rate_hz(r)) {
         return Err(invalid(
             logio::Problem::BadRate { rate_hz }.render(&read_log_argument),
         ));
     }
-    let opts = logio::ReadOptions {
+    Ok(logio::ReadOptions {
         rate_hz: rate,
         units: logio::UnitOptions {
             gyro: unit(
@@ -483,8 +477,14 @@ fn read_log_columns<'py>(
         },
         columns: columns.unwrap_or_default(),
         topic,
-    };
-    let log = py.detach(|| logio::read_log(&path, &opts)).map_err(|e| {
+    })
+}
+
+/// A log file read by the CLI's reader; an unreadable file is a [`LogUnreadable`] (an
+/// `OSError`), anything else an [`InvalidInput`], with the reader's message (settings named by
+/// `read_log`'s arguments).
+fn read_log_file(path: &std::path::Path, opts: &logio::ReadOptions) -> PyResult<logio::Log> {
+    logio::read_log(path, opts).map_err(|e| {
         let msg = e.render(&read_log_argument);
         match *e.problem {
             logio::Problem::Unreadable
@@ -495,7 +495,27 @@ fn read_log_columns<'py>(
             }),
             _ => invalid(msg),
         }
-    })?;
+    })
+}
+
+/// A log file read by the CLI's reader ([`logio::read_log`]): CSV or gzip CSV, ROS 1 bag, ROS 2
+/// MCAP. Returns `source`, `rate_hz`, `t` (s, or None) and `channels`: (name, SI array) pairs in
+/// the log's order.
+#[pyfunction]
+#[pyo3(signature = (path, rate, gyro_unit, accel_unit, time_unit, columns, topic))]
+#[allow(clippy::too_many_arguments)]
+fn read_log_columns<'py>(
+    py: Python<'py>,
+    path: std::path::PathBuf,
+    rate: Option<f64>,
+    gyro_unit: Option<&str>,
+    accel_unit: Option<&str>,
+    time_unit: Option<&str>,
+    columns: Option<Vec<(String, String)>>,
+    topic: Option<String>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let opts = read_options(rate, gyro_unit, accel_unit, time_unit, columns, topic)?;
+    let log = py.detach(|| read_log_file(&path, &opts))?;
     let logio::Log {
         source,
         rate_hz,
@@ -620,5 +640,9 @@ fn _imudrift(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sensor::sensor_toml_of_json, m)?)?;
     m.add_function(wrap_pyfunction!(sensor::sensor_noise_file, m)?)?;
     m.add_function(wrap_pyfunction!(sensor::sensor_plan, m)?)?;
+    m.add_function(wrap_pyfunction!(analyse::spec_run, m)?)?;
+    m.add_function(wrap_pyfunction!(analyse::diagnose_run, m)?)?;
+    m.add_function(wrap_pyfunction!(analyse::drift_run, m)?)?;
+    m.add_function(wrap_pyfunction!(analyse::seconds_of, m)?)?;
     Ok(())
 }

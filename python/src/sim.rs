@@ -200,24 +200,30 @@ fn job_of(subject: &Subject, s: &Settings) -> PyResult<Job> {
 /// Refuse `runs` runs of the job (its ablation sub-runs counted) whose per-run values would not
 /// fit in memory or whose work is beyond the CLI's limit (`montecarlo::job`), before any work.
 fn check_size(job: &Job, runs: u64) -> PyResult<()> {
+    let all_runs = runs * (1 + 2 * job.subs.as_ref().map_or(0, Vec::len) as u64);
+    check_experiment_size(&job.exp, runs, all_runs)
+}
+
+/// Refuse `runs` runs of `exp` whose per-run values would not fit in memory, or `all_runs` runs
+/// (sub-experiments counted) whose work is beyond the CLI's limit (`montecarlo::job`).
+pub fn check_experiment_size(exp: &Experiment, runs: u64, all_runs: u64) -> PyResult<()> {
     let gib = |b: f64| b / f64::from(1u32 << 30);
-    let bytes = job::value_bytes(&job.exp, runs);
+    let bytes = job::value_bytes(exp, runs);
     let limit = logio::available_memory_bytes()
         .map_or(job::MAX_VALUE_BYTES, |a| a.min(job::MAX_VALUE_BYTES));
     if bytes > limit {
         return Err(invalid(format!(
             "runs: {runs} runs x {} checkpoints keep {:.2} GiB of per-run values (limit {:.2} GiB); split them with simulate_shard and merge, or use fewer checkpoints",
-            job.exp.scenario.checkpoint_steps.len(),
+            exp.scenario.checkpoint_steps.len(),
             gib(bytes as f64),
             gib(limit as f64)
         )));
     }
-    let all_runs = runs * (1 + 2 * job.subs.as_ref().map_or(0, Vec::len) as u64);
-    let work = job::work_samples(&job.exp, all_runs);
+    let work = job::work_samples(exp, all_runs);
     if work.is_nan() || work > job::MAX_WORK_SAMPLES {
         return Err(invalid(format!(
             "{}: {all_runs} run(s) are {work:.2e} samples of work (limit {:.0e}, about 3 h on 2 cores): use fewer runs, a shorter duration_s or a lower rate_hz (or split the runs with simulate_shard)",
-            job.exp.scenario.name,
+            exp.scenario.name,
             job::MAX_WORK_SAMPLES
         )));
     }
@@ -227,7 +233,7 @@ fn check_size(job: &Job, runs: u64) -> PyResult<()> {
 /// Run `work` on a thread pool of `threads` workers (None or 0: one per core) with the GIL
 /// released, checking for Ctrl-C meanwhile: a `KeyboardInterrupt` (or any error a signal handler
 /// raises) stops the runs and is returned.
-fn run_job<T: Send>(
+pub fn run_job<T: Send>(
     py: Python<'_>,
     threads: Option<usize>,
     work: impl FnOnce(&job::RunRange<'_>) -> Option<T> + Send,
@@ -248,13 +254,15 @@ fn run_job<T: Send>(
         })?;
     let stop = AtomicBool::new(false);
     let run = |e: &Experiment, runs: std::ops::Range<u64>, _label: &str| {
-        pool.install(|| montecarlo::run_range_until(&e.kernel(), runs, &|_| {}, &stop))
+        montecarlo::run_range_until(&e.kernel(), runs, &|_| {}, &stop)
     };
     py.detach(|| {
         std::thread::scope(|scope| {
             let (tx, rx) = std::sync::mpsc::channel();
+            // The work runs in the call's pool, so that its own parallel parts (a readback, a
+            // diagnosis) use it too, and never the process-wide rayon pool.
             let worker = scope.spawn(move || {
-                let _ = tx.send(work(&run));
+                let _ = tx.send(pool.install(|| work(&run)));
             });
             loop {
                 match rx.recv_timeout(SIGNAL_POLL) {
