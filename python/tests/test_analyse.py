@@ -1,0 +1,181 @@
+"""imudrift.spec, diagnose, drift: to_dict() equal to the CLI's --json (a shipped sensor pair; the
+ADIS16405 logs from $IMUDRIFT_DATA, skipped without them), logs given as arrays equal to the same
+log as a file, the tables, the corrected Sensor, errors named by the Python arguments, the GIL
+released and Ctrl-C stopping spec's drift runs. Kept short (horizon 60 s, few seeds/replicates)."""
+
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import imudrift
+
+from test_simulate import ROOT, assert_same, cli_binary
+
+MTX = os.path.join(ROOT, "configs", "sensors", "mtx.toml")
+ADIS = os.path.join(ROOT, "configs", "sensors", "adis16405.toml")
+REQ = "pos_horizontal_m < 100 m @ 60 s"
+
+
+def cli(*args):
+    import json
+
+    exe = cli_binary()
+    if exe is None:
+        pytest.skip("no imudrift binary (cargo build --release, or set IMUDRIFT_BIN)")
+    out = subprocess.run([exe, *args, "--json"], check=True, capture_output=True)
+    return json.loads(out.stdout)
+
+
+@pytest.fixture(scope="module")
+def adis_logs():
+    """Paths of ADIS16405 static runs 1 and 2 (100 Hz, no time column)."""
+    root = os.environ.get("IMUDRIFT_DATA")
+    if not root:
+        pytest.skip("IMUDRIFT_DATA is not set: the ADIS16405 logs are not available")
+    paths = [os.path.join(root, "adis16405_imudata", f"adis16405_imu{i}.csv.gz") for i in (1, 2)]
+    if not all(os.path.exists(p) for p in paths):
+        pytest.skip(f"{paths} not found")
+    return paths
+
+
+def test_spec_to_dict_equals_the_cli_json():
+    c = cli("spec", MTX, ADIS, "--times", "60,600", "--runs", "50", "--require", REQ,
+            "--readback-duration", "3600", "--seed", "5")
+    r = imudrift.spec([MTX, imudrift.Sensor(ADIS)], times=[60, "10 min"], runs=50, require=REQ,
+                      readback_duration_s=3600, seed=5)
+    assert_same(r.to_dict(), c)
+    df = r.to_pandas()
+    assert list(df["sensor"]) == ["Xsens MTx"] * 2 + ["ADIS16405"] * 2
+    assert list(df["t_s"]) == [60.0, 600.0] * 2
+    req = r.requirements()
+    assert list(req["sensor"]) == ["Xsens MTx", "ADIS16405"]
+    assert set(req["verdict"]) <= {"pass", "fail", "undecided", "not_informed"}
+    assert r.seed == 5 and r.readback_duration_s == 3600
+
+
+def test_spec_errors_name_the_arguments():
+    with pytest.raises(imudrift.InvalidInput, match="^require: "):
+        imudrift.spec(MTX, require="pos_horizontal_m < 10 m")
+    with pytest.raises(imudrift.InvalidInput, match="^rate_hz: expected a sample rate"):
+        imudrift.spec(MTX, rate_hz=-1)
+    with pytest.raises(imudrift.InvalidInput, match="^runs: expected an integer >= 1"):
+        imudrift.spec(MTX, runs=0)
+    with pytest.raises(imudrift.InvalidInput, match="shorter than one sample at rate_hz"):
+        imudrift.spec(MTX, times=[0.001])
+    with pytest.raises(imudrift.InvalidInput, match="^readback_duration_s: expected at least 10 s"):
+        imudrift.spec(MTX, readback_duration_s=1)
+
+
+def test_diagnose_to_dict_equals_the_cli_json(adis_logs):
+    log = adis_logs[0]
+    c = cli("diagnose", log, "--model", ADIS, "--rate", "100", "--horizons", "60", "--seeds", "4",
+            "--rounds", "1")
+    r = imudrift.diagnose(log, ADIS, rate=100, horizons=[60], seeds=4, rounds=1)
+    assert_same(r.to_dict(), c)
+    # The effects table, and the corrected model: the CLI's TOML, read back as a Sensor.
+    effects = r.effects
+    assert effects and {e["channel"] for e in effects} <= set(c["channels"])
+    n = sum(len(ch["effects"]) for ch in c["channels"].values())
+    df = r.to_pandas()
+    assert len(df) == n and {"channel", "effect", "gap_before", "gap_after"} <= set(df.columns)
+    assert isinstance(r.corrected, imudrift.Sensor)
+    assert r.corrected.name == "ADIS16405"
+    assert imudrift.Sensor(c["corrected_model_toml"]).to_toml() == r.corrected.to_toml()
+
+
+def test_drift_to_dict_equals_the_cli_json(adis_logs):
+    c = cli("drift", *adis_logs, "--model", ADIS, "--rate", "100", "--horizons", "60",
+            "--replicates", "10", "--calibration", "window:60", "--init", "level:60")
+    r = imudrift.drift(adis_logs, imudrift.Sensor(ADIS), rate=100, horizons=[60], replicates=10,
+                       calibration="window:60", init="level:1 min")
+    assert_same(r.to_dict(), c)
+    df = r.to_pandas()
+    quantities = c["horizons"][0]["channels"]
+    assert len(df) == len(quantities) and set(df["quantity"]) == set(quantities)
+    assert set(df["verdict"]) <= {"inside", "above", "below", "not_informed"}
+
+
+def synthetic_log(tmp_path):
+    """A 10-minute static MTx log at 100 Hz as a DataFrame and as a CSV file of the same values."""
+    df = imudrift.generate(imudrift.Sensor(MTX), duration_s=600, rate_hz=100, seed=3)
+    cols = ["gx", "gy", "gz", "ax", "ay", "az"]
+    path = tmp_path / "mtx.csv"
+    np.savetxt(path, df[cols].to_numpy(), fmt="%.17g", delimiter=",", header=",".join(cols),
+               comments="")
+    return df[cols], str(path)
+
+
+def test_arrays_are_the_same_log_as_a_file(tmp_path):
+    df, path = synthetic_log(tmp_path)
+    kw = dict(rate=100, horizons=[60], seeds=4, rounds=1)
+    named = ("log", "columns", "skipped_columns")
+    strip = lambda d: {k: v for k, v in d.items() if k not in named}
+    from_file = imudrift.diagnose(path, MTX, **kw).to_dict()
+    for given in (df, df.to_numpy(), {c: df[c].to_numpy() for c in df.columns}):
+        d = imudrift.diagnose(given, MTX, **kw).to_dict()
+        assert_same(strip(d), strip(from_file))
+        assert [c["channel_from"] for c in d["columns"]] == ["name"] * 6
+    a = imudrift.drift(df, MTX, rate=100, horizons=[60], replicates=10).to_dict()
+    b = imudrift.drift(path, MTX, rate=100, horizons=[60], replicates=10).to_dict()
+    assert a.pop("logs") != b.pop("logs")
+    assert_same(a, b)
+
+
+def test_diagnose_and_drift_errors_name_the_arguments(tmp_path):
+    df, _ = synthetic_log(tmp_path)
+    with pytest.raises(imudrift.InvalidInput, match="rate: the sample rate in Hz is needed"):
+        imudrift.diagnose(df.to_numpy(), MTX)
+    with pytest.raises(imudrift.InvalidInput, match="^seeds 1: at least 2"):
+        imudrift.diagnose(df, MTX, rate=100, seeds=1)
+    with pytest.raises(imudrift.InvalidInput, match="^replicates 5: expected 10 to 100000"):
+        imudrift.drift(df, MTX, rate=100, replicates=5)
+    with pytest.raises(imudrift.InvalidInput, match="^horizons 0.015: 1.5 samples"):
+        imudrift.drift(df, MTX, rate=100, horizons=[0.015], replicates=10)
+    with pytest.raises(imudrift.InvalidInput, match="^calibration window:700: the window is longer"):
+        imudrift.drift(df, MTX, rate=100, horizons=[60], calibration="window:700")
+    with pytest.raises(imudrift.InvalidInput, match="channel gx is constant"):
+        imudrift.drift(dict(df, gx=np.zeros(len(df))), MTX, rate=100, horizons=[60])
+    with pytest.raises(imudrift.LogUnreadable):
+        imudrift.drift(str(tmp_path / "missing.csv"), MTX, rate=100)
+
+
+def test_the_gil_is_released_during_spec():
+    t = threading.Thread(target=lambda: imudrift.spec(MTX, times=[600], runs=300, threads=1))
+    t.start()
+    time.sleep(0.05)
+    loops, t0 = 0, time.perf_counter()
+    while time.perf_counter() - t0 < 0.2:
+        loops += 1
+    still_running = t.is_alive()
+    t.join()
+    assert still_running, "spec ended too soon to tell"
+    assert loops > 1000
+
+
+CTRL_C_CHILD = r"""
+import sys, imudrift
+print("start", flush=True)
+try:
+    imudrift.spec(sys.argv[1], times=[3600], runs=100000, threads=1)
+except KeyboardInterrupt:
+    print("interrupted", flush=True)
+"""
+
+
+def test_ctrl_c_stops_spec_drift_runs():
+    p = subprocess.Popen([sys.executable, "-c", CTRL_C_CHILD, MTX], stdout=subprocess.PIPE,
+                         text=True)
+    assert p.stdout.readline().strip() == "start"
+    time.sleep(1.0)
+    t0 = time.perf_counter()
+    p.send_signal(signal.SIGINT)
+    out, _ = p.communicate(timeout=30)
+    took = time.perf_counter() - t0
+    assert "interrupted" in out
+    assert took < 1.0
