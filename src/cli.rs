@@ -1,30 +1,17 @@
 //! Pieces of command-line handling that several commands share.
 
 use anyhow::{bail, Result};
-use noise::units::{parse_quantity, Quantity};
 
 /// A time given on the command line, s: a bare number is seconds, otherwise a value with its unit
 /// (`"60"`, `"90 s"`, `"5 min"`, `"12 h"`); finite and > 0. The value parser of every duration
 /// flag (`--duration`, `--horizons`, `--times`, ...): clap names the flag in the error.
 pub fn duration_s(text: &str) -> std::result::Result<f64, String> {
-    let duration_s = duration_or_zero_s(text)?;
-    if duration_s == 0.0 {
-        return Err("expected a time > 0".into());
-    }
-    Ok(duration_s)
+    noise::units::duration_s(text)
 }
 
 /// As [`duration_s`], zero allowed (a lower bound that may be absent, such as `--tau-min`).
 pub fn duration_or_zero_s(text: &str) -> std::result::Result<f64, String> {
-    let duration_s = match text.trim().parse::<f64>() {
-        Ok(v) => v,
-        Err(_) => parse_quantity(text, Quantity::Time)
-            .map_err(|e| format!("expected seconds or a time such as \"12 h\" ({e})"))?,
-    };
-    if !(duration_s.is_finite() && duration_s >= 0.0) {
-        return Err("expected a time >= 0".into());
-    }
-    Ok(duration_s)
+    noise::units::duration_or_zero_s(text)
 }
 
 /// A confidence level: `1sigma` (erf(1/sqrt 2) = 0.6827, SP 1065 §5.3), a fraction (`0.95`) or

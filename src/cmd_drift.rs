@@ -82,29 +82,12 @@ pub struct Args {
 
 /// The value parser of `--calibration`: none, log-mean or window:TIME.
 pub(crate) fn calibration(text: &str) -> std::result::Result<Calibration, String> {
-    match text {
-        "none" => Ok(Calibration::None),
-        "log-mean" => Ok(Calibration::LogMean),
-        t => match t.strip_prefix("window:") {
-            Some(w) => Ok(Calibration::Window {
-                window_s: crate::cli::duration_s(w)?,
-            }),
-            None => Err("expected none, log-mean or window:TIME (e.g. window:60s)".into()),
-        },
-    }
+    Calibration::parse(text, &crate::cli::duration_s)
 }
 
 /// The value parser of `--init`: perfect or level:TIME.
 pub(crate) fn initialisation(text: &str) -> std::result::Result<Initialisation, String> {
-    match text {
-        "perfect" => Ok(Initialisation::Perfect),
-        t => match t.strip_prefix("level:") {
-            Some(w) => Ok(Initialisation::Levelled {
-                window_s: crate::cli::duration_s(w)?,
-            }),
-            None => Err("expected perfect or level:TIME (e.g. level:10s)".into()),
-        },
-    }
+    Initialisation::parse(text, &crate::cli::duration_s)
 }
 
 /// The flag of each protocol setting.

@@ -282,58 +282,23 @@ fn protocol_argument(setting: ProtocolSetting) -> &'static str {
     }
 }
 
-/// A time given as a number of seconds or a text with its unit ("60", "10 min").
-fn seconds(arg: &str, text: &str) -> PyResult<f64> {
-    let t = text.trim();
-    let s = match t.parse::<f64>() {
-        Ok(v) => v,
-        Err(_) => noise::units::parse_quantity(t, noise::units::Quantity::Time).map_err(|e| {
-            invalid(format!(
-                "{arg}: expected seconds or a time such as \"1 min\" ({e})"
-            ))
-        })?,
-    };
-    if !(s.is_finite() && s > 0.0) {
-        return Err(invalid(format!("{arg}: expected a time > 0, found {text}")));
-    }
-    Ok(s)
-}
-
-/// A time given as a text with its unit ("10 min"), in seconds, for the argument `name`.
+/// A time given as a text with its unit ("10 min"), in seconds, for the argument `name`
+/// (`noise::units::duration_s`, the CLI's reading of a duration).
 #[pyfunction]
 pub fn seconds_of(name: &str, text: &str) -> PyResult<f64> {
-    seconds(name, text)
+    noise::units::duration_s(text).map_err(|e| invalid(format!("{name} {text:?}: {e}")))
 }
 
 /// `calibration`: none, log-mean or window:TIME (the CLI's `--calibration`).
 fn calibration(text: &str) -> PyResult<Calibration> {
-    match text {
-        "none" => Ok(Calibration::None),
-        "log-mean" => Ok(Calibration::LogMean),
-        t => match t.strip_prefix("window:") {
-            Some(w) => Ok(Calibration::Window {
-                window_s: seconds("calibration", w)?,
-            }),
-            None => Err(invalid(format!(
-                "calibration {t:?}: expected \"none\", \"log-mean\" or \"window:TIME\" (e.g. \"window:60\")"
-            ))),
-        },
-    }
+    Calibration::parse(text, &noise::units::duration_s)
+        .map_err(|e| invalid(format!("calibration {text:?}: {e}")))
 }
 
 /// `init`: perfect or level:TIME (the CLI's `--init`).
 fn initialisation(text: &str) -> PyResult<Initialisation> {
-    match text {
-        "perfect" => Ok(Initialisation::Perfect),
-        t => match t.strip_prefix("level:") {
-            Some(w) => Ok(Initialisation::Levelled {
-                window_s: seconds("init", w)?,
-            }),
-            None => Err(invalid(format!(
-                "init {t:?}: expected \"perfect\" or \"level:TIME\" (e.g. \"level:10\")"
-            ))),
-        },
-    }
+    Initialisation::parse(text, &noise::units::duration_s)
+        .map_err(|e| invalid(format!("init {text:?}: {e}")))
 }
 
 /// The protocol fits the logs' sampling, and the model's output filter their rate.
@@ -353,6 +318,28 @@ fn check_logs(
             noise::text::rate(1.0 / dt_s)
         ))
     })
+}
+
+/// Each worker of a diagnosis holds a simulated six-channel log of the longest run's length
+/// (and its phase, 16 bytes a sample): refuse logs whose simulation would not fit rather than be
+/// killed for memory halfway (the CLI's check).
+fn check_memory(logs: &[OwnedLog], threads: Option<usize>) -> PyResult<()> {
+    let threads = threads
+        .filter(|&n| n > 0)
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let longest = logs.iter().map(OwnedLog::len).max().unwrap_or(0);
+    let need = threads as u64 * 6 * longest as u64 * 16;
+    if let Some(available) = logio::available_memory_bytes() {
+        if need > available {
+            return Err(invalid(format!(
+                "{}: simulating logs of {longest} samples on {threads} threads needs about {:.1} GiB and {:.1} GiB is available: use fewer threads or a shorter log",
+                logs[0].source,
+                need as f64 / (1u64 << 30) as f64,
+                available as f64 / (1u64 << 30) as f64
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// `imudrift.diagnose`'s settings (the CLI's options by their Python names).
@@ -459,6 +446,7 @@ pub fn diagnose_run<'py>(
         overlapping: false,
     };
     check_logs(&logs, &protocol, &m, &model_name)?;
+    check_memory(&logs, settings.threads)?;
     let inputs: Vec<LogInput> = logs.iter().map(|l| l.input(true)).collect();
     let s = diagnose::Settings {
         seed: settings.seed,

@@ -28,6 +28,26 @@ pub enum Calibration {
     Window { window_s: f64 },
 }
 
+impl Calibration {
+    /// `none`, `log-mean` or `window:TIME`, the time read by `seconds` (e.g.
+    /// `noise::units::duration_s`); the message says what is expected.
+    pub fn parse(
+        text: &str,
+        seconds: &dyn Fn(&str) -> Result<f64, String>,
+    ) -> Result<Calibration, String> {
+        match text {
+            "none" => Ok(Calibration::None),
+            "log-mean" => Ok(Calibration::LogMean),
+            t => match t.strip_prefix("window:") {
+                Some(w) => Ok(Calibration::Window {
+                    window_s: seconds(w)?,
+                }),
+                None => Err("expected none, log-mean or window:TIME (e.g. window:60s)".into()),
+            },
+        }
+    }
+}
+
 /// How the attitude starts.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
@@ -36,6 +56,24 @@ pub enum Initialisation {
     Perfect,
     /// Roll and pitch from the calibrated accelerometers' mean over `window_s` before the segment.
     Levelled { window_s: f64 },
+}
+
+impl Initialisation {
+    /// `perfect` or `level:TIME`, the time read by `seconds`; the message says what is expected.
+    pub fn parse(
+        text: &str,
+        seconds: &dyn Fn(&str) -> Result<f64, String>,
+    ) -> Result<Initialisation, String> {
+        match text {
+            "perfect" => Ok(Initialisation::Perfect),
+            t => match t.strip_prefix("level:") {
+                Some(w) => Ok(Initialisation::Levelled {
+                    window_s: seconds(w)?,
+                }),
+                None => Err("expected perfect or level:TIME (e.g. level:10s)".into()),
+            },
+        }
+    }
 }
 
 /// The whole protocol.

@@ -283,6 +283,30 @@ pub fn parse_quantity(text: &str, quantity: Quantity) -> Result<f64, UnitError> 
     Ok(si)
 }
 
+/// A time as a person gives it, s: a bare number is seconds, otherwise a value with its unit
+/// (`"60"`, `"90 s"`, `"5 min"`, `"12 h"`); finite and >= 0. The message says what is expected
+/// (a front end puts the setting's name before it).
+pub fn duration_or_zero_s(text: &str) -> Result<f64, String> {
+    let duration_s = match text.trim().parse::<f64>() {
+        Ok(v) => v,
+        Err(_) => parse_quantity(text, Quantity::Time)
+            .map_err(|e| format!("expected seconds or a time such as \"12 h\" ({e})"))?,
+    };
+    if !(duration_s.is_finite() && duration_s >= 0.0) {
+        return Err("expected a time >= 0".into());
+    }
+    Ok(duration_s)
+}
+
+/// As [`duration_or_zero_s`], and > 0.
+pub fn duration_s(text: &str) -> Result<f64, String> {
+    let duration_s = duration_or_zero_s(text)?;
+    if duration_s == 0.0 {
+        return Err("expected a time > 0".into());
+    }
+    Ok(duration_s)
+}
+
 /// Format an SI value so that `parse_quantity` gives back the same bits.
 pub fn format_si(value: f64, quantity: Quantity) -> String {
     // `{:?}` prints the shortest representation that round-trips; SI units have factor 1.
