@@ -2,7 +2,6 @@
 ``diagnose`` and ``drift`` from Python, through the same library code (``montecarlo::spec_job``,
 ``diagnose::document``); each result's ``to_dict()`` is the command's ``--json`` document."""
 
-import json
 import os
 
 import numpy as np
@@ -11,6 +10,8 @@ from ._imudrift import InvalidInput
 from ._imudrift import diagnose_run as _diagnose
 from ._imudrift import drift_run as _drift
 from ._imudrift import spec_run as _spec
+from ._document import Document as _Document
+from ._log import reader_settings
 from ._sensor import Sensor
 
 _CHANNELS = ("gx", "gy", "gz", "ax", "ay", "az")
@@ -39,23 +40,6 @@ def _sensor_arg(x):
     """(text, source) of a model: an :class:`imudrift.Sensor` or anything ``Sensor()`` takes."""
     s = x if isinstance(x, Sensor) else Sensor(x)
     return (s._text, s._source)
-
-
-class _Document:
-    """A result holding a command's JSON document: its keys read as attributes."""
-
-    def __init__(self, text):
-        self._doc = json.loads(text)
-
-    def to_dict(self):
-        """The command's ``--json`` document (a fresh copy)."""
-        return json.loads(json.dumps(self._doc))
-
-    def __getattr__(self, name):
-        doc = self.__dict__.get("_doc", {})
-        if name in doc:
-            return doc[name]
-        raise AttributeError(name)
 
 
 def _pandas(what):
@@ -161,17 +145,6 @@ def _logs(logs, rate):
     return [_log_arg(logs, rate)]
 
 
-def _reader(rate, gyro_unit, accel_unit, time_unit, columns, topic):
-    return {
-        "rate": None if rate is None else float(rate),
-        "gyro_unit": gyro_unit,
-        "accel_unit": accel_unit,
-        "time_unit": time_unit,
-        "columns": None if columns is None else [(str(k), str(v)) for k, v in dict(columns).items()],
-        "topic": topic,
-    }
-
-
 def _model_name(model):
     return getattr(model, "_source", None) or os.fspath(model)
 
@@ -241,7 +214,7 @@ def diagnose(logs, model, rate=None, gyro_unit=None, accel_unit=None, time_unit=
         "init": init,
         "threads": None if threads is None else int(threads),
     }
-    reader = _reader(rate, gyro_unit, accel_unit, time_unit, columns, topic)
+    reader = reader_settings(rate, gyro_unit, accel_unit, time_unit, columns, topic)
     held = [] if check is None else _logs(check, rate)
     raw = _diagnose(_logs(logs, rate), _sensor_arg(model), reader, settings, held)
     stem = os.path.splitext(os.path.basename(_model_name(model)))[0] or "sensor"
@@ -305,5 +278,5 @@ def drift(logs, model, rate=None, gyro_unit=None, accel_unit=None, time_unit=Non
         "seed": int(seed),
         "threads": None if threads is None else int(threads),
     }
-    reader = _reader(rate, gyro_unit, accel_unit, time_unit, columns, topic)
+    reader = reader_settings(rate, gyro_unit, accel_unit, time_unit, columns, topic)
     return DriftResult(_drift(_logs(logs, rate), _sensor_arg(model), reader, settings))

@@ -26,15 +26,8 @@ def allan_analysis(
     edf: str,
     stable32_stop: bool,
 ) -> Dict[str, Any]: ...
-def read_log_columns(
-    path: str,
-    rate: Optional[float],
-    gyro_unit: Optional[str],
-    accel_unit: Optional[str],
-    time_unit: Optional[str],
-    columns: Optional[List[Tuple[str, str]]],
-    topic: Optional[str],
-) -> Dict[str, Any]: ...
+# reader: rate, gyro_unit, accel_unit, time_unit, columns [(channel, column)], topic.
+def read_log_columns(path: str, reader: Dict[str, Any]) -> Dict[str, Any]: ...
 def generate_columns(
     sensor_text: str,
     source: str,

@@ -3,6 +3,18 @@
 from ._imudrift import read_log_columns as _read
 
 
+def reader_settings(rate, gyro_unit, accel_unit, time_unit, columns, topic):
+    """The reader's settings as the compiled module takes them (``read_log``'s arguments)."""
+    return {
+        "rate": None if rate is None else float(rate),
+        "gyro_unit": gyro_unit,
+        "accel_unit": accel_unit,
+        "time_unit": time_unit,
+        "columns": None if columns is None else [(str(k), str(v)) for k, v in dict(columns).items()],
+        "topic": topic,
+    }
+
+
 def read_log(path, rate=None, gyro_unit=None, accel_unit=None, time_unit=None, columns=None, topic=None):
     """Read an IMU log as ``imudrift`` commands do (crate ``logio``): CSV or gzip CSV (``#``
     comment lines, a header row, columns found by name with their units), a ROS 1 bag or a ROS 2
@@ -22,15 +34,7 @@ def read_log(path, rate=None, gyro_unit=None, accel_unit=None, time_unit=None, c
         import pandas as pd
     except ImportError:
         raise ImportError("imudrift.read_log needs pandas: pip install pandas") from None
-    raw = _read(
-        str(path),
-        None if rate is None else float(rate),
-        gyro_unit,
-        accel_unit,
-        time_unit,
-        None if columns is None else [(str(k), str(v)) for k, v in dict(columns).items()],
-        topic,
-    )
+    raw = _read(str(path), reader_settings(rate, gyro_unit, accel_unit, time_unit, columns, topic))
     data = {} if raw["t"] is None else {"t": raw["t"]}
     data.update(raw["channels"])
     df = pd.DataFrame(data)

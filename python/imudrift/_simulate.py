@@ -1,15 +1,15 @@
 """``imudrift.simulate``, ``simulate_shard`` and ``merge``: the Monte Carlo drift run of
 ``imudrift simulate`` (and its shards and ``imudrift merge``) from Python."""
 
-import json
 import os
 
+from ._document import Document
 from ._imudrift import merge_shards as _merge
 from ._imudrift import simulate_run as _simulate
 from ._imudrift import simulate_shard_bytes as _shard
 
 
-class SimulateResult:
+class SimulateResult(Document):
     """The result of :func:`simulate` or :func:`merge`.
 
     - ``values``: per-run values, a numpy array runs x checkpoints x quantities (the runs that
@@ -24,21 +24,11 @@ class SimulateResult:
     """
 
     def __init__(self, raw):
-        self._doc = json.loads(raw["document"])
+        super().__init__(raw["document"])
         self.values = raw["values"]
         self.run_ids = raw["run_ids"]
         self.t = raw["t_s"]
         self.quantities = list(raw["quantities"])
-
-    def to_dict(self):
-        """The ``imudrift simulate --json`` document (a fresh copy)."""
-        return json.loads(json.dumps(self._doc))
-
-    def __getattr__(self, name):
-        doc = self.__dict__.get("_doc", {})
-        if name in doc:
-            return doc[name]
-        raise AttributeError(name)
 
     def to_pandas(self):
         """One row per checkpoint and quantity: ``t_s, quantity, mean, std, rms, p5, p50, p95,

@@ -6,7 +6,7 @@
 //! flag in the library, so a Ctrl-C during them is raised when they finish.
 
 use crate::sim::{check_experiment_size, message, run_job, terms};
-use crate::{invalid, read_log_file, read_options};
+use crate::{invalid, read_log_file, read_options, ReaderArgs};
 use diagnose::document::{self, DiagnoseSources, HeldOutChecks, ProtocolSetting};
 use diagnose::drift_check::{check_drift_fitted, CheckError, CheckSettings};
 use diagnose::protocol::{Calibration, Initialisation, Protocol};
@@ -120,18 +120,6 @@ pub struct ArrayLog<'py> {
     channels: Vec<(String, PyReadonlyArray1<'py, f64>)>,
 }
 
-/// How the reader reads log files (`read_log`'s arguments).
-#[derive(FromPyObject)]
-#[pyo3(from_item_all)]
-pub struct ReaderArgs {
-    rate: Option<f64>,
-    gyro_unit: Option<String>,
-    accel_unit: Option<String>,
-    time_unit: Option<String>,
-    columns: Option<Vec<(String, String)>>,
-    topic: Option<String>,
-}
-
 /// A log read or given, in SI, with its `columns[]` / `skipped_columns[]` JSON.
 struct OwnedLog {
     source: String,
@@ -161,14 +149,7 @@ impl OwnedLog {
 /// Read or take each log, refusing one without a gyro or accelerometer channel, with a constant
 /// channel, or with samples that are not finite.
 fn logs_of(py: Python<'_>, logs: Vec<LogArg<'_>>, reader: &ReaderArgs) -> PyResult<Vec<OwnedLog>> {
-    let opts = read_options(
-        reader.rate,
-        reader.gyro_unit.as_deref(),
-        reader.accel_unit.as_deref(),
-        reader.time_unit.as_deref(),
-        reader.columns.clone(),
-        reader.topic.clone(),
-    )?;
+    let opts = read_options(reader)?;
     let mut out = Vec::new();
     for log in logs {
         let owned = match log {

@@ -439,44 +439,49 @@ fn unit<U: Copy>(
         })
 }
 
-/// The reader's settings from `read_log`'s arguments (checked, named by them in errors).
-fn read_options(
+/// How the reader reads log files: `read_log`'s arguments.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub struct ReaderArgs {
     rate: Option<f64>,
-    gyro_unit: Option<&str>,
-    accel_unit: Option<&str>,
-    time_unit: Option<&str>,
+    gyro_unit: Option<String>,
+    accel_unit: Option<String>,
+    time_unit: Option<String>,
     columns: Option<Vec<(String, String)>>,
     topic: Option<String>,
-) -> PyResult<logio::ReadOptions> {
-    if let Some(rate_hz) = rate.filter(|&r| !logio::valid_rate_hz(r)) {
+}
+
+/// The reader's settings from `read_log`'s arguments (checked, named by them in errors).
+fn read_options(reader: &ReaderArgs) -> PyResult<logio::ReadOptions> {
+    if let Some(rate_hz) = reader.rate.filter(|&r| !logio::valid_rate_hz(r)) {
         return Err(invalid(
             logio::Problem::BadRate { rate_hz }.render(&read_log_argument),
         ));
     }
     Ok(logio::ReadOptions {
-        rate_hz: rate,
+        rate_hz: reader.rate,
         units: logio::UnitOptions {
             gyro: unit(
                 "gyro_unit",
-                gyro_unit,
+                reader.gyro_unit.as_deref(),
                 &logio::GyroUnit::ALL,
                 logio::GyroUnit::name,
             )?,
             accel: unit(
                 "accel_unit",
-                accel_unit,
+                reader.accel_unit.as_deref(),
                 &logio::AccelUnit::ALL,
                 logio::AccelUnit::name,
             )?,
             time: unit(
                 "time_unit",
-                time_unit,
+                reader.time_unit.as_deref(),
                 &logio::TimeUnit::ALL,
                 logio::TimeUnit::name,
             )?,
         },
-        columns: columns.unwrap_or_default(),
-        topic,
+        columns: reader.columns.clone().unwrap_or_default(),
+        topic: reader.topic.clone(),
     })
 }
 
@@ -502,19 +507,12 @@ fn read_log_file(path: &std::path::Path, opts: &logio::ReadOptions) -> PyResult<
 /// MCAP. Returns `source`, `rate_hz`, `t` (s, or None) and `channels`: (name, SI array) pairs in
 /// the log's order.
 #[pyfunction]
-#[pyo3(signature = (path, rate, gyro_unit, accel_unit, time_unit, columns, topic))]
-#[allow(clippy::too_many_arguments)]
 fn read_log_columns<'py>(
     py: Python<'py>,
     path: std::path::PathBuf,
-    rate: Option<f64>,
-    gyro_unit: Option<&str>,
-    accel_unit: Option<&str>,
-    time_unit: Option<&str>,
-    columns: Option<Vec<(String, String)>>,
-    topic: Option<String>,
+    reader: ReaderArgs,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let opts = read_options(rate, gyro_unit, accel_unit, time_unit, columns, topic)?;
+    let opts = read_options(&reader)?;
     let log = py.detach(|| read_log_file(&path, &opts))?;
     let logio::Log {
         source,

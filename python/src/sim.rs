@@ -24,16 +24,7 @@ const SIGNAL_POLL: Duration = Duration::from_millis(100);
 const MAX_CONFIG_BYTES: u64 = 16 << 20;
 
 /// An error and its causes as the CLI prints them (`error: {e:#}`: joined by ": ").
-pub fn message(e: &dyn std::error::Error) -> String {
-    let mut s = e.to_string();
-    let mut cause = e.source();
-    while let Some(c) = cause {
-        s.push_str(": ");
-        s.push_str(&c.to_string());
-        cause = c.source();
-    }
-    s
-}
+pub use noise::text::error_chain as message;
 
 /// A job error as `InvalidInput`, named by the Python argument where it comes from one.
 fn job_error(e: JobError) -> PyErr {

@@ -4,18 +4,14 @@ log as a file, the tables, the corrected Sensor, errors named by the Python argu
 released and Ctrl-C stopping spec's drift runs. Kept short (horizon 60 s, few seeds/replicates)."""
 
 import os
-import signal
 import subprocess
-import sys
-import threading
-import time
 
 import numpy as np
 import pytest
 
 import imudrift
 
-from test_simulate import ROOT, assert_same, cli_binary
+from test_simulate import ROOT, assert_same, cli_binary, interrupted_after, python_loops_beside
 
 MTX = os.path.join(ROOT, "configs", "sensors", "mtx.toml")
 ADIS = os.path.join(ROOT, "configs", "sensors", "adis16405.toml")
@@ -146,14 +142,8 @@ def test_diagnose_and_drift_errors_name_the_arguments(tmp_path):
 
 
 def test_the_gil_is_released_during_spec():
-    t = threading.Thread(target=lambda: imudrift.spec(MTX, times=[600], runs=300, threads=1))
-    t.start()
-    time.sleep(0.05)
-    loops, t0 = 0, time.perf_counter()
-    while time.perf_counter() - t0 < 0.2:
-        loops += 1
-    still_running = t.is_alive()
-    t.join()
+    still_running, loops = python_loops_beside(
+        lambda: imudrift.spec(MTX, times=[600], runs=300, threads=1))
     assert still_running, "spec ended too soon to tell"
     assert loops > 1000
 
@@ -169,13 +159,6 @@ except KeyboardInterrupt:
 
 
 def test_ctrl_c_stops_spec_drift_runs():
-    p = subprocess.Popen([sys.executable, "-c", CTRL_C_CHILD, MTX], stdout=subprocess.PIPE,
-                         text=True)
-    assert p.stdout.readline().strip() == "start"
-    time.sleep(1.0)
-    t0 = time.perf_counter()
-    p.send_signal(signal.SIGINT)
-    out, _ = p.communicate(timeout=30)
-    took = time.perf_counter() - t0
+    out, took = interrupted_after(CTRL_C_CHILD, MTX)
     assert "interrupted" in out
     assert took < 1.0

@@ -147,9 +147,10 @@ def _one(n, seed):
     return time.perf_counter() - t0
 
 
-def test_the_gil_is_released_while_it_runs():
-    """Python code runs in another thread while a simulation is under way."""
-    t = threading.Thread(target=_one, args=(4000, 1))
+def python_loops_beside(work):
+    """Run `work` in another thread and count a Python loop's turns in 0.2 s meanwhile: whether
+    the work was still running at the end, and the count (a few if the GIL were held)."""
+    t = threading.Thread(target=work)
     t.start()
     time.sleep(0.05)
     loops, t0 = 0, time.perf_counter()
@@ -157,6 +158,12 @@ def test_the_gil_is_released_while_it_runs():
         loops += 1
     still_running = t.is_alive()
     t.join()
+    return still_running, loops
+
+
+def test_the_gil_is_released_while_it_runs():
+    """Python code runs in another thread while a simulation is under way."""
+    still_running, loops = python_loops_beside(lambda: _one(4000, 1))
     assert still_running, "the simulation ended too soon to tell"
     assert loops > 1000
 
@@ -223,15 +230,20 @@ except KeyboardInterrupt:
 """
 
 
-def test_ctrl_c_stops_a_long_simulation():
-    p = subprocess.Popen([sys.executable, "-c", CTRL_C_CHILD, SCENARIO], stdout=subprocess.PIPE,
-                         text=True)
+def interrupted_after(child, arg):
+    """Run `child` (Python code printing "start", then "interrupted" on KeyboardInterrupt) with
+    `arg`, send it SIGINT a second after it starts; its output and the seconds it took to end."""
+    p = subprocess.Popen([sys.executable, "-c", child, arg], stdout=subprocess.PIPE, text=True)
     assert p.stdout.readline().strip() == "start"
     time.sleep(1.0)
     t0 = time.perf_counter()
     p.send_signal(signal.SIGINT)
     out, _ = p.communicate(timeout=30)
-    took = time.perf_counter() - t0
+    return out, time.perf_counter() - t0
+
+
+def test_ctrl_c_stops_a_long_simulation():
+    out, took = interrupted_after(CTRL_C_CHILD, SCENARIO)
     print(f"SIGINT to exit: {took:.3f} s")
     assert "interrupted" in out
     assert took < 1.0

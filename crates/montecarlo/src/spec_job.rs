@@ -14,7 +14,7 @@ use crate::spec::{
     drift_experiment, drift_rows, gyro_readback, gyro_spec_values, SensorSpec, READBACK_CONFIDENCE,
     READBACK_DURATION_S, READBACK_RATE_HZ,
 };
-use noise::text::time;
+use noise::text::{error_chain as chain, time};
 use noise::{Effect, Sensor, SensorModel};
 use serde::Serialize;
 
@@ -168,18 +168,6 @@ impl SpecError {
             }
         }
     }
-}
-
-/// An error and its causes joined by ": " (as the CLI prints an error).
-fn chain(e: &dyn std::error::Error) -> String {
-    let mut s = e.to_string();
-    let mut cause = e.source();
-    while let Some(c) = cause {
-        s.push_str(": ");
-        s.push_str(&c.to_string());
-        cause = c.source();
-    }
-    s
 }
 
 /// The comparison's settings, checked: requirements parsed, drift times rounded to whole

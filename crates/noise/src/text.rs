@@ -131,3 +131,15 @@ pub fn noise_density_alt(si_unit: &str, v: f64) -> Option<String> {
         _ => None,
     }
 }
+
+/// An error and its causes joined by ": ", as the command line prints an error (`{e:#}`).
+pub fn error_chain(e: &dyn std::error::Error) -> String {
+    let mut s = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        s.push_str(": ");
+        s.push_str(&c.to_string());
+        cause = c.source();
+    }
+    s
+}
