@@ -5,7 +5,7 @@
 //! within a second (the runner's stop flag); its readback, `diagnose` and `drift` have no stop
 //! flag in the library, so a Ctrl-C during them is raised when they finish.
 
-use crate::sim::{check_experiment_size, message, run_job, terms};
+use crate::sim::{check_experiment_size, detached, message, run_job, terms};
 use crate::{invalid, read_log_file, read_options, ReaderArgs};
 use diagnose::document::{self, DiagnoseSources, HeldOutChecks, ProtocolSetting};
 use diagnose::drift_check::{check_drift_fitted, CheckError, CheckSettings};
@@ -154,7 +154,7 @@ fn logs_of(py: Python<'_>, logs: Vec<LogArg<'_>>, reader: &ReaderArgs) -> PyResu
     for log in logs {
         let owned = match log {
             LogArg::Path(path) => {
-                let log = py.detach(|| read_log_file(&path, &opts))?;
+                let log = detached(py, || read_log_file(&path, &opts))??;
                 let columns = log.columns_json(&crate::read_log_argument);
                 OwnedLog {
                     source: log.source,

@@ -154,7 +154,7 @@ fn curve(
         ),
         None => None,
     };
-    py.detach(move || {
+    sim::detached(py, move || {
         let series = match phase_out {
             None => {
                 if let Some(e) = non_finite(data) {
@@ -178,7 +178,7 @@ fn curve(
             }
         };
         Ok(series.deviation(est, &grid, &opts))
-    })
+    })?
 }
 
 type Columns<'py> = (
@@ -377,7 +377,7 @@ fn allan_analysis<'py>(
     };
     let allan::Analysis {
         points, fit, sheet, ..
-    } = py.detach(move || {
+    } = sim::detached(py, move || {
         let tau0_s = 1.0 / rate;
         let quiet = |_: &str| {};
         match kind {
@@ -386,7 +386,7 @@ fn allan_analysis<'py>(
                 allan::analyse(&Series::new(&data, kind, tau0_s), est, &grid, &opts, &quiet)
             }
         }
-    });
+    })?;
     let d = PyDict::new(py);
     let col = |f: &dyn Fn(&AllanPoint) -> f64| -> Vec<f64> { points.iter().map(f).collect() };
     d.set_item("tau", col(&|p| p.tau_s).into_pyarray(py))?;
@@ -513,7 +513,7 @@ fn read_log_columns<'py>(
     reader: ReaderArgs,
 ) -> PyResult<Bound<'py, PyDict>> {
     let opts = read_options(&reader)?;
-    let log = py.detach(|| read_log_file(&path, &opts))?;
+    let log = sim::detached(py, || read_log_file(&path, &opts))??;
     let logio::Log {
         source,
         rate_hz,
@@ -588,7 +588,7 @@ fn generate_columns<'py>(
     noise::ImuErrors::check_rate(&model, dt_s)
         .map_err(|e| invalid(format!("{source}: {e}; lower the cutoff or raise rate_hz")))?;
     let n = samples as usize;
-    let (cols, temp) = py.detach(|| {
+    let (cols, temp) = sim::detached(py, || {
         let mut errors = noise::ImuErrors::new(&model, dt_s, seed, run);
         let ideal = noise::StaticLevel::STANDARD;
         let mut cols: [Vec<f64>; 6] = std::array::from_fn(|_| vec![0.0; n]);
@@ -600,7 +600,7 @@ fn generate_columns<'py>(
         );
         let temp: Vec<f64> = (0..n as u64).map(|k| errors.temperature_c(k)).collect();
         (cols, temp)
-    });
+    })?;
     for (name, c) in noise::CHANNEL_NAMES.iter().zip(&cols) {
         if let Some(k) = c.iter().position(|v| !v.is_finite()) {
             return Err(invalid(format!(

@@ -221,14 +221,10 @@ pub fn check_experiment_size(exp: &Experiment, runs: u64, all_runs: u64) -> PyRe
     Ok(())
 }
 
-/// Run `work` on a thread pool of `threads` workers (None or 0: one per core) with the GIL
-/// released, checking for Ctrl-C meanwhile: a `KeyboardInterrupt` (or any error a signal handler
-/// raises) stops the runs and is returned.
-pub fn run_job<T: Send>(
-    py: Python<'_>,
-    threads: Option<usize>,
-    work: impl FnOnce(&job::RunRange<'_>) -> Option<T> + Send,
-) -> PyResult<T> {
+/// The call's own rayon pool of `threads` workers (None or 0: one per core), dropped when the
+/// call returns: no library code runs in the process-wide rayon pool, whose threads a forked
+/// child would not have (its first parallel call would then wait for ever).
+pub fn call_pool(threads: Option<usize>) -> PyResult<rayon::ThreadPool> {
     let n = threads.unwrap_or(0);
     let max = std::thread::available_parallelism().map_or(1, |n| n.get()) * 4;
     if n > max.max(64) {
@@ -237,12 +233,30 @@ pub fn run_job<T: Send>(
             max.max(64)
         )));
     }
-    let pool = rayon::ThreadPoolBuilder::new()
+    rayon::ThreadPoolBuilder::new()
         .num_threads(n)
         .build()
         .map_err(|e| {
             pyo3::exceptions::PyOSError::new_err(format!("cannot start the worker threads: {e}"))
-        })?;
+        })
+}
+
+/// `work` with the GIL released, in a pool of the call's own ([`call_pool`], one worker per
+/// core): for the calls without a Ctrl-C check (reading a log, an Allan analysis, a merge).
+pub fn detached<T: Send>(py: Python<'_>, work: impl FnOnce() -> T + Send) -> PyResult<T> {
+    let pool = call_pool(None)?;
+    Ok(py.detach(|| pool.install(work)))
+}
+
+/// Run `work` on a thread pool of `threads` workers (None or 0: one per core) with the GIL
+/// released, checking for Ctrl-C meanwhile: a `KeyboardInterrupt` (or any error a signal handler
+/// raises) stops the runs and is returned.
+pub fn run_job<T: Send>(
+    py: Python<'_>,
+    threads: Option<usize>,
+    work: impl FnOnce(&job::RunRange<'_>) -> Option<T> + Send,
+) -> PyResult<T> {
+    let pool = call_pool(threads)?;
     let stop = AtomicBool::new(false);
     let run = |e: &Experiment, runs: std::ops::Range<u64>, _label: &str| {
         montecarlo::run_range_until(&e.kernel(), runs, &|_| {}, &stop)
@@ -386,8 +400,7 @@ pub fn merge_shards<'py>(py: Python<'py>, shards: Vec<Vec<u8>>) -> PyResult<Boun
     }
     let (inputs, overrides, exp) = job::shard_experiment(&files[0].1)
         .map_err(|e| invalid(format!("shards[0]: the stored scenario: {}", message(&e))))?;
-    let sim = py
-        .detach(|| job::merge(files, &inputs, &overrides, &exp))
+    let sim = detached(py, || job::merge(files, &inputs, &overrides, &exp))?
         .map_err(|e| invalid(message(&e)))?;
     result_dict(py, sim, &exp)
 }

@@ -167,3 +167,25 @@ def test_plot(white_gyro, monkeypatch):
     monkeypatch.setitem(sys.modules, "matplotlib.pyplot", None)
     with pytest.raises(ImportError, match="pip install matplotlib"):
         r.plot()
+
+
+def _allan_child(q):
+    g = np.random.default_rng(2).normal(0.0, 0.01, 30_000)
+    q.put(len(imudrift.allan(g, 100.0).tau))
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="fork")
+def test_a_forked_child_runs_allan():
+    """Every call runs in a pool of its own: a child forked after the parent's parallel Allan
+    work (the fit's null simulation) runs its own (it waited for ever in the process-wide pool)."""
+    import multiprocessing
+
+    imudrift.allan(np.random.default_rng(1).normal(0.0, 0.01, 20_000), 100.0)
+    ctx = multiprocessing.get_context("fork")
+    q = ctx.Queue()
+    p = ctx.Process(target=_allan_child, args=(q,))
+    p.start()
+    n = q.get(timeout=60)
+    p.join(timeout=60)
+    assert p.exitcode == 0
+    assert n == len(imudrift.allan(np.random.default_rng(2).normal(0.0, 0.01, 30_000), 100.0).tau)
