@@ -329,17 +329,16 @@ fn segment_errors_with(
         .step_by(stride)
         .map(|start| Segment::new(start, dt_s, protocol, means))
         .collect();
-    // Eight segments at a time in the strapdown's lanes (each lane's numbers are those of a
-    // one-lane integrator, bit for bit); a group of one or two alone.
+    // Up to eight segments at a time in the strapdown's lanes (each lane's numbers are those of
+    // a one-lane integrator, bit for bit), the last group in as few lanes as hold it.
     let truth = NavState::default();
     for group in segments.chunks(SEGMENT_LANES) {
-        let ends: Vec<NavState> = if group.len() <= 2 {
-            group
-                .iter()
-                .map(|s| integrate_segments::<1>(channels, dt_s, len, std::slice::from_ref(s))[0])
-                .collect()
-        } else {
-            integrate_segments::<SEGMENT_LANES>(channels, dt_s, len, group)[..group.len()].to_vec()
+        let ends: Vec<NavState> = match group.len() {
+            1 => integrate_segments::<1>(channels, dt_s, len, group).to_vec(),
+            2 => integrate_segments::<2>(channels, dt_s, len, group).to_vec(),
+            3 | 4 => integrate_segments::<4>(channels, dt_s, len, group)[..group.len()].to_vec(),
+            _ => integrate_segments::<SEGMENT_LANES>(channels, dt_s, len, group)[..group.len()]
+                .to_vec(),
         };
         for end in &ends {
             let e = nav_error(end, &truth);
@@ -474,6 +473,50 @@ mod tests {
         assert_eq!(b.len(), 29);
         // Every other overlapping segment is a consecutive one.
         assert_eq!(b.heading_rad[2], a.heading_rad[1]);
+    }
+
+    /// Segments dead-reckoned in lanes (groups of 8, 4, 2 and 1) give each segment's numbers of
+    /// a one-lane integrator bit for bit, under both calibrations and initialisations.
+    #[test]
+    fn segments_in_lanes_equal_segments_alone() {
+        let n = 30_000;
+        let chans: Vec<Vec<f64>> = (0..6)
+            .map(|c| walk(n, c as u64 + 11, 1e-4, if c == 5 { -G_MPS2 } else { 0.0 }))
+            .collect();
+        let refs: [Option<&[f64]>; 6] = std::array::from_fn(|c| Some(chans[c].as_slice()));
+        let protocols = [
+            Protocol::default(),
+            Protocol {
+                calibration: Calibration::Window { window_s: 5.0 },
+                initialisation: Initialisation::Levelled { window_s: 5.0 },
+                overlapping: true,
+                ..Protocol::default()
+            },
+        ];
+        // 300 s: 30, 15, 7, 3 and 1 segments (lanes 8+8+8+4+2, 8+4+2+1, 4+2+1...).
+        for p in &protocols {
+            let means = Means::new(&refs, p);
+            for horizon in [10.0, 20.0, 40.0, 100.0, 300.0] {
+                let got = segment_errors_with(&refs, 0.01, horizon, p, &means);
+                let len = (horizon / 0.01_f64).round() as usize;
+                let stride = if p.overlapping { len / 2 } else { len };
+                let starts = (p.lead(0.01)..=n - len).step_by(stride);
+                let mut count = 0;
+                for (i, start) in starts.enumerate() {
+                    let seg = Segment::new(start, 0.01, p, &means);
+                    let end = integrate_segments::<1>(&refs, 0.01, len, &[seg])[0];
+                    let e = nav_error(&end, &NavState::default());
+                    assert_eq!(got.heading_rad[i].to_bits(), e.yaw_rad.to_bits());
+                    assert_eq!(got.roll_rad[i].to_bits(), e.roll_rad.to_bits());
+                    assert_eq!(
+                        got.pos_horizontal_m[i].to_bits(),
+                        e.pos_horizontal_m().to_bits()
+                    );
+                    count += 1;
+                }
+                assert_eq!(got.len(), count, "horizon {horizon} s");
+            }
+        }
     }
 
     /// A constant accelerometer bias is invisible after a window calibration, and with a
