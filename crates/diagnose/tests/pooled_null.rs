@@ -13,10 +13,12 @@ use noise::SensorModel;
 /// Samples per run (655 s at 100 Hz: taus up to 164 s).
 const SAMPLES: usize = 1 << 16;
 
-/// Diagnose four clean runs of `base` (seeds `first..first + 4`; the band's master seed `seed`),
+/// Diagnose four clean runs of `base` (seeds `first..first + 4`, or `IMUDRIFT_NULL_RUNS` runs; the
+/// band's master seed `seed`, `IMUDRIFT_NULL_SEEDS` simulated logs, default 16),
 /// with the drift check on horizons of 60 and 300 s when `drift`.
 fn clean_pooled(base: &SensorModel, first: u64, drift: bool, seed: u64) -> Diagnosis {
-    let logs: Vec<GeneratedLog> = (first..first + 4)
+    let runs: u64 = env_or("IMUDRIFT_NULL_RUNS", 4);
+    let logs: Vec<GeneratedLog> = (first..first + runs)
         .map(|s| GeneratedLog::new(base, SAMPLES, s, false))
         .collect();
     let inputs: Vec<LogInput> = logs
@@ -29,6 +31,7 @@ fn clean_pooled(base: &SensorModel, first: u64, drift: bool, seed: u64) -> Diagn
         .collect();
     let settings = Settings {
         seed,
+        seeds: env_or("IMUDRIFT_NULL_SEEDS", 16),
         horizons_s: vec![60.0, 300.0],
         drift_protocol: drift.then(|| Protocol {
             horizons_s: vec![60.0, 300.0],
@@ -37,6 +40,14 @@ fn clean_pooled(base: &SensorModel, first: u64, drift: bool, seed: u64) -> Diagn
         ..Settings::default()
     };
     diagnose_runs(&inputs, base, &settings, &()).expect("diagnose runs")
+}
+
+/// The environment variable `name` as a number, else `default`.
+fn env_or<T: std::str::FromStr>(name: &str, default: T) -> T {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
 }
 
 /// Which step named each effect of a diagnosis: "detector" (round 0), "drift" (the drift loop),
@@ -78,14 +89,8 @@ fn named_by_step(d: &Diagnosis) -> Vec<String> {
 #[test]
 #[ignore = "minutes: run with --ignored --nocapture"]
 fn null_rate_of_pooled_diagnoses() {
-    let n: u64 = std::env::var("IMUDRIFT_NULL_N")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(50);
-    let first: u64 = std::env::var("IMUDRIFT_NULL_FIRST")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(0);
+    let n: u64 = env_or("IMUDRIFT_NULL_N", 50);
+    let first: u64 = env_or("IMUDRIFT_NULL_FIRST", 0);
     // "on" or "off": every diagnosis with or without the drift check (default: alternating).
     let drift_mode = std::env::var("IMUDRIFT_NULL_DRIFT").unwrap_or_default();
     let mut alarms = 0;
