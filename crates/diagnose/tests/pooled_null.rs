@@ -5,9 +5,8 @@
 
 mod common;
 
-use common::{base_model, GeneratedLog, DT_S};
-use diagnose::protocol::Protocol;
-use diagnose::{diagnose_runs, Diagnosis, LogInput, Settings};
+use common::{base_model, GeneratedLog};
+use diagnose::{diagnose_runs, Diagnosis, Settings};
 use noise::SensorModel;
 
 /// Samples per run (655 s at 100 Hz: taus up to 164 s).
@@ -21,25 +20,12 @@ fn clean_pooled(base: &SensorModel, first: u64, drift: bool, seed: u64) -> Diagn
     let logs: Vec<GeneratedLog> = (first..first + runs)
         .map(|s| GeneratedLog::new(base, SAMPLES, s, false))
         .collect();
-    let inputs: Vec<LogInput> = logs
-        .iter()
-        .map(|l| LogInput {
-            dt_s: DT_S,
-            channels: noise::ImuChannels(l.channels.each_ref().map(|c| Some(c.as_slice()))),
-            temperature_c: None,
-        })
-        .collect();
     let settings = Settings {
         seed,
         seeds: env_or("IMUDRIFT_NULL_SEEDS", 16),
-        horizons_s: vec![60.0, 300.0],
-        drift_protocol: drift.then(|| Protocol {
-            horizons_s: vec![60.0, 300.0],
-            ..Protocol::default()
-        }),
-        ..Settings::default()
+        ..common::pooled_settings(drift)
     };
-    diagnose_runs(&inputs, base, &settings, &()).expect("diagnose runs")
+    diagnose_runs(&common::run_inputs(&logs), base, &settings, &()).expect("diagnose runs")
 }
 
 /// The environment variable `name` as a number, else `default`.

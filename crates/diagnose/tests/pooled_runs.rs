@@ -5,9 +5,8 @@
 
 mod common;
 
-use common::{base_model, GeneratedLog, DT_S};
-use diagnose::protocol::Protocol;
-use diagnose::{diagnose_runs, Diagnosis, LogInput, Settings};
+use common::{base_model, GeneratedLog};
+use diagnose::{diagnose_runs, Diagnosis};
 use noise::{Channel, Effect, SensorModel};
 
 /// Samples per run (655 s at 100 Hz: taus up to 164 s).
@@ -25,23 +24,13 @@ fn diagnose_generated(
         .iter()
         .map(|&s| GeneratedLog::new(model, SAMPLES, s, false))
         .collect();
-    let inputs: Vec<LogInput> = logs
-        .iter()
-        .map(|l| LogInput {
-            dt_s: DT_S,
-            channels: noise::ImuChannels(l.channels.each_ref().map(|c| Some(c.as_slice()))),
-            temperature_c: None,
-        })
-        .collect();
-    let settings = Settings {
-        horizons_s: vec![60.0, 300.0],
-        drift_protocol: drift.then(|| Protocol {
-            horizons_s: vec![60.0, 300.0],
-            ..Protocol::default()
-        }),
-        ..Settings::default()
-    };
-    diagnose_runs(&inputs, base, &settings, &()).expect("diagnose runs")
+    diagnose_runs(
+        &common::run_inputs(&logs),
+        base,
+        &common::pooled_settings(drift),
+        &(),
+    )
+    .expect("diagnose runs")
 }
 
 fn named(d: &Diagnosis) -> Vec<String> {
