@@ -37,7 +37,7 @@
 
 use crate::fitted_on::FittedOn;
 use crate::model_terms::{fitted_term, set_term, squared_level};
-use crate::simulate::{adev_at, static_log, SimSetup};
+use crate::simulate::{adev_at, with_static_log, SimSetup};
 use allan::{EdfMethod, Estimator};
 use noise::{AxisModel, Channel, Effect, SensorModel, Term};
 use rayon::prelude::*;
@@ -378,17 +378,17 @@ fn simulate_fitted_logs(
                 temp_coeff: noise::ImuChannels::default(),
             };
             let run = first_run + (r * logs + t) as u64;
-            let log = static_log(model, &setup, seed, run);
-            let out = fits
-                .iter()
-                .map(|f| {
-                    let ms = &f.grid_m[..f.held[t]];
-                    adev_at(&log[f.ch], fitted.sample_interval_s, ms)
-                        .iter()
-                        .map(|a| a * a)
-                        .collect()
-                })
-                .collect();
+            let out = with_static_log(model, &setup, seed, run, |log| {
+                fits.iter()
+                    .map(|f| {
+                        let ms = &f.grid_m[..f.held[t]];
+                        adev_at(&log[f.ch], fitted.sample_interval_s, ms)
+                            .iter()
+                            .map(|a| a * a)
+                            .collect()
+                    })
+                    .collect()
+            });
             tick();
             out
         })

@@ -37,7 +37,7 @@ use crate::fitted_on::FittedOn;
 use crate::input::LogInput;
 use crate::observer::Observer;
 use crate::protocol::{all_segment_errors, Protocol, Quantity, SegmentErrors};
-use crate::simulate::{static_log, SimSetup};
+use crate::simulate::{with_static_log, SimSetup};
 use noise::SensorModel;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -407,10 +407,11 @@ fn simulate_experiments<'m>(
                 temp_coeff: noise::ImuChannels::default(),
             };
             let run = (r * logs.len() + l) as u64;
-            let sim = static_log(model_of(r), &setup, settings.seed, run);
-            let chans =
-                noise::ImuChannels::from_fn(|c| setup.active[c].then(|| sim[c].as_slice())).0;
-            let out = all_segment_errors(&chans, dt_s, &settings.protocol);
+            let out = with_static_log(model_of(r), &setup, settings.seed, run, |sim| {
+                let chans =
+                    noise::ImuChannels::from_fn(|c| setup.active[c].then(|| sim[c].as_slice())).0;
+                all_segment_errors(&chans, dt_s, &settings.protocol)
+            });
             progress.tick();
             out
         })

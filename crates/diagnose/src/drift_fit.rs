@@ -39,7 +39,7 @@ use crate::model_terms::{
     fitted_term, flicker_band, has_random_walk_bias_instability, set_term, squared_level,
 };
 use crate::protocol::{all_segment_errors, Protocol, Quantity};
-use crate::simulate::{static_log, SimSetup};
+use crate::simulate::{with_static_log, SimSetup};
 use crate::trials::{at_squared_level, Trial};
 use noise::{Channel, Effect, GaussMarkov, ModelError, SensorModel, Term};
 
@@ -114,21 +114,23 @@ impl UnitDrift<'_> {
         let sums: Vec<Vec<([f64; 5], usize)>> = (0..self.logs as u64)
             .into_par_iter()
             .map(|s| {
-                let log = static_log(model, &setup, self.seed, UNIT_RUN_BASE + s);
-                let mut acc = vec![([0.0; 5], 0usize); nh];
-                for &n in &lengths {
-                    let chans = noise::ImuChannels::from_fn(|i| (i == c).then(|| &log[i][..n])).0;
-                    for (h, e) in all_segment_errors(&chans, dt_u, self.protocol)
-                        .iter()
-                        .enumerate()
-                    {
-                        for (qi, q) in Quantity::ALL.iter().enumerate() {
-                            acc[h].0[qi] += e.values(*q).iter().map(|x| x * x).sum::<f64>();
+                with_static_log(model, &setup, self.seed, UNIT_RUN_BASE + s, |log| {
+                    let mut acc = vec![([0.0; 5], 0usize); nh];
+                    for &n in &lengths {
+                        let chans =
+                            noise::ImuChannels::from_fn(|i| (i == c).then(|| &log[i][..n])).0;
+                        for (h, e) in all_segment_errors(&chans, dt_u, self.protocol)
+                            .iter()
+                            .enumerate()
+                        {
+                            for (qi, q) in Quantity::ALL.iter().enumerate() {
+                                acc[h].0[qi] += e.values(*q).iter().map(|x| x * x).sum::<f64>();
+                            }
+                            acc[h].1 += e.len();
                         }
-                        acc[h].1 += e.len();
                     }
-                }
-                acc
+                    acc
+                })
             })
             .collect();
         (0..nh)

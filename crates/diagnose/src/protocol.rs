@@ -14,7 +14,7 @@
 use noise::units::STANDARD_GRAVITY_MPS2 as G_MPS2;
 use noise::Channel;
 use serde::Serialize;
-use strapdown::{nav_error, Attitude, BodyVector, NavState, Scheme, Strapdown};
+use strapdown::{nav_error, Attitude, NavState, Scheme, StrapdownLanes};
 
 /// How the bias is removed before each segment.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -320,27 +320,66 @@ fn segment_errors_with(
     if len == 0 || n < lead.saturating_add(len) {
         return out;
     }
-    let ideal = [0.0, 0.0, 0.0, 0.0, 0.0, -G_MPS2];
     let stride = if protocol.overlapping {
         (len / 2).max(1)
     } else {
         len
     };
+    let segments: Vec<Segment> = (lead..=n - len)
+        .step_by(stride)
+        .map(|start| Segment::new(start, dt_s, protocol, means))
+        .collect();
+    // Up to eight segments at a time in the strapdown's lanes (each lane's numbers are those of
+    // a one-lane integrator, bit for bit), the last group in as few lanes as hold it.
     let truth = NavState::default();
-    let mut start = lead;
-    while start + len <= n {
-        // The bias removed from each channel for this segment.
+    for group in segments.chunks(SEGMENT_LANES) {
+        let ends: Vec<NavState> = match group.len() {
+            1 => integrate_segments::<1>(channels, dt_s, len, group).to_vec(),
+            2 => integrate_segments::<2>(channels, dt_s, len, group).to_vec(),
+            3 | 4 => integrate_segments::<4>(channels, dt_s, len, group)[..group.len()].to_vec(),
+            _ => integrate_segments::<SEGMENT_LANES>(channels, dt_s, len, group)[..group.len()]
+                .to_vec(),
+        };
+        for end in &ends {
+            let e = nav_error(end, &truth);
+            out.heading_rad.push(e.yaw_rad);
+            out.roll_rad.push(e.roll_rad);
+            out.pitch_rad.push(e.pitch_rad);
+            out.pos_horizontal_m.push(e.pos_horizontal_m());
+            out.vel_horizontal_mps.push(e.vel_horizontal_mps());
+        }
+    }
+    out
+}
+
+/// Segments dead-reckoned together, one per strapdown lane.
+const SEGMENT_LANES: usize = 8;
+
+/// The specific force of a static level IMU, and its zero rate: the readings the calibration
+/// refers each channel to (gx gy gz ax ay az).
+const IDEAL: [f64; 6] = [0.0, 0.0, 0.0, 0.0, 0.0, -G_MPS2];
+
+/// One segment: its first sample, the bias removed from each channel and its initial state.
+#[derive(Clone, Copy)]
+struct Segment {
+    start: usize,
+    offset: [f64; 6],
+    init: NavState,
+}
+
+impl Segment {
+    /// The user's calibration and initialisation before the segment starting at `start`.
+    fn new(start: usize, dt_s: f64, protocol: &Protocol, means: &Means) -> Segment {
         let offset: [f64; 6] = std::array::from_fn(|ch| match protocol.calibration {
             Calibration::None => 0.0,
-            Calibration::LogMean => means.whole[ch].map_or(0.0, |m| m - ideal[ch]),
+            Calibration::LogMean => means.whole[ch].map_or(0.0, |m| m - IDEAL[ch]),
             Calibration::Window { window_s } => {
                 let w = window_samples(window_s, dt_s);
                 means
                     .window(ch, start - w, start)
-                    .map_or(0.0, |m| m - ideal[ch])
+                    .map_or(0.0, |m| m - IDEAL[ch])
             }
         });
-        let value = |ch: usize, k: usize| channels[ch].map_or(ideal[ch], |c| c[k] - offset[ch]);
         let attitude = match protocol.initialisation {
             Initialisation::Perfect => Attitude::identity(),
             Initialisation::Levelled { window_s } => {
@@ -348,7 +387,7 @@ fn segment_errors_with(
                 let f: [f64; 3] = std::array::from_fn(|a| {
                     means
                         .window(3 + a, start - w, start)
-                        .map_or(ideal[3 + a], |m| m - offset[3 + a])
+                        .map_or(IDEAL[3 + a], |m| m - offset[3 + a])
                 });
                 let roll = (-f[1]).atan2(-f[2]);
                 let pitch = f[0].atan2(f[1].hypot(f[2]));
@@ -359,21 +398,38 @@ fn segment_errors_with(
             attitude,
             ..NavState::default()
         };
-        let mut nav = Strapdown::new(Scheme::Accurate, init, G_MPS2);
-        for k in start..start + len {
-            let gyro = BodyVector::new(value(0, k), value(1, k), value(2, k));
-            let accel = BodyVector::new(value(3, k), value(4, k), value(5, k));
-            nav.step(&gyro, &accel, dt_s);
+        Segment {
+            start,
+            offset,
+            init,
         }
-        let e = nav_error(&nav.state(), &truth);
-        out.heading_rad.push(e.yaw_rad);
-        out.roll_rad.push(e.roll_rad);
-        out.pitch_rad.push(e.pitch_rad);
-        out.pos_horizontal_m.push(e.pos_horizontal_m());
-        out.vel_horizontal_mps.push(e.vel_horizontal_mps());
-        start += stride;
     }
-    out
+}
+
+/// Dead-reckon `segments` (at most `L`; the lanes beyond them repeat the first and are not
+/// returned meaningfully) for `len` samples each from rest with the `Accurate` scheme: sample k
+/// of a segment reads each channel's value less the segment's offset (a missing channel its
+/// ideal value). Returns each lane's final state.
+fn integrate_segments<const L: usize>(
+    channels: &[Option<&[f64]>; 6],
+    dt_s: f64,
+    len: usize,
+    segments: &[Segment],
+) -> [NavState; L] {
+    let lane: [Segment; L] = std::array::from_fn(|l| segments[l.min(segments.len() - 1)]);
+    let init: [NavState; L] = std::array::from_fn(|l| lane[l].init);
+    let mut nav = StrapdownLanes::<L>::new(Scheme::Accurate, &init, G_MPS2);
+    nav.integrate(len, dt_s, |first, chunk| {
+        for (c, channel) in channels.iter().enumerate() {
+            for (l, seg) in lane.iter().enumerate() {
+                let from = seg.start + first;
+                for (j, s) in chunk.iter_mut().enumerate() {
+                    s[c][l] = channel.map_or(IDEAL[c], |x| x[from + j] - seg.offset[c]);
+                }
+            }
+        }
+    });
+    std::array::from_fn(|l| nav.state(l))
 }
 
 #[cfg(test)]
@@ -417,6 +473,50 @@ mod tests {
         assert_eq!(b.len(), 29);
         // Every other overlapping segment is a consecutive one.
         assert_eq!(b.heading_rad[2], a.heading_rad[1]);
+    }
+
+    /// Segments dead-reckoned in lanes (groups of 8, 4, 2 and 1) give each segment's numbers of
+    /// a one-lane integrator bit for bit, under both calibrations and initialisations.
+    #[test]
+    fn segments_in_lanes_equal_segments_alone() {
+        let n = 30_000;
+        let chans: Vec<Vec<f64>> = (0..6)
+            .map(|c| walk(n, c as u64 + 11, 1e-4, if c == 5 { -G_MPS2 } else { 0.0 }))
+            .collect();
+        let refs: [Option<&[f64]>; 6] = std::array::from_fn(|c| Some(chans[c].as_slice()));
+        let protocols = [
+            Protocol::default(),
+            Protocol {
+                calibration: Calibration::Window { window_s: 5.0 },
+                initialisation: Initialisation::Levelled { window_s: 5.0 },
+                overlapping: true,
+                ..Protocol::default()
+            },
+        ];
+        // 300 s: 30, 15, 7, 3 and 1 segments (lanes 8+8+8+4+2, 8+4+2+1, 4+2+1...).
+        for p in &protocols {
+            let means = Means::new(&refs, p);
+            for horizon in [10.0, 20.0, 40.0, 100.0, 300.0] {
+                let got = segment_errors_with(&refs, 0.01, horizon, p, &means);
+                let len = (horizon / 0.01_f64).round() as usize;
+                let stride = if p.overlapping { len / 2 } else { len };
+                let starts = (p.lead(0.01)..=n - len).step_by(stride);
+                let mut count = 0;
+                for (i, start) in starts.enumerate() {
+                    let seg = Segment::new(start, 0.01, p, &means);
+                    let end = integrate_segments::<1>(&refs, 0.01, len, &[seg])[0];
+                    let e = nav_error(&end, &NavState::default());
+                    assert_eq!(got.heading_rad[i].to_bits(), e.yaw_rad.to_bits());
+                    assert_eq!(got.roll_rad[i].to_bits(), e.roll_rad.to_bits());
+                    assert_eq!(
+                        got.pos_horizontal_m[i].to_bits(),
+                        e.pos_horizontal_m().to_bits()
+                    );
+                    count += 1;
+                }
+                assert_eq!(got.len(), count, "horizon {horizon} s");
+            }
+        }
     }
 
     /// A constant accelerometer bias is invisible after a window calibration, and with a

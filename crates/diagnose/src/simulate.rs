@@ -121,20 +121,58 @@ pub fn static_log(
     seed: u64,
     run: u64,
 ) -> ImuChannels<Vec<f64>> {
+    let mut out = ImuChannels::default();
+    static_log_into(model, setup, seed, run, &mut out);
+    out
+}
+
+thread_local! {
+    /// The log [`with_static_log`] lends, kept per thread between calls (a fresh 8 MB vector per
+    /// channel and log costs its page faults again every time).
+    static LOG_BUFFER: std::cell::RefCell<ImuChannels<Vec<f64>>> = std::cell::RefCell::default();
+}
+
+/// `f` of the static log of run `run` ([`static_log`]'s values), generated into this thread's
+/// reused buffer.
+pub fn with_static_log<R>(
+    model: &SensorModel,
+    setup: &SimSetup,
+    seed: u64,
+    run: u64,
+    f: impl FnOnce(&ImuChannels<Vec<f64>>) -> R,
+) -> R {
+    // Taken out for the call, so that a nested call finds an empty buffer instead of a borrow.
+    let mut log = LOG_BUFFER.with(|b| std::mem::take(&mut *b.borrow_mut()));
+    static_log_into(model, setup, seed, run, &mut log);
+    let result = f(&log);
+    LOG_BUFFER.with(|b| *b.borrow_mut() = log);
+    result
+}
+
+/// [`static_log`] into `out`'s vectors (their capacity reused).
+fn static_log_into(
+    model: &SensorModel,
+    setup: &SimSetup,
+    seed: u64,
+    run: u64,
+    out: &mut ImuChannels<Vec<f64>>,
+) {
     let n = setup.samples;
     let mut errors = ImuErrors::new(model, setup.dt_s, seed, run);
     // A static level IMU reads zero rate and specific force (0, 0, -g) (docs/cli.md convention).
     let gyro = Vector3::zeros();
     let accel = Vector3::new(0.0, 0.0, -G_MPS2);
-    let mut out: ImuChannels<Vec<f64>> = ImuChannels::default();
     // Each channel owns its random streams, so generating only the active ones changes nothing else.
     for (ch, gen) in Channel::ALL
         .into_iter()
         .zip(errors.channels_mut().iter_mut())
     {
+        let series = &mut out[ch];
+        series.clear();
         if setup.active[ch] {
-            out[ch] = vec![0.0; n];
-            gen.fill_static(0, if ch.is_gyro() { &gyro } else { &accel }, &mut out[ch]);
+            // `fill_static` writes every sample (no value of a previous log survives).
+            series.resize(n, 0.0);
+            gen.fill_static(0, if ch.is_gyro() { &gyro } else { &accel }, series);
         }
     }
     if let Some(temp) = setup.temperature_c {
@@ -147,7 +185,6 @@ pub fn static_log(
             }
         }
     }
-    out
 }
 
 /// Overlapping Allan deviation of `series` at exactly the averaging factors `grid_m` (no intervals).
@@ -190,7 +227,19 @@ impl RunKernel for Kernel<'_> {
     /// horizon the protocol's segment errors (heading, roll, pitch, horizontal position and
     /// velocity).
     fn run(&self, run: u64, out: &mut [f64]) -> Result<(), montecarlo::runner::RunError> {
-        let log = static_log(self.model, self.setup, self.seed, run);
+        with_static_log(self.model, self.setup, self.seed, run, |log| {
+            self.rows(log, out)
+        })
+    }
+}
+
+impl Kernel<'_> {
+    /// The rows of one simulated log (`RunKernel::run`).
+    fn rows(
+        &self,
+        log: &ImuChannels<Vec<f64>>,
+        out: &mut [f64],
+    ) -> Result<(), montecarlo::runner::RunError> {
         let m = self.taus();
         let longest = self.setup.samples;
         for (d, &n) in self.lengths.iter().enumerate() {

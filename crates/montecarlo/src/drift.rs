@@ -197,70 +197,23 @@ impl DriftKernel {
 }
 
 /// Integrate `n` samples of every lane's block (`block[lane][channel][sample]`, gyro x y z then
-/// accelerometer x y z). Compiled as is and with AVX-512F / AVX2 enabled, the widest the CPU has
-/// chosen at run time: the lanes' operations are the same at every width (no fused
-/// multiply-add), so the same bits.
+/// accelerometer x y z), through [`StrapdownLanes::integrate`] (the widest vector unit the CPU
+/// has, the same bits at every width).
 fn integrate_fast<const L: usize>(
     nav: &mut StrapdownLanes<L>,
     block: &[[[f64; BLOCK]; 6]],
     n: usize,
     dt_s: f64,
 ) {
-    #[inline(always)]
-    fn integrate<const L: usize>(
-        nav: &mut StrapdownLanes<L>,
-        block: &[[[f64; BLOCK]; 6]],
-        n: usize,
-        dt_s: f64,
-    ) {
-        // Sample-major copy first (sample i: channel c of every lane contiguous), in chunks of
-        // eight samples so both sides stay in the first-level cache.
-        const CHUNK: usize = 8;
-        let mut samples = [[[0.0f64; L]; 6]; CHUNK];
-        for start in (0..n).step_by(CHUNK) {
-            let m = CHUNK.min(n - start);
-            for (l, lane) in block.iter().enumerate() {
-                for (c, channel) in lane.iter().enumerate() {
-                    for (j, s) in samples[..m].iter_mut().enumerate() {
-                        s[c][l] = channel[start + j];
-                    }
+    nav.integrate(n, dt_s, |start, samples| {
+        for (l, lane) in block.iter().enumerate() {
+            for (c, channel) in lane.iter().enumerate() {
+                for (j, s) in samples.iter_mut().enumerate() {
+                    s[c][l] = channel[start + j];
                 }
             }
-            for s in &samples[..m] {
-                nav.step(&[s[0], s[1], s[2]], &[s[3], s[4], s[5]], dt_s);
-            }
         }
-    }
-    #[cfg(target_arch = "x86_64")]
-    {
-        #[target_feature(enable = "avx512f")]
-        fn avx512<const L: usize>(
-            nav: &mut StrapdownLanes<L>,
-            block: &[[[f64; BLOCK]; 6]],
-            n: usize,
-            dt_s: f64,
-        ) {
-            integrate(nav, block, n, dt_s)
-        }
-        #[target_feature(enable = "avx2")]
-        fn avx2<const L: usize>(
-            nav: &mut StrapdownLanes<L>,
-            block: &[[[f64; BLOCK]; 6]],
-            n: usize,
-            dt_s: f64,
-        ) {
-            integrate(nav, block, n, dt_s)
-        }
-        if L > 1 && std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU supports AVX-512F (checked just above).
-            return unsafe { avx512(nav, block, n, dt_s) };
-        }
-        if L > 1 && std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2 (checked just above).
-            return unsafe { avx2(nav, block, n, dt_s) };
-        }
-    }
-    integrate(nav, block, n, dt_s)
+    });
 }
 
 /// The active terms of `model` with their law sources (each term's own,

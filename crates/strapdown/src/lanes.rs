@@ -18,7 +18,11 @@ use crate::mechanisation::{NavState, Scheme, RENORMALISE_EVERY};
 use nalgebra::{Matrix3, Vector3};
 
 /// `[[f64; L]; N]`: component `k` of every lane at `[k][lane]`.
-type Lanes<const N: usize, const L: usize> = [[f64; L]; N];
+pub type Lanes<const N: usize, const L: usize> = [[f64; L]; N];
+
+/// Samples per chunk of [`StrapdownLanes::integrate`] (eight keep a chunk of eight lanes in the
+/// first-level cache).
+pub const CHUNK: usize = 8;
 
 /// `L` strapdown integrators (see the module docs).
 #[derive(Clone, Debug)]
@@ -158,6 +162,66 @@ impl<const L: usize> StrapdownLanes<L> {
             self.steps_since_renormalise = 0;
             self.c = renormalise(&self.c);
         }
+    }
+
+    /// Advance every lane by `n` samples whose inputs `fill(start, chunk)` writes, [`CHUNK`]
+    /// samples at a time: `chunk[j][c][lane]` is sample `start + j`'s channel `c` (gyro x y z,
+    /// then accelerometer x y z; `chunk.len()` samples, the last chunk shorter). The same steps as
+    /// [`Self::step`], compiled as is and, with more than one lane, with AVX-512F or AVX2 enabled
+    /// (the widest the CPU has, chosen at run time): the lanes' operations are the same at every
+    /// width (no fused multiply-add), so the same bits. The sample-major chunk stays in the
+    /// first-level cache while the caller gathers it.
+    #[inline]
+    pub fn integrate<F>(&mut self, n: usize, dt_s: f64, fill: F)
+    where
+        F: FnMut(usize, &mut [Lanes<6, L>]),
+    {
+        #[inline(always)]
+        fn run<const L: usize, F: FnMut(usize, &mut [Lanes<6, L>])>(
+            nav: &mut StrapdownLanes<L>,
+            n: usize,
+            dt_s: f64,
+            mut fill: F,
+        ) {
+            let mut samples = [[[0.0f64; L]; 6]; CHUNK];
+            for start in (0..n).step_by(CHUNK) {
+                let chunk = &mut samples[..CHUNK.min(n - start)];
+                fill(start, chunk);
+                for s in chunk.iter() {
+                    nav.step(&[s[0], s[1], s[2]], &[s[3], s[4], s[5]], dt_s);
+                }
+            }
+        }
+        #[cfg(target_arch = "x86_64")]
+        {
+            #[target_feature(enable = "avx512f")]
+            fn avx512<const L: usize, F: FnMut(usize, &mut [Lanes<6, L>])>(
+                nav: &mut StrapdownLanes<L>,
+                n: usize,
+                dt_s: f64,
+                fill: F,
+            ) {
+                run(nav, n, dt_s, fill)
+            }
+            #[target_feature(enable = "avx2")]
+            fn avx2<const L: usize, F: FnMut(usize, &mut [Lanes<6, L>])>(
+                nav: &mut StrapdownLanes<L>,
+                n: usize,
+                dt_s: f64,
+                fill: F,
+            ) {
+                run(nav, n, dt_s, fill)
+            }
+            if L > 1 && std::arch::is_x86_feature_detected!("avx512f") {
+                // SAFETY: the CPU supports AVX-512F (checked just above).
+                return unsafe { avx512(self, n, dt_s, fill) };
+            }
+            if L > 1 && std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU supports AVX2 (checked just above).
+                return unsafe { avx2(self, n, dt_s, fill) };
+            }
+        }
+        run(self, n, dt_s, fill)
     }
 }
 

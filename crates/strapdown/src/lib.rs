@@ -32,7 +32,7 @@ pub mod spec;
 pub mod trajectory;
 
 pub use frames::{Attitude, BodyVector, NavVector};
-pub use lanes::{Strapdown, StrapdownLanes};
+pub use lanes::{Lanes, Strapdown, StrapdownLanes, CHUNK};
 pub use mechanisation::{NavState, Scheme};
 pub use nav_error::{nav_error, NavError};
 pub use spec::{TrajectoryError, TrajectorySpec};

@@ -416,6 +416,55 @@ struct IirState {
     ys: Vec<f64>,
 }
 
+/// Which raw samples of a block are read out: the one at `next` (index in the block) into output
+/// slot `slot`, then every `every`-th into the following slots.
+#[derive(Clone, Copy)]
+struct Readout {
+    next: u64,
+    slot: usize,
+    every: u64,
+}
+
+impl IirState {
+    /// The recursion over `raw`, y_r = sum_i b_i x_{r-i} - sum_{i>=1} a_i y_{r-i} (the histories
+    /// newest first), writing the samples `read` names into `out`; `NB`, `NA` the lengths of b and
+    /// a (the first- and second-order kinds), so the histories stay in registers.
+    #[inline]
+    fn run<const NB: usize, const NA: usize>(
+        &mut self,
+        raw: &[f64],
+        read: Readout,
+        out: &mut [f64],
+    ) {
+        let b: [f64; NB] = std::array::from_fn(|i| self.b[i]);
+        let a: [f64; NA] = std::array::from_fn(|i| self.a[i]);
+        let mut xs: [f64; NB] = std::array::from_fn(|i| self.xs[i]);
+        let mut ys: [f64; NA] = std::array::from_fn(|i| self.ys[i]);
+        let Readout {
+            mut next,
+            mut slot,
+            every,
+        } = read;
+        for (j, &x) in raw.iter().enumerate() {
+            xs.rotate_right(1);
+            xs[0] = x;
+            let mut y: f64 = b.iter().zip(xs.iter()).map(|(b, x)| b * x).sum();
+            for i in 1..NA {
+                y -= a[i] * ys[i - 1];
+            }
+            ys.rotate_right(1);
+            ys[0] = y;
+            if j as u64 == next {
+                out[slot] = y;
+                slot += 1;
+                next += every;
+            }
+        }
+        self.xs.copy_from_slice(&xs);
+        self.ys.copy_from_slice(&ys);
+    }
+}
+
 /// The output filter's running state: the raw history it needs and where the raw stream stands.
 #[derive(Clone, Debug)]
 pub(crate) struct FilterState {
@@ -468,19 +517,27 @@ impl FilterState {
         let (d, pre) = (self.decimation as u64, self.preroll as u64);
         let is_output = |r: u64| r >= pre && (r - pre).is_multiple_of(d);
         let slot = |r: u64| ((r - pre) / d - k0) as usize;
-        if let Some(IirState { b, a, xs, ys }) = &mut self.iir {
-            for (j, &x) in raw.iter().enumerate() {
-                xs.rotate_right(1);
-                xs[0] = x;
-                let mut y: f64 = b.iter().zip(xs.iter()).map(|(b, x)| b * x).sum();
-                for i in 1..a.len() {
-                    y -= a[i] * ys[i - 1];
-                }
-                ys.rotate_right(1);
-                ys[0] = y;
-                let r = start + j as u64;
-                if is_output(r) {
-                    out[slot(r)] = y;
+        if let Some(state) = &mut self.iir {
+            // Raw index (in `raw`) and output slot of the first sample read out in this block;
+            // then every d-th.
+            let first = if start <= pre {
+                pre
+            } else {
+                pre + (start - pre).div_ceil(d) * d
+            };
+            let read = Readout {
+                next: first - start,
+                slot: ((first - pre) / d - k0) as usize,
+                every: d,
+            };
+            match (state.b.len(), state.a.len()) {
+                (1, 2) => state.run::<1, 2>(raw, read, out),
+                (2, 2) => state.run::<2, 2>(raw, read, out),
+                (2, 3) => state.run::<2, 3>(raw, read, out),
+                (3, 3) => state.run::<3, 3>(raw, read, out),
+                // `OutputFilter::recursion` makes only these two orders.
+                (nb, na) => {
+                    unreachable!("an IIR output filter of order 1 or 2, not b {nb}, a {na}")
                 }
             }
         } else {
