@@ -15,10 +15,19 @@
 //! horizon) and many logs; it proposes a level, which the re-simulation at the logs' own rate
 //! then confirms or rejects.
 //!
-//! The level minimises chi2 = sum over taus of z_allan^2 + sum over the channel's (horizon,
+//! The level minimises chi2 = sum over taus of z_allan^2 + w sum over the channel's (horizon,
 //! quantity) pairs of z_drift^2 (`drift_gap::DriftFit::z`), and the candidate is named by the
 //! Allan rule (`Settings::min_delta_bic`): its BIC = chi2 + k ln M (M taus and drift pairs) + the
 //! cost of a searched shape must be below the unchanged model's chi2 by at least that much.
+//!
+//! The weight w (`DriftFitInput::drift_weight`) is there because the drift pairs are not
+//! independent: gx informs roll, horizontal position and velocity at every horizon, and under a
+//! static protocol the last two are the tilt error integrated, nearly the same draw; counted as
+//! independent, one 2-sigma drift excursion weighed like six, and clean runs pooled four at a time
+//! named a slow term on gx or gy in 11 of 100 diagnoses with the drift check (10 by this loop; 0
+//! of 100 without it; docs/diagnose.md, "False alarms of the pooled rule"). The correlation of
+//! the pairs comes from the model's own simulated logs (`drift_gap`), so the drift part of the
+//! statistic is scaled to its null distribution under the model, not to our tests.
 
 use crate::candidates::{
     free_parameters, level_term, shape_search_penalty, unit_family_signature, unit_signature,
@@ -145,8 +154,10 @@ pub(crate) struct DriftFitInput<'a> {
     pub(crate) dt_s: f64,
     /// The rate ramp's level (`trials`: the runs' least-squares slope).
     pub(crate) ramp_slope: f64,
-    /// The channel's informed (horizon index, quantity, drift numbers).
+    /// The channel's informed (horizon index, quantity, drift numbers), and the correlation of
+    /// their z-scores under the model (`DriftGap::correlation_of_channel`, same order).
     pub(crate) drift: Vec<(usize, Quantity, DriftFit)>,
+    pub(crate) correlation: Vec<Vec<f64>>,
     pub(crate) unit: UnitDrift<'a>,
 }
 
@@ -159,18 +170,48 @@ pub(crate) struct DriftTrial {
 
 impl DriftFitInput<'_> {
     /// The joint chi2 when the term's level moves from c0 to c, its Allan signature `f` and unit
-    /// drift `u[h][q]`.
-    fn chi2(&self, data: &FitData, f: &[f64], u: &[[f64; 5]], c0: f64, c: f64) -> f64 {
+    /// drift `u[h][q]`, the drift pairs weighed by `w` ([`DriftFitInput::drift_weight`]).
+    fn chi2(&self, data: &FitData, f: &[f64], u: &[[f64; 5]], (c0, c): (f64, f64), w: f64) -> f64 {
         let allan = data.chi2(f, c - c0);
         let drift: f64 = self
             .drift
             .iter()
-            .map(|(h, q, d)| {
-                let qi = Quantity::ALL.iter().position(|x| x == q).unwrap_or(0);
-                d.z((c - c0) * u[*h][qi]).powi(2)
+            .map(|(h, q, d)| d.z((c - c0) * u[*h][quantity_index(*q)]).powi(2))
+            .sum();
+        allan + w * drift
+    }
+
+    /// The weight of the drift pairs' chi2 for a candidate with unit drift `u` (module doc): the
+    /// pairs' z-scores are correlated (R, `correlation`), and a one-level candidate moves them
+    /// along a = dz/dc, a_i = u_i / (2 MS_i scale_i) up to sign (`DriftFit::z` at c0). Their
+    /// independence chi2 sum z_i^2 then overstates the evidence along a by a'Ra / a'a (its
+    /// projection a'z has variance a'Ra, not a'a); the weight a'a / a'Ra (at most 1) makes the
+    /// drift part of the likelihood-ratio statistic chi2_1 again: the magnitude adjustment of a
+    /// composite likelihood for a scalar parameter, H / J with sensitivity H = a'a and
+    /// variability J = a'Ra (Varin, Reid & Firth 2011, Statistica Sinica 21, 5-42, §2.3;
+    /// Chandler & Bate 2007, Biometrika 94, 167-183).
+    fn drift_weight(&self, u: &[[f64; 5]]) -> f64 {
+        let a: Vec<f64> = self
+            .drift
+            .iter()
+            .map(|(h, q, d)| u[*h][quantity_index(*q)] / (2.0 * d.mean_square * d.scale))
+            .collect();
+        let aa: f64 = a.iter().map(|x| x * x).sum();
+        let ara: f64 = (0..a.len())
+            .map(|i| {
+                (0..a.len())
+                    .map(|j| {
+                        let r = self.correlation.get(i).and_then(|row| row.get(j));
+                        a[i] * a[j] * r.copied().unwrap_or(1.0)
+                    })
+                    .sum::<f64>()
             })
             .sum();
-        allan + drift
+        if ara > aa && aa > 0.0 {
+            aa / ara
+        } else {
+            1.0
+        }
     }
 
     /// Every drift candidate fitted (module doc), the best shape of each.
@@ -248,7 +289,8 @@ impl DriftFitInput<'_> {
             }
         };
         let u = self.unit_drift(&term_at(c_unit).ok()?, c_unit);
-        let chi = |c: f64| self.chi2(data, &f, &u, c0, c);
+        let w = self.drift_weight(&u);
+        let chi = |c: f64| self.chi2(data, &f, &u, (c0, c), w);
         let (c, chi2) = if effect == Effect::RateRamp {
             // A ramp's level is the runs' slope (deterministic, `trials`).
             let c = self.ramp_slope * self.ramp_slope;
@@ -298,6 +340,11 @@ impl DriftFitInput<'_> {
             .map(|ms| ms.map(|v| v / c_unit))
             .collect()
     }
+}
+
+/// The index of `q` in `Quantity::ALL` (the unit drift's order).
+fn quantity_index(q: Quantity) -> usize {
+    Quantity::ALL.iter().position(|x| *x == q).unwrap_or(0)
 }
 
 /// The level c >= 0 minimising `chi`: 0, c0 and a log grid from 1e-6 to 1e4 times `scale`, then a

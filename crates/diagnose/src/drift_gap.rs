@@ -78,22 +78,36 @@ pub struct DriftGap {
     /// How many (horizon, quantity) pairs lie outside the model's 95 % band.
     pub outside: usize,
     pub horizons: Vec<DriftGapHorizon>,
+    /// The informed (horizon index, quantity) pairs, horizons in order and quantities in
+    /// `Quantity::ALL` order, and the correlation of their pooled mean squares over the model's
+    /// simulated logs (module doc; not serialised).
+    #[serde(skip)]
+    pub(crate) pairs: Vec<(usize, Quantity)>,
+    #[serde(skip)]
+    pub(crate) correlation: Vec<Vec<f64>>,
 }
 
 impl DriftGap {
     /// The informed (horizon index, quantity, z) whose quantity comes from channel `c`.
     pub(crate) fn of_channel(&self, c: Channel) -> Vec<(usize, Quantity, DriftFit)> {
-        let mut out = Vec::new();
-        for (h, hz) in self.horizons.iter().enumerate() {
-            for q in Quantity::ALL {
-                if let Some(d) = hz.quantities.get(q.name()) {
-                    if q.needs().contains(&c) {
-                        out.push((h, q, d.fit));
-                    }
-                }
-            }
-        }
-        out
+        self.pairs
+            .iter()
+            .filter(|(_, q)| q.needs().contains(&c))
+            .filter_map(|&(h, q)| {
+                let d = self.horizons[h].quantities.get(q.name())?;
+                Some((h, q, d.fit))
+            })
+            .collect()
+    }
+
+    /// The correlation matrix of the pairs of [`DriftGap::of_channel`], in its order.
+    pub(crate) fn correlation_of_channel(&self, c: Channel) -> Vec<Vec<f64>> {
+        let mine: Vec<usize> = (0..self.pairs.len())
+            .filter(|&i| self.pairs[i].1.needs().contains(&c))
+            .collect();
+        mine.iter()
+            .map(|&i| mine.iter().map(|&j| self.correlation[i][j]).collect())
+            .collect()
     }
 
     /// Sum of z^2 over every informed pair.
@@ -156,6 +170,7 @@ pub(crate) fn drift_gap(
 ) -> DriftGap {
     let seeds = simulated.len();
     let runs = of_run.len();
+    let mut pairs = Vec::new();
     let horizons: Vec<DriftGapHorizon> = measured
         .iter()
         .enumerate()
@@ -179,6 +194,7 @@ pub(crate) fn drift_gap(
                 let spread = pooled_mean_square(simulated, of_run, h, q);
                 if let Some(d) = quantity_z(values, &ln_rms, spread, runs) {
                     quantities.insert(q.name(), d);
+                    pairs.push((h, q));
                 }
             }
             DriftGapHorizon {
@@ -196,7 +212,80 @@ pub(crate) fn drift_gap(
         gap: crate::gap::rms(&z),
         outside: z.iter().filter(|z| z.abs() > Z_95).count(),
         horizons,
+        correlation: pooled_correlation(simulated, of_run, &pairs),
+        pairs,
     }
+}
+
+/// Each simulated log's mean square of every pair at length index `d` (`[log][pair]`).
+fn log_mean_squares(
+    simulated: &[Vec<Vec<SegmentErrors>>],
+    d: usize,
+    pairs: &[(usize, Quantity)],
+) -> Vec<Vec<f64>> {
+    simulated
+        .iter()
+        .map(|log| {
+            pairs
+                .iter()
+                .map(|&(h, q)| {
+                    let v = log[d][h].values(q);
+                    v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The correlation of the pooled mean squares of `pairs` (module doc): the covariance of two
+/// pairs' pooled mean squares is sum_r n_ri n_rj c_d(r)(i, j) / (N_i N_j), c_d the covariance over
+/// the simulated logs of one log's mean squares at run r's length (the runs independent; N_i
+/// cancels in the correlation); a pair without spread is taken as fully correlated with every
+/// other (the conservative side: `drift_fit` then weighs it least).
+fn pooled_correlation(
+    simulated: &[Vec<Vec<SegmentErrors>>],
+    of_run: &[usize],
+    pairs: &[(usize, Quantity)],
+) -> Vec<Vec<f64>> {
+    let k = pairs.len();
+    let mut cov = vec![vec![0.0; k]; k];
+    let logs = simulated.len() as f64;
+    for &d in of_run {
+        let ms = log_mean_squares(simulated, d, pairs);
+        let n: Vec<f64> = pairs
+            .iter()
+            .map(|&(h, _)| simulated.first().map_or(0, |log| log[d][h].len()) as f64)
+            .collect();
+        let mean: Vec<f64> = (0..k)
+            .map(|i| ms.iter().map(|m| m[i]).sum::<f64>() / logs)
+            .collect();
+        for i in 0..k {
+            for j in 0..k {
+                let c = ms
+                    .iter()
+                    .map(|m| (m[i] - mean[i]) * (m[j] - mean[j]))
+                    .sum::<f64>()
+                    / (logs - 1.0);
+                cov[i][j] += n[i] * n[j] * c;
+            }
+        }
+    }
+    (0..k)
+        .map(|i| {
+            (0..k)
+                .map(|j| {
+                    let r = cov[i][j] / (cov[i][i] * cov[j][j]).sqrt();
+                    if i == j {
+                        1.0
+                    } else if r.is_finite() {
+                        r.clamp(-1.0, 1.0)
+                    } else {
+                        1.0
+                    }
+                })
+                .collect()
+        })
+        .collect()
 }
 
 /// The pooled mean square's mean and variance (module doc) of quantity `q` at horizon `h`, from
@@ -209,12 +298,9 @@ fn pooled_mean_square(
 ) -> (f64, f64) {
     let (mut n_all, mut mean, mut var) = (0.0, 0.0, 0.0);
     for &d in of_run {
-        let ms: Vec<f64> = simulated
-            .iter()
-            .map(|log| {
-                let v = log[d][h].values(q);
-                v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64
-            })
+        let ms: Vec<f64> = log_mean_squares(simulated, d, &[(h, q)])
+            .into_iter()
+            .map(|m| m[0])
             .collect();
         let n = simulated.first().map_or(0, |log| log[d][h].len()) as f64;
         let m = stats::mean(&ms);
@@ -278,6 +364,38 @@ mod tests {
             heading_rad: noise.iter().map(|x| sigma * x).collect(),
             ..Default::default()
         }]]
+    }
+
+    /// The pairs' correlation: a quantity that is another's copy (times 3) is fully correlated
+    /// with it, an independent one hardly (|r| < 0.5 over 32 simulated logs: the sampling sd of
+    /// r is about 0.18), and the diagonal is 1.
+    #[test]
+    fn the_pairs_correlation_comes_from_the_simulated_logs() {
+        let normals = crate::testutil::normals(40 * 32 * 2, 5);
+        let simulated: Vec<Vec<Vec<SegmentErrors>>> = (0..32)
+            .map(|s| {
+                let a: Vec<f64> = normals[40 * s..40 * (s + 1)].to_vec();
+                let b: Vec<f64> = normals[40 * (32 + s)..40 * (33 + s)].to_vec();
+                vec![vec![SegmentErrors {
+                    horizon_s: 60.0,
+                    roll_rad: a.iter().map(|x| 3.0 * x).collect(),
+                    heading_rad: a,
+                    pitch_rad: b,
+                    ..Default::default()
+                }]]
+            })
+            .collect();
+        let pairs = [
+            (0, Quantity::Heading),
+            (0, Quantity::Roll),
+            (0, Quantity::Pitch),
+        ];
+        let r = pooled_correlation(&simulated, &[0, 0], &pairs);
+        for (i, row) in r.iter().enumerate() {
+            assert_eq!(row[i], 1.0);
+        }
+        assert!((r[0][1] - 1.0).abs() < 1e-9, "{r:?}");
+        assert!(r[0][2].abs() < 0.5 && r[1][2].abs() < 0.5, "{r:?}");
     }
 
     /// Heading errors of 40 segments per run, 3 runs, 32 simulated logs: the same distribution

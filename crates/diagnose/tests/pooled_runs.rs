@@ -5,9 +5,8 @@
 
 mod common;
 
-use common::{base_model, GeneratedLog, DT_S};
-use diagnose::protocol::Protocol;
-use diagnose::{diagnose_runs, Diagnosis, LogInput, Settings};
+use common::{base_model, GeneratedLog};
+use diagnose::{diagnose_runs, Diagnosis};
 use noise::{Channel, Effect, SensorModel};
 
 /// Samples per run (655 s at 100 Hz: taus up to 164 s).
@@ -25,23 +24,13 @@ fn diagnose_generated(
         .iter()
         .map(|&s| GeneratedLog::new(model, SAMPLES, s, false))
         .collect();
-    let inputs: Vec<LogInput> = logs
-        .iter()
-        .map(|l| LogInput {
-            dt_s: DT_S,
-            channels: noise::ImuChannels(l.channels.each_ref().map(|c| Some(c.as_slice()))),
-            temperature_c: None,
-        })
-        .collect();
-    let settings = Settings {
-        horizons_s: vec![60.0, 300.0],
-        drift_protocol: drift.then(|| Protocol {
-            horizons_s: vec![60.0, 300.0],
-            ..Protocol::default()
-        }),
-        ..Settings::default()
-    };
-    diagnose_runs(&inputs, base, &settings, &()).expect("diagnose runs")
+    diagnose_runs(
+        &common::run_inputs(&logs),
+        base,
+        &common::pooled_settings(drift),
+        &(),
+    )
+    .expect("diagnose runs")
 }
 
 fn named(d: &Diagnosis) -> Vec<String> {
@@ -53,14 +42,14 @@ fn named(d: &Diagnosis) -> Vec<String> {
 
 /// Clean runs (generated from the model diagnosed with), four runs pooled, the drift check in the
 /// loop, six pooled diagnoses. Measured false-alarm rate of such a diagnosis (something named on
-/// clean runs): 4 in 54 (7 %; seeds 7000+ here with the draws of issue 26, 2 of 6; seeds 17000+,
-/// 0 of 24 with these draws and 2 of 24 with the previous sampler's), well above the 1e-3 per log
-/// the BIC rule has on one log: the pooled, drift-in-the-loop rule is not calibrated against its
-/// own null distribution yet (issue 23 notes). At a rate of 7.4 % per diagnosis, 3 or more of 6
-/// happen with probability 0.8 %: this test fails when clean runs are named clearly more often
-/// than that. The drift gaps of these correct models are printed (measured 0.75-1.78: the 10
-/// z-scores of one diagnosis are correlated, heading and attitude at 60 and 300 s coming from the
-/// same channels, so their RMS scatters more than that of independent ones).
+/// clean runs; docs/diagnose.md, "False alarms of the pooled rule", `pooled_null.rs`): 10 in 200
+/// (5 %: 6 by the drift loop, 4 by the Allan rounds) with the drift pairs weighed by their
+/// correlation, 20 in 200 before (here, seeds 7000+: 0 of 6, before 2 of 6), still above the
+/// 1e-3 per log the BIC rule has on one log. At 5 % per diagnosis, 3 or more of 6 happen with
+/// probability 0.2 %: this test fails when clean runs are named clearly more often than that.
+/// The drift gaps of these correct models are printed (measured 0.59-1.90: the 10 z-scores of
+/// one diagnosis are correlated, heading and attitude at 60 and 300 s coming from the same
+/// channels, so their RMS scatters more than that of independent ones).
 #[test]
 fn clean_runs_pooled_with_the_drift_check_name_nothing() {
     let mut named_runs = Vec::new();

@@ -57,6 +57,7 @@ impl Run<'_> {
             dt_s: self.dt_s(),
             ramp_slope: self.ramp_slope[c],
             drift: drift.of_channel(c),
+            correlation: drift.correlation_of_channel(c),
             unit: UnitDrift {
                 dt_s: self.dt_s(),
                 samples: &self.samples,

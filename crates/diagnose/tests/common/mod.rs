@@ -92,6 +92,31 @@ impl GeneratedLog {
     }
 }
 
+/// Runs of one sensor diagnosed together (`pooled_runs.rs`, `pooled_null.rs`): the logs as
+/// inputs, and the settings with drift horizons of 60 and 300 s, the drift check on those
+/// horizons (default protocol) when `drift`.
+pub fn run_inputs(logs: &[GeneratedLog]) -> Vec<LogInput<'_>> {
+    logs.iter()
+        .map(|l| LogInput {
+            dt_s: DT_S,
+            channels: noise::ImuChannels(l.channels.each_ref().map(|c| Some(c.as_slice()))),
+            temperature_c: None,
+        })
+        .collect()
+}
+
+/// See [`run_inputs`].
+pub fn pooled_settings(drift: bool) -> Settings {
+    Settings {
+        horizons_s: vec![60.0, 300.0],
+        drift_protocol: drift.then(|| diagnose::protocol::Protocol {
+            horizons_s: vec![60.0, 300.0],
+            ..diagnose::protocol::Protocol::default()
+        }),
+        ..Settings::default()
+    }
+}
+
 /// Is `value` within 25 % of `truth`, or `truth` inside the stated interval [lo, hi]?
 pub fn parameter_ok(truth: f64, value: f64, lo: f64, hi: f64) -> bool {
     (value / truth - 1.0).abs() <= 0.25 || (lo <= truth && truth <= hi)
