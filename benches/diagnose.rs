@@ -1,9 +1,11 @@
 //! Diagnose benchmarks: the model band (16 simulated 6-channel static logs and their overlapping Allan
 //! deviations) and the whole workflow on a 6-channel log with a hidden rate random walk on gx, both for
 //! the ADIS16405 datasheet model (configs/sensors/adis16405.toml: white noise, 13-component flicker on the
-//! gyros) at 100 Hz, 2^16 samples. The whole command on a 1 M-sample log is timed in the README.
+//! gyros) at 100 Hz, 2^16 samples, and the drift protocol's dead reckoning of that log's segments. The
+//! whole command on a 1 M-sample log is timed in docs/performance.md.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use diagnose::protocol::{all_segment_errors, Calibration, Initialisation, Protocol};
 use diagnose::simulate::{simulate, static_log, SimSetup};
 use diagnose::{diagnose, LogInput, Settings};
 use noise::SensorModel;
@@ -57,6 +59,32 @@ fn bench(c: &mut Criterion) {
         };
         b.iter(|| black_box(diagnose(&input, &model, &settings).expect("diagnoses")))
     });
+    group.finish();
+    // The drift protocol on the same log (the dead reckoning of every segment, eight segments at
+    // a time in the strapdown's lanes): 10 s and 60 s horizons, both protocols.
+    let chans = log.0.each_ref().map(|c| Some(c.as_slice()));
+    let mut group = c.benchmark_group("drift_protocol_2^16");
+    group.sample_size(20);
+    group.throughput(Throughput::Elements((SAMPLES * 2) as u64));
+    for (name, protocol) in [
+        ("log_mean_perfect_10s_60s", Protocol::default()),
+        (
+            "window_levelled_10s_60s",
+            Protocol {
+                calibration: Calibration::Window { window_s: 10.0 },
+                initialisation: Initialisation::Levelled { window_s: 10.0 },
+                ..Protocol::default()
+            },
+        ),
+    ] {
+        let protocol = Protocol {
+            horizons_s: vec![10.0, 60.0],
+            ..protocol
+        };
+        group.bench_function(name, |b| {
+            b.iter(|| black_box(all_segment_errors(&chans, DT_S, &protocol)))
+        });
+    }
     group.finish();
 }
 
