@@ -290,6 +290,24 @@ pub fn all_segment_errors(
         .collect()
 }
 
+thread_local! {
+    /// Prefix-sum vectors of [`Means`], returned when it is dropped and reused by the next log on
+    /// this thread.
+    static PREFIX_POOL: std::cell::RefCell<Vec<Vec<f64>>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+impl Drop for Means {
+    fn drop(&mut self) {
+        let done: Vec<Vec<f64>> = self.prefix.drain(..).flatten().collect();
+        PREFIX_POOL.with(|pool| {
+            let mut pool = pool.borrow_mut();
+            // At most one log's worth (six channels) kept per thread.
+            pool.extend(done);
+            pool.truncate(6);
+        });
+    }
+}
+
 /// Channel means: over the whole log, and prefix sums for window means when the protocol has
 /// windows.
 struct Means {
@@ -321,7 +339,13 @@ impl Means {
             .iter()
             .map(|c| {
                 c.filter(|_| windows).map(|c| {
-                    let mut p = Vec::with_capacity(n + 1);
+                    // A vector of this thread's pool (a fresh 8 MB one per channel and log costs
+                    // its page faults again every time); every entry is written below.
+                    let mut p = PREFIX_POOL
+                        .with(|pool| pool.borrow_mut().pop())
+                        .unwrap_or_default();
+                    p.clear();
+                    p.reserve(n + 1);
                     let mut s = 0.0;
                     p.push(0.0);
                     for &v in &c[..n] {
