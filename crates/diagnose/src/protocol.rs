@@ -468,10 +468,10 @@ impl Segment {
     }
 }
 
-/// Dead-reckon `segments` (at most `L`; the lanes beyond them repeat the first and are not
-/// returned meaningfully) for `len` samples each from rest with the `Accurate` scheme: sample k
-/// of a segment reads each channel's value less the segment's offset (a missing channel its
-/// ideal value). Returns each lane's final state.
+/// Dead-reckon `segments` (1 to `L` of them; lanes beyond them repeat the last segment, and the
+/// caller reads only the first `segments.len()` states) for `len` samples each from rest with the
+/// `Accurate` scheme: sample k of a segment reads each channel's value less the segment's offset
+/// (a missing channel its ideal value). Returns each lane's final state.
 fn integrate_segments<const L: usize>(
     channels: &[Option<&[f64]>; 6],
     dt_s: f64,
