@@ -45,12 +45,13 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 
 /// The effects whose level is drawn (module doc).
-const DRAWN: [Effect; 7] = [
+const DRAWN: [Effect; 8] = [
     Effect::Quantization,
     Effect::WhiteNoise,
     Effect::BiasInstability,
     Effect::RateRandomWalk,
     Effect::GaussMarkov,
+    Effect::SlowGaussMarkov,
     Effect::Sinusoidal,
     Effect::Resonance,
 ];

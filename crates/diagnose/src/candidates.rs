@@ -67,7 +67,10 @@ pub fn named(term: &Term, white_n: Option<f64>) -> Vec<(&'static str, f64)> {
 /// Number of free parameters of a candidate (for the information criterion).
 pub fn free_parameters(effect: Effect) -> usize {
     match effect {
-        Effect::GaussMarkov | Effect::Sinusoidal | Effect::OutputFilter => 2,
+        Effect::GaussMarkov
+        | Effect::SlowGaussMarkov
+        | Effect::Sinusoidal
+        | Effect::OutputFilter => 2,
         Effect::Resonance => 3,
         _ => 1,
     }
@@ -90,7 +93,9 @@ pub fn unit_signature(effect: Effect, tau_s: f64, dt_s: f64, flicker: &Flicker) 
 /// Allan variance per unit squared level for a shaped term at shape parameter `shape`.
 pub fn unit_family_signature(effect: Effect, shape: f64, tau_s: f64, dt_s: f64) -> f64 {
     match effect {
-        Effect::GaussMarkov => cf::gauss_markov_avar_sampled(1.0, shape, tau_s, dt_s),
+        Effect::GaussMarkov | Effect::SlowGaussMarkov => {
+            cf::gauss_markov_avar_sampled(1.0, shape, tau_s, dt_s)
+        }
         Effect::Sinusoidal => cf::sinusoid_avar_sampled(1.0, shape, tau_s, dt_s),
         _ => f64::NAN,
     }

@@ -40,10 +40,12 @@ use crate::model_terms::{
 };
 use crate::protocol::{all_segment_errors, Protocol, Quantity};
 use crate::simulate::{with_static_log, SimSetup};
-use crate::trials::{at_squared_level, Trial};
-use noise::{Channel, Effect, GaussMarkov, ModelError, SensorModel, Term};
+use crate::trials::{at_squared_level, Named, Trial};
+use noise::{Channel, Effect, GaussMarkov, ModelError, SensorModel, SlowGaussMarkov, Term};
 
-/// The candidates of the drift loop, in the order tried.
+/// The candidates of the drift loop, in the order tried. The Gauss-Markov candidate goes into the
+/// channel's `gauss_markov` slot when that is free or already holds a slow term, else into
+/// `slow_gauss_markov` (`gauss_markov_slot`).
 pub const DRIFT_CANDIDATES: [Effect; 4] = [
     Effect::RateRandomWalk,
     Effect::BiasInstability,
@@ -166,17 +168,56 @@ pub(crate) struct DriftFitInput<'a> {
 pub(crate) struct DriftTrial {
     pub(crate) trial: Trial,
     pub(crate) delta_bic: f64,
+    /// The channel's rate random walk re-levelled with the candidate (`with_random_walk`).
+    pub(crate) partner: Option<Partner>,
+}
+
+/// The rate random walk at the level fitted with a candidate: its term (None: removed), its
+/// parameters before and at the ends of the 95 % interval, its change of the Allan variance.
+pub(crate) struct Partner {
+    pub(crate) term: Option<Term>,
+    pub(crate) model: Named,
+    pub(crate) lo: Named,
+    pub(crate) hi: Named,
+    pub(crate) delta_avar: Vec<f64>,
+    pub(crate) signature: Vec<f64>,
+}
+
+/// One term's level moving in the joint chi2: its Allan signature, unit drift and level before.
+struct Move<'a> {
+    f: &'a [f64],
+    u: &'a [[f64; 5]],
+    c0: f64,
+}
+
+/// A fitted level (and the random walk's, when re-levelled with it).
+struct Level {
+    c: f64,
+    bic: f64,
+    aic: f64,
+    interval: (f64, f64),
+    partner: Option<Partner>,
 }
 
 impl DriftFitInput<'_> {
-    /// The joint chi2 when the term's level moves from c0 to c, its Allan signature `f` and unit
-    /// drift `u[h][q]`, the drift pairs weighed by `w` ([`DriftFitInput::drift_weight`]).
-    fn chi2(&self, data: &FitData, f: &[f64], u: &[[f64; 5]], (c0, c): (f64, f64), w: f64) -> f64 {
-        let allan = data.chi2(f, c - c0);
+    /// The joint chi2 when each moved term's level goes from its c0 to c (its Allan signature `f`
+    /// and unit drift `u[h][q]`), the drift pairs weighed by `w` ([`DriftFitInput::drift_weight`]).
+    fn chi2(&self, data: &FitData, moves: &[(&Move, f64)], w: f64) -> f64 {
+        let mut delta_avar = vec![0.0; data.ln_meas.len()];
+        for (m, c) in moves {
+            for (d, f) in delta_avar.iter_mut().zip(m.f) {
+                *d += (c - m.c0) * f;
+            }
+        }
+        let allan = data.chi2(&delta_avar, 1.0);
         let drift: f64 = self
             .drift
             .iter()
-            .map(|(h, q, d)| d.z((c - c0) * u[*h][quantity_index(*q)]).powi(2))
+            .map(|(h, q, d)| {
+                let qi = quantity_index(*q);
+                let delta: f64 = moves.iter().map(|(m, c)| (c - m.c0) * m.u[*h][qi]).sum();
+                d.z(delta).powi(2)
+            })
             .sum();
         allan + w * drift
     }
@@ -225,17 +266,21 @@ impl DriftFitInput<'_> {
         };
         let tau_max = self.measured.tau_s.last().copied().unwrap_or(1.0);
         let mut out = Vec::new();
-        for effect in DRIFT_CANDIDATES {
-            if effect == Effect::BiasInstability
+        for candidate in DRIFT_CANDIDATES {
+            if candidate == Effect::BiasInstability
                 && has_random_walk_bias_instability(self.model, self.channel)
             {
                 continue;
             }
+            let effect = match candidate {
+                Effect::GaussMarkov => self.gauss_markov_slot(tau_max),
+                e => e,
+            };
             let current = fitted_term(self.model, self.channel, effect);
             let own_shape = current.and_then(|c| c.parameters().get(1).map(|p| p.1));
-            let shapes: Vec<Option<f64>> = match (effect, own_shape) {
-                (Effect::GaussMarkov, Some(t)) => vec![Some(t)],
-                (Effect::GaussMarkov, None) => GAUSS_MARKOV_TIMES
+            let shapes: Vec<Option<f64>> = match (is_gauss_markov(effect), own_shape) {
+                (true, Some(t)) => vec![Some(t)],
+                (true, None) => GAUSS_MARKOV_TIMES
                     .iter()
                     .map(|k| Some(k * tau_max))
                     .collect(),
@@ -251,7 +296,16 @@ impl DriftFitInput<'_> {
         out
     }
 
-    /// One candidate at one shape.
+    /// Where the slow Gauss-Markov candidate goes: `gauss_markov` when the channel has none or has
+    /// one at least as slow as the candidate's shortest correlation time (then it is refitted at
+    /// its own), else `slow_gauss_markov` (the fast one, a stand-in the Allan rounds fitted at the
+    /// shortest averaging times, stays).
+    pub(crate) fn gauss_markov_slot(&self, tau_max: f64) -> Effect {
+        gauss_markov_slot(self.model, self.channel, tau_max)
+    }
+
+    /// One candidate at one shape: its level alone, and (`with_random_walk`) with the channel's
+    /// rate random walk re-levelled beside it; the better by BIC.
     fn fit(
         &self,
         data: &FitData,
@@ -284,13 +338,17 @@ impl DriftFitInput<'_> {
         // The term at squared level c (a Gauss-Markov process at the shape tried).
         let term_at = |c: f64| -> Result<Term, ModelError> {
             match shape {
+                Some(tau_s) if effect == Effect::SlowGaussMarkov => {
+                    Ok(SlowGaussMarkov::new(c.sqrt(), tau_s)?.into())
+                }
                 Some(tau_s) => Ok(GaussMarkov::new(c.sqrt(), tau_s)?.into()),
                 None => level_term(self.model, self.channel, effect, c.sqrt()),
             }
         };
         let u = self.unit_drift(&term_at(c_unit).ok()?, c_unit);
         let w = self.drift_weight(&u);
-        let chi = |c: f64| self.chi2(data, &f, &u, (c0, c), w);
+        let own = Move { f: &f, u: &u, c0 };
+        let chi = |c: f64| self.chi2(data, &[(&own, c)], w);
         let (c, chi2) = if effect == Effect::RateRamp {
             // A ramp's level is the runs' slope (deterministic, `trials`).
             let c = self.ramp_slope * self.ramp_slope;
@@ -300,14 +358,26 @@ impl DriftFitInput<'_> {
         };
         let (k, m) = (free_parameters(effect), f.len() + self.drift.len());
         let base = chi(c0);
-        let bic_new = bic(chi2, k, m) + penalty;
-        let (c_lo, c_hi) = interval(&chi, c, chi2 + CHI2_1_95);
+        let mut best = Level {
+            c,
+            bic: bic(chi2, k, m) + penalty,
+            aic: aic(chi2, k) + penalty,
+            interval: interval(&chi, c, chi2 + CHI2_1_95),
+            partner: None,
+        };
+        if !matches!(effect, Effect::RateRamp | Effect::RateRandomWalk) {
+            let joint = self.with_random_walk(data, &own, (c_unit, w), (k + 1, m), penalty);
+            if let Some(joint) = joint.filter(|j| j.bic < best.bic) {
+                best = joint;
+            }
+        }
         let term = if effect == Effect::RateRamp {
             level_term(self.model, self.channel, effect, self.ramp_slope).ok()?
         } else {
-            term_at(c).ok()?
+            term_at(best.c).ok()?
         };
         let named = term.parameters();
+        let (c_lo, c_hi) = best.interval;
         Some(DriftTrial {
             trial: Trial {
                 effect,
@@ -316,12 +386,82 @@ impl DriftFitInput<'_> {
                 term,
                 white_n: None,
                 model: current.map(Term::parameters),
-                bic: bic_new,
-                aic: aic(chi2, k) + penalty,
-                delta_avar: f.iter().map(|v| (c - c0) * v).collect(),
+                bic: best.bic,
+                aic: best.aic,
+                delta_avar: f.iter().map(|v| (best.c - c0) * v).collect(),
                 signature: f.to_vec(),
             },
-            delta_bic: base - bic_new,
+            delta_bic: base - best.bic,
+            partner: best.partner,
+        })
+    }
+
+    /// The candidate `own` fitted with the channel's rate random walk re-levelled beside it (the
+    /// slow terms' levels are not identified by the Allan curve alone: a long Gauss-Markov process
+    /// and a random walk look alike up to the longest averaging time, and the drift, which
+    /// integrates them differently, helps tell them apart). The level pair minimising the joint
+    /// chi2: the random walk's level profiled (`minimise` over its level, the candidate's
+    /// minimised at each); the drift weight the smaller of the two terms'
+    /// ([`DriftFitInput::drift_weight`]: the pairs' evidence counted at most once along either
+    /// direction); one more free parameter. None without a fitted random walk.
+    fn with_random_walk(
+        &self,
+        data: &FitData,
+        own: &Move,
+        (c_unit, w_own): (f64, f64),
+        (k, m): (usize, usize),
+        penalty: f64,
+    ) -> Option<Level> {
+        let rrw = fitted_term(self.model, self.channel, Effect::RateRandomWalk)?;
+        let c0_r = squared_level(Some(rrw));
+        if c0_r <= 0.0 {
+            return None;
+        }
+        let flicker = flicker_band(self.model, self.channel);
+        let f_r: Vec<f64> = self
+            .measured
+            .tau_s
+            .iter()
+            .map(|&t| unit_signature(Effect::RateRandomWalk, t, self.dt_s, &flicker))
+            .collect();
+        let u_r = self.unit_drift(rrw, c0_r);
+        let w = w_own.min(self.drift_weight(&u_r));
+        let walk = Move {
+            f: &f_r,
+            u: &u_r,
+            c0: c0_r,
+        };
+        let profile = |c_r: f64| -> (f64, f64) {
+            minimise(
+                &|c: f64| self.chi2(data, &[(own, c), (&walk, c_r)], w),
+                own.c0,
+                c_unit,
+            )
+        };
+        let c_r = minimise(&|c_r: f64| profile(c_r).1, c0_r, c0_r).0;
+        let (c, chi2) = profile(c_r);
+        let chi = |c: f64| self.chi2(data, &[(own, c), (&walk, c_r)], w);
+        let named = rrw.parameters();
+        let (r_lo, r_hi) = interval(
+            &|x: f64| self.chi2(data, &[(own, c), (&walk, x)], w),
+            c_r,
+            chi2 + CHI2_1_95,
+        );
+        Some(Level {
+            c,
+            bic: bic(chi2, k, m) + penalty,
+            aic: aic(chi2, k) + penalty,
+            interval: interval(&chi, c, chi2 + CHI2_1_95),
+            partner: Some(Partner {
+                term: (c_r > 0.0)
+                    .then(|| rrw.with_level(c_r.sqrt()).ok())
+                    .flatten(),
+                model: named.clone(),
+                lo: at_squared_level(&named, r_lo),
+                hi: at_squared_level(&named, r_hi),
+                delta_avar: f_r.iter().map(|v| (c_r - c0_r) * v).collect(),
+                signature: f_r.clone(),
+            }),
         })
     }
 
@@ -340,6 +480,24 @@ impl DriftFitInput<'_> {
             .map(|ms| ms.map(|v| v / c_unit))
             .collect()
     }
+}
+
+/// [`DriftFitInput::gauss_markov_slot`] of channel `ch` of `model`, longest averaging time
+/// `tau_max`.
+pub(crate) fn gauss_markov_slot(model: &SensorModel, ch: Channel, tau_max: f64) -> Effect {
+    let slowest_fast = GAUSS_MARKOV_TIMES[0] * tau_max;
+    match fitted_term(model, ch, Effect::GaussMarkov) {
+        None => Effect::GaussMarkov,
+        Some(t) if t.parameters().get(1).is_some_and(|p| p.1 >= slowest_fast) => {
+            Effect::GaussMarkov
+        }
+        Some(_) => Effect::SlowGaussMarkov,
+    }
+}
+
+/// Is `effect` one of the two first-order Gauss-Markov slots?
+fn is_gauss_markov(effect: Effect) -> bool {
+    matches!(effect, Effect::GaussMarkov | Effect::SlowGaussMarkov)
 }
 
 /// The index of `q` in `Quantity::ALL` (the unit drift's order).

@@ -55,6 +55,7 @@ pub use terms::rate_random_walk::RateRandomWalk;
 pub use terms::resonance::Resonance;
 pub use terms::scale_factor::ScaleFactor;
 pub use terms::sinusoidal::Sinusoid;
+pub use terms::slow_gauss_markov::SlowGaussMarkov;
 pub use terms::temperature_bias::TemperatureBias;
 pub use terms::turn_on_bias::TurnOnBias;
 pub use terms::warmup_transient::WarmupTransient;

@@ -12,11 +12,12 @@ use crate::{Effect, Sensor, SensorModel};
 pub const LONG_HORIZON_S: f64 = 100.0;
 
 /// The terms that shape drift at long horizons.
-const LONG_TERM: [Effect; 5] = [
+const LONG_TERM: [Effect; 6] = [
     Effect::BiasInstability,
     Effect::RateRandomWalk,
     Effect::RateRamp,
     Effect::GaussMarkov,
+    Effect::SlowGaussMarkov,
     Effect::TemperatureBias,
 ];
 

@@ -6,14 +6,14 @@
 //! only if the joint chi2 (the drift gap's and the changed channels' Allan gaps') shrank.
 
 use super::{shifted_band, Run};
-use crate::drift_fit::{DriftFitInput, DriftTrial, UnitDrift};
+use crate::drift_fit::{DriftFitInput, DriftTrial, Partner, UnitDrift};
 use crate::drift_gap::DriftGap;
 use crate::error::DiagnoseError;
 use crate::findings::{found_by_fit, merge_refinements, rejected_record, Choice};
 use crate::gap::gap;
-use crate::model_terms::{current_term, set_term};
+use crate::model_terms::{current_term, restore_term, set_term};
 use crate::report::{Candidate, CandidateRecord, DriftLoop};
-use crate::trials::named_map;
+use crate::trials::{named_map, Trial};
 use noise::{Channel, Effect, ImuChannels, Term};
 
 /// A change the drift loop made: the channel, the effect and its term before.
@@ -34,6 +34,7 @@ impl Run<'_> {
                 .channels_outside()
                 .into_iter()
                 .filter_map(|c| self.drift_choice(c, &before, round))
+                .flatten()
                 .collect();
             if changes.is_empty() || !self.drift_resimulate(round, &before, changes)? {
                 break;
@@ -43,8 +44,9 @@ impl Run<'_> {
     }
 
     /// The drift candidates of channel `c` weighed, and the best one that passes the BIC rule
-    /// named (put into both models); the change made.
-    fn drift_choice(&mut self, c: Channel, drift: &DriftGap, round: usize) -> Option<Change> {
+    /// named (put into both models, with the rate random walk re-levelled beside it when that fit
+    /// better: `DriftFitInput::with_random_walk`); the changes made.
+    fn drift_choice(&mut self, c: Channel, drift: &DriftGap, round: usize) -> Option<Vec<Change>> {
         let (band, g) = self.gap(c)?;
         let curve = self.measured[c].as_ref()?.curve.clone();
         let protocol = self.plan.protocol.clone()?;
@@ -95,7 +97,13 @@ impl Run<'_> {
         let previous = current_term(&self.sim_model, c, effect);
         set_term(&mut self.sim_model, c, best.trial.term.clone());
         set_term(&mut self.out_model, c, best.trial.term.clone());
-        let predicted = gap(&curve, &shifted_band(&band, &best.trial.delta_avar)).rms;
+        let mut delta_avar = best.trial.delta_avar.clone();
+        if let Some(p) = &best.partner {
+            for (d, r) in delta_avar.iter_mut().zip(&p.delta_avar) {
+                *d += r;
+            }
+        }
+        let predicted = gap(&curve, &shifted_band(&band, &delta_avar)).rms;
         let choice = Choice {
             trial: &best.trial,
             delta_bic: best.delta_bic,
@@ -104,7 +112,59 @@ impl Run<'_> {
         let mut found = found_by_fit(choice, round, g.rms, predicted, self.dt_s());
         found.drift_gap_before = Some(drift.gap);
         self.channels[c].effects.push(found);
-        Some((c, effect, previous))
+        let mut changes = vec![(c, effect, previous)];
+        if let Some(p) = &best.partner {
+            changes.push(self.relevel_random_walk(
+                c,
+                p,
+                best.delta_bic,
+                round,
+                (g.rms, predicted, drift.gap),
+            ));
+        }
+        Some(changes)
+    }
+
+    /// Put the rate random walk re-levelled with a drift candidate into both models (removed at
+    /// level 0) and report it as a wrong level; the change made.
+    fn relevel_random_walk(
+        &mut self,
+        c: Channel,
+        p: &Partner,
+        delta_bic: f64,
+        round: usize,
+        (gap_before, gap_predicted, drift_gap): (f64, f64, f64),
+    ) -> Change {
+        let effect = Effect::RateRandomWalk;
+        let previous = current_term(&self.sim_model, c, effect);
+        for model in [&mut self.sim_model, &mut self.out_model] {
+            restore_term(model, c, effect, p.term.clone());
+        }
+        let zero = previous.as_ref().and_then(|t| t.with_level(0.0).ok());
+        let Some(term) = p.term.clone().or(zero) else {
+            return (c, effect, previous);
+        };
+        let trial = Trial {
+            effect,
+            term,
+            white_n: None,
+            lo: p.lo.clone(),
+            hi: p.hi.clone(),
+            model: Some(p.model.clone()),
+            bic: f64::NAN,
+            aic: f64::NAN,
+            delta_avar: p.delta_avar.clone(),
+            signature: p.signature.clone(),
+        };
+        let choice = Choice {
+            trial: &trial,
+            delta_bic,
+            cannot_tell_from: Vec::new(),
+        };
+        let mut found = found_by_fit(choice, round, gap_before, gap_predicted, self.dt_s());
+        found.drift_gap_before = Some(drift_gap);
+        self.channels[c].effects.push(found);
+        (c, effect, previous)
     }
 
     /// The round's re-simulation: kept (true) if the joint chi2 of the drift gap and the changed

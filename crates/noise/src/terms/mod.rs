@@ -18,6 +18,7 @@ pub mod rate_random_walk;
 pub mod resonance;
 pub mod scale_factor;
 pub mod sinusoidal;
+pub mod slow_gauss_markov;
 pub mod temperature_bias;
 pub mod term;
 pub mod turn_on_bias;
@@ -299,6 +300,8 @@ registry! {
     OutputFilter => output_filter::OutputFilter,
     /// A narrow-band random vibration (second-order Gauss-Markov).
     Resonance => resonance::Resonance,
+    /// A second first-order Gauss-Markov bias, for the slow wander.
+    SlowGaussMarkov => slow_gauss_markov::SlowGaussMarkov,
 }
 
 /// The order a channel's terms act in within each [`Stage`] (`ChannelErrors`): the input terms, then
@@ -315,6 +318,7 @@ pub const GENERATION_ORDER: [Effect; Effect::COUNT] = [
     Effect::RateRandomWalk,
     Effect::RateRamp,
     Effect::GaussMarkov,
+    Effect::SlowGaussMarkov,
     Effect::Resonance,
     Effect::Sinusoidal,
     Effect::TemperatureBias,
@@ -337,6 +341,7 @@ pub const WRITE_ORDER: [Effect; Effect::COUNT] = [
     Effect::ScaleFactor,
     Effect::BiasInstability,
     Effect::GaussMarkov,
+    Effect::SlowGaussMarkov,
     Effect::Sinusoidal,
     Effect::OutputFilter,
     Effect::Outliers,
