@@ -576,3 +576,29 @@ fn interval(chi: &dyn Fn(f64) -> f64, c: f64, level: f64) -> (f64, f64) {
     };
     (lo, edge(c * 1e6))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn with_gauss_markov(tau_s: Option<f64>) -> SensorModel {
+        let mut m = SensorModel::default();
+        if let Some(t) = tau_s {
+            set_term(&mut m, Channel::Gz, GaussMarkov::new(1e-4, t).unwrap().into());
+        }
+        m
+    }
+
+    /// The slow candidate takes `gauss_markov` when it is free or already slow, and the second
+    /// slot beside a fast stand-in (which stays).
+    #[test]
+    fn the_slow_candidate_goes_beside_a_fast_gauss_markov() {
+        let tau_max = 1310.72;
+        let slot = |t| gauss_markov_slot(&with_gauss_markov(t), Channel::Gz, tau_max);
+        assert_eq!(slot(None), Effect::GaussMarkov);
+        assert_eq!(slot(Some(0.0073)), Effect::SlowGaussMarkov);
+        assert_eq!(slot(Some(0.5 * tau_max)), Effect::SlowGaussMarkov);
+        assert_eq!(slot(Some(tau_max)), Effect::GaussMarkov);
+        assert_eq!(slot(Some(10.0 * tau_max)), Effect::GaussMarkov);
+    }
+}

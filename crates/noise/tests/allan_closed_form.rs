@@ -7,7 +7,9 @@ mod common;
 
 use common::*;
 use noise::closed_form as cf;
-use noise::{AxisModel, BiasInstability, Flicker, GaussMarkov, Resonance, Sinusoid};
+use noise::{
+    AxisModel, BiasInstability, Flicker, GaussMarkov, Resonance, Sinusoid, SlowGaussMarkov,
+};
 
 const RATES_HZ: [f64; 3] = [10.0, 100.0, 1000.0];
 /// 2^20 samples per series: 29 h at 10 Hz, 2.9 h at 100 Hz, 17 min at 1 kHz.
@@ -251,4 +253,31 @@ fn sum_of_terms_matches_sum_of_closed_forms() {
         .with(noise::RateRandomWalk::new(1e-5).unwrap())
         .with(GaussMarkov::new(3e-4, 5.0).unwrap());
     check("white + flicker + RRW + GM", &axis, &MS, &[0, -1, -2]);
+}
+
+/// The slow Gauss-Markov slot beside a fast Gauss-Markov term on one axis (the layout the drift loop
+/// of `diagnose` writes: a fast stand-in and a slow wander): each is generated from its own stream
+/// and the two Allan variances add (Hou 4.60 twice), at correlation times of 3 and 3000 samples.
+/// Correlation time 3000 samples is held-updated (`GaussMarkovBank::multirate`), so this also
+/// covers the hold in the new slot.
+#[test]
+fn slow_gauss_markov_beside_a_fast_one_adds_its_closed_form() {
+    for (i, &rate) in RATES_HZ.iter().enumerate() {
+        let dt = 1.0 / rate;
+        let axis = noise::AxisModel::default()
+            .with(GaussMarkov::new(1e-3, 3.0 * dt).unwrap())
+            .with(SlowGaussMarkov::new(5e-4, 3000.0 * dt).unwrap());
+        let data = gyro_x_series(&axis, rate, N, SEED + 2, i as u64);
+        assert_avar_matches(
+            &format!("fast + slow Gauss-Markov at {rate} Hz"),
+            &data,
+            dt,
+            &MS,
+            &[0, -2],
+            |tau| axis.allan_variance_sampled(tau, dt),
+        );
+        let both = cf::gauss_markov_avar_sampled(1e-3, 3.0 * dt, 10.0 * dt, dt)
+            + cf::gauss_markov_avar_sampled(5e-4, 3000.0 * dt, 10.0 * dt, dt);
+        assert!((axis.allan_variance_sampled(10.0 * dt, dt) / both - 1.0).abs() < 1e-12);
+    }
 }
