@@ -20,6 +20,15 @@
 //! Allan rule (`Settings::min_delta_bic`): its BIC = chi2 + k ln M (M taus and drift pairs) + the
 //! cost of a searched shape must be below the unchanged model's chi2 by at least that much.
 //!
+//! Where the model cannot follow the channel's Allan curve at all (its chi2 beyond the 0.999
+//! quantile of chi2 with M degrees of freedom: an overdispersed fit, e.g. a filter shape the model's
+//! filters do not have), the Allan part is divided by the dispersion c = chi2 / M of the model as it
+//! stands (`allan_dispersion`): the quasi-likelihood correction for overdispersion (Burnham &
+//! Anderson, Model Selection and Multimodel Inference, 2nd ed. 2002, §2.5, QAIC; Wedderburn 1974).
+//! Without it, a curve the model misses by 60 sigma decides every level by its small shifts, and a
+//! drift 12 sigma off moves nothing. A fit inside its chi2 quantile is left as it is (c = 1), so a
+//! clean run's likelihood, and the false-alarm rate measured on clean runs, do not change.
+//!
 //! The weight w (`DriftFitInput::drift_weight`) is there because the drift pairs are not
 //! independent: gx informs roll, horizontal position and velocity at every horizon, and under a
 //! static protocol the last two are the tilt error integrated, nearly the same draw; counted as
@@ -203,13 +212,14 @@ impl DriftFitInput<'_> {
     /// The joint chi2 when each moved term's level goes from its c0 to c (its Allan signature `f`
     /// and unit drift `u[h][q]`), the drift pairs weighed by `w` ([`DriftFitInput::drift_weight`]).
     fn chi2(&self, data: &FitData, moves: &[(&Move, f64)], w: f64) -> f64 {
+        let dispersion = allan_dispersion(data.chi2_base(), data.ln_meas.len());
         let mut delta_avar = vec![0.0; data.ln_meas.len()];
         for (m, c) in moves {
             for (d, f) in delta_avar.iter_mut().zip(m.f) {
                 *d += (c - m.c0) * f;
             }
         }
-        let allan = data.chi2(&delta_avar, 1.0);
+        let allan = data.chi2(&delta_avar, 1.0) / dispersion;
         let drift: f64 = self
             .drift
             .iter()
@@ -495,6 +505,20 @@ pub(crate) fn gauss_markov_slot(model: &SensorModel, ch: Channel, tau_max: f64) 
     }
 }
 
+/// Overdispersion test level of the Allan part (module doc).
+const OVERDISPERSION_LEVEL: f64 = 1e-3;
+
+/// The dispersion c of an Allan fit with chi2 `chi2` over `m` taus (module doc): chi2 / m where
+/// chi2 exceeds the 1 - `OVERDISPERSION_LEVEL` quantile of chi2(m), else 1.
+pub(crate) fn allan_dispersion(chi2: f64, m: usize) -> f64 {
+    let k = m as f64;
+    if m > 0 && chi2 > allan::chi2::chi2_ppf(1.0 - OVERDISPERSION_LEVEL, k) {
+        chi2 / k
+    } else {
+        1.0
+    }
+}
+
 /// Is `effect` one of the two first-order Gauss-Markov slots?
 fn is_gauss_markov(effect: Effect) -> bool {
     matches!(effect, Effect::GaussMarkov | Effect::SlowGaussMarkov)
@@ -584,7 +608,11 @@ mod tests {
     fn with_gauss_markov(tau_s: Option<f64>) -> SensorModel {
         let mut m = SensorModel::default();
         if let Some(t) = tau_s {
-            set_term(&mut m, Channel::Gz, GaussMarkov::new(1e-4, t).unwrap().into());
+            set_term(
+                &mut m,
+                Channel::Gz,
+                GaussMarkov::new(1e-4, t).unwrap().into(),
+            );
         }
         m
     }

@@ -6,7 +6,7 @@
 //! only if the joint chi2 (the drift gap's and the changed channels' Allan gaps') shrank.
 
 use super::{shifted_band, Run};
-use crate::drift_fit::{DriftFitInput, DriftTrial, Partner, UnitDrift};
+use crate::drift_fit::{allan_dispersion, DriftFitInput, DriftTrial, Partner, UnitDrift};
 use crate::drift_gap::DriftGap;
 use crate::error::DiagnoseError;
 use crate::findings::{found_by_fit, merge_refinements, rejected_record, Choice};
@@ -185,11 +185,23 @@ impl Run<'_> {
             &of_run,
             &self.setup.active,
         );
+        // Each changed channel's Allan chi2, divided by its dispersion before the round
+        // (`drift_fit::allan_dispersion`), counted once per channel.
+        let mut channels: Vec<Channel> = changes.iter().map(|(c, _, _)| *c).collect();
+        channels.dedup();
+        let chi2_of = |run: &Self, bands: &ImuChannels<Option<crate::gap::Band>>, c: Channel| {
+            Self::gap_of(run.measured[c].as_ref(), bands[c].as_ref())
+                .map(|(_, g)| (g.z.iter().map(|z| z * z).sum::<f64>(), g.z.len()))
+        };
+        let dispersion: Vec<f64> = channels
+            .iter()
+            .map(|&c| chi2_of(self, &self.bands, c).map_or(1.0, |(x, m)| allan_dispersion(x, m)))
+            .collect();
         let allan_chi2 = |run: &Self, bands: &ImuChannels<Option<crate::gap::Band>>| -> f64 {
-            changes
+            channels
                 .iter()
-                .filter_map(|(c, _, _)| Self::gap_of(run.measured[*c].as_ref(), bands[*c].as_ref()))
-                .map(|(_, g)| g.z.iter().map(|z| z * z).sum::<f64>())
+                .zip(&dispersion)
+                .filter_map(|(&c, d)| chi2_of(run, bands, c).map(|(x, _)| x / d))
                 .sum()
         };
         let kept = after.chi2() + allan_chi2(self, &sim.bands)
