@@ -20,11 +20,14 @@
 //! Allan rule (`Settings::min_delta_bic`): its BIC = chi2 + k ln M (M taus and drift pairs) + the
 //! cost of a searched shape must be below the unchanged model's chi2 by at least that much.
 //!
-//! Where the model cannot follow the channel's Allan curve at all (its chi2 beyond the 0.999
-//! quantile of chi2 with M degrees of freedom: an overdispersed fit, e.g. a filter shape the model's
-//! filters do not have), the Allan part is divided by the dispersion c = chi2 / M of the model as it
-//! stands (`allan_dispersion`): the quasi-likelihood correction for overdispersion (Burnham &
-//! Anderson, Model Selection and Multimodel Inference, 2nd ed. 2002, §2.5, QAIC; Wedderburn 1974).
+//! Where the model cannot follow the channel's Allan curve (its chi2 over the M taus the candidate
+//! can move, those where the term at its reference level makes at least a tenth of the band's Allan
+//! variance, beyond the 0.999 quantile of chi2 with M degrees of freedom: an overdispersed fit, e.g.
+//! a filter shape the model's filters do not have), the Allan part is divided by the dispersion
+//! c = chi2 / M of the model as it stands there (`allan_dispersion`): the quasi-likelihood
+//! correction for overdispersion (Burnham & Anderson, Model Selection and Multimodel Inference,
+//! 2nd ed. 2002, §2.5, QAIC; Wedderburn 1974). Local, because a misfit at the shortest taus (a
+//! filter) says nothing about how well the long taus a slow term moves are known.
 //! Without it, a curve the model misses by 60 sigma decides every level by its small shifts, and a
 //! drift 12 sigma off moves nothing. A fit inside its chi2 quantile is left as it is (c = 1), so a
 //! clean run's likelihood, and the false-alarm rate measured on clean runs, do not change.
@@ -197,6 +200,9 @@ struct Move<'a> {
     f: &'a [f64],
     u: &'a [[f64; 5]],
     c0: f64,
+    /// The level whose Allan variance decides where the term can move the curve (the model's own,
+    /// else the unit level).
+    c_ref: f64,
 }
 
 /// A fitted level (and the random walk's, when re-levelled with it).
@@ -212,7 +218,7 @@ impl DriftFitInput<'_> {
     /// The joint chi2 when each moved term's level goes from its c0 to c (its Allan signature `f`
     /// and unit drift `u[h][q]`), the drift pairs weighed by `w` ([`DriftFitInput::drift_weight`]).
     fn chi2(&self, data: &FitData, moves: &[(&Move, f64)], w: f64) -> f64 {
-        let dispersion = allan_dispersion(data.chi2_base(), data.ln_meas.len());
+        let dispersion = self.dispersion(data, moves);
         let mut delta_avar = vec![0.0; data.ln_meas.len()];
         for (m, c) in moves {
             for (d, f) in delta_avar.iter_mut().zip(m.f) {
@@ -230,6 +236,21 @@ impl DriftFitInput<'_> {
             })
             .sum();
         allan + w * drift
+    }
+
+    /// The dispersion of the Allan part for `moves` (module doc): over the taus where the moved
+    /// terms at their reference levels make at least a tenth of the band's Allan variance (the
+    /// taus the change can move), the chi2 of the model as it stands.
+    fn dispersion(&self, data: &FitData, moves: &[(&Move, f64)]) -> f64 {
+        let (mut chi2, mut m) = (0.0, 0);
+        for i in 0..data.ln_meas.len() {
+            let moved: f64 = moves.iter().map(|(mv, _)| mv.c_ref * mv.f[i].abs()).sum();
+            if moved >= SUPPORT_SHARE * data.avar_band[i] {
+                chi2 += ((data.ln_meas[i] - data.ln_band[i]) / data.s[i]).powi(2);
+                m += 1;
+            }
+        }
+        allan_dispersion(chi2, m)
     }
 
     /// The weight of the drift pairs' chi2 for a candidate with unit drift `u` (module doc): the
@@ -357,7 +378,12 @@ impl DriftFitInput<'_> {
         };
         let u = self.unit_drift(&term_at(c_unit).ok()?, c_unit);
         let w = self.drift_weight(&u);
-        let own = Move { f: &f, u: &u, c0 };
+        let own = Move {
+            f: &f,
+            u: &u,
+            c0,
+            c_ref: c_unit,
+        };
         let chi = |c: f64| self.chi2(data, &[(&own, c)], w);
         let (c, chi2) = if effect == Effect::RateRamp {
             // A ramp's level is the runs' slope (deterministic, `trials`).
@@ -440,6 +466,7 @@ impl DriftFitInput<'_> {
             f: &f_r,
             u: &u_r,
             c0: c0_r,
+            c_ref: c0_r,
         };
         let profile = |c_r: f64| -> (f64, f64) {
             minimise(
@@ -504,6 +531,10 @@ pub(crate) fn gauss_markov_slot(model: &SensorModel, ch: Channel, tau_max: f64) 
         Some(_) => Effect::SlowGaussMarkov,
     }
 }
+
+/// Share of the band's Allan variance a moved term must make at a tau for the tau to count in the
+/// dispersion (`DriftFitInput::dispersion`).
+const SUPPORT_SHARE: f64 = 0.1;
 
 /// Overdispersion test level of the Allan part (module doc).
 const OVERDISPERSION_LEVEL: f64 = 1e-3;
@@ -615,6 +646,17 @@ mod tests {
             );
         }
         m
+    }
+
+    /// A fit within its chi2 quantile keeps the Allan part as it is; an overdispersed one is divided
+    /// by chi2 / M (the 0.999 quantile of chi2 with 16 degrees of freedom is 39.25).
+    #[test]
+    fn only_an_overdispersed_allan_fit_is_scaled() {
+        assert_eq!(allan_dispersion(16.0, 16), 1.0);
+        assert_eq!(allan_dispersion(39.0, 16), 1.0);
+        assert_eq!(allan_dispersion(40.0, 16), 2.5);
+        assert_eq!(allan_dispersion(78.0 * 78.0 * 16.0, 16), 78.0 * 78.0);
+        assert_eq!(allan_dispersion(5.0, 0), 1.0);
     }
 
     /// The slow candidate takes `gauss_markov` when it is free or already slow, and the second

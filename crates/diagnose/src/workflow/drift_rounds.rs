@@ -185,23 +185,38 @@ impl Run<'_> {
             &of_run,
             &self.setup.active,
         );
-        // Each changed channel's Allan chi2, divided by its dispersion before the round
-        // (`drift_fit::allan_dispersion`), counted once per channel.
+        // Each changed channel's Allan chi2, divided by its dispersion before the round over the
+        // taus the round moved by a tenth or more (`drift_fit::allan_dispersion`), counted once
+        // per channel.
         let mut channels: Vec<Channel> = changes.iter().map(|(c, _, _)| *c).collect();
         channels.dedup();
-        let chi2_of = |run: &Self, bands: &ImuChannels<Option<crate::gap::Band>>, c: Channel| {
+        let gap_on = |run: &Self, bands: &ImuChannels<Option<crate::gap::Band>>, c: Channel| {
             Self::gap_of(run.measured[c].as_ref(), bands[c].as_ref())
-                .map(|(_, g)| (g.z.iter().map(|z| z * z).sum::<f64>(), g.z.len()))
         };
         let dispersion: Vec<f64> = channels
             .iter()
-            .map(|&c| chi2_of(self, &self.bands, c).map_or(1.0, |(x, m)| allan_dispersion(x, m)))
+            .map(|&c| {
+                let (Some((b0, g0)), Some((b1, _))) =
+                    (gap_on(self, &self.bands, c), gap_on(self, &sim.bands, c))
+                else {
+                    return 1.0;
+                };
+                let moved: Vec<f64> =
+                    g0.z.iter()
+                        .zip(b0.avar_mean.iter().zip(&b1.avar_mean))
+                        .filter(|(_, (a0, a1))| (*a1 - *a0).abs() >= 0.1 * *a0)
+                        .map(|(z, _)| *z)
+                        .collect();
+                allan_dispersion(moved.iter().map(|z| z * z).sum(), moved.len())
+            })
             .collect();
         let allan_chi2 = |run: &Self, bands: &ImuChannels<Option<crate::gap::Band>>| -> f64 {
             channels
                 .iter()
                 .zip(&dispersion)
-                .filter_map(|(&c, d)| chi2_of(run, bands, c).map(|(x, _)| x / d))
+                .filter_map(|(&c, d)| {
+                    gap_on(run, bands, c).map(|(_, g)| g.z.iter().map(|z| z * z).sum::<f64>() / d)
+                })
                 .sum()
         };
         let kept = after.chi2() + allan_chi2(self, &sim.bands)
