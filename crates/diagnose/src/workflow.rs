@@ -426,6 +426,7 @@ impl<'a> Run<'a> {
     /// Step 4: every candidate fitted to channel `c`'s gap against `band`.
     fn candidates(&self, c: Channel, curve: &Curve, band: &Band, g: &Gap) -> Vec<Trial> {
         let dt_s = self.dt_s();
+        let series = self.series(c);
         trials(&ChannelFit {
             model: &self.sim_model,
             channel: c,
@@ -436,7 +437,10 @@ impl<'a> Run<'a> {
             ramp_slope: self.ramp_slope[c],
             peak: self.peaks[c],
             lines: &self.lines[c],
-            line_resolution_hz: crate::spectrum::line_resolution_hz(&self.series(c), dt_s),
+            line_resolution_hz: crate::spectrum::line_resolution_hz(&series, dt_s),
+            line_frequency_resolution_hz: crate::spectrum::line_frequency_resolution_hz(
+                &series, dt_s,
+            ),
         })
     }
 
