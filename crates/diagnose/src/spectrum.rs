@@ -383,6 +383,60 @@ fn refine_lines(xs: &[&[f64]], dt_s: f64, coarse: &[f64], df_coarse: f64) -> Vec
     out
 }
 
+/// The broad peak and the lines of the runs `xs` ([`broad_peak_runs`], [`spectral_lines_runs`]),
+/// without a broad peak that is only a line: a strong tone halfway between two bins of the
+/// peak's spectrum is, after the 3-bin smoothing, 4 bins wide at half power, as wide as the
+/// narrowest peak. A peak is that line when the lines inside its raised region hold at least half
+/// of the region's excess power in the runs' fine spectrum (the spectrum [`refine_lines`] measures
+/// the lines on, where a line keeps its power within its main lobe, +-2 fine bins, and a
+/// resonance spreads its own over its bandwidth, many fine bins): each line's excess over its main
+/// lobe +-3 fine bins, against the excess summed over the region, both over the median of the fine
+/// bins within 20 coarse resolutions of the peak.
+pub fn peak_and_lines_runs(xs: &[&[f64]], dt_s: f64) -> (Option<SpectralPeak>, Vec<f64>) {
+    let lines = spectral_lines_runs(xs, dt_s);
+    let peak = broad_peak_runs(xs, dt_s);
+    let inside: Vec<f64> = lines
+        .iter()
+        .copied()
+        .filter(|&f| peak.is_some_and(|p| p.covers(f)))
+        .collect();
+    let peak = match peak {
+        Some(p) if !inside.is_empty() && lines_hold_peak(xs, dt_s, &p, &inside) => None,
+        other => other,
+    };
+    (peak, lines)
+}
+
+/// Whether the lines `inside` the broad peak `peak` hold at least half its excess power in the
+/// fine spectrum ([`peak_and_lines_runs`]).
+fn lines_hold_peak(xs: &[&[f64]], dt_s: f64, peak: &SpectralPeak, inside: &[f64]) -> bool {
+    let Some(df_coarse) = line_resolution_hz(xs, dt_s) else {
+        return false;
+    };
+    let seg = fine_segment_length(xs);
+    let df = 1.0 / (seg as f64 * dt_s);
+    if df >= df_coarse {
+        return false;
+    }
+    let (p, _) = welch_runs(xs, seg);
+    let nb = p.len();
+    let bin = |f: f64| ((f / df).round().max(1.0) as usize).min(nb - 2);
+    let centre = 0.5 * (peak.lo_hz + peak.hi_hz);
+    let mut near = p[bin(centre - 20.0 * df_coarse)..=bin(centre + 20.0 * df_coarse)].to_vec();
+    let background = median(&mut near);
+    let excess =
+        |a: usize, b: usize| -> f64 { (a..=b).map(|i| (p[i] - background).max(0.0)).sum() };
+    let total = excess(bin(peak.lo_hz), bin(peak.hi_hz));
+    let in_lines: f64 = inside
+        .iter()
+        .map(|&f| {
+            let i = bin(f);
+            excess(i.saturating_sub(3).max(1), (i + 3).min(nb - 1))
+        })
+        .sum();
+    total > 0.0 && in_lines >= 0.5 * total
+}
+
 /// A Welch spectrum with its background.
 struct Spectrum {
     p: Vec<f64>,
@@ -746,5 +800,42 @@ mod tests {
         for g in f {
             assert!(is_spectral_line_runs(&xs, dt, g), "{g}");
         }
+    }
+
+    /// A strong tone halfway between two bins of the peak's spectrum (0.5737 Hz at 100 Hz,
+    /// amplitude 0.3 in unit white noise) passes for a broad peak (0.09 Hz wide);
+    /// [`peak_and_lines_runs`] keeps it a line, and keeps a resonance (AR(2), 0.6 Hz wide at
+    /// 12 Hz) a peak.
+    #[test]
+    fn a_line_is_not_a_broad_peak_and_a_resonance_stays_one() {
+        let dt = 0.01;
+        let n = 1 << 18;
+        let w = normals(n, 8);
+        let f0 = 23.5 / (4096.0 * dt);
+        let tone: Vec<f64> = (0..n)
+            .map(|k| w[k] + 0.3 * (std::f64::consts::TAU * f0 * k as f64 * dt).sin())
+            .collect();
+        assert!(broad_peak(&tone, dt).is_some());
+        let (peak, lines) = peak_and_lines_runs(&[&tone], dt);
+        assert_eq!(peak, None);
+        assert_eq!(lines.len(), 1, "{lines:?}");
+        let e = normals(n, 9);
+        let (fr, bw) = (12.0, 0.6);
+        let r = (-std::f64::consts::PI * bw * dt).exp();
+        let th = std::f64::consts::TAU * fr * dt;
+        let (mut y1, mut y2) = (0.0, 0.0);
+        let resonance: Vec<f64> = (0..n)
+            .map(|k| {
+                let y = 2.0 * r * th.cos() * y1 - r * r * y2 + 0.05 * e[k];
+                y2 = y1;
+                y1 = y;
+                y + w[k]
+            })
+            .collect();
+        let (peak, _) = peak_and_lines_runs(&[&resonance], dt);
+        assert!(
+            peak.is_some_and(|p| (p.frequency_hz - fr).abs() < 0.05),
+            "{peak:?}"
+        );
     }
 }
