@@ -1,4 +1,5 @@
-//! Welch spectrum of a channel and the broad spectral peak a resonance leaves in it.
+//! Welch spectrum of a channel: the broad spectral peak a resonance leaves in it, and the lines
+//! (tones) it shows, their frequencies measured to the runs' resolution.
 //!
 //! A resonance (a narrow-band random vibration, `noise::Resonance`) shows in the power spectral
 //! density as a peak several resolutions wide above a smooth background; a sinusoid shows as a line
