@@ -36,25 +36,8 @@ fn adis16405_run1_diagnosis_generalises_to_runs_2_to_6() {
         p
     };
     let checks: Vec<String> = (2..=6).map(|i| run(i).display().to_string()).collect();
-    let model = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/configs/sensors/adis16405.toml"
-    );
     // The default 16 seeds per band: the command docs/real-effects.md times and reports.
-    let out = command()
-        .arg("diagnose")
-        .arg(run(1))
-        .args([
-            "--model",
-            model,
-            "--rate",
-            "100",
-            "--gyro-unit",
-            "deg/s",
-            "--accel-unit",
-            "g",
-        ])
-        .args(["--col", COLUMNS, "--json", "--horizons", "60"])
+    let out = diagnose_command(&[run(1)])
         .arg("--check")
         .arg(checks.join(","))
         .output()
@@ -134,6 +117,32 @@ fn adis16405_run1_diagnosis_generalises_to_runs_2_to_6() {
     }
 }
 
+/// `imudrift diagnose LOGS` with the datasheet model, the logs' rate, units and columns, JSON on
+/// stdout and a 60 s drift horizon.
+fn diagnose_command(logs: &[std::path::PathBuf]) -> std::process::Command {
+    let model = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/configs/sensors/adis16405.toml"
+    );
+    let mut c = command();
+    c.arg("diagnose").args(logs).args([
+        "--model",
+        model,
+        "--rate",
+        "100",
+        "--gyro-unit",
+        "deg/s",
+        "--accel-unit",
+        "g",
+        "--col",
+        COLUMNS,
+        "--json",
+        "--horizons",
+        "60",
+    ]);
+    c
+}
+
 /// The ADIS16405's accelerometer tone (issue 23: the spectrum puts it at 0.564 Hz, Welch with a
 /// 0.0004 Hz resolution, the same in each quarter of run 1) is named on accelerometer channel `ch`
 /// as a sinusoid within 0.005 Hz of 0.564 Hz, not a stand-in (measured 0.5638-0.5641 Hz in run 1
@@ -163,26 +172,7 @@ fn adis16405_runs_pooled_name_the_accelerometer_tone() {
     let runs: Vec<std::path::PathBuf> = (1..=6)
         .map(|i| dir.join(format!("adis16405_imudata/adis16405_imu{i}.csv.gz")))
         .collect();
-    let model = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/configs/sensors/adis16405.toml"
-    );
-    let out = command()
-        .arg("diagnose")
-        .args(&runs)
-        .args([
-            "--model",
-            model,
-            "--rate",
-            "100",
-            "--gyro-unit",
-            "deg/s",
-            "--accel-unit",
-            "g",
-        ])
-        .args(["--col", COLUMNS, "--json", "--horizons", "60"])
-        .output()
-        .expect("runs");
+    let out = diagnose_command(&runs).output().expect("runs");
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "diagnose failed: {stderr}");
     let doc: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON on stdout");

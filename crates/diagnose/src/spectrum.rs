@@ -574,6 +574,23 @@ mod tests {
     use super::*;
     use crate::testutil::normals;
 
+    /// A resonance at `f0` Hz, `bw` Hz wide (AR(2) driven by 0.05 `e`, poles r e^{+-i theta}: a
+    /// peak at f0 with -3 dB width -ln(r^2) / (2 pi dt)) in the white noise `w`.
+    fn resonance_in(w: &[f64], e: &[f64], (f0, bw): (f64, f64), dt: f64) -> Vec<f64> {
+        let r = (-std::f64::consts::PI * bw * dt).exp();
+        let th = std::f64::consts::TAU * f0 * dt;
+        let (mut y1, mut y2) = (0.0, 0.0);
+        w.iter()
+            .zip(e)
+            .map(|(w, e)| {
+                let y = 2.0 * r * th.cos() * y1 - r * r * y2 + 0.05 * e;
+                y2 = y1;
+                y1 = y;
+                y + w
+            })
+            .collect()
+    }
+
     /// A resonance (AR(2) with poles r e^{+-i theta}: a peak at f0 with -3 dB width
     /// -ln(r^2) / (2 pi dt) = 0.6 Hz) in white noise is found at its frequency and width; white
     /// noise, a random walk and a pure tone give no broad peak.
@@ -584,17 +601,7 @@ mod tests {
         let w = normals(n, 2);
         let e = normals(n, 3);
         let (f0, bw) = (12.0, 0.6);
-        let r = (-std::f64::consts::PI * bw * dt).exp();
-        let th = std::f64::consts::TAU * f0 * dt;
-        let (mut y1, mut y2) = (0.0, 0.0);
-        let x: Vec<f64> = (0..n)
-            .map(|k| {
-                let y = 2.0 * r * th.cos() * y1 - r * r * y2 + 0.05 * e[k];
-                y2 = y1;
-                y1 = y;
-                y + w[k]
-            })
-            .collect();
+        let x = resonance_in(&w, &e, (f0, bw), dt);
         let p = broad_peak(&x, dt).expect("a resonance");
         // Two resolutions (100 Hz / 4096 = 0.024 Hz) on the frequency; the width from ~25 bins of
         // 256-segment averages (each bin's relative spread 1/16) within the 25 %.
@@ -652,17 +659,7 @@ mod tests {
         assert!(spectral_lines_runs(&[&walk], dt).is_empty());
         let e = normals(n, 6);
         let (f0, bw) = (12.0, 0.6);
-        let r = (-std::f64::consts::PI * bw * dt).exp();
-        let th = std::f64::consts::TAU * f0 * dt;
-        let (mut y1, mut y2) = (0.0, 0.0);
-        let resonance: Vec<f64> = (0..n)
-            .map(|k| {
-                let y = 2.0 * r * th.cos() * y1 - r * r * y2 + 0.05 * e[k];
-                y2 = y1;
-                y1 = y;
-                y + w[k]
-            })
-            .collect();
+        let resonance = resonance_in(&w, &e, (f0, bw), dt);
         assert!(spectral_lines_runs(&[&resonance], dt).is_empty());
     }
 
@@ -822,17 +819,7 @@ mod tests {
         assert_eq!(lines.len(), 1, "{lines:?}");
         let e = normals(n, 9);
         let (fr, bw) = (12.0, 0.6);
-        let r = (-std::f64::consts::PI * bw * dt).exp();
-        let th = std::f64::consts::TAU * fr * dt;
-        let (mut y1, mut y2) = (0.0, 0.0);
-        let resonance: Vec<f64> = (0..n)
-            .map(|k| {
-                let y = 2.0 * r * th.cos() * y1 - r * r * y2 + 0.05 * e[k];
-                y2 = y1;
-                y1 = y;
-                y + w[k]
-            })
-            .collect();
+        let resonance = resonance_in(&w, &e, (fr, bw), dt);
         let (peak, _) = peak_and_lines_runs(&[&resonance], dt);
         assert!(
             peak.is_some_and(|p| (p.frequency_hz - fr).abs() < 0.05),
