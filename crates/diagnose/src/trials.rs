@@ -144,7 +144,12 @@ fn fit_shaped(
     let (tau, dt_s) = (&input.measured.tau_s, input.dt_s);
     let m = tau.len();
     let (shapes, penalty, from_lines) = match current.and_then(|c| c.parameters().get(1).copied()) {
-        Some((_, s)) => (vec![s], 0.0, false),
+        // A sinusoid named at a line keeps the line's frequency and its interval.
+        Some((_, s)) => (
+            vec![s],
+            0.0,
+            effect == Effect::Sinusoidal && input.lines.contains(&s),
+        ),
         None if effect == Effect::Sinusoidal => sinusoid_shapes(input)?,
         None => {
             let g = shape_grid(effect, tau[0], tau[m - 1], dt_s);
