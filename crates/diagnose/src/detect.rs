@@ -817,8 +817,7 @@ fn detect_channel(
         x = corrected;
         findings.push(f);
     }
-    let peak = crate::spectrum::broad_peak(&x, dt_s);
-    let lines = crate::spectrum::spectral_lines_runs(&[&x], dt_s);
+    let (peak, lines) = crate::spectrum::peak_and_lines_runs(&[&x], dt_s);
     Detected {
         corrected: x,
         findings,

@@ -31,10 +31,13 @@ pub(crate) struct ChannelFit<'a> {
     pub(crate) ramp_slope: f64,
     /// The log's broad spectral peak: where a resonance is searched and no sinusoid is offered.
     pub(crate) peak: Option<SpectralPeak>,
-    /// The log's spectral lines (`spectrum::spectral_lines_runs`), Hz, and the resolution below 6
-    /// times which its spectrum cannot show one (None: too short for a spectrum).
+    /// The log's spectral lines (`spectrum::spectral_lines_runs`), Hz, the resolution below 6
+    /// times which its spectrum cannot show one (None: too short for a spectrum), and the
+    /// resolution the lines' frequencies are measured to
+    /// (`spectrum::line_frequency_resolution_hz`).
     pub(crate) lines: &'a [f64],
     pub(crate) line_resolution_hz: Option<f64>,
+    pub(crate) line_frequency_resolution_hz: Option<f64>,
 }
 
 /// Parameters by their docs/cli.md JSON names.
@@ -141,8 +144,13 @@ fn fit_shaped(
     let (tau, dt_s) = (&input.measured.tau_s, input.dt_s);
     let m = tau.len();
     let (shapes, penalty, from_lines) = match current.and_then(|c| c.parameters().get(1).copied()) {
-        Some((_, s)) => (vec![s], 0.0, false),
-        None if effect == Effect::Sinusoidal => sinusoid_shapes(input, data)?,
+        // A sinusoid named at a line keeps the line's frequency and its interval.
+        Some((_, s)) => (
+            vec![s],
+            0.0,
+            effect == Effect::Sinusoidal && input.lines.contains(&s),
+        ),
+        None if effect == Effect::Sinusoidal => sinusoid_shapes(input)?,
         None => {
             let g = shape_grid(effect, tau[0], tau[m - 1], dt_s);
             let penalty = shape_search_penalty(g.len());
@@ -169,9 +177,9 @@ fn fit_shaped(
         (None, _) => Sinusoid::new(level, ff.shape, None).ok()?.into(),
     };
     // Shape interval at the 95 % threshold widened by this fit's Birge ratio; a line's frequency
-    // is the spectrum's, known to half its resolution.
+    // is the spectrum's, known to half the resolution it was measured to.
     let scale = birge_scale(ff.fit.chi2, free_parameters(effect), m);
-    let (shape_lo, shape_hi) = match (from_lines, input.line_resolution_hz) {
+    let (shape_lo, shape_hi) = match (from_lines, input.line_frequency_resolution_hz) {
         (true, Some(df)) => (ff.shape - 0.5 * df, ff.shape + 0.5 * df),
         _ => ff.shape_interval(CHI2_1_95 * scale * scale),
     };
@@ -185,48 +193,30 @@ fn fit_shaped(
 }
 
 /// The frequencies a new sinusoid is tried at, the look-elsewhere cost of the choice, and whether
-/// they are the spectrum's lines. Where the log's spectrum resolves a line (from 6 of its
-/// resolutions up), a tone is a line of the spectrum: its frequency is the line's
-/// (`spectrum::spectral_lines_runs`), only the amplitude is fitted, at a cost of 2 ln of the
-/// number of lines chosen from. Below that the Allan grid is searched (`shape_grid`, with its own
-/// cost); no line and nothing below the resolution: no sinusoid. Neither inside a broad spectral
-/// peak: the spectrum shows the power there spread over many resolutions, not a line (the
-/// resonance candidate describes it).
-fn sinusoid_shapes(input: &ChannelFit, data: &FitData) -> Option<(Vec<f64>, f64, bool)> {
+/// they are the spectrum's lines. A tone is a line of the spectrum: where the log's spectrum shows
+/// lines (`spectrum::spectral_lines_runs`, from 6 of its resolutions up to the Nyquist frequency),
+/// the sinusoid is offered at their frequencies only, each measured on the spectrum to the runs'
+/// resolution; only the amplitude is fitted, at a cost of 2 ln of the number of lines chosen from.
+/// A sinusoid searched on the Allan grid has no line to stand on (a stand-in), so it is offered
+/// only on a channel whose spectrum shows no line: there the grid below the spectrum's resolution
+/// is searched (`shape_grid`, with its own cost); nothing below the resolution either: no
+/// sinusoid. Neither inside a broad spectral peak: the spectrum shows the power there spread over
+/// many resolutions, not a line (the resonance candidate describes it).
+fn sinusoid_shapes(input: &ChannelFit) -> Option<(Vec<f64>, f64, bool)> {
     let (tau, dt_s) = (&input.measured.tau_s, input.dt_s);
     let outside_peak = |f: &f64| input.peak.is_none_or(|p| !p.covers(*f));
     let lines: Vec<f64> = input.lines.iter().copied().filter(outside_peak).collect();
+    if !lines.is_empty() {
+        let cost = shape_search_penalty(lines.len());
+        return Some((lines, cost, true));
+    }
     let mut grid = shape_grid(Effect::Sinusoidal, tau[0], tau[tau.len() - 1], dt_s);
     grid.retain(outside_peak);
     if let Some(df) = input.line_resolution_hz {
         grid.retain(|&f| f < 6.0 * df);
     }
-    // The grid below the resolution and the lines are two searches: the better by BIC is offered.
-    let line_cost = shape_search_penalty(lines.len());
-    let grid_cost = shape_search_penalty(grid.len());
-    match (lines.is_empty(), grid.is_empty()) {
-        (true, true) => None,
-        (false, true) => Some((lines, line_cost, true)),
-        (true, false) => Some((grid, grid_cost, false)),
-        (false, false) => {
-            let best = |shapes: &[f64]| {
-                let sigs: Vec<Vec<f64>> = shapes
-                    .iter()
-                    .map(|&f| {
-                        tau.iter()
-                            .map(|&t| unit_family_signature(Effect::Sinusoidal, f, t, dt_s))
-                            .collect()
-                    })
-                    .collect();
-                fit_family(data, shapes, &sigs, &|_| 0.0).map_or(f64::INFINITY, |f| f.fit.chi2)
-            };
-            if best(&lines) + line_cost <= best(&grid) + grid_cost {
-                Some((lines, line_cost, true))
-            } else {
-                Some((grid, grid_cost, false))
-            }
-        }
-    }
+    let cost = shape_search_penalty(grid.len());
+    (!grid.is_empty()).then_some((grid, cost, false))
 }
 
 /// A resonance. One the model has is refitted around its shape (the other terms it was fitted

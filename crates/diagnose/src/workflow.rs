@@ -209,16 +209,17 @@ impl<'a> Run<'a> {
         let (peaks, lines) = if logs.len() == 1 {
             (s.pre[0].peaks, s.pre[0].lines.clone())
         } else {
-            let xs =
-                |c: Channel| -> Vec<&[f64]> { logs.iter().filter_map(|l| l.channels[c]).collect() };
+            let both = ImuChannels::from_fn(|c| {
+                let xs: Vec<&[f64]> = logs.iter().filter_map(|l| l.channels[c]).collect();
+                if xs.is_empty() {
+                    (None, Vec::new())
+                } else {
+                    crate::spectrum::peak_and_lines_runs(&xs, first.dt_s)
+                }
+            });
             (
-                ImuChannels::from_fn(|c| {
-                    let xs = xs(c);
-                    (!xs.is_empty())
-                        .then(|| crate::spectrum::broad_peak_runs(&xs, first.dt_s))
-                        .flatten()
-                }),
-                ImuChannels::from_fn(|c| crate::spectrum::spectral_lines_runs(&xs(c), first.dt_s)),
+                ImuChannels::from_fn(|c| both[c].0),
+                ImuChannels::from_fn(|c| both[c].1.clone()),
             )
         };
         let several = logs.len() > 1;
@@ -426,6 +427,7 @@ impl<'a> Run<'a> {
     /// Step 4: every candidate fitted to channel `c`'s gap against `band`.
     fn candidates(&self, c: Channel, curve: &Curve, band: &Band, g: &Gap) -> Vec<Trial> {
         let dt_s = self.dt_s();
+        let series = self.series(c);
         trials(&ChannelFit {
             model: &self.sim_model,
             channel: c,
@@ -436,7 +438,10 @@ impl<'a> Run<'a> {
             ramp_slope: self.ramp_slope[c],
             peak: self.peaks[c],
             lines: &self.lines[c],
-            line_resolution_hz: crate::spectrum::line_resolution_hz(&self.series(c), dt_s),
+            line_resolution_hz: crate::spectrum::line_resolution_hz(&series, dt_s),
+            line_frequency_resolution_hz: crate::spectrum::line_frequency_resolution_hz(
+                &series, dt_s,
+            ),
         })
     }
 
