@@ -89,12 +89,9 @@ impl TermKind for SlowGaussMarkov {
         GaussMarkov::from_raw(raw, cx).map(SlowGaussMarkov)
     }
 
-    /// None: a written config has never taken its units from this table.
-    fn note_units(
-        _value: &toml::Value,
-        _sig: Signal,
-        _note: &mut dyn FnMut(Quantity, &toml::Value),
-    ) {
+    /// As `gauss_markov`'s.
+    fn note_units(value: &toml::Value, sig: Signal, note: &mut dyn FnMut(Quantity, &toml::Value)) {
+        GaussMarkov::note_units(value, sig, note)
     }
 
     type Generator = BankGenerator;
