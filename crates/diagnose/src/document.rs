@@ -63,7 +63,10 @@ pub fn corrected_model_toml(
             "# The b values above are IEEE 952 coefficients B (Allan plateau 0.664 B); the model below writes\n\
              # bias_instability in the input's convention{}.",
             if style.keeps_allan_minimum() {
-                " (allan_minimum: the minimum of the axis' Allan deviation, as spec sheets quote it)"
+                " (allan_minimum: the minimum of the axis' Allan deviation, as spec sheets quote it;\n\
+                 # B is solved from the whole axis, so editing another term of an axis changes its B: to keep\n\
+                 # it, write that axis' bias_instability as B with convention = \"ieee\" (B is the b above where\n\
+                 # diagnose fitted it))"
             } else {
                 " (ieee: the coefficient B)"
             }
