@@ -205,6 +205,34 @@ struct Move<'a> {
     c_ref: f64,
 }
 
+/// The channel's fitted rate random walk: its term, Allan signature per unit squared level, unit
+/// drift and squared level.
+struct Walk<'a> {
+    term: &'a Term,
+    f: Vec<f64>,
+    u: Vec<[f64; 5]>,
+    c0: f64,
+}
+
+impl Walk<'_> {
+    fn as_move(&self) -> Move<'_> {
+        Move {
+            f: &self.f,
+            u: &self.u,
+            c0: self.c0,
+            c_ref: self.c0,
+        }
+    }
+}
+
+/// How the joint chi2 weighs its parts: the drift pairs by `w`, the Allan part divided by
+/// `dispersion`.
+#[derive(Clone, Copy)]
+struct Scale {
+    w: f64,
+    dispersion: f64,
+}
+
 /// A fitted level (and the random walk's, when re-levelled with it).
 struct Level {
     c: f64,
@@ -216,16 +244,16 @@ struct Level {
 
 impl DriftFitInput<'_> {
     /// The joint chi2 when each moved term's level goes from its c0 to c (its Allan signature `f`
-    /// and unit drift `u[h][q]`), the drift pairs weighed by `w` ([`DriftFitInput::drift_weight`]).
-    fn chi2(&self, data: &FitData, moves: &[(&Move, f64)], w: f64) -> f64 {
-        let dispersion = self.dispersion(data, moves);
+    /// and unit drift `u[h][q]`): the Allan part divided by `scale.dispersion` (module doc), the
+    /// drift pairs weighed by `scale.w` ([`DriftFitInput::drift_weight`]).
+    fn chi2(&self, data: &FitData, moves: &[(&Move, f64)], scale: Scale) -> f64 {
         let mut delta_avar = vec![0.0; data.ln_meas.len()];
         for (m, c) in moves {
             for (d, f) in delta_avar.iter_mut().zip(m.f) {
                 *d += (c - m.c0) * f;
             }
         }
-        let allan = data.chi2(&delta_avar, 1.0) / dispersion;
+        let allan = data.chi2(&delta_avar, 1.0) / scale.dispersion;
         let drift: f64 = self
             .drift
             .iter()
@@ -235,22 +263,7 @@ impl DriftFitInput<'_> {
                 d.z(delta).powi(2)
             })
             .sum();
-        allan + w * drift
-    }
-
-    /// The dispersion of the Allan part for `moves` (module doc): over the taus where the moved
-    /// terms at their reference levels make at least a tenth of the band's Allan variance (the
-    /// taus the change can move), the chi2 of the model as it stands.
-    fn dispersion(&self, data: &FitData, moves: &[(&Move, f64)]) -> f64 {
-        let (mut chi2, mut m) = (0.0, 0);
-        for i in 0..data.ln_meas.len() {
-            let moved: f64 = moves.iter().map(|(mv, _)| mv.c_ref * mv.f[i].abs()).sum();
-            if moved >= SUPPORT_SHARE * data.avar_band[i] {
-                chi2 += ((data.ln_meas[i] - data.ln_band[i]) / data.s[i]).powi(2);
-                m += 1;
-            }
-        }
-        allan_dispersion(chi2, m)
+        allan + scale.w * drift
     }
 
     /// The weight of the drift pairs' chi2 for a candidate with unit drift `u` (module doc): the
@@ -345,15 +358,7 @@ impl DriftFitInput<'_> {
         current: Option<&Term>,
         penalty: f64,
     ) -> Option<DriftTrial> {
-        let (tau, dt_s) = (&self.measured.tau_s, self.dt_s);
-        let flicker = flicker_band(self.model, self.channel);
-        let f: Vec<f64> = tau
-            .iter()
-            .map(|&t| match shape {
-                Some(s) => unit_family_signature(effect, s, t, dt_s),
-                None => unit_signature(effect, t, dt_s, &flicker),
-            })
-            .collect();
+        let f = self.signature(effect, shape);
         let c0 = squared_level(current);
         // The unit level: the model's own, else the one at which the term alone would reach the
         // measured Allan variance at the longest tau (the drift is then of a realistic size).
@@ -377,14 +382,26 @@ impl DriftFitInput<'_> {
             }
         };
         let u = self.unit_drift(&term_at(c_unit).ok()?, c_unit);
-        let w = self.drift_weight(&u);
         let own = Move {
             f: &f,
             u: &u,
             c0,
             c_ref: c_unit,
         };
-        let chi = |c: f64| self.chi2(data, &[(&own, c)], w);
+        // The channel's random walk, re-levelled beside the candidate (`with_random_walk`).
+        let walk = (!matches!(effect, Effect::RateRamp | Effect::RateRandomWalk))
+            .then(|| self.random_walk())
+            .flatten();
+        // One dispersion for every comparison of this candidate: over the taus the candidate or
+        // the random walk can move, so its BIC gain compares chi2 values on one scale.
+        let walk_move = walk.as_ref().map(Walk::as_move);
+        let mut refs: Vec<&Move> = vec![&own];
+        refs.extend(walk_move.as_ref());
+        let scale = Scale {
+            w: self.drift_weight(&u),
+            dispersion: dispersion(data, &refs),
+        };
+        let chi = |c: f64| self.chi2(data, &[(&own, c)], scale);
         let (c, chi2) = if effect == Effect::RateRamp {
             // A ramp's level is the runs' slope (deterministic, `trials`).
             let c = self.ramp_slope * self.ramp_slope;
@@ -401,9 +418,10 @@ impl DriftFitInput<'_> {
             interval: interval(&chi, c, chi2 + CHI2_1_95),
             partner: None,
         };
-        if !matches!(effect, Effect::RateRamp | Effect::RateRandomWalk) {
-            let joint = self.with_random_walk(data, &own, (c_unit, w), (k + 1, m), penalty);
-            if let Some(joint) = joint.filter(|j| j.bic < best.bic) {
+        if let Some(walk) = &walk {
+            let joint =
+                self.with_random_walk(data, (&own, walk), (c_unit, scale), (k + 1, m), penalty);
+            if joint.bic < best.bic {
                 best = joint;
             }
         }
@@ -432,6 +450,36 @@ impl DriftFitInput<'_> {
         })
     }
 
+    /// The Allan variance per unit squared level of `effect` at each measured tau (a Gauss-Markov
+    /// process at correlation time `shape`).
+    fn signature(&self, effect: Effect, shape: Option<f64>) -> Vec<f64> {
+        let flicker = flicker_band(self.model, self.channel);
+        self.measured
+            .tau_s
+            .iter()
+            .map(|&t| match shape {
+                Some(s) => unit_family_signature(effect, s, t, self.dt_s),
+                None => unit_signature(effect, t, self.dt_s, &flicker),
+            })
+            .collect()
+    }
+
+    /// The channel's fitted rate random walk with its Allan signature and unit drift (None without
+    /// one, or at level 0).
+    fn random_walk(&self) -> Option<Walk<'_>> {
+        let term = fitted_term(self.model, self.channel, Effect::RateRandomWalk)?;
+        let c0 = squared_level(Some(term));
+        if c0 <= 0.0 {
+            return None;
+        }
+        Some(Walk {
+            term,
+            f: self.signature(Effect::RateRandomWalk, None),
+            u: self.unit_drift(term, c0),
+            c0,
+        })
+    }
+
     /// The candidate `own` fitted with the channel's rate random walk re-levelled beside it (the
     /// slow terms' levels are not identified by the Allan curve alone: a long Gauss-Markov process
     /// and a random walk look alike up to the longest averaging time, and the drift, which
@@ -439,67 +487,42 @@ impl DriftFitInput<'_> {
     /// chi2: the random walk's level profiled (`minimise` over its level, the candidate's
     /// minimised at each); the drift weight the smaller of the two terms'
     /// ([`DriftFitInput::drift_weight`]: the pairs' evidence counted at most once along either
-    /// direction); one more free parameter. None without a fitted random walk.
+    /// direction), the candidate's dispersion; one more free parameter.
     fn with_random_walk(
         &self,
         data: &FitData,
-        own: &Move,
-        (c_unit, w_own): (f64, f64),
+        (own, walk): (&Move, &Walk),
+        (c_unit, scale): (f64, Scale),
         (k, m): (usize, usize),
         penalty: f64,
-    ) -> Option<Level> {
-        let rrw = fitted_term(self.model, self.channel, Effect::RateRandomWalk)?;
-        let c0_r = squared_level(Some(rrw));
-        if c0_r <= 0.0 {
-            return None;
-        }
-        let flicker = flicker_band(self.model, self.channel);
-        let f_r: Vec<f64> = self
-            .measured
-            .tau_s
-            .iter()
-            .map(|&t| unit_signature(Effect::RateRandomWalk, t, self.dt_s, &flicker))
-            .collect();
-        let u_r = self.unit_drift(rrw, c0_r);
-        let w = w_own.min(self.drift_weight(&u_r));
-        let walk = Move {
-            f: &f_r,
-            u: &u_r,
-            c0: c0_r,
-            c_ref: c0_r,
+    ) -> Level {
+        let scale = Scale {
+            w: scale.w.min(self.drift_weight(&walk.u)),
+            ..scale
         };
-        let profile = |c_r: f64| -> (f64, f64) {
-            minimise(
-                &|c: f64| self.chi2(data, &[(own, c), (&walk, c_r)], w),
-                own.c0,
-                c_unit,
-            )
-        };
-        let c_r = minimise(&|c_r: f64| profile(c_r).1, c0_r, c0_r).0;
+        let mv = walk.as_move();
+        let joint = |c: f64, c_r: f64| self.chi2(data, &[(own, c), (&mv, c_r)], scale);
+        let profile = |c_r: f64| minimise(&|c: f64| joint(c, c_r), own.c0, c_unit);
+        let c_r = minimise(&|c_r: f64| profile(c_r).1, walk.c0, walk.c0).0;
         let (c, chi2) = profile(c_r);
-        let chi = |c: f64| self.chi2(data, &[(own, c), (&walk, c_r)], w);
-        let named = rrw.parameters();
-        let (r_lo, r_hi) = interval(
-            &|x: f64| self.chi2(data, &[(own, c), (&walk, x)], w),
-            c_r,
-            chi2 + CHI2_1_95,
-        );
-        Some(Level {
+        let named = walk.term.parameters();
+        let (r_lo, r_hi) = interval(&|x: f64| joint(c, x), c_r, chi2 + CHI2_1_95);
+        Level {
             c,
             bic: bic(chi2, k, m) + penalty,
             aic: aic(chi2, k) + penalty,
-            interval: interval(&chi, c, chi2 + CHI2_1_95),
+            interval: interval(&|x: f64| joint(x, c_r), c, chi2 + CHI2_1_95),
             partner: Some(Partner {
                 term: (c_r > 0.0)
-                    .then(|| rrw.with_level(c_r.sqrt()).ok())
+                    .then(|| walk.term.with_level(c_r.sqrt()).ok())
                     .flatten(),
                 model: named.clone(),
                 lo: at_squared_level(&named, r_lo),
                 hi: at_squared_level(&named, r_hi),
-                delta_avar: f_r.iter().map(|v| (c_r - c0_r) * v).collect(),
-                signature: f_r.clone(),
+                delta_avar: walk.f.iter().map(|v| (c_r - walk.c0) * v).collect(),
+                signature: walk.f.clone(),
             }),
-        })
+        }
     }
 
     /// u[h][q]: each quantity's mean square per unit c of `term` (at squared level c_unit) alone
@@ -532,9 +555,24 @@ pub(crate) fn gauss_markov_slot(model: &SensorModel, ch: Channel, tau_max: f64) 
     }
 }
 
+/// The dispersion of the Allan part for the terms `moves` (module doc): over the taus where they,
+/// at their reference levels, make at least a tenth of the band's Allan variance (the taus the
+/// change can move), the chi2 of the model as it stands.
+fn dispersion(data: &FitData, moves: &[&Move]) -> f64 {
+    let (mut chi2, mut m) = (0.0, 0);
+    for i in 0..data.ln_meas.len() {
+        let moved: f64 = moves.iter().map(|mv| mv.c_ref * mv.f[i].abs()).sum();
+        if moved >= SUPPORT_SHARE * data.avar_band[i] {
+            chi2 += ((data.ln_meas[i] - data.ln_band[i]) / data.s[i]).powi(2);
+            m += 1;
+        }
+    }
+    allan_dispersion(chi2, m)
+}
+
 /// Share of the band's Allan variance a moved term must make at a tau for the tau to count in the
 /// dispersion (`DriftFitInput::dispersion`).
-const SUPPORT_SHARE: f64 = 0.1;
+pub(crate) const SUPPORT_SHARE: f64 = 0.1;
 
 /// Overdispersion test level of the Allan part (module doc).
 const OVERDISPERSION_LEVEL: f64 = 1e-3;
@@ -657,6 +695,35 @@ mod tests {
         assert_eq!(allan_dispersion(40.0, 16), 2.5);
         assert_eq!(allan_dispersion(78.0 * 78.0 * 16.0, 16), 78.0 * 78.0);
         assert_eq!(allan_dispersion(5.0, 0), 1.0);
+    }
+
+    /// The dispersion counts only the taus the moved terms can move: a misfit of 100 sigma at taus
+    /// where the term makes nothing (a filter's region) leaves a slow term's Allan part as it is;
+    /// counted, it divides it by (2 x 100^2 + 2) / 4.
+    #[test]
+    fn the_dispersion_is_over_the_taus_a_term_moves() {
+        let ln_meas = [100.0, -100.0, 1.0, -1.0];
+        let zeros = [0.0; 4];
+        let data = FitData {
+            ln_meas: &ln_meas,
+            ln_band: &zeros,
+            avar_band: &[1.0; 4],
+            s: &[1.0; 4],
+        };
+        let u = [[0.0; 5]];
+        let slow = Move {
+            f: &[0.0, 0.01, 1.0, 2.0],
+            u: &u,
+            c0: 0.0,
+            c_ref: 1.0,
+        };
+        assert_eq!(dispersion(&data, &[&slow]), 1.0);
+        let everywhere = Move {
+            f: &[1.0; 4],
+            ..slow
+        };
+        assert_eq!(dispersion(&data, &[&everywhere]), 20002.0 / 4.0);
+        assert_eq!(dispersion(&data, &[&slow, &everywhere]), 20002.0 / 4.0);
     }
 
     /// The slow candidate takes `gauss_markov` when it is free or already slow, and the second

@@ -6,7 +6,9 @@
 //! only if the joint chi2 (the drift gap's and the changed channels' Allan gaps') shrank.
 
 use super::{shifted_band, Run};
-use crate::drift_fit::{allan_dispersion, DriftFitInput, DriftTrial, Partner, UnitDrift};
+use crate::drift_fit::{
+    allan_dispersion, DriftFitInput, DriftTrial, Partner, UnitDrift, SUPPORT_SHARE,
+};
 use crate::drift_gap::DriftGap;
 use crate::error::DiagnoseError;
 use crate::findings::{found_by_fit, merge_refinements, rejected_record, Choice};
@@ -186,7 +188,7 @@ impl Run<'_> {
             &self.setup.active,
         );
         // Each changed channel's Allan chi2, divided by its dispersion before the round over the
-        // taus the round moved by a tenth or more (`drift_fit::allan_dispersion`), counted once
+        // taus the round moved by `SUPPORT_SHARE` or more (`drift_fit::allan_dispersion`), counted once
         // per channel.
         let mut channels: Vec<Channel> = changes.iter().map(|(c, _, _)| *c).collect();
         channels.dedup();
@@ -204,7 +206,7 @@ impl Run<'_> {
                 let moved: Vec<f64> =
                     g0.z.iter()
                         .zip(b0.avar_mean.iter().zip(&b1.avar_mean))
-                        .filter(|(_, (a0, a1))| (*a1 - *a0).abs() >= 0.1 * *a0)
+                        .filter(|(_, (a0, a1))| (*a1 - *a0).abs() >= SUPPORT_SHARE * *a0)
                         .map(|(z, _)| *z)
                         .collect();
                 allan_dispersion(moved.iter().map(|z| z * z).sum(), moved.len())
