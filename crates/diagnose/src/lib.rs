@@ -20,6 +20,7 @@ pub mod effect_text;
 pub mod error;
 mod findings;
 pub mod fit;
+pub mod alternatives;
 pub mod fitted_on;
 pub mod gap;
 mod held_out;

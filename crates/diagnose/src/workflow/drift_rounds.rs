@@ -6,6 +6,9 @@
 //! only if the joint chi2 (the drift gap's and the changed channels' Allan gaps') shrank.
 
 use super::{shifted_band, Run};
+use crate::alternatives::{
+    differing_effects, weights, Alternative, MAX_PER_CHANNEL, OCCAM_DELTA_BIC,
+};
 use crate::drift_fit::{
     allan_dispersion, DriftFitInput, DriftTrial, Partner, UnitDrift, SUPPORT_SHARE,
 };
@@ -32,13 +35,21 @@ impl Run<'_> {
                 break;
             };
             let round = self.rounds + 1;
+            let alternatives = ImuChannels::from_fn(|c| self.channels[c].alternatives.clone());
             let changes: Vec<Change> = before
                 .channels_outside()
                 .into_iter()
                 .filter_map(|c| self.drift_choice(c, &before, round))
                 .flatten()
                 .collect();
-            if changes.is_empty() || !self.drift_resimulate(round, &before, changes)? {
+            if changes.is_empty() {
+                break;
+            }
+            if !self.drift_resimulate(round, &before, changes)? {
+                // The round's alternatives were weighed against a structure undone.
+                for c in Channel::ALL {
+                    self.channels[c].alternatives = alternatives[c].clone();
+                }
                 break;
             }
         }
@@ -83,10 +94,12 @@ impl Run<'_> {
                 delta_aic: f64::NAN,
                 parameters: named_map(&t.trial.named()),
             }));
-        let best: &DriftTrial = trials
+        let best = trials
             .iter()
             .filter(|t| t.delta_bic >= self.settings.min_delta_bic)
-            .max_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic))?;
+            .max_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic));
+        self.channels[c].alternatives = self.alternatives_of(c, &trials, best);
+        let best: &DriftTrial = best?;
         let cannot_tell_from = trials
             .iter()
             .filter(|t| {
@@ -125,6 +138,55 @@ impl Run<'_> {
             ));
         }
         Some(changes)
+    }
+
+    /// The structures of channel `c` within Occam's window of the one kept (`best` named, or the
+    /// model as it is when none passed the rule), each the channel's axis of the corrected model
+    /// with a trial's term (and its re-levelled random walk) in place of the kept one's, weighted
+    /// by their BIC (`alternatives`).
+    fn alternatives_of(
+        &self,
+        c: Channel,
+        trials: &[DriftTrial],
+        best: Option<&DriftTrial>,
+    ) -> Vec<Alternative> {
+        let base = self.out_model.axis(c.sensor(), c.axis());
+        let with = |t: &DriftTrial| {
+            let mut a = base.clone();
+            a.set_term(t.trial.term.clone());
+            if let Some(p) = &t.partner {
+                match &p.term {
+                    Some(term) => a.set_term(term.clone()),
+                    None => a.remove(Effect::RateRandomWalk),
+                }
+            }
+            a
+        };
+        let kept = best.map_or(0.0, |b| b.delta_bic);
+        let own = best.map_or_else(|| base.clone(), with);
+        let mut near: Vec<(f64, &DriftTrial)> = trials
+            .iter()
+            .filter(|t| best.is_none_or(|b| t.trial.effect != b.trial.effect))
+            .map(|t| (kept - t.delta_bic, t))
+            .filter(|(d, _)| d.is_finite() && *d <= OCCAM_DELTA_BIC)
+            .collect();
+        near.sort_by(|a, b| a.0.total_cmp(&b.0));
+        near.truncate(MAX_PER_CHANNEL);
+        let d: Vec<f64> = near.iter().map(|(d, _)| *d).collect();
+        let w = weights(&d);
+        near.iter()
+            .zip(&w[1..])
+            .map(|(&(delta_bic, t), &weight)| {
+                let axis = with(t);
+                Alternative {
+                    channel: c,
+                    weight,
+                    delta_bic,
+                    effects: differing_effects(&own, &axis),
+                    axis,
+                }
+            })
+            .collect()
     }
 
     /// Put the rate random walk re-levelled with a drift candidate into both models (removed at
