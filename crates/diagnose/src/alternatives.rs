@@ -53,6 +53,8 @@ pub struct Alternative {
     pub delta_bic: f64,
     /// The effects it has that the chosen structure has not, or at another level.
     pub effects: Vec<Effect>,
+    /// The effects the chosen structure has that it has not.
+    pub removed: Vec<Effect>,
     /// The channel's whole axis in this structure.
     #[serde(skip)]
     pub axis: AxisModel,
@@ -78,6 +80,14 @@ pub fn differing_effects(chosen: &AxisModel, other: &AxisModel) -> Vec<Effect> {
     Effect::ALL
         .into_iter()
         .filter(|&e| other.term(e).is_some() && other.term(e) != chosen.term(e))
+        .collect()
+}
+
+/// The effects `chosen` has and `other` has not.
+pub fn removed_effects(chosen: &AxisModel, other: &AxisModel) -> Vec<Effect> {
+    Effect::ALL
+        .into_iter()
+        .filter(|&e| chosen.term(e).is_some() && other.term(e).is_none())
         .collect()
 }
 
@@ -121,6 +131,12 @@ pub fn to_toml(alternatives: &[Alternative], style: &UnitStyle) -> String {
         let _ = writeln!(s, "weight = {:?}", a.weight);
         let _ = writeln!(s, "delta_bic = {:?}", a.delta_bic);
         let _ = writeln!(s, "effects = [{}]", effects.join(", "));
+        let removed: Vec<String> = a
+            .removed
+            .iter()
+            .map(|e| format!("\"{}\"", e.name()))
+            .collect();
+        let _ = writeln!(s, "removed = [{}]", removed.join(", "));
         let _ = writeln!(s, "[alternatives.terms]");
         s.push_str(&m.axis_toml_styled(a.channel.sensor(), a.channel.axis(), style));
     }
@@ -176,8 +192,8 @@ fn entry(entry: usize, t: &toml::Table, source: &str) -> Result<Alternative, Alt
             .as_float()
             .ok_or(bad("delta_bic", "a number (the BIC difference)"))?,
     };
-    let effects = match t.get("effects") {
-        None => Vec::new(),
+    let names = |key: &'static str| match t.get(key) {
+        None => Ok(Vec::new()),
         Some(v) => v
             .as_array()
             .and_then(|a| {
@@ -185,8 +201,10 @@ fn entry(entry: usize, t: &toml::Table, source: &str) -> Result<Alternative, Alt
                     .map(|e| e.as_str().and_then(Effect::from_name))
                     .collect::<Option<Vec<Effect>>>()
             })
-            .ok_or(bad("effects", "a list of effect names"))?,
+            .ok_or(bad(key, "a list of effect names")),
     };
+    let effects = names("effects")?;
+    let removed = names("removed")?;
     let terms = t
         .get("terms")
         .and_then(toml::Value::as_table)
@@ -215,6 +233,7 @@ fn entry(entry: usize, t: &toml::Table, source: &str) -> Result<Alternative, Alt
         weight,
         delta_bic,
         effects,
+        removed,
         axis: m.axis(channel.sensor(), channel.axis()).clone(),
     })
 }
@@ -251,15 +270,20 @@ pub fn structures(model: &SensorModel, alternatives: &[Alternative]) -> Vec<Stru
             for a in &alts {
                 let mut m = s.model.clone();
                 *m.axis_mut(c.sensor(), c.axis()) = a.axis.clone();
-                let names: Vec<&str> = a.effects.iter().map(|e| e.name()).collect();
-                let this = format!("{}: {}", c.name(), names.join(" + "));
+                let names: Vec<String> = a
+                    .effects
+                    .iter()
+                    .map(|e| e.name().to_string())
+                    .chain(a.removed.iter().map(|e| format!("no {}", e.name())))
+                    .collect();
+                let this = format!("{}: {}", c.name(), names.join(", "));
                 next.push(Structure {
                     weight: s.weight * a.weight,
                     model: m,
                     label: if s.label == "as fitted" {
                         this
                     } else {
-                        format!("{}, {this}", s.label)
+                        format!("{}; {this}", s.label)
                     },
                 });
             }
@@ -347,6 +371,7 @@ mod tests {
             weight: 0.25,
             delta_bic: 2.0 * 3f64.ln(),
             effects: differing_effects(model().axis(noise::Sensor::Gyro, 2), &axis),
+            removed: removed_effects(model().axis(noise::Sensor::Gyro, 2), &axis),
             axis,
         }
     }
@@ -368,6 +393,7 @@ mod tests {
         let b = &back[0];
         assert_eq!((b.channel, b.weight, b.delta_bic), (a.channel, a.weight, a.delta_bic));
         assert_eq!(b.effects, a.effects);
+        assert_eq!(b.removed, vec![Effect::RateRandomWalk]);
         // Written to five digits: the terms agree to that.
         let sigma = |ax: &AxisModel| match ax.term(Effect::SlowGaussMarkov) {
             Some(t) => t.level().unwrap().1,
@@ -423,7 +449,10 @@ mod tests {
             assert!((got - want).abs() < 1e-12, "{w:?}");
         }
         assert_eq!(s[0].label, "as fitted");
-        assert_eq!(s[3].label, "gx: slow_gauss_markov, gz: slow_gauss_markov");
+        assert_eq!(
+            s[3].label,
+            "gx: slow_gauss_markov, no rate_random_walk; gz: slow_gauss_markov, no rate_random_walk"
+        );
         assert!(s[1]
             .model
             .axis(noise::Sensor::Gyro, 2)

@@ -7,7 +7,7 @@
 
 use super::{shifted_band, Run};
 use crate::alternatives::{
-    differing_effects, weights, Alternative, MAX_PER_CHANNEL, OCCAM_DELTA_BIC,
+    differing_effects, removed_effects, weights, Alternative, MAX_PER_CHANNEL, OCCAM_DELTA_BIC,
 };
 use crate::drift_fit::{
     allan_dispersion, DriftFitInput, DriftTrial, Partner, UnitDrift, SUPPORT_SHARE,
@@ -19,7 +19,7 @@ use crate::gap::gap;
 use crate::model_terms::{current_term, restore_term, set_term};
 use crate::report::{Candidate, CandidateRecord, DriftLoop};
 use crate::trials::{named_map, Trial};
-use noise::{Channel, Effect, ImuChannels, Term};
+use noise::{AxisModel, Channel, Effect, ImuChannels, Term};
 
 /// A change the drift loop made: the channel, the effect and its term before.
 type Change = (Channel, Effect, Option<Term>);
@@ -140,10 +140,13 @@ impl Run<'_> {
         Some(changes)
     }
 
-    /// The structures of channel `c` within Occam's window of the one kept (`best` named, or the
-    /// model as it is when none passed the rule), each the channel's axis of the corrected model
-    /// with a trial's term (and its re-levelled random walk) in place of the kept one's, weighted
-    /// by their BIC (`alternatives`).
+    /// The structures of channel `c` the evidence cannot tell from the one kept (`alternatives`),
+    /// after this round's weighing `trials`. Each is the channel's axis of the corrected model
+    /// with a trial's term (and its re-levelled random walk). When `best` is named, the others
+    /// within Occam's window of it replace the channel's earlier alternatives (those were weighed
+    /// against a structure this round changed). When none passed the rule, the model stays as it
+    /// is, and the trials within the window that add a term the channel lacks join the earlier
+    /// alternatives (a level of a term it has is the bootstrap's part, not another structure).
     fn alternatives_of(
         &self,
         c: Channel,
@@ -164,27 +167,41 @@ impl Run<'_> {
         };
         let kept = best.map_or(0.0, |b| b.delta_bic);
         let own = best.map_or_else(|| base.clone(), with);
-        let mut near: Vec<(f64, &DriftTrial)> = trials
-            .iter()
-            .filter(|t| best.is_none_or(|b| t.trial.effect != b.trial.effect))
-            .map(|t| (kept - t.delta_bic, t))
-            .filter(|(d, _)| d.is_finite() && *d <= OCCAM_DELTA_BIC)
-            .collect();
+        let mut near: Vec<(f64, AxisModel)> = match best {
+            Some(_) => Vec::new(),
+            None => self.channels[c]
+                .alternatives
+                .iter()
+                .map(|a| (a.delta_bic, a.axis.clone()))
+                .collect(),
+        };
+        for t in trials {
+            let new_term = !base.has(t.trial.effect);
+            let competes = match best {
+                Some(b) => t.trial.effect != b.trial.effect,
+                None => new_term,
+            };
+            let d = kept - t.delta_bic;
+            if competes && d.is_finite() && d <= OCCAM_DELTA_BIC {
+                let axis = with(t);
+                if axis != own && near.iter().all(|(_, a)| *a != axis) {
+                    near.push((d, axis));
+                }
+            }
+        }
         near.sort_by(|a, b| a.0.total_cmp(&b.0));
         near.truncate(MAX_PER_CHANNEL);
         let d: Vec<f64> = near.iter().map(|(d, _)| *d).collect();
         let w = weights(&d);
-        near.iter()
+        near.into_iter()
             .zip(&w[1..])
-            .map(|(&(delta_bic, t), &weight)| {
-                let axis = with(t);
-                Alternative {
-                    channel: c,
-                    weight,
-                    delta_bic,
-                    effects: differing_effects(&own, &axis),
-                    axis,
-                }
+            .map(|((delta_bic, axis), &weight)| Alternative {
+                channel: c,
+                weight,
+                delta_bic,
+                effects: differing_effects(&own, &axis),
+                removed: removed_effects(&own, &axis),
+                axis,
             })
             .collect()
     }
