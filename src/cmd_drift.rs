@@ -360,9 +360,10 @@ fn structures_text(r: &DriftCheck, one_flag: bool) -> String {
     for st in &r.structures {
         let _ = writeln!(
             s,
-            "  {:>5.1} %  {:>3} experiments  {}",
+            "  {:>5.1} %  {:>3} experiment{}  {}",
             100.0 * st.weight,
             st.replicates,
+            if st.replicates == 1 { " " } else { "s" },
             st.label
         );
     }
