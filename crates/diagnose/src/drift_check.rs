@@ -33,7 +33,7 @@
 //! not (a datasheet) is taken as exact and every replicate simulates it as it is.
 
 use crate::alternatives::{self, Alternative, Structure};
-use crate::bootstrap::{draw_models, BootstrapError, ParameterSpread};
+use crate::bootstrap::{draw_models, draw_models_on, BootstrapError, ParameterSpread};
 use crate::fitted_on::FittedOn;
 use crate::input::LogInput;
 use crate::observer::Observer;
@@ -382,16 +382,28 @@ impl StructurePlan {
         StructurePlan { structures, counts }
     }
 
-    /// Replicates of structure `s`'s bootstrap.
+    /// The channels where structure `s` differs from the model's own (structure 0).
+    fn changed(&self, s: usize) -> noise::ImuChannels<bool> {
+        let (own, this) = (&self.structures[0].model, &self.structures[s].model);
+        noise::ImuChannels::from_fn(|c| {
+            own.axis(c.sensor(), c.axis()) != this.axis(c.sensor(), c.axis())
+        })
+    }
+
+    /// Replicates of structure `s`'s own bootstrap: for the model's structure all the replicates
+    /// (every structure takes its other channels' levels from it), for another at least
+    /// `alternatives::MIN_BOOTSTRAP` of its changed channels (the draws are centred on their
+    /// mean, which a handful of replicates would pin to the fitted levels).
     fn bootstrap_replicates(&self, s: usize) -> usize {
-        match (self.counts[s], self.structures.len()) {
-            (0, _) => 0,
-            (n, 1) => n,
-            (n, _) => n.max(alternatives::MIN_BOOTSTRAP),
+        match (s, self.counts[s]) {
+            (0, _) => self.counts.iter().sum(),
+            (_, 0) => 0,
+            (_, n) => n.max(alternatives::MIN_BOOTSTRAP),
         }
     }
 
-    /// The logs simulated with `logs` measured logs, the bootstraps' included.
+    /// The logs simulated with `logs` measured logs, the bootstraps' included (a structure's own
+    /// bootstrap simulates only its changed channels, counted as whole logs).
     fn simulated_logs(&self, logs: usize, fitted_on: Option<&FittedOn>) -> usize {
         let boot: usize = (0..self.counts.len())
             .map(|s| self.bootstrap_replicates(s))
@@ -400,35 +412,63 @@ impl StructurePlan {
     }
 
     /// Each replicate's model, in replicate order (empty: every replicate simulates the model as
-    /// it is), and the first drawn structure's level spread. The bootstraps' runs start at
-    /// `first_run` of `seed`, one structure after the other.
+    /// it is), and the model's own level spread. With a fitted-on table the model's bootstrap
+    /// draws every replicate's levels; the replicates of another structure take its changed
+    /// channels from that structure's own bootstrap, on the channels it changes. The bootstraps'
+    /// runs start at `first_run` of `seed`, the model's first, then each structure's.
     fn draw(
         &self,
         fitted_on: Option<&FittedOn>,
-        (seed, mut first_run): (u64, u64),
+        (seed, first_run): (u64, u64),
         tick: &(dyn Fn() + Sync),
     ) -> Result<(Vec<SensorModel>, Option<ParameterSpread>), CheckError> {
-        let mut models = Vec::new();
-        let mut spread = None;
-        if fitted_on.is_none() && self.structures.len() == 1 {
-            return Ok((models, spread));
-        }
-        for (s, structure) in self.structures.iter().enumerate() {
+        let Some(f) = fitted_on else {
+            if self.structures.len() == 1 {
+                return Ok((Vec::new(), None));
+            }
+            let models = self
+                .structures
+                .iter()
+                .zip(&self.counts)
+                .flat_map(|(s, &n)| std::iter::repeat_n(s.model.clone(), n))
+                .collect();
+            return Ok((models, None));
+        };
+        let logs = f.samples.len() as u64;
+        let all = self.bootstrap_replicates(0);
+        let own = draw_models(
+            &self.structures[0].model,
+            f,
+            (seed, first_run, all),
+            tick,
+        )?;
+        let mut next_run = first_run + all as u64 * logs;
+        let mut models = own.models;
+        let mut r = self.counts[0];
+        for s in 1..self.structures.len() {
             let n = self.counts[s];
             if n == 0 {
                 continue;
             }
-            let Some(f) = fitted_on else {
-                models.extend(std::iter::repeat_n(structure.model.clone(), n));
-                continue;
-            };
+            let changed = self.changed(s);
             let reps = self.bootstrap_replicates(s);
-            let d = draw_models(&structure.model, f, (seed, first_run, reps), tick)?;
-            first_run += (reps * f.samples.len()) as u64;
-            spread.get_or_insert(d.spread);
-            models.extend(d.models.into_iter().take(n));
+            let d = draw_models_on(
+                &self.structures[s].model,
+                f,
+                changed,
+                (seed, next_run, reps),
+                tick,
+            )?;
+            next_run += reps as u64 * logs;
+            for drawn in d.models.iter().take(n) {
+                for c in noise::Channel::ALL.into_iter().filter(|&c| changed[c]) {
+                    *models[r].axis_mut(c.sensor(), c.axis()) =
+                        drawn.axis(c.sensor(), c.axis()).clone();
+                }
+                r += 1;
+            }
         }
-        Ok((models, spread))
+        Ok((models, Some(own.spread)))
     }
 
     /// The structures' shares for the report (empty with one structure).

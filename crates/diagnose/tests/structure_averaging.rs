@@ -150,9 +150,25 @@ fn each_structure_draws_its_own_levels() {
     let counts: Vec<usize> = c.structures.iter().map(|s| s.replicates).collect();
     assert_eq!(counts, vec![18, 2]);
     assert!(c.parameters.is_some());
-    // Logs simulated: 20 experiments of one log, bootstraps of 18 and 16 replicates of one log.
+    // Logs simulated: 20 experiments of one log; the model's bootstrap for all 20 replicates
+    // (every structure's other channels) and the alternative's of its channel, 16 replicates.
     assert_eq!(
-        diagnose::drift_check::simulated_logs_averaged(1, &own, &[alt], Some(&fitted), 20),
-        20 + 18 + alternatives::MIN_BOOTSTRAP
+        diagnose::drift_check::simulated_logs_averaged(1, &own, &[alt.clone()], Some(&fitted), 20),
+        20 + 20 + alternatives::MIN_BOOTSTRAP
     );
+    // The model's own bootstrap draws every replicate's levels (the same draws as the model
+    // alone: the same spread), and the alternative's replicates keep them on the other channels:
+    // the roll drift, which gz feeds only through second-order coupling, has nearly the same band.
+    let alone = check_drift_fitted(&inputs, &own, Some(&fitted), &settings, &()).unwrap();
+    assert_eq!(
+        serde_json::to_string(&c.parameters).unwrap(),
+        serde_json::to_string(&alone.parameters).unwrap()
+    );
+    let roll = |c: &DriftCheck| c.horizons[0].channels["roll_rad"].model.unwrap();
+    for (a, b) in [
+        (roll(&c).band_lo, roll(&alone).band_lo),
+        (roll(&c).band_hi, roll(&alone).band_hi),
+    ] {
+        assert!((a / b - 1.0).abs() < 1e-3, "roll band {a} against {b}");
+    }
 }
