@@ -141,12 +141,15 @@ impl Run<'_> {
     }
 
     /// The structures of channel `c` the evidence cannot tell from the one kept (`alternatives`),
-    /// after this round's weighing `trials`. Each is the channel's axis of the corrected model
-    /// with a trial's term (and its re-levelled random walk). When `best` is named, the others
-    /// within Occam's window of it replace the channel's earlier alternatives (those were weighed
-    /// against a structure this round changed). When none passed the rule, the model stays as it
-    /// is, and the trials within the window that add a term the channel lacks join the earlier
-    /// alternatives (a level of a term it has is the bootstrap's part, not another structure).
+    /// after this round's weighing `trials`: the channel's axis before the round, and with each
+    /// trial's term (and its re-levelled random walk). Each is scored by its BIC gain less the
+    /// naming rule's threshold for a change (`min_delta_bic`, read as the prior odds e^(-T/2)
+    /// against a change that the rule's null calibration stands for: a change is named exactly
+    /// when its posterior odds reach 1), so a candidate the rule did not name weighs less than the
+    /// structure kept, and the structure before a named change stays in the average when the
+    /// change barely passed. Those within Occam's window of the kept one are its alternatives.
+    /// When `best` is named they replace the channel's earlier alternatives (weighed against a
+    /// structure this round changed); otherwise they join them.
     fn alternatives_of(
         &self,
         c: Channel,
@@ -165,7 +168,8 @@ impl Run<'_> {
             }
             a
         };
-        let kept = best.map_or(0.0, |b| b.delta_bic);
+        let prior = self.settings.min_delta_bic;
+        let kept = best.map_or(0.0, |b| b.delta_bic - prior);
         let own = best.map_or_else(|| base.clone(), with);
         let mut near: Vec<(f64, AxisModel)> = match best {
             Some(_) => Vec::new(),
@@ -175,18 +179,16 @@ impl Run<'_> {
                 .map(|a| (a.delta_bic, a.axis.clone()))
                 .collect(),
         };
-        for t in trials {
-            let new_term = !base.has(t.trial.effect);
-            let competes = match best {
-                Some(b) => t.trial.effect != b.trial.effect,
-                None => new_term,
-            };
-            let d = kept - t.delta_bic;
-            if competes && d.is_finite() && d <= OCCAM_DELTA_BIC {
-                let axis = with(t);
-                if axis != own && near.iter().all(|(_, a)| *a != axis) {
-                    near.push((d, axis));
-                }
+        let scored = std::iter::once((0.0, base.clone()))
+            .chain(trials.iter().map(|t| (t.delta_bic - prior, with(t))));
+        for (score, axis) in scored {
+            let d = kept - score;
+            if d.is_finite()
+                && d <= OCCAM_DELTA_BIC
+                && axis != own
+                && near.iter().all(|(_, a)| *a != axis)
+            {
+                near.push((d, axis));
             }
         }
         near.sort_by(|a, b| a.0.total_cmp(&b.0));
