@@ -471,14 +471,14 @@ fn alternatives_text(result: &Diagnosis, indent: &str) -> String {
     }
     let _ = writeln!(
         s,
-        "{indent}structures the drift evidence could not tell apart (within 2 ln 20 of the BIC; the corrected model lists them and `imudrift drift` averages its band over them with these weights):"
+        "{indent}structures the drift evidence could not tell apart (posterior odds above 1:20 against the kept one; the corrected model lists them and `imudrift drift` averages its band over them with these weights):"
     );
     for a in &result.alternatives {
         let mut what: Vec<String> = a.effects.iter().map(|e| e.name().to_string()).collect();
         what.extend(a.removed.iter().map(|e| format!("no {}", e.name())));
         let _ = writeln!(
             s,
-            "{indent}  {}: {} (weight {:.2}, BIC {:+.1} against the model's)",
+            "{indent}  {}: {} (weight {:.2}, -2 ln odds {:.1})",
             a.channel.name(),
             what.join(", "),
             a.weight,

@@ -2,17 +2,19 @@
 //! (docs/drift.md, "Structure uncertainty").
 //!
 //! The drift loop of `diagnose` chooses each channel's long-averaging-time term by the BIC
-//! (docs/diagnose.md, "Drift in the loop"). Where another candidate comes within Occam's window of
-//! the chosen one (a BIC difference of at most 2 ln 20 = 6.0, posterior odds 1:20; Madigan &
-//! Raftery 1994, JASA 89, 1535-1546), the data cannot tell the two apart, yet they predict
-//! different drifts (a rate random walk keeps wandering, a Gauss-Markov process returns). The
-//! corrected model then carries the other structures as `[[alternatives]]`, each with its
-//! posterior weight exp(-dBIC / 2) normalised over the channel's structures (the BIC approximation
-//! of the posterior model probability: Schwarz 1978; Raftery 1995, Sociological Methodology 25,
-//! 111-163), and `drift` averages its band over them (Bayesian model averaging: Hoeting, Madigan,
-//! Raftery & Volinsky 1999, Statistical Science 14, 382-417): the simulated experiments are
-//! shared out among the structures in proportion to their weights (largest remainders), each
-//! structure's levels drawn by its own parametric bootstrap.
+//! (docs/diagnose.md, "Drift in the loop"). Its candidates are scored by their BIC gain less the
+//! naming rule's threshold (the prior odds against a change the rule stands for), and where
+//! another structure comes within Occam's window of the kept one (a score at most 2 ln 20 = 6.0
+//! lower, posterior odds 1:20; Madigan & Raftery 1994, JASA 89, 1535-1546), the data cannot tell
+//! the two apart, yet they predict different drifts (a rate random walk keeps wandering, a
+//! Gauss-Markov process returns). The corrected model then carries the other structures as
+//! `[[alternatives]]`, each with its posterior weight exp(-d / 2) normalised over the channel's
+//! structures (the BIC approximation of the posterior model probability: Schwarz 1978; Raftery
+//! 1995, Sociological Methodology 25, 111-163), and `drift` averages its band over them (Bayesian
+//! model averaging: Hoeting, Madigan, Raftery & Volinsky 1999, Statistical Science 14, 382-417):
+//! the simulated experiments are shared out among the structures in proportion to their weights
+//! (largest remainders), each structure's changed channels drawn by their own parametric
+//! bootstrap.
 //!
 //! ```toml
 //! [[alternatives]]
@@ -31,7 +33,7 @@ use noise::{AxisModel, Channel, Effect, ImuChannels, SensorModel, UnitStyle};
 use serde::{Serialize, Serializer};
 use std::fmt::Write as _;
 
-/// Occam's window: alternatives within 2 ln 20 of the chosen structure's BIC (module doc).
+/// Occam's window: alternatives within 2 ln 20 of the chosen structure's score (module doc).
 pub const OCCAM_DELTA_BIC: f64 = 5.991_464_547_107_979;
 
 /// Most alternatives kept per channel (the strongest).
@@ -48,8 +50,8 @@ pub struct Alternative {
     pub channel: Channel,
     /// Its posterior weight among the channel's structures (the model's own has the rest).
     pub weight: f64,
-    /// Its BIC minus the chosen structure's (>= 0: the chosen one is preferred, but within
-    /// Occam's window).
+    /// -2 ln of its posterior odds against the chosen structure (the BIC difference, the naming
+    /// rule's threshold counted as prior odds against each change; >= 0 within Occam's window).
     pub delta_bic: f64,
     /// The effects it has that the chosen structure has not, or at another level.
     pub effects: Vec<Effect>,
