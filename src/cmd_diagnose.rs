@@ -667,7 +667,12 @@ fn drift_check_markdown(result: &Diagnosis) -> String {
     if !alternatives.is_empty() {
         s.push('\n');
         for line in alternatives.lines() {
-            let _ = writeln!(s, "{}", line.strip_prefix("  ").map_or(line.to_string(), |l| format!("- {l}")));
+            let _ = writeln!(
+                s,
+                "{}",
+                line.strip_prefix("  ")
+                    .map_or(line.to_string(), |l| format!("- {l}"))
+            );
         }
     }
     s

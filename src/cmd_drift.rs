@@ -7,9 +7,9 @@ use crate::log_input::{self, LogArgs};
 use crate::output::write_string;
 use crate::plot::{Band, LogLogPlot, Series};
 use anyhow::{anyhow, bail, Context, Result};
+use diagnose::alternatives::Alternative;
 use diagnose::document::ProtocolSetting;
 use diagnose::drift::CHANNELS;
-use diagnose::alternatives::Alternative;
 use diagnose::drift_check::{
     check_drift_averaged, simulated_logs_averaged, CheckError, CheckSettings, DriftCheck, Verdict,
 };
@@ -145,6 +145,41 @@ fn fitted_on(args: &Args, model_file: &TextFile) -> Result<Option<FittedOn>> {
         .with_context(|| name.clone())
 }
 
+/// The model to check against: its structures and the data its levels were fitted on.
+struct Structures<'a> {
+    model: &'a noise::SensorModel,
+    alternatives: &'a [Alternative],
+    fitted: Option<&'a FittedOn>,
+}
+
+impl Structures<'_> {
+    /// The drift check of `inputs`, its simulated logs on a progress bar.
+    fn check(&self, inputs: &[LogInput], settings: &CheckSettings) -> Result<DriftCheck> {
+        let total = simulated_logs_averaged(
+            inputs.len(),
+            self.model,
+            self.alternatives,
+            self.fitted,
+            settings.replicates,
+        ) as u64;
+        let bar = Simulated(crate::progress::Progress::new(
+            "simulating the model",
+            "logs",
+            total,
+        ));
+        let result = check_drift_averaged(
+            inputs,
+            self.model,
+            self.alternatives,
+            self.fitted,
+            settings,
+            &bar,
+        );
+        bar.0.finish();
+        result.map_err(with_flags)
+    }
+}
+
 /// The structures the model lists beside its own (`diagnose::document::alternatives_of`).
 fn alternatives(args: &Args, model_file: &TextFile) -> Result<Vec<Alternative>> {
     let TextFile { name, text } = model_file;
@@ -205,28 +240,12 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
         seed: args.seed,
     };
     let started = std::time::Instant::now();
-    let total = simulated_logs_averaged(
-        logs.len(),
-        &model,
-        &alternatives,
-        fitted.as_ref(),
-        args.replicates,
-    ) as u64;
-    let bar = Simulated(crate::progress::Progress::new(
-        "simulating the model",
-        "logs",
-        total,
-    ));
-    let result = check_drift_averaged(
-        &inputs,
-        &model,
-        &alternatives,
-        fitted.as_ref(),
-        &settings,
-        &bar,
-    );
-    bar.0.finish();
-    let result = result.map_err(with_flags).with_context(|| {
+    let structures = Structures {
+        model: &model,
+        alternatives: &alternatives,
+        fitted: fitted.as_ref(),
+    };
+    let result = structures.check(&inputs, &settings).with_context(|| {
         format!(
             "checking the drift of {} log(s) against {}",
             logs.len(),

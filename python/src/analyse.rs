@@ -529,9 +529,8 @@ pub fn drift_run<'py>(
     let m = model(&model_text, &model_name)?;
     let fitted = document::fitted_on_of(&model_text, &model_name, settings.exact_parameters)
         .map_err(|e| invalid(format!("{model_name}: {}", message(&e))))?;
-    let alternatives =
-        document::alternatives_of(&model_text, &model_name, settings.one_structure)
-            .map_err(|e| invalid(format!("{model_name}: {}", message(&e))))?;
+    let alternatives = document::alternatives_of(&model_text, &model_name, settings.one_structure)
+        .map_err(|e| invalid(format!("{model_name}: {}", message(&e))))?;
     let logs = logs_of(py, logs, &reader)?;
     check_logs(&logs, &protocol, &m, &model_name)?;
     let inputs: Vec<LogInput> = logs.iter().map(|l| l.input(false)).collect();

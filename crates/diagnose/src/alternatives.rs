@@ -300,7 +300,7 @@ pub fn structures(model: &SensorModel, alternatives: &[Alternative]) -> Vec<Stru
 /// earlier. The counts add up to `n`.
 pub fn allocate(weights: &[f64], n: usize) -> Vec<usize> {
     let total: f64 = weights.iter().sum();
-    if weights.is_empty() || !(total > 0.0) {
+    if weights.is_empty() || total.is_nan() || total <= 0.0 {
         return vec![0; weights.len()];
     }
     let quota: Vec<f64> = weights.iter().map(|w| n as f64 * w / total).collect();
@@ -393,7 +393,10 @@ mod tests {
         let back = from_model_text(&text, "t.toml").unwrap();
         assert_eq!(back.len(), 1);
         let b = &back[0];
-        assert_eq!((b.channel, b.weight, b.delta_bic), (a.channel, a.weight, a.delta_bic));
+        assert_eq!(
+            (b.channel, b.weight, b.delta_bic),
+            (a.channel, a.weight, a.delta_bic)
+        );
         assert_eq!(b.effects, a.effects);
         assert_eq!(b.removed, vec![Effect::RateRandomWalk]);
         // Written to five digits: the terms agree to that.
@@ -409,14 +412,18 @@ mod tests {
     fn bad_alternatives_name_the_entry_and_key() {
         let base = "name = \"m\"\n";
         let e = from_model_text(
-            &format!("{base}[[alternatives]]\nchannel = \"gq\"\nweight = 0.2\n[alternatives.terms]\n"),
+            &format!(
+                "{base}[[alternatives]]\nchannel = \"gq\"\nweight = 0.2\n[alternatives.terms]\n"
+            ),
             "t.toml",
         )
         .unwrap_err()
         .to_string();
         assert!(e.contains("entry 1") && e.contains("channel"), "{e}");
         let e = from_model_text(
-            &format!("{base}[[alternatives]]\nchannel = \"gz\"\nweight = 1.5\n[alternatives.terms]\n"),
+            &format!(
+                "{base}[[alternatives]]\nchannel = \"gz\"\nweight = 1.5\n[alternatives.terms]\n"
+            ),
             "t.toml",
         )
         .unwrap_err()

@@ -436,12 +436,7 @@ impl StructurePlan {
         };
         let logs = f.samples.len() as u64;
         let all = self.bootstrap_replicates(0);
-        let own = draw_models(
-            &self.structures[0].model,
-            f,
-            (seed, first_run, all),
-            tick,
-        )?;
+        let own = draw_models(&self.structures[0].model, f, (seed, first_run, all), tick)?;
         let mut next_run = first_run + all as u64 * logs;
         let mut models = own.models;
         let mut r = self.counts[0];

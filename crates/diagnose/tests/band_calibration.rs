@@ -170,15 +170,8 @@ fn one_seed(d: &Design, s: u64) -> (DriftCheck, Option<DriftCheck>) {
             .collect();
         eprintln!("seed {s}: alternatives {}", names.join("; "));
     }
-    let drawn = check_drift_averaged(
-        &inputs,
-        &model,
-        &alternatives,
-        Some(&fitted),
-        &check,
-        &(),
-    )
-    .unwrap();
+    let drawn =
+        check_drift_averaged(&inputs, &model, &alternatives, Some(&fitted), &check, &()).unwrap();
     // The contrast: the levels taken as exact, or with the drift loop the model's own structure
     // alone (its levels drawn).
     let contrast = match d.fit {

@@ -62,9 +62,7 @@ fn the_band_is_shared_between_the_structures() {
     };
     let own = model("3 deg/h/sqrt(h)");
     let other = model("30 deg/h/sqrt(h)");
-    let logs: Vec<_> = (0..2)
-        .map(|l| static_log(&own, &setup, 77, l))
-        .collect();
+    let logs: Vec<_> = (0..2).map(|l| static_log(&own, &setup, 77, l)).collect();
     let inputs = inputs_of(&logs);
     let settings = CheckSettings {
         protocol: Protocol {
@@ -145,15 +143,28 @@ fn each_structure_draws_its_own_levels() {
         removed: vec![],
         axis: other.axis(noise::Sensor::Gyro, 2).clone(),
     };
-    let c = check_drift_averaged(&inputs, &own, &[alt.clone()], Some(&fitted), &settings, &())
-        .unwrap();
+    let c = check_drift_averaged(
+        &inputs,
+        &own,
+        std::slice::from_ref(&alt),
+        Some(&fitted),
+        &settings,
+        &(),
+    )
+    .unwrap();
     let counts: Vec<usize> = c.structures.iter().map(|s| s.replicates).collect();
     assert_eq!(counts, vec![18, 2]);
     assert!(c.parameters.is_some());
     // Logs simulated: 20 experiments of one log; the model's bootstrap for all 20 replicates
     // (every structure's other channels) and the alternative's of its channel, 16 replicates.
     assert_eq!(
-        diagnose::drift_check::simulated_logs_averaged(1, &own, &[alt.clone()], Some(&fitted), 20),
+        diagnose::drift_check::simulated_logs_averaged(
+            1,
+            &own,
+            std::slice::from_ref(&alt),
+            Some(&fitted),
+            20
+        ),
         20 + 20 + alternatives::MIN_BOOTSTRAP
     );
     // The model's own bootstrap draws every replicate's levels (the same draws as the model
