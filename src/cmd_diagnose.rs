@@ -458,6 +458,33 @@ fn drift_check_text(result: &Diagnosis) -> String {
             r.before.verdict, r.before.z, r.after.model, r.after.lo, r.after.hi, r.after.verdict, r.after.z
         );
     }
+    s.push_str(&alternatives_text(result, "  "));
+    s
+}
+
+/// The structures the drift loop could not tell apart (the corrected model's `[[alternatives]]`),
+/// one line each after a heading, every line starting with `indent`.
+fn alternatives_text(result: &Diagnosis, indent: &str) -> String {
+    let mut s = String::new();
+    if result.alternatives.is_empty() {
+        return s;
+    }
+    let _ = writeln!(
+        s,
+        "{indent}structures the drift evidence could not tell apart (posterior odds above 1:20 against the kept one; the corrected model lists them and `imudrift drift` averages its band over them with these weights):"
+    );
+    for a in &result.alternatives {
+        let mut what: Vec<String> = a.effects.iter().map(|e| e.name().to_string()).collect();
+        what.extend(a.removed.iter().map(|e| format!("no {}", e.name())));
+        let _ = writeln!(
+            s,
+            "{indent}  {}: {} (weight {:.2}, -2 ln odds {:.1})",
+            a.channel.name(),
+            what.join(", "),
+            a.weight,
+            a.delta_bic
+        );
+    }
     s
 }
 
@@ -635,6 +662,18 @@ fn drift_check_markdown(result: &Diagnosis) -> String {
             r.after.verdict,
             r.after.z
         );
+    }
+    let alternatives = alternatives_text(result, "");
+    if !alternatives.is_empty() {
+        s.push('\n');
+        for line in alternatives.lines() {
+            let _ = writeln!(
+                s,
+                "{}",
+                line.strip_prefix("  ")
+                    .map_or(line.to_string(), |l| format!("- {l}"))
+            );
+        }
     }
     s
 }

@@ -7,10 +7,11 @@ use crate::log_input::{self, LogArgs};
 use crate::output::write_string;
 use crate::plot::{Band, LogLogPlot, Series};
 use anyhow::{anyhow, bail, Context, Result};
+use diagnose::alternatives::Alternative;
 use diagnose::document::ProtocolSetting;
 use diagnose::drift::CHANNELS;
 use diagnose::drift_check::{
-    check_drift_fitted, simulated_logs, CheckError, CheckSettings, DriftCheck, Verdict,
+    check_drift_averaged, simulated_logs_averaged, CheckError, CheckSettings, DriftCheck, Verdict,
 };
 use diagnose::fitted_on::FittedOn;
 use diagnose::protocol::{Calibration, Initialisation, Protocol, Quantity};
@@ -66,6 +67,10 @@ pub struct Args {
     /// [fitted_on] table, written by `diagnose`): no parametric bootstrap
     #[arg(long)]
     pub exact_parameters: bool,
+    /// Take the model's structure as certain even when it lists others the fit could not tell
+    /// apart from it (its [[alternatives]], written by `diagnose`): no averaging over them
+    #[arg(long)]
+    pub one_structure: bool,
     /// Master seed of the simulated logs (written into the outputs)
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -140,11 +145,54 @@ fn fitted_on(args: &Args, model_file: &TextFile) -> Result<Option<FittedOn>> {
         .with_context(|| name.clone())
 }
 
+/// The model to check against: its structures and the data its levels were fitted on.
+struct Structures<'a> {
+    model: &'a noise::SensorModel,
+    alternatives: &'a [Alternative],
+    fitted: Option<&'a FittedOn>,
+}
+
+impl Structures<'_> {
+    /// The drift check of `inputs`, its simulated logs on a progress bar.
+    fn check(&self, inputs: &[LogInput], settings: &CheckSettings) -> Result<DriftCheck> {
+        let total = simulated_logs_averaged(
+            inputs.len(),
+            self.model,
+            self.alternatives,
+            self.fitted,
+            settings.replicates,
+        ) as u64;
+        let bar = Simulated(crate::progress::Progress::new(
+            "simulating the model",
+            "logs",
+            total,
+        ));
+        let result = check_drift_averaged(
+            inputs,
+            self.model,
+            self.alternatives,
+            self.fitted,
+            settings,
+            &bar,
+        );
+        bar.0.finish();
+        result.map_err(with_flags)
+    }
+}
+
+/// The structures the model lists beside its own (`diagnose::document::alternatives_of`).
+fn alternatives(args: &Args, model_file: &TextFile) -> Result<Vec<Alternative>> {
+    let TextFile { name, text } = model_file;
+    diagnose::document::alternatives_of(text, name, args.one_structure)
+        .with_context(|| name.clone())
+}
+
 fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
     let model_file = files::read_config(&args.model)?;
     let model = files::sensor_model_of(&model_file)?;
     crate::model_notes::print(&model, args.horizons.iter().copied().reduce(f64::max));
     let fitted = fitted_on(args, &model_file)?;
+    let alternatives = alternatives(args, &model_file)?;
     let opts = args.log_args.options()?;
     let mut logs = Vec::new();
     for path in &args.logs {
@@ -192,15 +240,12 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
         seed: args.seed,
     };
     let started = std::time::Instant::now();
-    let total = simulated_logs(logs.len(), fitted.as_ref(), args.replicates) as u64;
-    let bar = Simulated(crate::progress::Progress::new(
-        "simulating the model",
-        "logs",
-        total,
-    ));
-    let result = check_drift_fitted(&inputs, &model, fitted.as_ref(), &settings, &bar);
-    bar.0.finish();
-    let result = result.map_err(with_flags).with_context(|| {
+    let structures = Structures {
+        model: &model,
+        alternatives: &alternatives,
+        fitted: fitted.as_ref(),
+    };
+    let result = structures.check(&inputs, &settings).with_context(|| {
         format!(
             "checking the drift of {} log(s) against {}",
             logs.len(),
@@ -210,7 +255,8 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
     let elapsed_s = started.elapsed().as_secs_f64();
     let sources: Vec<String> = logs.iter().map(|l| l.source.clone()).collect();
     let human = text(&result, &sources, &args.model, elapsed_s)
-        + &parameters_text(&result, args.exact_parameters);
+        + &parameters_text(&result, args.exact_parameters)
+        + &structures_text(&result, args.one_structure);
     let doc =
         diagnose::document::drift_document(&result, &sources, &args.model.display().to_string())
             .context("cannot serialise the drift check")?;
@@ -318,6 +364,31 @@ fn text(r: &DriftCheck, logs: &[String], model: &std::path::Path, elapsed_s: f64
 }
 
 /// How the model's levels entered the band: exact, or drawn (each level's spread).
+/// The structures the band averaged over (none: nothing).
+fn structures_text(r: &DriftCheck, one_flag: bool) -> String {
+    if r.structures.is_empty() {
+        return if one_flag {
+            "model structure: taken as certain (--one-structure)\n".into()
+        } else {
+            String::new()
+        };
+    }
+    let mut s = String::from(
+        "model structure: the band averages over the structures the fit could not tell apart (the model's [[alternatives]], BIC weights; docs/drift.md):\n",
+    );
+    for st in &r.structures {
+        let _ = writeln!(
+            s,
+            "  {:>5.1} %  {:>3} experiment{}  {}",
+            100.0 * st.weight,
+            st.replicates,
+            if st.replicates == 1 { " " } else { "s" },
+            st.label
+        );
+    }
+    s
+}
+
 fn parameters_text(r: &DriftCheck, exact_flag: bool) -> String {
     let Some(p) = &r.parameters else {
         return format!(

@@ -170,3 +170,73 @@ fn bad_protocols_are_refused_with_the_option_named() {
         assert!(err.contains(needle), "{flag}: {err}");
     }
 }
+
+/// A model with `[[alternatives]]` (as `diagnose` writes them): the band is averaged over its
+/// structures, the JSON says how (`structures[]`, the model's own first, replicates adding up),
+/// `--one-structure` takes the model's own alone (no `structures`), and a broken entry is refused
+/// naming the file, the entry and the key.
+#[test]
+fn alternatives_are_averaged_unless_one_structure_is_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = generate(dir.path(), "a.csv", "13");
+    let with_alt = dir.path().join("alt.toml");
+    let alternative = "\n[[alternatives]]\nchannel = \"gz\"\nweight = 0.25\ndelta_bic = 2.2\n\
+         effects = [\"rate_random_walk\"]\nremoved = []\n[alternatives.terms]\n\
+         white_noise = \"0.5 deg/sqrt(h)\"\nbias_instability = \"10 deg/h\"\n\
+         rate_random_walk = \"30 deg/h/sqrt(h)\"\n";
+    std::fs::write(&with_alt, format!("{MODEL}{alternative}")).unwrap();
+    let run = |extra: &[&str], model: &std::path::Path| {
+        let mut args = vec![
+            "drift",
+            a.as_str(),
+            "--model",
+            model.to_str().unwrap(),
+            "--horizons",
+            "60",
+            "--replicates",
+            "20",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        imudrift(&args)
+    };
+    let out = common::ok(run(&[], &with_alt));
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let s = doc["structures"].as_array().unwrap();
+    assert_eq!(s.len(), 2);
+    assert_eq!(s[0]["label"], "as fitted");
+    assert_eq!(s[1]["label"], "gz: rate_random_walk");
+    assert_eq!(
+        s[0]["replicates"].as_u64().unwrap() + s[1]["replicates"].as_u64().unwrap(),
+        20
+    );
+    assert!((s[1]["weight"].as_f64().unwrap() - 0.25).abs() < 1e-12);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("averages over the structures"), "{err}");
+    let one = common::ok(run(&["--one-structure"], &with_alt));
+    let doc: serde_json::Value = serde_json::from_slice(&one.stdout).unwrap();
+    assert!(doc.get("structures").is_none());
+    // --one-structure is the model without the table, byte for byte.
+    let plain = dir.path().join("m.toml");
+    let plain_doc: serde_json::Value =
+        serde_json::from_slice(&common::ok(run(&[], &plain)).stdout).unwrap();
+    let mut one_doc = doc.clone();
+    one_doc["model"] = plain_doc["model"].clone();
+    assert_eq!(one_doc, plain_doc);
+    let bad = dir.path().join("bad.toml");
+    std::fs::write(
+        &bad,
+        format!(
+            "{MODEL}{}",
+            alternative.replace("weight = 0.25", "weight = 2")
+        ),
+    )
+    .unwrap();
+    let out = run(&[], &bad);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("bad.toml") && err.contains("entry 1") && err.contains("weight"),
+        "{err}"
+    );
+}

@@ -252,7 +252,8 @@ class DriftResult(_Document):
 
 def drift(logs, model, rate=None, gyro_unit=None, accel_unit=None, time_unit=None, columns=None,
           topic=None, calibration="log-mean", init="perfect", horizons=(10.0, 60.0, 600.0, 3600.0),
-          overlap=False, replicates=40, exact_parameters=False, seed=1, threads=None):
+          overlap=False, replicates=40, exact_parameters=False, one_structure=False, seed=1,
+          threads=None):
     """``imudrift drift LOG... --model MODEL``: the drift measured on static logs against the
     drift the model predicts under one protocol, with intervals and a verdict; the same numbers
     as the CLI.
@@ -261,7 +262,8 @@ def drift(logs, model, rate=None, gyro_unit=None, accel_unit=None, time_unit=Non
     ``"log-mean"``, ``"window:60"``), ``init`` (``"perfect"``, ``"level:10"``), ``horizons``
     (s), ``overlap`` (half-overlapping segments); ``replicates`` simulated experiments for the
     model's 95 % band; ``exact_parameters`` takes a diagnosed model's levels as exact (no
-    parametric bootstrap); ``seed``; ``threads``. The GIL is released while it works; the library
+    parametric bootstrap); ``one_structure`` takes its structure as certain (no averaging over
+    the ``[[alternatives]]`` a diagnosed model lists); ``seed``; ``threads``. The GIL is released while it works; the library
     has no stop flag for the check, so Ctrl-C is raised when it finishes.
 
     >>> r = imudrift.drift(["adis16405_imu1.csv.gz", "adis16405_imu2.csv.gz"],
@@ -275,6 +277,7 @@ def drift(logs, model, rate=None, gyro_unit=None, accel_unit=None, time_unit=Non
         "overlap": bool(overlap),
         "replicates": int(replicates),
         "exact_parameters": bool(exact_parameters),
+        "one_structure": bool(one_structure),
         "seed": int(seed),
         "threads": None if threads is None else int(threads),
     }

@@ -8,7 +8,7 @@
 use crate::sim::{check_experiment_size, detached, message, run_job, terms};
 use crate::{invalid, read_log_file, read_options, ReaderArgs};
 use diagnose::document::{self, DiagnoseSources, HeldOutChecks, ProtocolSetting};
-use diagnose::drift_check::{check_drift_fitted, CheckError, CheckSettings};
+use diagnose::drift_check::{check_drift_averaged, CheckError, CheckSettings};
 use diagnose::protocol::{Calibration, Initialisation, Protocol};
 use diagnose::{DiagnoseError, LogInput};
 use montecarlo::spec_job::{self, SpecDoc, SpecError, SpecRequest, SpecSetting, SpecSettings};
@@ -492,6 +492,7 @@ pub struct DriftArgs {
     overlap: bool,
     replicates: usize,
     exact_parameters: bool,
+    one_structure: bool,
     seed: u64,
     threads: Option<usize>,
 }
@@ -528,6 +529,8 @@ pub fn drift_run<'py>(
     let m = model(&model_text, &model_name)?;
     let fitted = document::fitted_on_of(&model_text, &model_name, settings.exact_parameters)
         .map_err(|e| invalid(format!("{model_name}: {}", message(&e))))?;
+    let alternatives = document::alternatives_of(&model_text, &model_name, settings.one_structure)
+        .map_err(|e| invalid(format!("{model_name}: {}", message(&e))))?;
     let logs = logs_of(py, logs, &reader)?;
     check_logs(&logs, &protocol, &m, &model_name)?;
     let inputs: Vec<LogInput> = logs.iter().map(|l| l.input(false)).collect();
@@ -537,7 +540,14 @@ pub fn drift_run<'py>(
         seed: settings.seed,
     };
     let result = run_job(py, settings.threads, |_| {
-        Some(check_drift_fitted(&inputs, &m, fitted.as_ref(), &s, &()))
+        Some(check_drift_averaged(
+            &inputs,
+            &m,
+            &alternatives,
+            fitted.as_ref(),
+            &s,
+            &(),
+        ))
     })?
     .map_err(|e| {
         let msg = match e {

@@ -39,7 +39,7 @@ use crate::fitted_on::FittedOn;
 use crate::model_terms::{fitted_term, set_term, squared_level};
 use crate::simulate::{adev_at, with_static_log, SimSetup};
 use allan::{EdfMethod, Estimator};
-use noise::{AxisModel, Channel, Effect, SensorModel, Term};
+use noise::{AxisModel, Channel, Effect, ImuChannels, SensorModel, Term};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -414,6 +414,20 @@ fn simulate_fitted_logs(
 pub fn draw_models(
     model: &SensorModel,
     fitted: &FittedOn,
+    runs: (u64, u64, usize),
+    tick: &(dyn Fn() + Sync),
+) -> Result<Draws, BootstrapError> {
+    draw_models_on(model, fitted, ImuChannels([true; 6]), runs, tick)
+}
+
+/// [`draw_models`] on the channels `only` alone: only they are simulated and refitted, the other
+/// channels keep the model's levels. The refit is per channel and each channel's errors come from
+/// its own random streams, so a channel's draws do not depend on which others are drawn with it
+/// (for the same runs).
+pub fn draw_models_on(
+    model: &SensorModel,
+    fitted: &FittedOn,
+    only: ImuChannels<bool>,
     (seed, first_run, replicates): (u64, u64, usize),
     tick: &(dyn Fn() + Sync),
 ) -> Result<Draws, BootstrapError> {
@@ -422,6 +436,7 @@ pub fn draw_models(
     let unfiltered = without_output_filters(model, fitted.sample_interval_s);
     let fits: Vec<ChannelFit> = Channel::ALL
         .into_iter()
+        .filter(|&ch| only[ch])
         .filter_map(|ch| ChannelFit::new(&unfiltered, ch, fitted))
         .collect();
     if let Some(f) = fits.iter().find(|f| f.terms.len() > MAX_TERMS) {

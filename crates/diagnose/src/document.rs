@@ -76,6 +76,7 @@ pub fn corrected_model_toml(
     if let Some(f) = fitted_on {
         out.push_str(&f.to_toml());
     }
+    out.push_str(&crate::alternatives::to_toml(&result.alternatives, style));
     out
 }
 
@@ -151,6 +152,19 @@ pub fn fitted_on_of(
         return Ok(None);
     }
     FittedOn::from_model_text(text)
+}
+
+/// The structures a model lists beside its own (its `[[alternatives]]`, written by `diagnose`;
+/// none for a noise file, a model without them, or when its structure is to be taken as certain).
+pub fn alternatives_of(
+    text: &str,
+    name: &str,
+    one_structure: bool,
+) -> Result<Vec<crate::alternatives::Alternative>, crate::alternatives::AlternativesError> {
+    if one_structure || noise::is_noise_file_text(text, name) {
+        return Ok(Vec::new());
+    }
+    crate::alternatives::from_model_text(text, name)
 }
 
 /// A setting of a drift protocol, as a front end names it in messages.

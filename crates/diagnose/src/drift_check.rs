@@ -32,7 +32,8 @@
 //! "Parameter uncertainty"), so that the band holds the fit's uncertainty too; a model that does
 //! not (a datasheet) is taken as exact and every replicate simulates it as it is.
 
-use crate::bootstrap::{draw_models, BootstrapError, ParameterSpread};
+use crate::alternatives::{self, Alternative, Structure};
+use crate::bootstrap::{draw_models, draw_models_on, BootstrapError, ParameterSpread};
 use crate::fitted_on::FittedOn;
 use crate::input::LogInput;
 use crate::observer::Observer;
@@ -219,7 +220,19 @@ pub struct DriftCheck {
     /// How the model's levels were drawn per replicate; absent when they are taken as exact.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub parameters: Option<ParameterSpread>,
+    /// The structures the band averages over (`alternatives`), with their weights and
+    /// replicates; absent when the model has one structure.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub structures: Vec<StructureShare>,
     pub horizons: Vec<HorizonCheck>,
+}
+
+/// One structure's share of the band: what it is, its weight and its simulated experiments.
+#[derive(Clone, Debug, Serialize)]
+pub struct StructureShare {
+    pub label: String,
+    pub weight: f64,
+    pub replicates: usize,
 }
 
 /// Errors of a drift check.
@@ -297,6 +310,22 @@ pub fn check_drift_fitted(
     settings: &CheckSettings,
     observer: &dyn Observer,
 ) -> Result<DriftCheck, CheckError> {
+    check_drift_averaged(logs, model_sensor, &[], fitted_on, settings, observer)
+}
+
+/// [`check_drift_fitted`] averaged over the model's structures (`alternatives`): the replicates
+/// shared out among them by weight, each structure's levels drawn by its own bootstrap (at least
+/// `alternatives::MIN_BOOTSTRAP` replicates of it when there are several), the bootstraps' runs
+/// one after the other after the replicates' own. With no alternatives, exactly
+/// [`check_drift_fitted`].
+pub fn check_drift_averaged(
+    logs: &[LogInput],
+    model_sensor: &SensorModel,
+    alternatives: &[Alternative],
+    fitted_on: Option<&FittedOn>,
+    settings: &CheckSettings,
+    observer: &dyn Observer,
+) -> Result<DriftCheck, CheckError> {
     let dt_s = check_inputs(logs, settings)?;
     let p = &settings.protocol;
     // Measured segments per horizon, per log (kept apart for the effective count).
@@ -304,19 +333,18 @@ pub fn check_drift_fitted(
         .par_iter()
         .map(|l| all_segment_errors(&l.channels.0, dt_s, p))
         .collect();
+    let plan = StructurePlan::new(model_sensor, alternatives, settings.replicates);
     let progress = Progress {
         done: std::sync::atomic::AtomicUsize::new(0),
-        total: simulated_logs(logs.len(), fitted_on, settings.replicates),
+        total: plan.simulated_logs(logs.len(), fitted_on),
         observer,
     };
-    let draws = fitted_on
-        .map(|f| {
-            let first_run = (settings.replicates * logs.len()) as u64;
-            let runs = (settings.seed, first_run, settings.replicates);
-            draw_models(model_sensor, f, runs, &|| progress.tick())
-        })
-        .transpose()?;
-    let model_of = |r: usize| draws.as_ref().map_or(model_sensor, |d| &d.models[r]);
+    let (models, parameters) = plan.draw(
+        fitted_on,
+        (settings.seed, (settings.replicates * logs.len()) as u64),
+        &|| progress.tick(),
+    )?;
+    let model_of = |r: usize| models.get(r).unwrap_or(model_sensor);
     let experiment = Experiment {
         logs,
         model: model_sensor,
@@ -334,15 +362,142 @@ pub fn check_drift_fitted(
         seed: settings.seed,
         replicates: settings.replicates,
         logs: logs.len(),
-        parameters: draws.map(|d| d.spread),
+        parameters,
+        structures: plan.shares(),
         horizons,
     })
+}
+
+/// The model's structures and how many replicates each gets.
+struct StructurePlan {
+    structures: Vec<Structure>,
+    counts: Vec<usize>,
+}
+
+impl StructurePlan {
+    fn new(model: &SensorModel, alternatives: &[Alternative], replicates: usize) -> StructurePlan {
+        let structures = alternatives::structures(model, alternatives);
+        let weights: Vec<f64> = structures.iter().map(|s| s.weight).collect();
+        let counts = alternatives::allocate(&weights, replicates);
+        StructurePlan { structures, counts }
+    }
+
+    /// The channels where structure `s` differs from the model's own (structure 0).
+    fn changed(&self, s: usize) -> noise::ImuChannels<bool> {
+        let (own, this) = (&self.structures[0].model, &self.structures[s].model);
+        noise::ImuChannels::from_fn(|c| {
+            own.axis(c.sensor(), c.axis()) != this.axis(c.sensor(), c.axis())
+        })
+    }
+
+    /// Replicates of structure `s`'s own bootstrap: for the model's structure all the replicates
+    /// (every structure takes its other channels' levels from it), for another at least
+    /// `alternatives::MIN_BOOTSTRAP` of its changed channels (the draws are centred on their
+    /// mean, which a handful of replicates would pin to the fitted levels).
+    fn bootstrap_replicates(&self, s: usize) -> usize {
+        match (s, self.counts[s]) {
+            (0, _) => self.counts.iter().sum(),
+            (_, 0) => 0,
+            (_, n) => n.max(alternatives::MIN_BOOTSTRAP),
+        }
+    }
+
+    /// The logs simulated with `logs` measured logs, the bootstraps' included (a structure's own
+    /// bootstrap simulates only its changed channels, counted as whole logs).
+    fn simulated_logs(&self, logs: usize, fitted_on: Option<&FittedOn>) -> usize {
+        let boot: usize = (0..self.counts.len())
+            .map(|s| self.bootstrap_replicates(s))
+            .sum();
+        self.counts.iter().sum::<usize>() * logs + boot * fitted_on.map_or(0, |f| f.samples.len())
+    }
+
+    /// Each replicate's model, in replicate order (empty: every replicate simulates the model as
+    /// it is), and the model's own level spread. With a fitted-on table the model's bootstrap
+    /// draws every replicate's levels; the replicates of another structure take its changed
+    /// channels from that structure's own bootstrap, on the channels it changes. The bootstraps'
+    /// runs start at `first_run` of `seed`, the model's first, then each structure's.
+    fn draw(
+        &self,
+        fitted_on: Option<&FittedOn>,
+        (seed, first_run): (u64, u64),
+        tick: &(dyn Fn() + Sync),
+    ) -> Result<(Vec<SensorModel>, Option<ParameterSpread>), CheckError> {
+        let Some(f) = fitted_on else {
+            if self.structures.len() == 1 {
+                return Ok((Vec::new(), None));
+            }
+            let models = self
+                .structures
+                .iter()
+                .zip(&self.counts)
+                .flat_map(|(s, &n)| std::iter::repeat_n(s.model.clone(), n))
+                .collect();
+            return Ok((models, None));
+        };
+        let logs = f.samples.len() as u64;
+        let all = self.bootstrap_replicates(0);
+        let own = draw_models(&self.structures[0].model, f, (seed, first_run, all), tick)?;
+        let mut next_run = first_run + all as u64 * logs;
+        let mut models = own.models;
+        let mut r = self.counts[0];
+        for s in 1..self.structures.len() {
+            let n = self.counts[s];
+            if n == 0 {
+                continue;
+            }
+            let changed = self.changed(s);
+            let reps = self.bootstrap_replicates(s);
+            let d = draw_models_on(
+                &self.structures[s].model,
+                f,
+                changed,
+                (seed, next_run, reps),
+                tick,
+            )?;
+            next_run += reps as u64 * logs;
+            for drawn in d.models.iter().take(n) {
+                for c in noise::Channel::ALL.into_iter().filter(|&c| changed[c]) {
+                    *models[r].axis_mut(c.sensor(), c.axis()) =
+                        drawn.axis(c.sensor(), c.axis()).clone();
+                }
+                r += 1;
+            }
+        }
+        Ok((models, Some(own.spread)))
+    }
+
+    /// The structures' shares for the report (empty with one structure).
+    fn shares(&self) -> Vec<StructureShare> {
+        if self.structures.len() == 1 {
+            return Vec::new();
+        }
+        self.structures
+            .iter()
+            .zip(&self.counts)
+            .map(|(s, &n)| StructureShare {
+                label: s.label.clone(),
+                weight: s.weight,
+                replicates: n,
+            })
+            .collect()
+    }
 }
 
 /// The logs a drift check simulates: `replicates` experiments of `logs` logs, and with a fitted
 /// model as many times its fitted logs.
 pub fn simulated_logs(logs: usize, fitted_on: Option<&FittedOn>, replicates: usize) -> usize {
     replicates * (logs + fitted_on.map_or(0, |f| f.samples.len()))
+}
+
+/// The logs [`check_drift_averaged`] simulates.
+pub fn simulated_logs_averaged(
+    logs: usize,
+    model: &SensorModel,
+    alternatives: &[Alternative],
+    fitted_on: Option<&FittedOn>,
+    replicates: usize,
+) -> usize {
+    StructurePlan::new(model, alternatives, replicates).simulated_logs(logs, fitted_on)
 }
 
 /// Simulated logs counted for the observer, from worker threads.

@@ -8,6 +8,7 @@
 // Per-tau and per-channel arrays are indexed in parallel; index loops say that more plainly.
 #![allow(clippy::needless_range_loop)]
 
+pub mod alternatives;
 pub mod bootstrap;
 pub mod candidates;
 pub mod detect;

@@ -198,6 +198,10 @@ pub struct Diagnosis {
     /// of the corrected model (absent without a protocol).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub drift_check: Option<DriftLoop>,
+    /// The structures the drift loop could not tell from the ones it kept, with their weights
+    /// (`alternatives`; the corrected model carries them for `drift`'s band).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub alternatives: Vec<crate::alternatives::Alternative>,
     /// Shortest tau analysed, s.
     pub tau_min_s: f64,
     /// The corrected model (written as TOML by the CLI).

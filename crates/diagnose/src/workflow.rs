@@ -129,6 +129,9 @@ struct ChannelState {
     records: Vec<CandidateRecord>,
     /// Nothing more to name: no disagreement left, no candidate good enough, or a round rejected.
     done: bool,
+    /// The structures the drift loop's last weighing of this channel could not tell from the one
+    /// kept (`alternatives`).
+    alternatives: Vec<crate::alternatives::Alternative>,
 }
 
 /// A channel changed in this round: the changes in the order made (each effect with its level
@@ -741,6 +744,10 @@ impl<'a> Run<'a> {
         let drift = self.drift();
         let runs = self.run_reports();
         let drift_check = self.drift_report();
+        let alternatives = Channel::ALL
+            .into_iter()
+            .flat_map(|c| std::mem::take(&mut self.channels[c].alternatives))
+            .collect();
         let mut channels = BTreeMap::new();
         for c in Channel::ALL {
             if let Some(r) = self.channel_report(c) {
@@ -768,6 +775,7 @@ impl<'a> Run<'a> {
             drift,
             runs,
             drift_check,
+            alternatives,
             tau_min_s: self.settings.tau_min_s,
             model_final: self.out_model,
             grid_m: self.grid_m,

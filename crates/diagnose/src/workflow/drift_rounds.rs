@@ -6,6 +6,9 @@
 //! only if the joint chi2 (the drift gap's and the changed channels' Allan gaps') shrank.
 
 use super::{shifted_band, Run};
+use crate::alternatives::{
+    differing_effects, removed_effects, weights, Alternative, MAX_PER_CHANNEL, OCCAM_DELTA_BIC,
+};
 use crate::drift_fit::{
     allan_dispersion, DriftFitInput, DriftTrial, Partner, UnitDrift, SUPPORT_SHARE,
 };
@@ -16,7 +19,7 @@ use crate::gap::gap;
 use crate::model_terms::{current_term, restore_term, set_term};
 use crate::report::{Candidate, CandidateRecord, DriftLoop};
 use crate::trials::{named_map, Trial};
-use noise::{Channel, Effect, ImuChannels, Term};
+use noise::{AxisModel, Channel, Effect, ImuChannels, Term};
 
 /// A change the drift loop made: the channel, the effect and its term before.
 type Change = (Channel, Effect, Option<Term>);
@@ -32,13 +35,21 @@ impl Run<'_> {
                 break;
             };
             let round = self.rounds + 1;
+            let alternatives = ImuChannels::from_fn(|c| self.channels[c].alternatives.clone());
             let changes: Vec<Change> = before
                 .channels_outside()
                 .into_iter()
                 .filter_map(|c| self.drift_choice(c, &before, round))
                 .flatten()
                 .collect();
-            if changes.is_empty() || !self.drift_resimulate(round, &before, changes)? {
+            if changes.is_empty() {
+                break;
+            }
+            if !self.drift_resimulate(round, &before, changes)? {
+                // The round's alternatives were weighed against a structure undone.
+                for c in Channel::ALL {
+                    self.channels[c].alternatives = alternatives[c].clone();
+                }
                 break;
             }
         }
@@ -83,10 +94,12 @@ impl Run<'_> {
                 delta_aic: f64::NAN,
                 parameters: named_map(&t.trial.named()),
             }));
-        let best: &DriftTrial = trials
+        let best = trials
             .iter()
             .filter(|t| t.delta_bic >= self.settings.min_delta_bic)
-            .max_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic))?;
+            .max_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic));
+        self.channels[c].alternatives = self.alternatives_of(c, &trials, best);
+        let best: &DriftTrial = best?;
         let cannot_tell_from = trials
             .iter()
             .filter(|t| {
@@ -125,6 +138,74 @@ impl Run<'_> {
             ));
         }
         Some(changes)
+    }
+
+    /// The structures of channel `c` the evidence cannot tell from the one kept (`alternatives`),
+    /// after this round's weighing `trials`: the channel's axis before the round, and with each
+    /// trial's term (and its re-levelled random walk). Each is scored by its BIC gain less the
+    /// naming rule's threshold for a change (`min_delta_bic`, read as the prior odds e^(-T/2)
+    /// against a change that the rule's null calibration stands for: a change is named exactly
+    /// when its posterior odds reach 1), so a candidate the rule did not name weighs less than the
+    /// structure kept, and the structure before a named change stays in the average when the
+    /// change barely passed. Those within Occam's window of the kept one are its alternatives.
+    /// When `best` is named they replace the channel's earlier alternatives (weighed against a
+    /// structure this round changed); otherwise they join them.
+    fn alternatives_of(
+        &self,
+        c: Channel,
+        trials: &[DriftTrial],
+        best: Option<&DriftTrial>,
+    ) -> Vec<Alternative> {
+        let base = self.out_model.axis(c.sensor(), c.axis());
+        let with = |t: &DriftTrial| {
+            let mut a = base.clone();
+            a.set_term(t.trial.term.clone());
+            if let Some(p) = &t.partner {
+                match &p.term {
+                    Some(term) => a.set_term(term.clone()),
+                    None => a.remove(Effect::RateRandomWalk),
+                }
+            }
+            a
+        };
+        let prior = self.settings.min_delta_bic;
+        let kept = best.map_or(0.0, |b| b.delta_bic - prior);
+        let own = best.map_or_else(|| base.clone(), with);
+        let mut near: Vec<(f64, AxisModel)> = match best {
+            Some(_) => Vec::new(),
+            None => self.channels[c]
+                .alternatives
+                .iter()
+                .map(|a| (a.delta_bic, a.axis.clone()))
+                .collect(),
+        };
+        let scored = std::iter::once((0.0, base.clone()))
+            .chain(trials.iter().map(|t| (t.delta_bic - prior, with(t))));
+        for (score, axis) in scored {
+            let d = kept - score;
+            if d.is_finite()
+                && d <= OCCAM_DELTA_BIC
+                && axis != own
+                && near.iter().all(|(_, a)| *a != axis)
+            {
+                near.push((d, axis));
+            }
+        }
+        near.sort_by(|a, b| a.0.total_cmp(&b.0));
+        near.truncate(MAX_PER_CHANNEL);
+        let d: Vec<f64> = near.iter().map(|(d, _)| *d).collect();
+        let w = weights(&d);
+        near.into_iter()
+            .zip(&w[1..])
+            .map(|((delta_bic, axis), &weight)| Alternative {
+                channel: c,
+                weight,
+                delta_bic,
+                effects: differing_effects(&own, &axis),
+                removed: removed_effects(&own, &axis),
+                axis,
+            })
+            .collect()
     }
 
     /// Put the rate random walk re-levelled with a drift candidate into both models (removed at

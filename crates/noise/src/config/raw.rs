@@ -16,6 +16,10 @@ pub(super) struct RawSensor {
     /// the diagnose crate (`diagnose::fitted_on`), not a part of the error model.
     #[allow(dead_code)]
     pub(super) fitted_on: Option<serde::de::IgnoredAny>,
+    /// The structures a fitted model's evidence could not tell apart (`imudrift diagnose` writes
+    /// them): read by the diagnose crate (`diagnose::alternatives`), not a part of the error model.
+    #[allow(dead_code)]
+    pub(super) alternatives: Option<serde::de::IgnoredAny>,
 }
 
 #[derive(Deserialize)]

@@ -292,6 +292,23 @@ fn sig5(v: f64) -> String {
 }
 
 impl SensorModel {
+    /// The keys of one axis (`sensor`, axis 0-2) as [`SensorModel::to_toml_string_styled`] writes
+    /// them under its `[sensor.axis]` header, without the header.
+    pub fn axis_toml_styled(&self, sensor: Sensor, axis: usize, style: &UnitStyle) -> String {
+        let f = |v: f64, q: Quantity| style.format(v, q);
+        let mut s = String::new();
+        let a = &self.triad(sensor).axes[axis];
+        write_axis_with(
+            &mut s,
+            a,
+            signal_of(sensor),
+            &f,
+            &sig5,
+            style.bi_allan_minimum,
+        );
+        s
+    }
+
     /// Write the model as a config in `style`'s units with about five significant digits: a
     /// triad whose three axes agree as one `[sensor.all]` table, no empty tables, the temperature
     /// table only when it is not the default (constant 25 degC). For people; `to_toml_string` is
