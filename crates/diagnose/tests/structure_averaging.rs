@@ -36,6 +36,19 @@ fn inputs_of(logs: &[noise::ImuChannels<Vec<f64>>]) -> Vec<LogInput<'_>> {
         .collect()
 }
 
+/// One hour at 10 Hz, every channel.
+fn setup() -> SimSetup {
+    SimSetup {
+        dt_s: DT,
+        samples: SAMPLES,
+        grid_m: Vec::new(),
+        active: noise::ImuChannels([true; 6]),
+        horizons_s: Vec::new(),
+        temperature_c: None,
+        temp_coeff: noise::ImuChannels::default(),
+    }
+}
+
 fn band(c: &DriftCheck, horizon: usize) -> (f64, f64) {
     let m = c.horizons[horizon].channels["heading_rad"].model.unwrap();
     (m.band_lo, m.band_hi)
@@ -51,15 +64,7 @@ fn band(c: &DriftCheck, horizon: usize) -> (f64, f64) {
 /// own band on its side.
 #[test]
 fn the_band_is_shared_between_the_structures() {
-    let setup = SimSetup {
-        dt_s: DT,
-        samples: SAMPLES,
-        grid_m: Vec::new(),
-        active: noise::ImuChannels([true; 6]),
-        horizons_s: Vec::new(),
-        temperature_c: None,
-        temp_coeff: noise::ImuChannels::default(),
-    };
+    let setup = setup();
     let own = model("3 deg/h/sqrt(h)");
     let other = model("30 deg/h/sqrt(h)");
     let logs: Vec<_> = (0..2).map(|l| static_log(&own, &setup, 77, l)).collect();
@@ -113,15 +118,7 @@ fn the_band_is_shared_between_the_structures() {
 /// its replicates (largest remainders) with a bootstrap of at least `MIN_BOOTSTRAP` replicates.
 #[test]
 fn each_structure_draws_its_own_levels() {
-    let setup = SimSetup {
-        dt_s: DT,
-        samples: SAMPLES,
-        grid_m: Vec::new(),
-        active: noise::ImuChannels([true; 6]),
-        horizons_s: Vec::new(),
-        temperature_c: None,
-        temp_coeff: noise::ImuChannels::default(),
-    };
+    let setup = setup();
     let own = model("3 deg/h/sqrt(h)");
     let other = model("10 deg/h/sqrt(h)");
     let logs: Vec<_> = (0..1).map(|l| static_log(&own, &setup, 78, l)).collect();
