@@ -37,7 +37,7 @@ fn inputs_of(logs: &[noise::ImuChannels<Vec<f64>>]) -> Vec<LogInput<'_>> {
 }
 
 /// One hour at 10 Hz, every channel.
-fn setup() -> SimSetup {
+fn setup() -> SimSetup<'static> {
     SimSetup {
         dt_s: DT,
         samples: SAMPLES,
