@@ -162,3 +162,30 @@ def test_ctrl_c_stops_spec_drift_runs():
     out, took = interrupted_after(CTRL_C_CHILD, MTX)
     assert "interrupted" in out
     assert took < 1.0
+
+
+def test_drift_averages_over_a_models_alternatives(tmp_path):
+    """A model with [[alternatives]] (as diagnose writes them): the band is averaged over its
+    structures as by the CLI, and one_structure=True takes the model's own alone."""
+    df, path = synthetic_log(tmp_path)
+    model = tmp_path / "alt.toml"
+    model.write_text(open(MTX).read() + """
+[[alternatives]]
+channel = "gz"
+weight = 0.3
+delta_bic = 1.7
+effects = ["rate_random_walk"]
+removed = []
+[alternatives.terms]
+white_noise = "0.05 deg/s/sqrt(Hz)"
+rate_random_walk = "100 deg/h/sqrt(h)"
+""")
+    kw = dict(rate=100, horizons=[60], replicates=10)
+    r = imudrift.drift(path, str(model), **kw).to_dict()
+    assert [s["replicates"] for s in r["structures"]] == [7, 3]
+    assert r["structures"][1]["label"] == "gz: rate_random_walk"
+    c = cli("drift", path, "--model", str(model), "--rate", "100", "--horizons", "60",
+            "--replicates", "10")
+    assert_same(r, c)
+    one = imudrift.drift(path, str(model), one_structure=True, **kw).to_dict()
+    assert "structures" not in one
