@@ -384,3 +384,79 @@ fn structure_averaged_coverage_figure() {
     };
     assert_calibrated(&coverage(&design));
 }
+
+/// The chain from the drift loop's near tie to `drift`'s averaged band, on one seed of
+/// `structure_averaged_coverage_figure` whose corrected model carries alternatives (seed 194:
+/// gz's rate random walk at another level, alone and with a Gauss-Markov process): the weights
+/// are valid, the corrected model's text carries them back unchanged (what `drift` reads), and the
+/// drift check shares its replicates among the structures.
+#[test]
+fn a_diagnosis_with_alternatives_reaches_the_drift_band_through_its_model_file() {
+    let s = 194;
+    let truth = SensorModel::from_toml_str(TRUTH_GM, "truth.toml").unwrap();
+    let start = SensorModel::from_toml_str(START, "start.toml").unwrap();
+    let train = log_of(&truth, 0.1, 72_000, 2_000_000 + s, 0);
+    let train_input = input(0.1, &train);
+    let protocol = Protocol {
+        horizons_s: vec![60.0, 600.0],
+        ..Protocol::default()
+    };
+    let settings = Settings {
+        seed: 11 + s,
+        horizons_s: Vec::new(),
+        drift_protocol: Some(protocol.clone()),
+        ..Settings::default()
+    };
+    let diagnosis = diagnose(&train_input, &start, &settings).unwrap();
+    let alternatives = diagnosis.alternatives.clone();
+    assert!(
+        !alternatives.is_empty(),
+        "seed {s} no longer meets a near tie"
+    );
+    for c in noise::Channel::ALL {
+        let total: f64 = alternatives
+            .iter()
+            .filter(|a| a.channel == c)
+            .map(|a| a.weight)
+            .sum();
+        assert!((0.0..1.0).contains(&total), "{}: {total}", c.name());
+    }
+    for a in &alternatives {
+        assert!(a.weight > 0.0 && a.delta_bic <= diagnose::alternatives::OCCAM_DELTA_BIC);
+    }
+    let fitted = FittedOn::from_logs(&[train_input], settings.tau_min_s).unwrap();
+    let style = noise::UnitStyle::from_config_text(START);
+    let text = diagnose::document::corrected_model_toml(&diagnosis, &start, &style, Some(&fitted));
+    let read = diagnose::alternatives::from_model_text(&text, "corrected.toml").unwrap();
+    let key = |a: &diagnose::alternatives::Alternative| {
+        (
+            a.channel,
+            a.weight,
+            a.delta_bic,
+            a.effects.clone(),
+            a.removed.clone(),
+        )
+    };
+    assert_eq!(
+        read.iter().map(key).collect::<Vec<_>>(),
+        alternatives.iter().map(key).collect::<Vec<_>>()
+    );
+    let model = SensorModel::from_toml_str(&text, "corrected.toml").unwrap();
+    let held = log_of(&truth, 0.1, 72_000, 3_000_000 + s, 0);
+    let check = CheckSettings {
+        protocol,
+        replicates: 39,
+        seed: 5 + s,
+    };
+    let c = check_drift_averaged(
+        &[input(0.1, &held)],
+        &model,
+        &read,
+        Some(&fitted),
+        &check,
+        &(),
+    )
+    .unwrap();
+    assert!(c.structures.len() > 1);
+    assert_eq!(c.structures.iter().map(|s| s.replicates).sum::<usize>(), 39);
+}
