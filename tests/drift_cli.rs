@@ -239,4 +239,20 @@ fn alternatives_are_averaged_unless_one_structure_is_asked() {
         err.contains("bad.toml") && err.contains("entry 1") && err.contains("weight"),
         "{err}"
     );
+    // An alternative whose output filter cannot run at the log's rate (40 Hz cutoff, 50 Hz log):
+    // refused naming the structure, no panic.
+    let filt = dir.path().join("filter.toml");
+    let with_filter = alternative.replace(
+        "white_noise = \"0.5 deg/sqrt(h)\"\n",
+        "white_noise = \"0.5 deg/sqrt(h)\"\noutput_filter = { kind = \"lowpass1\", cutoff = \"40 Hz\", decimation = 1 }\n",
+    );
+    assert_ne!(with_filter, alternative);
+    std::fs::write(&filt, format!("{MODEL}{with_filter}")).unwrap();
+    let out = run(&[], &filt);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("[[alternatives]] structure \"gz: ") && err.contains("gyro.z"),
+        "{err}"
+    );
 }

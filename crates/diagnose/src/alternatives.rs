@@ -77,7 +77,7 @@ pub fn weights(delta_bic: &[f64]) -> Vec<f64> {
     w.iter().map(|x| x / total).collect()
 }
 
-/// The effects whose terms differ between two axes (either has it, not equal).
+/// The effects `other` has that `chosen` has not, or at another level.
 pub fn differing_effects(chosen: &AxisModel, other: &AxisModel) -> Vec<Effect> {
     Effect::ALL
         .into_iter()
@@ -116,7 +116,7 @@ pub fn to_toml(alternatives: &[Alternative], style: &UnitStyle) -> String {
     for (k, a) in alternatives.iter().enumerate() {
         if k == 0 {
             s.push_str(
-                "\n# Structures the evidence could not tell apart from the one above (within 2 ln 20 of its BIC):\n\
+                "\n# Structures the evidence could not tell apart from the one above (posterior odds above 1:20):\n\
                  # `imudrift drift` averages its band over them with these weights (docs/drift.md).\n\
                  # Delete them to take the structure above as certain.\n",
             );
@@ -278,7 +278,12 @@ pub fn structures(model: &SensorModel, alternatives: &[Alternative]) -> Vec<Stru
                     .map(|e| e.name().to_string())
                     .chain(a.removed.iter().map(|e| format!("no {}", e.name())))
                     .collect();
-                let this = format!("{}: {}", c.name(), names.join(", "));
+                let what = if names.is_empty() {
+                    "other terms".to_string()
+                } else {
+                    names.join(", ")
+                };
+                let this = format!("{}: {what}", c.name());
                 next.push(Structure {
                     weight: s.weight * a.weight,
                     model: m,

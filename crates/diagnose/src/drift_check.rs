@@ -249,6 +249,9 @@ pub enum CheckError {
     NotFinite { run: u64, quantity: &'static str },
     #[error("drawing the model's levels: {0}")]
     Bootstrap(#[from] BootstrapError),
+    /// A structure of the model's `[[alternatives]]` that cannot run at the logs' rate.
+    #[error("[[alternatives]] structure \"{label}\": {message}")]
+    Structure { label: String, message: String },
 }
 
 /// The order statistic of 1-based fractional rank `a` (linear between neighbours, clamped).
@@ -334,6 +337,13 @@ pub fn check_drift_averaged(
         .map(|l| all_segment_errors(&l.channels.0, dt_s, p))
         .collect();
     let plan = StructurePlan::new(model_sensor, alternatives, settings.replicates);
+    // The model itself is checked by the caller; an alternative's output filter may not fit.
+    for s in plan.structures.iter().skip(1) {
+        noise::ImuErrors::check_rate(&s.model, dt_s).map_err(|e| CheckError::Structure {
+            label: s.label.clone(),
+            message: e.to_string(),
+        })?;
+    }
     let progress = Progress {
         done: std::sync::atomic::AtomicUsize::new(0),
         total: plan.simulated_logs(logs.len(), fitted_on),
