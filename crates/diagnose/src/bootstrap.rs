@@ -45,9 +45,10 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 
 /// The effects whose level is drawn (module doc).
-const DRAWN: [Effect; 8] = [
+const DRAWN: [Effect; 9] = [
     Effect::Quantization,
     Effect::WhiteNoise,
+    Effect::OutputWhiteNoise,
     Effect::BiasInstability,
     Effect::RateRandomWalk,
     Effect::GaussMarkov,

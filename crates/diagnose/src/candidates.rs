@@ -4,18 +4,22 @@
 
 use crate::model_terms::{fitted_term, flicker_band};
 use noise::closed_form as cf;
+use noise::filter::FilteredAllan;
 use noise::{
-    BiasInstability, Channel, Effect, FilterKind, Flicker, ModelError, OutputFilter, Quantization,
-    RateRamp, RateRandomWalk, SensorModel, TemperatureBias, Term, WhiteNoise,
+    BiasInstability, Channel, Effect, ErrorTerm, FilterKind, Flicker, ModelError, OutputFilter,
+    OutputWhiteNoise, Quantization, RateRamp, RateRandomWalk, SensorModel, TemperatureBias, Term,
+    WhiteNoise,
 };
 
 /// Effects diagnose fits to the Allan gap (docs/diagnose.md list; the output filter is tried beside
-/// them). The temperature bias is not among them: it is regressed on the log's temperature column in
+/// them; white noise on the output register only on a channel that has one: without a filter it is
+/// the same process as `white_noise`). The temperature bias is not among them: it is regressed on the log's temperature column in
 /// the time domain (`detect`, step 0), where its phase is seen; its Allan signature alone cannot
 /// tell it from a slow bias wander.
-pub const CANDIDATES: [Effect; 8] = [
+pub const CANDIDATES: [Effect; 9] = [
     Effect::Quantization,
     Effect::WhiteNoise,
+    Effect::OutputWhiteNoise,
     Effect::BiasInstability,
     Effect::RateRandomWalk,
     Effect::RateRamp,
@@ -24,8 +28,8 @@ pub const CANDIDATES: [Effect; 8] = [
     Effect::Resonance,
 ];
 
-/// A one-level candidate `effect` (quantisation, white noise, flicker bias instability, rate random
-/// walk, rate ramp, temperature coefficient) at `level` on channel `ch`: the model's own term at
+/// A one-level candidate `effect` (quantisation, white noise before or after the output filter,
+/// flicker bias instability, rate random walk, rate ramp, temperature coefficient) at `level` on channel `ch`: the model's own term at
 /// that level (its other parameters kept, e.g. flicker's band), else a new one (flicker on the
 /// channel's band), through the term's validating constructor.
 pub fn level_term(
@@ -40,6 +44,7 @@ pub fn level_term(
     Ok(match effect {
         Effect::Quantization => Quantization::new(level)?.into(),
         Effect::WhiteNoise => WhiteNoise::new(level)?.into(),
+        Effect::OutputWhiteNoise => OutputWhiteNoise::new(level)?.into(),
         Effect::BiasInstability => {
             BiasInstability::Flicker(flicker_band(model, ch).with_level(level)?).into()
         }
@@ -76,29 +81,61 @@ pub fn free_parameters(effect: Effect) -> usize {
     }
 }
 
-/// Allan variance per unit squared level at tau (for the one-level terms), for sample interval dt.
-/// Bias instability is flicker as the noise crate realises it (a Gauss-Markov sum over a band of
-/// correlation times, plateau 0.664 B inside it), with B = 1 in `flicker`.
-pub fn unit_signature(effect: Effect, tau_s: f64, dt_s: f64, flicker: &Flicker) -> f64 {
-    match effect {
-        Effect::Quantization => cf::quantization_avar(1.0, tau_s),
-        Effect::WhiteNoise => cf::white_noise_avar(1.0, tau_s),
-        Effect::BiasInstability => flicker.avar_sampled(tau_s, dt_s),
-        Effect::RateRandomWalk => cf::rate_random_walk_avar_sampled(1.0, tau_s, dt_s),
-        Effect::RateRamp => cf::rate_ramp_avar(1.0, tau_s),
+/// Allan variance per unit squared level at tau (for the one-level terms), for sample interval dt,
+/// as the channel generates the term: behind the channel's output filter `fa` where the term acts
+/// before it (`ErrorTerm::allan_variance_filtered`, noise::filter), as it is without one. White
+/// noise on the output register, quantisation and a ramp are the same either way (the first two act
+/// after the filter; unit DC gain keeps a ramp a ramp). Bias instability is flicker as the noise
+/// crate realises it (a Gauss-Markov sum over a band of correlation times, plateau 0.664 B inside
+/// it), with B = 1 in `flicker`.
+pub fn unit_signature(
+    effect: Effect,
+    tau_s: f64,
+    dt_s: f64,
+    flicker: &Flicker,
+    fa: Option<&FilteredAllan>,
+) -> f64 {
+    match (effect, fa) {
+        (Effect::WhiteNoise, Some(fa)) => fa.white_noise(1.0, tau_s),
+        (Effect::BiasInstability, Some(fa)) => BiasInstability::Flicker(flicker.clone())
+            .allan_variance_filtered(tau_s, dt_s, fa)
+            .unwrap_or(f64::NAN),
+        (Effect::RateRandomWalk, Some(fa)) => fa.random_walk(1.0, tau_s),
+        (Effect::Quantization, _) => cf::quantization_avar(1.0, tau_s),
+        (Effect::WhiteNoise | Effect::OutputWhiteNoise, _) => cf::white_noise_avar(1.0, tau_s),
+        (Effect::BiasInstability, None) => flicker.avar_sampled(tau_s, dt_s),
+        (Effect::RateRandomWalk, None) => cf::rate_random_walk_avar_sampled(1.0, tau_s, dt_s),
+        (Effect::RateRamp, _) => cf::rate_ramp_avar(1.0, tau_s),
         _ => f64::NAN,
     }
 }
 
-/// Allan variance per unit squared level for a shaped term at shape parameter `shape`.
-pub fn unit_family_signature(effect: Effect, shape: f64, tau_s: f64, dt_s: f64) -> f64 {
-    match effect {
-        Effect::GaussMarkov | Effect::SlowGaussMarkov => {
+/// Allan variance per unit squared level for a shaped term at shape parameter `shape` (a
+/// Gauss-Markov correlation time, a sinusoid's frequency), behind the channel's output filter `fa`
+/// where it has one (both act before the filter; the generator adds a filtered sinusoid's output).
+pub fn unit_family_signature(
+    effect: Effect,
+    shape: f64,
+    tau_s: f64,
+    dt_s: f64,
+    fa: Option<&FilteredAllan>,
+) -> f64 {
+    match (effect, fa) {
+        (Effect::GaussMarkov | Effect::SlowGaussMarkov, Some(fa)) => {
+            fa.gauss_markov(1.0, shape, tau_s)
+        }
+        (Effect::GaussMarkov | Effect::SlowGaussMarkov, None) => {
             cf::gauss_markov_avar_sampled(1.0, shape, tau_s, dt_s)
         }
-        Effect::Sinusoidal => cf::sinusoid_avar_sampled(1.0, shape, tau_s, dt_s),
+        (Effect::Sinusoidal, Some(fa)) => fa.sinusoid(1.0, shape, tau_s),
+        (Effect::Sinusoidal, None) => cf::sinusoid_avar_sampled(1.0, shape, tau_s, dt_s),
         _ => f64::NAN,
     }
+}
+
+/// The Allan-variance view of channel `ch`'s output filter at sample interval `dt_s`, if it has one.
+pub fn filtered_allan(model: &SensorModel, ch: Channel, dt_s: f64) -> Option<FilteredAllan> {
+    crate::model_terms::output_filter(model, ch).map(|f| FilteredAllan::new(&f, dt_s))
 }
 
 /// Shape grid for a family over the measured tau range.

@@ -42,7 +42,8 @@
 //! statistic is scaled to its null distribution under the model, not to our tests.
 
 use crate::candidates::{
-    free_parameters, level_term, shape_search_penalty, unit_family_signature, unit_signature,
+    filtered_allan, free_parameters, level_term, shape_search_penalty, unit_family_signature,
+    unit_signature,
 };
 use crate::drift_gap::DriftFit;
 use crate::fit::{aic, bic, FitData, CHI2_1_95};
@@ -451,15 +452,16 @@ impl DriftFitInput<'_> {
     }
 
     /// The Allan variance per unit squared level of `effect` at each measured tau (a Gauss-Markov
-    /// process at correlation time `shape`).
+    /// process at correlation time `shape`), behind the channel's output filter.
     fn signature(&self, effect: Effect, shape: Option<f64>) -> Vec<f64> {
         let flicker = flicker_band(self.model, self.channel);
+        let fa = filtered_allan(self.model, self.channel, self.dt_s);
         self.measured
             .tau_s
             .iter()
             .map(|&t| match shape {
-                Some(s) => unit_family_signature(effect, s, t, self.dt_s),
-                None => unit_signature(effect, t, self.dt_s, &flicker),
+                Some(s) => unit_family_signature(effect, s, t, self.dt_s, fa.as_ref()),
+                None => unit_signature(effect, t, self.dt_s, &flicker, fa.as_ref()),
             })
             .collect()
     }

@@ -1,9 +1,9 @@
 //! Step 4: every candidate effect fitted to one channel's gap.
 
 use crate::candidates::{
-    filter_grid, free_parameters, level_term, named, resonance_grid, resonance_refinement,
-    resonance_signature, shape_grid, shape_search_penalty, unit_family_signature, unit_signature,
-    white_signature, CANDIDATES,
+    filter_grid, filtered_allan, free_parameters, level_term, named, resonance_grid,
+    resonance_refinement, resonance_signature, shape_grid, shape_search_penalty,
+    unit_family_signature, unit_signature, white_signature, CANDIDATES,
 };
 use crate::fit::predicted_ln_adev;
 use crate::fit::{
@@ -118,6 +118,10 @@ pub(crate) fn trials(input: &ChannelFit) -> Vec<Trial> {
         if effect == Effect::BiasInstability && has_random_walk_bias_instability(input.model, ch) {
             continue;
         }
+        // White noise after the filter is told from white noise before it only by the filter.
+        if effect == Effect::OutputWhiteNoise && output_filter(input.model, ch).is_none() {
+            continue;
+        }
         let current = fitted_term(input.model, ch, effect);
         let fitted = match effect {
             Effect::GaussMarkov | Effect::Sinusoidal => fit_shaped(input, &data, effect, current),
@@ -157,11 +161,12 @@ fn fit_shaped(
             (g, penalty, false)
         }
     };
+    let fa = filtered_allan(input.model, input.channel, dt_s);
     let sigs: Vec<Vec<f64>> = shapes
         .iter()
         .map(|&s| {
             tau.iter()
-                .map(|&t| unit_family_signature(effect, s, t, dt_s))
+                .map(|&t| unit_family_signature(effect, s, t, dt_s, fa.as_ref()))
                 .collect()
         })
         .collect();
@@ -349,14 +354,14 @@ fn fit_level(
 ) -> Option<Fitted> {
     let (tau, dt_s) = (&input.measured.tau_s, input.dt_s);
     let ch = input.channel;
-    let f: Vec<f64> = if effect == Effect::WhiteNoise {
-        white_signature(output_filter(input.model, ch).as_ref(), tau, dt_s)
-    } else {
-        let flicker = flicker_band(input.model, ch);
-        tau.iter()
-            .map(|&t| unit_signature(effect, t, dt_s, &flicker))
-            .collect()
-    };
+    let (flicker, fa) = (
+        flicker_band(input.model, ch),
+        filtered_allan(input.model, ch, dt_s),
+    );
+    let f: Vec<f64> = tau
+        .iter()
+        .map(|&t| unit_signature(effect, t, dt_s, &flicker, fa.as_ref()))
+        .collect();
     let c0 = squared_level(current);
     let fit = fit_linear(data, &f, c0);
     let (fit, level) = if effect == Effect::RateRamp {

@@ -49,6 +49,7 @@ pub use terms::gauss_markov::GaussMarkov;
 pub use terms::misalignment::Misalignment;
 pub use terms::outliers::Outliers;
 pub use terms::output_filter::{FilterKind, OutputFilter, MAX_RESPONSE};
+pub use terms::output_white_noise::OutputWhiteNoise;
 pub use terms::quantization::Quantization;
 pub use terms::rate_ramp::RateRamp;
 pub use terms::rate_random_walk::RateRandomWalk;

@@ -8,7 +8,8 @@ mod common;
 
 use common::*;
 use noise::{
-    AxisModel, BiasInstability, FilterKind, Flicker, GaussMarkov, Outliers, OutputFilter, Resonance,
+    AxisModel, BiasInstability, FilterKind, Flicker, GaussMarkov, Outliers, OutputFilter,
+    OutputWhiteNoise, Resonance,
 };
 
 const RATES_HZ: [f64; 3] = [10.0, 100.0, 1000.0];
@@ -95,6 +96,44 @@ fn first_order_lowpass_reads_back() {
         let data = gyro_x_series(&axis, rate, N, SEED + 11, i as u64);
         assert_avar_matches(
             &format!("lowpass1 at {rate} Hz"),
+            &data,
+            dt,
+            &MS,
+            &[0],
+            |tau| axis.allan_variance_sampled(tau, dt),
+        );
+    }
+}
+
+/// White noise on the output register behind a strong low-pass (the shape of a phone's log: the
+/// sensing element's noise filtered to a cutoff of a hundredth of the output rate, a smaller white
+/// noise after the filter): the Allan variance is the filtered white noise's plus N_out^2 / tau
+/// (Hou 4.36, unfiltered), which dominates at the shortest taus; and the term alone, the filter's
+/// place in the chain aside, reads back as plain white noise.
+#[test]
+fn output_white_noise_is_added_after_the_filter() {
+    for (i, &rate) in RATES_HZ.iter().enumerate() {
+        let axis = AxisModel::default()
+            .with(noise::WhiteNoise::new(1e-3).unwrap())
+            .with(OutputWhiteNoise::new(1e-4).unwrap())
+            .with(
+                OutputFilter::new(
+                    FilterKind::LowPass1 {
+                        cutoff_hz: 0.01 * rate,
+                    },
+                    1,
+                )
+                .unwrap(),
+            );
+        let dt = 1.0 / rate;
+        // At one sample the term is most of the variance (the filter leaves ~ N^2 pi fc of the
+        // element's noise; the term adds N_out^2 / dt): the test would fail if it were filtered.
+        let mut without = axis.clone();
+        without.remove(noise::Effect::OutputWhiteNoise);
+        assert!(axis.allan_variance_sampled(dt, dt) > 2.0 * without.allan_variance_sampled(dt, dt));
+        let data = gyro_x_series(&axis, rate, N, SEED + 13, i as u64);
+        assert_avar_matches(
+            &format!("lowpass1 + output white noise at {rate} Hz"),
             &data,
             dt,
             &MS,

@@ -12,6 +12,7 @@ pub mod gauss_markov;
 pub mod misalignment;
 pub mod outliers;
 pub mod output_filter;
+pub mod output_white_noise;
 pub mod quantization;
 pub mod rate_ramp;
 pub mod rate_random_walk;
@@ -302,12 +303,14 @@ registry! {
     Resonance => resonance::Resonance,
     /// A second first-order Gauss-Markov bias, for the slow wander.
     SlowGaussMarkov => slow_gauss_markov::SlowGaussMarkov,
+    /// White noise on the output register, after the output filter.
+    OutputWhiteNoise => output_white_noise::OutputWhiteNoise,
 }
 
 /// The order a channel's terms act in within each [`Stage`] (`ChannelErrors`): the input terms, then
 /// the raw ones in the order they are added (changing it changes the last bits of every output),
-/// then those on the output register (after the filter: the filtered sinusoid, the outliers, the
-/// quantiser).
+/// then those on the output register (after the filter: the filtered sinusoid, the output white
+/// noise, the outliers, the quantiser).
 pub const GENERATION_ORDER: [Effect; Effect::COUNT] = [
     Effect::ConstantBias,
     Effect::TurnOnBias,
@@ -323,6 +326,7 @@ pub const GENERATION_ORDER: [Effect; Effect::COUNT] = [
     Effect::Sinusoidal,
     Effect::TemperatureBias,
     Effect::WarmupTransient,
+    Effect::OutputWhiteNoise,
     Effect::Outliers,
     Effect::Quantization,
     Effect::OutputFilter,
@@ -333,6 +337,7 @@ pub const GENERATION_ORDER: [Effect; Effect::COUNT] = [
 pub const WRITE_ORDER: [Effect; Effect::COUNT] = [
     Effect::Quantization,
     Effect::WhiteNoise,
+    Effect::OutputWhiteNoise,
     Effect::RateRandomWalk,
     Effect::RateRamp,
     Effect::TemperatureBias,
