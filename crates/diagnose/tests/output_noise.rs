@@ -79,7 +79,9 @@ fn trial(t: u64) -> Result<(), String> {
             .iter()
             .find(|e| e.effect == Effect::OutputWhiteNoise)
         else {
-            problems.push(format!("{c}: hidden n = {n:.3e} not named (named {named:?})"));
+            problems.push(format!(
+                "{c}: hidden n = {n:.3e} not named (named {named:?})"
+            ));
             continue;
         };
         if named.len() > 1 {
@@ -97,7 +99,10 @@ fn trial(t: u64) -> Result<(), String> {
             problems.push(format!("{c}: n = {v:.4e}, truth {n:.4e}"));
         }
         if !gap_closed(r.gap_initial, r.gap_final) {
-            problems.push(format!("{c}: gap {:.2} -> {:.2}", r.gap_initial, r.gap_final));
+            problems.push(format!(
+                "{c}: gap {:.2} -> {:.2}",
+                r.gap_initial, r.gap_final
+            ));
         }
     }
     if problems.is_empty() {
@@ -152,5 +157,9 @@ fn null_rate_of_filtered_logs() {
     let mut logs: Vec<&str> = named.iter().filter_map(|l| l.split(':').next()).collect();
     logs.dedup();
     eprintln!("{} of {n} clean filtered logs named something", logs.len());
-    assert!(logs.len() as f64 <= 0.05 * n as f64, "{} of {n}", logs.len());
+    assert!(
+        logs.len() as f64 <= 0.05 * n as f64,
+        "{} of {n}",
+        logs.len()
+    );
 }

@@ -63,6 +63,30 @@ fn white_noise_grows_as_sqrt_t_t3_t5() {
     });
 }
 
+/// White noise on the output register (after the filter) is an angle random walk of its own
+/// density: the same laws as `white_noise` (its law source says so), generated at the output rate.
+#[test]
+fn output_white_noise_grows_as_white_noise() {
+    let n = 1e-3;
+    let term = noise::OutputWhiteNoise::new(n).unwrap();
+    let temperature = noise::TemperatureProfile::default();
+    let cx = noise::LawSourceContext {
+        ideal: 0.0,
+        others: [0.0; 2],
+        dt_s: 0.01,
+        temperature: &temperature,
+        temperature_reference_c: 25.0,
+    };
+    assert_eq!(
+        noise::ErrorTerm::law_sources(&term, &cx),
+        vec![noise::LawSource::White(n)]
+    );
+    let axis = noise::AxisModel::default().with(term);
+    check_growth("output white noise", &axis, |t, how| {
+        cf::white_noise_growth_std(n, t, how)
+    });
+}
+
 #[test]
 fn random_walk_variance_grows_linearly_and_its_integrals_as_t3_t5_t7() {
     let k = 1e-4;
