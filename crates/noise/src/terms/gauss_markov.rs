@@ -140,6 +140,26 @@ impl BankGenerator {
     }
 }
 
+impl BankGenerator {
+    /// The bank's next `out.len()` values and then the random walk `walk`'s, in one pass
+    /// ([`GaussMarkovBank::add_block_then_walk`]): the values of `add_raw` on each in turn.
+    #[inline]
+    pub(crate) fn add_raw_then_walk(
+        &mut self,
+        out: &mut [f64],
+        scratch: &mut Vec<f64>,
+        walk: &mut super::rate_random_walk::RandomWalkGenerator,
+        walk_scratch: &mut Vec<f64>,
+    ) {
+        self.bank.add_block_then_walk(
+            &mut self.rng,
+            out,
+            scratch,
+            (&mut walk.walk, &mut walk.rng, walk_scratch),
+        );
+    }
+}
+
 impl Generate for BankGenerator {
     fn stage(&self) -> Stage {
         Stage::Raw
