@@ -242,34 +242,25 @@ impl GaussMarkovBank {
         }
     }
 
-    /// [`Self::add_block`] and then a random walk's [`RandomWalk::add_block`] on the same block
-    /// (`walk_rng`, `walk_scratch` its stream and buffer), in one pass where the bank has 1 to 4
-    /// every-sample components: each value gets the bank's value and then the walk's, the same
-    /// two additions in the same order as the two passes, from the same draws (tested below).
-    /// Why: each pass is a chain of dependent floating-point operations per sample (the bank's
-    /// recursions, the walk's sum), and the two chains side by side take about the time of the
-    /// longer one (the walk alone was 3.5 % of `imudrift drift`, 2026-11-26).
-    pub(crate) fn add_block_then_walk(
+    /// [`Self::add_block`] and then `follower`'s processes (a random walk, a resonance: the terms
+    /// that follow the flicker band in the generation order) on the same block, in one pass
+    /// where the bank has 1 to 4 every-sample components: each value gets the bank's value and
+    /// then each follower's, the same additions in the same order as one pass per term, from
+    /// the same draws (tested below and in `terms/resonance.rs`). Why: each pass is a chain of
+    /// dependent floating-point operations per sample (the bank's recursions, the walk's sum, the
+    /// resonance's recursion), and chains side by side take about the time of the longest (the
+    /// walk alone was 3.5 % of `imudrift drift`, the resonance 6.6 %, 2026-11-26).
+    pub(crate) fn add_block_then(
         &mut self,
         rng: &mut NormalStream,
         out: &mut [f64],
         scratch: &mut Vec<f64>,
-        (walk, walk_rng, walk_scratch): (&mut RandomWalk, &mut NormalStream, &mut Vec<f64>),
+        follower: &mut impl Follower,
     ) {
-        let n = out.len();
-        let mut follower = WalkFollower {
-            state: walk.state,
-            step: walk.step,
-            draws: draws(walk_rng, walk_scratch, n),
-        };
-        if self.add_block_with(rng, out, scratch, &mut follower) {
-            walk.state = follower.state;
-        } else {
+        if !self.add_block_with(rng, out, scratch, follower) {
             self.add_block_stepwise(rng, out, scratch);
-            let (state, step) = (&mut walk.state, walk.step);
-            for (v, w) in out.iter_mut().zip(follower.draws) {
-                *v += *state;
-                *state += step * w;
+            for (i, v) in out.iter_mut().enumerate() {
+                follower.add(i, v);
             }
         }
     }
@@ -406,8 +397,8 @@ impl GaussMarkovBank {
 }
 
 /// A process whose values the bank's block loop adds after its own to each sample
-/// ([`GaussMarkovBank::add_block_then_walk`]).
-trait Follower {
+/// ([`GaussMarkovBank::add_block_then`]), its draws for the block made beforehand.
+pub(crate) trait Follower {
     /// Add this process's value at sample `i` of the block to `v`, then advance it.
     fn add(&mut self, i: usize, v: &mut f64);
 }
@@ -420,11 +411,40 @@ impl Follower for NoFollower {
     fn add(&mut self, _i: usize, _v: &mut f64) {}
 }
 
-/// A random walk's [`RandomWalk::add_block`] over the block, its draws made beforehand.
-struct WalkFollower<'a> {
+/// Two followers, in order.
+impl<A: Follower, B: Follower> Follower for (A, B) {
+    #[inline(always)]
+    fn add(&mut self, i: usize, v: &mut f64) {
+        self.0.add(i, v);
+        self.1.add(i, v);
+    }
+}
+
+/// A random walk's [`RandomWalk::add_block`] over a block, as a [`Follower`]; its state is
+/// written back by [`WalkFollower::finish`].
+pub(crate) struct WalkFollower<'a> {
+    walk: &'a mut RandomWalk,
     state: f64,
     step: f64,
     draws: &'a [f64],
+}
+
+impl<'a> WalkFollower<'a> {
+    /// The walk over a block whose draws (one per sample) are `draws`.
+    pub(crate) fn new(walk: &'a mut RandomWalk, draws: &'a [f64]) -> WalkFollower<'a> {
+        let (state, step) = (walk.state, walk.step);
+        WalkFollower {
+            walk,
+            state,
+            step,
+            draws,
+        }
+    }
+
+    /// Keep the walk's state at the end of the block.
+    pub(crate) fn finish(self) {
+        self.walk.state = self.state;
+    }
 }
 
 impl Follower for WalkFollower<'_> {
@@ -503,7 +523,9 @@ mod tests {
                     break;
                 }
                 let end = (k + len).min(n);
-                fused.add_block_then_walk(ra, &mut a[k..end], &mut s1, (&mut walk_a, wa, &mut s2));
+                let mut f = WalkFollower::new(&mut walk_a, draws(wa, &mut s2, end - k));
+                fused.add_block_then(ra, &mut a[k..end], &mut s1, &mut f);
+                f.finish();
                 apart.add_block(rb, &mut b[k..end], &mut s3);
                 walk_b.add_block(wb, &mut b[k..end], &mut s3);
                 k = end;

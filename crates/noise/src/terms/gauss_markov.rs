@@ -141,22 +141,17 @@ impl BankGenerator {
 }
 
 impl BankGenerator {
-    /// The bank's next `out.len()` values and then the random walk `walk`'s, in one pass
-    /// ([`GaussMarkovBank::add_block_then_walk`]): the values of `add_raw` on each in turn.
+    /// The bank's next `out.len()` values and then `follower`'s, in one pass
+    /// ([`GaussMarkovBank::add_block_then`]): the values of `add_raw` on each term in turn.
     #[inline]
-    pub(crate) fn add_raw_then_walk(
+    pub(crate) fn add_raw_then(
         &mut self,
         out: &mut [f64],
         scratch: &mut Vec<f64>,
-        walk: &mut super::rate_random_walk::RandomWalkGenerator,
-        walk_scratch: &mut Vec<f64>,
+        follower: &mut impl crate::discrete::Follower,
     ) {
-        self.bank.add_block_then_walk(
-            &mut self.rng,
-            out,
-            scratch,
-            (&mut walk.walk, &mut walk.rng, walk_scratch),
-        );
+        self.bank
+            .add_block_then(&mut self.rng, out, scratch, follower);
     }
 }
 
