@@ -137,6 +137,22 @@ fn bench(c: &mut Criterion) {
         fill_static_all(b, &m);
     });
     group.finish();
+
+    // The MTx model with a sinusoid on every axis (the fitted ADIS16405 model's accelerometer
+    // lines): exact sin/cos every 64 samples, eight windows rotated side by side in between.
+    let mut group = c.benchmark_group("generate_mtx_sinusoid");
+    group.throughput(Throughput::Elements(SAMPLES));
+    group.sample_size(10);
+    let mut m = model.clone();
+    for s in noise::Sensor::ALL {
+        for a in &mut m.triad_mut(s).axes {
+            a.set_term(noise::Sinusoid::new(8e-3, 0.5641, None).unwrap());
+        }
+    }
+    group.bench_function("fill_static_6_channels", |b| {
+        fill_static_all(b, &m);
+    });
+    group.finish();
 }
 
 /// The standard-normal draws every stochastic term makes: the wide sampler (`NormalStream`, eight

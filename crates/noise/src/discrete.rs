@@ -237,7 +237,42 @@ impl GaussMarkovBank {
         out: &mut [f64],
         scratch: &mut Vec<f64>,
     ) {
-        let n = out.len();
+        if !self.add_block_with(rng, out, scratch, &mut NoFollower) {
+            self.add_block_stepwise(rng, out, scratch);
+        }
+    }
+
+    /// [`Self::add_block`] and then `follower`'s processes (a random walk, a resonance: the terms
+    /// that follow the flicker band in the generation order) on the same block, in one pass
+    /// where the bank has 1 to 4 every-sample components: each value gets the bank's value and
+    /// then each follower's, the same additions in the same order as one pass per term, from
+    /// the same draws (tested below and in `terms/resonance.rs`). Why: each pass is a chain of
+    /// dependent floating-point operations per sample (the bank's recursions, the walk's sum, the
+    /// resonance's recursion), and chains side by side take about the time of the longest (the
+    /// walk alone was 3.5 % of `imudrift drift`, the resonance 6.6 %, 2026-11-26).
+    pub(crate) fn add_block_then(
+        &mut self,
+        rng: &mut NormalStream,
+        out: &mut [f64],
+        scratch: &mut Vec<f64>,
+        follower: &mut impl Follower,
+    ) {
+        if !self.add_block_with(rng, out, scratch, follower) {
+            self.add_block_stepwise(rng, out, scratch);
+            for (i, v) in out.iter_mut().enumerate() {
+                follower.add(i, v);
+            }
+        }
+    }
+
+    /// The draws of the next `out.len()` samples: the every-sample components' and the held
+    /// updates falling in the block.
+    fn block_draws<'a>(
+        &self,
+        rng: &mut NormalStream,
+        scratch: &'a mut Vec<f64>,
+        n: usize,
+    ) -> &'a [f64] {
         // Held updates within the block: component h is next due in left - (span - until) samples.
         let elapsed = self.event_span - self.until_event;
         let held_draws: usize = self
@@ -252,48 +287,102 @@ impl GaussMarkovBank {
                 }
             })
             .sum();
-        let w = draws(rng, scratch, n * self.state.len() + held_draws);
-        // The usual banks (flicker's band has 2-4 components advanced every sample) with their
-        // states in registers; the same operations in the same order as `step`.
+        draws(rng, scratch, n * self.state.len() + held_draws)
+    }
+
+    /// The usual banks (flicker's band has 2-4 components advanced every sample) with their
+    /// states in registers, `follower` adding its value after the bank's to each sample; false
+    /// (nothing done, nothing drawn) for another number of components.
+    #[inline(always)]
+    fn add_block_with(
+        &mut self,
+        rng: &mut NormalStream,
+        out: &mut [f64],
+        scratch: &mut Vec<f64>,
+        follower: &mut impl Follower,
+    ) -> bool {
+        if !(1..=4).contains(&self.state.len()) {
+            return false;
+        }
+        let w = self.block_draws(rng, scratch, out.len());
         let used = match self.state.len() {
-            1 => self.add_block_fixed::<1>(w, out),
-            2 => self.add_block_fixed::<2>(w, out),
-            3 => self.add_block_fixed::<3>(w, out),
-            4 => self.add_block_fixed::<4>(w, out),
-            _ => {
-                let mut j = 0;
-                for v in out.iter_mut() {
-                    *v += self.step(|| {
-                        j += 1;
-                        w[j - 1]
-                    });
-                }
-                j
-            }
+            1 => self.add_block_fixed::<1>(w, out, follower),
+            2 => self.add_block_fixed::<2>(w, out, follower),
+            3 => self.add_block_fixed::<3>(w, out, follower),
+            _ => self.add_block_fixed::<4>(w, out, follower),
         };
         debug_assert_eq!(used, w.len());
+        true
+    }
+
+    /// [`Self::add_block`] by [`Self::step`], one sample at a time (any number of components).
+    fn add_block_stepwise(
+        &mut self,
+        rng: &mut NormalStream,
+        out: &mut [f64],
+        scratch: &mut Vec<f64>,
+    ) {
+        let w = self.block_draws(rng, scratch, out.len());
+        let mut j = 0;
+        for v in out.iter_mut() {
+            *v += self.step(|| {
+                j += 1;
+                w[j - 1]
+            });
+        }
+        debug_assert_eq!(j, w.len());
     }
 
     /// [`Self::step`] over a block for a bank of `N` every-sample components, the draws taken
     /// from `w` in order; returns how many it used.
+    ///
+    /// The block goes in runs between the held components' updates: within a run the held sum
+    /// and the offset are constants and the components' states stay in registers, so each sample
+    /// is the components' recursions alone (a chain of one multiply-add per component) with no
+    /// branch and no memory update of the countdown (that decrement through memory was part of
+    /// every sample's dependency chain: the bank was 13 % of `imudrift drift`, 2026-11-26). The
+    /// same operations in the same order as `step`: the same bits (tested below).
     #[inline(always)]
-    fn add_block_fixed<const N: usize>(&mut self, w: &[f64], out: &mut [f64]) -> usize {
+    fn add_block_fixed<const N: usize>(
+        &mut self,
+        w: &[f64],
+        out: &mut [f64],
+        follower: &mut impl Follower,
+    ) -> usize {
         let mut x: [f64; N] = std::array::from_fn(|c| self.state[c]);
         let phi: [f64; N] = std::array::from_fn(|c| self.phi[c]);
         let drive: [f64; N] = std::array::from_fn(|c| self.drive[c]);
         let mut j = 0;
-        for v in out.iter_mut() {
-            let mut sum = 0.0;
-            for c in 0..N {
-                sum += x[c];
-                x[c] = phi[c] * x[c] + drive[c] * w[j + c];
+        let mut i = 0;
+        while i < out.len() {
+            let left = out.len() - i;
+            let run = if self.held.is_empty() {
+                left
+            } else {
+                left.min(self.until_event as usize)
+            };
+            let (held_sum, offset) = (self.held_sum, self.offset);
+            let draws = &w[j..j + run * N];
+            for (r, (v, d)) in out[i..i + run]
+                .iter_mut()
+                .zip(draws.chunks_exact(N))
+                .enumerate()
+            {
+                let mut sum = 0.0;
+                for c in 0..N {
+                    sum += x[c];
+                    x[c] = phi[c] * x[c] + drive[c] * d[c];
+                }
+                sum += held_sum;
+                sum -= offset;
+                *v += sum;
+                follower.add(i + r, v);
             }
-            j += N;
-            sum += self.held_sum;
-            sum -= self.offset;
-            *v += sum;
+            j += run * N;
+            i += run;
             if !self.held.is_empty() {
-                self.until_event -= 1;
+                // `run` <= until_event, which fits in u32.
+                self.until_event -= run as u32;
                 if self.until_event == 0 {
                     self.sync_held_with(self.event_span, || {
                         j += 1;
@@ -304,6 +393,65 @@ impl GaussMarkovBank {
         }
         self.state.copy_from_slice(&x);
         j
+    }
+}
+
+/// A process whose values the bank's block loop adds after its own to each sample
+/// ([`GaussMarkovBank::add_block_then`]), its draws for the block made beforehand.
+pub(crate) trait Follower {
+    /// Add this process's value at sample `i` of the block to `v`, then advance it.
+    fn add(&mut self, i: usize, v: &mut f64);
+}
+
+/// Nothing follows the bank.
+struct NoFollower;
+
+impl Follower for NoFollower {
+    #[inline(always)]
+    fn add(&mut self, _i: usize, _v: &mut f64) {}
+}
+
+/// Two followers, in order.
+impl<A: Follower, B: Follower> Follower for (A, B) {
+    #[inline(always)]
+    fn add(&mut self, i: usize, v: &mut f64) {
+        self.0.add(i, v);
+        self.1.add(i, v);
+    }
+}
+
+/// A random walk's [`RandomWalk::add_block`] over a block, as a [`Follower`]; its state is
+/// written back by [`WalkFollower::finish`].
+pub(crate) struct WalkFollower<'a> {
+    walk: &'a mut RandomWalk,
+    state: f64,
+    step: f64,
+    draws: &'a [f64],
+}
+
+impl<'a> WalkFollower<'a> {
+    /// The walk over a block whose draws (one per sample) are `draws`.
+    pub(crate) fn new(walk: &'a mut RandomWalk, draws: &'a [f64]) -> WalkFollower<'a> {
+        let (state, step) = (walk.state, walk.step);
+        WalkFollower {
+            walk,
+            state,
+            step,
+            draws,
+        }
+    }
+
+    /// Keep the walk's state at the end of the block.
+    pub(crate) fn finish(self) {
+        self.walk.state = self.state;
+    }
+}
+
+impl Follower for WalkFollower<'_> {
+    #[inline(always)]
+    fn add(&mut self, i: usize, v: &mut f64) {
+        *v += self.state;
+        self.state += self.step * self.draws[i];
     }
 }
 
@@ -339,6 +487,95 @@ impl RandomWalk {
         for (v, w) in out.iter_mut().zip(draws(rng, scratch, n)) {
             *v += self.state;
             self.state += self.step * w;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+
+    /// The bank and a random walk in one pass give the bits of the two passes one after the
+    /// other, for 1 to 5 every-sample components (5: the stepwise fallback) and held ones.
+    #[test]
+    fn bank_then_walk_equals_the_two_passes() {
+        for every in 1..=5usize {
+            let comps: Vec<(f64, f64)> = (0..every)
+                .map(|c| (0.05 * (c + 1) as f64, 1e-3 * (c + 1) as f64))
+                .chain([(20.0, 2e-4), (2500.0, 3e-4)])
+                .collect();
+            let mut seed_rng = crate::ImuRng::seed_from_u64(4);
+            let mut fused = GaussMarkovBank::multirate(&comps, 0.0025, &mut seed_rng);
+            let mut apart = fused.clone();
+            let (mut walk_a, mut walk_b) =
+                (RandomWalk::new(3e-5, 0.0025), RandomWalk::new(3e-5, 0.0025));
+            let mut r = [1u64, 2, 3, 4].map(|s| NormalStream::new(crate::ImuRng::seed_from_u64(s)));
+            let [ra, wa, rb, wb] = &mut r;
+            *rb = ra.clone();
+            *wb = wa.clone();
+            let n = 30_000;
+            let (mut a, mut b) = (vec![0.5; n], vec![0.5; n]);
+            let (mut s1, mut s2, mut s3) = (Vec::new(), Vec::new(), Vec::new());
+            let mut k = 0;
+            for len in [2048usize, 1, 5, 512, 4095].iter().cycle() {
+                if k >= n {
+                    break;
+                }
+                let end = (k + len).min(n);
+                let mut f = WalkFollower::new(&mut walk_a, draws(wa, &mut s2, end - k));
+                fused.add_block_then(ra, &mut a[k..end], &mut s1, &mut f);
+                f.finish();
+                apart.add_block(rb, &mut b[k..end], &mut s3);
+                walk_b.add_block(wb, &mut b[k..end], &mut s3);
+                k = end;
+            }
+            assert!(
+                a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()),
+                "{every} every-sample components"
+            );
+        }
+    }
+
+    /// The bank's block path (runs between the held updates, states in registers) gives the bits
+    /// of `step` sample by sample on the same stream, for 1 to 5 every-sample components with and
+    /// without held ones, offsets included, in blocks of mixed lengths.
+    #[test]
+    fn block_path_equals_step_by_step() {
+        for every in 1..=5usize {
+            for held in [0usize, 1, 4] {
+                // Every-sample components (T < 1000 dt), then slow ones held for 2 .. 500 samples.
+                let comps: Vec<(f64, f64)> = (0..every)
+                    .map(|c| (0.05 * (c + 1) as f64, 1e-3 * (c + 1) as f64))
+                    .chain((0..held).map(|h| (20.0 * 5f64.powi(h as i32), 2e-4)))
+                    .collect();
+                let mut seed_rng = crate::ImuRng::seed_from_u64(9);
+                let mut fast = GaussMarkovBank::multirate(&comps, 0.01, &mut seed_rng);
+                fast.offset = 1.5e-4;
+                let mut slow = fast.clone();
+                let n = 20_000;
+                let mut a = vec![0.25; n];
+                let mut b = a.clone();
+                let mut s1 = NormalStream::new(crate::ImuRng::seed_from_u64(3));
+                let mut s2 = s1.clone();
+                let mut scratch = Vec::new();
+                let mut k = 0;
+                for len in [1usize, 3, 512, 7, 2048, 999].iter().cycle() {
+                    if k >= n {
+                        break;
+                    }
+                    let end = (k + len).min(n);
+                    fast.add_block(&mut s1, &mut a[k..end], &mut scratch);
+                    k = end;
+                }
+                for v in &mut b {
+                    *v += slow.step(|| s2.normal());
+                }
+                assert!(
+                    a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()),
+                    "{every} every-sample, {held} held"
+                );
+            }
         }
     }
 }

@@ -140,6 +140,21 @@ impl BankGenerator {
     }
 }
 
+impl BankGenerator {
+    /// The bank's next `out.len()` values and then `follower`'s, in one pass
+    /// ([`GaussMarkovBank::add_block_then`]): the values of `add_raw` on each term in turn.
+    #[inline]
+    pub(crate) fn add_raw_then(
+        &mut self,
+        out: &mut [f64],
+        scratch: &mut Vec<f64>,
+        follower: &mut impl crate::discrete::Follower,
+    ) {
+        self.bank
+            .add_block_then(&mut self.rng, out, scratch, follower);
+    }
+}
+
 impl Generate for BankGenerator {
     fn stage(&self) -> Stage {
         Stage::Raw

@@ -98,6 +98,19 @@ pub struct RandomWalkGenerator {
     pub(crate) rng: NormalStream,
 }
 
+impl RandomWalkGenerator {
+    /// The walk over the next `n` samples as a follower of the flicker bank
+    /// ([`crate::discrete::GaussMarkovBank::add_block_then`]), its draws in `scratch`.
+    pub(crate) fn follower<'a>(
+        &'a mut self,
+        scratch: &'a mut Vec<f64>,
+        n: usize,
+    ) -> crate::discrete::WalkFollower<'a> {
+        let w = crate::discrete::draws(&mut self.rng, scratch, n);
+        crate::discrete::WalkFollower::new(&mut self.walk, w)
+    }
+}
+
 impl Generate for RandomWalkGenerator {
     fn stage(&self) -> Stage {
         Stage::Raw

@@ -234,6 +234,55 @@ impl Resonator {
     }
 }
 
+/// A resonator's [`Resonator::add_block`] over a block as a follower of the flicker bank
+/// ([`crate::discrete::GaussMarkovBank::add_block_then`]): the same operations on each sample;
+/// its state is written back by [`ResonatorFollower::finish`].
+pub(crate) struct ResonatorFollower<'a> {
+    resonator: &'a mut Resonator,
+    x: f64,
+    v: f64,
+    /// Two normals per sample, in sample order.
+    draws: &'a [f64],
+}
+
+impl ResonatorFollower<'_> {
+    /// Keep the resonator's state at the end of the block.
+    pub(crate) fn finish(self) {
+        self.resonator.state = [self.x, self.v];
+    }
+}
+
+impl crate::discrete::Follower for ResonatorFollower<'_> {
+    #[inline(always)]
+    fn add(&mut self, i: usize, o: &mut f64) {
+        let (phi, (l11, l21, l22)) = (&self.resonator.phi, self.resonator.chol);
+        let (d0, d1) = (self.draws[2 * i], self.draws[2 * i + 1]);
+        let (x, v) = (self.x, self.v);
+        *o += x;
+        self.x = phi[0][0] * x + phi[0][1] * v + l11 * d0;
+        self.v = phi[1][0] * x + phi[1][1] * v + l21 * d0 + l22 * d1;
+    }
+}
+
+impl ResonanceGenerator {
+    /// The resonance over the next `n` samples as a follower of the flicker bank, its draws in
+    /// `scratch`.
+    pub(crate) fn follower<'a>(
+        &'a mut self,
+        scratch: &'a mut Vec<f64>,
+        n: usize,
+    ) -> ResonatorFollower<'a> {
+        let draws = draws(&mut self.rng, scratch, 2 * n);
+        let [x, v] = self.resonator.state;
+        ResonatorFollower {
+            resonator: &mut self.resonator,
+            x,
+            v,
+            draws,
+        }
+    }
+}
+
 /// A resonance with its stream.
 #[derive(Clone, Debug)]
 pub struct ResonanceGenerator {
@@ -256,4 +305,69 @@ impl Generate for ResonanceGenerator {
 #[cfg(test)]
 pub(crate) fn sample() -> Resonance {
     Resonance::new(7e-4, 20.0, 0.7).unwrap()
+}
+
+#[cfg(test)]
+mod fused_tests {
+    use super::*;
+    use crate::discrete::{draws, GaussMarkovBank, RandomWalk, WalkFollower};
+    use rand::SeedableRng;
+
+    /// The flicker bank, a random walk and a resonance in one pass give the bits of the three
+    /// passes one after the other (bank with 3 and with 6 every-sample components: the one-pass
+    /// loop and the stepwise fallback), in blocks of mixed lengths.
+    #[test]
+    fn bank_walk_and_resonance_in_one_pass_equal_three_passes() {
+        let r = Resonance::new(8e-3, 11.36, 0.18).unwrap();
+        for every in [3usize, 6] {
+            let comps: Vec<(f64, f64)> = (0..every)
+                .map(|c| (0.05 * (c + 1) as f64, 1e-3))
+                .chain([(10.0, 2e-4), (1000.0, 3e-4)])
+                .collect();
+            let dt = 0.01;
+            let mut seed = crate::ImuRng::seed_from_u64(8);
+            let mut bank_a = GaussMarkovBank::multirate(&comps, dt, &mut seed);
+            let mut res_a = ResonanceGenerator {
+                resonator: Resonator::new(&r, dt, &mut seed),
+                rng: NormalStream::new(crate::ImuRng::seed_from_u64(5)),
+            };
+            let (mut bank_b, mut res_b) = (bank_a.clone(), res_a.clone());
+            let (mut walk_a, mut walk_b) = (RandomWalk::new(5e-5, dt), RandomWalk::new(5e-5, dt));
+            let mut streams = [1u64, 2].map(|s| NormalStream::new(crate::ImuRng::seed_from_u64(s)));
+            let [bank_rng_a, walk_rng_a] = &mut streams;
+            let (mut bank_rng_b, mut walk_rng_b) = (bank_rng_a.clone(), walk_rng_a.clone());
+            let n = 20_000;
+            let (mut a, mut b) = (vec![0.125; n], vec![0.125; n]);
+            let mut s = [(); 4].map(|_| Vec::new());
+            let mut k = 0;
+            for len in [512usize, 1, 2048, 7, 333].iter().cycle() {
+                if k >= n {
+                    break;
+                }
+                let end = (k + len).min(n);
+                let [s0, s1, s2, s3] = &mut s;
+                let walk = WalkFollower::new(&mut walk_a, draws(walk_rng_a, s1, end - k));
+                let mut f = (walk, res_a.follower(s2, end - k));
+                bank_a.add_block_then(bank_rng_a, &mut a[k..end], s0, &mut f);
+                f.0.finish();
+                f.1.finish();
+                bank_b.add_block(&mut bank_rng_b, &mut b[k..end], s3);
+                walk_b.add_block(&mut walk_rng_b, &mut b[k..end], s3);
+                res_b.add_raw(
+                    RawClock {
+                        k0: k as u64,
+                        dt_s: dt,
+                        offset_s: 0.0,
+                    },
+                    &mut b[k..end],
+                    s3,
+                );
+                k = end;
+            }
+            assert!(
+                a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()),
+                "{every} every-sample components"
+            );
+        }
+    }
 }

@@ -230,24 +230,115 @@ impl SinusoidGenerator {
     /// cos d - sin x sin d, with d = omega dt: at most 63 rotations, each adding about one
     /// rounding (relative error below 1e-14), and the value is a function of k alone, so the same
     /// for any split into blocks. One sin/cos per 64 samples instead of a sin per sample.
+    ///
+    /// Whole windows of 64 samples go [`WINDOWS`] at a time ([`Self::add_windows`]): a window's
+    /// rotations are a chain of dependent multiply-adds, and the windows' chains are independent,
+    /// so several side by side take about the time of one (the same operations on each value:
+    /// the same bits as one window at a time, tested below).
     fn add(&self, k0: u64, dt_s: f64, offset_s: f64, out: &mut [f64]) {
-        let (a, omega, phase) = (self.amplitude, self.omega, self.phase);
-        let angle = |k: u64| omega * (k as f64 * dt_s - offset_s) + phase;
-        let (sd, cd) = (omega * dt_s).sin_cos();
+        let rot = Rotation::new(self, dt_s, offset_s);
+        // The first, partial window: up to the next anchor.
+        let head = ((ANCHOR - k0 % ANCHOR) % ANCHOR).min(out.len() as u64) as usize;
+        let (first, rest) = out.split_at_mut(head);
+        rot.window(self.amplitude, k0, first);
+        let w = ANCHOR as usize;
+        let mut groups = rest.chunks_exact_mut(WINDOWS * w);
+        let mut k = k0 + head as u64;
+        for group in groups.by_ref() {
+            rot.windows(self.amplitude, k, group);
+            k += (WINDOWS * w) as u64;
+        }
+        for window in groups.into_remainder().chunks_mut(w) {
+            rot.window(self.amplitude, k, window);
+            k += w as u64;
+        }
+    }
+
+    /// [`Self::add`] one window at a time, as before the windows went side by side: the
+    /// reference the fast path is tested against.
+    #[cfg(test)]
+    fn add_one_window_at_a_time(&self, k0: u64, dt_s: f64, offset_s: f64, out: &mut [f64]) {
+        let rot = Rotation::new(self, dt_s, offset_s);
         let mut i = 0usize;
         while i < out.len() {
             let k = k0 + i as u64;
-            let anchor = k - k % ANCHOR;
-            let (mut s, mut c) = angle(anchor).sin_cos();
-            for _ in anchor..k {
-                (s, c) = (s * cd + c * sd, c * cd - s * sd);
-            }
-            let end = ((anchor + ANCHOR - k0) as usize).min(out.len());
-            for v in &mut out[i..end] {
-                *v += a * s;
-                (s, c) = (s * cd + c * sd, c * cd - s * sd);
-            }
+            let end = ((k - k % ANCHOR + ANCHOR - k0) as usize).min(out.len());
+            rot.window(self.amplitude, k, &mut out[i..end]);
             i = end;
+        }
+    }
+}
+
+/// Windows of [`ANCHOR`] samples rotated side by side by [`SinusoidGenerator::add`]: eight keep
+/// their sines and cosines in sixteen 2-wide (SSE2) registers' worth, and make one output block of
+/// `process.rs` (512 samples).
+const WINDOWS: usize = 8;
+
+/// The exact values and the one-sample rotation of a sinusoid at a raw clock.
+struct Rotation {
+    omega: f64,
+    phase: f64,
+    dt_s: f64,
+    offset_s: f64,
+    /// sin and cos of omega dt.
+    sd: f64,
+    cd: f64,
+}
+
+impl Rotation {
+    fn new(g: &SinusoidGenerator, dt_s: f64, offset_s: f64) -> Rotation {
+        let (sd, cd) = (g.omega * dt_s).sin_cos();
+        Rotation {
+            omega: g.omega,
+            phase: g.phase,
+            dt_s,
+            offset_s,
+            sd,
+            cd,
+        }
+    }
+
+    /// (sin, cos) of the angle at absolute sample k, exactly.
+    #[inline(always)]
+    fn exact(&self, k: u64) -> (f64, f64) {
+        (self.omega * (k as f64 * self.dt_s - self.offset_s) + self.phase).sin_cos()
+    }
+
+    /// (sin, cos) one sample later, by the angle-addition formulas.
+    #[inline(always)]
+    fn rotate(&self, (s, c): (f64, f64)) -> (f64, f64) {
+        (s * self.cd + c * self.sd, c * self.cd - s * self.sd)
+    }
+
+    /// Add `a` sin to `out`, samples k .. k + out.len(), all in one window (k's anchor's).
+    #[inline(always)]
+    fn window(&self, a: f64, k: u64, out: &mut [f64]) {
+        let anchor = k - k % ANCHOR;
+        let mut sc = self.exact(anchor);
+        for _ in anchor..k {
+            sc = self.rotate(sc);
+        }
+        for v in out {
+            *v += a * sc.0;
+            sc = self.rotate(sc);
+        }
+    }
+
+    /// [`Self::window`] for the [`WINDOWS`] whole windows of `out` (k a multiple of [`ANCHOR`]),
+    /// their samples of the same offset in the window together: the same operations on each value.
+    #[inline(always)]
+    fn windows(&self, a: f64, k: u64, out: &mut [f64]) {
+        let w = ANCHOR as usize;
+        let mut s = [0.0; WINDOWS];
+        let mut c = [0.0; WINDOWS];
+        for j in 0..WINDOWS {
+            (s[j], c[j]) = self.exact(k + (j * w) as u64);
+        }
+        for i in 0..w {
+            for j in 0..WINDOWS {
+                out[j * w + i] += a * s[j];
+                (s[j], c[j]) = self.rotate((s[j], c[j]));
+            }
         }
     }
 }
@@ -296,5 +387,35 @@ mod tests {
             .iter()
             .zip(&parts)
             .all(|(a, b)| a.to_bits() == b.to_bits()));
+    }
+
+    /// The windows side by side give the bits of one window at a time, from any start, in blocks
+    /// that hold several groups of windows and partial ones at both ends.
+    #[test]
+    fn windows_side_by_side_equal_one_window_at_a_time() {
+        let g = SinusoidGenerator {
+            amplitude: 8.6e-3,
+            omega: std::f64::consts::TAU * 0.5641,
+            phase: -2.3,
+            after_filter: false,
+        };
+        for (k0, n) in [
+            (0u64, 512usize),
+            (7, 5000),
+            (64, 1536),
+            (999_937, 4096),
+            (3, 40),
+        ] {
+            let base: Vec<f64> = (0..n).map(|i| (i as f64).sqrt() - 3.0).collect();
+            let (mut fast, mut simple) = (base.clone(), base);
+            g.add(k0, 0.01, 0.0025, &mut fast);
+            g.add_one_window_at_a_time(k0, 0.01, 0.0025, &mut simple);
+            assert!(
+                fast.iter()
+                    .zip(&simple)
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+                "k0 {k0}, {n} samples"
+            );
+        }
     }
 }
