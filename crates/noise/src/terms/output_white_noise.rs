@@ -11,6 +11,7 @@
 use super::term::{
     note_value_units, ErrorTerm, GenContext, Generate, Stage, TermKind, WriteContext,
 };
+use super::white_noise::WhiteNoiseSampler;
 use crate::closed_form as cf;
 use crate::config::error::ConfigError;
 use crate::config::read::{ReadContext, Text};
@@ -86,11 +87,11 @@ impl TermKind for OutputWhiteNoise {
 
     type Generator = OutputWhiteNoiseGenerator;
 
-    /// Sampled at the output interval: n_k = (N / sqrt(dt)) w_k (docs/model.md §3), on the term's
-    /// own stream.
+    /// `white_noise`'s sampler at the output interval: n_k = (N / sqrt(dt)) w_k (docs/model.md §3),
+    /// on the term's own stream.
     fn generator(&self, cx: &GenContext, rng: &dyn Fn() -> ImuRng) -> OutputWhiteNoiseGenerator {
         OutputWhiteNoiseGenerator {
-            sd: self.density / cx.dt_out_s.sqrt(),
+            sampler: WhiteNoiseSampler::new(self.density, cx.dt_out_s),
             rng: NormalStream::new(rng()),
             scratch: Vec::new(),
         }
@@ -100,8 +101,8 @@ impl TermKind for OutputWhiteNoise {
 /// White noise on the output register with its stream.
 #[derive(Clone, Debug)]
 pub struct OutputWhiteNoiseGenerator {
-    /// Standard deviation of one output sample, N / sqrt(dt_out).
-    sd: f64,
+    /// `white_noise`'s sampler at the output interval.
+    sampler: WhiteNoiseSampler,
     rng: NormalStream,
     scratch: Vec<f64>,
 }
@@ -113,10 +114,8 @@ impl Generate for OutputWhiteNoiseGenerator {
 
     /// Adds the next `out.len()` draws (the stream's values do not depend on the block split).
     fn output(&mut self, _k0: u64, _dt_s: f64, out: &mut [f64]) {
-        let w = crate::discrete::draws(&mut self.rng, &mut self.scratch, out.len());
-        for (v, w) in out.iter_mut().zip(w) {
-            *v += self.sd * w;
-        }
+        self.sampler
+            .add_block(&mut self.rng, out, &mut self.scratch);
     }
 }
 

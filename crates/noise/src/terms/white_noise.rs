@@ -108,7 +108,12 @@ impl WhiteNoiseSampler {
     }
     /// Add the next `out.len()` values to `out` (the values of as many `sample` calls).
     #[inline]
-    fn add_block(&self, rng: &mut NormalStream, out: &mut [f64], scratch: &mut Vec<f64>) {
+    pub(crate) fn add_block(
+        &self,
+        rng: &mut NormalStream,
+        out: &mut [f64],
+        scratch: &mut Vec<f64>,
+    ) {
         let n = out.len();
         for (v, w) in out.iter_mut().zip(draws(rng, scratch, n)) {
             *v += self.sd * w;
