@@ -55,8 +55,9 @@ fn plan_axis(
         };
         out.push(plan_term(kind, &curve, dt_s, target, duration_s, MAX_TAU_S));
     };
-    if let Some(n) = m.get::<noise::WhiteNoise>().map(noise::WhiteNoise::density) {
-        // The Allan variance of sampled white noise is exactly N^2 / tau (IEEE 952 annex C).
+    if let Some(n) = m.white_noise_density() {
+        // The Allan variance of sampled white noise is exactly N^2 / tau (IEEE 952 annex C), before
+        // or after the output filter (`AxisModel::white_noise_density`).
         term(PlanTerm::WhiteNoise, &|t| n * n / t);
     }
     if let Some(bi) = m.get::<noise::BiasInstability>() {

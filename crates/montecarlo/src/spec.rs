@@ -7,10 +7,7 @@ use crate::nav_quantity::NavQuantity;
 use crate::report::DriftReport;
 use crate::scenario::Scenario;
 use allan::{DataKind, Estimator, Options, TauGrid};
-use noise::{
-    AxisModel, BiasInstability, Effect, ImuErrors, OutputWhiteNoise, Sensor, SensorModel,
-    StaticLevel, WhiteNoise,
-};
+use noise::{BiasInstability, Effect, ImuErrors, Sensor, SensorModel, StaticLevel};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -70,18 +67,6 @@ pub struct SensorSpec {
     pub drift_runs: u64,
 }
 
-/// The axis' white-noise density as an Allan curve's tau^-1/2 line shows it, which a spec sheet's
-/// ARW is: `white_noise` and `output_white_noise` (white noise after the output filter) in
-/// quadrature (independent terms: their Allan variances N^2 / tau add); None without either.
-fn white_density(m: &AxisModel) -> Option<f64> {
-    let n = m.get::<WhiteNoise>().map(WhiteNoise::density);
-    let out = m.get::<OutputWhiteNoise>().map(OutputWhiteNoise::density);
-    match (n, out) {
-        (None, None) => None,
-        _ => Some(n.unwrap_or(0.0).hypot(out.unwrap_or(0.0))),
-    }
-}
-
 /// Generate the static gyro log of `model` (12 h, 100 Hz unless given) and read its ARW and bias
 /// instability back per axis. Axes are generated and analysed in parallel; each axis draws from its
 /// own streams, so the result does not depend on the thread count.
@@ -91,7 +76,7 @@ pub fn gyro_readback(model: &SensorModel, seed: u64, duration_s: f64, rate_hz: f
     let mut g = GyroSpec::default();
     for (axis, points) in readback_curves(model, seed, n, dt_s) {
         let m = model.axis(noise::Sensor::Gyro, axis);
-        g.arw_spec[axis] = white_density(m);
+        g.arw_spec[axis] = m.white_noise_density();
         if m.has(Effect::BiasInstability) {
             let log_taus: Vec<f64> = points.iter().map(|p| p.tau_s).collect();
             g.bi_spec[axis] = bi_spec_value(m, dt_s, &log_taus);
@@ -173,8 +158,10 @@ impl AxisReading<'_> {
     /// white noise is less than [`MASKED_SHARE`] of the Allan variance there.
     fn arw(&self, g: &mut GyroSpec) {
         let (axis, name) = (self.axis, self.name);
-        let (Some(nv), Some(p)) = (white_density(self.model), self.at(self.readings.arw_tau_s))
-        else {
+        let (Some(nv), Some(p)) = (
+            self.model.white_noise_density(),
+            self.at(self.readings.arw_tau_s),
+        ) else {
             return;
         };
         let share = nv * nv / p.tau_s / self.closed(p.tau_s);
@@ -217,7 +204,10 @@ impl AxisReading<'_> {
         };
         // White noise hides the floor: the curve still falls at the longest usable tau and
         // white noise is most of it there.
-        let white_share = white_density(self.model).map_or(0.0, |nv| nv * nv / last.tau_s)
+        let white_share = self
+            .model
+            .white_noise_density()
+            .map_or(0.0, |nv| nv * nv / last.tau_s)
             / self.closed(last.tau_s);
         let still_falling =
             self.closed(last.tau_s * 1.5) < self.closed(last.tau_s) && white_share >= MASKED_SHARE;
@@ -300,7 +290,7 @@ pub fn gyro_spec_values(model: &SensorModel, rate_hz: f64) -> GyroSpec {
     let mut g = GyroSpec::default();
     for axis in 0..3 {
         let m = model.axis(noise::Sensor::Gyro, axis);
-        g.arw_spec[axis] = white_density(m);
+        g.arw_spec[axis] = m.white_noise_density();
         if m.has(Effect::BiasInstability) {
             g.bi_spec[axis] = bi_spec_value(m, dt_s, &taus);
         }
@@ -361,22 +351,4 @@ pub fn drift_experiment(
 ) -> Result<Experiment, crate::experiment::ExperimentError> {
     let scenario = drift_scenario(times_s, rate_hz, runs, seed)?;
     Experiment::new(scenario, model, &Overrides::default())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A spec sheet's ARW is the tau^-1/2 line of the Allan curve: white noise before and after the
-    /// output filter add in quadrature (3-4-5), and white noise alone is its density exactly.
-    #[test]
-    fn arw_holds_the_white_noise_after_the_filter() {
-        let both = AxisModel::default()
-            .with(WhiteNoise::new(3e-4).unwrap())
-            .with(OutputWhiteNoise::new(4e-4).unwrap());
-        assert!((white_density(&both).unwrap() - 5e-4).abs() < 1e-18);
-        let alone = AxisModel::default().with(WhiteNoise::new(3e-4).unwrap());
-        assert_eq!(white_density(&alone), Some(3e-4));
-        assert_eq!(white_density(&AxisModel::default()), None);
-    }
 }

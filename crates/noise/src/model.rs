@@ -80,6 +80,22 @@ impl AxisModel {
             .and_then(T::from_term)
     }
 
+    /// The white-noise density the Allan curve's tau^-1/2 line shows, which a spec sheet's ARW /
+    /// VRW is: `white_noise` and `output_white_noise` (after the output filter) in quadrature
+    /// (independent terms: their Allan variances N^2 / tau add); None without either.
+    pub fn white_noise_density(&self) -> Option<f64> {
+        use crate::terms::{output_white_noise::OutputWhiteNoise, white_noise::WhiteNoise};
+        let n = self.get::<WhiteNoise>().map(WhiteNoise::density);
+        let out = self
+            .get::<OutputWhiteNoise>()
+            .map(OutputWhiteNoise::density);
+        match (n, out) {
+            (None, None) => None,
+            // hypot(n, 0) is |n| exactly (IEEE 754): an axis without the second term reads N.
+            _ => Some(n.unwrap_or(0.0).hypot(out.unwrap_or(0.0))),
+        }
+    }
+
     /// The term of `effect` with its parameters, if the axis has it.
     pub fn term(&self, effect: Effect) -> Option<&Term> {
         self.terms[effect as usize].as_ref()

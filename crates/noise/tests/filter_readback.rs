@@ -239,3 +239,16 @@ fn filtered_sinusoid_is_the_filter_applied_to_the_raw_sinusoid() {
         }
     }
 }
+
+/// The ARW / VRW an Allan curve's tau^-1/2 line shows: white noise before and after the filter in
+/// quadrature (3-4-5); white noise alone is its density exactly; none without either.
+#[test]
+fn white_noise_density_adds_the_output_white_noise_in_quadrature() {
+    let both = AxisModel::default()
+        .with(noise::WhiteNoise::new(3e-4).unwrap())
+        .with(OutputWhiteNoise::new(4e-4).unwrap());
+    assert!((both.white_noise_density().unwrap() - 5e-4).abs() < 1e-18);
+    let alone = AxisModel::default().with(noise::WhiteNoise::new(3e-4).unwrap());
+    assert_eq!(alone.white_noise_density(), Some(3e-4));
+    assert_eq!(AxisModel::default().white_noise_density(), None);
+}
