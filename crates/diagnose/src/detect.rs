@@ -971,8 +971,7 @@ pub fn model_levels(model: &noise::SensorModel) -> ImuChannels<NoiseLevels> {
             None => (0.0, 0.0),
         };
         NoiseLevels {
-            n: a.get::<noise::WhiteNoise>()
-                .map_or(0.0, noise::WhiteNoise::density),
+            n: a.white_noise_density().unwrap_or(0.0),
             b,
             k: a.get::<noise::RateRandomWalk>()
                 .map_or(0.0, noise::RateRandomWalk::density)

@@ -125,7 +125,8 @@ fn worst(axes: &[AxisValue; 3]) -> f64 {
     axes.iter().map(|x| x.value).fold(f64::NAN, f64::max)
 }
 
-/// A model axis's noise density and random walk for a noise file: its white noise N, and its rate
+/// A model axis's noise density and random walk for a noise file: its white noise N (before and
+/// after the output filter in quadrature, `AxisModel::white_noise_density`), and its rate
 /// random walk K or, where it has none, the largest random walk its Allan curve allows over the
 /// averaging times `taus_s` (the +1/2 line sigma^2 = K^2 tau / 3, IEEE 952 Table C.1, touching
 /// the model's curve, which covers its bias instability there; `how_tau(tau)` names the tau of
@@ -138,7 +139,7 @@ pub fn axis_noise_values(
     how_tau: &dyn Fn(f64) -> String,
 ) -> Option<(AxisValue, AxisValue)> {
     let n = AxisValue {
-        value: axis.get::<WhiteNoise>()?.density(),
+        value: axis.white_noise_density()?,
         how: how.into(),
     };
     let k = match axis.get::<RateRandomWalk>().map(RateRandomWalk::density) {
