@@ -370,15 +370,11 @@ fn simulate_fitted_logs(
     let per_job: Vec<Vec<Vec<f64>>> = jobs
         .par_iter()
         .map(|&(r, t)| {
-            let setup = SimSetup {
-                dt_s: fitted.sample_interval_s,
-                samples: fitted.samples[t],
-                grid_m: Vec::new(),
-                active: noise::ImuChannels::from_fn(|c| fits.iter().any(|f| f.ch == c)),
-                horizons_s: Vec::new(),
-                temperature_c: None,
-                temp_coeff: noise::ImuChannels::default(),
-            };
+            let setup = SimSetup::plain(
+                fitted.sample_interval_s,
+                fitted.samples[t],
+                noise::ImuChannels::from_fn(|c| fits.iter().any(|f| f.ch == c)),
+            );
             let run = first_run + (r * logs + t) as u64;
             let out = with_static_log(model, &setup, seed, run, |log| {
                 fits.iter()

@@ -562,15 +562,11 @@ fn simulate_experiments<'m>(
                 .map(|c| c.len())
                 .min()
                 .unwrap_or(0);
-            let setup = SimSetup {
+            let setup = SimSetup::plain(
                 dt_s,
                 samples,
-                grid_m: Vec::new(),
-                active: noise::ImuChannels::from_fn(|c| log.channels[c].is_some()),
-                horizons_s: Vec::new(),
-                temperature_c: None,
-                temp_coeff: noise::ImuChannels::default(),
-            };
+                noise::ImuChannels::from_fn(|c| log.channels[c].is_some()),
+            );
             let run = (r * logs.len() + l) as u64;
             let out = with_static_log(model_of(r), &setup, settings.seed, run, |sim| {
                 let chans =

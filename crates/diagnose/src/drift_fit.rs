@@ -116,15 +116,11 @@ impl UnitDrift<'_> {
         let k = self.decimation();
         let dt_u = self.dt_s * k as f64;
         let lengths: Vec<usize> = self.samples.iter().map(|n| n / k).collect();
-        let setup = SimSetup {
-            dt_s: dt_u,
-            samples: lengths.iter().copied().max().unwrap_or(0),
-            grid_m: Vec::new(),
-            active: noise::ImuChannels::from_fn(|i| i == c),
-            horizons_s: Vec::new(),
-            temperature_c: None,
-            temp_coeff: noise::ImuChannels::default(),
-        };
+        let setup = SimSetup::plain(
+            dt_u,
+            lengths.iter().copied().max().unwrap_or(0),
+            noise::ImuChannels::from_fn(|i| i == c),
+        );
         let nh = self.protocol.horizons_s.len();
         let sums: Vec<Vec<([f64; 5], usize)>> = (0..self.logs as u64)
             .into_par_iter()

@@ -31,6 +31,22 @@ pub struct SimSetup<'a> {
     pub temp_coeff: ImuChannels<f64>,
 }
 
+impl SimSetup<'static> {
+    /// A plain static log of `samples` at `dt_s` on the `active` channels: no measured curve, no
+    /// drift horizons, no temperature (the logs of a bootstrap, a drift check or a test).
+    pub fn plain(dt_s: f64, samples: usize, active: ImuChannels<bool>) -> SimSetup<'static> {
+        SimSetup {
+            dt_s,
+            samples,
+            grid_m: Vec::new(),
+            active,
+            horizons_s: Vec::new(),
+            temperature_c: None,
+            temp_coeff: ImuChannels::default(),
+        }
+    }
+}
+
 /// Bands of the active channels and the segment drifts of all seeds (merged in seed order).
 #[derive(Clone, Debug)]
 pub struct SimResult {

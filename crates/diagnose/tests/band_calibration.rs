@@ -110,15 +110,7 @@ struct Design {
 type Row = (f64, usize, usize, usize, usize, usize, usize);
 
 fn log_of(model: &SensorModel, dt_s: f64, samples: usize, seed: u64, run: u64) -> [Vec<f64>; 6] {
-    let setup = SimSetup {
-        dt_s,
-        samples,
-        grid_m: Vec::new(),
-        active: noise::ImuChannels([true; 6]),
-        horizons_s: Vec::new(),
-        temperature_c: None,
-        temp_coeff: noise::ImuChannels::default(),
-    };
+    let setup = SimSetup::plain(dt_s, samples, noise::ImuChannels([true; 6]));
     static_log(model, &setup, seed, run).0
 }
 

@@ -41,15 +41,7 @@ fn protocol() -> Protocol {
 /// Check logs drawn from `models` (log l from `models[l]`, master seed `seed`) against the
 /// model of the file.
 fn check(models: &[SensorModel], seed: u64) -> DriftCheck {
-    let setup = SimSetup {
-        dt_s: DT,
-        samples: SAMPLES,
-        grid_m: Vec::new(),
-        active: noise::ImuChannels([true; 6]),
-        horizons_s: Vec::new(),
-        temperature_c: None,
-        temp_coeff: noise::ImuChannels::default(),
-    };
+    let setup = SimSetup::plain(DT, SAMPLES, noise::ImuChannels([true; 6]));
     let logs: Vec<_> = models
         .iter()
         .enumerate()

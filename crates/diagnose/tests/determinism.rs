@@ -82,15 +82,7 @@ bias_instability = "30 ug"
         "det.toml",
     )
     .unwrap();
-    let setup = SimSetup {
-        dt_s: 0.1,
-        samples: 6_000,
-        grid_m: Vec::new(),
-        active: noise::ImuChannels([true; 6]),
-        horizons_s: Vec::new(),
-        temperature_c: None,
-        temp_coeff: noise::ImuChannels::default(),
-    };
+    let setup = SimSetup::plain(0.1, 6_000, noise::ImuChannels([true; 6]));
     let logs: Vec<[Vec<f64>; 6]> = (0..2)
         .map(|run| diagnose::simulate::static_log(&model, &setup, 99, run).0)
         .collect();

@@ -30,15 +30,7 @@ fn coverage(
     replicates: usize,
 ) -> Vec<(f64, usize, usize)> {
     let model = SensorModel::from_toml_str(MODEL, "calibration.toml").unwrap();
-    let setup = SimSetup {
-        dt_s: dt,
-        samples,
-        grid_m: Vec::new(),
-        active: noise::ImuChannels([true; 6]),
-        horizons_s: Vec::new(),
-        temperature_c: None,
-        temp_coeff: noise::ImuChannels::default(),
-    };
+    let setup = SimSetup::plain(dt, samples, noise::ImuChannels([true; 6]));
     let mut counts: Vec<(f64, usize, usize)> =
         protocol.horizons_s.iter().map(|&h| (h, 0, 0)).collect();
     for s in 0..seeds {

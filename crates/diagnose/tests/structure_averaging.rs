@@ -38,15 +38,7 @@ fn inputs_of(logs: &[noise::ImuChannels<Vec<f64>>]) -> Vec<LogInput<'_>> {
 
 /// One hour at 10 Hz, every channel.
 fn setup() -> SimSetup<'static> {
-    SimSetup {
-        dt_s: DT,
-        samples: SAMPLES,
-        grid_m: Vec::new(),
-        active: noise::ImuChannels([true; 6]),
-        horizons_s: Vec::new(),
-        temperature_c: None,
-        temp_coeff: noise::ImuChannels::default(),
-    }
+    SimSetup::plain(DT, SAMPLES, noise::ImuChannels([true; 6]))
 }
 
 fn band(c: &DriftCheck, horizon: usize) -> (f64, f64) {
