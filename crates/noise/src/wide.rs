@@ -170,16 +170,14 @@ fn groups_fast(state: &mut [[u64; LANES]; 4], fallback: &mut ImuRng, out: &mut [
 #[cfg(target_arch = "x86_64")]
 mod avx512 {
     use super::{finish_rejected, with_exponent, ImuRng, LANES, PASS, ZIG_NORM_X};
+    use crate::ziggurat::ZIG_NORM_X_PAIRS;
     use std::arch::x86_64::*;
-    use std::mem::MaybeUninit;
 
     /// As [`super::groups`]. Safety: the CPU must support AVX-512F.
     #[target_feature(enable = "avx512f")]
     pub(super) fn groups(state: &mut [[u64; LANES]; 4], fallback: &mut ImuRng, out: &mut [f64]) {
         // SAFETY (every unsafe block below): unaligned loads and stores of exactly eight u64 /
-        // f64 inside `state` and `group` (each LANES = 8 long); compressed stores of at most
-        // eight values at `count`, which stays below PASS - 8 + 1 before each (at most eight
-        // per group, PASS / LANES groups per pass).
+        // f64 inside `state`, `layer`, `lo`, `hi` and `group` (each LANES = 8 long).
         let load = |w: &[u64; LANES]| unsafe { _mm512_loadu_si512(w.as_ptr().cast()) };
         let (mut s0, mut s1, mut s2, mut s3) = (
             load(&state[0]),
@@ -191,13 +189,14 @@ mod avx512 {
         let exponent = _mm512_set1_epi64(1024 << 52);
         let three = _mm512_set1_pd(3.0);
         let abs_mask = _mm512_set1_epi64(i64::MAX);
-        let lane_index = _mm512_set_epi64(7, 6, 5, 4, 3, 2, 1, 0);
-        // Not initialised (a memset of both on every call cost more than the draws of a short
-        // request): only the first `count` entries, stored below, are read.
-        let mut rejected_at = [MaybeUninit::<u64>::uninit(); PASS + LANES];
-        let mut rejected_bits = [MaybeUninit::<u64>::uninit(); PASS + LANES];
+        let even = _mm512_set_epi64(14, 12, 10, 8, 6, 4, 2, 0);
+        let odd = _mm512_set_epi64(15, 13, 11, 9, 7, 5, 3, 1);
+        // Per group of the pass, the mask of its rejected lanes: one byte stored per group, no
+        // branch and no dependency between groups (compressing the rejected lanes' positions
+        // as they come made every group wait for the previous one's count).
+        let mut rejected = [0u8; PASS / LANES];
         for pass in out.chunks_mut(PASS) {
-            let mut count = 0usize;
+            let groups = pass.len() / LANES;
             for (g, group) in pass.chunks_exact_mut(LANES).enumerate() {
                 // Xoshiro256++: output rotl(s0 + s3, 23) + s0, then advance.
                 let bits = _mm512_add_epi64(_mm512_rol_epi64::<23>(_mm512_add_epi64(s0, s3)), s0);
@@ -211,49 +210,59 @@ mod avx512 {
                 // The ziggurat's first pass: i = low 8 bits, u = [2, 4) - 3, x = u X_i,
                 // accepted when |x| < X_{i+1}. The table is read with scalar loads (faster than
                 // a gather on the CPUs measured, docs/performance.md).
-                let mut layer = [0u64; LANES];
+                // Lane l's pair (X_i, X_{i+1}) in one load, at byte offset 16 i of the pair
+                // table; lanes 0-3 into `a`, 4-7 into `b`, then the X_i and the X_{i+1} taken out
+                // of them by two permutations. The offsets are read back from memory (volatile:
+                // extracting them from the vector register took the shuffle unit the inserts need).
+                let mut offset = [0u64; LANES];
                 unsafe {
-                    _mm512_storeu_si512(layer.as_mut_ptr().cast(), _mm512_and_si512(bits, low8))
+                    _mm512_storeu_si512(
+                        offset.as_mut_ptr().cast(),
+                        _mm512_slli_epi64::<4>(_mm512_and_si512(bits, low8)),
+                    )
                 };
-                let (mut lo, mut hi) = ([0.0f64; LANES], [0.0f64; LANES]);
-                for l in 0..LANES {
-                    let k = layer[l] as usize & 0xff;
-                    lo[l] = ZIG_NORM_X[k];
-                    hi[l] = ZIG_NORM_X[k + 1];
-                }
+                let table = ZIG_NORM_X_PAIRS.as_ptr().cast::<u8>();
+                let pair = |l: usize| {
+                    // SAFETY: l < LANES, and offset[l] = 16 i with i < 256 (stored just above),
+                    // the start of pair i of the 256.
+                    unsafe {
+                        let at = std::ptr::read_volatile(offset.as_ptr().add(l)) as usize;
+                        _mm_load_pd(table.add(at).cast())
+                    }
+                };
+                let a = _mm512_insertf64x4::<1>(
+                    _mm512_castpd256_pd512(_mm256_set_m128d(pair(1), pair(0))),
+                    _mm256_set_m128d(pair(3), pair(2)),
+                );
+                let b = _mm512_insertf64x4::<1>(
+                    _mm512_castpd256_pd512(_mm256_set_m128d(pair(5), pair(4))),
+                    _mm256_set_m128d(pair(7), pair(6)),
+                );
+                let lo = _mm512_permutex2var_pd(a, even, b);
+                let hi = _mm512_permutex2var_pd(a, odd, b);
                 let u = _mm512_sub_pd(
                     _mm512_castsi512_pd(_mm512_or_si512(_mm512_srli_epi64::<12>(bits), exponent)),
                     three,
                 );
-                let x = _mm512_mul_pd(u, unsafe { _mm512_loadu_pd(lo.as_ptr()) });
+                let x = _mm512_mul_pd(u, lo);
                 let abs = _mm512_castsi512_pd(_mm512_and_si512(_mm512_castpd_si512(x), abs_mask));
-                let accepted =
-                    _mm512_cmp_pd_mask::<_CMP_LT_OQ>(abs, unsafe { _mm512_loadu_pd(hi.as_ptr()) });
-                unsafe { _mm512_storeu_pd(group.as_mut_ptr(), x) };
-                // Collect the rejected lanes' positions and bits, in lane order.
-                let at = _mm512_add_epi64(lane_index, _mm512_set1_epi64((g * LANES) as i64));
-                // (Compressed in a register, then stored whole: a compressing store to memory is
-                // microcoded and slow on AMD Zen 4; the lanes past `count` are overwritten later.)
-                unsafe {
-                    let rejected = !accepted;
-                    _mm512_storeu_si512(
-                        rejected_at.as_mut_ptr().add(count).cast(),
-                        _mm512_maskz_compress_epi64(rejected, at),
-                    );
-                    _mm512_storeu_si512(
-                        rejected_bits.as_mut_ptr().add(count).cast(),
-                        _mm512_maskz_compress_epi64(rejected, bits),
-                    );
-                }
-                count += (!accepted).count_ones() as usize;
+                let accepted = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(abs, hi);
+                // A rejected draw's bits are kept in place of its value until it is finished
+                // (below), as in [`super::groups`].
+                let kept = _mm512_mask_blend_pd(!accepted, x, _mm512_castsi512_pd(bits));
+                unsafe { _mm512_storeu_pd(group.as_mut_ptr(), kept) };
+                rejected[g] = !accepted;
             }
-            for k in 0..count {
-                // SAFETY: entries below `count` were stored above.
-                let (at, bits) =
-                    unsafe { (rejected_at[k].assume_init(), rejected_bits[k].assume_init()) };
-                let (i, u) = ((bits & 0xff) as usize, with_exponent(bits >> 12, 1) - 3.0);
-                let at = at as usize;
-                pass[at] = finish_rejected(fallback, i, u, pass[at]);
+            // The rejected draws finished in draw order (group, then lane).
+            for (g, &mask) in rejected[..groups].iter().enumerate() {
+                let mut mask = mask;
+                while mask != 0 {
+                    let at = g * LANES + mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let bits = pass[at].to_bits();
+                    let (i, u) = ((bits & 0xff) as usize, with_exponent(bits >> 12, 1) - 3.0);
+                    pass[at] = finish_rejected(fallback, i, u, u * ZIG_NORM_X[i]);
+                }
             }
         }
         let store =
@@ -335,8 +344,8 @@ mod tests {
     fn every_width_gives_the_same_bits() {
         let mut a = stream(17);
         let mut b = a.clone();
-        let mut x = vec![0.0; 80_000];
-        let mut y = vec![0.0; 80_000];
+        let mut x = vec![0.0; 800_000];
+        let mut y = vec![0.0; 800_000];
         groups_fast(&mut a.state, &mut a.fallback, &mut x);
         groups(&mut b.state, &mut b.fallback, &mut y);
         // The AVX2 build of the generic code too, where the CPU has it.
@@ -347,7 +356,7 @@ mod tests {
                 groups(state, fallback, out)
             }
             let mut c = stream(17);
-            let mut z = vec![0.0; 80_000];
+            let mut z = vec![0.0; 800_000];
             // SAFETY: the CPU supports AVX2 (checked just above).
             unsafe { avx2(&mut c.state, &mut c.fallback, &mut z) };
             assert!(z.iter().zip(&y).all(|(p, q)| p.to_bits() == q.to_bits()));

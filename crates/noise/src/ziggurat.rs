@@ -82,8 +82,25 @@ fn tail<R: RngCore + ?Sized>(rng: &mut R, u: f64) -> f64 {
 }
 
 const ZIG_NORM_R: f64 = 3.654152885361008796;
+pub(crate) static ZIG_NORM_X: [f64; 257] = NORM_X;
+
+/// Each layer's pair (X_i, X_{i+1}), 16-byte aligned: both values of a first-pass test in one
+/// 128-bit load (the wide sampler, `crate::wide`).
+#[repr(C, align(16))]
+pub(crate) struct Pair(pub(crate) [f64; 2]);
+
+pub(crate) static ZIG_NORM_X_PAIRS: [Pair; 256] = {
+    let mut out = [const { Pair([0.0; 2]) }; 256];
+    let mut i = 0;
+    while i < 256 {
+        out[i] = Pair([NORM_X[i], NORM_X[i + 1]]);
+        i += 1;
+    }
+    out
+};
+
 #[rustfmt::skip]
-pub(crate) static ZIG_NORM_X: [f64; 257] =
+const NORM_X: [f64; 257] =
     [3.910757959537090045, 3.654152885361008796, 3.449278298560964462, 3.320244733839166074,
      3.224575052047029100, 3.147889289517149969, 3.083526132001233044, 3.027837791768635434,
      2.978603279880844834, 2.934366867207854224, 2.894121053612348060, 2.857138730872132548,
