@@ -482,6 +482,8 @@ pub(crate) struct FilterState {
     history: Vec<f64>,
     /// Scratch for one block's raw samples.
     pub(crate) raw: Vec<f64>,
+    /// Scratch for the FIR kinds: the history and the block's first samples.
+    head: Vec<f64>,
 }
 
 impl FilterState {
@@ -503,6 +505,7 @@ impl FilterState {
             decimation: f.decimation as usize,
             raw_done: 0,
             history: Vec::new(),
+            head: Vec::new(),
             raw: Vec::new(),
         }
     }
@@ -515,8 +518,6 @@ impl FilterState {
 
     pub(crate) fn filter(&mut self, start: u64, raw: &[f64], k0: u64, out: &mut [f64]) {
         let (d, pre) = (self.decimation as u64, self.preroll as u64);
-        let is_output = |r: u64| r >= pre && (r - pre).is_multiple_of(d);
-        let slot = |r: u64| ((r - pre) / d - k0) as usize;
         if let Some(state) = &mut self.iir {
             // Raw index (in `raw`) and output slot of the first sample read out in this block;
             // then every d-th.
@@ -541,32 +542,58 @@ impl FilterState {
                 }
             }
         } else {
-            // y_r = sum_i h_i x_{r-i}, only at the raw indices that are read out.
-            let l = self.h.len();
-            let hist = self.history.len();
-            let mut joined = std::mem::take(&mut self.history);
-            joined.extend_from_slice(raw);
-            let first = start.max(pre);
-            let mut r = if is_output(first) {
-                first
-            } else {
-                pre + (first - pre).div_ceil(d) * d
-            };
-            let end = start + raw.len() as u64;
-            while r < end {
-                // Position of raw sample r in `joined`.
-                let p = (r - start) as usize + hist;
-                let mut y = 0.0;
-                for (i, hi) in self.h.iter().enumerate() {
-                    y += hi * joined[p - i];
-                }
-                out[slot(r)] = y;
-                r += d;
-            }
-            let keep = (l - 1).min(joined.len());
-            self.history = joined[joined.len() - keep..].to_vec();
+            self.fir(start, raw, k0, out);
         }
         self.raw_done = start + raw.len() as u64;
+    }
+}
+
+impl FilterState {
+    /// The FIR kinds' block: y_r = sum_i h_i x_{r-i}, only at the raw indices that are read out.
+    /// A window that reaches back before the block reads the history joined with the block's
+    /// first samples (`head`); the others read the block itself, so the block is not copied
+    /// (the sums are the same products added in the same order either way).
+    fn fir(&mut self, start: u64, raw: &[f64], k0: u64, out: &mut [f64]) {
+        let (d, pre) = (self.decimation as u64, self.preroll as u64);
+        let l = self.h.len();
+        let hist = self.history.len();
+        let mut head = std::mem::take(&mut self.head);
+        head.clear();
+        head.extend_from_slice(&self.history);
+        head.extend_from_slice(&raw[..(l - 1).min(raw.len())]);
+        let first = start.max(pre);
+        let mut r = pre + (first - pre).div_ceil(d) * d;
+        let end = start + raw.len() as u64;
+        let window_sum = |w: &[f64]| {
+            let mut y = 0.0;
+            for (hi, x) in self.h.iter().zip(w.iter().rev()) {
+                y += hi * x;
+            }
+            y
+        };
+        while r < end {
+            // Position of raw sample r in the history followed by the block; its window is the
+            // l samples ending there (the pre-roll makes p >= l - 1).
+            let p = (r - start) as usize + hist;
+            out[((r - pre) / d - k0) as usize] = if p < head.len() {
+                window_sum(&head[p + 1 - l..=p])
+            } else {
+                // Here p >= hist + l - 1: the window lies in the block.
+                window_sum(&raw[p - hist + 1 - l..=p - hist])
+            };
+            r += d;
+        }
+        // The last l - 1 raw samples: from the block alone, or (a block shorter than that) from
+        // the history and the whole block, which `head` then holds.
+        let keep = l - 1;
+        self.history.clear();
+        if raw.len() >= keep {
+            self.history.extend_from_slice(&raw[raw.len() - keep..]);
+        } else {
+            self.history
+                .extend_from_slice(&head[head.len() - keep.min(head.len())..]);
+        }
+        self.head = head;
     }
 }
 
@@ -574,4 +601,58 @@ impl FilterState {
 #[cfg(test)]
 pub(crate) fn sample() -> OutputFilter {
     OutputFilter::new(FilterKind::Bartlett { taps: 8 }, 2).unwrap()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The FIR path read out block by block (blocks of 1 to 600 outputs, so raw blocks both
+    /// shorter and longer than the response) gives, bit for bit, the direct sum
+    /// y_r = sum_i h_i x_{r-i} over the whole raw stream, for every FIR kind.
+    #[test]
+    fn fir_blocks_equal_the_direct_sum() {
+        for kind in [
+            FilterKind::Bartlett { taps: 8 },
+            FilterKind::MovingAverage { taps: 5 },
+            FilterKind::MovingAverage { taps: 1 },
+        ] {
+            for decimation in [1, 2, 4] {
+                let f = OutputFilter::new(kind, decimation).unwrap();
+                let mut state = FilterState::new(&f, 0.01);
+                assert!(state.iir.is_none());
+                let (d, pre) = (state.decimation as u64, state.preroll as u64);
+                let h = state.h.clone();
+                let outputs = 3000u64;
+                let total = (pre + (outputs - 1) * d + 1) as usize;
+                // A deterministic, irregular raw stream.
+                let x: Vec<f64> = (0..total)
+                    .map(|j| ((j * 7919 % 1013) as f64).sin())
+                    .collect();
+                let mut got = vec![0.0; outputs as usize];
+                let (mut k0, mut size) = (0u64, 1u64);
+                while k0 < outputs {
+                    let n = size.min(outputs - k0);
+                    let end = pre + (k0 + n - 1) * d + 1;
+                    let start = state.raw_done;
+                    let raw = x[start as usize..end as usize].to_vec();
+                    state.filter(start, &raw, k0, &mut got[k0 as usize..(k0 + n) as usize]);
+                    k0 += n;
+                    size = size * 7 % 601 + 1;
+                }
+                for (k, g) in got.iter().enumerate() {
+                    let r = pre as usize + k * d as usize;
+                    let mut y = 0.0;
+                    for (i, hi) in h.iter().enumerate() {
+                        y += hi * x[r - i];
+                    }
+                    assert_eq!(
+                        g.to_bits(),
+                        y.to_bits(),
+                        "{kind:?} / {decimation}: output {k}"
+                    );
+                }
+            }
+        }
+    }
 }
