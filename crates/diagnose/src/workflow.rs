@@ -142,6 +142,42 @@ struct Pending {
     gap_before: f64,
 }
 
+/// One channel's round, worked out on its own copy of the model ([`Run::name_effects`]): the terms
+/// to set on the channel in order, the channel's effects after the round (those named before it
+/// and now), the candidates weighed, and the changes to check by re-simulation (None: no change).
+struct RoundOutcome {
+    terms: Vec<Term>,
+    effects: Vec<FoundEffect>,
+    records: Vec<CandidateRecord>,
+    pending: Option<Pending>,
+}
+
+/// Step 4: put the chosen term into `model` on channel `c` and append it to `terms` (what the
+/// round then sets in both of the run's models); the changes made, each with the term before. A
+/// trial whose parameters the terms' constructors refuse changes nothing.
+fn accept(
+    model: &mut SensorModel,
+    terms: &mut Vec<Term>,
+    c: Channel,
+    best: &Trial,
+) -> Vec<(Effect, Option<Term>)> {
+    let mut new = vec![best.term.clone()];
+    if let Some(n) = best.white_n {
+        // The filter is fitted with the white-noise level: undoing it restores both.
+        match noise::WhiteNoise::new(n) {
+            Ok(white) => new.insert(0, white.into()),
+            Err(_) => return Vec::new(),
+        }
+    }
+    let mut changes = Vec::new();
+    for term in new {
+        changes.push((term.effect(), current_term(model, c, term.effect())));
+        set_term(model, c, term.clone());
+        terms.push(term);
+    }
+    changes
+}
+
 /// One diagnosis in progress.
 struct Run<'a> {
     settings: &'a Settings,
@@ -340,14 +376,33 @@ impl<'a> Run<'a> {
         }
     }
 
-    /// Steps 3 and 4 of one round on every channel not done; the channels changed.
+    /// Steps 3 and 4 of one round on every channel not done; the channels changed. Each
+    /// channel's round reads only its own axis of the model and its own findings (the candidates,
+    /// the selection and the changes are per channel), so the rounds run side by side on a copy
+    /// of the model each and are applied in channel order: the state one after the other leaves.
     fn name_effects(&mut self, round: usize) -> Vec<Pending> {
+        use rayon::prelude::*;
+        let todo: Vec<Channel> = Channel::ALL
+            .into_iter()
+            .filter(|&c| !self.channels[c].done)
+            .collect();
+        let outcomes: Vec<Option<RoundOutcome>> = todo
+            .par_iter()
+            .map(|&c| self.channel_round(c, round))
+            .collect();
         let mut pending = Vec::new();
-        for c in Channel::ALL {
-            if self.channels[c].done {
+        for (c, outcome) in todo.into_iter().zip(outcomes) {
+            let Some(o) = outcome else {
+                self.channels[c].done = true;
                 continue;
+            };
+            for term in o.terms {
+                set_term(&mut self.sim_model, c, term.clone());
+                set_term(&mut self.out_model, c, term);
             }
-            match self.channel_round(c, round) {
+            self.channels[c].records.extend(o.records);
+            self.channels[c].effects = o.effects;
+            match o.pending {
                 Some(p) => pending.push(p),
                 None => self.channels[c].done = true,
             }
@@ -358,8 +413,8 @@ impl<'a> Run<'a> {
     /// One round on channel `c`: up to `effects_per_round` effects by forward selection on the
     /// closed-form prediction (so a short-tau disagreement with huge z does not hold back a long-tau
     /// one for many rounds); the round's re-simulation then checks them together. None when the
-    /// channel has nothing (more) to name.
-    fn channel_round(&mut self, c: Channel, round: usize) -> Option<Pending> {
+    /// channel has no disagreement left; an outcome without `pending` when nothing was changed.
+    fn channel_round(&self, c: Channel, round: usize) -> Option<RoundOutcome> {
         let (band, g) = self.gap(c)?;
         if g.disagreements.is_empty() {
             return None;
@@ -370,6 +425,13 @@ impl<'a> Run<'a> {
             .curve
             .clone();
         let ln_meas: Vec<f64> = curve.adev.iter().map(|a| a.ln()).collect();
+        let mut model = self.sim_model.clone();
+        let mut out = RoundOutcome {
+            terms: Vec::new(),
+            effects: self.channels[c].effects.clone(),
+            records: Vec::new(),
+            pending: None,
+        };
         let mut predicted = band;
         let mut g_pred = g.clone();
         let mut changes = Vec::new();
@@ -377,7 +439,7 @@ impl<'a> Run<'a> {
             if g_pred.disagreements.is_empty() {
                 break;
             }
-            let ts = self.candidates(c, &curve, &predicted, &g_pred);
+            let ts = self.candidates(&model, c, &curve, &predicted, &g_pred);
             let data = FitData {
                 ln_meas: &ln_meas,
                 ln_band: &predicted.ln_mean,
@@ -385,9 +447,9 @@ impl<'a> Run<'a> {
                 s: &g_pred.s,
             };
             let base_bic = bic(data.chi2_base(), 0, ln_meas.len());
-            let records = trial_records(round, &ts, base_bic, data.chi2_base());
-            self.channels[c].records.extend(records);
-            let choice = self.select(c, &ts, base_bic);
+            out.records
+                .extend(trial_records(round, &ts, base_bic, data.chi2_base()));
+            let choice = self.select(&out.effects, &ts, base_bic);
             // The joint re-level is of the model as given (round 1): later rounds refine the levels
             // of the terms they name one at a time, as before.
             let joint = (round == 1)
@@ -395,7 +457,7 @@ impl<'a> Run<'a> {
                 .flatten();
             if let Some(joint) = joint.filter(|j| self.prefer_joint(j, choice.as_ref(), base_bic)) {
                 for t in &joint.levels {
-                    changes.extend(self.accept(c, t));
+                    changes.extend(accept(&mut model, &mut out.terms, c, t));
                 }
                 predicted = shifted_band(&predicted, &joint.delta_avar);
                 g_pred = gap(&curve, &predicted);
@@ -406,33 +468,41 @@ impl<'a> Run<'a> {
                         cannot_tell_from: Vec::new(),
                     };
                     let found = found_by_fit(choice, round, g.rms, g_pred.rms, self.dt_s());
-                    self.channels[c].effects.push(found);
+                    out.effects.push(found);
                 }
                 continue;
             }
             let Some(choice) = choice else {
                 break;
             };
-            changes.extend(self.accept(c, choice.trial));
+            changes.extend(accept(&mut model, &mut out.terms, c, choice.trial));
             // The closed-form prediction of the band with this change, for the next step.
             predicted = shifted_band(&predicted, &choice.trial.delta_avar);
             g_pred = gap(&curve, &predicted);
             let found = found_by_fit(choice, round, g.rms, g_pred.rms, self.dt_s());
-            self.channels[c].effects.push(found);
+            out.effects.push(found);
         }
-        (!changes.is_empty()).then_some(Pending {
+        out.pending = (!changes.is_empty()).then_some(Pending {
             channel: c,
             changes,
             gap_before: g.rms,
-        })
+        });
+        Some(out)
     }
 
     /// Step 4: every candidate fitted to channel `c`'s gap against `band`.
-    fn candidates(&self, c: Channel, curve: &Curve, band: &Band, g: &Gap) -> Vec<Trial> {
+    fn candidates(
+        &self,
+        model: &SensorModel,
+        c: Channel,
+        curve: &Curve,
+        band: &Band,
+        g: &Gap,
+    ) -> Vec<Trial> {
         let dt_s = self.dt_s();
         let series = self.series(c);
         trials(&ChannelFit {
-            model: &self.sim_model,
+            model,
             channel: c,
             measured: curve,
             band,
@@ -449,12 +519,16 @@ impl<'a> Run<'a> {
     }
 
     /// Step 4: the candidate to name, if any improves BIC by `min_delta_bic`.
-    fn select<'t>(&self, c: Channel, ts: &'t [Trial], base_bic: f64) -> Option<Choice<'t>> {
+    fn select<'t>(
+        &self,
+        named: &[FoundEffect],
+        ts: &'t [Trial],
+        base_bic: f64,
+    ) -> Option<Choice<'t>> {
         let settings = self.settings;
         let mut best = ts.iter().min_by(|a, b| a.bic.total_cmp(&b.bic))?;
         // Occam: re-levelling an effect already named on this channel is preferred to naming
         // another one unless the other is better by the ambiguity margin.
-        let named = &self.channels[c].effects;
         if let Some(refine) = ts
             .iter()
             .filter(|t| named.iter().any(|e| e.effect == t.effect))
@@ -492,28 +566,7 @@ impl<'a> Run<'a> {
             && best.is_none_or(|b| joint.bic < b.trial.bic)
     }
 
-    /// Step 4: put the chosen term into both models; the changes made, each with the term before.
-    /// A trial whose parameters the terms' constructors refuse changes nothing.
-    fn accept(&mut self, c: Channel, best: &Trial) -> Vec<(Effect, Option<Term>)> {
-        let mut terms = vec![best.term.clone()];
-        if let Some(n) = best.white_n {
-            // The filter is fitted with the white-noise level: undoing it restores both.
-            match noise::WhiteNoise::new(n) {
-                Ok(white) => terms.insert(0, white.into()),
-                Err(_) => return Vec::new(),
-            }
-        }
-        let mut changes = Vec::new();
-        for term in terms {
-            let effect = term.effect();
-            changes.push((effect, current_term(&self.sim_model, c, effect)));
-            set_term(&mut self.sim_model, c, term.clone());
-            set_term(&mut self.out_model, c, term);
-        }
-        changes
-    }
-
-    /// Undo one change of [`Run::accept`] in both models.
+    /// Undo one change of [`accept`] in both models.
     fn undo(&mut self, c: Channel, effect: Effect, previous: Option<Term>) {
         for model in [&mut self.sim_model, &mut self.out_model] {
             restore_term(model, c, effect, previous.clone());
