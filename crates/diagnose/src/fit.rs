@@ -74,13 +74,13 @@ impl FitData<'_> {
     }
 }
 
-/// Best squared parameter c >= 0 for one signature, with its chi2 and profile 95 % interval.
+/// Best squared parameter c >= 0 for one signature, with its chi2. Its profile interval is
+/// [`linear_interval`]'s, computed only where wanted: most fits are compared by chi2 alone, and the
+/// interval's bisections cost as many chi2 evaluations as the fit itself.
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct LinearFit {
     pub c: f64,
     pub chi2: f64,
-    pub c_lo: f64,
-    pub c_hi: f64,
 }
 
 /// Range of c worth searching: the levels at which the term alone would explain the measured variance at
@@ -161,13 +161,9 @@ pub fn fit_linear(data: &FitData, f: &[f64], c0: f64) -> LinearFit {
             }
         }
     }
-    // The caller widens this by the Birge ratio once the number of free parameters is known.
-    let (c_lo, c_hi) = profile_interval(&chi, best_c, best, CHI2_1_95, hi.max(best_c));
     LinearFit {
         c: best_c,
         chi2: best,
-        c_lo,
-        c_hi,
     }
 }
 
@@ -184,16 +180,7 @@ fn profile_interval(
     let c_lo = if c_best <= 0.0 || chi(0.0) <= level {
         0.0
     } else {
-        let (mut a, mut b) = (0.0, c_best); // chi(a) > level >= chi(b)
-        for _ in 0..80 {
-            let mid = 0.5 * (a + b);
-            if chi(mid) > level {
-                a = mid;
-            } else {
-                b = mid;
-            }
-        }
-        b
+        bisect(chi, level, c_best, 0.0) // chi(0) > level >= chi(c_best)
     };
     // Upper side: expand until above the level.
     let mut top = if c_best > 0.0 {
@@ -202,23 +189,35 @@ fn profile_interval(
         c_max.max(f64::MIN_POSITIVE) * 1e-6
     };
     let mut expansions = 0;
-    while chi(top) <= level && expansions < 200 {
+    let mut chi_top = chi(top);
+    while chi_top <= level && expansions < 200 {
         top *= 2.0;
+        chi_top = chi(top);
         expansions += 1;
     }
-    if chi(top) <= level {
+    if chi_top <= level {
         return (c_lo, f64::INFINITY);
     }
-    let (mut a, mut b) = (c_best, top); // chi(a) <= level < chi(b)
+    (c_lo, bisect(chi, level, c_best, top)) // chi(c_best) <= level < chi(top)
+}
+
+/// The bound between `inside` (chi <= level) and `outside` (chi > level) after 80 halvings: the
+/// last point inside. It stops early once a halving leaves both ends as they were, a fixed point
+/// (the next halving would take the same midpoint to the same side), so the bits are those of all 80.
+fn bisect(chi: &dyn Fn(f64) -> f64, level: f64, mut inside: f64, mut outside: f64) -> f64 {
     for _ in 0..80 {
-        let mid = 0.5 * (a + b);
+        let before = (inside.to_bits(), outside.to_bits());
+        let mid = 0.5 * (inside + outside);
         if chi(mid) > level {
-            b = mid;
+            outside = mid;
         } else {
-            a = mid;
+            inside = mid;
+        }
+        if (inside.to_bits(), outside.to_bits()) == before {
+            break;
         }
     }
-    (c_lo, a)
+    inside
 }
 
 /// Fit of a signature family over one shape parameter (Gauss-Markov time, sinusoid frequency): the
@@ -290,7 +289,8 @@ pub fn birge_scale(chi2: f64, k: usize, m: usize) -> f64 {
     (chi2 / dof).sqrt().max(1.0)
 }
 
-/// Interval on c for a target threshold delta (used when widening by the Birge ratio).
+/// Profile interval on c of `fit` (from [`fit_linear`] on the same data) for a threshold delta:
+/// [`CHI2_1_95`] for the 95 % interval, times the Birge ratio squared to widen it.
 pub fn linear_interval(
     data: &FitData,
     f: &[f64],
@@ -332,7 +332,8 @@ mod tests {
         let fit = fit_linear(&data, &f_rrw, 0.0);
         assert!((fit.c / k2 - 1.0).abs() < 1e-6, "c {} vs {}", fit.c, k2);
         assert!(fit.chi2 < 1e-8);
-        assert!(fit.c_lo < fit.c && fit.c < fit.c_hi);
+        let (c_lo, c_hi) = linear_interval(&data, &f_rrw, 0.0, &fit, CHI2_1_95);
+        assert!(c_lo < fit.c && fit.c < c_hi);
         // Wrong level of a present term: the model has white noise at n2, the truth at 2 n2.
         let f_white: Vec<f64> = tau.iter().map(|t| 1.0 / t).collect();
         let ln_meas2: Vec<f64> = tau.iter().map(|t| 0.5 * (2.0 * n2 / t).ln()).collect();
@@ -350,6 +351,38 @@ mod tests {
         };
         let fit3 = fit_linear(&data3, &f_white, n2);
         assert!((fit3.c / (0.5 * n2) - 1.0).abs() < 1e-6);
+    }
+
+    /// The early-stopping bisection gives the bits of all 80 halvings, on either side of the
+    /// bound, for bounds at many scales (and at 0 and at an end).
+    #[test]
+    fn bisect_equals_eighty_halvings() {
+        let full = |chi: &dyn Fn(f64) -> f64, level: f64, mut inside: f64, mut outside: f64| {
+            for _ in 0..80 {
+                let mid = 0.5 * (inside + outside);
+                if chi(mid) > level {
+                    outside = mid;
+                } else {
+                    inside = mid;
+                }
+            }
+            inside
+        };
+        for k in 0..400 {
+            let bound = 1.37f64.powi(k - 200) * (1.0 + 0.1 * f64::from(k % 7));
+            let rising = |c: f64| if c > bound { 5.0 } else { 1.0 };
+            let falling = |c: f64| if c < bound { 5.0 } else { 1.0 };
+            for (outside, inside) in [(bound * 3.0, bound * 0.5), (bound * 9.0, 0.0)] {
+                let a = bisect(&rising, 2.0, inside, outside);
+                assert_eq!(a.to_bits(), full(&rising, 2.0, inside, outside).to_bits());
+            }
+            for (inside, outside) in [(bound * 3.0, 0.0), (bound * 1.5, bound * 0.25)] {
+                let a = bisect(&falling, 2.0, inside, outside);
+                assert_eq!(a.to_bits(), full(&falling, 2.0, inside, outside).to_bits());
+            }
+            let a = bisect(&rising, 2.0, bound, bound);
+            assert_eq!(a.to_bits(), full(&rising, 2.0, bound, bound).to_bits());
+        }
     }
 
     #[test]
@@ -379,7 +412,8 @@ mod tests {
         let d = 2.0 * 0.1 * CHI2_1_95.sqrt();
         let lo = 2.0 * (-d).exp() - 1.0;
         let hi = 2.0 * d.exp() - 1.0;
-        assert!((fit.c_lo - lo).abs() < 1e-6, "{} vs {}", fit.c_lo, lo);
-        assert!((fit.c_hi - hi).abs() < 1e-6, "{} vs {}", fit.c_hi, hi);
+        let (c_lo, c_hi) = linear_interval(&data, &f, 0.0, &fit, CHI2_1_95);
+        assert!((c_lo - lo).abs() < 1e-6, "{} vs {}", c_lo, lo);
+        assert!((c_hi - hi).abs() < 1e-6, "{} vs {}", c_hi, hi);
     }
 }
