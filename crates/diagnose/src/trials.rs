@@ -373,7 +373,6 @@ fn fit_level(
         let ramp = LinearFit {
             c,
             chi2: data.chi2(&f, c - c0),
-            ..fit
         };
         (ramp, input.ramp_slope)
     } else {
