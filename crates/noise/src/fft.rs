@@ -4,19 +4,7 @@
 /// In-place radix-2 FFT (iterative Cooley-Tukey); `re.len()` a power of two.
 pub fn fft(re: &mut [f64], im: &mut [f64]) {
     let n = re.len();
-    let mut j = 0;
-    for i in 1..n {
-        let mut bit = n >> 1;
-        while j & bit != 0 {
-            j ^= bit;
-            bit >>= 1;
-        }
-        j |= bit;
-        if i < j {
-            re.swap(i, j);
-            im.swap(i, j);
-        }
-    }
+    bit_reverse(re, im);
     let twiddles = stage_twiddles(n);
     let mut len = 2;
     while len <= n {
@@ -38,6 +26,24 @@ pub fn fft(re: &mut [f64], im: &mut [f64]) {
             }
         }
         len <<= 1;
+    }
+}
+
+/// The input in bit-reversed order (the iterative transform's first step).
+fn bit_reverse(re: &mut [f64], im: &mut [f64]) {
+    let n = re.len();
+    let mut j = 0;
+    for i in 1..n {
+        let mut bit = n >> 1;
+        while j & bit != 0 {
+            j ^= bit;
+            bit >>= 1;
+        }
+        j |= bit;
+        if i < j {
+            re.swap(i, j);
+            im.swap(i, j);
+        }
     }
 }
 
@@ -110,25 +116,13 @@ mod tests {
     }
 
     /// The transform with cached, per-stage twiddles gives the bits of the one that made its
-    /// twiddles each call and read them at a stride (as first written), at every size, twice
-    /// (the second from the cache).
+    /// twiddles each call and read them at a stride (as first written, the bit reversal aside,
+    /// which is unchanged), at every size, twice (the second from the cache).
     #[test]
     fn cached_stage_twiddles_give_the_same_bits() {
         let strided = |re: &mut [f64], im: &mut [f64]| {
             let n = re.len();
-            let mut j = 0;
-            for i in 1..n {
-                let mut bit = n >> 1;
-                while j & bit != 0 {
-                    j ^= bit;
-                    bit >>= 1;
-                }
-                j |= bit;
-                if i < j {
-                    re.swap(i, j);
-                    im.swap(i, j);
-                }
-            }
+            bit_reverse(re, im);
             let twiddle: Vec<(f64, f64)> = (0..n / 2)
                 .map(|k| (-std::f64::consts::TAU * k as f64 / n as f64).sin_cos())
                 .collect();

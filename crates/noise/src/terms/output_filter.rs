@@ -425,6 +425,18 @@ struct Readout {
     every: u64,
 }
 
+impl Readout {
+    /// Output `y`, raw sample `j` of the block, if it is the next one read out.
+    #[inline(always)]
+    fn take(&mut self, j: usize, y: f64, out: &mut [f64]) {
+        if j as u64 == self.next {
+            out[self.slot] = y;
+            self.slot += 1;
+            self.next += self.every;
+        }
+    }
+}
+
 impl IirState {
     /// The recursion over `raw`, y_r = sum_i b_i x_{r-i} - sum_{i>=1} a_i y_{r-i} (the histories
     /// newest first), writing the samples `read` names into `out`; `NB`, `NA` the lengths of b and
@@ -440,11 +452,7 @@ impl IirState {
         let a: [f64; NA] = std::array::from_fn(|i| self.a[i]);
         let mut xs: [f64; NB] = std::array::from_fn(|i| self.xs[i]);
         let mut ys: [f64; NA] = std::array::from_fn(|i| self.ys[i]);
-        let Readout {
-            mut next,
-            mut slot,
-            every,
-        } = read;
+        let mut read = read;
         for (j, &x) in raw.iter().enumerate() {
             xs.rotate_right(1);
             xs[0] = x;
@@ -454,11 +462,7 @@ impl IirState {
             }
             ys.rotate_right(1);
             ys[0] = y;
-            if j as u64 == next {
-                out[slot] = y;
-                slot += 1;
-                next += every;
-            }
+            read.take(j, y, out);
         }
         self.xs.copy_from_slice(&xs);
         self.ys.copy_from_slice(&ys);
@@ -474,11 +478,7 @@ impl IirState {
         // Newest first: x1 the last input, y1 the last output.
         let [mut x1, mut x2, mut x3] = [self.xs[0], self.xs[1], self.xs[2]];
         let [mut y1, mut y2, mut y3] = [self.ys[0], self.ys[1], self.ys[2]];
-        let Readout {
-            mut next,
-            mut slot,
-            every,
-        } = read;
+        let mut read = read;
         for (j, &x) in raw.iter().enumerate() {
             // `run`'s sum starts at -0.0, which adds nothing: -0.0 + v is v, bit for bit.
             let mut y = b0 * x + b1 * x1 + b2 * x2;
@@ -486,11 +486,7 @@ impl IirState {
             y -= a2 * y2;
             (x3, x2, x1) = (x2, x1, x);
             (y3, y2, y1) = (y2, y1, y);
-            if j as u64 == next {
-                out[slot] = y;
-                slot += 1;
-                next += every;
-            }
+            read.take(j, y, out);
         }
         self.xs.copy_from_slice(&[x1, x2, x3]);
         self.ys.copy_from_slice(&[y1, y2, y3]);
