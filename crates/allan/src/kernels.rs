@@ -12,6 +12,8 @@ use crate::{edf, Estimator};
 /// does (measured on the 4.32 M-sample benchmark, one thread: blocked kernel 30 ms SSE2,
 /// 20 ms AVX2, 17.5 ms AVX-512; noise identification 19.3 -> 16.3 ms from AVX2 to AVX-512).
 /// The kernels the body calls are `#[inline(always)]`, so they are compiled inside each variant.
+/// Exported for the other crates' lane kernels (`diagnose`'s transient profile).
+#[macro_export]
 macro_rules! wide_variant {
     ($(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident: $ty:ty),*) -> $ret:ty $body:block) => {
         $(#[$meta])*

@@ -76,39 +76,12 @@ impl PhasePlan {
         let n = rate.len();
         // The mean only keeps the phase small: any rounding in it adds a linear phase trend,
         // which every estimator's differences cancel. Plain 8-lane sums are accurate enough.
-        let block_sums: Vec<f64> = rate
-            .par_chunks(PHASE_BLOCK)
-            .map(|b| {
-                let mut lanes = [0.0f64; 8];
-                let chunks = b.chunks_exact(8);
-                let tail: f64 = chunks.remainder().iter().sum();
-                for c in chunks {
-                    for (l, v) in lanes.iter_mut().zip(c) {
-                        *l += v;
-                    }
-                }
-                pairwise_lanes(&lanes) + tail
-            })
-            .collect();
+        let block_sums: Vec<f64> = rate.par_chunks(PHASE_BLOCK).map(block_sum).collect();
         let mean = block_sums.iter().sum::<f64>() / n.max(1) as f64;
         // Compensated sum of (y - mean) of every block: (sum, error).
         let block_totals: Vec<(f64, f64)> = rate
             .par_chunks(PHASE_BLOCK)
-            .map(|b| {
-                let (mut s, mut c) = ([0.0f64; 8], [0.0f64; 8]);
-                let chunks = b.chunks_exact(8);
-                let tail = chunks.remainder();
-                for ch in chunks {
-                    for l in 0..8 {
-                        two_sum_acc(&mut s[l], &mut c[l], ch[l] - mean);
-                    }
-                }
-                let (mut sum, mut comp) = (0.0f64, c.iter().sum::<f64>());
-                for v in s.into_iter().chain(tail.iter().map(|y| y - mean)) {
-                    two_sum_acc(&mut sum, &mut comp, v);
-                }
-                (sum, comp)
-            })
+            .map(|b| block_total(b, mean))
             .collect();
         let mut starts = Vec::with_capacity(block_totals.len());
         let (mut sum, mut comp) = (0.0f64, 0.0f64);
@@ -122,6 +95,41 @@ impl PhasePlan {
             starts,
             total: (sum, comp),
         }
+    }
+}
+
+crate::wide_variant! {
+    /// The sum of one block: 8 lanes in a fixed order, then the tail ([`PhasePlan::of`]'s mean).
+    fn block_sum(b: &[f64]) -> f64 {
+        let mut lanes = [0.0f64; 8];
+        let chunks = b.chunks_exact(8);
+        let tail: f64 = chunks.remainder().iter().sum();
+        for c in chunks {
+            for (l, v) in lanes.iter_mut().zip(c) {
+                *l += v;
+            }
+        }
+        pairwise_lanes(&lanes) + tail
+    }
+}
+
+crate::wide_variant! {
+    /// The compensated sum (sum, error) of one block of y - `mean`: 8 lanes of TwoSum, then the
+    /// lanes and the tail in order ([`PhasePlan::of`]'s block totals).
+    fn block_total(b: &[f64], mean: f64) -> (f64, f64) {
+        let (mut s, mut c) = ([0.0f64; 8], [0.0f64; 8]);
+        let chunks = b.chunks_exact(8);
+        let tail = chunks.remainder();
+        for ch in chunks {
+            for l in 0..8 {
+                two_sum_acc(&mut s[l], &mut c[l], ch[l] - mean);
+            }
+        }
+        let (mut sum, mut comp) = (0.0f64, c.iter().sum::<f64>());
+        for v in s.into_iter().chain(tail.iter().map(|y| y - mean)) {
+            two_sum_acc(&mut sum, &mut comp, v);
+        }
+        (sum, comp)
     }
 }
 

@@ -399,16 +399,55 @@ pub fn fit_transient(x: &[f64], dt_s: f64, floor: &NoiseLevels) -> Option<Transi
 /// transient must stand out from a straight line (a rate ramp or a slow drift is not a
 /// transient): everything is fitted beside (1, k). Profile: the residual sum of squares at tau,
 /// RSS = S~xx - S~xg^2 / S~gg with x~ the detrended log and S~gg = S_gg - S_g^2/n - S_kg^2/S_kk,
-/// g_k = phi^k accumulated in one pass.
+/// g_k = phi^k accumulated in one pass. Each pass over the log serves up to [`LANES`] time
+/// constants (the grid, the golden section's two points, the bisection's next three levels, the
+/// interval's next steps): the searches are the same, each value is.
 struct TransientProfile {
     dt_s: f64,
     /// The detrended log and its sum of squares.
     xt: Vec<f64>,
     sxx: f64,
+    /// Is every sample of `xt` finite (then a decayed exponential adds nothing: [`decay_sums`]).
+    finite: bool,
     /// n, the mean sample index and the index's centred sum of squares.
     nf: f64,
     km: f64,
     skk: f64,
+}
+
+/// Time constants per pass of [`decay_sums`].
+const LANES: usize = 8;
+
+/// Samples between [`decay_sums`]' checks for exponentials decayed to exactly 0.
+const ZERO_CHECK: usize = 1024;
+
+allan::wide_variant! {
+    /// The transient profile's sums (S_g, S_gg, S_kg, S_xg) over the detrended log `xt`, g_k =
+    /// phi^k, for [`LANES`] factors `phi` at once: in each lane the operations of one time constant
+    /// alone, in sample order (the same bits). Once every g is 0 (a time constant short beside the
+    /// log) the rest adds +-0 to sums that are never -0 (they start at +0, and a rounded sum is -0
+    /// only of two -0), which changes no bit if the log is `finite` (0 x inf would not be 0): it
+    /// stops there.
+    fn decay_sums(xt: &[f64], km: f64, phi: [f64; LANES], finite: bool) -> [[f64; LANES]; 4] {
+        let mut g = [1.0f64; LANES];
+        let (mut sg, mut sgg, mut skg, mut sxg) = ([0.0; LANES], [0.0; LANES], [0.0; LANES], [0.0; LANES]);
+        for (block, xs) in xt.chunks(ZERO_CHECK).enumerate() {
+            if finite && g.iter().all(|&v| v == 0.0) {
+                break;
+            }
+            for (j, &v) in xs.iter().enumerate() {
+                let d = (block * ZERO_CHECK + j) as f64 - km;
+                for l in 0..LANES {
+                    sg[l] += g[l];
+                    sgg[l] += g[l] * g[l];
+                    skg[l] += d * g[l];
+                    sxg[l] += g[l] * v;
+                    g[l] *= phi[l];
+                }
+            }
+        }
+        [sg, sgg, skg, sxg]
+    }
 }
 
 impl TransientProfile {
@@ -418,6 +457,7 @@ impl TransientProfile {
         let nf = x.len() as f64;
         TransientProfile {
             dt_s,
+            finite: xt.iter().all(|v| v.is_finite()),
             xt,
             sxx,
             nf,
@@ -426,33 +466,35 @@ impl TransientProfile {
         }
     }
 
-    /// (RSS, amplitude) at time constant `tau` (None where the exponential is a straight line).
-    fn rss_at(&self, tau: f64) -> Option<(f64, f64)> {
-        let (nf, km, skk) = (self.nf, self.km, self.skk);
-        let phi = (-self.dt_s / tau).exp();
-        let (mut g, mut sg, mut sgg, mut skg, mut sxg) = (1.0, 0.0, 0.0, 0.0, 0.0);
-        for (k, &v) in self.xt.iter().enumerate() {
-            sg += g;
-            sgg += g * g;
-            skg += (k as f64 - km) * g;
-            sxg += g * v;
-            g *= phi;
+    /// (RSS, amplitude) at each time constant of `taus`, in passes of [`LANES`] (None where the
+    /// exponential is a straight line).
+    fn rss_many(&self, taus: &[f64]) -> Vec<Option<(f64, f64)>> {
+        let (nf, skk) = (self.nf, self.skk);
+        let mut out = Vec::with_capacity(taus.len());
+        for group in taus.chunks(LANES) {
+            // Spare lanes repeat the first time constant (decayed no later than it).
+            let phi: [f64; LANES] =
+                std::array::from_fn(|l| (-self.dt_s / group.get(l).unwrap_or(&group[0])).exp());
+            let [sg, sgg, skg, sxg] = decay_sums(&self.xt, self.km, phi, self.finite);
+            out.extend((0..group.len()).map(|l| {
+                let sgg_c = sgg[l] - sg[l] * sg[l] / nf - skg[l] * skg[l] / skk;
+                (sgg_c > 1e-12 * sgg[l])
+                    .then(|| (self.sxx - sxg[l] * sxg[l] / sgg_c, sxg[l] / sgg_c))
+            }));
         }
-        let sgg_c = sgg - sg * sg / nf - skg * skg / skk;
-        if sgg_c <= 1e-12 * sgg {
-            return None;
-        }
-        Some((self.sxx - sxg * sxg / sgg_c, sxg / sgg_c))
+        out
     }
 
     /// The time constant of least RSS in [lo, hi]: 41 log-spaced values, then golden section in
     /// ln tau between the best one's neighbours.
     fn best_tau(&self, lo: f64, hi: f64) -> Option<f64> {
         let steps = 40;
+        let grid: Vec<f64> = (0..=steps)
+            .map(|j| lo * (hi / lo).powf(j as f64 / steps as f64))
+            .collect();
         let mut best: Option<(f64, f64)> = None;
-        for j in 0..=steps {
-            let tau = lo * (hi / lo).powf(j as f64 / steps as f64);
-            if let Some((rss, _)) = self.rss_at(tau) {
+        for (&tau, r) in grid.iter().zip(self.rss_many(&grid)) {
+            if let Some((rss, _)) = r {
                 if best.is_none_or(|(b, _)| rss < b) {
                     best = Some((rss, tau));
                 }
@@ -468,8 +510,9 @@ impl TransientProfile {
         for _ in 0..30 {
             let x1 = b - gr * (b - a);
             let x2 = a + gr * (b - a);
-            let f1 = self.rss_at(x1.exp()).map_or(f64::INFINITY, |v| v.0);
-            let f2 = self.rss_at(x2.exp()).map_or(f64::INFINITY, |v| v.0);
+            let r = self.rss_many(&[x1.exp(), x2.exp()]);
+            let f1 = r[0].map_or(f64::INFINITY, |v| v.0);
+            let f2 = r[1].map_or(f64::INFINITY, |v| v.0);
             if f1 < f2 {
                 b = x2;
             } else {
@@ -482,41 +525,77 @@ impl TransientProfile {
     /// The time constants around `tau` where the RSS reaches `level` (steps of 1.25, then
     /// bisection in ln tau), within [lo, hi].
     fn tau_interval(&self, tau: f64, level: f64, (lo, hi): (f64, f64)) -> (f64, f64) {
-        let crossing = |inside: f64, outside: f64| -> f64 {
-            let (mut i, mut o) = (inside.ln(), outside.ln());
-            for _ in 0..25 {
-                let mid = 0.5 * (i + o);
-                if self.rss_at(mid.exp()).is_some_and(|v| v.0 <= level) {
-                    i = mid;
-                } else {
-                    o = mid;
+        let down = |t: f64| (t / 1.25).max(lo);
+        let up = |t: f64| (t * 1.25).min(hi);
+        (
+            self.reach(tau, level, lo, |t| t > lo, down),
+            self.reach(tau, level, hi, |t| t < hi, up),
+        )
+    }
+
+    /// From `tau` by `step` while `short_of_bound` and the RSS stays within `level`: the crossing
+    /// of `level` (by [`Self::crossing`]) after the last step inside, or `bound`. The next steps
+    /// (up to [`LANES`], none past the bound) are evaluated in one pass and walked in order.
+    fn reach(
+        &self,
+        tau: f64,
+        level: f64,
+        bound: f64,
+        short_of_bound: impl Fn(f64) -> bool,
+        step: impl Fn(f64) -> f64,
+    ) -> f64 {
+        let (mut reached, mut t) = (bound, tau);
+        while short_of_bound(t) {
+            let mut steps = vec![step(t)];
+            while steps.len() < LANES && short_of_bound(steps[steps.len() - 1]) {
+                steps.push(step(steps[steps.len() - 1]));
+            }
+            for (&next, r) in steps.iter().zip(self.rss_many(&steps)) {
+                if r.is_none_or(|v| v.0 > level) {
+                    return self.crossing(t, next, level);
+                }
+                t = next;
+                reached = t;
+            }
+        }
+        reached
+    }
+
+    /// 25 bisections in ln tau between `inside` (RSS within `level`) and `outside`, the last
+    /// inside point. Each pass evaluates the midpoints of the next three halvings on every path
+    /// they can take (seven lanes, node n's halves at 2n + 1 (moved inside) and 2n + 2), then
+    /// follows the one taken.
+    fn crossing(&self, inside: f64, outside: f64, level: f64) -> f64 {
+        let (mut i, mut o) = (inside.ln(), outside.ln());
+        let mut left = 25;
+        while left > 0 {
+            let depth = left.min(3);
+            let nodes = (1 << depth) - 1;
+            let mut ends = vec![(i, o); nodes];
+            let mut mids = vec![0.0; nodes];
+            for n in 0..nodes {
+                let (a, b) = ends[n];
+                mids[n] = 0.5 * (a + b);
+                if 2 * n + 2 < nodes {
+                    ends[2 * n + 1] = (mids[n], b);
+                    ends[2 * n + 2] = (a, mids[n]);
                 }
             }
-            i.exp()
-        };
-        let mut tau_lo = lo;
-        let mut t = tau;
-        while t > lo {
-            let next = (t / 1.25).max(lo);
-            if self.rss_at(next).is_none_or(|v| v.0 > level) {
-                tau_lo = crossing(t, next);
-                break;
+            let taus: Vec<f64> = mids.iter().map(|m| m.exp()).collect();
+            let rss = self.rss_many(&taus);
+            let mut n = 0;
+            for _ in 0..depth {
+                if rss[n].is_some_and(|v| v.0 <= level) {
+                    i = mids[n];
+                    n = 2 * n + 1;
+                } else {
+                    o = mids[n];
+                    n = 2 * n + 2;
+                }
             }
-            t = next;
-            tau_lo = t;
+            left -= depth;
         }
-        let mut tau_hi = hi;
-        let mut t = tau;
-        while t < hi {
-            let next = (t * 1.25).min(hi);
-            if self.rss_at(next).is_none_or(|v| v.0 > level) {
-                tau_hi = crossing(t, next);
-                break;
-            }
-            t = next;
-            tau_hi = t;
-        }
-        (tau_lo, tau_hi)
+        i.exp()
     }
 }
 
@@ -535,6 +614,69 @@ pub fn is_spectral_line(x: &[f64], dt_s: f64, f0_hz: f64) -> bool {
 mod tests {
     use super::*;
     use crate::testutil::normals;
+
+    /// The transient profile's passes in lanes (with the stop at decayed exponentials, the
+    /// interval's speculative steps and bisections) give the bits of one time constant at a time.
+    #[test]
+    fn transient_profile_lanes_equal_one_at_a_time() {
+        let dt = 0.01;
+        let x: Vec<f64> = normals(30_000, 11)
+            .iter()
+            .enumerate()
+            .map(|(k, e)| 0.02 * e + 0.05 * (-(k as f64) * dt / 8.0).exp())
+            .collect();
+        let p = TransientProfile::new(&x, dt);
+        // RSS at one tau the plain way: the sums over the whole log, one sample after the other.
+        let one = |tau: f64| -> Option<(f64, f64)> {
+            let phi = (-dt / tau).exp();
+            let (mut g, mut sg, mut sgg, mut skg, mut sxg) = (1.0, 0.0, 0.0, 0.0, 0.0);
+            for (k, &v) in p.xt.iter().enumerate() {
+                sg += g;
+                sgg += g * g;
+                skg += (k as f64 - p.km) * g;
+                sxg += g * v;
+                g *= phi;
+            }
+            let sgg_c = sgg - sg * sg / p.nf - skg * skg / p.skk;
+            (sgg_c > 1e-12 * sgg).then(|| (p.sxx - sxg * sxg / sgg_c, sxg / sgg_c))
+        };
+        let bits = |r: Option<(f64, f64)>| r.map(|(a, b)| (a.to_bits(), b.to_bits()));
+        let taus: Vec<f64> = (0..19).map(|j| 0.05 * 1.9f64.powi(j)).collect();
+        for (&tau, r) in taus.iter().zip(p.rss_many(&taus)) {
+            assert_eq!(bits(r), bits(one(tau)), "tau {tau}");
+        }
+        // The interval the plain way: steps of 1.25 one at a time, then 25 single bisections.
+        let plain_crossing = |inside: f64, outside: f64, level: f64| {
+            let (mut i, mut o) = (inside.ln(), outside.ln());
+            for _ in 0..25 {
+                let mid = 0.5 * (i + o);
+                if one(mid.exp()).is_some_and(|v| v.0 <= level) {
+                    i = mid;
+                } else {
+                    o = mid;
+                }
+            }
+            i.exp()
+        };
+        let (lo, hi) = (20.0 * dt, x.len() as f64 * dt / 3.0);
+        let tau = p.best_tau(lo, hi).expect("a fit");
+        let rss = one(tau).expect("a fit").0;
+        for level in [rss * 1.000_01, rss * 1.001, rss * 1.1, rss * 10.0] {
+            let mut t = tau;
+            let mut plain_lo = lo;
+            while t > lo {
+                let next = (t / 1.25).max(lo);
+                if one(next).is_none_or(|v| v.0 > level) {
+                    plain_lo = plain_crossing(t, next, level);
+                    break;
+                }
+                t = next;
+                plain_lo = t;
+            }
+            let (fast_lo, _) = p.tau_interval(tau, level, (lo, hi));
+            assert_eq!(fast_lo.to_bits(), plain_lo.to_bits(), "level {level}");
+        }
+    }
 
     #[test]
     fn normal_quantiles() {

@@ -29,13 +29,36 @@ const MIN_VARIANCE_RATIO: f64 = 1e-6;
 /// ln adev of a band whose mean Allan variance `avar_band` (ln adev centre `ln_band`) changes by `delta`.
 /// A band with no variance at all (a channel the model has no term for) takes the change as its variance.
 pub fn predicted_ln_adev(ln_band: f64, avar_band: f64, delta: f64) -> f64 {
+    ln_adev_from(ln_band, avar_band, ln_argument(avar_band, delta).ln())
+}
+
+/// What [`predicted_ln_adev`] takes the logarithm of: the variance ratio, or on an empty band the
+/// change itself.
+#[inline(always)]
+fn ln_argument(avar_band: f64, delta: f64) -> f64 {
+    // Both computed, one chosen: no branch, so a loop of these vectorises.
+    let ratio = ((avar_band + delta) / avar_band).max(MIN_VARIANCE_RATIO);
+    let change = delta.max(f64::MIN_POSITIVE);
     if avar_band > 0.0 {
-        let ratio = ((avar_band + delta) / avar_band).max(MIN_VARIANCE_RATIO);
-        ln_band + 0.5 * ratio.ln()
+        ratio
     } else {
-        0.5 * delta.max(f64::MIN_POSITIVE).ln()
+        change
     }
 }
+
+/// [`predicted_ln_adev`] from the logarithm `ln_arg` of its [`ln_argument`].
+#[inline(always)]
+fn ln_adev_from(ln_band: f64, avar_band: f64, ln_arg: f64) -> f64 {
+    let (shifted, alone) = (ln_band + 0.5 * ln_arg, 0.5 * ln_arg);
+    if avar_band > 0.0 {
+        shifted
+    } else {
+        alone
+    }
+}
+
+/// Taus per pass of [`FitData::chi2`] (on the stack).
+const CHI2_CHUNK: usize = 32;
 
 /// What the fit sees of one channel: the measurement and the current model's band, on one tau grid.
 #[derive(Clone, Debug)]
@@ -55,13 +78,36 @@ impl FitData<'_> {
         self.ln_meas.len()
     }
 
-    /// chi2 of the model changed by `dc * f` (dc = c - c0).
+    /// chi2 of the model changed by `dc * f` (dc = c - c0): the sum over taus, in tau order, of
+    /// z^2 with the prediction of [`predicted_ln_adev`]. The fits evaluate it hundreds of times, so
+    /// it runs in passes over chunks of taus: the logarithms' arguments (the divisions vectorised),
+    /// the logarithms, the z^2 (vectorised), then the sum in order; each value is computed by the
+    /// same operations as one tau at a time, so the bits are the same.
     pub fn chi2(&self, f: &[f64], dc: f64) -> f64 {
         let mut sum = 0.0;
-        for i in 0..self.m() {
-            let ln_pred = predicted_ln_adev(self.ln_band[i], self.avar_band[i], dc * f[i]);
-            let z = (self.ln_meas[i] - ln_pred) / self.s[i];
-            sum += z * z;
+        let mut buf = [0.0; CHI2_CHUNK];
+        for start in (0..self.m()).step_by(CHI2_CHUNK) {
+            let end = (start + CHI2_CHUNK).min(self.m());
+            let v = &mut buf[..end - start];
+            let (ln_meas, ln_band) = (&self.ln_meas[start..end], &self.ln_band[start..end]);
+            let (avar, s, f) = (
+                &self.avar_band[start..end],
+                &self.s[start..end],
+                &f[start..end],
+            );
+            for ((x, &a), &fi) in v.iter_mut().zip(avar).zip(f) {
+                *x = ln_argument(a, dc * fi);
+            }
+            for x in v.iter_mut() {
+                *x = x.ln();
+            }
+            for (i, x) in v.iter_mut().enumerate() {
+                let z = (ln_meas[i] - ln_adev_from(ln_band[i], avar[i], *x)) / s[i];
+                *x = z * z;
+            }
+            for z2 in v.iter() {
+                sum += z2;
+            }
         }
         sum
     }
@@ -74,13 +120,13 @@ impl FitData<'_> {
     }
 }
 
-/// Best squared parameter c >= 0 for one signature, with its chi2 and profile 95 % interval.
+/// Best squared parameter c >= 0 for one signature, with its chi2. Its profile interval is
+/// [`linear_interval`]'s, computed only where wanted: most fits are compared by chi2 alone, and the
+/// interval's bisections cost as many chi2 evaluations as the fit itself.
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct LinearFit {
     pub c: f64,
     pub chi2: f64,
-    pub c_lo: f64,
-    pub c_hi: f64,
 }
 
 /// Range of c worth searching: the levels at which the term alone would explain the measured variance at
@@ -161,13 +207,9 @@ pub fn fit_linear(data: &FitData, f: &[f64], c0: f64) -> LinearFit {
             }
         }
     }
-    // The caller widens this by the Birge ratio once the number of free parameters is known.
-    let (c_lo, c_hi) = profile_interval(&chi, best_c, best, CHI2_1_95, hi.max(best_c));
     LinearFit {
         c: best_c,
         chi2: best,
-        c_lo,
-        c_hi,
     }
 }
 
@@ -184,16 +226,7 @@ fn profile_interval(
     let c_lo = if c_best <= 0.0 || chi(0.0) <= level {
         0.0
     } else {
-        let (mut a, mut b) = (0.0, c_best); // chi(a) > level >= chi(b)
-        for _ in 0..80 {
-            let mid = 0.5 * (a + b);
-            if chi(mid) > level {
-                a = mid;
-            } else {
-                b = mid;
-            }
-        }
-        b
+        bisect(chi, level, c_best, 0.0) // chi(0) > level >= chi(c_best)
     };
     // Upper side: expand until above the level.
     let mut top = if c_best > 0.0 {
@@ -202,23 +235,35 @@ fn profile_interval(
         c_max.max(f64::MIN_POSITIVE) * 1e-6
     };
     let mut expansions = 0;
-    while chi(top) <= level && expansions < 200 {
+    let mut chi_top = chi(top);
+    while chi_top <= level && expansions < 200 {
         top *= 2.0;
+        chi_top = chi(top);
         expansions += 1;
     }
-    if chi(top) <= level {
+    if chi_top <= level {
         return (c_lo, f64::INFINITY);
     }
-    let (mut a, mut b) = (c_best, top); // chi(a) <= level < chi(b)
+    (c_lo, bisect(chi, level, c_best, top)) // chi(c_best) <= level < chi(top)
+}
+
+/// The bound between `inside` (chi <= level) and `outside` (chi > level) after 80 halvings: the
+/// last point inside. It stops early once a halving leaves both ends as they were, a fixed point
+/// (the next halving would take the same midpoint to the same side), so the bits are those of all 80.
+fn bisect(chi: &dyn Fn(f64) -> f64, level: f64, mut inside: f64, mut outside: f64) -> f64 {
     for _ in 0..80 {
-        let mid = 0.5 * (a + b);
+        let before = (inside.to_bits(), outside.to_bits());
+        let mid = 0.5 * (inside + outside);
         if chi(mid) > level {
-            b = mid;
+            outside = mid;
         } else {
-            a = mid;
+            inside = mid;
+        }
+        if (inside.to_bits(), outside.to_bits()) == before {
+            break;
         }
     }
-    (c_lo, a)
+    inside
 }
 
 /// Fit of a signature family over one shape parameter (Gauss-Markov time, sinusoid frequency): the
@@ -290,7 +335,8 @@ pub fn birge_scale(chi2: f64, k: usize, m: usize) -> f64 {
     (chi2 / dof).sqrt().max(1.0)
 }
 
-/// Interval on c for a target threshold delta (used when widening by the Birge ratio).
+/// Profile interval on c of `fit` (from [`fit_linear`] on the same data) for a threshold delta:
+/// [`CHI2_1_95`] for the 95 % interval, times the Birge ratio squared to widen it.
 pub fn linear_interval(
     data: &FitData,
     f: &[f64],
@@ -332,7 +378,8 @@ mod tests {
         let fit = fit_linear(&data, &f_rrw, 0.0);
         assert!((fit.c / k2 - 1.0).abs() < 1e-6, "c {} vs {}", fit.c, k2);
         assert!(fit.chi2 < 1e-8);
-        assert!(fit.c_lo < fit.c && fit.c < fit.c_hi);
+        let (c_lo, c_hi) = linear_interval(&data, &f_rrw, 0.0, &fit, CHI2_1_95);
+        assert!(c_lo < fit.c && fit.c < c_hi);
         // Wrong level of a present term: the model has white noise at n2, the truth at 2 n2.
         let f_white: Vec<f64> = tau.iter().map(|t| 1.0 / t).collect();
         let ln_meas2: Vec<f64> = tau.iter().map(|t| 0.5 * (2.0 * n2 / t).ln()).collect();
@@ -350,6 +397,89 @@ mod tests {
         };
         let fit3 = fit_linear(&data3, &f_white, n2);
         assert!((fit3.c / (0.5 * n2) - 1.0).abs() < 1e-6);
+    }
+
+    /// The early-stopping bisection gives the bits of all 80 halvings, on either side of the
+    /// bound, for bounds at many scales (and at 0 and at an end).
+    #[test]
+    fn bisect_equals_eighty_halvings() {
+        let full = |chi: &dyn Fn(f64) -> f64, level: f64, mut inside: f64, mut outside: f64| {
+            for _ in 0..80 {
+                let mid = 0.5 * (inside + outside);
+                if chi(mid) > level {
+                    outside = mid;
+                } else {
+                    inside = mid;
+                }
+            }
+            inside
+        };
+        for k in 0..400 {
+            let bound = 1.37f64.powi(k - 200) * (1.0 + 0.1 * f64::from(k % 7));
+            let rising = |c: f64| if c > bound { 5.0 } else { 1.0 };
+            let falling = |c: f64| if c < bound { 5.0 } else { 1.0 };
+            for (outside, inside) in [(bound * 3.0, bound * 0.5), (bound * 9.0, 0.0)] {
+                let a = bisect(&rising, 2.0, inside, outside);
+                assert_eq!(a.to_bits(), full(&rising, 2.0, inside, outside).to_bits());
+            }
+            for (inside, outside) in [(bound * 3.0, 0.0), (bound * 1.5, bound * 0.25)] {
+                let a = bisect(&falling, 2.0, inside, outside);
+                assert_eq!(a.to_bits(), full(&falling, 2.0, inside, outside).to_bits());
+            }
+            let a = bisect(&rising, 2.0, bound, bound);
+            assert_eq!(a.to_bits(), full(&rising, 2.0, bound, bound).to_bits());
+        }
+    }
+
+    /// The chunked chi2 gives the bits of the sum taken one tau at a time, over lengths across
+    /// chunk boundaries, with empty bands and with changes that take the variance below zero.
+    #[test]
+    fn chunked_chi2_equals_the_plain_sum() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut uniform = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for m in [0, 1, 5, 18, 31, 32, 33, 64, 70] {
+            let gen = |g: &mut dyn FnMut() -> f64, lo: f64, hi: f64| -> Vec<f64> {
+                (0..m).map(|_| lo + (hi - lo) * g()).collect()
+            };
+            let ln_meas = gen(&mut uniform, -12.0, -2.0);
+            let ln_band = gen(&mut uniform, -12.0, -2.0);
+            let mut avar_band = gen(&mut uniform, -1e-6, 1e-5);
+            avar_band.iter_mut().step_by(7).for_each(|a| *a = 0.0);
+            let s = gen(&mut uniform, 0.01, 0.5);
+            let f = gen(&mut uniform, 0.0, 2.0);
+            let data = FitData {
+                ln_meas: &ln_meas,
+                ln_band: &ln_band,
+                avar_band: &avar_band,
+                s: &s,
+            };
+            // The prediction as first written, one expression per tau.
+            let predicted = |ln_band: f64, avar_band: f64, delta: f64| {
+                if avar_band > 0.0 {
+                    let ratio = ((avar_band + delta) / avar_band).max(MIN_VARIANCE_RATIO);
+                    ln_band + 0.5 * ratio.ln()
+                } else {
+                    0.5 * delta.max(f64::MIN_POSITIVE).ln()
+                }
+            };
+            for dc in [0.0, 1e-7, -3e-6, 5e-5, -1.0, 1e300, f64::INFINITY, f64::NAN] {
+                let mut plain = 0.0;
+                for i in 0..m {
+                    let ln_pred = predicted(ln_band[i], avar_band[i], dc * f[i]);
+                    let z = (ln_meas[i] - ln_pred) / s[i];
+                    plain += z * z;
+                }
+                let chunked = data.chi2(&f, dc);
+                let same =
+                    chunked.to_bits() == plain.to_bits() || chunked.is_nan() && plain.is_nan();
+                assert!(same, "m {m} dc {dc}: {chunked} vs {plain}");
+            }
+        }
     }
 
     #[test]
@@ -379,7 +509,8 @@ mod tests {
         let d = 2.0 * 0.1 * CHI2_1_95.sqrt();
         let lo = 2.0 * (-d).exp() - 1.0;
         let hi = 2.0 * d.exp() - 1.0;
-        assert!((fit.c_lo - lo).abs() < 1e-6, "{} vs {}", fit.c_lo, lo);
-        assert!((fit.c_hi - hi).abs() < 1e-6, "{} vs {}", fit.c_hi, hi);
+        let (c_lo, c_hi) = linear_interval(&data, &f, 0.0, &fit, CHI2_1_95);
+        assert!((c_lo - lo).abs() < 1e-6, "{} vs {}", c_lo, lo);
+        assert!((c_hi - hi).abs() < 1e-6, "{} vs {}", c_hi, hi);
     }
 }

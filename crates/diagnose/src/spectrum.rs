@@ -153,33 +153,64 @@ pub fn broad_peak_runs(xs: &[&[f64]], dt_s: f64) -> Option<SpectralPeak> {
 
 /// Power of the runs `xs` near frequency `f0_hz`, Welch-averaged over segments of `seg` samples (Hann
 /// window), at f0 + j df for j = -span..=span, df = 1 / (seg dt). Each value is a direct DFT at that
-/// frequency (Goertzel-style rotation), so f0 need not lie on a bin.
+/// frequency (Goertzel-style rotation), so f0 need not lie on a bin. The frequencies go through the
+/// log [`FREQ_LANES`] at a time ([`rotation_sums`]), each by its own operations.
 fn local_spectrum(xs: &[&[f64]], dt_s: f64, f0_hz: f64, seg: usize, span: i32) -> Vec<f64> {
     let k: usize = xs.iter().map(|x| x.len() / seg).sum();
     let df = 1.0 / (seg as f64 * dt_s);
     let window = hann(seg);
-    (-span..=span)
-        .map(|j| {
+    let js: Vec<i32> = (-span..=span).collect();
+    let mut out = Vec::with_capacity(js.len());
+    for group in js.chunks(FREQ_LANES) {
+        // Spare lanes repeat the first frequency; their sums are dropped.
+        let rot: [(f64, f64); FREQ_LANES] = std::array::from_fn(|l| {
+            let j = group.get(l).copied().unwrap_or(group[0]);
             let w = std::f64::consts::TAU * (f0_hz + f64::from(j) * df) * dt_s;
-            let (c1, s1) = (w.cos(), w.sin());
-            let mut total = 0.0;
-            for seg_x in xs.iter().flat_map(|x| x.chunks_exact(seg)) {
-                let mean = seg_x.iter().sum::<f64>() / seg as f64;
-                let (mut re, mut im) = (0.0, 0.0);
-                let (mut c, mut sn) = (1.0, 0.0);
-                for (v, wn) in seg_x.iter().zip(&window) {
-                    let a = (v - mean) * wn;
-                    re += a * c;
-                    im -= a * sn;
-                    let c2 = c * c1 - sn * s1;
-                    sn = sn * c1 + c * s1;
-                    c = c2;
+            (w.cos(), w.sin())
+        });
+        let totals = rotation_sums(xs, &window, rot);
+        out.extend(totals[..group.len()].iter().map(|t| t / k.max(1) as f64));
+    }
+    out
+}
+
+/// Frequencies per pass of [`rotation_sums`].
+const FREQ_LANES: usize = 8;
+
+allan::wide_variant! {
+    /// For each lane's rotation (cos w, sin w): the sum over the runs' segments (in order) of
+    /// |sum_n (x_n - mean) window_n e^{-i w n}|^2, the rotation advanced by angle addition, in each
+    /// lane the operations of that frequency alone (the same bits); the windowed sample is the same
+    /// in every lane, so it is formed once.
+    fn rotation_sums(
+        xs: &[&[f64]],
+        window: &[f64],
+        rot: [(f64, f64); FREQ_LANES]
+    ) -> [f64; FREQ_LANES] {
+        let seg = window.len();
+        let (c1, s1): ([f64; FREQ_LANES], [f64; FREQ_LANES]) =
+            (rot.map(|r| r.0), rot.map(|r| r.1));
+        let mut total = [0.0; FREQ_LANES];
+        for seg_x in xs.iter().flat_map(|x| x.chunks_exact(seg)) {
+            let mean = seg_x.iter().sum::<f64>() / seg as f64;
+            let (mut re, mut im) = ([0.0; FREQ_LANES], [0.0; FREQ_LANES]);
+            let (mut c, mut sn) = ([1.0; FREQ_LANES], [0.0; FREQ_LANES]);
+            for (v, wn) in seg_x.iter().zip(window) {
+                let a = (v - mean) * wn;
+                for l in 0..FREQ_LANES {
+                    re[l] += a * c[l];
+                    im[l] -= a * sn[l];
+                    let c2 = c[l] * c1[l] - sn[l] * s1[l];
+                    sn[l] = sn[l] * c1[l] + c[l] * s1[l];
+                    c[l] = c2;
                 }
-                total += re * re + im * im;
             }
-            total / k.max(1) as f64
-        })
-        .collect()
+            for l in 0..FREQ_LANES {
+                total[l] += re[l] * re[l] + im[l] * im[l];
+            }
+        }
+        total
+    }
 }
 
 /// May a sinusoid at `f0_hz` be named in the runs `xs`: there is a spectral line there

@@ -373,7 +373,6 @@ fn fit_level(
         let ramp = LinearFit {
             c,
             chi2: data.chi2(&f, c - c0),
-            ..fit
         };
         (ramp, input.ramp_slope)
     } else {
@@ -474,8 +473,9 @@ fn filter_trial(input: &ChannelFit, data: &FitData) -> Option<Trial> {
     let (chi2, b) = search.simplest(tried)?;
     let (k, m) = (free_parameters(Effect::OutputFilter), search.tau.len());
     let scale = birge_scale(chi2, k, m);
-    let lo = (b.fit.c_lo / (scale * scale).max(1.0)).min(b.fit.c);
-    let hi = b.fit.c_hi * (scale * scale).max(1.0);
+    let (c_lo, c_hi) = b.interval(search.data, search.c0);
+    let lo = (c_lo / (scale * scale).max(1.0)).min(b.fit.c);
+    let hi = c_hi * (scale * scale).max(1.0);
     let p = |c: f64| named(&b.filter.into(), Some(c.max(0.0).sqrt()));
     Some(Trial {
         effect: Effect::OutputFilter,
@@ -493,10 +493,27 @@ fn filter_trial(input: &ChannelFit, data: &FitData) -> Option<Trial> {
     })
 }
 
+/// One filter's refit white level, with what its interval needs.
 struct OutputFilterFit {
     filter: OutputFilter,
     fit: LinearFit,
     delta: Vec<f64>,
+    /// The white signature through the filter and the band shifted to it (the fit's data).
+    fw: Vec<f64>,
+    ln_band: Vec<f64>,
+    avar_band: Vec<f64>,
+}
+
+impl OutputFilterFit {
+    /// The fit's 95 % profile interval on the squared white level (of `data`, the unshifted fit data).
+    fn interval(&self, data: &FitData, c0: f64) -> (f64, f64) {
+        let shifted = FitData {
+            ln_band: &self.ln_band,
+            avar_band: &self.avar_band,
+            ..data.clone()
+        };
+        linear_interval(&shifted, &self.fw, c0, &self.fit, CHI2_1_95)
+    }
 }
 
 /// The search over output filters of [`filter_trial`].
@@ -579,7 +596,17 @@ impl<'a> FilterSearch<'a> {
         let delta = (0..m)
             .map(|i| fit.c * fw[i] - c0 * self.fw_cur[i] * g[i])
             .collect();
-        Some((fit.chi2, OutputFilterFit { filter, fit, delta }))
+        Some((
+            fit.chi2,
+            OutputFilterFit {
+                filter,
+                fit,
+                delta,
+                fw,
+                ln_band,
+                avar_band,
+            },
+        ))
     }
 
     /// Refine around the best of each kind and decimation: every tap count within 30 %, or the

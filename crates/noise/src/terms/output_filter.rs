@@ -425,6 +425,18 @@ struct Readout {
     every: u64,
 }
 
+impl Readout {
+    /// Output `y`, raw sample `j` of the block, if it is the next one read out.
+    #[inline(always)]
+    fn take(&mut self, j: usize, y: f64, out: &mut [f64]) {
+        if j as u64 == self.next {
+            out[self.slot] = y;
+            self.slot += 1;
+            self.next += self.every;
+        }
+    }
+}
+
 impl IirState {
     /// The recursion over `raw`, y_r = sum_i b_i x_{r-i} - sum_{i>=1} a_i y_{r-i} (the histories
     /// newest first), writing the samples `read` names into `out`; `NB`, `NA` the lengths of b and
@@ -440,11 +452,7 @@ impl IirState {
         let a: [f64; NA] = std::array::from_fn(|i| self.a[i]);
         let mut xs: [f64; NB] = std::array::from_fn(|i| self.xs[i]);
         let mut ys: [f64; NA] = std::array::from_fn(|i| self.ys[i]);
-        let Readout {
-            mut next,
-            mut slot,
-            every,
-        } = read;
+        let mut read = read;
         for (j, &x) in raw.iter().enumerate() {
             xs.rotate_right(1);
             xs[0] = x;
@@ -454,14 +462,34 @@ impl IirState {
             }
             ys.rotate_right(1);
             ys[0] = y;
-            if j as u64 == next {
-                out[slot] = y;
-                slot += 1;
-                next += every;
-            }
+            read.take(j, y, out);
         }
         self.xs.copy_from_slice(&xs);
         self.ys.copy_from_slice(&ys);
+    }
+
+    /// [`Self::run`] of the second-order kind (b and a of 3), its histories in named variables:
+    /// the same operations in the same order, but the generic loop's dot product is compiled to a
+    /// packed multiply that reloads the rotated history from memory each sample, and that store
+    /// and reload lie on the recursion's critical path (about 1.5 times slower).
+    fn run_second_order(&mut self, raw: &[f64], read: Readout, out: &mut [f64]) {
+        let (b0, b1, b2) = (self.b[0], self.b[1], self.b[2]);
+        let (a1, a2) = (self.a[1], self.a[2]);
+        // Newest first: x1 the last input, y1 the last output.
+        let [mut x1, mut x2, mut x3] = [self.xs[0], self.xs[1], self.xs[2]];
+        let [mut y1, mut y2, mut y3] = [self.ys[0], self.ys[1], self.ys[2]];
+        let mut read = read;
+        for (j, &x) in raw.iter().enumerate() {
+            // `run`'s sum starts at -0.0, which adds nothing: -0.0 + v is v, bit for bit.
+            let mut y = b0 * x + b1 * x1 + b2 * x2;
+            y -= a1 * y1;
+            y -= a2 * y2;
+            (x3, x2, x1) = (x2, x1, x);
+            (y3, y2, y1) = (y2, y1, y);
+            read.take(j, y, out);
+        }
+        self.xs.copy_from_slice(&[x1, x2, x3]);
+        self.ys.copy_from_slice(&[y1, y2, y3]);
     }
 }
 
@@ -535,7 +563,7 @@ impl FilterState {
                 (1, 2) => state.run::<1, 2>(raw, read, out),
                 (2, 2) => state.run::<2, 2>(raw, read, out),
                 (2, 3) => state.run::<2, 3>(raw, read, out),
-                (3, 3) => state.run::<3, 3>(raw, read, out),
+                (3, 3) => state.run_second_order(raw, read, out),
                 // `OutputFilter::recursion` makes only these two orders.
                 (nb, na) => {
                     unreachable!("an IIR output filter of order 1 or 2, not b {nb}, a {na}")
@@ -653,6 +681,55 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    /// The second-order recursion with named histories gives the bits of the generic one, over
+    /// blocks of any length (the state carried between them), with signed zeros in the input and
+    /// read out at every decimation and offset.
+    #[test]
+    fn second_order_run_equals_the_generic_one() {
+        let f = OutputFilter::new(FilterKind::LowPass2 { cutoff_hz: 31.7 }, 2).unwrap();
+        let (b, a) = f.recursion(0.01).unwrap();
+        let fresh = || IirState {
+            b: b.clone(),
+            a: a.clone(),
+            xs: vec![0.0; 3],
+            ys: vec![0.0; 3],
+        };
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let raw: Vec<f64> = (0..5000)
+            .map(|k| {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                match k % 97 {
+                    0..=9 => -0.0,
+                    10 => 0.0,
+                    _ => (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5,
+                }
+            })
+            .collect();
+        for (block, every) in [(1, 1), (7, 2), (64, 3), (1000, 8), (5000, 1)] {
+            let (mut generic, mut named) = (fresh(), fresh());
+            let (mut out_g, mut out_n) = (vec![0.0; raw.len()], vec![0.0; raw.len()]);
+            let mut slot = 0;
+            for (i, chunk) in raw.chunks(block).enumerate() {
+                let start = i * block;
+                let first = start.div_ceil(every) * every;
+                let read = Readout {
+                    next: (first - start) as u64,
+                    slot,
+                    every: every as u64,
+                };
+                generic.run::<3, 3>(chunk, read, &mut out_g);
+                named.run_second_order(chunk, read, &mut out_n);
+                slot += (start + chunk.len()).div_ceil(every) - first.div_ceil(every);
+            }
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&out_g), bits(&out_n), "block {block} every {every}");
+            assert_eq!(bits(&generic.xs), bits(&named.xs));
+            assert_eq!(bits(&generic.ys), bits(&named.ys));
         }
     }
 }
