@@ -263,7 +263,7 @@ impl Kernel<'_> {
         let longest = self.setup.samples;
         for (d, &n) in self.lengths.iter().enumerate() {
             for ch in Channel::ALL {
-                let adev = if self.setup.active[ch] {
+                let adev = if self.setup.active[ch] && m > 0 {
                     adev_at(&log[ch][..n], self.setup.dt_s, &self.setup.grid_m)
                 } else {
                     vec![0.0; m]

@@ -675,7 +675,20 @@ impl<'a> Run<'a> {
     /// simulation is stale (a partial or rejected round).
     fn settle_drift(&mut self) -> Result<(), DiagnoseError> {
         if self.dirty {
-            let sim = self.simulate_whole()?;
+            // Only the drift is wanted here: no Allan deviations of the simulated logs (an empty
+            // grid), the same logs and so the same drift.
+            let setup = SimSetup {
+                grid_m: Vec::new(),
+                ..self.setup.clone()
+            };
+            let settings = self.settings;
+            let sim = simulate_runs(
+                &self.sim_model,
+                &setup,
+                &self.plan,
+                settings.seed,
+                settings.seeds,
+            )?;
             self.last_drift = sim.drift;
             self.last_protocol = sim.protocol_errors;
             self.dirty = false;
