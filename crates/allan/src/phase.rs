@@ -27,32 +27,66 @@ pub fn rate_to_phase_into(rate: &[f64], tau0_s: f64, out: &mut [f64]) {
         "the phase has one point more than the rate"
     );
     let plan = PhasePlan::of(rate);
-    // Two blocks per task, their recursions interleaved: each is a chain of dependent additions,
-    // and two chains keep the adder busy where one waits on its latency (each block's additions
-    // are unchanged, so the values are too).
+    // Up to eight blocks per task, their recursions interleaved: each is a chain of dependent
+    // additions, and eight chains keep the adders busy where one waits on its latency (each
+    // block's additions are unchanged, so the values are too; test below).
     out[..rate.len()]
-        .par_chunks_mut(2 * PHASE_BLOCK)
-        .zip(rate.par_chunks(2 * PHASE_BLOCK))
-        .zip(plan.starts.par_chunks(2))
+        .par_chunks_mut(LOCKSTEP * PHASE_BLOCK)
+        .zip(rate.par_chunks(LOCKSTEP * PHASE_BLOCK))
+        .zip(plan.starts.par_chunks(LOCKSTEP))
         .for_each(|((dst, src), starts)| {
-            let (d0, d1) = dst.split_at_mut(PHASE_BLOCK.min(dst.len()));
-            let (s0, s1) = src.split_at(PHASE_BLOCK.min(src.len()));
-            let (mut a, mut b) = (starts[0], starts.get(1).copied().unwrap_or_default());
-            let both = d1.len();
-            for i in 0..both {
-                let (ya, yb) = (s0[i] - plan.mean, s1[i] - plan.mean);
-                d0[i] = (a.0 + a.1) * tau0_s;
-                d1[i] = (b.0 + b.1) * tau0_s;
-                two_sum_acc(&mut a.0, &mut a.1, ya);
-                two_sum_acc(&mut b.0, &mut b.1, yb);
-            }
-            for i in both..d0.len() {
-                let y = s0[i] - plan.mean;
-                d0[i] = (a.0 + a.1) * tau0_s;
-                two_sum_acc(&mut a.0, &mut a.1, y);
+            let mut blocks: Vec<(&mut [f64], &[f64], (f64, f64))> = dst
+                .chunks_mut(PHASE_BLOCK)
+                .zip(src.chunks(PHASE_BLOCK))
+                .zip(starts.iter().copied())
+                .map(|((d, s), st)| (d, s, st))
+                .collect();
+            // Groups of 8, 4, 2, 1 whole blocks side by side; a short last block alone.
+            let mut rest = &mut blocks[..];
+            while !rest.is_empty() {
+                let whole = rest.iter().take_while(|b| b.0.len() == PHASE_BLOCK).count();
+                let n = match whole {
+                    8.. => recursions::<8>(rest, plan.mean, tau0_s),
+                    4..=7 => recursions::<4>(rest, plan.mean, tau0_s),
+                    2..=3 => recursions::<2>(rest, plan.mean, tau0_s),
+                    _ => recursions::<1>(rest, plan.mean, tau0_s),
+                };
+                rest = &mut rest[n..];
             }
         });
     out[rate.len()] = (plan.total.0 + plan.total.1) * tau0_s;
+}
+
+/// Blocks whose recursions one task runs side by side.
+const LOCKSTEP: usize = 8;
+
+/// The compensated phase recursion of the first `N` blocks of `blocks` (destination, rate, start)
+/// side by side over their common length, each block's remainder after it alone; returns N.
+#[inline(always)]
+fn recursions<const N: usize>(
+    blocks: &mut [(&mut [f64], &[f64], (f64, f64))],
+    mean: f64,
+    tau0_s: f64,
+) -> usize {
+    let group = &mut blocks[..N];
+    let common = group.iter().map(|b| b.0.len()).min().unwrap_or(0);
+    let mut sum: [f64; N] = std::array::from_fn(|k| group[k].2 .0);
+    let mut comp: [f64; N] = std::array::from_fn(|k| group[k].2 .1);
+    for i in 0..common {
+        for k in 0..N {
+            let y = group[k].1[i] - mean;
+            group[k].0[i] = (sum[k] + comp[k]) * tau0_s;
+            two_sum_acc(&mut sum[k], &mut comp[k], y);
+        }
+    }
+    for (k, (d, s, _)) in group.iter_mut().enumerate() {
+        for i in common..d.len() {
+            let y = s[i] - mean;
+            d[i] = (sum[k] + comp[k]) * tau0_s;
+            two_sum_acc(&mut sum[k], &mut comp[k], y);
+        }
+    }
+    N
 }
 
 /// Samples per block of the phase conversion. Fixed, not per thread: the result does not

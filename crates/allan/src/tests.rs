@@ -316,12 +316,15 @@ fn total_deviation_reaches_the_largest_factor() {
 
 #[test]
 fn phase_from_a_slice_equals_phase_in_place() {
-    // Several blocks of the phase conversion and a remainder (not a multiple of 8).
-    let y = series(3 * (1 << 16) + 5, 21);
-    let a = rate_to_phase(&y, 0.01);
-    let b = crate::rate_to_phase_in_place(y.clone(), 0.01);
-    assert_eq!(a.len(), y.len() + 1);
-    assert!(a.iter().zip(&b).all(|(p, q)| p.to_bits() == q.to_bits()));
+    // Several blocks of the phase conversion and a remainder (not a multiple of 8): groups of
+    // 2 and 1 blocks side by side (3 blocks), of 8, 4 and 1 (13), two tasks of 8 (16 blocks).
+    for (blocks, extra) in [(3, 5), (13, 7), (16, 0)] {
+        let y = series(blocks * (1 << 16) + extra, 21);
+        let a = rate_to_phase(&y, 0.01);
+        let b = crate::rate_to_phase_in_place(y.clone(), 0.01);
+        assert_eq!(a.len(), y.len() + 1);
+        assert!(a.iter().zip(&b).all(|(p, q)| p.to_bits() == q.to_bits()), "{blocks}");
+    }
 }
 
 #[test]
