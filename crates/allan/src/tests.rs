@@ -323,7 +323,10 @@ fn phase_from_a_slice_equals_phase_in_place() {
         let a = rate_to_phase(&y, 0.01);
         let b = crate::rate_to_phase_in_place(y.clone(), 0.01);
         assert_eq!(a.len(), y.len() + 1);
-        assert!(a.iter().zip(&b).all(|(p, q)| p.to_bits() == q.to_bits()), "{blocks}");
+        assert!(
+            a.iter().zip(&b).all(|(p, q)| p.to_bits() == q.to_bits()),
+            "{blocks}"
+        );
     }
 }
 
