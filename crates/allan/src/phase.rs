@@ -35,7 +35,7 @@ pub fn rate_to_phase_into(rate: &[f64], tau0_s: f64, out: &mut [f64]) {
         .zip(rate.par_chunks(LOCKSTEP * PHASE_BLOCK))
         .zip(plan.starts.par_chunks(LOCKSTEP))
         .for_each(|((dst, src), starts)| {
-            let mut blocks: Vec<(&mut [f64], &[f64], (f64, f64))> = dst
+            let mut blocks: Vec<PhaseBlock> = dst
                 .chunks_mut(PHASE_BLOCK)
                 .zip(src.chunks(PHASE_BLOCK))
                 .zip(starts.iter().copied())
@@ -57,17 +57,17 @@ pub fn rate_to_phase_into(rate: &[f64], tau0_s: f64, out: &mut [f64]) {
     out[rate.len()] = (plan.total.0 + plan.total.1) * tau0_s;
 }
 
+/// One block of the phase recursion: its destination, its rate samples and the running
+/// compensated sum (sum, error) at its start.
+type PhaseBlock<'a> = (&'a mut [f64], &'a [f64], (f64, f64));
+
 /// Blocks whose recursions one task runs side by side.
 const LOCKSTEP: usize = 8;
 
 /// The compensated phase recursion of the first `N` blocks of `blocks` (destination, rate, start)
 /// side by side over their common length, each block's remainder after it alone; returns N.
 #[inline(always)]
-fn recursions<const N: usize>(
-    blocks: &mut [(&mut [f64], &[f64], (f64, f64))],
-    mean: f64,
-    tau0_s: f64,
-) -> usize {
+fn recursions<const N: usize>(blocks: &mut [PhaseBlock], mean: f64, tau0_s: f64) -> usize {
     let group = &mut blocks[..N];
     let common = group.iter().map(|b| b.0.len()).min().unwrap_or(0);
     let mut sum: [f64; N] = std::array::from_fn(|k| group[k].2 .0);
