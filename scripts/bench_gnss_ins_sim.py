@@ -3,14 +3,15 @@
 Woodman's MTx experiment, static and level, 100 Hz, 60 s, free (strapdown) integration, many runs.
 
 gnss-ins-sim is not vendored: pass the path of a checkout (e.g. `git clone
-https://github.com/Aceinna/gnss-ins-sim`, or the snapshot 966ff27 named in peers.md). This script only
+https://github.com/Aceinna/gnss-ins-sim`; the figures in docs/performance.md used commit 966ff27). This script only
 drives it through its public API (imu_model.IMU, ins_sim.Sim, demo_algorithms.free_integration).
 
 Both simulators run on one core (gnss-ins-sim is single-threaded Python/numpy; imudrift with
 --threads 1) one after the other in the same session; throughput = runs x samples / wall time.
 
-MTx error model given to gnss-ins-sim (its closest terms; it has no flicker noise or rate random walk,
-peers.md §2.1): gyro ARW from Woodman Table 4 (0.075, 0.078, 0.079 deg/sqrt(s) = 4.5, 4.68, 4.74
+MTx error model given to gnss-ins-sim (its closest terms; its `pathgen.gyro_gen` / `acc_gen` have a
+constant bias, white noise and a bias drift that is a first-order Gauss-Markov process (white with
+an infinite correlation time), no flicker noise or rate random walk, and optional vibration): gyro ARW from Woodman Table 4 (0.075, 0.078, 0.079 deg/sqrt(s) = 4.5, 4.68, 4.74
 deg/sqrt(h)), bias drift as a first-order Gauss-Markov with Table 4's bias instability (36, 32.4,
 43.2 deg/h) and correlation times at the Allan minimum (620, 530, 270 s); accelerometer VRW
 0.004 m/s^2/sqrt(Hz) = 0.24 m/s/sqrt(h) (MTx manual). imudrift runs configs/scenarios/mtx-static-60s.toml

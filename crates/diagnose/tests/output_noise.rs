@@ -163,3 +163,33 @@ fn null_rate_of_filtered_logs() {
         logs.len()
     );
 }
+
+/// Same seed, any thread count: a diagnosis whose rounds change several channels (the channels'
+/// rounds run side by side, `Run::name_effects`) is the same JSON with 1 and with 3 threads.
+#[test]
+fn diagnosis_does_not_depend_on_the_thread_count() {
+    let base = filtered_base();
+    let mut model = base.clone();
+    for c in [Channel::ALL[0], Channel::ALL[4]] {
+        let n = (0.5 * avar_at_dt(&base, c) * DT_S).sqrt();
+        model
+            .axis_mut(c.sensor(), c.axis())
+            .set_term(OutputWhiteNoise::new(n).unwrap());
+    }
+    let log = GeneratedLog::new(&model, 1 << 16, 91, false);
+    let json = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| serde_json::to_string(&log.diagnose(&base, SEEDS)).unwrap())
+    };
+    let d = log.diagnose(&base, SEEDS);
+    let changed = Channel::ALL
+        .iter()
+        .filter(|c| !d.channels[c.name()].effects.is_empty())
+        .count();
+    assert!(changed >= 2, "the test needs rounds on several channels");
+    let one = json(1);
+    assert_eq!(one, json(3));
+}
