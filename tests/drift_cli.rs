@@ -97,6 +97,25 @@ fn json_contract_pooling_and_verdicts() {
     let long = &doc["horizons"][2]["channels"]["heading_rad"];
     assert_eq!(long["verdict"], "not_informed");
     assert!(long["note"].as_str().unwrap().contains("3600 s"));
+    // Every informed cell judged together: the count outside is the verdicts', the p-value a
+    // Monte Carlo rank among the 21 members (docs/drift.md, "Every cell at once").
+    let j = &doc["joint"];
+    assert_eq!(j["cells"], 10, "{j}");
+    let outside = doc["horizons"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|h| h["channels"].as_object().unwrap().values())
+        .filter(|c| c["verdict"] == "above" || c["verdict"] == "below")
+        .count();
+    assert_eq!(j["outside"], outside as u64, "{j}");
+    let p = j["p_value"].as_f64().unwrap();
+    assert!((1.0 / 21.0 - 1e-12..=1.0).contains(&p), "{j}");
+    assert_eq!(j["consistent"], p >= 0.05, "{j}");
+    assert!(
+        [10.0, 60.0].contains(&j["worst"]["t_s"].as_f64().unwrap()),
+        "{j}"
+    );
     // Same seed, other thread count: the same bytes.
     assert_eq!(out.stdout, run("1").stdout);
 }

@@ -34,6 +34,7 @@
 
 use crate::alternatives::{self, Alternative, Structure};
 use crate::bootstrap::{draw_models, draw_models_on, BootstrapError, ParameterSpread};
+use crate::drift_joint::{joint_check, Cell, JointCheck};
 use crate::fitted_on::FittedOn;
 use crate::input::LogInput;
 use crate::observer::Observer;
@@ -225,6 +226,9 @@ pub struct DriftCheck {
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub structures: Vec<StructureShare>,
     pub horizons: Vec<HorizonCheck>,
+    /// Every informed cell judged together (`drift_joint`, docs/drift.md); absent without one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub joint: Option<JointCheck>,
 }
 
 /// One structure's share of the band: what it is, its weight and its simulated experiments.
@@ -252,18 +256,6 @@ pub enum CheckError {
     /// A structure of the model's `[[alternatives]]` that cannot run at the logs' rate.
     #[error("[[alternatives]] structure \"{label}\": {message}")]
     Structure { label: String, message: String },
-}
-
-/// The order statistic of 1-based fractional rank `a` (linear between neighbours, clamped).
-fn order_stat(sorted: &[f64], a: f64) -> f64 {
-    let a = a.clamp(1.0, sorted.len() as f64);
-    let i = a.floor() as usize;
-    let f = a - i as f64;
-    if i < sorted.len() {
-        sorted[i - 1] * (1.0 - f) + sorted[i] * f
-    } else {
-        sorted[i - 1]
-    }
 }
 
 fn abs_sorted(v: &[f64]) -> Vec<f64> {
@@ -366,6 +358,7 @@ pub fn check_drift_averaged(
         let per_log: Vec<SegmentErrors> = by_log.iter().map(|l| l[hi].clone()).collect();
         horizons.push(experiment.check_horizon(hi, h, &per_log)?);
     }
+    let joint = experiment.joint(&horizons);
     Ok(DriftCheck {
         protocol: p.clone(),
         protocol_text: p.describe(),
@@ -375,6 +368,7 @@ pub fn check_drift_averaged(
         parameters,
         structures: plan.shares(),
         horizons,
+        joint,
     })
 }
 
@@ -682,16 +676,49 @@ impl Experiment<'_> {
         // (R + 1 - 2a) / (R + 1) (e.g. Wilks 1941); a = 0.025 (R + 1), between order
         // statistics by linear interpolation, makes it 95 % for any R (at least 1: the
         // extremes, for R < 39).
-        let a = (0.025 * (rep_rms.len() + 1) as f64).max(1.0);
+        let (band_lo, band_hi) = crate::drift_joint::band(&rep_rms);
         let all_sorted = abs_sorted(&all);
         Ok(Model {
             mean: all_sorted.iter().sum::<f64>() / all_sorted.len() as f64,
             p50: stats::quantile(&all_sorted, 0.5),
             p95: stats::quantile(&all_sorted, 0.95),
             rms: stats::rms(&all),
-            band_lo: order_stat(&rep_rms, a),
-            band_hi: order_stat(&rep_rms, (rep_rms.len() + 1) as f64 - a),
+            band_lo,
+            band_hi,
         })
+    }
+
+    /// Each simulated experiment's RMS of quantity `q` at horizon `hi` (its logs pooled), in
+    /// replicate order.
+    fn replicate_rms(&self, hi: usize, q: Quantity) -> Vec<f64> {
+        self.simulated
+            .chunks(self.logs.len())
+            .map(|rep| {
+                let v: Vec<f64> = rep.iter().flat_map(|e| e[hi].values(q)).copied().collect();
+                stats::rms(&v)
+            })
+            .collect()
+    }
+
+    /// Every informed cell of `horizons` judged together (`drift_joint`).
+    fn joint(&self, horizons: &[HorizonCheck]) -> Option<JointCheck> {
+        let mut cells = Vec::new();
+        for (hi, h) in horizons.iter().enumerate() {
+            for q in Quantity::ALL {
+                let c = &h.channels[q.name()];
+                if let (Verdict::Above | Verdict::Below | Verdict::Inside, Some(m)) =
+                    (c.verdict, c.measured)
+                {
+                    cells.push(Cell {
+                        t_s: h.t_s,
+                        quantity: q.name(),
+                        measured: m.rms,
+                        simulated: self.replicate_rms(hi, q),
+                    });
+                }
+            }
+        }
+        joint_check(&cells)
     }
 }
 

@@ -17,6 +17,7 @@ pub mod drift;
 pub mod drift_check;
 mod drift_fit;
 pub mod drift_gap;
+pub mod drift_joint;
 pub mod effect_text;
 pub mod error;
 mod findings;

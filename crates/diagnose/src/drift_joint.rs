@@ -1,0 +1,265 @@
+//! All the cells of a drift check judged together (docs/drift.md, "Every cell at once").
+//!
+//! A check has one verdict per (horizon, quantity) cell, each against a 95 % band: a model that is
+//! right still leaves a cell outside now and then, and with twenty cells, most of them driven by
+//! the same gyros, how many misses are too many is not obvious. The joint test answers it from
+//! the model's own simulated experiments, with no threshold of ours.
+//!
+//! The members are the measurement and the R simulated experiments (exchangeable when the model
+//! is right: each experiment is a draw of the same statistics the measurement is). For member i
+//! and cell c, z_ic = (ln x_ic - mean_j ln x_jc) / sd_j ln x_jc over the other R members j, x the
+//! cell's RMS; the member's statistic is T_i = max over cells of |z_ic|, the most extreme cell
+//! standardised by the others (the max-T statistic of Westfall & Young, Resampling-Based
+//! Multiple Testing, 1993, §2.6, which keeps the family-wise level whatever the correlation of
+//! the cells). The p-value is the Monte Carlo test's rank, p = #{i : T_i >= T_0} / (R + 1)
+//! (member 0 the measurement, so p >= 1 / (R + 1); Davison & Hinkley 1997, §4.2.5): exact for
+//! exchangeable members. Leaving each member out of its own reference treats all of them alike,
+//! which is what makes the rank uniform under the model.
+//!
+//! Beside it, the count of cells outside their band and the same count for each simulated
+//! experiment against the others (the band rule of `drift_check`, order statistics a and
+//! R + 1 - a of the R other members, a = 0.025 (R + 1)): how many misses a right model makes.
+
+use serde::Serialize;
+
+/// The joint verdict of every informed cell of a drift check.
+#[derive(Clone, Debug, Serialize)]
+pub struct JointCheck {
+    /// Informed cells judged.
+    pub cells: usize,
+    /// Measured cells outside their 95 % band.
+    pub outside: usize,
+    /// Cells outside per simulated experiment against the others: the mean, and the share of
+    /// experiments with at least as many as measured.
+    pub model_outside_mean: f64,
+    pub model_outside_at_least: f64,
+    /// The measurement's most extreme cell, standardised by the simulated experiments: its
+    /// horizon, quantity and |z| (T_0).
+    pub worst: WorstCell,
+    /// The max-T test's p-value (module doc).
+    pub p_value: f64,
+    /// p >= 0.05: the misses are as many and as far as a right model's.
+    pub consistent: bool,
+}
+
+/// A cell named by its horizon and quantity, with the measurement's |z| there.
+#[derive(Clone, Debug, Serialize)]
+pub struct WorstCell {
+    pub t_s: f64,
+    pub quantity: &'static str,
+    pub abs_z: f64,
+}
+
+/// Level of the joint test.
+pub const JOINT_LEVEL: f64 = 0.05;
+
+/// One cell: its horizon and quantity, the measured RMS and the R simulated experiments' RMS.
+pub struct Cell {
+    pub t_s: f64,
+    pub quantity: &'static str,
+    pub measured: f64,
+    pub simulated: Vec<f64>,
+}
+
+/// The order statistic of 1-based fractional rank `a` of `sorted` (linear between neighbours,
+/// clamped): the band rule of `drift_check`.
+pub(crate) fn order_stat(sorted: &[f64], a: f64) -> f64 {
+    let a = a.clamp(1.0, sorted.len() as f64);
+    let i = a.floor() as usize;
+    let f = a - i as f64;
+    if i < sorted.len() {
+        sorted[i - 1] * (1.0 - f) + sorted[i] * f
+    } else {
+        sorted[i - 1]
+    }
+}
+
+/// The 95 % band of `values` (sorted): order statistics a and R + 1 - a, a = 0.025 (R + 1), at
+/// least the extremes.
+pub(crate) fn band(sorted: &[f64]) -> (f64, f64) {
+    let r = sorted.len();
+    let a = (0.025 * (r + 1) as f64).max(1.0);
+    (
+        order_stat(sorted, a),
+        order_stat(sorted, (r + 1) as f64 - a),
+    )
+}
+
+/// The joint test over `cells` (module doc); None without a cell whose members all have a
+/// positive finite RMS, or with fewer than 10 simulated experiments.
+pub fn joint_check(cells: &[Cell]) -> Option<JointCheck> {
+    let cells: Vec<&Cell> = cells
+        .iter()
+        .filter(|c| {
+            c.simulated.len() >= 10
+                && std::iter::once(c.measured)
+                    .chain(c.simulated.iter().copied())
+                    .all(|x| x.is_finite() && x > 0.0)
+        })
+        .collect();
+    let first = cells.first()?;
+    let members = first.simulated.len() + 1;
+    if cells.iter().any(|c| c.simulated.len() + 1 != members) {
+        return None;
+    }
+    // Per cell, each member's ln RMS (member 0 the measurement) and raw value.
+    let mut t = vec![0.0f64; members];
+    let mut worst = vec![0usize; members];
+    let mut outside = vec![0usize; members];
+    for (k, c) in cells.iter().enumerate() {
+        let x: Vec<f64> = std::iter::once(c.measured)
+            .chain(c.simulated.iter().copied())
+            .collect();
+        let ln: Vec<f64> = x.iter().map(|v| v.ln()).collect();
+        let (sum, sum2) = ln.iter().fold((0.0, 0.0), |(s, q), v| (s + v, q + v * v));
+        let others = (members - 1) as f64;
+        for i in 0..members {
+            let m = (sum - ln[i]) / others;
+            let var = ((sum2 - ln[i] * ln[i]) - others * m * m) / (others - 1.0);
+            if var > 0.0 {
+                let z = ((ln[i] - m) / var.sqrt()).abs();
+                if z > t[i] {
+                    t[i] = z;
+                    worst[i] = k;
+                }
+            }
+            let mut rest: Vec<f64> = x
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != i)
+                .map(|(_, &v)| v)
+                .collect();
+            rest.sort_by(f64::total_cmp);
+            let (lo, hi) = band(&rest);
+            if x[i] < lo || x[i] > hi {
+                outside[i] += 1;
+            }
+        }
+    }
+    let at_least = |v: &[f64], x: f64| v.iter().filter(|&&y| y >= x).count();
+    let p_value = at_least(&t, t[0]) as f64 / members as f64;
+    let sims = &outside[1..];
+    let model_outside_mean = sims.iter().sum::<usize>() as f64 / sims.len() as f64;
+    let model_outside_at_least =
+        sims.iter().filter(|&&o| o >= outside[0]).count() as f64 / sims.len() as f64;
+    Some(JointCheck {
+        cells: cells.len(),
+        outside: outside[0],
+        model_outside_mean,
+        model_outside_at_least,
+        worst: WorstCell {
+            t_s: cells[worst[0]].t_s,
+            quantity: cells[worst[0]].quantity,
+            abs_z: t[0],
+        },
+        p_value,
+        consistent: p_value >= JOINT_LEVEL,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_distr::StandardNormal;
+
+    /// Cells of one experiment: `k` cells driven by one common normal and their own (a
+    /// correlation of `rho` between cells), as ln RMS.
+    fn draw(rng: &mut rand::rngs::StdRng, k: usize, rho: f64, shift: &[f64]) -> Vec<f64> {
+        let common: f64 = rng.sample(StandardNormal);
+        (0..k)
+            .map(|c| {
+                let own: f64 = rng.sample(StandardNormal);
+                (0.3 * (rho.sqrt() * common + (1.0 - rho).sqrt() * own) + shift[c]).exp()
+            })
+            .collect()
+    }
+
+    fn cells(
+        rng: &mut rand::rngs::StdRng,
+        r: usize,
+        k: usize,
+        rho: f64,
+        shift: &[f64],
+    ) -> Vec<Cell> {
+        let measured = draw(rng, k, rho, shift);
+        let sims: Vec<Vec<f64>> = (0..r).map(|_| draw(rng, k, rho, &vec![0.0; k])).collect();
+        (0..k)
+            .map(|c| Cell {
+                t_s: c as f64,
+                quantity: "heading_rad",
+                measured: measured[c],
+                simulated: sims.iter().map(|s| s[c]).collect(),
+            })
+            .collect()
+    }
+
+    /// Under the model (the measurement one more experiment) the test rejects at most 5 % of the
+    /// time, whatever the cells' correlation: 2000 trials each at rho = 0 and 0.9, 20 cells,
+    /// R = 40. The rejection rate of an exact test at level 0.05 with R = 40 is 2/41 = 4.88 %;
+    /// the bound 4.88 % + 3.1 standard deviations of 2000 trials (sqrt(0.0488 * 0.951 / 2000)
+    /// = 0.48 %): 6.4 %, passed by a right test with probability 0.999. And at least 3 %: a test
+    /// that never rejects would pass a bound from above alone.
+    #[test]
+    fn rejects_five_percent_under_the_model() {
+        for &rho in &[0.0, 0.9] {
+            let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+            let trials = 2000;
+            let rejected = (0..trials)
+                .filter(|_| {
+                    let j = joint_check(&cells(&mut rng, 40, 20, rho, &[0.0; 20])).unwrap();
+                    !j.consistent
+                })
+                .count();
+            let rate = rejected as f64 / trials as f64;
+            assert!((0.030..=0.064).contains(&rate), "rho {rho}: rate {rate}");
+        }
+    }
+
+    /// One cell off by 5 of its own standard deviations is found, and named, in at least 90 % of
+    /// trials (with R = 40 the p-value is below 0.05 only when the measurement is one of the
+    /// two most extreme of the 41 members, so a smaller shift loses power to the maximum of twenty null
+    /// cells), while the count of cells outside the band alone (one of twenty) would not tell it
+    /// from a right model's misses.
+    #[test]
+    fn one_cell_far_out_is_found() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+        let mut shift = vec![0.0; 20];
+        shift[13] = 0.3 * 5.0;
+        let trials = 200;
+        let mut found = 0;
+        for _ in 0..trials {
+            let j = joint_check(&cells(&mut rng, 40, 20, 0.5, &shift)).unwrap();
+            if !j.consistent && j.worst.t_s == 13.0 {
+                found += 1;
+            }
+        }
+        assert!(
+            found as f64 / trials as f64 >= 0.9,
+            "found {found} of {trials}"
+        );
+    }
+
+    /// The count outside for the measurement is the band verdicts' count: a measurement outside
+    /// every cell's band counts all of them, and its p-value is the smallest, 1 / (R + 1).
+    #[test]
+    fn counts_and_smallest_p() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(3);
+        let mut c = cells(&mut rng, 39, 5, 0.0, &[0.0; 5]);
+        for cell in &mut c {
+            cell.measured = 100.0 * cell.simulated.iter().cloned().fold(0.0, f64::max);
+        }
+        let j = joint_check(&c).unwrap();
+        assert_eq!((j.cells, j.outside), (5, 5));
+        assert_eq!(j.p_value, 1.0 / 40.0);
+        assert!(!j.consistent);
+        assert_eq!(j.model_outside_at_least, 0.0);
+    }
+
+    #[test]
+    fn too_few_experiments_or_no_cell_is_none() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(3);
+        assert!(joint_check(&cells(&mut rng, 9, 5, 0.0, &[0.0; 5])).is_none());
+        assert!(joint_check(&[]).is_none());
+    }
+}
