@@ -250,8 +250,7 @@ impl ChannelErrors {
 
 /// Add the raw terms `raw`'s values to the raw samples `out`, term after term in generation
 /// order. A flicker bias instability followed by a rate random walk, and by a resonance after
-/// that (adjacent in the generation order, and in most fitted models), or by a resonance alone
-/// (a gyro without a random walk), runs in one pass
+/// that (adjacent in the generation order, and in most fitted models), runs in one pass
 /// ([`GaussMarkovBank::add_block_then`]): the values of the terms one after the other, bit for
 /// bit, in about the time of the slowest alone.
 #[inline]
@@ -272,12 +271,6 @@ fn raw_terms(raw: &mut [Generator], clock: RawClock, out: &mut [f64], s: [&mut V
             }
             [BiasInstability(Flicker(bank)), RateRandomWalk(walk), ..] => {
                 let mut f = walk.follower(s1, n);
-                bank.add_raw_then(out, s0, &mut f);
-                f.finish();
-                i += 2;
-            }
-            [BiasInstability(Flicker(bank)), Resonance(res), ..] => {
-                let mut f = res.follower(s2, n);
                 bank.add_raw_then(out, s0, &mut f);
                 f.finish();
                 i += 2;
