@@ -348,12 +348,13 @@ fn text(r: &DriftCheck, logs: &[String], model: &std::path::Path, elapsed_s: f64
         let _ = writeln!(
             s,
             "all {} cells together: {} outside the band (the model's own experiments: {} on average, \
-             {} or more in {} % of them); most extreme: {} {} at |z| = {}; p = {}: {} (docs/drift.md)",
+             {} or more in {} % of them, none in {} %); most extreme: {} {} at |z| = {}; p = {}: {} (docs/drift.md)",
             j.cells,
             j.outside,
             crate::fmt::sig(j.model_outside_mean, 2),
             j.outside,
             crate::fmt::sig(100.0 * j.model_outside_at_least, 2),
+            crate::fmt::sig(100.0 * j.model_all_inside, 2),
             crate::fmt::time(j.worst.t_s),
             j.worst.quantity,
             crate::fmt::sig(j.worst.abs_z, 3),

@@ -34,6 +34,9 @@ pub struct JointCheck {
     /// experiments with at least as many as measured.
     pub model_outside_mean: f64,
     pub model_outside_at_least: f64,
+    /// Share of simulated experiments with every cell inside the others' bands: how often a right
+    /// model passes a demand that every cell be inside.
+    pub model_all_inside: f64,
     /// The measurement's most extreme cell, standardised by the simulated experiments: its
     /// horizon, quantity and |z| (T_0).
     pub worst: WorstCell,
@@ -152,11 +155,13 @@ pub fn joint_check(cells: &[Cell]) -> Option<JointCheck> {
     let model_outside_mean = sims.iter().sum::<usize>() as f64 / sims.len() as f64;
     let model_outside_at_least =
         sims.iter().filter(|&&o| o >= outside[0]).count() as f64 / sims.len() as f64;
+    let model_all_inside = sims.iter().filter(|&&o| o == 0).count() as f64 / sims.len() as f64;
     Some(JointCheck {
         cells: cells.len(),
         outside: outside[0],
         model_outside_mean,
         model_outside_at_least,
+        model_all_inside,
         worst: WorstCell {
             t_s: cells[worst[0]].t_s,
             quantity: cells[worst[0]].quantity,
@@ -286,6 +291,7 @@ mod tests {
         assert_eq!(j.p_value, 1.0 / 40.0);
         assert!(!j.consistent);
         assert_eq!(j.model_outside_at_least, 0.0);
+        assert!((0.0..=1.0).contains(&j.model_all_inside));
     }
 
     #[test]
