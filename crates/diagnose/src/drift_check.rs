@@ -176,29 +176,97 @@ fn likely_cause(
             "slow bias wander on {list} (bias instability, rate random walk or temperature) larger than the model's; one log's length may not resolve it"
         )),
         Verdict::Below => {
-            let stand_ins: Vec<&str> = q
-                .needs()
-                .iter()
-                .filter(|&&c| {
-                    let a = model.axis(c.sensor(), c.axis());
-                    a.has(noise::Effect::Sinusoidal) || a.has(noise::Effect::GaussMarkov)
-                })
-                .map(|c| c.name())
-                .collect();
-            Some(if stand_ins.is_empty() {
-                format!(
-                    "the model's {} on {list} is above the sensor's",
-                    if short { "white noise" } else { "bias instability or random walk" }
-                )
+            let (fast, slow) = terms_by_time_scale(model, q.needs());
+            let white = if fast.is_empty() {
+                "white noise".to_string()
             } else {
                 format!(
-                    "the model's sinusoid / Gauss-Markov terms on {} (stand-ins `diagnose` fits for a filter at the shortest averaging times) add drift the sensor does not have",
-                    stand_ins.join(", ")
+                    "white noise or short-time stand-ins ({}, terms `diagnose` fits for a filter at the shortest averaging times)",
+                    fast
                 )
+            };
+            Some(match (slow.is_empty(), short) {
+                (false, _) => format!(
+                    "the model's slow terms on {list} ({}) wander further from the calibration than the sensor does{}",
+                    slow,
+                    if short { format!("; or its {white} is above the sensor's") } else { String::new() }
+                ),
+                (true, true) => format!("the model's {white} on {list} is above the sensor's"),
+                (true, false) => {
+                    format!("the model's bias instability or random walk on {list} is above the sensor's")
+                }
             })
         }
         _ => None,
     }
+}
+
+/// A Gauss-Markov process faster than this, or a sinusoid above its inverse, is a short-time
+/// stand-in (what `diagnose` fits for an output filter's shape: correlation times of milliseconds,
+/// lines near the filter's cutoff); slower ones, and every random walk, flicker level and ramp,
+/// set the slow wander about the calibration.
+const STAND_IN_TIME_S: f64 = 1.0;
+
+/// The stochastic terms on `channels` in two lists, the short-time stand-ins and the slow terms
+/// (`STAND_IN_TIME_S`), each as "effect on channel, channel; effect on channel" (one entry per
+/// effect, its channels in order).
+fn terms_by_time_scale(model: &SensorModel, channels: &[noise::Channel]) -> (String, String) {
+    use noise::{Effect, GaussMarkov, Sinusoid, SlowGaussMarkov};
+    let mut fast: Vec<(Effect, &str)> = Vec::new();
+    let mut slow: Vec<(Effect, &str)> = Vec::new();
+    for &c in channels {
+        let a = model.axis(c.sensor(), c.axis());
+        if let Some(g) = a.get::<GaussMarkov>() {
+            let list = if g.tau_s() < STAND_IN_TIME_S {
+                &mut fast
+            } else {
+                &mut slow
+            };
+            list.push((Effect::GaussMarkov, c.name()));
+        }
+        if let Some(t) = a.get::<Sinusoid>() {
+            if t.frequency_hz() > 1.0 / STAND_IN_TIME_S {
+                fast.push((Effect::Sinusoidal, c.name()));
+            } else if t.frequency_hz() < 0.01 {
+                // A line of a period beyond 100 s is slow wander in the drift (a tone at a few
+                // tenths of a hertz integrates to next to nothing).
+                slow.push((Effect::Sinusoidal, c.name()));
+            }
+        }
+        if a.get::<SlowGaussMarkov>().is_some() {
+            slow.push((Effect::SlowGaussMarkov, c.name()));
+        }
+        for e in [
+            Effect::BiasInstability,
+            Effect::RateRandomWalk,
+            Effect::RateRamp,
+        ] {
+            if a.has(e) {
+                slow.push((e, c.name()));
+            }
+        }
+    }
+    let grouped = |terms: Vec<(Effect, &str)>| {
+        let mut effects: Vec<Effect> = Vec::new();
+        for (e, _) in &terms {
+            if !effects.contains(e) {
+                effects.push(*e);
+            }
+        }
+        effects
+            .iter()
+            .map(|e| {
+                let on: Vec<&str> = terms
+                    .iter()
+                    .filter(|(f, _)| f == e)
+                    .map(|(_, c)| *c)
+                    .collect();
+                format!("{} on {}", e.name(), on.join(", "))
+            })
+            .collect::<Vec<String>>()
+            .join("; ")
+    };
+    (grouped(fast), grouped(slow))
 }
 
 /// One horizon.
@@ -800,5 +868,39 @@ fn compare(
         note: None,
         between_logs: None,
         likely_cause: likely_cause(q, h, verdict, model_sensor),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use noise::{GaussMarkov, RateRandomWalk, Sensor, Sinusoid};
+
+    /// Below the band, the likely cause names the slow terms of the quantity's channels (a slow
+    /// Gauss-Markov process, a random walk), not a tone of a few tenths of a hertz, and a
+    /// millisecond Gauss-Markov process as a short-time stand-in only at short horizons.
+    #[test]
+    fn below_names_the_slow_terms_not_the_tones() {
+        let mut m = SensorModel::default();
+        m.axis_mut(Sensor::Accel, 0)
+            .set_term(Sinusoid::new(8e-3, 0.564, None).unwrap());
+        m.axis_mut(Sensor::Accel, 0)
+            .set_term(RateRandomWalk::new(5e-4).unwrap());
+        m.axis_mut(Sensor::Accel, 1)
+            .set_term(GaussMarkov::new(7e-3, 499.0).unwrap());
+        m.axis_mut(Sensor::Gyro, 2)
+            .set_term(GaussMarkov::new(5e-4, 0.004).unwrap());
+        let pos = likely_cause(Quantity::PosHorizontal, 10.0, Verdict::Below, &m).unwrap();
+        assert!(pos.contains("rate_random_walk on ax"), "{pos}");
+        assert!(pos.contains("gauss_markov on ay"), "{pos}");
+        assert!(!pos.contains("sinusoidal"), "{pos}");
+        let heading = likely_cause(Quantity::Heading, 60.0, Verdict::Below, &m).unwrap();
+        assert!(
+            heading.contains("short-time stand-ins (gauss_markov on gz"),
+            "{heading}"
+        );
+        assert!(!heading.contains("slow terms"), "{heading}");
+        let long = likely_cause(Quantity::Heading, 600.0, Verdict::Below, &m).unwrap();
+        assert!(long.contains("bias instability or random walk"), "{long}");
     }
 }
