@@ -90,6 +90,25 @@ pub(crate) fn band(sorted: &[f64]) -> (f64, f64) {
     )
 }
 
+/// [`band`] of `sorted` without its element at index `skip` (the others of one member), read in
+/// place: element j of the shortened list is `sorted[j]` below `skip`, `sorted[j + 1]` from it.
+fn band_without(sorted: &[f64], skip: usize) -> (f64, f64) {
+    let r = sorted.len() - 1;
+    let at = |j: usize| sorted[if j < skip { j } else { j + 1 }];
+    let stat = |a: f64| {
+        let a = a.clamp(1.0, r as f64);
+        let i = a.floor() as usize;
+        let f = a - i as f64;
+        if i < r {
+            at(i - 1) * (1.0 - f) + at(i) * f
+        } else {
+            at(i - 1)
+        }
+    };
+    let a = (0.025 * (r + 1) as f64).max(1.0);
+    (stat(a), stat((r + 1) as f64 - a))
+}
+
 /// The joint test over `cells` (module doc); None without a cell whose members all have a
 /// positive finite RMS, or with fewer than 10 simulated experiments.
 pub fn joint_check(cells: &[Cell]) -> Option<JointCheck> {
@@ -116,6 +135,15 @@ pub fn joint_check(cells: &[Cell]) -> Option<JointCheck> {
             .chain(c.simulated.iter().copied())
             .collect();
         let ln: Vec<f64> = x.iter().map(|v| v.ln()).collect();
+        // The members sorted once, and each member's place there: its band is that of the
+        // others, the sorted list without it (`band_without`).
+        let mut order: Vec<usize> = (0..members).collect();
+        order.sort_by(|&a, &b| x[a].total_cmp(&x[b]));
+        let sorted: Vec<f64> = order.iter().map(|&j| x[j]).collect();
+        let mut rank = vec![0usize; members];
+        for (r, &j) in order.iter().enumerate() {
+            rank[j] = r;
+        }
         let (sum, sum2) = ln.iter().fold((0.0, 0.0), |(s, q), v| (s + v, q + v * v));
         let others = (members - 1) as f64;
         for i in 0..members {
@@ -128,14 +156,7 @@ pub fn joint_check(cells: &[Cell]) -> Option<JointCheck> {
                     worst[i] = k;
                 }
             }
-            let mut rest: Vec<f64> = x
-                .iter()
-                .enumerate()
-                .filter(|&(j, _)| j != i)
-                .map(|(_, &v)| v)
-                .collect();
-            rest.sort_by(f64::total_cmp);
-            let (lo, hi) = band(&rest);
+            let (lo, hi) = band_without(&sorted, rank[i]);
             if x[i] < lo || x[i] > hi {
                 outside[i] += 1;
             }
@@ -292,6 +313,23 @@ mod tests {
         assert!(!j.consistent);
         assert_eq!(j.model_outside_at_least, 0.0);
         assert!((0.0..=1.0).contains(&j.model_all_inside));
+    }
+
+    /// The band of the others read in place is the band of the shortened list, bit for bit.
+    #[test]
+    fn band_without_is_the_band_of_the_others() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(5);
+        for n in [11usize, 40, 41, 200] {
+            let mut v: Vec<f64> = (0..n)
+                .map(|_| rng.sample::<f64, _>(StandardNormal))
+                .collect();
+            v.sort_by(f64::total_cmp);
+            for skip in 0..n {
+                let mut rest = v.clone();
+                rest.remove(skip);
+                assert_eq!(band_without(&v, skip), band(&rest), "n {n} skip {skip}");
+            }
+        }
     }
 
     #[test]
