@@ -126,7 +126,7 @@ pub fn joint_check(cells: &[Cell]) -> Option<JointCheck> {
     if cells.iter().any(|c| c.simulated.len() + 1 != members) {
         return None;
     }
-    // Per cell, each member's ln RMS (member 0 the measurement) and raw value.
+    // Per member (0 the measurement): its largest |z| (T), the cell of it, its cells outside (C).
     let mut t = vec![0.0f64; members];
     let mut worst = vec![0usize; members];
     let mut outside = vec![0usize; members];
@@ -134,7 +134,10 @@ pub fn joint_check(cells: &[Cell]) -> Option<JointCheck> {
         let x: Vec<f64> = std::iter::once(c.measured)
             .chain(c.simulated.iter().copied())
             .collect();
+        // ln RMS about the members' mean (the leave-one-out sums below then keep their digits).
         let ln: Vec<f64> = x.iter().map(|v| v.ln()).collect();
+        let centre = ln.iter().sum::<f64>() / members as f64;
+        let ln: Vec<f64> = ln.iter().map(|v| v - centre).collect();
         // The members sorted once, and each member's place there: its band is that of the
         // others, the sorted list without it (`band_without`).
         let mut order: Vec<usize> = (0..members).collect();
