@@ -37,7 +37,7 @@ enum Command {
     Diagnose(cmd_diagnose::Args),
     /// Combine shard outputs of `simulate --shard i/k` into the single-machine result
     Merge(cmd_merge::Args),
-    /// Drift measured on static logs against the model's prediction under one protocol, with a verdict
+    /// Drift measured on static logs against the model's prediction under one protocol, with a verdict per horizon and quantity and one for all of them together
     Drift(cmd_drift::Args),
     /// Print a shell completion script on stdout (e.g. `imudrift completions bash > /etc/bash_completion.d/imudrift`)
     Completions {
