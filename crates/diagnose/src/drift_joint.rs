@@ -66,47 +66,37 @@ pub struct Cell {
     pub simulated: Vec<f64>,
 }
 
-/// The order statistic of 1-based fractional rank `a` of `sorted` (linear between neighbours,
-/// clamped): the band rule of `drift_check`.
-pub(crate) fn order_stat(sorted: &[f64], a: f64) -> f64 {
-    let a = a.clamp(1.0, sorted.len() as f64);
+/// The order statistic of 1-based fractional rank `a` of a sorted list of `len` values read by
+/// `at` (linear between neighbours, clamped): the band rule of `drift_check`.
+fn order_stat(len: usize, at: impl Fn(usize) -> f64, a: f64) -> f64 {
+    let a = a.clamp(1.0, len as f64);
     let i = a.floor() as usize;
     let f = a - i as f64;
-    if i < sorted.len() {
-        sorted[i - 1] * (1.0 - f) + sorted[i] * f
+    if i < len {
+        at(i - 1) * (1.0 - f) + at(i) * f
     } else {
-        sorted[i - 1]
+        at(i - 1)
     }
 }
 
-/// The 95 % band of `values` (sorted): order statistics a and R + 1 - a, a = 0.025 (R + 1), at
-/// least the extremes.
-pub(crate) fn band(sorted: &[f64]) -> (f64, f64) {
-    let r = sorted.len();
+/// The 95 % band of a sorted list of R values read by `at`: order statistics a and R + 1 - a,
+/// a = 0.025 (R + 1), at least the extremes.
+fn band_of(r: usize, at: impl Fn(usize) -> f64 + Copy) -> (f64, f64) {
     let a = (0.025 * (r + 1) as f64).max(1.0);
-    (
-        order_stat(sorted, a),
-        order_stat(sorted, (r + 1) as f64 - a),
-    )
+    (order_stat(r, at, a), order_stat(r, at, (r + 1) as f64 - a))
+}
+
+/// The 95 % band of `sorted` (module doc of `drift_check`).
+pub(crate) fn band(sorted: &[f64]) -> (f64, f64) {
+    band_of(sorted.len(), |j| sorted[j])
 }
 
 /// [`band`] of `sorted` without its element at index `skip` (the others of one member), read in
 /// place: element j of the shortened list is `sorted[j]` below `skip`, `sorted[j + 1]` from it.
 fn band_without(sorted: &[f64], skip: usize) -> (f64, f64) {
-    let r = sorted.len() - 1;
-    let at = |j: usize| sorted[if j < skip { j } else { j + 1 }];
-    let stat = |a: f64| {
-        let a = a.clamp(1.0, r as f64);
-        let i = a.floor() as usize;
-        let f = a - i as f64;
-        if i < r {
-            at(i - 1) * (1.0 - f) + at(i) * f
-        } else {
-            at(i - 1)
-        }
-    };
-    let a = (0.025 * (r + 1) as f64).max(1.0);
-    (stat(a), stat((r + 1) as f64 - a))
+    band_of(sorted.len() - 1, |j| {
+        sorted[if j < skip { j } else { j + 1 }]
+    })
 }
 
 /// The joint test over `cells` (module doc); None without a cell whose members all have a
@@ -234,14 +224,15 @@ mod tests {
     }
 
     /// Under the model (the measurement one more experiment) the test rejects at most 5 % of the
-    /// time, whatever the cells' correlation: 2000 trials each at rho = 0 and 0.9, 20 cells,
-    /// R = 40. The rejection rate of an exact test at level 0.05 with R = 40 is 2/41 = 4.88 %;
+    /// time, whatever the cells' correlation: 2000 trials each at rho = 0, 0.3, 0.6 and 0.9, 20
+    /// cells, R = 40 (measured 80-83 rejected, 4.0-4.2 %: the min-p of two statistics is a little
+    /// conservative). The rejection rate of an exact test at level 0.05 with R = 40 is 2/41 = 4.88 %;
     /// the bound 4.88 % + 3.1 standard deviations of 2000 trials (sqrt(0.0488 * 0.951 / 2000)
     /// = 0.48 %): 6.4 %, passed by a right test with probability 0.999. And at least 3 %: a test
     /// that never rejects would pass a bound from above alone.
     #[test]
     fn rejects_five_percent_under_the_model() {
-        for &rho in &[0.0, 0.9] {
+        for &rho in &[0.0, 0.3, 0.6, 0.9] {
             let mut rng = rand::rngs::StdRng::seed_from_u64(7);
             let trials = 2000;
             let rejected = (0..trials)
@@ -251,6 +242,7 @@ mod tests {
                 })
                 .count();
             let rate = rejected as f64 / trials as f64;
+            println!("rho {rho}: rejected {rejected}/{trials}");
             assert!((0.030..=0.064).contains(&rate), "rho {rho}: rate {rate}");
         }
     }
@@ -273,6 +265,7 @@ mod tests {
                 found += 1;
             }
         }
+        println!("one cell far out: found {found}/{trials}");
         assert!(
             found as f64 / trials as f64 >= 0.8,
             "found {found} of {trials}"
@@ -295,6 +288,7 @@ mod tests {
                     .consistent
             })
             .count();
+        println!("many cells a little out: rejected {rejected}/{trials}");
         assert!(
             rejected as f64 / trials as f64 >= 0.8,
             "rejected {rejected} of {trials}"
