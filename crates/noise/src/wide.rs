@@ -253,11 +253,16 @@ mod avx512 {
                 unsafe { _mm512_storeu_pd(group.as_mut_ptr(), kept) };
                 rejected[g] = !accepted;
             }
-            // The rejected draws finished in draw order (group, then lane).
-            for (g, &mask) in rejected[..groups].iter().enumerate() {
-                let mut mask = mask;
+            // The rejected draws finished in draw order (group, then lane): eight groups' masks
+            // read as one little-endian word, whose set bits are the positions in order (a
+            // branch per word, not per group).
+            for g0 in (0..groups).step_by(8) {
+                let take = (groups - g0).min(8);
+                let mut word = [0u8; 8];
+                word[..take].copy_from_slice(&rejected[g0..g0 + take]);
+                let mut mask = u64::from_le_bytes(word);
                 while mask != 0 {
-                    let at = g * LANES + mask.trailing_zeros() as usize;
+                    let at = g0 * LANES + mask.trailing_zeros() as usize;
                     mask &= mask - 1;
                     let bits = pass[at].to_bits();
                     let (i, u) = ((bits & 0xff) as usize, with_exponent(bits >> 12, 1) - 3.0);

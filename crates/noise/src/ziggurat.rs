@@ -48,8 +48,7 @@ pub fn standard_normal<R: RngCore + ?Sized>(rng: &mut R) -> f64 {
 /// (`|x| >= X[i + 1]`): the base strip's tail (i = 0) or the wedge test, and on failure a fresh
 /// draw, each from `rng` (the same steps as the loop of [`standard_normal`] after its first pass,
 /// with the further bits taken from `rng`; used by the wide sampler, `crate::wide`).
-#[cold]
-#[inline(never)]
+#[inline]
 pub(crate) fn finish_rejected<R: RngCore + ?Sized>(rng: &mut R, i: usize, u: f64, x: f64) -> f64 {
     if i == 0 {
         return tail(rng, u);
@@ -84,7 +83,7 @@ fn squeeze(i: usize, x: f64, y: f64) -> Option<bool> {
     let (f_hi, f_lo) = (ZIG_NORM_F[i + 1], ZIG_NORM_F[i]);
     let (x_near, x_far) = (ZIG_NORM_X[i + 1], ZIG_NORM_X[i]);
     let a = x.abs();
-    let chord = f_hi + (a - x_near) * ((f_lo - f_hi) / (x_far - x_near));
+    let chord = f_hi + (a - x_near) * ZIG_NORM_SLOPE[i];
     let tangent_near = f_hi * (1.0 - x_near * (a - x_near));
     let tangent_far = f_lo * (1.0 - x_far * (a - x_far));
     let (below, above) = if x_near >= 1.0 {
@@ -220,8 +219,22 @@ const NORM_X: [f64; 257] =
      0.487443966121754335, 0.463634336771763245, 0.437518402186662658, 0.408389134588000746,
      0.375121332850465727, 0.335737519180459465, 0.286174591747260509, 0.215241895913273806,
      0.000000000000000000];
+static ZIG_NORM_F: [f64; 257] = NORM_F;
+
+/// Each wedge's chord slope (F[i] - F[i+1]) / (X[i] - X[i+1]) (layer i >= 1; the squeeze of
+/// [`wedge_accepts`]), divided once here (at compile time: the same IEEE quotient as at run time).
+static ZIG_NORM_SLOPE: [f64; 256] = {
+    let mut out = [0.0; 256];
+    let mut i = 0;
+    while i < 256 {
+        out[i] = (NORM_F[i] - NORM_F[i + 1]) / (NORM_X[i] - NORM_X[i + 1]);
+        i += 1;
+    }
+    out
+};
+
 #[rustfmt::skip]
-static ZIG_NORM_F: [f64; 257] =
+const NORM_F: [f64; 257] =
     [0.000477467764586655, 0.001260285930498598, 0.002609072746106363, 0.004037972593371872,
      0.005522403299264754, 0.007050875471392110, 0.008616582769422917, 0.010214971439731100,
      0.011842757857943104, 0.013497450601780807, 0.015177088307982072, 0.016880083152595839,
