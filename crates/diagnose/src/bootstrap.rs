@@ -37,7 +37,7 @@
 
 use crate::fitted_on::FittedOn;
 use crate::model_terms::{fitted_term, set_term, squared_level};
-use crate::simulate::{adev_at, with_static_log, SimSetup};
+use crate::simulate::{adev_at, map_static_logs, LogJob, SimSetup};
 use allan::{EdfMethod, Estimator};
 use noise::{AxisModel, Channel, Effect, ImuChannels, SensorModel, Term};
 use rayon::prelude::*;
@@ -367,30 +367,31 @@ fn simulate_fitted_logs(
     let jobs: Vec<(usize, usize)> = (0..replicates)
         .flat_map(|r| (0..logs).map(move |t| (r, t)))
         .collect();
-    let per_job: Vec<Vec<Vec<f64>>> = jobs
-        .par_iter()
-        .map(|&(r, t)| {
-            let setup = SimSetup::plain(
-                fitted.sample_interval_s,
-                fitted.samples[t],
-                noise::ImuChannels::from_fn(|c| fits.iter().any(|f| f.ch == c)),
-            );
-            let run = first_run + (r * logs + t) as u64;
-            let out = with_static_log(model, &setup, seed, run, |log| {
-                fits.iter()
-                    .map(|f| {
-                        let ms = &f.grid_m[..f.held[t]];
-                        adev_at(&log[f.ch], fitted.sample_interval_s, ms)
-                            .iter()
-                            .map(|a| a * a)
-                            .collect()
-                    })
-                    .collect()
-            });
-            tick();
-            out
+    let active = noise::ImuChannels::from_fn(|c| fits.iter().any(|f| f.ch == c));
+    let log_jobs: Vec<LogJob> = jobs
+        .iter()
+        .map(|&(r, t)| LogJob {
+            model,
+            setup: SimSetup::plain(fitted.sample_interval_s, fitted.samples[t], active),
+            seed,
+            run: first_run + (r * logs + t) as u64,
         })
         .collect();
+    let per_job: Vec<Vec<Vec<f64>>> = map_static_logs(&log_jobs, |j, log| {
+        let t = jobs[j].1;
+        let out = fits
+            .iter()
+            .map(|f| {
+                let ms = &f.grid_m[..f.held[t]];
+                adev_at(&log[f.ch], fitted.sample_interval_s, ms)
+                    .iter()
+                    .map(|a| a * a)
+                    .collect()
+            })
+            .collect();
+        tick();
+        out
+    });
     // Regroup as [replicate][channel][log].
     (0..replicates)
         .map(|r| {

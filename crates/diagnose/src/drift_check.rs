@@ -39,7 +39,7 @@ use crate::fitted_on::FittedOn;
 use crate::input::LogInput;
 use crate::observer::Observer;
 use crate::protocol::{all_segment_errors, Protocol, Quantity, SegmentErrors};
-use crate::simulate::{with_static_log, SimSetup};
+use crate::simulate::{map_static_logs, LogJob, SimSetup};
 use noise::SensorModel;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -611,7 +611,8 @@ fn simulate_experiments<'m>(
     let jobs: Vec<(usize, usize)> = (0..settings.replicates)
         .flat_map(|r| (0..logs.len()).map(move |l| (r, l)))
         .collect();
-    jobs.par_iter()
+    let log_jobs: Vec<LogJob> = jobs
+        .iter()
         .map(|&(r, l)| {
             let log = &logs[l];
             let samples = log
@@ -622,21 +623,25 @@ fn simulate_experiments<'m>(
                 .map(|c| c.len())
                 .min()
                 .unwrap_or(0);
-            let setup = SimSetup::plain(
-                dt_s,
-                samples,
-                noise::ImuChannels::from_fn(|c| log.channels[c].is_some()),
-            );
-            let run = (r * logs.len() + l) as u64;
-            let out = with_static_log(model_of(r), &setup, settings.seed, run, |sim| {
-                let chans =
-                    noise::ImuChannels::from_fn(|c| setup.active[c].then(|| sim[c].as_slice())).0;
-                all_segment_errors(&chans, dt_s, &settings.protocol)
-            });
-            progress.tick();
-            out
+            LogJob {
+                model: model_of(r),
+                setup: SimSetup::plain(
+                    dt_s,
+                    samples,
+                    noise::ImuChannels::from_fn(|c| log.channels[c].is_some()),
+                ),
+                seed: settings.seed,
+                run: (r * logs.len() + l) as u64,
+            }
         })
-        .collect()
+        .collect();
+    map_static_logs(&log_jobs, |j, sim| {
+        let active = &log_jobs[j].setup.active;
+        let chans = noise::ImuChannels::from_fn(|c| active[c].then(|| sim[c].as_slice())).0;
+        let out = all_segment_errors(&chans, dt_s, &settings.protocol);
+        progress.tick();
+        out
+    })
 }
 
 /// The measured logs and the simulated experiments of one check.

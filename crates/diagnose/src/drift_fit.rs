@@ -52,7 +52,7 @@ use crate::model_terms::{
     fitted_term, flicker_band, has_random_walk_bias_instability, set_term, squared_level,
 };
 use crate::protocol::{all_segment_errors, Protocol, Quantity};
-use crate::simulate::{with_static_log, SimSetup};
+use crate::simulate::{map_static_logs, LogJob, SimSetup};
 use crate::trials::{at_squared_level, Named, Trial};
 use noise::{Channel, Effect, GaussMarkov, ModelError, SensorModel, SlowGaussMarkov, Term};
 
@@ -112,7 +112,6 @@ impl UnitDrift<'_> {
     /// `model`'s channel `c` alone (the other channels ideal), over the simulated logs at every
     /// run length.
     pub(crate) fn mean_squares(&self, model: &SensorModel, c: Channel) -> Vec<[f64; 5]> {
-        use rayon::prelude::*;
         let k = self.decimation();
         let dt_u = self.dt_s * k as f64;
         let lengths: Vec<usize> = self.samples.iter().map(|n| n / k).collect();
@@ -122,28 +121,30 @@ impl UnitDrift<'_> {
             noise::ImuChannels::from_fn(|i| i == c),
         );
         let nh = self.protocol.horizons_s.len();
-        let sums: Vec<Vec<([f64; 5], usize)>> = (0..self.logs as u64)
-            .into_par_iter()
-            .map(|s| {
-                with_static_log(model, &setup, self.seed, UNIT_RUN_BASE + s, |log| {
-                    let mut acc = vec![([0.0; 5], 0usize); nh];
-                    for &n in &lengths {
-                        let chans =
-                            noise::ImuChannels::from_fn(|i| (i == c).then(|| &log[i][..n])).0;
-                        for (h, e) in all_segment_errors(&chans, dt_u, self.protocol)
-                            .iter()
-                            .enumerate()
-                        {
-                            for (qi, q) in Quantity::ALL.iter().enumerate() {
-                                acc[h].0[qi] += e.values(*q).iter().map(|x| x * x).sum::<f64>();
-                            }
-                            acc[h].1 += e.len();
-                        }
-                    }
-                    acc
-                })
+        let jobs: Vec<LogJob> = (0..self.logs as u64)
+            .map(|s| LogJob {
+                model,
+                setup: setup.clone(),
+                seed: self.seed,
+                run: UNIT_RUN_BASE + s,
             })
             .collect();
+        let sums: Vec<Vec<([f64; 5], usize)>> = map_static_logs(&jobs, |_, log| {
+            let mut acc = vec![([0.0; 5], 0usize); nh];
+            for &n in &lengths {
+                let chans = noise::ImuChannels::from_fn(|i| (i == c).then(|| &log[i][..n])).0;
+                for (h, e) in all_segment_errors(&chans, dt_u, self.protocol)
+                    .iter()
+                    .enumerate()
+                {
+                    for (qi, q) in Quantity::ALL.iter().enumerate() {
+                        acc[h].0[qi] += e.values(*q).iter().map(|x| x * x).sum::<f64>();
+                    }
+                    acc[h].1 += e.len();
+                }
+            }
+            acc
+        });
         (0..nh)
             .map(|h| {
                 let count: usize = sums.iter().map(|a| a[h].1).sum();

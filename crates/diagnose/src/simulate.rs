@@ -137,15 +137,21 @@ pub fn static_log(
     seed: u64,
     run: u64,
 ) -> ImuChannels<Vec<f64>> {
-    let mut out = ImuChannels::default();
-    static_log_into(model, setup, seed, run, &mut out);
+    let mut out = [ImuChannels::default()];
+    static_logs_into(&[model], setup, seed, &[run], &mut out);
+    let [out] = out;
     out
 }
 
+/// Simulated logs generated side by side ([`with_static_logs`]): their generators' serial
+/// recursions run in one loop (`noise::ChannelErrors::fill_static_lanes`), each log's values
+/// those of the log alone. Four logs of 1 000 000 samples are 192 MB of the thread's buffer.
+pub const LOG_LANES: usize = 4;
+
 thread_local! {
-    /// The log [`with_static_log`] lends, kept per thread between calls (a fresh 8 MB vector per
+    /// The logs [`with_static_logs`] lends, kept per thread between calls (a fresh 8 MB vector per
     /// channel and log costs its page faults again every time).
-    static LOG_BUFFER: std::cell::RefCell<ImuChannels<Vec<f64>>> = std::cell::RefCell::default();
+    static LOG_BUFFER: std::cell::RefCell<Vec<ImuChannels<Vec<f64>>>> = std::cell::RefCell::default();
 }
 
 /// `f` of the static log of run `run` ([`static_log`]'s values), generated into this thread's
@@ -157,49 +163,136 @@ pub fn with_static_log<R>(
     run: u64,
     f: impl FnOnce(&ImuChannels<Vec<f64>>) -> R,
 ) -> R {
-    // Taken out for the call, so that a nested call finds an empty buffer instead of a borrow.
-    let mut log = LOG_BUFFER.with(|b| std::mem::take(&mut *b.borrow_mut()));
-    static_log_into(model, setup, seed, run, &mut log);
-    let result = f(&log);
-    LOG_BUFFER.with(|b| *b.borrow_mut() = log);
-    result
+    let mut f = Some(f);
+    let mut result = None;
+    with_static_logs(&[model], setup, seed, &[run], |_, log| {
+        result = f.take().map(|f| f(log));
+    });
+    result.expect("one log")
 }
 
-/// [`static_log`] into `out`'s vectors (their capacity reused).
-fn static_log_into(
-    model: &SensorModel,
+/// `f(l, log)` for the static logs of runs `runs[l]` of `models[l]` (one setup), in lane order,
+/// generated side by side into this thread's reused buffer: each log has [`static_log`]'s values.
+pub fn with_static_logs(
+    models: &[&SensorModel],
     setup: &SimSetup,
     seed: u64,
-    run: u64,
-    out: &mut ImuChannels<Vec<f64>>,
+    runs: &[u64],
+    mut f: impl FnMut(usize, &ImuChannels<Vec<f64>>),
+) {
+    // Taken out for the call, so that a nested call finds an empty buffer instead of a borrow.
+    let mut logs = LOG_BUFFER.with(|b| std::mem::take(&mut *b.borrow_mut()));
+    logs.resize_with(runs.len().max(logs.len()), ImuChannels::default);
+    static_logs_into(models, setup, seed, runs, &mut logs[..runs.len()]);
+    for (l, log) in logs[..runs.len()].iter().enumerate() {
+        f(l, log);
+    }
+    LOG_BUFFER.with(|b| *b.borrow_mut() = logs);
+}
+
+/// One simulated log to make: run `run` of `model` under `setup`.
+pub struct LogJob<'a> {
+    pub model: &'a SensorModel,
+    pub setup: SimSetup<'a>,
+    pub seed: u64,
+    pub run: u64,
+}
+
+/// `f(j, log)` of every job's log, in job order, in parallel: jobs of one setup (length, active
+/// channels, interval) generated [`LOG_LANES`] at a time side by side ([`with_static_logs`]). Each
+/// value is that of the log alone, so neither the grouping nor the thread count changes any.
+pub fn map_static_logs<R: Send>(
+    jobs: &[LogJob],
+    f: impl Fn(usize, &ImuChannels<Vec<f64>>) -> R + Sync,
+) -> Vec<R> {
+    use rayon::prelude::*;
+    let key = |j: &LogJob| {
+        (
+            j.setup.samples,
+            j.setup.dt_s.to_bits(),
+            j.setup.active.0,
+            j.seed,
+        )
+    };
+    let mut order: Vec<usize> = (0..jobs.len()).collect();
+    order.sort_by_key(|&j| key(&jobs[j]));
+    let mut groups: Vec<&[usize]> = Vec::new();
+    for same in order.chunk_by(|&a, &b| key(&jobs[a]) == key(&jobs[b])) {
+        groups.extend(same.chunks(LOG_LANES));
+    }
+    let done: Vec<Vec<(usize, R)>> = groups
+        .par_iter()
+        .map(|group| {
+            let first = &jobs[group[0]];
+            let models: Vec<&SensorModel> = group.iter().map(|&j| jobs[j].model).collect();
+            let runs: Vec<u64> = group.iter().map(|&j| jobs[j].run).collect();
+            let mut out = Vec::with_capacity(group.len());
+            with_static_logs(&models, &first.setup, first.seed, &runs, |l, log| {
+                out.push((group[l], f(group[l], log)));
+            });
+            out
+        })
+        .collect();
+    let mut results: Vec<Option<R>> = std::iter::repeat_with(|| None).take(jobs.len()).collect();
+    for (j, r) in done.into_iter().flatten() {
+        results[j] = Some(r);
+    }
+    results.into_iter().flatten().collect()
+}
+
+/// [`static_log`] of several runs side by side into `out`'s logs (their vectors' capacity
+/// reused): lane l is run `runs[l]` of `models[l]`.
+fn static_logs_into(
+    models: &[&SensorModel],
+    setup: &SimSetup,
+    seed: u64,
+    runs: &[u64],
+    out: &mut [ImuChannels<Vec<f64>>],
 ) {
     let n = setup.samples;
-    let mut errors = ImuErrors::new(model, setup.dt_s, seed, run);
+    let mut errors: Vec<ImuErrors> = models
+        .iter()
+        .zip(runs)
+        .map(|(m, &run)| ImuErrors::new(m, setup.dt_s, seed, run))
+        .collect();
     // A static level IMU reads zero rate and specific force (0, 0, -g) (docs/cli.md convention).
     let gyro = Vector3::zeros();
     let accel = Vector3::new(0.0, 0.0, -G_MPS2);
     // Each channel owns its random streams, so generating only the active ones changes nothing else.
-    for (ch, gen) in Channel::ALL
-        .into_iter()
-        .zip(errors.channels_mut().iter_mut())
-    {
-        let series = &mut out[ch];
+    for (c, ch) in Channel::ALL.into_iter().enumerate() {
+        let mut lanes: Vec<&mut noise::ChannelErrors> = errors
+            .iter_mut()
+            .map(|e| &mut e.channels_mut()[c])
+            .collect();
+        let mut series: Vec<&mut [f64]> = out
+            .iter_mut()
+            .map(|log| {
+                let s = &mut log[ch];
+                if setup.active[ch] {
+                    // `fill_static` writes every sample (no value of a previous log survives),
+                    // so the previous log's values are left in place rather than zeroed first:
+                    // zeroing the six 8 MB vectors of every log was 1.8 % of `imudrift drift`
+                    // (memset, 2026-11-26).
+                    s.resize(n, 0.0);
+                } else {
+                    s.clear();
+                }
+                s.as_mut_slice()
+            })
+            .collect();
         if setup.active[ch] {
-            // `fill_static` writes every sample (no value of a previous log survives), so the
-            // previous log's values are left in place rather than zeroed first: zeroing the six
-            // 8 MB vectors of every log was 1.8 % of `imudrift drift` (memset, 2026-11-26).
-            series.resize(n, 0.0);
-            gen.fill_static(0, if ch.is_gyro() { &gyro } else { &accel }, series);
-        } else {
-            series.clear();
+            let ideal = if ch.is_gyro() { &gyro } else { &accel };
+            noise::ChannelErrors::fill_static_lanes(&mut lanes, 0, ideal, &mut series);
         }
     }
     if let Some(temp) = setup.temperature_c {
-        for (ch, series) in out.iter_mut() {
-            let c = setup.temp_coeff[ch];
-            if c != 0.0 {
-                for (x, t) in series.iter_mut().zip(temp) {
-                    *x += c * t;
+        for log in out.iter_mut() {
+            for (ch, series) in log.iter_mut() {
+                let c = setup.temp_coeff[ch];
+                if c != 0.0 {
+                    for (x, t) in series.iter_mut().zip(temp) {
+                        *x += c * t;
+                    }
                 }
             }
         }
@@ -249,6 +342,26 @@ impl RunKernel for Kernel<'_> {
         with_static_log(self.model, self.setup, self.seed, run, |log| {
             self.rows(log, out)
         })
+    }
+    fn lanes(&self) -> usize {
+        LOG_LANES
+    }
+    /// The logs generated side by side ([`with_static_logs`]), then each log's rows.
+    fn run_lanes(
+        &self,
+        first: u64,
+        out: &mut [f64],
+        results: &mut [Result<(), montecarlo::runner::RunError>],
+    ) {
+        let width = out.len() / results.len().max(1);
+        let runs: Vec<u64> = (first..).take(results.len()).collect();
+        let models = vec![self.model; runs.len()];
+        let mut rows = out.chunks_mut(width);
+        with_static_logs(&models, self.setup, self.seed, &runs, |l, log| {
+            if let Some(row) = rows.next() {
+                results[l] = self.rows(log, row);
+            }
+        });
     }
 }
 

@@ -165,12 +165,21 @@ impl DriftKernel {
                         (ideal_g[i], ideal_a[i]) = (gyro.0, accel.0);
                     }
                 }
-                for (lane, e) in block.iter_mut().zip(&mut errors) {
-                    let out = lane.each_mut().map(|b| &mut b[..n]);
-                    match &still {
-                        Some((gyro, accel)) => e.fill_static(k, &gyro.0, &accel.0, out),
-                        None => e.fill_moving(k, &ideal_g[..n], &ideal_a[..n], out),
+                let mut outs: Vec<[&mut [f64]; 6]> = block
+                    .iter_mut()
+                    .map(|lane| lane.each_mut().map(|b| &mut b[..n]))
+                    .collect();
+                match &still {
+                    Some((gyro, accel)) => {
+                        ImuErrors::fill_static_lanes(&mut errors, k, &gyro.0, &accel.0, &mut outs)
                     }
+                    None => ImuErrors::fill_moving_lanes(
+                        &mut errors,
+                        k,
+                        &ideal_g[..n],
+                        &ideal_a[..n],
+                        &mut outs,
+                    ),
                 }
                 integrate_fast(&mut nav, &block, n, self.dt_s);
                 k += n as u64;

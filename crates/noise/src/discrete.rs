@@ -396,6 +396,367 @@ impl GaussMarkovBank {
     }
 }
 
+/// One run's share of [`fused4::run`]: its bank and the bank's draws for the block (made by
+/// [`GaussMarkovBank::block_draws`]), the random walk and the resonance that follow it (each with
+/// its draws, or None), and its block.
+pub(crate) struct FusedLane<'a> {
+    pub bank: &'a mut GaussMarkovBank,
+    pub bank_draws: &'a [f64],
+    pub walk: Option<(&'a mut RandomWalk, &'a [f64])>,
+    pub res: Option<(&'a mut crate::terms::resonance::Resonator, &'a [f64])>,
+    pub out: &'a mut [f64],
+}
+
+impl GaussMarkovBank {
+    /// Whether `other` can run in lockstep with this bank: the same number of every-sample
+    /// components, and the held ones on the same schedule (holds and countdowns).
+    fn same_schedule(&self, other: &GaussMarkovBank) -> bool {
+        self.state.len() == other.state.len()
+            && self.event_span == other.event_span
+            && self.until_event == other.until_event
+            && self.held.len() == other.held.len()
+            && self
+                .held
+                .iter()
+                .zip(&other.held)
+                .all(|(a, b)| a.every == b.every && a.left == b.left)
+    }
+
+    /// The draws of the next `n` samples into `scratch` ([`Self::block_draws`]); their count.
+    pub(crate) fn draw_block(
+        &self,
+        rng: &mut NormalStream,
+        scratch: &mut Vec<f64>,
+        n: usize,
+    ) -> usize {
+        self.block_draws(rng, scratch, n).len()
+    }
+}
+
+/// Four runs' banks, each followed by its random walk and resonance (or not), advanced in one
+/// AVX2 loop, run l in lane l of each 256-bit register. Per run and sample the operations of
+/// [`GaussMarkovBank::add_block_then`] with its followers, in their order, without fused
+/// multiply-adds: each lane gets the bits of its run alone (tested in `tests/lanes.rs`). Why: one
+/// run's loop costs about 40 instructions a raw sample (the bank's components, the walk, the
+/// resonance, five draw streams, the output) and its resonance a 12-cycle chain; in lanes the
+/// arithmetic is shared by four runs and the chains run side by side. The draws and blocks are
+/// transposed into sample-major order around the loop.
+pub(crate) mod fused4 {
+    use super::{FusedLane, GaussMarkovBank};
+
+    /// Runs advanced together.
+    pub(crate) const LANES: usize = 4;
+
+    /// Whether four banks can run in [`run`]: the CPU has AVX2, 1-4 every-sample components,
+    /// one schedule.
+    pub(crate) fn available(banks: [&GaussMarkovBank; LANES]) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        {
+            std::arch::is_x86_feature_detected!("avx2")
+                && (1..=4).contains(&banks[0].state.len())
+                && banks.iter().all(|b| b.same_schedule(banks[0]))
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let _ = banks;
+            false
+        }
+    }
+
+    /// The four lanes (all with or all without a walk, and a resonance; blocks of one length;
+    /// [`available`] true).
+    pub(crate) fn run(lanes: &mut [FusedLane; LANES]) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            let n = lanes[0].bank.state.len();
+            let (w, r) = (lanes[0].walk.is_some(), lanes[0].res.is_some());
+            assert!(
+                lanes.iter().all(|l| l.walk.is_some() == w
+                    && l.res.is_some() == r
+                    && l.out.len() == lanes[0].out.len()
+                    && l.bank.state.len() == n),
+                "lanes of one shape"
+            );
+            macro_rules! go {
+                ($n:literal) => {
+                    // SAFETY: `available` checked that the CPU has AVX2.
+                    unsafe {
+                        match (w, r) {
+                            (true, true) => x86::run::<$n, true, true>(lanes),
+                            (true, false) => x86::run::<$n, true, false>(lanes),
+                            (false, true) => x86::run::<$n, false, true>(lanes),
+                            (false, false) => x86::run::<$n, false, false>(lanes),
+                        }
+                    }
+                };
+            }
+            match n {
+                1 => go!(1),
+                2 => go!(2),
+                3 => go!(3),
+                _ => go!(4),
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let _ = lanes;
+            unreachable!("fused4::available is false here")
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    mod x86 {
+        use super::{FusedLane, LANES};
+        use std::arch::x86_64::*;
+
+        thread_local! {
+            /// The transposed draws and block (sample-major, four lanes a sample), reused.
+            static SCRATCH: std::cell::RefCell<[Vec<f64>; 4]> = std::cell::RefCell::default();
+        }
+
+        /// dst[4 k + l] = src[l][k], k < len.
+        #[target_feature(enable = "avx2")]
+        fn interleave(src: [&[f64]; LANES], len: usize, dst: &mut Vec<f64>) {
+            // Every value below LANES * len is written; a longer buffer's tail is left as it is.
+            if dst.len() < LANES * len {
+                dst.resize(LANES * len, 0.0);
+            }
+            let whole = len / 4 * 4;
+            for k in (0..whole).step_by(4) {
+                // SAFETY: src[l][k..k + 4] and dst[4k..4k + 16] are in bounds (k + 4 <= len).
+                unsafe {
+                    let r0 = _mm256_loadu_pd(src[0].as_ptr().add(k));
+                    let r1 = _mm256_loadu_pd(src[1].as_ptr().add(k));
+                    let r2 = _mm256_loadu_pd(src[2].as_ptr().add(k));
+                    let r3 = _mm256_loadu_pd(src[3].as_ptr().add(k));
+                    let t0 = _mm256_unpacklo_pd(r0, r1);
+                    let t1 = _mm256_unpackhi_pd(r0, r1);
+                    let t2 = _mm256_unpacklo_pd(r2, r3);
+                    let t3 = _mm256_unpackhi_pd(r2, r3);
+                    let d = dst.as_mut_ptr().add(4 * k);
+                    _mm256_storeu_pd(d, _mm256_permute2f128_pd::<0x20>(t0, t2));
+                    _mm256_storeu_pd(d.add(4), _mm256_permute2f128_pd::<0x20>(t1, t3));
+                    _mm256_storeu_pd(d.add(8), _mm256_permute2f128_pd::<0x31>(t0, t2));
+                    _mm256_storeu_pd(d.add(12), _mm256_permute2f128_pd::<0x31>(t1, t3));
+                }
+            }
+            for k in whole..len {
+                for l in 0..LANES {
+                    dst[4 * k + l] = src[l][k];
+                }
+            }
+        }
+
+        /// dst[l][k] = src[4 k + l].
+        #[target_feature(enable = "avx2")]
+        fn deinterleave(src: &[f64], dst: &mut [FusedLane; LANES]) {
+            let len = dst[0].out.len();
+            let whole = len / 4 * 4;
+            for k in (0..whole).step_by(4) {
+                // SAFETY: src[4k..4k + 16] and each out[k..k + 4] are in bounds.
+                unsafe {
+                    let s = src.as_ptr().add(4 * k);
+                    let r0 = _mm256_loadu_pd(s);
+                    let r1 = _mm256_loadu_pd(s.add(4));
+                    let r2 = _mm256_loadu_pd(s.add(8));
+                    let r3 = _mm256_loadu_pd(s.add(12));
+                    let t0 = _mm256_unpacklo_pd(r0, r1);
+                    let t1 = _mm256_unpackhi_pd(r0, r1);
+                    let t2 = _mm256_unpacklo_pd(r2, r3);
+                    let t3 = _mm256_unpackhi_pd(r2, r3);
+                    _mm256_storeu_pd(
+                        dst[0].out.as_mut_ptr().add(k),
+                        _mm256_permute2f128_pd::<0x20>(t0, t2),
+                    );
+                    _mm256_storeu_pd(
+                        dst[1].out.as_mut_ptr().add(k),
+                        _mm256_permute2f128_pd::<0x20>(t1, t3),
+                    );
+                    _mm256_storeu_pd(
+                        dst[2].out.as_mut_ptr().add(k),
+                        _mm256_permute2f128_pd::<0x31>(t0, t2),
+                    );
+                    _mm256_storeu_pd(
+                        dst[3].out.as_mut_ptr().add(k),
+                        _mm256_permute2f128_pd::<0x31>(t1, t3),
+                    );
+                }
+            }
+            for k in whole..len {
+                for (l, lane) in dst.iter_mut().enumerate() {
+                    lane.out[k] = src[4 * k + l];
+                }
+            }
+        }
+
+        /// Lane l of a register from four values.
+        #[inline(always)]
+        fn set(v: [f64; LANES]) -> __m256d {
+            // SAFETY: AVX is implied by the callers' AVX2.
+            unsafe { _mm256_set_pd(v[3], v[2], v[1], v[0]) }
+        }
+
+        #[inline(always)]
+        fn get(v: __m256d) -> [f64; LANES] {
+            let mut out = [0.0; LANES];
+            // SAFETY: four f64 into `out`.
+            unsafe { _mm256_storeu_pd(out.as_mut_ptr(), v) };
+            out
+        }
+
+        /// The loop ([`super::run`]): `N` every-sample components, a walk if `W`, a resonance if `R`.
+        #[target_feature(enable = "avx2")]
+        pub(super) fn run<const N: usize, const W: bool, const R: bool>(
+            lanes: &mut [FusedLane; LANES],
+        ) {
+            SCRATCH.with(|s| {
+                let s = &mut *s.borrow_mut();
+                let [bank_t, walk_t, res_t, out_t] = s;
+                let n = lanes[0].out.len();
+                let nb = lanes[0].bank_draws.len();
+                interleave(std::array::from_fn(|l| lanes[l].bank_draws), nb, bank_t);
+                if W {
+                    interleave(
+                        std::array::from_fn(|l| lanes[l].walk.as_ref().map_or(&[][..], |w| w.1)),
+                        n,
+                        walk_t,
+                    );
+                }
+                if R {
+                    interleave(
+                        std::array::from_fn(|l| lanes[l].res.as_ref().map_or(&[][..], |r| r.1)),
+                        2 * n,
+                        res_t,
+                    );
+                }
+                interleave(std::array::from_fn(|l| &*lanes[l].out), n, out_t);
+                let by = |f: &dyn Fn(usize) -> f64| set(std::array::from_fn(f));
+                let mut x: [__m256d; N] = std::array::from_fn(|c| by(&|l| lanes[l].bank.state[c]));
+                let phi: [__m256d; N] = std::array::from_fn(|c| by(&|l| lanes[l].bank.phi[c]));
+                let drive: [__m256d; N] = std::array::from_fn(|c| by(&|l| lanes[l].bank.drive[c]));
+                let walk = |f: &dyn Fn(&super::super::RandomWalk) -> f64| {
+                    by(&|l| lanes[l].walk.as_ref().map_or(0.0, |w| f(w.0)))
+                };
+                let mut ws = walk(&|w| w.state);
+                let step = walk(&|w| w.step);
+                let res = |f: &dyn Fn(&crate::terms::resonance::Resonator) -> f64| {
+                    by(&|l| lanes[l].res.as_ref().map_or(0.0, |r| f(r.0)))
+                };
+                let (mut rx, mut rv) = (res(&|r| r.state()[0]), res(&|r| r.state()[1]));
+                let [[p00, p01], [p10, p11]] = [
+                    [res(&|r| r.phi()[0][0]), res(&|r| r.phi()[0][1])],
+                    [res(&|r| r.phi()[1][0]), res(&|r| r.phi()[1][1])],
+                ];
+                let (l11, l21, l22) = (
+                    res(&|r| r.chol().0),
+                    res(&|r| r.chol().1),
+                    res(&|r| r.chol().2),
+                );
+                let held = !lanes[0].bank.held.is_empty();
+                let (bt, wt, rt, ot) = (
+                    bank_t.as_ptr(),
+                    walk_t.as_ptr(),
+                    res_t.as_ptr(),
+                    out_t.as_mut_ptr(),
+                );
+                let mut j = 0;
+                let mut i = 0;
+                while i < n {
+                    let left = n - i;
+                    let run = if held {
+                        left.min(lanes[0].bank.until_event as usize)
+                    } else {
+                        left
+                    };
+                    let held_sum = by(&|l| lanes[l].bank.held_sum);
+                    let offset = by(&|l| lanes[l].bank.offset);
+                    for k in i..i + run {
+                        // SAFETY: draw j + (k - i) N + c < nb, walk k < n, resonance 2k + 1 < 2n,
+                        // block k < n: the interleaved buffers hold four values for each.
+                        unsafe {
+                            let d = bt.add(4 * (j + (k - i) * N));
+                            let mut sum = _mm256_setzero_pd();
+                            for c in 0..N {
+                                sum = _mm256_add_pd(sum, x[c]);
+                                x[c] = _mm256_add_pd(
+                                    _mm256_mul_pd(phi[c], x[c]),
+                                    _mm256_mul_pd(drive[c], _mm256_loadu_pd(d.add(4 * c))),
+                                );
+                            }
+                            sum = _mm256_add_pd(sum, held_sum);
+                            sum = _mm256_sub_pd(sum, offset);
+                            let o = ot.add(4 * k);
+                            let mut v = _mm256_add_pd(_mm256_loadu_pd(o), sum);
+                            if W {
+                                v = _mm256_add_pd(v, ws);
+                                ws = _mm256_add_pd(
+                                    ws,
+                                    _mm256_mul_pd(step, _mm256_loadu_pd(wt.add(4 * k))),
+                                );
+                            }
+                            if R {
+                                v = _mm256_add_pd(v, rx);
+                                let d0 = _mm256_loadu_pd(rt.add(8 * k));
+                                let d1 = _mm256_loadu_pd(rt.add(8 * k + 4));
+                                let nx = _mm256_add_pd(
+                                    _mm256_add_pd(_mm256_mul_pd(p00, rx), _mm256_mul_pd(p01, rv)),
+                                    _mm256_mul_pd(l11, d0),
+                                );
+                                let nv = _mm256_add_pd(
+                                    _mm256_add_pd(
+                                        _mm256_add_pd(
+                                            _mm256_mul_pd(p10, rx),
+                                            _mm256_mul_pd(p11, rv),
+                                        ),
+                                        _mm256_mul_pd(l21, d0),
+                                    ),
+                                    _mm256_mul_pd(l22, d1),
+                                );
+                                rx = nx;
+                                rv = nv;
+                            }
+                            _mm256_storeu_pd(o, v);
+                        }
+                    }
+                    j += run * N;
+                    i += run;
+                    if held {
+                        // One schedule: every lane's update is due together and draws as many.
+                        let mut next = j;
+                        for lane in lanes.iter_mut() {
+                            let (bank, w) = (&mut *lane.bank, lane.bank_draws);
+                            bank.until_event -= run as u32;
+                            if bank.until_event == 0 {
+                                let mut k = j;
+                                bank.sync_held_with(bank.event_span, || {
+                                    k += 1;
+                                    w[k - 1]
+                                });
+                                next = k;
+                            }
+                        }
+                        j = next;
+                    }
+                }
+                deinterleave(out_t, lanes);
+                let xs: [[f64; LANES]; N] = std::array::from_fn(|c| get(x[c]));
+                let (ws, rx, rv) = (get(ws), get(rx), get(rv));
+                for (l, lane) in lanes.iter_mut().enumerate() {
+                    for (state, xs) in lane.bank.state.iter_mut().zip(&xs) {
+                        *state = xs[l];
+                    }
+                    if let Some((w, _)) = &mut lane.walk {
+                        w.state = ws[l];
+                    }
+                    if let Some((r, _)) = &mut lane.res {
+                        r.set_state([rx[l], rv[l]]);
+                    }
+                }
+            });
+        }
+    }
+}
+
 /// A process whose values the bank's block loop adds after its own to each sample
 /// ([`GaussMarkovBank::add_block_then`]), its draws for the block made beforehand.
 pub(crate) trait Follower {

@@ -12,6 +12,7 @@ use crate::terms::{GenContext, Generate, Generator, RawClock, Stage, GENERATION_
 use crate::{calibration_rng, term_rng};
 use nalgebra::Vector3;
 
+use crate::discrete::{fused4, FusedLane};
 pub use crate::discrete::{GaussMarkovBank, RandomWalk, HOLD_FRACTION};
 pub use crate::terms::quantization::Quantizer;
 pub use crate::terms::resonance::Resonator;
@@ -134,7 +135,9 @@ impl ChannelErrors {
     #[inline]
     pub fn sample(&mut self, k: u64, ideal: &Vector3<f64>) -> f64 {
         let mut v = 0.0;
-        self.fill_with(k, std::slice::from_mut(&mut v), |_| ideal);
+        Self::fill_with(&mut [self], k, &mut [std::slice::from_mut(&mut v)], |_| {
+            ideal
+        });
         v
     }
 
@@ -142,10 +145,7 @@ impl ChannelErrors {
     /// bit for bit, as `sample` called for each k in turn (one implementation serves both); a block
     /// is faster: each term runs over the whole block in one loop.
     pub fn fill_static(&mut self, k0: u64, ideal: &Vector3<f64>, out: &mut [f64]) {
-        // Sub-blocks keep the draws of one sub-block (`scratch`) in L1.
-        for (c, chunk) in out.chunks_mut(FILL_CHUNK).enumerate() {
-            self.fill_with(k0 + (c * FILL_CHUNK) as u64, chunk, |_| ideal);
-        }
+        Self::fill_lanes_lockstep(&mut [self], k0, &mut [out], |_| ideal);
     }
 
     /// Samples `k0 .. k0 + out.len()` for a moving IMU, sample `k0 + i` with ideal input
@@ -153,134 +153,402 @@ impl ChannelErrors {
     /// each k in turn with those inputs; a block is faster, as for [`ChannelErrors::fill_static`].
     pub fn fill_moving(&mut self, k0: u64, ideal: &[Vector3<f64>], out: &mut [f64]) {
         assert!(ideal.len() >= out.len(), "one ideal input per sample");
-        for (c, chunk) in out.chunks_mut(FILL_CHUNK).enumerate() {
-            let first = c * FILL_CHUNK;
-            self.fill_with(k0 + first as u64, chunk, |i| &ideal[first + i]);
-        }
+        Self::fill_lanes_lockstep(&mut [self], k0, &mut [out], |i| &ideal[i]);
     }
 
-    /// Samples `k0 .. k0 + out.len()`, sample `k0 + i` with ideal input `ideal(i)`. Each term adds
-    /// its values to the whole block in turn, in the order (and with the arithmetic) of one sample,
-    /// and every term draws from its own stream in sample order, so the block length does not
-    /// change any value.
-    #[inline]
-    fn fill_with<'a>(
-        &mut self,
+    /// [`ChannelErrors::fill_static`] of several runs' generators of one channel (lanes), run l
+    /// into `outs[l]`: each run gets exactly the values of its own call, and where the runs' terms
+    /// have the same structure (the same terms and output filter; the levels may differ) their
+    /// serial recursions run side by side ([`GaussMarkovBank::add_blocks_then`]).
+    pub fn fill_static_lanes(
+        lanes: &mut [&mut ChannelErrors],
         k0: u64,
-        out: &mut [f64],
+        ideal: &Vector3<f64>,
+        outs: &mut [&mut [f64]],
+    ) {
+        Self::fill_lanes(lanes, k0, outs, |_| ideal);
+    }
+
+    /// [`ChannelErrors::fill_moving`] of several runs (lanes) with one ideal input, as
+    /// [`ChannelErrors::fill_static_lanes`].
+    pub fn fill_moving_lanes(
+        lanes: &mut [&mut ChannelErrors],
+        k0: u64,
+        ideal: &[Vector3<f64>],
+        outs: &mut [&mut [f64]],
+    ) {
+        assert!(
+            outs.iter().all(|o| ideal.len() >= o.len()),
+            "one ideal input per sample"
+        );
+        Self::fill_lanes(lanes, k0, outs, |i| &ideal[i]);
+    }
+
+    /// Whether `other` (another run's generator of the same channel) can be filled in lockstep
+    /// with this one: the same raw interval and number of raw terms, and the same output filter
+    /// position.
+    fn lockstep_with(&self, other: &ChannelErrors) -> bool {
+        self.dt_raw.to_bits() == other.dt_raw.to_bits()
+            && self.raw.len() == other.raw.len()
+            && match (&self.filter, &other.filter) {
+                (None, None) => true,
+                (Some(a), Some(b)) => {
+                    (a.decimation, a.preroll, a.raw_done) == (b.decimation, b.preroll, b.raw_done)
+                }
+                _ => false,
+            }
+    }
+
+    /// The lanes in lockstep where they can be, else one after the other.
+    fn fill_lanes<'a>(
+        lanes: &mut [&mut ChannelErrors],
+        k0: u64,
+        outs: &mut [&mut [f64]],
         ideal: impl Fn(usize) -> &'a Vector3<f64>,
     ) {
-        #[cfg(debug_assertions)]
-        {
-            assert_eq!(k0, self.next_k, "samples must be drawn in order");
-            self.next_k = k0 + out.len() as u64;
-        }
-        match self.filter.take() {
-            None => self.fill_raw(k0, 0, out, ideal),
-            Some(mut f) => {
-                // Output sub-blocks of about RAW_CHUNK raw samples (the filter's state carries
-                // over, so the split changes no value).
-                let per = (RAW_CHUNK / f.decimation).max(1);
-                for (c, sub) in out.chunks_mut(per).enumerate() {
-                    let first = c * per;
-                    self.fill_filtered(&mut f, k0 + first as u64, sub, |i| ideal(first + i));
-                }
-                self.filter = Some(f);
+        assert_eq!(lanes.len(), outs.len(), "one block per lane");
+        let n = outs.first().map_or(0, |o| o.len());
+        let lockstep =
+            outs.iter().all(|o| o.len() == n) && lanes.iter().all(|l| l.lockstep_with(lanes[0]));
+        if lockstep {
+            Self::fill_lanes_lockstep(lanes, k0, outs, ideal);
+        } else {
+            for (l, o) in lanes.iter_mut().zip(outs.iter_mut()) {
+                Self::fill_lanes_lockstep(&mut [&mut **l], k0, &mut [&mut **o], &ideal);
             }
         }
-        let dt_s = self.dt_s;
-        for g in &mut self.output {
-            g.output(k0, dt_s, out);
+    }
+
+    /// Lanes in lockstep ([`ChannelErrors::lockstep_with`]), blocks of one length, in
+    /// sub-blocks that keep the draws of one sub-block (the generators' scratch) in L1/L2.
+    fn fill_lanes_lockstep<'a>(
+        lanes: &mut [&mut ChannelErrors],
+        k0: u64,
+        outs: &mut [&mut [f64]],
+        ideal: impl Fn(usize) -> &'a Vector3<f64>,
+    ) {
+        let n = outs.first().map_or(0, |o| o.len());
+        for first in (0..n).step_by(FILL_CHUNK) {
+            let end = (first + FILL_CHUNK).min(n);
+            let mut sub: Vec<&mut [f64]> = outs.iter_mut().map(|o| &mut o[first..end]).collect();
+            Self::fill_with(lanes, k0 + first as u64, &mut sub, |i| ideal(first + i));
         }
     }
 
-    /// Output samples `k0 .. k0 + out.len()` through the output filter `f`: the raw samples up to
-    /// the one output k0 + n - 1 is read at, each with the ideal input of the output sample it
-    /// belongs to (zero-order hold; the pre-roll takes output 0's), then filtered and read out.
-    fn fill_filtered<'a>(
-        &mut self,
-        f: &mut FilterState,
+    /// Samples `k0 .. k0 + n` of each lane (`outs[l]`, n long), sample `k0 + i` with ideal input
+    /// `ideal(i)`. Each term adds its values to the whole block in turn, in the order (and with
+    /// the arithmetic) of one sample, and every term draws from its own stream in sample order, so
+    /// neither the block length nor the lanes beside it change any value.
+    #[inline]
+    fn fill_with<'a>(
+        lanes: &mut [&mut ChannelErrors],
         k0: u64,
-        out: &mut [f64],
+        outs: &mut [&mut [f64]],
         ideal: impl Fn(usize) -> &'a Vector3<f64>,
     ) {
-        let n = out.len() as u64;
-        let (d, pre) = (f.decimation as u64, f.preroll as u64);
+        let n = outs.first().map_or(0, |o| o.len());
+        #[cfg(debug_assertions)]
+        for l in lanes.iter_mut() {
+            assert_eq!(k0, l.next_k, "samples must be drawn in order");
+            l.next_k = k0 + n as u64;
+        }
+        let mut filters: Vec<FilterState> =
+            lanes.iter_mut().filter_map(|l| l.filter.take()).collect();
+        match filters.first() {
+            None => Self::fill_raw(lanes, k0, 0, outs, ideal),
+            Some(f) => {
+                // Output sub-blocks of about RAW_CHUNK raw samples over all lanes (the filter's
+                // state carries over, so the split changes no value).
+                let per = (RAW_CHUNK / lanes.len() / f.decimation).max(1);
+                for first in (0..n).step_by(per) {
+                    let end = (first + per).min(n);
+                    let mut sub: Vec<&mut [f64]> =
+                        outs.iter_mut().map(|o| &mut o[first..end]).collect();
+                    Self::fill_filtered(lanes, &mut filters, k0 + first as u64, &mut sub, |i| {
+                        ideal(first + i)
+                    });
+                }
+                for (l, f) in lanes.iter_mut().zip(filters) {
+                    l.filter = Some(f);
+                }
+            }
+        }
+        for (l, out) in lanes.iter_mut().zip(outs.iter_mut()) {
+            let dt_s = l.dt_s;
+            for g in &mut l.output {
+                g.output(k0, dt_s, out);
+            }
+        }
+    }
+
+    /// Output samples `k0 .. k0 + n` of each lane through its output filter (`filters[l]`): the
+    /// raw samples up to the one output k0 + n - 1 is read at, each with the ideal input of the
+    /// output sample it belongs to (zero-order hold; the pre-roll takes output 0's), then filtered
+    /// and read out.
+    fn fill_filtered<'a>(
+        lanes: &mut [&mut ChannelErrors],
+        filters: &mut [FilterState],
+        k0: u64,
+        outs: &mut [&mut [f64]],
+        ideal: impl Fn(usize) -> &'a Vector3<f64>,
+    ) {
+        let n = outs.first().map_or(0, |o| o.len()) as u64;
+        let (d, pre, start) = match filters.first() {
+            Some(f) => (f.decimation as u64, f.preroll as u64, f.raw_done),
+            None => return,
+        };
         let end = pre + (k0 + n - 1) * d + 1;
-        let start = f.raw_done;
-        let mut raw = std::mem::take(&mut f.raw);
-        raw.clear();
-        raw.resize((end - start) as usize, 0.0);
-        self.fill_raw(start, pre, &mut raw, |j| {
+        let mut raws: Vec<Vec<f64>> = filters
+            .iter_mut()
+            .map(|f| {
+                let mut raw = std::mem::take(&mut f.raw);
+                raw.clear();
+                raw.resize((end - start) as usize, 0.0);
+                raw
+            })
+            .collect();
+        let mut raw_blocks: Vec<&mut [f64]> = raws.iter_mut().map(|r| r.as_mut_slice()).collect();
+        Self::fill_raw(lanes, start, pre, &mut raw_blocks, |j| {
             let r = start + j as u64;
             let o = r.saturating_sub(pre).div_ceil(d);
             ideal((o.max(k0) - k0).min(n - 1) as usize)
         });
-        f.filter(start, &raw, k0, out);
-        f.raw = raw;
+        for ((f, raw), out) in filters.iter_mut().zip(raws).zip(outs.iter_mut()) {
+            f.filter(start, &raw, k0, out);
+            f.raw = raw;
+        }
     }
 
-    /// Raw samples `k0 .. k0 + out.len()` at the raw interval (time t = (k - preroll) dt_raw), every
-    /// term but the filter, the outliers and the quantiser.
+    /// Raw samples `k0 .. k0 + n` of each lane at the raw interval (time t = (k - preroll)
+    /// dt_raw), every term but the filter, the outliers and the quantiser.
     #[inline]
     fn fill_raw<'a>(
-        &mut self,
+        lanes: &mut [&mut ChannelErrors],
         k0: u64,
         preroll: u64,
-        out: &mut [f64],
+        outs: &mut [&mut [f64]],
         ideal: impl Fn(usize) -> &'a Vector3<f64>,
     ) {
+        let Some(dt_raw) = lanes.first().map(|l| l.dt_raw) else {
+            return;
+        };
         let clock = RawClock {
             k0,
-            dt_s: self.dt_raw,
-            offset_s: preroll as f64 * self.dt_raw,
+            dt_s: dt_raw,
+            offset_s: preroll as f64 * dt_raw,
         };
-        for (i, v) in out.iter_mut().enumerate() {
-            let x = ideal(i);
-            *v = self.row[0] * x.x + self.row[1] * x.y + self.row[2] * x.z + self.bias;
+        let mut raw: Vec<RawLane> = lanes
+            .iter_mut()
+            .zip(outs.iter_mut())
+            .map(|(l, out)| {
+                for (i, v) in out.iter_mut().enumerate() {
+                    let x = ideal(i);
+                    *v = l.row[0] * x.x + l.row[1] * x.y + l.row[2] * x.z + l.bias;
+                }
+                RawLane {
+                    raw: &mut l.raw,
+                    out,
+                    s: [&mut l.scratch, &mut l.scratch2, &mut l.scratch3],
+                }
+            })
+            .collect();
+        raw_terms_lanes(&mut raw, clock);
+    }
+}
+
+/// The pass [`raw_terms`] makes over the terms from here: a flicker bias instability followed by
+/// a rate random walk and a resonance, by one of them, or by both (adjacent in the generation
+/// order, and in most fitted models) run in one loop; any other term alone.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Pass {
+    BankWalkResonance,
+    BankWalk,
+    BankResonance,
+    /// A flicker bias instability alone: one loop already; side by side in lanes.
+    Bank,
+    Alone,
+}
+
+impl Pass {
+    fn of(raw: &[Generator]) -> Pass {
+        use crate::terms::bias_instability::BiasInstabilityGenerator::Flicker;
+        use Generator::{BiasInstability, RateRandomWalk, Resonance};
+        match raw {
+            [BiasInstability(Flicker(_)), RateRandomWalk(_), Resonance(_), ..] => {
+                Pass::BankWalkResonance
+            }
+            [BiasInstability(Flicker(_)), RateRandomWalk(_), ..] => Pass::BankWalk,
+            [BiasInstability(Flicker(_)), Resonance(_), ..] => Pass::BankResonance,
+            [BiasInstability(Flicker(_)), ..] => Pass::Bank,
+            _ => Pass::Alone,
         }
-        raw_terms(
-            &mut self.raw,
-            clock,
-            out,
-            [&mut self.scratch, &mut self.scratch2, &mut self.scratch3],
-        );
+    }
+
+    /// Terms the pass covers.
+    fn terms(self) -> usize {
+        match self {
+            Pass::BankWalkResonance => 3,
+            Pass::BankWalk | Pass::BankResonance => 2,
+            Pass::Bank | Pass::Alone => 1,
+        }
     }
 }
 
 /// Add the raw terms `raw`'s values to the raw samples `out`, term after term in generation
-/// order. A flicker bias instability followed by a rate random walk, and by a resonance after
-/// that (adjacent in the generation order, and in most fitted models), runs in one pass
-/// ([`GaussMarkovBank::add_block_then`]): the values of the terms one after the other, bit for
-/// bit, in about the time of the slowest alone.
+/// order; the terms of a [`Pass`] in one loop ([`GaussMarkovBank::add_block_then`]): the values
+/// of the terms one after the other, bit for bit, in about the time of the slowest alone.
 #[inline]
 fn raw_terms(raw: &mut [Generator], clock: RawClock, out: &mut [f64], s: [&mut Vec<f64>; 3]) {
+    let mut lane = [RawLane { raw, out, s }];
+    raw_terms_lanes(&mut lane, clock);
+}
+
+/// One run's share of [`raw_terms_lanes`]: its channel's raw generators, its block, its scratch.
+struct RawLane<'a> {
+    raw: &'a mut [Generator],
+    out: &'a mut [f64],
+    s: [&'a mut Vec<f64>; 3],
+}
+
+/// [`raw_terms`] of several runs' generators of one channel (lanes) over blocks of one length:
+/// each lane gets exactly the values of its own `raw_terms`; the fused passes run the lanes side
+/// by side ([`GaussMarkovBank::add_blocks_then`]), their serial chains in one loop. From the first
+/// term where the lanes' passes differ, each lane runs its own.
+fn raw_terms_lanes(lanes: &mut [RawLane], clock: RawClock) {
     use crate::terms::bias_instability::BiasInstabilityGenerator::Flicker;
     use Generator::{BiasInstability, RateRandomWalk, Resonance};
-    let [s0, s1, s2] = s;
-    let n = out.len();
+    let Some(count) = lanes.first().map(|l| l.raw.len()) else {
+        return;
+    };
     let mut i = 0;
-    while i < raw.len() {
-        match &mut raw[i..] {
-            [BiasInstability(Flicker(bank)), RateRandomWalk(walk), Resonance(res), ..] => {
-                let mut f = (walk.follower(s1, n), res.follower(s2, n));
-                bank.add_raw_then(out, s0, &mut f);
-                f.0.finish();
-                f.1.finish();
-                i += 3;
+    while i < count {
+        let pass = Pass::of(&lanes[0].raw[i..]);
+        if lanes
+            .iter()
+            .any(|l| l.raw.len() != count || Pass::of(&l.raw[i..]) != pass)
+        {
+            for l in lanes.iter_mut() {
+                let [s0, s1, s2] = &mut l.s;
+                raw_terms(&mut l.raw[i..], clock, l.out, [s0, s1, s2]);
             }
-            [BiasInstability(Flicker(bank)), RateRandomWalk(walk), ..] => {
-                let mut f = walk.follower(s1, n);
-                bank.add_raw_then(out, s0, &mut f);
-                f.finish();
-                i += 2;
+            return;
+        }
+        match pass {
+            Pass::BankWalkResonance | Pass::BankWalk | Pass::BankResonance | Pass::Bank => {
+                for group in lanes.chunks_mut(fused4::LANES) {
+                    if fused_in_lanes(group, i, pass) {
+                        continue;
+                    }
+                    for l in group.iter_mut() {
+                        let n = l.out.len();
+                        let [s0, s1, s2] = &mut l.s;
+                        match &mut l.raw[i..] {
+                            [BiasInstability(Flicker(bank)), RateRandomWalk(walk), Resonance(res), ..]
+                                if pass == Pass::BankWalkResonance =>
+                            {
+                                let mut f = (walk.follower(s1, n), res.follower(s2, n));
+                                bank.add_raw_then(l.out, s0, &mut f);
+                                f.0.finish();
+                                f.1.finish();
+                            }
+                            [bank, ..] if pass == Pass::Bank => bank.add_raw(clock, l.out, s0),
+                            [BiasInstability(Flicker(bank)), RateRandomWalk(walk), ..] => {
+                                let mut f = walk.follower(s1, n);
+                                bank.add_raw_then(l.out, s0, &mut f);
+                                f.finish();
+                            }
+                            [BiasInstability(Flicker(bank)), Resonance(res), ..] => {
+                                let mut f = res.follower(s2, n);
+                                bank.add_raw_then(l.out, s0, &mut f);
+                                f.finish();
+                            }
+                            _ => unreachable!("Pass::of"),
+                        }
+                    }
+                }
             }
-            _ => {
-                raw[i].add_raw(clock, out, s0);
-                i += 1;
+            Pass::Alone => {
+                for l in lanes.iter_mut() {
+                    l.raw[i].add_raw(clock, l.out, l.s[0]);
+                }
             }
         }
+        i += pass.terms();
     }
+}
+
+/// The fused pass `pass` at term `i` of four lanes in one SIMD loop ([`fused4`]); false (nothing
+/// done, nothing drawn) for another number of lanes, a CPU without AVX2, or banks not on one
+/// schedule.
+fn fused_in_lanes(lanes: &mut [RawLane], i: usize, pass: Pass) -> bool {
+    use crate::terms::bias_instability::BiasInstabilityGenerator::Flicker;
+    use Generator::{BiasInstability, RateRandomWalk, Resonance};
+    let Ok(lanes) = <&mut [RawLane; fused4::LANES]>::try_from(lanes) else {
+        return false;
+    };
+    let banks = lanes.each_mut().map(|l| match &mut l.raw[i] {
+        BiasInstability(Flicker(bank)) => Some(&*bank.parts().0),
+        _ => None,
+    });
+    let Some(banks) = banks.into_iter().collect::<Option<Vec<_>>>() else {
+        return false;
+    };
+    let Ok(banks) = <[&GaussMarkovBank; fused4::LANES]>::try_from(banks) else {
+        return false;
+    };
+    if !fused4::available(banks) {
+        return false;
+    }
+    let (walk, res) = match pass {
+        Pass::BankWalkResonance => (Some(i + 1), Some(i + 2)),
+        Pass::BankWalk => (Some(i + 1), None),
+        Pass::BankResonance => (None, Some(i + 1)),
+        Pass::Bank => (None, None),
+        Pass::Alone => return false,
+    };
+    let fused: Vec<FusedLane> = lanes
+        .iter_mut()
+        .map(|l| {
+            let n = l.out.len();
+            let [s0, s1, s2] = &mut l.s;
+            let (head, rest) = l.raw[i..].split_at_mut(1);
+            let BiasInstability(Flicker(bank)) = &mut head[0] else {
+                unreachable!("checked above")
+            };
+            let (bank, rng) = bank.parts();
+            let nb = bank.draw_block(rng, s0, n);
+            let mut walk_gen = None;
+            let mut res_gen = None;
+            for (k, g) in rest.iter_mut().enumerate() {
+                match g {
+                    RateRandomWalk(w) if walk == Some(i + 1 + k) => walk_gen = Some(w),
+                    Resonance(r) if res == Some(i + 1 + k) => res_gen = Some(r),
+                    _ => {}
+                }
+            }
+            let walk = walk_gen.map(|w| {
+                crate::discrete::draws(&mut w.rng, s1, n);
+                (&mut w.walk, &s1[..n])
+            });
+            let res = res_gen.map(|r| {
+                let (resonator, rng) = r.parts();
+                crate::discrete::draws(rng, s2, 2 * n);
+                (resonator, &s2[..2 * n])
+            });
+            FusedLane {
+                bank,
+                bank_draws: &s0[..nb],
+                walk,
+                res,
+                out: &mut *l.out,
+            }
+        })
+        .collect();
+    let Ok(mut fused) = <[FusedLane; fused4::LANES]>::try_from(fused) else {
+        return false;
+    };
+    fused4::run(&mut fused);
+    true
 }
 
 /// A model that cannot run at a sample rate: an axis whose output filter does not fit the rate
@@ -417,6 +685,52 @@ impl ImuErrors {
         for ((c, channel), o) in Channel::ALL.into_iter().zip(&mut self.channels).zip(out) {
             channel.fill_moving(k0, if c.is_gyro() { ideal_gyro } else { ideal_accel }, o);
         }
+    }
+
+    /// [`ImuErrors::fill_static`] of several runs (lanes), run l into `outs[l]`: each run gets
+    /// exactly the values of its own call; channel by channel, the runs' serial recursions run
+    /// side by side where their terms have one structure ([`ChannelErrors::fill_static_lanes`]).
+    pub fn fill_static_lanes(
+        errors: &mut [ImuErrors],
+        k0: u64,
+        ideal_gyro: &Vector3<f64>,
+        ideal_accel: &Vector3<f64>,
+        outs: &mut [[&mut [f64]; 6]],
+    ) {
+        for c in Channel::ALL {
+            let (mut lanes, mut blocks) = Self::lanes_of(errors, outs, c);
+            let ideal = if c.is_gyro() { ideal_gyro } else { ideal_accel };
+            ChannelErrors::fill_static_lanes(&mut lanes, k0, ideal, &mut blocks);
+        }
+    }
+
+    /// [`ImuErrors::fill_moving`] of several runs (lanes) with one ideal input, as
+    /// [`ImuErrors::fill_static_lanes`].
+    pub fn fill_moving_lanes(
+        errors: &mut [ImuErrors],
+        k0: u64,
+        ideal_gyro: &[Vector3<f64>],
+        ideal_accel: &[Vector3<f64>],
+        outs: &mut [[&mut [f64]; 6]],
+    ) {
+        for c in Channel::ALL {
+            let (mut lanes, mut blocks) = Self::lanes_of(errors, outs, c);
+            let ideal = if c.is_gyro() { ideal_gyro } else { ideal_accel };
+            ChannelErrors::fill_moving_lanes(&mut lanes, k0, ideal, &mut blocks);
+        }
+    }
+
+    /// Channel `c`'s generator and block of every lane.
+    fn lanes_of<'a>(
+        errors: &'a mut [ImuErrors],
+        outs: &'a mut [[&mut [f64]; 6]],
+        c: Channel,
+    ) -> (Vec<&'a mut ChannelErrors>, Vec<&'a mut [f64]>) {
+        let i = c as usize;
+        (
+            errors.iter_mut().map(|e| &mut e.channels[i]).collect(),
+            outs.iter_mut().map(|o| &mut *o[i]).collect(),
+        )
     }
 
     /// Sensor temperature at sample k, degC.

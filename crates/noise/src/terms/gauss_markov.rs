@@ -153,6 +153,11 @@ impl BankGenerator {
         self.bank
             .add_block_then(&mut self.rng, out, scratch, follower);
     }
+
+    /// The bank and its stream.
+    pub(crate) fn parts(&mut self) -> (&mut GaussMarkovBank, &mut NormalStream) {
+        (&mut self.bank, &mut self.rng)
+    }
 }
 
 impl Generate for BankGenerator {

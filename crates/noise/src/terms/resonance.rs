@@ -217,6 +217,25 @@ impl Resonator {
         }
     }
 
+    /// The transition matrix Phi (for the lanes of `crate::discrete::fused4`).
+    pub(crate) fn phi(&self) -> [[f64; 2]; 2] {
+        self.phi
+    }
+
+    /// The Cholesky factor of Q: (l11, l21, l22).
+    pub(crate) fn chol(&self) -> (f64, f64, f64) {
+        self.chol
+    }
+
+    /// The state (x, x').
+    pub(crate) fn state(&self) -> [f64; 2] {
+        self.state
+    }
+
+    pub(crate) fn set_state(&mut self, state: [f64; 2]) {
+        self.state = state;
+    }
+
     /// Add the next `out.len()` values (two normals per sample, in sample order).
     #[inline]
     fn add_block(&mut self, rng: &mut NormalStream, out: &mut [f64], scratch: &mut Vec<f64>) {
@@ -261,6 +280,13 @@ impl crate::discrete::Follower for ResonatorFollower<'_> {
         *o += x;
         self.x = phi[0][0] * x + phi[0][1] * v + l11 * d0;
         self.v = phi[1][0] * x + phi[1][1] * v + l21 * d0 + l22 * d1;
+    }
+}
+
+impl ResonanceGenerator {
+    /// The resonator and its stream.
+    pub(crate) fn parts(&mut self) -> (&mut Resonator, &mut NormalStream) {
+        (&mut self.resonator, &mut self.rng)
     }
 }
 
