@@ -206,9 +206,11 @@ pub fn map_static_logs<R: Send>(
     f: impl Fn(usize, &ImuChannels<Vec<f64>>) -> R + Sync,
 ) -> Vec<R> {
     use rayon::prelude::*;
+    // Longest logs first: each thread's reused buffer then grows once, at its first group, instead
+    // of being reallocated and copied whenever a longer log follows a shorter one.
     let key = |j: &LogJob| {
         (
-            j.setup.samples,
+            std::cmp::Reverse(j.setup.samples),
             j.setup.dt_s.to_bits(),
             j.setup.active.0,
             j.seed,

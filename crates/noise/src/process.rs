@@ -313,8 +313,8 @@ impl ChannelErrors {
             let o = r.saturating_sub(pre).div_ceil(d);
             ideal((o.max(k0) - k0).min(n - 1) as usize)
         });
-        for ((f, raw), out) in filters.iter_mut().zip(raws).zip(outs.iter_mut()) {
-            f.filter(start, &raw, k0, out);
+        FilterState::filter_lanes(filters, start, &raws, k0, outs);
+        for (f, raw) in filters.iter_mut().zip(raws) {
             f.raw = raw;
         }
     }

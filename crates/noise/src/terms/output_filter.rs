@@ -733,3 +733,255 @@ mod tests {
         }
     }
 }
+
+impl FilterState {
+    /// [`FilterState::filter`] of several runs' filters (lanes) over blocks of one length, lane l
+    /// reading `raws[l]` into `outs[l]`: each lane's outputs those of its own call. Four filters
+    /// of one shape run in one AVX2 loop ([`lanes4`]), the others one after the other.
+    pub(crate) fn filter_lanes(
+        filters: &mut [FilterState],
+        start: u64,
+        raws: &[Vec<f64>],
+        k0: u64,
+        outs: &mut [&mut [f64]],
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if let (Ok(f4), Ok(r4), Ok(o4)) = (
+            <&mut [FilterState; 4]>::try_from(&mut *filters),
+            <&[Vec<f64>; 4]>::try_from(raws),
+            <&mut [&mut [f64]; 4]>::try_from(&mut *outs),
+        ) {
+            if lanes4::available(f4, r4) {
+                // SAFETY: `available` checked that the CPU has AVX2.
+                unsafe { lanes4::filter(f4, start, r4, k0, o4) };
+                return;
+            }
+        }
+        for ((f, raw), out) in filters.iter_mut().zip(raws).zip(outs.iter_mut()) {
+            f.filter(start, raw, k0, out);
+        }
+    }
+}
+
+/// Four runs' output filters in one AVX2 loop, run l in lane l of each 256-bit register: the
+/// operations of [`FilterState::filter`] per run in its order (no fused multiply-adds), so each
+/// lane's outputs are the bits of its run alone (tested in `tests/lanes.rs`). The IIR kinds are
+/// one chain of dependent operations a raw sample (9 cycles for the second order), which four runs
+/// share; the FIR kinds' products are shared.
+#[cfg(target_arch = "x86_64")]
+mod lanes4 {
+    use super::{FilterState, Readout};
+    use std::arch::x86_64::*;
+
+    thread_local! {
+        /// The four lanes' (history and) raw samples interleaved, sample-major; reused.
+        static INTERLEAVED: std::cell::RefCell<Vec<f64>> = std::cell::RefCell::default();
+    }
+
+    /// Whether the four filters run in lockstep here: AVX2, one kind and shape, one position.
+    pub(super) fn available(f: &[FilterState; 4], raws: &[Vec<f64>; 4]) -> bool {
+        let shape = |s: &FilterState| {
+            (
+                s.decimation,
+                s.preroll,
+                s.raw_done,
+                s.history.len(),
+                s.h.len(),
+                s.iir.as_ref().map(|i| (i.b.len(), i.a.len())),
+            )
+        };
+        std::arch::is_x86_feature_detected!("avx2")
+            && f.iter().all(|s| shape(s) == shape(&f[0]))
+            && raws.iter().all(|r| r.len() == raws[0].len())
+            && matches!(
+                f[0].iir.as_ref().map(|i| (i.b.len(), i.a.len())),
+                None | Some((1, 2) | (2, 2) | (2, 3) | (3, 3))
+            )
+    }
+
+    #[inline(always)]
+    fn set(v: [f64; 4]) -> __m256d {
+        // SAFETY: AVX is implied by the callers' AVX2.
+        unsafe { _mm256_set_pd(v[3], v[2], v[1], v[0]) }
+    }
+
+    #[inline(always)]
+    fn get(v: __m256d) -> [f64; 4] {
+        let mut out = [0.0; 4];
+        // SAFETY: four f64 into `out`.
+        unsafe { _mm256_storeu_pd(out.as_mut_ptr(), v) };
+        out
+    }
+
+    /// dst[4 k + l] = (lane l's `head` followed by its `raw`)[k]: the heads (a filter's short
+    /// history) one by one, the blocks by 4 x 4 transposes.
+    #[target_feature(enable = "avx2")]
+    fn interleave(head: [&[f64]; 4], raw: &[Vec<f64>; 4], dst: &mut Vec<f64>) {
+        let (h, m) = (head[0].len(), raw[0].len());
+        if dst.len() < 4 * (h + m) {
+            dst.resize(4 * (h + m), 0.0);
+        }
+        for (l, head) in head.iter().enumerate() {
+            for (k, &v) in head.iter().enumerate() {
+                dst[4 * k + l] = v;
+            }
+        }
+        let whole = m / 4 * 4;
+        for k in (0..whole).step_by(4) {
+            // SAFETY: raw[l][k..k + 4] and dst[4 (h + k)..4 (h + k) + 16] are in bounds.
+            unsafe {
+                let r0 = _mm256_loadu_pd(raw[0].as_ptr().add(k));
+                let r1 = _mm256_loadu_pd(raw[1].as_ptr().add(k));
+                let r2 = _mm256_loadu_pd(raw[2].as_ptr().add(k));
+                let r3 = _mm256_loadu_pd(raw[3].as_ptr().add(k));
+                let t0 = _mm256_unpacklo_pd(r0, r1);
+                let t1 = _mm256_unpackhi_pd(r0, r1);
+                let t2 = _mm256_unpacklo_pd(r2, r3);
+                let t3 = _mm256_unpackhi_pd(r2, r3);
+                let o = dst.as_mut_ptr().add(4 * (h + k));
+                _mm256_storeu_pd(o, _mm256_permute2f128_pd::<0x20>(t0, t2));
+                _mm256_storeu_pd(o.add(4), _mm256_permute2f128_pd::<0x20>(t1, t3));
+                _mm256_storeu_pd(o.add(8), _mm256_permute2f128_pd::<0x31>(t0, t2));
+                _mm256_storeu_pd(o.add(12), _mm256_permute2f128_pd::<0x31>(t1, t3));
+            }
+        }
+        for k in whole..m {
+            for (l, raw) in raw.iter().enumerate() {
+                dst[4 * (h + k) + l] = raw[k];
+            }
+        }
+    }
+
+    /// [`FilterState::filter`] of four lanes ([`available`] true).
+    #[target_feature(enable = "avx2")]
+    pub(super) fn filter(
+        f: &mut [FilterState; 4],
+        start: u64,
+        raws: &[Vec<f64>; 4],
+        k0: u64,
+        outs: &mut [&mut [f64]; 4],
+    ) {
+        INTERLEAVED.with(|buf| {
+            let buf = &mut *buf.borrow_mut();
+            let (d, pre) = (f[0].decimation as u64, f[0].preroll as u64);
+            let m = raws[0].len();
+            if f[0].iir.is_some() {
+                interleave([&[][..]; 4], raws, buf);
+                let first = if start <= pre {
+                    pre
+                } else {
+                    pre + (start - pre).div_ceil(d) * d
+                };
+                let read = Readout {
+                    next: first - start,
+                    slot: ((first - pre) / d - k0) as usize,
+                    every: d,
+                };
+                match f[0].iir.as_ref().map(|i| (i.b.len(), i.a.len())) {
+                    Some((1, 2)) => iir::<1, 2>(f, &buf[..4 * m], read, outs),
+                    Some((2, 2)) => iir::<2, 2>(f, &buf[..4 * m], read, outs),
+                    Some((2, 3)) => iir::<2, 3>(f, &buf[..4 * m], read, outs),
+                    _ => iir::<3, 3>(f, &buf[..4 * m], read, outs),
+                }
+            } else {
+                let hist = f[0].history.len();
+                interleave(std::array::from_fn(|l| &f[l].history[..]), raws, buf);
+                fir(f, &buf[..4 * (hist + m)], start, k0, outs);
+                // Each lane's last l - 1 samples of its history followed by its block.
+                let keep = f[0].h.len() - 1;
+                for (s, raw) in f.iter_mut().zip(raws) {
+                    let total = s.history.len() + raw.len();
+                    let from = total - keep.min(total);
+                    let mut next = Vec::with_capacity(keep);
+                    next.extend(s.history.iter().chain(raw.iter()).skip(from).copied());
+                    s.history = next;
+                }
+            }
+            for (s, raw) in f.iter_mut().zip(raws) {
+                s.raw_done = start + raw.len() as u64;
+            }
+        });
+    }
+
+    /// `IirState::run` (and `run_second_order`, the same operations) of four lanes over the
+    /// interleaved raw samples `x`.
+    #[target_feature(enable = "avx2")]
+    fn iir<const NB: usize, const NA: usize>(
+        f: &mut [FilterState; 4],
+        x: &[f64],
+        mut read: Readout,
+        outs: &mut [&mut [f64]; 4],
+    ) {
+        let state = |l: usize| f[l].iir.as_ref().expect("an IIR kind (checked)");
+        let b: [__m256d; NB] = std::array::from_fn(|i| set(std::array::from_fn(|l| state(l).b[i])));
+        let a: [__m256d; NA] = std::array::from_fn(|i| set(std::array::from_fn(|l| state(l).a[i])));
+        let mut xs: [__m256d; NB] =
+            std::array::from_fn(|i| set(std::array::from_fn(|l| state(l).xs[i])));
+        let mut ys: [__m256d; NA] =
+            std::array::from_fn(|i| set(std::array::from_fn(|l| state(l).ys[i])));
+        for j in 0..x.len() / 4 {
+            xs.rotate_right(1);
+            // SAFETY: x holds four values for each of its x.len() / 4 samples.
+            xs[0] = unsafe { _mm256_loadu_pd(x.as_ptr().add(4 * j)) };
+            // The dot product from b0 x0 (the scalar sum starts at -0.0, which adds nothing).
+            let mut y = _mm256_mul_pd(b[0], xs[0]);
+            for i in 1..NB {
+                y = _mm256_add_pd(y, _mm256_mul_pd(b[i], xs[i]));
+            }
+            for i in 1..NA {
+                y = _mm256_sub_pd(y, _mm256_mul_pd(a[i], ys[i - 1]));
+            }
+            ys.rotate_right(1);
+            ys[0] = y;
+            if j as u64 == read.next {
+                let v = get(y);
+                for (out, v) in outs.iter_mut().zip(v) {
+                    out[read.slot] = v;
+                }
+                read.slot += 1;
+                read.next += read.every;
+            }
+        }
+        let (xs, ys) = (xs.map(get), ys.map(get));
+        for (l, s) in f.iter_mut().enumerate() {
+            let st = s.iir.as_mut().expect("an IIR kind (checked)");
+            for (h, v) in st.xs.iter_mut().zip(&xs) {
+                *h = v[l];
+            }
+            for (h, v) in st.ys.iter_mut().zip(&ys) {
+                *h = v[l];
+            }
+        }
+    }
+
+    /// `FilterState::fir` of four lanes over the interleaved history and block `x`: y_r = sum_i
+    /// h_i x_{r-i} from 0.0, in i order, at the raw indices read out.
+    #[target_feature(enable = "avx2")]
+    fn fir(f: &[FilterState; 4], x: &[f64], start: u64, k0: u64, outs: &mut [&mut [f64]; 4]) {
+        let (d, pre) = (f[0].decimation as u64, f[0].preroll as u64);
+        let l = f[0].h.len();
+        let hist = f[0].history.len();
+        let h: Vec<__m256d> = (0..l)
+            .map(|i| set(std::array::from_fn(|k| f[k].h[i])))
+            .collect();
+        let end = start + (x.len() / 4 - hist) as u64;
+        let first = start.max(pre);
+        let mut r = pre + (first - pre).div_ceil(d) * d;
+        while r < end {
+            // The window of raw sample r ends at p in the history followed by the block (the
+            // pre-roll makes p >= l - 1).
+            let p = (r - start) as usize + hist;
+            let mut y = _mm256_setzero_pd();
+            for (i, hi) in h.iter().enumerate() {
+                // SAFETY: p - i >= p + 1 - l >= 0 and p < x.len() / 4.
+                let xv = unsafe { _mm256_loadu_pd(x.as_ptr().add(4 * (p - i))) };
+                y = _mm256_add_pd(y, _mm256_mul_pd(*hi, xv));
+            }
+            let slot = ((r - pre) / d - k0) as usize;
+            for (out, v) in outs.iter_mut().zip(get(y)) {
+                out[slot] = v;
+            }
+            r += d;
+        }
+    }
+}
