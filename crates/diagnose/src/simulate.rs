@@ -145,8 +145,29 @@ pub fn static_log(
 
 /// Simulated logs generated side by side ([`with_static_logs`]): their generators' serial
 /// recursions run in one loop (`noise::ChannelErrors::fill_static_lanes`), each log's values
-/// those of the log alone. Four logs of 1 000 000 samples are 192 MB of the thread's buffer.
+/// those of the log alone. Four six-channel logs of 1 000 000 samples are 192 MB of a thread's
+/// buffer ([`lanes_for`] bounds it).
 pub const LOG_LANES: usize = 4;
+
+/// The most the threads' buffers of side-by-side logs may hold together; longer logs are
+/// generated one at a time (the same values either way).
+const LANE_MEMORY_BYTES: usize = 1 << 30;
+
+/// Logs of `setup` generated side by side: [`LOG_LANES`], or 1 where every thread's buffer of
+/// that many logs would pass [`LANE_MEMORY_BYTES`] together.
+fn lanes_for(setup: &SimSetup) -> usize {
+    let channels = setup.active.0.iter().filter(|&&a| a).count();
+    let bytes = LOG_LANES
+        .saturating_mul(channels)
+        .saturating_mul(setup.samples)
+        .saturating_mul(std::mem::size_of::<f64>())
+        .saturating_mul(rayon::current_num_threads());
+    if bytes <= LANE_MEMORY_BYTES {
+        LOG_LANES
+    } else {
+        1
+    }
+}
 
 thread_local! {
     /// The logs [`with_static_logs`] lends, kept per thread between calls (a fresh 8 MB vector per
@@ -220,7 +241,7 @@ pub fn map_static_logs<R: Send>(
     order.sort_by_key(|&j| key(&jobs[j]));
     let mut groups: Vec<&[usize]> = Vec::new();
     for same in order.chunk_by(|&a, &b| key(&jobs[a]) == key(&jobs[b])) {
-        groups.extend(same.chunks(LOG_LANES));
+        groups.extend(same.chunks(lanes_for(&jobs[same[0]].setup)));
     }
     let done: Vec<Vec<(usize, R)>> = groups
         .par_iter()
@@ -346,7 +367,7 @@ impl RunKernel for Kernel<'_> {
         })
     }
     fn lanes(&self) -> usize {
-        LOG_LANES
+        lanes_for(self.setup)
     }
     /// The logs generated side by side ([`with_static_logs`]), then each log's rows.
     fn run_lanes(
@@ -788,5 +809,49 @@ mod tests {
             (mean_var / var - 1.0).abs() < REL_TOL,
             "{mean_var} vs {var}"
         );
+    }
+
+    /// Logs made four at a time (`map_static_logs`: jobs of several lengths and models, grouped
+    /// by setup, scattered back to job order) equal each log made alone (`static_log`) bit for
+    /// bit, for any thread count.
+    #[test]
+    fn logs_in_groups_equal_logs_alone() {
+        let shipped = |name: &str| {
+            let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../configs/sensors")
+                .join(name);
+            SensorModel::from_text(&std::fs::read_to_string(&path).unwrap(), name).unwrap()
+        };
+        let (adis, mtx) = (shipped("adis16405.toml"), shipped("mtx.toml"));
+        let all = ImuChannels::from_fn(|_| true);
+        let jobs: Vec<LogJob> = (0..11u64)
+            .map(|j| LogJob {
+                model: if j % 3 == 0 { &mtx } else { &adis },
+                setup: SimSetup::plain(0.01, [3000, 5000][j as usize % 2], all),
+                seed: 5,
+                run: 100 + j,
+            })
+            .collect();
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let got = pool.install(|| map_static_logs(&jobs, |_, log| log.clone()));
+            for (job, log) in jobs.iter().zip(&got) {
+                let alone = static_log(job.model, &job.setup, job.seed, job.run);
+                for ch in Channel::ALL {
+                    let same = log[ch]
+                        .iter()
+                        .zip(&alone[ch])
+                        .all(|(a, b)| a.to_bits() == b.to_bits());
+                    assert!(
+                        same && log[ch].len() == alone[ch].len(),
+                        "run {} {ch:?}",
+                        job.run
+                    );
+                }
+            }
+        }
     }
 }
