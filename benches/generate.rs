@@ -139,61 +139,43 @@ fn bench(c: &mut Criterion) {
     // Four runs: one after the other, and side by side (`ImuErrors::fill_static_lanes`: the
     // flicker bank, random walk and resonance of four runs in one AVX2 loop); the time is that
     // of all four runs (the throughput line counts one run's samples).
-    let ideal = StaticLevel::STANDARD;
-    let mut outs = vec![vec![vec![0.0; SAMPLES as usize]; 6]; 4];
-    group.bench_function("fill_static_4_runs_one_by_one", |b| {
-        b.iter_batched(
-            || {
-                (0..4)
-                    .map(|r| ImuErrors::new(&m, 0.01, 1, r))
-                    .collect::<Vec<_>>()
-            },
-            |mut es| {
-                for (e, lane) in es.iter_mut().zip(&mut outs) {
-                    let [o0, o1, o2, o3, o4, o5] = &mut lane[..] else {
-                        unreachable!()
-                    };
-                    e.fill_static(
-                        0,
-                        &ideal.triad(Sensor::Gyro),
-                        &ideal.triad(Sensor::Accel),
-                        [o0, o1, o2, o3, o4, o5].map(|o| &mut o[..]),
-                    );
-                }
-                black_box(&outs);
-            },
-            BatchSize::LargeInput,
-        )
-    });
-    group.bench_function("fill_static_4_runs_side_by_side", |b| {
-        b.iter_batched(
-            || {
-                (0..4)
-                    .map(|r| ImuErrors::new(&m, 0.01, 1, r))
-                    .collect::<Vec<_>>()
-            },
-            |mut es| {
-                let mut blocks: Vec<[&mut [f64]; 6]> = outs
-                    .iter_mut()
-                    .map(|lane| {
-                        let [o0, o1, o2, o3, o4, o5] = &mut lane[..] else {
-                            unreachable!()
-                        };
-                        [o0, o1, o2, o3, o4, o5].map(|o| &mut o[..])
-                    })
-                    .collect();
-                ImuErrors::fill_static_lanes(
-                    &mut es,
-                    0,
-                    &ideal.triad(Sensor::Gyro),
-                    &ideal.triad(Sensor::Accel),
-                    &mut blocks,
-                );
-                black_box(&blocks);
-            },
-            BatchSize::LargeInput,
-        )
-    });
+    let (g, a) = (
+        StaticLevel::STANDARD.triad(Sensor::Gyro),
+        StaticLevel::STANDARD.triad(Sensor::Accel),
+    );
+    let mut outs = vec![[(); 6].map(|_| vec![0.0; SAMPLES as usize]); 4];
+    let runs = || {
+        (0..4)
+            .map(|r| ImuErrors::new(&m, 0.01, 1, r))
+            .collect::<Vec<_>>()
+    };
+    for side_by_side in [false, true] {
+        let name = if side_by_side {
+            "fill_static_4_runs_side_by_side"
+        } else {
+            "fill_static_4_runs_one_by_one"
+        };
+        group.bench_function(name, |b| {
+            b.iter_batched(
+                runs,
+                |mut es| {
+                    let mut blocks: Vec<[&mut [f64]; 6]> = outs
+                        .iter_mut()
+                        .map(|lane| lane.each_mut().map(|o| &mut o[..]))
+                        .collect();
+                    if side_by_side {
+                        ImuErrors::fill_static_lanes(&mut es, 0, &g, &a, &mut blocks);
+                    } else {
+                        for (e, lane) in es.iter_mut().zip(blocks.iter_mut()) {
+                            e.fill_static(0, &g, &a, lane.each_mut().map(|o| &mut **o));
+                        }
+                    }
+                    black_box(&blocks);
+                },
+                BatchSize::LargeInput,
+            )
+        });
+    }
     group.finish();
 
     // The MTx model with a sinusoid on every axis (the fitted ADIS16405 model's accelerometer

@@ -514,79 +514,27 @@ pub(crate) mod fused4 {
             static SCRATCH: std::cell::RefCell<[Vec<f64>; 4]> = std::cell::RefCell::default();
         }
 
-        /// dst[4 k + l] = src[l][k], k < len.
+        /// dst[4 k + l] = src[l][k], k < len ([`crate::transpose4`]).
         #[target_feature(enable = "avx2")]
         fn interleave(src: [&[f64]; LANES], len: usize, dst: &mut Vec<f64>) {
             // Every value below LANES * len is written; a longer buffer's tail is left as it is.
             if dst.len() < LANES * len {
                 dst.resize(LANES * len, 0.0);
             }
-            let whole = len / 4 * 4;
-            for k in (0..whole).step_by(4) {
-                // SAFETY: src[l][k..k + 4] and dst[4k..4k + 16] are in bounds (k + 4 <= len).
-                unsafe {
-                    let r0 = _mm256_loadu_pd(src[0].as_ptr().add(k));
-                    let r1 = _mm256_loadu_pd(src[1].as_ptr().add(k));
-                    let r2 = _mm256_loadu_pd(src[2].as_ptr().add(k));
-                    let r3 = _mm256_loadu_pd(src[3].as_ptr().add(k));
-                    let t0 = _mm256_unpacklo_pd(r0, r1);
-                    let t1 = _mm256_unpackhi_pd(r0, r1);
-                    let t2 = _mm256_unpacklo_pd(r2, r3);
-                    let t3 = _mm256_unpackhi_pd(r2, r3);
-                    let d = dst.as_mut_ptr().add(4 * k);
-                    _mm256_storeu_pd(d, _mm256_permute2f128_pd::<0x20>(t0, t2));
-                    _mm256_storeu_pd(d.add(4), _mm256_permute2f128_pd::<0x20>(t1, t3));
-                    _mm256_storeu_pd(d.add(8), _mm256_permute2f128_pd::<0x31>(t0, t2));
-                    _mm256_storeu_pd(d.add(12), _mm256_permute2f128_pd::<0x31>(t1, t3));
-                }
-            }
-            for k in whole..len {
-                for l in 0..LANES {
-                    dst[4 * k + l] = src[l][k];
-                }
-            }
+            crate::transpose4::interleave(
+                std::array::from_fn(|l| &src[l][..len]),
+                &mut dst[..LANES * len],
+            );
         }
 
-        /// dst[l][k] = src[4 k + l].
+        /// Each lane's block from the interleaved `src` ([`crate::transpose4`]).
         #[target_feature(enable = "avx2")]
         fn deinterleave(src: &[f64], dst: &mut [FusedLane; LANES]) {
             let len = dst[0].out.len();
-            let whole = len / 4 * 4;
-            for k in (0..whole).step_by(4) {
-                // SAFETY: src[4k..4k + 16] and each out[k..k + 4] are in bounds.
-                unsafe {
-                    let s = src.as_ptr().add(4 * k);
-                    let r0 = _mm256_loadu_pd(s);
-                    let r1 = _mm256_loadu_pd(s.add(4));
-                    let r2 = _mm256_loadu_pd(s.add(8));
-                    let r3 = _mm256_loadu_pd(s.add(12));
-                    let t0 = _mm256_unpacklo_pd(r0, r1);
-                    let t1 = _mm256_unpackhi_pd(r0, r1);
-                    let t2 = _mm256_unpacklo_pd(r2, r3);
-                    let t3 = _mm256_unpackhi_pd(r2, r3);
-                    _mm256_storeu_pd(
-                        dst[0].out.as_mut_ptr().add(k),
-                        _mm256_permute2f128_pd::<0x20>(t0, t2),
-                    );
-                    _mm256_storeu_pd(
-                        dst[1].out.as_mut_ptr().add(k),
-                        _mm256_permute2f128_pd::<0x20>(t1, t3),
-                    );
-                    _mm256_storeu_pd(
-                        dst[2].out.as_mut_ptr().add(k),
-                        _mm256_permute2f128_pd::<0x31>(t0, t2),
-                    );
-                    _mm256_storeu_pd(
-                        dst[3].out.as_mut_ptr().add(k),
-                        _mm256_permute2f128_pd::<0x31>(t1, t3),
-                    );
-                }
-            }
-            for k in whole..len {
-                for (l, lane) in dst.iter_mut().enumerate() {
-                    lane.out[k] = src[4 * k + l];
-                }
-            }
+            crate::transpose4::deinterleave(
+                &src[..LANES * len],
+                dst.each_mut().map(|l| &mut *l.out),
+            );
         }
 
         /// Lane l of a register from four values.

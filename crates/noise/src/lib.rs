@@ -30,6 +30,7 @@ mod static_level;
 mod temperature;
 pub mod terms;
 pub mod text;
+mod transpose4;
 pub mod units;
 mod wide;
 mod ziggurat;

@@ -544,21 +544,25 @@ impl FilterState {
         &self.h
     }
 
-    pub(crate) fn filter(&mut self, start: u64, raw: &[f64], k0: u64, out: &mut [f64]) {
+    /// The raw index (in a block starting at raw sample `start`) and output slot of the block's
+    /// first sample read out, then every d-th; output k0 the block's first output.
+    fn readout(&self, start: u64, k0: u64) -> Readout {
         let (d, pre) = (self.decimation as u64, self.preroll as u64);
+        let first = if start <= pre {
+            pre
+        } else {
+            pre + (start - pre).div_ceil(d) * d
+        };
+        Readout {
+            next: first - start,
+            slot: ((first - pre) / d - k0) as usize,
+            every: d,
+        }
+    }
+
+    pub(crate) fn filter(&mut self, start: u64, raw: &[f64], k0: u64, out: &mut [f64]) {
+        let read = self.readout(start, k0);
         if let Some(state) = &mut self.iir {
-            // Raw index (in `raw`) and output slot of the first sample read out in this block;
-            // then every d-th.
-            let first = if start <= pre {
-                pre
-            } else {
-                pre + (start - pre).div_ceil(d) * d
-            };
-            let read = Readout {
-                next: first - start,
-                slot: ((first - pre) / d - k0) as usize,
-                every: d,
-            };
             match (state.b.len(), state.a.len()) {
                 (1, 2) => state.run::<1, 2>(raw, read, out),
                 (2, 2) => state.run::<2, 2>(raw, read, out),
@@ -814,7 +818,7 @@ mod lanes4 {
     }
 
     /// dst[4 k + l] = (lane l's `head` followed by its `raw`)[k]: the heads (a filter's short
-    /// history) one by one, the blocks by 4 x 4 transposes.
+    /// history) one by one, the blocks by [`crate::transpose4`].
     #[target_feature(enable = "avx2")]
     fn interleave(head: [&[f64]; 4], raw: &[Vec<f64>; 4], dst: &mut Vec<f64>) {
         let (h, m) = (head[0].len(), raw[0].len());
@@ -826,30 +830,10 @@ mod lanes4 {
                 dst[4 * k + l] = v;
             }
         }
-        let whole = m / 4 * 4;
-        for k in (0..whole).step_by(4) {
-            // SAFETY: raw[l][k..k + 4] and dst[4 (h + k)..4 (h + k) + 16] are in bounds.
-            unsafe {
-                let r0 = _mm256_loadu_pd(raw[0].as_ptr().add(k));
-                let r1 = _mm256_loadu_pd(raw[1].as_ptr().add(k));
-                let r2 = _mm256_loadu_pd(raw[2].as_ptr().add(k));
-                let r3 = _mm256_loadu_pd(raw[3].as_ptr().add(k));
-                let t0 = _mm256_unpacklo_pd(r0, r1);
-                let t1 = _mm256_unpackhi_pd(r0, r1);
-                let t2 = _mm256_unpacklo_pd(r2, r3);
-                let t3 = _mm256_unpackhi_pd(r2, r3);
-                let o = dst.as_mut_ptr().add(4 * (h + k));
-                _mm256_storeu_pd(o, _mm256_permute2f128_pd::<0x20>(t0, t2));
-                _mm256_storeu_pd(o.add(4), _mm256_permute2f128_pd::<0x20>(t1, t3));
-                _mm256_storeu_pd(o.add(8), _mm256_permute2f128_pd::<0x31>(t0, t2));
-                _mm256_storeu_pd(o.add(12), _mm256_permute2f128_pd::<0x31>(t1, t3));
-            }
-        }
-        for k in whole..m {
-            for (l, raw) in raw.iter().enumerate() {
-                dst[4 * (h + k) + l] = raw[k];
-            }
-        }
+        crate::transpose4::interleave(
+            std::array::from_fn(|l| &raw[l][..]),
+            &mut dst[4 * h..4 * (h + m)],
+        );
     }
 
     /// [`FilterState::filter`] of four lanes ([`available`] true).
@@ -863,20 +847,10 @@ mod lanes4 {
     ) {
         INTERLEAVED.with(|buf| {
             let buf = &mut *buf.borrow_mut();
-            let (d, pre) = (f[0].decimation as u64, f[0].preroll as u64);
             let m = raws[0].len();
             if f[0].iir.is_some() {
                 interleave([&[][..]; 4], raws, buf);
-                let first = if start <= pre {
-                    pre
-                } else {
-                    pre + (start - pre).div_ceil(d) * d
-                };
-                let read = Readout {
-                    next: first - start,
-                    slot: ((first - pre) / d - k0) as usize,
-                    every: d,
-                };
+                let read = f[0].readout(start, k0);
                 match f[0].iir.as_ref().map(|i| (i.b.len(), i.a.len())) {
                     Some((1, 2)) => iir::<1, 2>(f, &buf[..4 * m], read, outs),
                     Some((2, 2)) => iir::<2, 2>(f, &buf[..4 * m], read, outs),
