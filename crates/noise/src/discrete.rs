@@ -403,8 +403,16 @@ pub(crate) struct FusedLane<'a> {
     pub bank: &'a mut GaussMarkovBank,
     pub bank_draws: &'a [f64],
     pub walk: Option<(&'a mut RandomWalk, &'a [f64])>,
-    pub res: Option<(&'a mut crate::terms::resonance::Resonator, &'a [f64])>,
+    pub res: Option<(ResonatorLane<'a>, &'a [f64])>,
     pub out: &'a mut [f64],
+}
+
+/// A resonance's recursion as [`fused4`] runs it (`terms/resonance.rs` makes it): the transition
+/// matrix Phi, the Cholesky factor (l11, l21, l22) of the drive's covariance, the state (x, x').
+pub(crate) struct ResonatorLane<'a> {
+    pub phi: [[f64; 2]; 2],
+    pub chol: (f64, f64, f64),
+    pub state: &'a mut [f64; 2],
 }
 
 impl GaussMarkovBank {
@@ -587,19 +595,15 @@ pub(crate) mod fused4 {
                 };
                 let mut ws = walk(&|w| w.state);
                 let step = walk(&|w| w.step);
-                let res = |f: &dyn Fn(&crate::terms::resonance::Resonator) -> f64| {
-                    by(&|l| lanes[l].res.as_ref().map_or(0.0, |r| f(r.0)))
+                let res = |f: &dyn Fn(&crate::discrete::ResonatorLane) -> f64| {
+                    by(&|l| lanes[l].res.as_ref().map_or(0.0, |r| f(&r.0)))
                 };
-                let (mut rx, mut rv) = (res(&|r| r.state()[0]), res(&|r| r.state()[1]));
+                let (mut rx, mut rv) = (res(&|r| r.state[0]), res(&|r| r.state[1]));
                 let [[p00, p01], [p10, p11]] = [
-                    [res(&|r| r.phi()[0][0]), res(&|r| r.phi()[0][1])],
-                    [res(&|r| r.phi()[1][0]), res(&|r| r.phi()[1][1])],
+                    [res(&|r| r.phi[0][0]), res(&|r| r.phi[0][1])],
+                    [res(&|r| r.phi[1][0]), res(&|r| r.phi[1][1])],
                 ];
-                let (l11, l21, l22) = (
-                    res(&|r| r.chol().0),
-                    res(&|r| r.chol().1),
-                    res(&|r| r.chol().2),
-                );
+                let (l11, l21, l22) = (res(&|r| r.chol.0), res(&|r| r.chol.1), res(&|r| r.chol.2));
                 let held = !lanes[0].bank.held.is_empty();
                 let (bt, wt, rt, ot) = (
                     bank_t.as_ptr(),
@@ -697,7 +701,7 @@ pub(crate) mod fused4 {
                         w.state = ws[l];
                     }
                     if let Some((r, _)) = &mut lane.res {
-                        r.set_state([rx[l], rv[l]]);
+                        *r.state = [rx[l], rv[l]];
                     }
                 }
             });

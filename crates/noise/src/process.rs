@@ -533,7 +533,7 @@ fn fused_in_lanes(lanes: &mut [RawLane], i: usize, pass: Pass) -> bool {
             let res = res_gen.map(|r| {
                 let (resonator, rng) = r.parts();
                 crate::discrete::draws(rng, s2, 2 * n);
-                (resonator, &s2[..2 * n])
+                (resonator.lane(), &s2[..2 * n])
             });
             FusedLane {
                 bank,

@@ -217,23 +217,13 @@ impl Resonator {
         }
     }
 
-    /// The transition matrix Phi (for the lanes of `crate::discrete::fused4`).
-    pub(crate) fn phi(&self) -> [[f64; 2]; 2] {
-        self.phi
-    }
-
-    /// The Cholesky factor of Q: (l11, l21, l22).
-    pub(crate) fn chol(&self) -> (f64, f64, f64) {
-        self.chol
-    }
-
-    /// The state (x, x').
-    pub(crate) fn state(&self) -> [f64; 2] {
-        self.state
-    }
-
-    pub(crate) fn set_state(&mut self, state: [f64; 2]) {
-        self.state = state;
+    /// The recursion as the four-run loop runs it (`crate::discrete::fused4`).
+    pub(crate) fn lane(&mut self) -> crate::discrete::ResonatorLane<'_> {
+        crate::discrete::ResonatorLane {
+            phi: self.phi,
+            chol: self.chol,
+            state: &mut self.state,
+        }
     }
 
     /// Add the next `out.len()` values (two normals per sample, in sample order).
