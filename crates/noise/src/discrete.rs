@@ -560,139 +560,95 @@ pub(crate) mod fused4 {
             out
         }
 
-        /// The loop ([`super::run`]): `N` every-sample components, a walk if `W`, a resonance if `R`.
-        #[target_feature(enable = "avx2")]
-        pub(super) fn run<const N: usize, const W: bool, const R: bool>(
-            lanes: &mut [FusedLane; LANES],
-        ) {
-            SCRATCH.with(|s| {
-                let s = &mut *s.borrow_mut();
-                let [bank_t, walk_t, res_t, out_t] = s;
-                let n = lanes[0].out.len();
-                let nb = lanes[0].bank_draws.len();
-                interleave(std::array::from_fn(|l| lanes[l].bank_draws), nb, bank_t);
-                if W {
-                    interleave(
-                        std::array::from_fn(|l| lanes[l].walk.as_ref().map_or(&[][..], |w| w.1)),
-                        n,
-                        walk_t,
-                    );
-                }
-                if R {
-                    interleave(
-                        std::array::from_fn(|l| lanes[l].res.as_ref().map_or(&[][..], |r| r.1)),
-                        2 * n,
-                        res_t,
-                    );
-                }
-                interleave(std::array::from_fn(|l| &*lanes[l].out), n, out_t);
+        /// The four lanes' states and coefficients, one register per quantity (lane l in
+        /// element l): the bank's `N` every-sample components, the walk, the resonance.
+        struct Regs<const N: usize> {
+            x: [__m256d; N],
+            phi: [__m256d; N],
+            drive: [__m256d; N],
+            walk: __m256d,
+            step: __m256d,
+            /// The resonance's state (x, x'), Phi row by row and the Cholesky factor of Q.
+            rx: __m256d,
+            rv: __m256d,
+            p: [__m256d; 4],
+            l: [__m256d; 3],
+        }
+
+        impl<const N: usize> Regs<N> {
+            /// The lanes' values (a lane without a walk or resonance reads 0: never used).
+            #[inline(always)]
+            fn load(lanes: &[FusedLane; LANES]) -> Regs<N> {
                 let by = |f: &dyn Fn(usize) -> f64| set(std::array::from_fn(f));
-                let mut x: [__m256d; N] = std::array::from_fn(|c| by(&|l| lanes[l].bank.state[c]));
-                let phi: [__m256d; N] = std::array::from_fn(|c| by(&|l| lanes[l].bank.phi[c]));
-                let drive: [__m256d; N] = std::array::from_fn(|c| by(&|l| lanes[l].bank.drive[c]));
                 let walk = |f: &dyn Fn(&super::super::RandomWalk) -> f64| {
                     by(&|l| lanes[l].walk.as_ref().map_or(0.0, |w| f(w.0)))
                 };
-                let mut ws = walk(&|w| w.state);
-                let step = walk(&|w| w.step);
                 let res = |f: &dyn Fn(&crate::discrete::ResonatorLane) -> f64| {
                     by(&|l| lanes[l].res.as_ref().map_or(0.0, |r| f(&r.0)))
                 };
-                let (mut rx, mut rv) = (res(&|r| r.state[0]), res(&|r| r.state[1]));
-                let [[p00, p01], [p10, p11]] = [
-                    [res(&|r| r.phi[0][0]), res(&|r| r.phi[0][1])],
-                    [res(&|r| r.phi[1][0]), res(&|r| r.phi[1][1])],
-                ];
-                let (l11, l21, l22) = (res(&|r| r.chol.0), res(&|r| r.chol.1), res(&|r| r.chol.2));
-                let held = !lanes[0].bank.held.is_empty();
-                let (bt, wt, rt, ot) = (
-                    bank_t.as_ptr(),
-                    walk_t.as_ptr(),
-                    res_t.as_ptr(),
-                    out_t.as_mut_ptr(),
-                );
-                let mut j = 0;
-                let mut i = 0;
-                while i < n {
-                    let left = n - i;
-                    let run = if held {
-                        left.min(lanes[0].bank.until_event as usize)
-                    } else {
-                        left
-                    };
-                    let held_sum = by(&|l| lanes[l].bank.held_sum);
-                    let offset = by(&|l| lanes[l].bank.offset);
-                    for k in i..i + run {
-                        // SAFETY: draw j + (k - i) N + c < nb, walk k < n, resonance 2k + 1 < 2n,
-                        // block k < n: the interleaved buffers hold four values for each.
-                        unsafe {
-                            let d = bt.add(4 * (j + (k - i) * N));
-                            let mut sum = _mm256_setzero_pd();
-                            for c in 0..N {
-                                sum = _mm256_add_pd(sum, x[c]);
-                                x[c] = _mm256_add_pd(
-                                    _mm256_mul_pd(phi[c], x[c]),
-                                    _mm256_mul_pd(drive[c], _mm256_loadu_pd(d.add(4 * c))),
-                                );
-                            }
-                            sum = _mm256_add_pd(sum, held_sum);
-                            sum = _mm256_sub_pd(sum, offset);
-                            let o = ot.add(4 * k);
-                            let mut v = _mm256_add_pd(_mm256_loadu_pd(o), sum);
-                            if W {
-                                v = _mm256_add_pd(v, ws);
-                                ws = _mm256_add_pd(
-                                    ws,
-                                    _mm256_mul_pd(step, _mm256_loadu_pd(wt.add(4 * k))),
-                                );
-                            }
-                            if R {
-                                v = _mm256_add_pd(v, rx);
-                                let d0 = _mm256_loadu_pd(rt.add(8 * k));
-                                let d1 = _mm256_loadu_pd(rt.add(8 * k + 4));
-                                let nx = _mm256_add_pd(
-                                    _mm256_add_pd(_mm256_mul_pd(p00, rx), _mm256_mul_pd(p01, rv)),
-                                    _mm256_mul_pd(l11, d0),
-                                );
-                                let nv = _mm256_add_pd(
-                                    _mm256_add_pd(
-                                        _mm256_add_pd(
-                                            _mm256_mul_pd(p10, rx),
-                                            _mm256_mul_pd(p11, rv),
-                                        ),
-                                        _mm256_mul_pd(l21, d0),
-                                    ),
-                                    _mm256_mul_pd(l22, d1),
-                                );
-                                rx = nx;
-                                rv = nv;
-                            }
-                            _mm256_storeu_pd(o, v);
-                        }
-                    }
-                    j += run * N;
-                    i += run;
-                    if held {
-                        // One schedule: every lane's update is due together and draws as many.
-                        let mut next = j;
-                        for lane in lanes.iter_mut() {
-                            let (bank, w) = (&mut *lane.bank, lane.bank_draws);
-                            bank.until_event -= run as u32;
-                            if bank.until_event == 0 {
-                                let mut k = j;
-                                bank.sync_held_with(bank.event_span, || {
-                                    k += 1;
-                                    w[k - 1]
-                                });
-                                next = k;
-                            }
-                        }
-                        j = next;
-                    }
+                Regs {
+                    x: std::array::from_fn(|c| by(&|l| lanes[l].bank.state[c])),
+                    phi: std::array::from_fn(|c| by(&|l| lanes[l].bank.phi[c])),
+                    drive: std::array::from_fn(|c| by(&|l| lanes[l].bank.drive[c])),
+                    walk: walk(&|w| w.state),
+                    step: walk(&|w| w.step),
+                    rx: res(&|r| r.state[0]),
+                    rv: res(&|r| r.state[1]),
+                    p: [0, 1, 2, 3].map(|k| res(&|r| r.phi[k / 2][k % 2])),
+                    l: [res(&|r| r.chol.0), res(&|r| r.chol.1), res(&|r| r.chol.2)],
                 }
-                deinterleave(out_t, lanes);
-                let xs: [[f64; LANES]; N] = std::array::from_fn(|c| get(x[c]));
-                let (ws, rx, rv) = (get(ws), get(rx), get(rv));
+            }
+
+            /// One sample of the four lanes: the bank's value (its draws at `d`, the held sum
+            /// and the offset), then the walk's (its draw at `w`) if `W`, then the resonance's
+            /// (its two draws at `r`) if `R`, added to the block's value at `o`; the scalar
+            /// code's operations in its order. Safety: AVX2, and four readable values at `d`
+            /// (N of them), `w`, `r` (eight) and `o`, writable at `o`.
+            #[inline(always)]
+            unsafe fn step<const W: bool, const R: bool>(
+                &mut self,
+                (d, w, r, o): (*const f64, *const f64, *const f64, *mut f64),
+                held_sum: __m256d,
+                offset: __m256d,
+            ) {
+                // SAFETY: the caller's.
+                unsafe {
+                    let mut sum = _mm256_setzero_pd();
+                    for c in 0..N {
+                        sum = _mm256_add_pd(sum, self.x[c]);
+                        self.x[c] = _mm256_add_pd(
+                            _mm256_mul_pd(self.phi[c], self.x[c]),
+                            _mm256_mul_pd(self.drive[c], _mm256_loadu_pd(d.add(4 * c))),
+                        );
+                    }
+                    sum = _mm256_sub_pd(_mm256_add_pd(sum, held_sum), offset);
+                    let mut v = _mm256_add_pd(_mm256_loadu_pd(o), sum);
+                    if W {
+                        v = _mm256_add_pd(v, self.walk);
+                        let dw = _mm256_mul_pd(self.step, _mm256_loadu_pd(w));
+                        self.walk = _mm256_add_pd(self.walk, dw);
+                    }
+                    if R {
+                        let ([p00, p01, p10, p11], [l11, l21, l22]) = (self.p, self.l);
+                        let (rx, rv) = (self.rx, self.rv);
+                        v = _mm256_add_pd(v, rx);
+                        let (d0, d1) = (_mm256_loadu_pd(r), _mm256_loadu_pd(r.add(4)));
+                        let ax = _mm256_add_pd(_mm256_mul_pd(p00, rx), _mm256_mul_pd(p01, rv));
+                        let av = _mm256_add_pd(_mm256_mul_pd(p10, rx), _mm256_mul_pd(p11, rv));
+                        self.rx = _mm256_add_pd(ax, _mm256_mul_pd(l11, d0));
+                        self.rv = _mm256_add_pd(
+                            _mm256_add_pd(av, _mm256_mul_pd(l21, d0)),
+                            _mm256_mul_pd(l22, d1),
+                        );
+                    }
+                    _mm256_storeu_pd(o, v);
+                }
+            }
+
+            /// Each lane's states back into its bank, walk and resonance.
+            fn store(&self, lanes: &mut [FusedLane; LANES]) {
+                let xs: [[f64; LANES]; N] = self.x.map(get);
+                let (ws, rx, rv) = (get(self.walk), get(self.rx), get(self.rv));
                 for (l, lane) in lanes.iter_mut().enumerate() {
                     for (state, xs) in lane.bank.state.iter_mut().zip(&xs) {
                         *state = xs[l];
@@ -704,7 +660,89 @@ pub(crate) mod fused4 {
                         *r.state = [rx[l], rv[l]];
                     }
                 }
+            }
+        }
+
+        /// The loop ([`super::run`]): `N` every-sample components, a walk if `W`, a resonance if `R`.
+        #[target_feature(enable = "avx2")]
+        pub(super) fn run<const N: usize, const W: bool, const R: bool>(
+            lanes: &mut [FusedLane; LANES],
+        ) {
+            SCRATCH.with(|s| {
+                let [bank_t, walk_t, res_t, out_t] = &mut *s.borrow_mut();
+                let n = lanes[0].out.len();
+                let nb = lanes[0].bank_draws.len();
+                interleave(std::array::from_fn(|l| lanes[l].bank_draws), nb, bank_t);
+                if W {
+                    let w = |l: usize| lanes[l].walk.as_ref().map_or(&[][..], |w| w.1);
+                    interleave(std::array::from_fn(w), n, walk_t);
+                }
+                if R {
+                    let r = |l: usize| lanes[l].res.as_ref().map_or(&[][..], |r| r.1);
+                    interleave(std::array::from_fn(r), 2 * n, res_t);
+                }
+                interleave(std::array::from_fn(|l| &*lanes[l].out), n, out_t);
+                let mut regs = Regs::<N>::load(lanes);
+                let held = !lanes[0].bank.held.is_empty();
+                let (bt, wt, rt, ot) = (
+                    bank_t.as_ptr(),
+                    walk_t.as_ptr(),
+                    res_t.as_ptr(),
+                    out_t.as_mut_ptr(),
+                );
+                let (mut i, mut j) = (0, 0);
+                while i < n {
+                    let run = if held {
+                        (n - i).min(lanes[0].bank.until_event as usize)
+                    } else {
+                        n - i
+                    };
+                    let held_sum = set(std::array::from_fn(|l| lanes[l].bank.held_sum));
+                    let offset = set(std::array::from_fn(|l| lanes[l].bank.offset));
+                    for k in i..i + run {
+                        // SAFETY: AVX2 (this function's); draw j + (k - i) N + c < nb, walk
+                        // k < n, resonance 2k + 1 < 2n, block k < n: the interleaved buffers
+                        // hold four values for each (the walk's and resonance's only read
+                        // when W, R).
+                        unsafe {
+                            let at = (
+                                bt.add(4 * (j + (k - i) * N)),
+                                wt.wrapping_add(4 * k),
+                                rt.wrapping_add(8 * k),
+                                ot.add(4 * k),
+                            );
+                            regs.step::<W, R>(at, held_sum, offset);
+                        }
+                    }
+                    j += run * N;
+                    i += run;
+                    if held {
+                        j = sync_held(lanes, run, j);
+                    }
+                }
+                deinterleave(out_t, lanes);
+                regs.store(lanes);
             });
+        }
+
+        /// After `run` samples, each lane's held components that are due updated from its draws
+        /// at `j` on (one schedule: every lane's update is due together and draws as many);
+        /// the next draw's index.
+        fn sync_held(lanes: &mut [FusedLane; LANES], run: usize, j: usize) -> usize {
+            let mut next = j;
+            for lane in lanes.iter_mut() {
+                let (bank, w) = (&mut *lane.bank, lane.bank_draws);
+                bank.until_event -= run as u32;
+                if bank.until_event == 0 {
+                    let mut k = j;
+                    bank.sync_held_with(bank.event_span, || {
+                        k += 1;
+                        w[k - 1]
+                    });
+                    next = k;
+                }
+            }
+            next
         }
     }
 }
