@@ -223,6 +223,21 @@ mod tests {
             .collect()
     }
 
+    /// Of `trials` draws of `k` = 20 cells (R = 40 simulated, correlation `rho`, the measurement
+    /// shifted by `shift`) from seed `seed`, how many the joint check's outcome `hit` counts.
+    fn count(
+        seed: u64,
+        trials: usize,
+        rho: f64,
+        shift: &[f64],
+        hit: impl Fn(&JointCheck) -> bool,
+    ) -> usize {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+        (0..trials)
+            .filter(|_| hit(&joint_check(&cells(&mut rng, 40, 20, rho, shift)).unwrap()))
+            .count()
+    }
+
     /// Under the model (the measurement one more experiment) the test rejects at most 5 % of the
     /// time, whatever the cells' correlation: 2000 trials each at rho = 0, 0.3, 0.6 and 0.9, 20
     /// cells, R = 40 (measured 80-83 rejected, 4.0-4.2 %: the min-p of two statistics is a little
@@ -233,14 +248,8 @@ mod tests {
     #[test]
     fn rejects_five_percent_under_the_model() {
         for &rho in &[0.0, 0.3, 0.6, 0.9] {
-            let mut rng = rand::rngs::StdRng::seed_from_u64(7);
             let trials = 2000;
-            let rejected = (0..trials)
-                .filter(|_| {
-                    let j = joint_check(&cells(&mut rng, 40, 20, rho, &[0.0; 20])).unwrap();
-                    !j.consistent
-                })
-                .count();
+            let rejected = count(7, trials, rho, &[0.0; 20], |j| !j.consistent);
             let rate = rejected as f64 / trials as f64;
             println!("rho {rho}: rejected {rejected}/{trials}");
             assert!((0.030..=0.064).contains(&rate), "rho {rho}: rate {rate}");
@@ -254,17 +263,12 @@ mod tests {
     /// from a right model's misses.
     #[test]
     fn one_cell_far_out_is_found() {
-        let mut rng = rand::rngs::StdRng::seed_from_u64(11);
         let mut shift = vec![0.0; 20];
         shift[13] = 0.3 * 5.0;
         let trials = 200;
-        let mut found = 0;
-        for _ in 0..trials {
-            let j = joint_check(&cells(&mut rng, 40, 20, 0.5, &shift)).unwrap();
-            if !j.consistent && j.worst.t_s == 13.0 {
-                found += 1;
-            }
-        }
+        let found = count(11, trials, 0.5, &shift, |j| {
+            !j.consistent && j.worst.t_s == 13.0
+        });
         println!("one cell far out: found {found}/{trials}");
         assert!(
             found as f64 / trials as f64 >= 0.8,
@@ -276,18 +280,11 @@ mod tests {
     /// maximum alone, are found by the count outside: rejected in at least 80 % of 200 trials.
     #[test]
     fn many_cells_a_little_out_are_found() {
-        let mut rng = rand::rngs::StdRng::seed_from_u64(13);
         let shift: Vec<f64> = (0..20)
             .map(|c| if c % 5 < 2 { 0.75 } else { 0.0 })
             .collect();
         let trials = 200;
-        let rejected = (0..trials)
-            .filter(|_| {
-                !joint_check(&cells(&mut rng, 40, 20, 0.0, &shift))
-                    .unwrap()
-                    .consistent
-            })
-            .count();
+        let rejected = count(13, trials, 0.0, &shift, |j| !j.consistent);
         println!("many cells a little out: rejected {rejected}/{trials}");
         assert!(
             rejected as f64 / trials as f64 >= 0.8,
