@@ -668,6 +668,7 @@ pub(crate) mod fused4 {
         pub(super) fn run<const N: usize, const W: bool, const R: bool>(
             lanes: &mut [FusedLane; LANES],
         ) {
+            crate::transpose4::count_block(false);
             SCRATCH.with(|s| {
                 let [bank_t, walk_t, res_t, out_t] = &mut *s.borrow_mut();
                 let n = lanes[0].out.len();

@@ -31,6 +31,9 @@ mod temperature;
 pub mod terms;
 pub mod text;
 mod transpose4;
+#[cfg(target_arch = "x86_64")]
+#[doc(hidden)]
+pub use transpose4::simd_blocks;
 pub mod units;
 mod wide;
 mod ziggurat;

@@ -6,6 +6,26 @@
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
 
+thread_local! {
+    /// Blocks this thread ran through the four-run SIMD loops: (noise terms, output filters).
+    static SIMD_BLOCKS: std::cell::Cell<(u64, u64)> = const { std::cell::Cell::new((0, 0)) };
+}
+
+/// Count one block of the four-run noise loop (`filter` false) or filter loop (`filter` true).
+pub(crate) fn count_block(filter: bool) {
+    SIMD_BLOCKS.with(|c| {
+        let (t, f) = c.get();
+        c.set(if filter { (t, f + 1) } else { (t + 1, f) });
+    });
+}
+
+/// Blocks this thread has run through the four-run SIMD loops so far: (noise terms, output
+/// filters). For tests that must know the lanes ran in SIMD and not one run at a time.
+#[doc(hidden)]
+pub fn simd_blocks() -> (u64, u64) {
+    SIMD_BLOCKS.with(|c| c.get())
+}
+
 /// The 4 x 4 transpose of rows r0..r3 (row l: lane l's four samples) into four registers, one
 /// sample's four lanes each.
 #[cfg(target_arch = "x86_64")]

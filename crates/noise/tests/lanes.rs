@@ -150,6 +150,30 @@ fn still(n: usize) -> Vec<Ideal> {
     vec![(Vector3::zeros(), Vector3::new(0.0, 0.0, -9.80665)); n]
 }
 
+/// Whether this CPU runs four lanes in SIMD (then the tests below must see the SIMD loops run).
+fn simd() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// Blocks this thread ran through the four-run SIMD loops (noise terms, filters).
+fn simd_blocks() -> (u64, u64) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        noise::simd_blocks()
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        (0, 0)
+    }
+}
+
 #[test]
 fn every_lane_equals_its_run_alone() {
     let n = 12_000;
@@ -162,7 +186,19 @@ fn every_lane_equals_its_run_alone() {
     for (name, model) in &models {
         for lanes in [1usize, 2, 3, 4, 5, 8] {
             let ms = vec![model; lanes];
+            let before = simd_blocks();
             let got = side_by_side(&ms, 11, n, None);
+            let after = simd_blocks();
+            if simd() && lanes >= 4 && name == "fitted" {
+                // The fitted model has fused passes and filters on every channel: both loops ran.
+                assert!(
+                    after.0 > before.0 && after.1 > before.1,
+                    "{lanes} lanes: the SIMD loops did not run ({before:?} -> {after:?})"
+                );
+            }
+            if lanes < 4 {
+                assert_eq!(before, after, "{lanes} lanes cannot run four at a time");
+            }
             let expect: Vec<_> = (0..lanes as u64)
                 .map(|l| alone(model, 11 + l, n, &still(n)))
                 .collect();

@@ -740,8 +740,8 @@ mod tests {
 
 impl FilterState {
     /// [`FilterState::filter`] of several runs' filters (lanes) over blocks of one length, lane l
-    /// reading `raws[l]` into `outs[l]`: each lane's outputs those of its own call. Four filters
-    /// of one shape run in one AVX2 loop ([`lanes4`]), the others one after the other.
+    /// reading `raws[l]` into `outs[l]`: each lane's outputs those of its own call. Each four
+    /// filters of one shape run in one AVX2 loop ([`lanes4`]), the rest one after the other.
     pub(crate) fn filter_lanes(
         filters: &mut [FilterState],
         start: u64,
@@ -749,20 +749,26 @@ impl FilterState {
         k0: u64,
         outs: &mut [&mut [f64]],
     ) {
-        #[cfg(target_arch = "x86_64")]
-        if let (Ok(f4), Ok(r4), Ok(o4)) = (
-            <&mut [FilterState; 4]>::try_from(&mut *filters),
-            <&[Vec<f64>; 4]>::try_from(raws),
-            <&mut [&mut [f64]; 4]>::try_from(&mut *outs),
-        ) {
-            if lanes4::available(f4, r4) {
-                // SAFETY: `available` checked that the CPU has AVX2.
-                unsafe { lanes4::filter(f4, start, r4, k0, o4) };
-                return;
+        for ((f, raw), out) in filters
+            .chunks_mut(4)
+            .zip(raws.chunks(4))
+            .zip(outs.chunks_mut(4))
+        {
+            #[cfg(target_arch = "x86_64")]
+            if let (Ok(f4), Ok(r4), Ok(o4)) = (
+                <&mut [FilterState; 4]>::try_from(&mut *f),
+                <&[Vec<f64>; 4]>::try_from(raw),
+                <&mut [&mut [f64]; 4]>::try_from(&mut *out),
+            ) {
+                if lanes4::available(f4, r4) {
+                    // SAFETY: `available` checked that the CPU has AVX2.
+                    unsafe { lanes4::filter(f4, start, r4, k0, o4) };
+                    continue;
+                }
             }
-        }
-        for ((f, raw), out) in filters.iter_mut().zip(raws).zip(outs.iter_mut()) {
-            f.filter(start, raw, k0, out);
+            for ((f, raw), out) in f.iter_mut().zip(raw).zip(out.iter_mut()) {
+                f.filter(start, raw, k0, out);
+            }
         }
     }
 }
@@ -845,6 +851,7 @@ mod lanes4 {
         k0: u64,
         outs: &mut [&mut [f64]; 4],
     ) {
+        crate::transpose4::count_block(true);
         INTERLEAVED.with(|buf| {
             let buf = &mut *buf.borrow_mut();
             let m = raws[0].len();
