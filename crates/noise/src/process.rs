@@ -337,22 +337,39 @@ impl ChannelErrors {
             dt_s: dt_raw,
             offset_s: preroll as f64 * dt_raw,
         };
+        if lanes.len() == 1 {
+            // One run (`sample` per sample, `fill_static` per block): the lane on the stack, not
+            // in a vector allocated per call.
+            if let (Some(l), Some(out)) = (lanes.first_mut(), outs.first_mut()) {
+                let mut one = [raw_lane(l, out, &ideal)];
+                raw_terms_lanes(&mut one, clock);
+            }
+            return;
+        }
         let mut raw: Vec<RawLane> = lanes
             .iter_mut()
             .zip(outs.iter_mut())
-            .map(|(l, out)| {
-                for (i, v) in out.iter_mut().enumerate() {
-                    let x = ideal(i);
-                    *v = l.row[0] * x.x + l.row[1] * x.y + l.row[2] * x.z + l.bias;
-                }
-                RawLane {
-                    raw: &mut l.raw,
-                    out,
-                    s: [&mut l.scratch, &mut l.scratch2, &mut l.scratch3],
-                }
-            })
+            .map(|(l, out)| raw_lane(l, out, &ideal))
             .collect();
         raw_terms_lanes(&mut raw, clock);
+    }
+}
+
+/// A run's raw block started at its ideal reading (row times the ideal input, plus the bias), as
+/// a lane of [`raw_terms_lanes`].
+fn raw_lane<'l, 'a>(
+    l: &'l mut ChannelErrors,
+    out: &'l mut [f64],
+    ideal: &impl Fn(usize) -> &'a Vector3<f64>,
+) -> RawLane<'l> {
+    for (i, v) in out.iter_mut().enumerate() {
+        let x = ideal(i);
+        *v = l.row[0] * x.x + l.row[1] * x.y + l.row[2] * x.z + l.bias;
+    }
+    RawLane {
+        raw: &mut l.raw,
+        out,
+        s: [&mut l.scratch, &mut l.scratch2, &mut l.scratch3],
     }
 }
 
