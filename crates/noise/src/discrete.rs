@@ -684,7 +684,7 @@ pub(crate) mod fused4 {
                 }
                 interleave(std::array::from_fn(|l| &*lanes[l].out), n, out_t);
                 let mut regs = Regs::<N>::load(lanes);
-                let held = !lanes[0].bank.held.is_empty();
+                let mut held = Held::load(lanes);
                 let (bt, wt, rt, ot) = (
                     bank_t.as_ptr(),
                     walk_t.as_ptr(),
@@ -693,13 +693,11 @@ pub(crate) mod fused4 {
                 );
                 let (mut i, mut j) = (0, 0);
                 while i < n {
-                    let run = if held {
-                        (n - i).min(lanes[0].bank.until_event as usize)
+                    let run = if held.any {
+                        (n - i).min(held.until_event as usize)
                     } else {
                         n - i
                     };
-                    let held_sum = set(std::array::from_fn(|l| lanes[l].bank.held_sum));
-                    let offset = set(std::array::from_fn(|l| lanes[l].bank.offset));
                     for k in i..i + run {
                         // SAFETY: AVX2 (this function's); draw j + (k - i) N + c < nb, walk
                         // k < n, resonance 2k + 1 < 2n, block k < n: the interleaved buffers
@@ -712,38 +710,119 @@ pub(crate) mod fused4 {
                                 rt.wrapping_add(8 * k),
                                 ot.add(4 * k),
                             );
-                            regs.step::<W, R>(at, held_sum, offset);
+                            regs.step::<W, R>(at, held.sum, held.offset);
                         }
                     }
                     j += run * N;
                     i += run;
-                    if held {
-                        j = sync_held(lanes, run, j);
+                    if held.any {
+                        // SAFETY: AVX2 (this function's); the due components' draws are the
+                        // bank's next ones, below nb (the bank drew them for this block).
+                        j = unsafe { held.advance(run, bt, j) };
                     }
                 }
+                held.store(lanes);
                 deinterleave(out_t, lanes);
                 regs.store(lanes);
             });
         }
 
-        /// After `run` samples, each lane's held components that are due updated from its draws
-        /// at `j` on (one schedule: every lane's update is due together and draws as many);
-        /// the next draw's index.
-        fn sync_held(lanes: &mut [FusedLane; LANES], run: usize, j: usize) -> usize {
-            let mut next = j;
-            for lane in lanes.iter_mut() {
-                let (bank, w) = (&mut *lane.bank, lane.bank_draws);
-                bank.until_event -= run as u32;
-                if bank.until_event == 0 {
-                    let mut k = j;
-                    bank.sync_held_with(bank.event_span, || {
-                        k += 1;
-                        w[k - 1]
-                    });
-                    next = k;
+        /// The four lanes' held components (one schedule: `fused4::available`), their states
+        /// in registers (component c of lane l in element l of `state[c]`), the schedule kept
+        /// once: [`super::super::GaussMarkovBank::sync_held_with`] for four lanes at a time,
+        /// the same operations per lane in its order (so the same bits), without a call and a
+        /// loop over the lanes at every update (a component held for m samples updates every m;
+        /// m is 2-8 for the fitted ADIS16405 model's faster held components).
+        struct Held {
+            any: bool,
+            phi: Vec<__m256d>,
+            drive: Vec<__m256d>,
+            state: Vec<__m256d>,
+            every: Vec<u32>,
+            left: Vec<u32>,
+            /// The held states' sum and the bank's offset, per lane.
+            sum: __m256d,
+            offset: __m256d,
+            event_span: u32,
+            until_event: u32,
+        }
+
+        impl Held {
+            #[inline(always)]
+            fn load(lanes: &[FusedLane; LANES]) -> Held {
+                let bank0 = &*lanes[0].bank;
+                let by = |f: &dyn Fn(&super::super::HeldComponent) -> f64| -> Vec<__m256d> {
+                    (0..bank0.held.len())
+                        .map(|c| set(std::array::from_fn(|l| f(&lanes[l].bank.held[c]))))
+                        .collect()
+                };
+                Held {
+                    any: !bank0.held.is_empty(),
+                    phi: by(&|h| h.phi),
+                    drive: by(&|h| h.drive),
+                    state: by(&|h| h.state),
+                    every: bank0.held.iter().map(|h| h.every).collect(),
+                    left: bank0.held.iter().map(|h| h.left).collect(),
+                    sum: set(std::array::from_fn(|l| lanes[l].bank.held_sum)),
+                    offset: set(std::array::from_fn(|l| lanes[l].bank.offset)),
+                    event_span: bank0.event_span,
+                    until_event: bank0.until_event,
                 }
             }
-            next
+
+            /// After `run` samples: count down, and at an event update the due components from
+            /// the lanes' draws at `j` on (interleaved at `bt`), in component order, and
+            /// recompute the sum and the next event; the next draw's index. Safety: AVX2, and
+            /// four values at `bt` for each draw used.
+            #[inline(always)]
+            unsafe fn advance(&mut self, run: usize, bt: *const f64, mut j: usize) -> usize {
+                // `run` <= until_event, which fits in u32.
+                self.until_event -= run as u32;
+                if self.until_event != 0 {
+                    return j;
+                }
+                let span = self.event_span;
+                let mut next = u32::MAX;
+                // SAFETY: the caller's.
+                unsafe {
+                    let mut sum = _mm256_setzero_pd();
+                    for c in 0..self.state.len() {
+                        self.left[c] -= span;
+                        if self.left[c] == 0 {
+                            self.left[c] = self.every[c];
+                            self.state[c] = _mm256_add_pd(
+                                _mm256_mul_pd(self.phi[c], self.state[c]),
+                                _mm256_mul_pd(self.drive[c], _mm256_loadu_pd(bt.add(4 * j))),
+                            );
+                            j += 1;
+                        }
+                        sum = _mm256_add_pd(sum, self.state[c]);
+                        next = next.min(self.left[c]);
+                    }
+                    self.sum = sum;
+                }
+                self.event_span = next;
+                self.until_event = self.event_span;
+                j
+            }
+
+            /// The states, countdowns, sum and next event back into each lane's bank.
+            fn store(&self, lanes: &mut [FusedLane; LANES]) {
+                let states: Vec<[f64; LANES]> = self.state.iter().map(|&v| get(v)).collect();
+                let sums = get(self.sum);
+                for (l, lane) in lanes.iter_mut().enumerate() {
+                    let bank = &mut *lane.bank;
+                    for (c, h) in bank.held.iter_mut().enumerate() {
+                        h.state = states[c][l];
+                        h.left = self.left[c];
+                    }
+                    if self.any {
+                        bank.held_sum = sums[l];
+                        bank.event_span = self.event_span;
+                        bank.until_event = self.until_event;
+                    }
+                }
+            }
         }
     }
 }
