@@ -175,12 +175,10 @@ fn log_channels(log: &logio::Log) -> Result<LogInput<'_>> {
 fn run_inner(args: &Args) -> Result<()> {
     let model = crate::files::sensor_model(&args.model)?;
     crate::model_notes::print(&model, args.horizons.iter().copied().reduce(f64::max));
-    let mut logs = Vec::with_capacity(args.logs.len());
-    for path in &args.logs {
-        let log = args.log_args.read(path)?;
-        eprintln!("{}: {}", log.source, log_input::mapping_text(&log));
-        crate::plausibility::print(&log);
-        logs.push(log);
+    let logs = args.log_args.read_all(&args.logs)?;
+    for log in &logs {
+        eprintln!("{}: {}", log.source, log_input::mapping_text(log));
+        crate::plausibility::print(log);
     }
     let log = &logs[0];
     let sources = logs

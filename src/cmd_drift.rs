@@ -193,18 +193,15 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
     crate::model_notes::print(&model, args.horizons.iter().copied().reduce(f64::max));
     let fitted = fitted_on(args, &model_file)?;
     let alternatives = alternatives(args, &model_file)?;
-    let opts = args.log_args.options()?;
-    let mut logs = Vec::new();
-    for path in &args.logs {
-        let log = log_input::read_log(path, &opts)?;
-        eprintln!("{}: {}", log.source, log_input::mapping_text(&log));
-        crate::plausibility::print(&log);
+    let logs = args.log_args.read_all(&args.logs)?;
+    for log in &logs {
+        eprintln!("{}: {}", log.source, log_input::mapping_text(log));
+        crate::plausibility::print(log);
         log_input::refuse_constant(
-            &log,
+            log,
             CHANNELS,
             "leave the column out or map another one with --col",
         )?;
-        logs.push(log);
     }
     let inputs: Vec<LogInput> = logs
         .iter()
