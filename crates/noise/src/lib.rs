@@ -26,6 +26,7 @@ mod model_error;
 pub mod model_notes;
 pub mod noise_file;
 pub mod process;
+mod rng;
 mod static_level;
 mod temperature;
 pub mod terms;
@@ -70,8 +71,7 @@ pub use wide::NormalStream;
 
 use rand::SeedableRng;
 
-/// The one random generator used for results.
-pub type ImuRng = rand_xoshiro::Xoshiro256PlusPlus;
+pub use rng::ImuRng;
 
 /// SplitMix64 finaliser (Steele, Lea & Flood 2014), used to hash (seed, stream) pairs.
 fn splitmix64(mut z: u64) -> u64 {

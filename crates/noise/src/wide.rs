@@ -22,7 +22,7 @@
 //! lanes. The vector width changes only how many lanes an instruction does: integer steps,
 //! one multiplication and one comparison per draw, the same bits at every width.
 
-use crate::ziggurat::{finish_rejected, with_exponent, ZIG_NORM_X};
+use crate::ziggurat::{finish_rejected_bits, with_exponent, ZIG_NORM_X};
 use crate::ImuRng;
 use rand::RngCore;
 
@@ -134,10 +134,7 @@ fn groups(state: &mut [[u64; LANES]; 4], fallback: &mut ImuRng, out: &mut [f64])
         }
         for &at in &rejected_at[..count] {
             let at = usize::from(at);
-            let bits = pass[at].to_bits();
-            let i = (bits & 0xff) as usize;
-            let u = with_exponent(bits >> 12, 1) - 3.0;
-            pass[at] = finish_rejected(fallback, i, u, u * ZIG_NORM_X[i]);
+            pass[at] = finish_rejected_bits(fallback, pass[at].to_bits());
         }
     }
     *state = [s0, s1, s2, s3];
@@ -169,7 +166,7 @@ fn groups_fast(state: &mut [[u64; LANES]; 4], fallback: &mut ImuRng, out: &mut [
 /// [`groups`] (integer steps, one rounded multiplication, one comparison), so the same bits.
 #[cfg(target_arch = "x86_64")]
 mod avx512 {
-    use super::{finish_rejected, with_exponent, ImuRng, LANES, PASS, ZIG_NORM_X};
+    use super::{finish_rejected_bits, ImuRng, LANES, PASS};
     use crate::ziggurat::ZIG_NORM_X_PAIRS;
     use std::arch::x86_64::*;
 
@@ -200,13 +197,16 @@ mod avx512 {
             for (g, group) in pass.chunks_exact_mut(LANES).enumerate() {
                 // Xoshiro256++: output rotl(s0 + s3, 23) + s0, then advance.
                 let bits = _mm512_add_epi64(_mm512_rol_epi64::<23>(_mm512_add_epi64(s0, s3)), s0);
+                // The advance's five xors as three three-way xors and one (0x96: a ^ b ^ c):
+                // s2 ^ s0 ^ t, s1 ^ (s2 ^ s0), s0 ^ (s3 ^ s1), s3 ^ s1; the same values.
                 let t = _mm512_slli_epi64::<17>(s1);
-                s2 = _mm512_xor_si512(s2, s0);
-                s3 = _mm512_xor_si512(s3, s1);
-                s1 = _mm512_xor_si512(s1, s2);
-                s0 = _mm512_xor_si512(s0, s3);
-                s2 = _mm512_xor_si512(s2, t);
-                s3 = _mm512_rol_epi64::<45>(s3);
+                let (n0, n1, n2) = (
+                    _mm512_ternarylogic_epi64::<0x96>(s0, s3, s1),
+                    _mm512_ternarylogic_epi64::<0x96>(s1, s2, s0),
+                    _mm512_ternarylogic_epi64::<0x96>(s2, s0, t),
+                );
+                s3 = _mm512_rol_epi64::<45>(_mm512_xor_si512(s3, s1));
+                (s0, s1, s2) = (n0, n1, n2);
                 // The ziggurat's first pass: i = low 8 bits, u = [2, 4) - 3, x = u X_i,
                 // accepted when |x| < X_{i+1}. The table is read with scalar loads (faster than
                 // a gather on the CPUs measured, docs/performance.md).
@@ -256,17 +256,15 @@ mod avx512 {
             // The rejected draws finished in draw order (group, then lane): eight groups' masks
             // read as one little-endian word, whose set bits are the positions in order (a
             // branch per word, not per group).
+            // A short (last) pass leaves no earlier pass's masks after its own.
+            rejected[groups..].fill(0);
             for g0 in (0..groups).step_by(8) {
-                let take = (groups - g0).min(8);
-                let mut word = [0u8; 8];
-                word[..take].copy_from_slice(&rejected[g0..g0 + take]);
+                let word: [u8; 8] = rejected[g0..g0 + 8].try_into().expect("g0 <= 56");
                 let mut mask = u64::from_le_bytes(word);
                 while mask != 0 {
                     let at = g0 * LANES + mask.trailing_zeros() as usize;
                     mask &= mask - 1;
-                    let bits = pass[at].to_bits();
-                    let (i, u) = ((bits & 0xff) as usize, with_exponent(bits >> 12, 1) - 3.0);
-                    pass[at] = finish_rejected(fallback, i, u, u * ZIG_NORM_X[i]);
+                    pass[at] = finish_rejected_bits(fallback, pass[at].to_bits());
                 }
             }
         }
