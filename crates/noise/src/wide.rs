@@ -13,7 +13,7 @@
 //! So every value has exactly the ziggurat's distribution (the bits the algorithm consumes are
 //! independent uniform bits, only their source differs), and draw k is a pure function of the
 //! stream and k: the values do not depend on how the caller splits its requests into blocks
-//! (a partial group is kept in a buffer), which the block path and the sample-by-sample path
+//! (draws made ahead are kept in a buffer), which the block path and the sample-by-sample path
 //! rely on (tested below).
 //!
 //! Why: one Xoshiro256++ generator is a serial dependency chain (about 2 ns per normal with the
@@ -36,8 +36,8 @@ pub struct NormalStream {
     state: [[u64; LANES]; 4],
     /// The sequential generator: the bits of the draws the first ziggurat pass rejects.
     fallback: ImuRng,
-    /// The last group drawn and how many of its values were handed out.
-    buffer: [f64; LANES],
+    /// The last groups drawn and how many of their values were handed out.
+    buffer: [f64; BUFFERED],
     used: usize,
 }
 
@@ -58,15 +58,15 @@ impl NormalStream {
         NormalStream {
             state,
             fallback: rng,
-            buffer: [0.0; LANES],
-            used: LANES,
+            buffer: [0.0; BUFFERED],
+            used: BUFFERED,
         }
     }
 
     /// The next standard normal.
     #[inline]
     pub fn normal(&mut self) -> f64 {
-        if self.used == LANES {
+        if self.used == BUFFERED {
             groups_fast(&mut self.state, &mut self.fallback, &mut self.buffer);
             self.used = 0;
         }
@@ -76,7 +76,7 @@ impl NormalStream {
 
     /// The next `out.len()` standard normals, in order: the values of as many [`Self::normal`] calls.
     pub fn fill(&mut self, out: &mut [f64]) {
-        let take = (LANES - self.used).min(out.len());
+        let take = (BUFFERED - self.used).min(out.len());
         out[..take].copy_from_slice(&self.buffer[self.used..self.used + take]);
         self.used += take;
         let rest = &mut out[take..];
@@ -90,6 +90,12 @@ impl NormalStream {
         }
     }
 }
+
+/// Draws made ahead and kept for the next requests: eight groups, so that a caller asking for a
+/// few draws at a time (one sample of a run: `ImuErrors::corrupt`) pays the call into the
+/// sampler once per 64 draws rather than per 8 (the values do not depend on it: draw k is a
+/// function of the stream and k alone).
+const BUFFERED: usize = 8 * LANES;
 
 /// Draws per pass: the first ziggurat pass runs over this many, the rejected ones (about 1.5 %)
 /// are collected and finished after it, in draw order, so the main loop has no branch.
