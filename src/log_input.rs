@@ -80,15 +80,60 @@ impl LogArgs {
     /// Read the logs at `paths` with these options, several at once (decompressing a gzip log
     /// is one thread's work: six ADIS16405 logs one after the other held `drift` on one core for
     /// its first second), in the order given; the first failing path's error, as read alone.
+    /// Each reader refuses a log that would not fit in the memory available when it starts, so
+    /// logs read side by side could pass that check together and not fit together: they are read
+    /// one after the other unless their files are small beside the memory available
+    /// ([`fits_side_by_side`]).
     pub fn read_all(&self, paths: &[PathBuf]) -> Result<Vec<Log>> {
         let opts = self.options()?;
-        paths
-            .par_iter()
-            .map(|path| read_log(path, &opts))
-            .collect::<Vec<_>>()
-            .into_iter()
-            .collect()
+        let logs: Vec<Result<Log>> = if fits_side_by_side(paths, logio::available_memory_bytes()) {
+            paths.par_iter().map(|path| read_log(path, &opts)).collect()
+        } else {
+            // Stop at the first failure, as one after the other always did.
+            let mut logs = Vec::with_capacity(paths.len());
+            for path in paths {
+                logs.push(Ok(read_log(path, &opts)?));
+            }
+            logs
+        };
+        logs.into_iter().collect()
     }
+}
+
+/// Bytes of memory a log may take while it is read, per byte of its file: real CSV logs compress
+/// less than 10 times (2.4 to 7.3 measured, the note on `logio`'s gzip limit), and the reader
+/// holds the text and at most 8 bytes of columns per byte of it (a value is at least 2 bytes of
+/// text, "0,", and 16 parsed: `logio`'s own bound), 9 bytes per byte of text; 100 covers both.
+const READ_BYTES_PER_FILE_BYTE: u64 = 100;
+
+/// Whether the logs at `paths` may be read side by side: their files' sizes together, at
+/// [`READ_BYTES_PER_FILE_BYTE`], within half the memory `available` (unknown: as the readers
+/// themselves, which then check nothing). A file that cannot be inspected is left to its reader,
+/// read one after the other, to report.
+fn fits_side_by_side(paths: &[PathBuf], available: Option<u64>) -> bool {
+    let Some(available) = available else {
+        return true;
+    };
+    let mut total = 0u64;
+    for path in paths {
+        // A ROS 2 bag is a directory: its files' sizes.
+        let size = if path.is_dir() {
+            std::fs::read_dir(path).ok().map(|entries| {
+                entries
+                    .flatten()
+                    .filter_map(|e| e.metadata().ok())
+                    .map(|m| m.len())
+                    .sum::<u64>()
+            })
+        } else {
+            std::fs::metadata(path).ok().map(|m| m.len())
+        };
+        let Some(size) = size else {
+            return false;
+        };
+        total = total.saturating_add(size.saturating_mul(READ_BYTES_PER_FILE_BYTE));
+    }
+    total <= available / 2
 }
 
 /// Refuse a constant channel among `names` (a stuck or disconnected sensor, a column of zeros
@@ -144,4 +189,27 @@ pub fn mapping_text(log: &Log) -> String {
 /// `columns[]` and `skipped_columns[]` of the JSON (docs/cli.md, "Log files"), with the flags.
 pub fn columns_json(log: &Log) -> (serde_json::Value, serde_json::Value) {
     log.columns_json(&flag)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Side by side only when the files at 100 bytes per byte fit in half the memory; unknown
+    /// memory: side by side; a path that cannot be inspected: one after the other.
+    #[test]
+    fn logs_side_by_side_only_when_they_fit() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = dir.path().join("a.csv");
+        let b = dir.path().join("b.csv");
+        std::fs::write(&a, vec![b'0'; 1000]).unwrap();
+        std::fs::write(&b, vec![b'0'; 3000]).unwrap();
+        let both = [a.clone(), b];
+        // 4000 bytes x 100 = 400 000: fits in half of 800 000, not in half of 799 999.
+        assert!(fits_side_by_side(&both, Some(800_000)));
+        assert!(!fits_side_by_side(&both, Some(799_999)));
+        assert!(fits_side_by_side(&both, None));
+        let missing = [a, dir.path().join("missing.csv")];
+        assert!(!fits_side_by_side(&missing, Some(u64::MAX)));
+    }
 }
