@@ -24,6 +24,7 @@
 //!
 //! **Error** ([`nav_error`]): estimate minus truth, in the navigation frame.
 
+pub mod earth;
 mod frames;
 mod lanes;
 mod mechanisation;
