@@ -9,8 +9,12 @@ pub struct ClaimLevel {
     pub rate: f64,
     /// Number of claims in the family (default 30: 5 terms x 6 channels).
     pub family: usize,
-    /// Null logs simulated (default 200; 0: no simulation, no term is resolved).
+    /// Null logs simulated where the shipped table does not cover the analysis (default 200;
+    /// 0: no term is resolved).
     pub replicates: usize,
+    /// Read the thresholds from the shipped table where it covers the analysis (default true;
+    /// false: always simulate, as the table's own checks do).
+    pub table: bool,
 }
 
 impl Default for ClaimLevel {
@@ -19,6 +23,7 @@ impl Default for ClaimLevel {
             rate: 0.01,
             family: 30,
             replicates: 200,
+            table: true,
         }
     }
 }

@@ -36,6 +36,8 @@ pub mod edf;
 pub mod fit;
 mod grid;
 pub mod null;
+pub mod null_table;
+mod null_table_data;
 pub mod plan;
 pub mod sheet;
 

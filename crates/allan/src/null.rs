@@ -30,7 +30,8 @@
 
 pub use crate::claims::ClaimLevel;
 use crate::fit::{basis, capped_edf, scaled_ls, Fit, ScaledLs};
-use crate::{AllanPoint, Estimator, Options, Series, TauGrid};
+use crate::null_table::{families, Grid};
+use crate::{AllanPoint, EdfMethod, Estimator, Options, Series, TauGrid};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -103,8 +104,38 @@ type Key = (usize, u64, Estimator, String, String);
 
 static CACHE: Mutex<Option<HashMap<Key, NullThresholds>>> = Mutex::new(None);
 
+/// The thresholds from the shipped table ([`crate::null_table`]) for a log of `n_rate` rate
+/// samples analysed with `est`, `grid` and `opts`, where the table covers the analysis: adev,
+/// oadev or totdev on the octave or decade grid, Greenhall EDF with the noise identified per tau,
+/// Stable32's stop ratio and (totdev) its bias correction, `opts.claims.table` set. `None`
+/// elsewhere (the caller simulates).
+pub fn tabulated_thresholds(
+    n_rate: usize,
+    est: Estimator,
+    grid: &TauGrid,
+    opts: &Options,
+) -> Option<NullThresholds> {
+    let covered = opts.claims.table
+        && opts.claims.replicates > 0
+        && opts.edf == EdfMethod::Greenhall
+        && opts.alpha.is_none()
+        && opts.stable32_stop
+        && opts.totvar_bias_correction;
+    if !covered {
+        return None;
+    }
+    let g = Grid::of(grid)?;
+    let family = families().iter().find(|f| f.est == est && f.grid == g)?;
+    let (start, scale) = family.tail_at(n_rate)?;
+    let r = family.replicates;
+    let share = (TAIL_SHARE * r as f64).floor() / r as f64;
+    Some(thresholds_of(start, scale, share, &opts.claims))
+}
+
 /// The thresholds for a log of `n_rate` rate samples every `tau0_s` seconds analysed with
-/// `est`, `grid` and `opts` (cached per combination).
+/// `est`, `grid` and `opts`: from the shipped table where it covers the combination
+/// ([`tabulated_thresholds`]: no simulation), else simulated ([`simulated_thresholds`], cached
+/// per combination).
 pub fn null_thresholds(
     n_rate: usize,
     tau0_s: f64,
@@ -112,6 +143,29 @@ pub fn null_thresholds(
     grid: &TauGrid,
     opts: &Options,
 ) -> NullThresholds {
+    null_thresholds_with(n_rate, tau0_s, est, grid, opts, &|_, _| {})
+}
+
+/// [`null_thresholds`] telling `tick(done, total)` after each simulated null log, for progress
+/// displays (never called when the table answers).
+pub fn null_thresholds_with(
+    n_rate: usize,
+    tau0_s: f64,
+    est: Estimator,
+    grid: &TauGrid,
+    opts: &Options,
+    tick: &(dyn Fn(usize, usize) + Sync),
+) -> NullThresholds {
+    if opts.claims.replicates == 0 {
+        return NullThresholds {
+            tail_start: [f64::NAN; 5],
+            tail_scale: [f64::NAN; 5],
+            threshold: [f64::INFINITY; 5],
+        };
+    }
+    if let Some(t) = tabulated_thresholds(n_rate, est, grid, opts) {
+        return t;
+    }
     let key: Key = (
         n_rate,
         tau0_s.to_bits(),
@@ -126,7 +180,7 @@ pub fn null_thresholds(
     {
         return t;
     }
-    let t = simulate(n_rate, tau0_s, est, grid, opts);
+    let t = simulated_thresholds_with(n_rate, tau0_s, est, grid, opts, tick);
     if let Ok(mut c) = CACHE.lock() {
         c.get_or_insert_with(HashMap::new).insert(key, t);
     }
@@ -134,8 +188,10 @@ pub fn null_thresholds(
 }
 
 /// One null log's statistics: those of Q, B, K, R from white rate noise, N's from white angle
-/// noise (its rate samples are the angle's differences over the interval).
-fn replicate(
+/// noise (its rate samples are the angle's differences over the interval). Replicate `i` is a
+/// function of `i` alone, so a table built from replicates 0..R and a simulation of 0..r share
+/// their first r logs.
+pub fn replicate(
     i: usize,
     n_rate: usize,
     tau0_s: f64,
@@ -159,38 +215,98 @@ fn replicate(
     t
 }
 
-fn simulate(
+/// The upper tail of simulated null statistics: the empirical (1 - [`TAIL_SHARE`]) quantile and
+/// the mean excess beyond it, per term (`None` for fewer than 20 statistics: no tail to fit).
+pub fn tail_of(stats: &[[f64; 5]]) -> Option<([f64; 5], [f64; 5])> {
+    let r = stats.len();
+    let exceed = (TAIL_SHARE * r as f64).floor() as usize;
+    if exceed < 2 {
+        return None;
+    }
+    let mut start = [f64::NAN; 5];
+    let mut scale = [f64::NAN; 5];
+    for j in 0..5 {
+        let mut v: Vec<f64> = stats.iter().map(|s| s[j]).collect();
+        v.sort_by(f64::total_cmp);
+        start[j] = v[r - exceed - 1];
+        scale[j] = v[r - exceed..].iter().map(|x| x - start[j]).sum::<f64>() / exceed as f64;
+    }
+    Some((start, scale))
+}
+
+/// The thresholds of a fitted exponential tail at `level`: P(t > u + x) = share exp(-x / scale)
+/// = rate / family, share the fraction of statistics beyond u.
+pub fn thresholds_of(
+    tail_start: [f64; 5],
+    tail_scale: [f64; 5],
+    share: f64,
+    level: &ClaimLevel,
+) -> NullThresholds {
+    let per_claim = level.rate / level.family.max(1) as f64;
+    NullThresholds {
+        tail_start,
+        tail_scale,
+        threshold: std::array::from_fn(|j| {
+            tail_start[j] + tail_scale[j] * (share / per_claim).ln().max(0.0)
+        }),
+    }
+}
+
+/// The statistics of `replicates` null logs (replicates 0..`replicates`, in parallel; the result
+/// does not depend on the thread count). `tick(done, total)` after each.
+pub fn null_statistics(
+    n_rate: usize,
+    tau0_s: f64,
+    est: Estimator,
+    grid: &TauGrid,
+    opts: &Options,
+    replicates: usize,
+    tick: &(dyn Fn(usize, usize) + Sync),
+) -> Vec<[f64; 5]> {
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    (0..replicates)
+        .into_par_iter()
+        .map(|i| {
+            let s = replicate(i, n_rate, tau0_s, est, grid, opts);
+            let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            tick(d, replicates);
+            s
+        })
+        .collect()
+}
+
+/// The thresholds simulated at the log's length: `opts.claims.replicates` null logs through the
+/// whole analysis (the reference the table is built from and checked against).
+pub fn simulated_thresholds(
     n_rate: usize,
     tau0_s: f64,
     est: Estimator,
     grid: &TauGrid,
     opts: &Options,
 ) -> NullThresholds {
+    simulated_thresholds_with(n_rate, tau0_s, est, grid, opts, &|_, _| {})
+}
+
+fn simulated_thresholds_with(
+    n_rate: usize,
+    tau0_s: f64,
+    est: Estimator,
+    grid: &TauGrid,
+    opts: &Options,
+    tick: &(dyn Fn(usize, usize) + Sync),
+) -> NullThresholds {
     let level = opts.claims;
     let r = level.replicates;
-    let stats: Vec<[f64; 5]> = (0..r)
-        .into_par_iter()
-        .map(|i| replicate(i, n_rate, tau0_s, est, grid, opts))
-        .collect();
-    let per_claim = level.rate / level.family.max(1) as f64;
-    let mut out = NullThresholds {
-        tail_start: [f64::NAN; 5],
-        tail_scale: [f64::NAN; 5],
-        threshold: [f64::INFINITY; 5],
-    };
-    let exceed = (TAIL_SHARE * r as f64).floor() as usize;
-    if exceed < 2 {
-        return out;
+    let stats = null_statistics(n_rate, tau0_s, est, grid, opts, r, tick);
+    match tail_of(&stats) {
+        Some((start, scale)) => {
+            let share = (TAIL_SHARE * r as f64).floor() / r as f64;
+            thresholds_of(start, scale, share, &level)
+        }
+        None => NullThresholds {
+            tail_start: [f64::NAN; 5],
+            tail_scale: [f64::NAN; 5],
+            threshold: [f64::INFINITY; 5],
+        },
     }
-    for j in 0..5 {
-        let mut v: Vec<f64> = stats.iter().map(|s| s[j]).collect();
-        v.sort_by(f64::total_cmp);
-        let start = v[r - exceed - 1];
-        let scale = v[r - exceed..].iter().map(|x| x - start).sum::<f64>() / exceed as f64;
-        out.tail_start[j] = start;
-        out.tail_scale[j] = scale;
-        // P(t > u + x) = (exceed / r) exp(-x / scale) = per_claim.
-        out.threshold[j] = start + scale * ((exceed as f64 / r as f64) / per_claim).ln().max(0.0);
-    }
-    out
 }
