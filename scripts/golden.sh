@@ -14,8 +14,8 @@ cd "$(dirname "$0")/.."
 mode=${1:?usage: golden.sh capture|check DIR}
 ref=${2:?usage: golden.sh capture|check DIR}
 data=${IMUDRIFT_DATA:?set IMUDRIFT_DATA to the directory of the real IMU logs}
-cargo build --release --quiet
-bin=$PWD/target/release/imudrift
+# IMUDRIFT_BIN: another binary (e.g. the previous main's, to capture its outputs); else this build.
+if [ -n "${IMUDRIFT_BIN:-}" ]; then bin=$IMUDRIFT_BIN; else cargo build --release --quiet; bin=$PWD/target/release/imudrift; fi
 if [ "$mode" = capture ]; then out=$ref; mkdir -p "$out"; else out=$(mktemp -d); trap 'rm -rf "$out"' EXIT; fi
 run() { # name, then the command's arguments
   local name=$1; shift

@@ -33,12 +33,15 @@ pub const SOMIGLIANA_K: f64 = 0.001_931_852_652_41;
 /// (1 - e^2 sin^2 L)^(3/2) and transverse (prime vertical) R_E = a / (1 - e^2 sin^2 L)^(1/2), m
 /// (Groves eqs 2.105, 2.106).
 pub fn radii_m(lat_rad: f64) -> (f64, f64) {
-    let s2 = lat_rad.sin().powi(2);
+    radii_sin2(lat_rad.sin().powi(2))
+}
+
+/// [`radii_m`] of sin^2 L.
+#[inline(always)]
+pub(crate) fn radii_sin2(s2: f64) -> (f64, f64) {
     let d = 1.0 - WGS84_E2 * s2;
-    (
-        WGS84_A_M * (1.0 - WGS84_E2) / d.powf(1.5),
-        WGS84_A_M / d.sqrt(),
-    )
+    let sq = d.sqrt();
+    (WGS84_A_M * (1.0 - WGS84_E2) / (d * sq), WGS84_A_M / sq)
 }
 
 /// Normal gravity (gravitation plus the centrifugal term: what a static accelerometer reads,
@@ -47,13 +50,20 @@ pub fn radii_m(lat_rad: f64) -> (f64, f64) {
 /// sin^2 L) (NIMA TR8350.2 eq 4-1), times the free-air series 1 - 2/a (1 + f + m - 2 f sin^2 L) h
 /// + 3 h^2 / a^2, m = omega^2 a^2 b / GM (eq 4-3, for heights of a few km).
 pub fn normal_gravity_mps2(lat_rad: f64, height_m: f64) -> f64 {
-    let s2 = lat_rad.sin().powi(2);
+    gravity_sin2(lat_rad.sin().powi(2), height_m)
+}
+
+/// The free-air series' m = omega^2 a^2 b / GM (NIMA TR8350.2 eq 4-3; Table 3.3: 0.003 449 786 506 84).
+const FREE_AIR_M: f64 =
+    EARTH_RATE_RAD_S * EARTH_RATE_RAD_S * WGS84_A_M * WGS84_A_M * (WGS84_A_M * (1.0 - WGS84_F))
+        / WGS84_GM_M3_S2;
+
+/// [`normal_gravity_mps2`] of sin^2 L and the height.
+#[inline(always)]
+pub(crate) fn gravity_sin2(s2: f64, h: f64) -> f64 {
     let gamma0 = GAMMA_EQUATOR_MPS2 * (1.0 + SOMIGLIANA_K * s2) / (1.0 - WGS84_E2 * s2).sqrt();
-    let b = WGS84_A_M * (1.0 - WGS84_F);
-    let m = EARTH_RATE_RAD_S.powi(2) * WGS84_A_M.powi(2) * b / WGS84_GM_M3_S2;
-    let h = height_m;
     gamma0
-        * (1.0 - 2.0 / WGS84_A_M * (1.0 + WGS84_F + m - 2.0 * WGS84_F * s2) * h
+        * (1.0 - 2.0 / WGS84_A_M * (1.0 + WGS84_F + FREE_AIR_M - 2.0 * WGS84_F * s2) * h
             + 3.0 * h * h / (WGS84_A_M * WGS84_A_M))
 }
 
@@ -150,6 +160,10 @@ mod tests {
     #[test]
     fn wgs84_values() {
         assert!((WGS84_E2 - 6.694_379_990_14e-3).abs() < 1e-14);
+        assert!(
+            (FREE_AIR_M - 0.003_449_786_506_84).abs() < 1e-14,
+            "{FREE_AIR_M}"
+        );
         let (rn, re) = radii_m(0.0);
         assert!((re - WGS84_A_M).abs() < 1e-6);
         assert!((rn - WGS84_A_M * (1.0 - WGS84_E2)).abs() < 1e-6);

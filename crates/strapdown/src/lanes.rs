@@ -15,6 +15,7 @@ use crate::frames::{
     rodrigues_coefficients, rodrigues_entries, rodrigues_series, Attitude, BodyVector, NavVector,
 };
 use crate::mechanisation::{NavState, Scheme, RENORMALISE_EVERY};
+use crate::round_earth::{Origin, RoundEarth, Vertical};
 use nalgebra::{Matrix3, Vector3};
 
 /// `[[f64; L]; N]`: component `k` of every lane at `[k][lane]`.
@@ -35,8 +36,11 @@ pub struct StrapdownLanes<const L: usize> {
     p: Lanes<3, L>,
     /// Previous gyro increment `w_{k-1} dt` (rad), for the coning correction.
     previous: Lanes<3, L>,
-    /// Gravity in the navigation frame, `(0, 0, +g)`.
+    /// Gravity in the navigation frame, `(0, 0, +g)` (flat Earth).
     gravity_nav: [f64; 3],
+    /// The round Earth (`None`: Woodman's flat one). With it, `p` holds latitude (rad), longitude
+    /// (rad) and height (m) (crate::round_earth).
+    earth: Option<Origin>,
     steps_since_renormalise: u32,
 }
 
@@ -50,6 +54,7 @@ impl<const L: usize> StrapdownLanes<L> {
             p: [[0.0; L]; 3],
             previous: [[0.0; L]; 3],
             gravity_nav: [0.0, 0.0, gravity_mps2],
+            earth: None,
             steps_since_renormalise: 0,
         };
         for (l, state) in initial.iter().enumerate() {
@@ -63,6 +68,26 @@ impl<const L: usize> StrapdownLanes<L> {
             }
         }
         s
+    }
+
+    /// Integrators on the round, rotating Earth `earth` (crate::round_earth), starting at
+    /// `initial` (positions in NED metres from `earth.place`).
+    pub fn on_earth(scheme: Scheme, initial: &[NavState; L], earth: RoundEarth) -> Self {
+        let mut s = Self::new(scheme, initial, earth.place.gravity_mps2());
+        let origin = Origin::new(earth);
+        for l in 0..L {
+            let geo = origin.from_ned([s.p[0][l], s.p[1][l], s.p[2][l]]);
+            for k in 0..3 {
+                s.p[k][l] = geo[k];
+            }
+        }
+        s.earth = Some(origin);
+        s
+    }
+
+    /// The round Earth the lanes navigate on (`None`: the flat one).
+    pub fn earth(&self) -> Option<RoundEarth> {
+        self.earth.map(|o| o.earth)
     }
 
     /// The gyro sample (rad/s) of the interval before the first step, the same for every lane
@@ -79,11 +104,16 @@ impl<const L: usize> StrapdownLanes<L> {
     }
 
     /// Lane `lane`'s navigation solution.
+    /// On the round Earth the position is NED metres from the start place (crate::round_earth).
     pub fn state(&self, lane: usize) -> NavState {
+        let mut p = [self.p[0][lane], self.p[1][lane], self.p[2][lane]];
+        if let Some(o) = &self.earth {
+            p = o.to_ned(p[0], p[1], p[2]);
+        }
         NavState {
             attitude: Attitude(Matrix3::from_fn(|i, j| self.c[3 * i + j][lane])),
             velocity: NavVector(Vector3::from_fn(|i, _| self.v[i][lane])),
-            position: NavVector(Vector3::from_fn(|i, _| self.p[i][lane])),
+            position: NavVector(Vector3::from(p)),
         }
     }
 
@@ -92,14 +122,28 @@ impl<const L: usize> StrapdownLanes<L> {
     /// convention of [`crate::Strapdown::step`]).
     #[inline(always)]
     pub fn step(&mut self, gyro: &Lanes<3, L>, accel: &Lanes<3, L>, dt_s: f64) {
+        if let Some(origin) = self.earth {
+            self.step_round(&origin, gyro, accel, dt_s);
+        } else {
+            self.step_flat(gyro, accel, dt_s);
+        }
+        self.steps_since_renormalise += 1;
+        if self.steps_since_renormalise >= RENORMALISE_EVERY {
+            self.steps_since_renormalise = 0;
+            self.c = renormalise(&self.c);
+        }
+    }
+
+    /// The body's rotation over the step (Woodman eq 41, or the coning-corrected exact one).
+    #[inline(always)]
+    fn body_rotation(&mut self, gyro: &Lanes<3, L>, dt_s: f64) -> Lanes<9, L> {
         let mut dtheta = [[0.0; L]; 3];
         for k in 0..3 {
             for l in 0..L {
                 dtheta[k][l] = gyro[k][l] * dt_s;
             }
         }
-        let c_old = self.c;
-        let rotation = match self.scheme {
+        match self.scheme {
             // Woodman eq 41: C(t+dt) = C(t) exp(B), B = [w dt x].
             Scheme::Woodman => so3_exp_lanes(&dtheta),
             Scheme::Accurate => {
@@ -123,7 +167,14 @@ impl<const L: usize> StrapdownLanes<L> {
                 // Exact rotation for the (corrected) constant-rate increment, Woodman eq 41.
                 so3_exp_lanes(&phi)
             }
-        };
+        }
+    }
+
+    /// One step on Woodman's flat, non-rotating Earth.
+    #[inline(always)]
+    fn step_flat(&mut self, gyro: &Lanes<3, L>, accel: &Lanes<3, L>, dt_s: f64) {
+        let c_old = self.c;
+        let rotation = self.body_rotation(gyro, dt_s);
         self.c = mat_mul(&c_old, &rotation);
         match self.scheme {
             Scheme::Woodman => {
@@ -157,11 +208,111 @@ impl<const L: usize> StrapdownLanes<L> {
                 }
             }
         }
-        self.steps_since_renormalise += 1;
-        if self.steps_since_renormalise >= RENORMALISE_EVERY {
-            self.steps_since_renormalise = 0;
-            self.c = renormalise(&self.c);
+    }
+
+    /// One step on the round, rotating Earth (crate::round_earth: Groves eqs 5.45, 5.53, 5.56).
+    /// The Earth's quantities are taken at the step's start; Woodman's scheme then steps velocity
+    /// and position as on the flat Earth (rectangles, the new attitude), the accurate one with
+    /// the trapezoid and the Coriolis term at the step's mean velocity (one prediction).
+    #[inline(always)]
+    fn step_round(&mut self, o: &Origin, gyro: &Lanes<3, L>, accel: &Lanes<3, L>, dt_s: f64) {
+        let c_old = self.c;
+        let rotation = self.body_rotation(gyro, dt_s);
+        let c_body = mat_mul(&c_old, &rotation);
+        let w = o.earth.rate_rad_s();
+        let mut zeta = [[0.0; L]; 3];
+        let mut cor = [[0.0; L]; 3];
+        let (mut g, mut rn_h, mut re_h_cos) = ([0.0; L], [0.0; L], [0.0; L]);
+        for l in 0..L {
+            let (s, c) = o.sin_cos(self.p[0][l]);
+            let (rnh, reh, gamma) = o.radii_gravity(s, self.p[2][l]);
+            let (vn, ve) = (self.v[0][l], self.v[1][l]);
+            let ie = [w * c, 0.0, -w * s];
+            let en = [ve / reh, -vn / rnh, -ve * s / (c * reh)];
+            for k in 0..3 {
+                zeta[k][l] = -(ie[k] + en[k]) * dt_s;
+                cor[k][l] = 2.0 * ie[k] + en[k];
+            }
+            g[l] = gamma;
+            rn_h[l] = rnh;
+            re_h_cos[l] = reh * c;
         }
+        // The navigation frame's turn over the step, exp(-[omega_in dt x]), applied after the body's.
+        self.c = mat_mul(&so3_exp_lanes(&zeta), &c_body);
+        let coriolis = |v: &Lanes<3, L>| -> Lanes<3, L> {
+            let mut out = [[0.0; L]; 3];
+            for l in 0..L {
+                out[0][l] = cor[1][l] * v[2][l] - cor[2][l] * v[1][l];
+                out[1][l] = cor[2][l] * v[0][l] - cor[0][l] * v[2][l];
+                out[2][l] = cor[0][l] * v[1][l] - cor[1][l] * v[0][l];
+            }
+            out
+        };
+        let v_old = self.v;
+        let held = o.earth.vertical == Vertical::Held;
+        let (v_new, v_pos) = match self.scheme {
+            Scheme::Woodman => {
+                let a = mat_vec(&self.c, accel);
+                let cv = coriolis(&v_old);
+                let mut v_new = [[0.0; L]; 3];
+                for k in 0..3 {
+                    for l in 0..L {
+                        let gk = if k == 2 { g[l] } else { 0.0 };
+                        v_new[k][l] = v_old[k][l] + dt_s * (a[k][l] + gk - cv[k][l]);
+                    }
+                }
+                if held {
+                    v_new[2] = [0.0; L];
+                }
+                (v_new, v_new)
+            }
+            Scheme::Accurate => {
+                let mut sum = [[0.0; L]; 9];
+                for e in 0..9 {
+                    for l in 0..L {
+                        sum[e][l] = c_old[e][l] + self.c[e][l];
+                    }
+                }
+                let a = mat_vec(&sum, accel);
+                let mut force = [[0.0; L]; 3];
+                for k in 0..3 {
+                    for l in 0..L {
+                        force[k][l] = 0.5 * a[k][l] + if k == 2 { g[l] } else { 0.0 };
+                    }
+                }
+                let c0 = coriolis(&v_old);
+                let mut v_mid = [[0.0; L]; 3];
+                for k in 0..3 {
+                    for l in 0..L {
+                        let pred = v_old[k][l] + dt_s * (force[k][l] - c0[k][l]);
+                        v_mid[k][l] = 0.5 * (v_old[k][l] + pred);
+                    }
+                }
+                let cm = coriolis(&v_mid);
+                let mut v_new = [[0.0; L]; 3];
+                let mut v_pos = [[0.0; L]; 3];
+                for k in 0..3 {
+                    for l in 0..L {
+                        v_new[k][l] = v_old[k][l] + dt_s * (force[k][l] - cm[k][l]);
+                    }
+                }
+                if held {
+                    v_new[2] = [0.0; L];
+                }
+                for k in 0..3 {
+                    for l in 0..L {
+                        v_pos[k][l] = 0.5 * (v_old[k][l] + v_new[k][l]);
+                    }
+                }
+                (v_new, v_pos)
+            }
+        };
+        for l in 0..L {
+            self.p[0][l] += dt_s * v_pos[0][l] / rn_h[l];
+            self.p[1][l] += dt_s * v_pos[1][l] / re_h_cos[l];
+            self.p[2][l] -= dt_s * v_pos[2][l];
+        }
+        self.v = v_new;
     }
 
     /// Advance every lane by `n` samples whose inputs `fill(start, chunk)` writes, [`CHUNK`]
@@ -321,6 +472,12 @@ impl Strapdown {
     /// [`Strapdown::set_previous_gyro`] provides it.
     pub fn new(scheme: Scheme, initial: NavState, gravity_mps2: f64) -> Strapdown {
         Strapdown(StrapdownLanes::new(scheme, &[initial], gravity_mps2))
+    }
+
+    /// A new integrator on the round, rotating Earth `earth`, starting at `initial` (position in NED
+    /// metres from `earth.place`; crate::round_earth).
+    pub fn on_earth(scheme: Scheme, initial: NavState, earth: RoundEarth) -> Strapdown {
+        Strapdown(StrapdownLanes::on_earth(scheme, &[initial], earth))
     }
 
     /// Provide the gyro sample of the interval before the first step (for the coning correction of the

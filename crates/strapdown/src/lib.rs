@@ -29,6 +29,7 @@ mod frames;
 mod lanes;
 mod mechanisation;
 mod nav_error;
+pub mod round_earth;
 pub mod spec;
 pub mod trajectory;
 
@@ -36,6 +37,7 @@ pub use frames::{Attitude, BodyVector, NavVector};
 pub use lanes::{Lanes, Strapdown, StrapdownLanes, CHUNK};
 pub use mechanisation::{NavState, Scheme};
 pub use nav_error::{nav_error, NavError};
+pub use round_earth::{RoundEarth, Vertical};
 pub use spec::{TrajectoryError, TrajectorySpec};
 pub use trajectory::{AnyTrajectory, Coning, ConstantRate, Profile, Segment, Static, Trajectory};
 
