@@ -91,6 +91,7 @@ fn check(n: usize, est: Estimator, grid: TauGrid) {
     check_with(n, est, grid, false)
 }
 
+#[allow(clippy::needless_range_loop)] // j indexes five parallel arrays of one term each
 fn check_with(n: usize, est: Estimator, grid: TauGrid, beyond_top: bool) {
     let mut opts = simulated_opts();
     opts.claims.family = 30;

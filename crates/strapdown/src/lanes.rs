@@ -76,7 +76,7 @@ impl<const L: usize> StrapdownLanes<L> {
         let mut s = Self::new(scheme, initial, earth.place.gravity_mps2());
         let origin = Origin::new(earth);
         for l in 0..L {
-            let geo = origin.from_ned([s.p[0][l], s.p[1][l], s.p[2][l]]);
+            let geo = origin.geodetic_of([s.p[0][l], s.p[1][l], s.p[2][l]]);
             for k in 0..3 {
                 s.p[k][l] = geo[k];
             }
@@ -108,7 +108,7 @@ impl<const L: usize> StrapdownLanes<L> {
     pub fn state(&self, lane: usize) -> NavState {
         let mut p = [self.p[0][lane], self.p[1][lane], self.p[2][lane]];
         if let Some(o) = &self.earth {
-            p = o.to_ned(p[0], p[1], p[2]);
+            p = o.ned_of(p[0], p[1], p[2]);
         }
         NavState {
             attitude: Attitude(Matrix3::from_fn(|i, j| self.c[3 * i + j][lane])),

@@ -128,7 +128,7 @@ impl Origin {
     }
 
     /// NED metres from the start place of (latitude, longitude, height).
-    pub fn to_ned(&self, lat: f64, lon: f64, h: f64) -> [f64; 3] {
+    pub fn ned_of(&self, lat: f64, lon: f64, h: f64) -> [f64; 3] {
         let p = &self.earth.place;
         [
             (lat - p.lat_rad) * self.m_per_rad_lat,
@@ -138,7 +138,7 @@ impl Origin {
     }
 
     /// (latitude, longitude, height) of NED metres from the start place.
-    pub fn from_ned(&self, ned: [f64; 3]) -> [f64; 3] {
+    pub fn geodetic_of(&self, ned: [f64; 3]) -> [f64; 3] {
         let p = &self.earth.place;
         [
             p.lat_rad + ned[0] / self.m_per_rad_lat,

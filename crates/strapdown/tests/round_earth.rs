@@ -13,11 +13,11 @@
 use strapdown::earth::{radii_m, schuler_gyro_bias_m, Place};
 use strapdown::{Attitude, NavState, RoundEarth, Scheme, Strapdown, Vertical};
 
+/// `attitudes`: the navigator's initial attitude and the truth's.
 fn run(
     scheme: Scheme,
     earth: RoundEarth,
-    nav_attitude: Attitude,
-    truth_attitude: Attitude,
+    (nav_attitude, truth_attitude): (Attitude, Attitude),
     gyro_bias: [f64; 3],
     dt: f64,
     steps: usize,
@@ -30,8 +30,8 @@ fn run(
     };
     let mut nav = Strapdown::on_earth(scheme, initial, earth);
     let mut gyro = w;
-    for k in 0..3 {
-        gyro.0[k] += gyro_bias[k];
+    for (g, b) in gyro.0.iter_mut().zip(gyro_bias) {
+        *g += b;
     }
     nav.set_previous_gyro(&gyro, dt);
     for i in 1..=steps {
@@ -58,7 +58,7 @@ fn ideal_static_imu_stays_put() {
             };
             let att = Attitude::from_euler_rad(0.02, -0.01, 1.0);
             let mut worst = (0.0f64, 0.0f64);
-            run(scheme, earth, att, att, [0.0; 3], 0.1, steps, |_, s| {
+            run(scheme, earth, (att, att), [0.0; 3], 0.1, steps, |_, s| {
                 worst.0 = worst.0.max(s.position.0.norm());
                 worst.1 = worst.1.max(
                     strapdown::nav_error(
@@ -101,8 +101,7 @@ fn tilt_oscillates_at_the_schuler_period() {
     run(
         Scheme::Accurate,
         earth,
-        nav,
-        truth,
+        (nav, truth),
         [0.0; 3],
         dt,
         4 * 36_000,
@@ -152,8 +151,7 @@ fn gyro_bias_follows_the_schuler_closed_form() {
     run(
         Scheme::Accurate,
         earth,
-        Attitude::identity(),
-        Attitude::identity(),
+        (Attitude::identity(), Attitude::identity()),
         [eps, 0.0, 0.0],
         dt,
         72_000,
