@@ -25,6 +25,7 @@
 //! **Error** ([`nav_error`]): estimate minus truth, in the navigation frame.
 
 pub mod earth;
+pub mod error_model;
 mod frames;
 mod lanes;
 mod mechanisation;
