@@ -14,22 +14,29 @@
 //!   Gaussian mean radius; held: dr_D = dv_D = 0);
 //! - d(psi)/dt = -omega_ie x psi - C gyro_error.
 //!
-//! Each error source drives it through three augmented states (its value per body axis) or as
-//! white noise: white noise of PSD N^2 (ARW, VRW), a constant random bias, a random walk of PSD
-//! K^2, and a first-order Gauss-Markov process (the flicker bank of the noise crate is a sum of
-//! them). The system is linear with constant coefficients, so the covariance over an interval h
-//! is exact: P <- Phi P Phi^T + Q_d, Phi = exp(F h), Q_d from Van Loan's block exponential (C. F.
-//! Van Loan, "Computing integrals involving the matrix exponential", IEEE TAC 23(3), 1978).
+//! Each error source drives it through augmented states (its value per body axis; a ramp also its
+//! rate) or as white noise: white noise of PSD N^2 (ARW, VRW), a random constant bias, a known
+//! constant bias, a known ramp, a random walk of PSD K^2, and a first-order Gauss-Markov process
+//! (the flicker bank of the noise crate is a sum of them), and a random initial attitude error.
+//! The known sources give the error's mean, the random ones its covariance. The system is linear
+//! with constant coefficients, so both are exact over an interval h: m <- Phi m,
+//! P <- Phi P Phi^T + Q_d, Phi = exp(F h), Q_d from Van Loan's block exponential (C. F. Van Loan,
+//! "Computing integrals involving the matrix exponential", IEEE TAC 23(3), 1978).
 //! The discrete white noise of a simulation at interval dt has this law to O(dt) of the
 //! dynamics' rates (Schuler 1.2e-3 rad/s): far below any Monte Carlo's resolution.
 
 use crate::round_earth::{RoundEarth, Vertical};
 use crate::Attitude;
-use nalgebra::{Matrix3, SMatrix, Vector3};
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
-/// Error states: position (3), velocity (3), psi (3), the source's augmented state (3).
-const N: usize = 12;
+/// Error states: position (3), velocity (3), psi (3), the source's augmented states (its value
+/// per axis, and for a ramp its rate per axis).
+const N: usize = 15;
+/// First augmented state (the source's value), and the ramp's rate.
+const VALUE: usize = 9;
+const RATE: usize = 12;
 type Mat = SMatrix<f64, N, N>;
+type Vec15 = SVector<f64, N>;
 
 /// Which sensor an error source acts on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,10 +49,14 @@ pub enum Sensor {
 /// accelerometers.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Source {
-    /// White noise of two-sided PSD `n2` per axis ((rad/s)^2/Hz = rad^2/s; (m/s^2)^2/Hz).
+    /// White noise of PSD `n2` per axis (rad^2/s for gyros, (m/s^2)^2 s for accelerometers: N^2).
     White { sensor: Sensor, n2: [f64; 3] },
     /// A constant bias drawn once with variance `var` per axis.
-    Bias { sensor: Sensor, var: [f64; 3] },
+    RandomBias { sensor: Sensor, var: [f64; 3] },
+    /// A known constant bias `value` per axis.
+    Bias { sensor: Sensor, value: [f64; 3] },
+    /// A known ramp: the error grows as `rate` t per axis (rad/s^2; m/s^3).
+    Ramp { sensor: Sensor, rate: [f64; 3] },
     /// A random walk from zero, of white-noise PSD `k2` per axis.
     RandomWalk { sensor: Sensor, k2: [f64; 3] },
     /// A stationary first-order Gauss-Markov process of variance `var` and correlation time
@@ -59,29 +70,32 @@ pub enum Source {
     Attitude { var: [f64; 3] },
 }
 
-/// The covariance of the nine navigation errors (dr_N, dr_E, dr_D, dv_N, dv_E, dv_D, psi_N,
-/// psi_E, psi_D) at one time.
+/// The mean and covariance of the nine navigation errors (dr_N, dr_E, dr_D, dv_N, dv_E, dv_D,
+/// psi_N, psi_E, psi_D) at one time.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ErrorCovariance(pub SMatrix<f64, 9, 9>);
+pub struct ErrorMoments {
+    pub mean: SVector<f64, 9>,
+    pub cov: SMatrix<f64, 9, 9>,
+}
 
-impl ErrorCovariance {
-    /// Mean square of the horizontal position error, m^2.
+impl ErrorMoments {
+    /// Mean square of the horizontal position error (mean squared plus variance), m^2.
     pub fn horizontal_position_ms(&self) -> f64 {
-        self.0[(0, 0)] + self.0[(1, 1)]
+        self.second_moment(0) + self.second_moment(1)
     }
     /// Mean square of the horizontal velocity error, (m/s)^2.
     pub fn horizontal_velocity_ms(&self) -> f64 {
-        self.0[(3, 3)] + self.0[(4, 4)]
+        self.second_moment(3) + self.second_moment(4)
     }
-    /// Variance of state `i` (0-8 in the order above).
-    pub fn variance(&self, i: usize) -> f64 {
-        self.0[(i, i)]
+    /// E[x_i^2] of state `i` (0-8 in the order above).
+    pub fn second_moment(&self, i: usize) -> f64 {
+        self.mean[i] * self.mean[i] + self.cov[(i, i)]
     }
 }
 
 /// The continuous system of a stationary navigator at `earth.place` with body attitude
-/// `attitude` (body to NED) and one `source`: F, the white-noise covariance G Q G^T, P(0).
-fn system(earth: &RoundEarth, attitude: &Attitude, source: &Source) -> (Mat, Mat, Mat) {
+/// `attitude` (body to NED) and one `source`: F, the white-noise covariance G Q G^T, P(0), m(0).
+fn system(earth: &RoundEarth, attitude: &Attitude, source: &Source) -> (Mat, Mat, Mat, Vec15) {
     let place = earth.place;
     let g = place.gravity_mps2();
     let r = place.schuler_radius_m();
@@ -109,7 +123,9 @@ fn system(earth: &RoundEarth, attitude: &Attitude, source: &Source) -> (Mat, Mat
     let cm = *attitude.matrix();
     let (sensor, row) = match source {
         Source::White { sensor, .. }
+        | Source::RandomBias { sensor, .. }
         | Source::Bias { sensor, .. }
+        | Source::Ramp { sensor, .. }
         | Source::RandomWalk { sensor, .. }
         | Source::GaussMarkov { sensor, .. } => (
             Some(*sensor),
@@ -127,6 +143,7 @@ fn system(earth: &RoundEarth, attitude: &Attitude, source: &Source) -> (Mat, Mat
     };
     let mut q = Mat::zeros();
     let mut p0 = Mat::zeros();
+    let mut m0 = Vec15::zeros();
     let diag = |v: &[f64; 3]| Matrix3::from_diagonal(&Vector3::from(*v));
     match source {
         Source::White { n2, .. } => {
@@ -134,20 +151,34 @@ fn system(earth: &RoundEarth, attitude: &Attitude, source: &Source) -> (Mat, Mat
             q.fixed_view_mut::<3, 3>(row, row)
                 .copy_from(&(cm * diag(n2) * cm.transpose()));
         }
-        Source::Bias { var, .. } => {
-            a.fixed_view_mut::<3, 3>(row, 9).copy_from(&(sign * cm));
-            p0.fixed_view_mut::<3, 3>(9, 9).copy_from(&diag(var));
+        Source::RandomBias { var, .. } => {
+            a.fixed_view_mut::<3, 3>(row, VALUE).copy_from(&(sign * cm));
+            p0.fixed_view_mut::<3, 3>(VALUE, VALUE)
+                .copy_from(&diag(var));
+        }
+        Source::Bias { value, .. } => {
+            a.fixed_view_mut::<3, 3>(row, VALUE).copy_from(&(sign * cm));
+            m0.fixed_rows_mut::<3>(VALUE)
+                .copy_from(&Vector3::from(*value));
+        }
+        Source::Ramp { rate, .. } => {
+            a.fixed_view_mut::<3, 3>(row, VALUE).copy_from(&(sign * cm));
+            for i in 0..3 {
+                a[(VALUE + i, RATE + i)] = 1.0;
+            }
+            m0.fixed_rows_mut::<3>(RATE)
+                .copy_from(&Vector3::from(*rate));
         }
         Source::RandomWalk { k2, .. } => {
-            a.fixed_view_mut::<3, 3>(row, 9).copy_from(&(sign * cm));
-            q.fixed_view_mut::<3, 3>(9, 9).copy_from(&diag(k2));
+            a.fixed_view_mut::<3, 3>(row, VALUE).copy_from(&(sign * cm));
+            q.fixed_view_mut::<3, 3>(VALUE, VALUE).copy_from(&diag(k2));
         }
         Source::GaussMarkov { var, tau_s, .. } => {
-            a.fixed_view_mut::<3, 3>(row, 9).copy_from(&(sign * cm));
+            a.fixed_view_mut::<3, 3>(row, VALUE).copy_from(&(sign * cm));
             for i in 0..3 {
-                a[(9 + i, 9 + i)] = -1.0 / tau_s[i];
-                q[(9 + i, 9 + i)] = 2.0 * var[i] / tau_s[i];
-                p0[(9 + i, 9 + i)] = var[i];
+                a[(VALUE + i, VALUE + i)] = -1.0 / tau_s[i];
+                q[(VALUE + i, VALUE + i)] = 2.0 * var[i] / tau_s[i];
+                p0[(VALUE + i, VALUE + i)] = var[i];
             }
         }
         Source::Attitude { var } => {
@@ -168,7 +199,7 @@ fn system(earth: &RoundEarth, attitude: &Attitude, source: &Source) -> (Mat, Mat
             q[(j, 5)] = 0.0;
         }
     }
-    (a, q, p0)
+    (a, q, p0, m0)
 }
 
 /// Phi = exp(F h) and Q_d = int_0^h exp(F s) Q exp(F^T s) ds (Van Loan 1978, eq for the
@@ -185,17 +216,17 @@ fn discretise(a: &Mat, q: &Mat, h: f64) -> (Mat, Mat) {
     (phi, 0.5 * (qd + qd.transpose()))
 }
 
-/// The error covariance at each of `times_s` (ascending, seconds from the start) of a
-/// stationary navigator on `earth` with body attitude `attitude` and the error `source` alone.
+/// The error's mean and covariance at each of `times_s` (ascending, seconds from the start) of
+/// a stationary navigator on `earth` with body attitude `attitude` and the error `source` alone.
 /// Steps of at most `MAX_STEP_S` keep the exponentials' arguments small.
-pub fn covariance(
+pub fn moments(
     earth: &RoundEarth,
     attitude: &Attitude,
     source: &Source,
     times_s: &[f64],
-) -> Vec<ErrorCovariance> {
+) -> Vec<ErrorMoments> {
     const MAX_STEP_S: f64 = 10.0;
-    let (a, q, mut p) = system(earth, attitude, source);
+    let (a, q, mut p, mut m) = system(earth, attitude, source);
     let mut out = Vec::with_capacity(times_s.len());
     let mut t = 0.0;
     let mut cache: Option<(f64, Mat, Mat)> = None;
@@ -214,10 +245,14 @@ pub fn covariance(
             };
             for _ in 0..steps {
                 p = phi * p * phi.transpose() + qd;
+                m = phi * m;
             }
         }
         t = target.max(t);
-        out.push(ErrorCovariance(p.fixed_view::<9, 9>(0, 0).into_owned()));
+        out.push(ErrorMoments {
+            mean: m.fixed_rows::<9>(0).into_owned(),
+            cov: p.fixed_view::<9, 9>(0, 0).into_owned(),
+        });
     }
     out
 }
