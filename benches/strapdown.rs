@@ -5,8 +5,10 @@
 //! as for any IMU below ~570 deg/s at 100 Hz.
 
 use criterion::{black_box, criterion_group, criterion_main, BatchSize, Criterion, Throughput};
+use strapdown::earth::Place;
 use strapdown::{
-    BodyVector, NavState, Scheme, Static, Strapdown, Trajectory, STANDARD_GRAVITY_MPS2,
+    BodyVector, NavState, RoundEarth, Scheme, Static, Strapdown, StrapdownLanes, Trajectory,
+    STANDARD_GRAVITY_MPS2,
 };
 
 const STEPS_PER_ITER: usize = 1000;
@@ -40,6 +42,24 @@ fn bench_step(c: &mut Criterion) {
             )
         });
     }
+    // The same steps on the round, rotating Earth (45 deg N; strapdown::round_earth).
+    let earth = RoundEarth::at(Place::from_deg(45.0, 0.0, 0.0));
+    for (name, scheme) in [
+        ("woodman_round_earth", Scheme::Woodman),
+        ("accurate_round_earth", Scheme::Accurate),
+    ] {
+        group.bench_function(name, |b| {
+            b.iter_batched_ref(
+                || Strapdown::on_earth(scheme, NavState::default(), earth),
+                |sd| {
+                    for (gyro, accel) in &samples {
+                        sd.step(black_box(gyro), black_box(accel), DT_S);
+                    }
+                },
+                BatchSize::SmallInput,
+            )
+        });
+    }
     // The Monte Carlo inner loop on a static scenario: ideal sample + step.
     let traj = Static::default();
     group.bench_function("accurate_with_static_ideal_imu", |b| {
@@ -57,5 +77,44 @@ fn bench_step(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_step);
+/// Eight runs side by side, as the Monte Carlo kernel steps them (`StrapdownLanes::integrate`,
+/// the widest vector unit the CPU has), on the flat and on the round Earth.
+fn bench_lanes(c: &mut Criterion) {
+    const L: usize = 8;
+    let samples = inputs();
+    let mut group = c.benchmark_group("strapdown_lanes8");
+    group.throughput(Throughput::Elements((STEPS_PER_ITER * L) as u64));
+    let earth = RoundEarth::at(Place::from_deg(45.0, 0.0, 0.0));
+    let initial = [NavState::default(); L];
+    for (name, round) in [("accurate_flat", false), ("accurate_round_earth", true)] {
+        group.bench_function(name, |b| {
+            b.iter_batched_ref(
+                || {
+                    if round {
+                        StrapdownLanes::<L>::on_earth(Scheme::Accurate, &initial, earth)
+                    } else {
+                        StrapdownLanes::<L>::new(Scheme::Accurate, &initial, STANDARD_GRAVITY_MPS2)
+                    }
+                },
+                |nav| {
+                    nav.integrate(STEPS_PER_ITER, DT_S, |start, chunk| {
+                        for (j, s) in chunk.iter_mut().enumerate() {
+                            let (g, a) = &samples[start + j];
+                            for l in 0..L {
+                                for k in 0..3 {
+                                    s[k][l] = g.0[k];
+                                    s[3 + k][l] = a.0[k];
+                                }
+                            }
+                        }
+                    });
+                },
+                BatchSize::SmallInput,
+            )
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_step, bench_lanes);
 criterion_main!(benches);
