@@ -100,11 +100,9 @@ fn bench_lanes(c: &mut Criterion) {
                     nav.integrate(STEPS_PER_ITER, DT_S, |start, chunk| {
                         for (j, s) in chunk.iter_mut().enumerate() {
                             let (g, a) = &samples[start + j];
-                            for l in 0..L {
-                                for k in 0..3 {
-                                    s[k][l] = g.0[k];
-                                    s[3 + k][l] = a.0[k];
-                                }
+                            for k in 0..3 {
+                                s[k] = [g.0[k]; L];
+                                s[3 + k] = [a.0[k]; L];
                             }
                         }
                     });
