@@ -41,7 +41,28 @@ pub struct StrapdownLanes<const L: usize> {
     /// The round Earth (`None`: Woodman's flat one). With it, `p` holds latitude (rad), longitude
     /// (rad) and height (m) (crate::round_earth).
     earth: Option<Origin>,
+    /// The round Earth's slowly varying quantities per lane, refreshed every [`EARTH_EVERY`] steps.
+    slow: EarthSlow<L>,
     steps_since_renormalise: u32,
+}
+
+/// Steps between refreshes of the round Earth's position-dependent quantities (radii, gravity,
+/// Earth rate in NED): over 8 steps at 100 Hz a navigator at 100 m/s moves 1.3e-8 rad of latitude,
+/// which changes gravity by 5e-10 m/s^2 and the radii by 1e-9 relative, far below any sensor.
+pub const EARTH_EVERY: u32 = 8;
+
+/// Per lane: sin L, cos L, tan L, 1 / (R_N + h), 1 / ((R_E + h) cos L), 1 / (R_E + h), normal
+/// gravity (crate::round_earth).
+#[derive(Clone, Debug)]
+struct EarthSlow<const L: usize> {
+    sin: [f64; L],
+    cos: [f64; L],
+    tan: [f64; L],
+    inv_re_h_cos: [f64; L],
+    inv_rn_h: [f64; L],
+    inv_re_h: [f64; L],
+    g: [f64; L],
+    steps: u32,
 }
 
 impl<const L: usize> StrapdownLanes<L> {
@@ -55,6 +76,16 @@ impl<const L: usize> StrapdownLanes<L> {
             previous: [[0.0; L]; 3],
             gravity_nav: [0.0, 0.0, gravity_mps2],
             earth: None,
+            slow: EarthSlow {
+                sin: [0.0; L],
+                cos: [0.0; L],
+                tan: [0.0; L],
+                inv_re_h_cos: [0.0; L],
+                inv_rn_h: [0.0; L],
+                inv_re_h: [0.0; L],
+                g: [0.0; L],
+                steps: 0,
+            },
             steps_since_renormalise: 0,
         };
         for (l, state) in initial.iter().enumerate() {
@@ -211,7 +242,8 @@ impl<const L: usize> StrapdownLanes<L> {
     }
 
     /// One step on the round, rotating Earth (crate::round_earth: Groves eqs 5.45, 5.53, 5.56).
-    /// The Earth's quantities are taken at the step's start; Woodman's scheme then steps velocity
+    /// The position-dependent quantities are refreshed every [`EARTH_EVERY`] steps, the transport
+    /// rate and Coriolis term from the step's velocity; Woodman's scheme then steps velocity
     /// and position as on the flat Earth (rectangles, the new attitude), the accurate one with
     /// the trapezoid and the Coriolis term at the step's mean velocity (one prediction).
     #[inline(always)]
@@ -219,24 +251,36 @@ impl<const L: usize> StrapdownLanes<L> {
         let c_old = self.c;
         let rotation = self.body_rotation(gyro, dt_s);
         let c_body = mat_mul(&c_old, &rotation);
+        if self.slow.steps == 0 {
+            for l in 0..L {
+                let (s, c) = o.sin_cos(self.p[0][l]);
+                let (rnh, reh, gamma) = o.radii_gravity(s, self.p[2][l]);
+                self.slow.sin[l] = s;
+                self.slow.cos[l] = c;
+                self.slow.inv_rn_h[l] = 1.0 / rnh;
+                self.slow.inv_re_h[l] = 1.0 / reh;
+                self.slow.tan[l] = s / c;
+                self.slow.inv_re_h_cos[l] = 1.0 / (reh * c);
+                self.slow.g[l] = gamma;
+            }
+        }
+        self.slow.steps = (self.slow.steps + 1) % EARTH_EVERY;
         let w = o.earth.rate_rad_s();
+        let sl = &self.slow;
         let mut zeta = [[0.0; L]; 3];
         let mut cor = [[0.0; L]; 3];
-        let (mut g, mut rn_h, mut re_h_cos) = ([0.0; L], [0.0; L], [0.0; L]);
         for l in 0..L {
-            let (s, c) = o.sin_cos(self.p[0][l]);
-            let (rnh, reh, gamma) = o.radii_gravity(s, self.p[2][l]);
+            let (s, c) = (sl.sin[l], sl.cos[l]);
             let (vn, ve) = (self.v[0][l], self.v[1][l]);
             let ie = [w * c, 0.0, -w * s];
-            let en = [ve / reh, -vn / rnh, -ve * s / (c * reh)];
+            let e_over_r = ve * sl.inv_re_h[l];
+            let en = [e_over_r, -vn * sl.inv_rn_h[l], -e_over_r * sl.tan[l]];
             for k in 0..3 {
                 zeta[k][l] = -(ie[k] + en[k]) * dt_s;
                 cor[k][l] = 2.0 * ie[k] + en[k];
             }
-            g[l] = gamma;
-            rn_h[l] = rnh;
-            re_h_cos[l] = reh * c;
         }
+        let g = sl.g;
         // The navigation frame's turn over the step, exp(-[omega_in dt x]), applied after the body's.
         self.c = mat_mul(&so3_exp_lanes(&zeta), &c_body);
         let coriolis = |v: &Lanes<3, L>| -> Lanes<3, L> {
@@ -308,8 +352,9 @@ impl<const L: usize> StrapdownLanes<L> {
             }
         };
         for l in 0..L {
-            self.p[0][l] += dt_s * v_pos[0][l] / rn_h[l];
-            self.p[1][l] += dt_s * v_pos[1][l] / re_h_cos[l];
+            let sl = &self.slow;
+            self.p[0][l] += dt_s * v_pos[0][l] * sl.inv_rn_h[l];
+            self.p[1][l] += dt_s * v_pos[1][l] * sl.inv_re_h_cos[l];
             self.p[2][l] -= dt_s * v_pos[2][l];
         }
         self.v = v_new;
