@@ -222,13 +222,7 @@ impl<const L: usize> StrapdownLanes<L> {
             Scheme::Accurate => {
                 // Trapezoidal rule for eq 43, (C_k + C_{k+1}) f / 2 (one matrix-vector product),
                 // and for eq 44.
-                let mut sum = [[0.0; L]; 9];
-                for e in 0..9 {
-                    for l in 0..L {
-                        sum[e][l] = c_old[e][l] + self.c[e][l];
-                    }
-                }
-                let a = mat_vec(&sum, accel);
+                let a = sum_times(&c_old, &self.c, accel);
                 for k in 0..3 {
                     for l in 0..L {
                         let v_old = self.v[k][l];
@@ -311,13 +305,7 @@ impl<const L: usize> StrapdownLanes<L> {
                 (v_new, v_new)
             }
             Scheme::Accurate => {
-                let mut sum = [[0.0; L]; 9];
-                for e in 0..9 {
-                    for l in 0..L {
-                        sum[e][l] = c_old[e][l] + self.c[e][l];
-                    }
-                }
-                let a = mat_vec(&sum, accel);
+                let a = sum_times(&c_old, &self.c, accel);
                 let mut force = [[0.0; L]; 3];
                 for k in 0..3 {
                     for l in 0..L {
@@ -435,6 +423,18 @@ fn mat_mul<const L: usize>(a: &Lanes<9, L>, b: &Lanes<9, L>) -> Lanes<9, L> {
         }
     }
     out
+}
+
+/// (A + B) x per lane: the trapezoid's specific force, twice its mean over the step.
+#[inline(always)]
+fn sum_times<const L: usize>(a: &Lanes<9, L>, b: &Lanes<9, L>, x: &Lanes<3, L>) -> Lanes<3, L> {
+    let mut sum = [[0.0; L]; 9];
+    for e in 0..9 {
+        for l in 0..L {
+            sum[e][l] = a[e][l] + b[e][l];
+        }
+    }
+    mat_vec(&sum, x)
 }
 
 /// Row-major 3x3 times vector per lane: (A x)_i = (A_i0 x_0 + A_i1 x_1) + A_i2 x_2.
