@@ -23,8 +23,9 @@ Inputs
   * the synthetic CSV: one column `gx`, 4 320 000 samples at 100 Hz (12 h; 100 000 with --quick),
     white noise plus a random walk, numpy seed 20261121, written with 17 significant digits;
     generated once and cached in --cache DIR (default /tmp/imudrift-timing);
-  * the real ADIS16405 logs, from $IMUDRIFT_DATA (default ../shared/data from the repository
-    root): adis16405_imudata/adis16405_imu1.csv.gz .. imu6 (with --quick: the first 100 000
+  * the real ADIS16405 logs, from the folder in $IMUDRIFT_DATA (required: the folder holding
+    `adis16405_imudata/`, the six static ADIS16405 runs of the SMAC-Group imudata package as
+    gzip CSV, docs/validation.md): adis16405_imudata/adis16405_imu1.csv.gz .. imu6 (with --quick: the first 100 000
     samples of runs 1 and 2, copied into the cache);
   * the shipped configs/ (the commands run with the repository root as working directory);
   * the shards for `merge`: written once before timing by the new binary's `simulate --shard
@@ -237,8 +238,11 @@ class Context:
         self.python = args.python
         self.cache = Path(args.cache).resolve()
         data_env = os.environ.get("IMUDRIFT_DATA")
-        self.data = (Path(data_env) if data_env else REPO / ".." / "shared" / "data").resolve()
-        self.data_from = "$IMUDRIFT_DATA" if data_env else "../shared/data (IMUDRIFT_DATA unset)"
+        if not data_env:
+            sys.exit("time_commands.py: set IMUDRIFT_DATA to the folder holding adis16405_imudata/ "
+                     "(the real logs the allan, diagnose and drift rows read)")
+        self.data = Path(data_env).resolve()
+        self.data_from = "$IMUDRIFT_DATA"
         self.tmp = Path(tempfile.mkdtemp(prefix="imudrift-timing-run-"))
         self.synth_csv = None
         self.adis_logs = []
