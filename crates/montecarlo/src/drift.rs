@@ -10,7 +10,7 @@ use nalgebra::Vector3;
 use noise::{ImuErrors, LawSource, LawSourceContext, Sensor, SensorModel};
 use rand_distr::{Distribution, StandardNormal};
 use strapdown::{
-    nav_error, AnyTrajectory, Attitude, NavState, Scheme, StrapdownLanes, Trajectory,
+    nav_error, Attitude, EarthModel, EarthTrajectory, NavState, Scheme, StrapdownLanes, Trajectory,
     TrajectorySpec,
 };
 
@@ -26,7 +26,9 @@ const BLOCK: usize = 256;
 #[derive(Debug, Clone)]
 pub struct DriftKernel {
     pub model: SensorModel,
-    pub trajectory: AnyTrajectory,
+    /// The trajectory on the scenario's Earth (its truth, its ideal IMU, the Earth the
+    /// mechanisation runs on).
+    pub trajectory: EarthTrajectory,
     pub scheme: Scheme,
     pub dt_s: f64,
     pub seed: u64,
@@ -137,7 +139,7 @@ impl DriftKernel {
         let mut errors: [ImuErrors; L] = std::array::from_fn(|l| self.errors(first + l as u64));
         let initial: [NavState; L] =
             std::array::from_fn(|l| self.initial_estimate(first + l as u64));
-        let mut nav = StrapdownLanes::<L>::new(self.scheme, &initial, self.gravity_mps2);
+        let mut nav: StrapdownLanes<L> = self.trajectory.earth().lanes(self.scheme, &initial);
         // Prime the coning correction with the (ideal) motion before t = 0 (the trajectory holds
         // its initial rate there), so a constant-rate start is not a spurious step.
         let (g_prev, _) = self.trajectory.imu_average(-self.dt_s, 0.0);
@@ -227,21 +229,28 @@ fn integrate_fast<const L: usize>(
 
 /// The active terms of `model` with their law sources (each term's own,
 /// `noise::ErrorTerm::law_sources`), and the conditions of the laws, for a scenario's trajectory
-/// and alignment, sampled every `dt_s` (the sinusoid's law depends on it).
+/// and alignment on `earth`, sampled every `dt_s` (the sinusoid's law depends on it).
 pub fn law_terms(
     model: &SensorModel,
     spec: &TrajectorySpec,
     alignment: &Alignment,
-    gravity_mps2: f64,
+    earth: &EarthModel,
     dt_s: f64,
 ) -> (Vec<Term>, LawContext) {
-    let (static_level, yaw_rate, reason) = law_conditions(spec);
+    let gravity_mps2 = earth.gravity_mps2();
+    let (static_level, yaw_rate, reason, attitude) = law_conditions(spec, earth);
+    // The ideal readings the terms see: on the round Earth a static IMU's (Earth rate and local
+    // gravity in its body axes); on the flat Earth static level (a constant yaw rate on the z gyro).
+    let (round_gyro, round_accel) = earth.static_imu(&attitude);
     let mut terms = Vec::new();
     for sensor in [Sensor::Gyro, Sensor::Accel] {
-        // Ideal readings, static level (a constant yaw rate on the z gyro).
-        let ideal: Vector3<f64> = match sensor {
-            Sensor::Gyro => Vector3::new(0.0, 0.0, yaw_rate.unwrap_or(0.0)),
-            Sensor::Accel => Vector3::new(0.0, 0.0, -gravity_mps2),
+        let ideal: Vector3<f64> = match (earth, sensor) {
+            (EarthModel::Round(_), Sensor::Gyro) => round_gyro.0,
+            (EarthModel::Round(_), Sensor::Accel) => round_accel.0,
+            (EarthModel::Flat { .. }, Sensor::Gyro) => {
+                Vector3::new(0.0, 0.0, yaw_rate.unwrap_or(0.0))
+            }
+            (EarthModel::Flat { .. }, Sensor::Accel) => Vector3::new(0.0, 0.0, -gravity_mps2),
         };
         for axis in 0..3 {
             let entry = match sensor {
@@ -279,26 +288,40 @@ pub fn law_terms(
         yaw_rate_rad_s: yaw_rate,
         reason,
         gravity_mps2,
+        earth: *earth,
+        attitude,
     };
     (terms, ctx)
 }
 
-/// Whether the laws hold for a trajectory: static, level and north-facing (the laws of
-/// docs/model.md §4); or a constant rate about body z from level, which keeps the z gyro error on
-/// the yaw channel (rotations about one axis commute), so that only the yaw law holds
-/// (calibration errors ~ rate x duration, docs/model.md §1.5 Table 2), with the rate. Else why not.
-fn law_conditions(spec: &TrajectorySpec) -> (bool, Option<f64>, String) {
+/// Whether the laws hold for a trajectory, and the static attitude. On the flat Earth: static,
+/// level and north-facing (the laws of docs/model.md §4); or a constant rate about body z from
+/// level, which keeps the z gyro error on the yaw channel (rotations about one axis commute), so
+/// that only the yaw law holds (calibration errors ~ rate x duration, docs/model.md §1.5 Table 2),
+/// with the rate. On the round Earth: static at any attitude (the error model takes it). Else why
+/// not.
+fn law_conditions(
+    spec: &TrajectorySpec,
+    earth: &EarthModel,
+) -> (bool, Option<f64>, String, Attitude) {
+    let round = matches!(earth, EarthModel::Round(_));
     match *spec {
         TrajectorySpec::Static {
             roll_deg,
             pitch_deg,
             yaw_deg,
         } => {
+            let attitude = Attitude::from_euler_rad(
+                roll_deg.to_radians(),
+                pitch_deg.to_radians(),
+                yaw_deg.to_radians(),
+            );
             let level = roll_deg == 0.0 && pitch_deg == 0.0 && yaw_deg == 0.0;
             (
-                level,
+                level || round,
                 None,
                 "the laws assume a level, north-facing IMU".to_string(),
+                attitude,
             )
         }
         TrajectorySpec::ConstantRate {
@@ -306,12 +329,13 @@ fn law_conditions(spec: &TrajectorySpec) -> (bool, Option<f64>, String) {
             pitch_deg: 0.0,
             yaw_deg: 0.0,
             rate_deg_s,
-        } if rate_deg_s[0] == 0.0 && rate_deg_s[1] == 0.0 => (
+        } if rate_deg_s[0] == 0.0 && rate_deg_s[1] == 0.0 && !round => (
             false,
             Some(rate_deg_s[2].to_radians()),
             "motion".to_string(),
+            Attitude::identity(),
         ),
-        _ => (false, None, "motion".to_string()),
+        _ => (false, None, "motion".to_string(), Attitude::identity()),
     }
 }
 

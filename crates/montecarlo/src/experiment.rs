@@ -75,7 +75,7 @@ impl Experiment {
             &model,
             &scenario.trajectory_spec,
             &scenario.alignment,
-            scenario.gravity_mps2,
+            &scenario.earth,
             scenario.dt_s(),
         );
         let terms = if scenario.bias_calibrated_at_start {
@@ -109,6 +109,7 @@ impl Experiment {
             duration_s: self.scenario.duration_s,
             scheme: self.scenario.scheme.name().into(),
             trajectory: self.scenario.trajectory_spec.clone(),
+            earth: crate::report::EarthReport::of(&self.scenario.earth),
             only: self.only.clone(),
             without: self.without.clone(),
             checkpoint_steps: self.scenario.checkpoint_steps.clone(),

@@ -14,6 +14,7 @@ use crate::nav_quantity::NavQuantity;
 use noise::closed_form::{self as cf, Integration};
 use noise::LawSource;
 use serde::{Deserialize, Serialize};
+use strapdown::{Attitude, EarthModel};
 
 /// Above this predicted attitude error (rad, rms) the small-angle laws are not printed
 /// (sin(0.05) differs from 0.05 by 0.04 %, but second-order couplings of a 3-D attitude error
@@ -258,6 +259,11 @@ pub struct LawContext {
     /// Why the scenario is outside the laws, if it is (e.g. "motion").
     pub reason: String,
     pub gravity_mps2: f64,
+    /// The Earth of the scenario: the flat one's closed forms, or the round one's error model
+    /// (`earth_laws::round_laws`), which holds for a static IMU at any `attitude`.
+    pub earth: EarthModel,
+    /// The static IMU's attitude (identity when it moves).
+    pub attitude: Attitude,
 }
 
 /// The laws of every channel at time `t_s` outside the static level case: none, but the yaw law
@@ -455,6 +461,10 @@ mod tests {
             yaw_rate_rad_s: None,
             reason: String::new(),
             gravity_mps2: 9.80665,
+            earth: EarthModel::Flat {
+                gravity_mps2: 9.80665,
+            },
+            attitude: Attitude::identity(),
         }
     }
 

@@ -21,6 +21,7 @@
 
 pub mod ablation;
 pub mod drift;
+pub mod earth_laws;
 pub mod experiment;
 pub mod job;
 pub mod laws;

@@ -3,7 +3,8 @@
 //! JSON fields: `seed`, `runs`, `checkpoints[]` with `t_s` and `channels{name: {mean, std, rms, p50,
 //! p95, law_std, ratio}}`; more fields are added, none renamed).
 
-use crate::laws::{channel_laws, Law, LawContext, Term};
+use crate::earth_laws::all_laws;
+use crate::laws::{Law, LawContext, Term};
 use crate::nav_quantity::NavQuantity;
 use crate::runner::RunFailure;
 use crate::stats::{ratio_interval, summarise, RunMatrix, Z_999};
@@ -11,6 +12,7 @@ use noise::TermSelector;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use strapdown::spec::TrajectorySpec;
+use strapdown::{EarthModel, Vertical};
 
 /// Stated allowance for the law's own discretisation error, relative, times dt/t: the laws are
 /// continuous-time integrals while the mechanisation sums up to three nested rectangle or trapezoid
@@ -75,6 +77,9 @@ pub struct DriftReport {
     /// The scenario's trajectory as written, tagged by `kind`, units in the field names
     /// (docs/cli.md).
     pub trajectory: TrajectorySpec,
+    /// The Earth the runs and the laws used (the scenario's `[earth]` table).
+    #[serde(default)]
+    pub earth: EarthReport,
     /// The active error terms after the term switches `only` / `without` (docs/cli.md names).
     pub active_terms: Vec<String>,
     pub only: Option<Vec<TermSelector>>,
@@ -82,6 +87,64 @@ pub struct DriftReport {
     /// Confidence level of `ratio_lo` .. `ratio_hi`.
     pub confidence: f64,
     pub checkpoints: Vec<CheckpointReport>,
+}
+
+/// The Earth of a report, in the scenario's `[earth]` names: `model` `wgs84` with its place and
+/// vertical channel, or `flat`; gravity at the start place either way.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct EarthReport {
+    pub model: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub latitude_deg: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub longitude_deg: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub height_m: Option<f64>,
+    /// `held` (a known height) or `free` (the unaided vertical channel).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub vertical: Option<String>,
+    pub gravity_mps2: f64,
+}
+
+impl EarthReport {
+    pub fn of(earth: &EarthModel) -> EarthReport {
+        let round = earth.round();
+        EarthReport {
+            model: earth.name().to_string(),
+            latitude_deg: round.map(|e| e.place.lat_rad.to_degrees()),
+            longitude_deg: round.map(|e| e.place.lon_rad.to_degrees()),
+            height_m: round.map(|e| e.place.height_m),
+            vertical: round.map(|e| {
+                match e.vertical {
+                    Vertical::Held => "held",
+                    Vertical::Free => "free",
+                }
+                .to_string()
+            }),
+            gravity_mps2: earth.gravity_mps2(),
+        }
+    }
+
+    /// One line for people: `WGS-84 at 45 deg N, 0 deg E, 0 m, height held` or `flat (Woodman), g = 9.80665 m/s^2`.
+    pub fn describe(&self) -> String {
+        match (self.latitude_deg, self.longitude_deg, self.height_m) {
+            (Some(lat), Some(lon), Some(h)) => format!(
+                "WGS-84, rotating, at {:.4} deg {}, {:.4} deg {}, {h} m; vertical channel {}",
+                lat.abs(),
+                if lat < 0.0 { "S" } else { "N" },
+                lon.abs(),
+                if lon < 0.0 { "W" } else { "E" },
+                match self.vertical.as_deref() {
+                    Some("free") => "free (unaided, diverging)",
+                    _ => "held (known height)",
+                }
+            ),
+            _ => format!(
+                "flat, non-rotating (Woodman), g = {} m/s^2",
+                self.gravity_mps2
+            ),
+        }
+    }
 }
 
 /// Everything a report needs besides the runs.
@@ -95,6 +158,7 @@ pub struct ReportMeta {
     pub duration_s: f64,
     pub scheme: String,
     pub trajectory: TrajectorySpec,
+    pub earth: EarthReport,
     pub only: Option<Vec<TermSelector>>,
     pub without: Vec<TermSelector>,
     pub checkpoint_steps: Vec<u64>,
@@ -122,13 +186,19 @@ pub fn build_report(
     failures: &[RunFailure],
 ) -> DriftReport {
     let dt_s = 1.0 / meta.rate_hz;
+    let times: Vec<f64> = meta
+        .checkpoint_steps
+        .iter()
+        .map(|&step| step as f64 * dt_s)
+        .collect();
+    let all = all_laws(terms, ctx, &times);
     let checkpoints = meta
         .checkpoint_steps
         .iter()
         .enumerate()
         .map(|(cp, &step)| {
-            let t_s = step as f64 * dt_s;
-            let laws = channel_laws(terms, ctx, t_s);
+            let t_s = times[cp];
+            let laws = &all[cp];
             let allowance = DISCRETISATION_ALLOWANCE_STEPS / step as f64;
             let quantities = NavQuantity::ALL
                 .iter()
@@ -202,6 +272,7 @@ pub fn build_report(
         duration_s: meta.duration_s,
         scheme: meta.scheme.clone(),
         trajectory: meta.trajectory.clone(),
+        earth: meta.earth.clone(),
         active_terms: terms
             .iter()
             .map(|t| t.name.clone())

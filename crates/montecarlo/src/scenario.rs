@@ -6,7 +6,8 @@
 use noise::TermSelector;
 use serde::Deserialize;
 use std::path::PathBuf;
-use strapdown::{AnyTrajectory, Scheme, TrajectorySpec};
+use strapdown::earth::Place;
+use strapdown::{EarthModel, EarthTrajectory, RoundEarth, Scheme, TrajectorySpec, Vertical};
 
 /// A configuration error: `source` (file name), `key` (dotted TOML path) and what was expected.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -29,6 +30,7 @@ struct RawScenario {
     seed: Option<u64>,
     scheme: Option<String>,
     gravity_mps2: Option<f64>,
+    earth: Option<RawEarth>,
     trajectory: Option<TrajectorySpec>,
     checkpoints: Option<RawCheckpoints>,
     alignment: Option<RawAlignment>,
@@ -53,6 +55,18 @@ pub struct Reference {
     /// What a reader should know when comparing (printed under the comparison, not in the JSON).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub note: Option<String>,
+}
+
+/// The `[earth]` table (names relied on by users' scripts: `model`, `latitude_deg`,
+/// `longitude_deg`, `height_m`; and `vertical`).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawEarth {
+    model: Option<String>,
+    latitude_deg: Option<f64>,
+    longitude_deg: Option<f64>,
+    height_m: Option<f64>,
+    vertical: Option<String>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -112,10 +126,14 @@ pub struct Scenario {
     pub seed: u64,
     /// Strapdown mechanisation scheme (`woodman` or `accurate`, strapdown's names).
     pub scheme: Scheme,
+    /// Gravity at the start place, m/s^2 (the flat Earth's `gravity_mps2`, or normal gravity at
+    /// the round Earth's latitude and height).
     pub gravity_mps2: f64,
-    /// The trajectory as written (strapdown's spec) and built.
+    /// The Earth the scenario runs on (`[earth]`; the round, rotating WGS-84 Earth by default).
+    pub earth: EarthModel,
+    /// The trajectory as written (strapdown's spec) and built on the scenario's Earth.
     pub trajectory_spec: TrajectorySpec,
-    pub trajectory: AnyTrajectory,
+    pub trajectory: EarthTrajectory,
     /// Step indices k (t = k dt) at which errors are recorded, ascending, unique, 1 <= k <= steps.
     pub checkpoint_steps: Vec<u64>,
     pub alignment: Alignment,
@@ -143,6 +161,9 @@ pub use noise::units::STANDARD_GRAVITY_MPS2;
 pub const DEFAULT_DURATION_S: f64 = 60.0;
 /// Default sample rate when a scenario leaves `rate_hz` out (Hz).
 pub const DEFAULT_RATE_HZ: f64 = 100.0;
+/// Default latitude of the round Earth when a scenario leaves `earth.latitude_deg` out, deg
+/// (mid-latitude: Earth rate splits evenly between the north and down axes).
+pub const DEFAULT_LATITUDE_DEG: f64 = 45.0;
 /// Default number of Monte Carlo runs when a scenario leaves `runs` out (Woodman measured 500).
 pub const DEFAULT_RUNS: u64 = 500;
 /// Default master seed when a scenario leaves `seed` out.
@@ -186,16 +207,17 @@ impl Scenario {
             return Err(err("runs", "expected an integer >= 1".into()));
         }
         let scheme = scheme(raw.scheme.as_deref(), &err)?;
-        let gravity_mps2 = match raw.gravity_mps2 {
-            Some(g) => positive("gravity_mps2", g, &err)?,
-            None => STANDARD_GRAVITY_MPS2,
-        };
+        let earth = earth(raw.earth.unwrap_or_default(), raw.gravity_mps2, &err)?;
+        let gravity_mps2 = earth.gravity_mps2();
         let trajectory_spec = raw.trajectory.unwrap_or(TrajectorySpec::Static {
             roll_deg: 0.0,
             pitch_deg: 0.0,
             yaw_deg: 0.0,
         });
-        let trajectory = build_trajectory(&trajectory_spec, gravity_mps2, &err)?;
+        let trajectory = EarthTrajectory::new(
+            build_trajectory(&trajectory_spec, gravity_mps2, &err)?,
+            earth,
+        );
         let mut checkpoint_steps = checkpoint_steps(raw.checkpoints, rate_hz, steps, &err)?;
         if let Some(r) = &raw.reference {
             // The reference time is always a checkpoint.
@@ -231,6 +253,7 @@ impl Scenario {
             seed: raw.seed.unwrap_or(DEFAULT_SEED),
             scheme,
             gravity_mps2,
+            earth,
             trajectory_spec,
             trajectory,
             checkpoint_steps,
@@ -262,6 +285,92 @@ fn parse_raw(text: &str, err: &ErrFn) -> Result<RawScenario, ScenarioError> {
         // toml's message names the line, column and offending key.
         err("(document)", e.to_string().trim_end().replace('\n', " "))
     })
+}
+
+/// The `[earth]` table and the flat Earth's `gravity_mps2`: `model = "wgs84"` (default) at
+/// `latitude_deg` (default [`DEFAULT_LATITUDE_DEG`]), `longitude_deg`, `height_m` (default 0) with
+/// the vertical channel `held` (default: a known height) or `free`; or `model = "flat"`,
+/// Woodman's Earth, with `gravity_mps2` (default standard gravity).
+fn earth(raw: RawEarth, gravity: Option<f64>, err: &ErrFn) -> Result<EarthModel, ScenarioError> {
+    let model = raw.model.as_deref().unwrap_or("wgs84");
+    match model {
+        "flat" => {
+            for (key, given) in [
+                ("earth.latitude_deg", raw.latitude_deg.is_some()),
+                ("earth.longitude_deg", raw.longitude_deg.is_some()),
+                ("earth.height_m", raw.height_m.is_some()),
+                ("earth.vertical", raw.vertical.is_some()),
+            ] {
+                if given {
+                    return Err(err(
+                        key,
+                        "applies to `model = \"wgs84\"` only: the flat Earth has no place".into(),
+                    ));
+                }
+            }
+            Ok(EarthModel::Flat {
+                gravity_mps2: match gravity {
+                    Some(g) => positive("gravity_mps2", g, err)?,
+                    None => STANDARD_GRAVITY_MPS2,
+                },
+            })
+        }
+        "wgs84" => {
+            if gravity.is_some() {
+                return Err(err(
+                    "gravity_mps2",
+                    "applies to `[earth] model = \"flat\"` only: on the WGS-84 Earth gravity \
+                     follows from earth.latitude_deg and earth.height_m"
+                        .into(),
+                ));
+            }
+            let lat = finite(
+                "earth.latitude_deg",
+                raw.latitude_deg.unwrap_or(DEFAULT_LATITUDE_DEG),
+                err,
+            )?;
+            if lat.abs() > 89.0 {
+                return Err(err(
+                    "earth.latitude_deg",
+                    format!("expected a latitude in [-89, 89] deg (the north-east-down frame is singular at the poles), got {lat}"),
+                ));
+            }
+            let lon = finite("earth.longitude_deg", raw.longitude_deg.unwrap_or(0.0), err)?;
+            if lon.abs() > 180.0 {
+                return Err(err(
+                    "earth.longitude_deg",
+                    format!("expected a longitude in [-180, 180] deg, got {lon}"),
+                ));
+            }
+            let h = finite("earth.height_m", raw.height_m.unwrap_or(0.0), err)?;
+            if !(-1000.0..=20_000.0).contains(&h) {
+                return Err(err(
+                    "earth.height_m",
+                    format!("expected a height in [-1000, 20000] m above the ellipsoid (the normal-gravity height series holds there), got {h}"),
+                ));
+            }
+            let vertical = match raw.vertical.as_deref().unwrap_or("held") {
+                "held" => Vertical::Held,
+                "free" => Vertical::Free,
+                other => {
+                    return Err(err(
+                        "earth.vertical",
+                        format!("expected `held` (a known height) or `free` (the unaided, diverging vertical channel), got `{other}`"),
+                    ))
+                }
+            };
+            Ok(EarthModel::Round(RoundEarth {
+                vertical,
+                ..RoundEarth::at(Place::from_deg(lat, lon, h))
+            }))
+        }
+        other => Err(err(
+            "earth.model",
+            format!(
+                "expected `wgs84` (the round, rotating Earth) or `flat` (Woodman's), got `{other}`"
+            ),
+        )),
+    }
 }
 
 /// A finite value > 0.
@@ -320,7 +429,7 @@ fn build_trajectory(
     spec: &TrajectorySpec,
     gravity_mps2: f64,
     err: &ErrFn,
-) -> Result<AnyTrajectory, ScenarioError> {
+) -> Result<strapdown::AnyTrajectory, ScenarioError> {
     spec.build_with_gravity(gravity_mps2).map_err(|e| match e {
         strapdown::TrajectoryError::Invalid { key, expected, got } => err(
             &if key == "gravity_mps2" {

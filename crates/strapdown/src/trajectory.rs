@@ -326,6 +326,11 @@ impl Profile {
         &self.segments
     }
 
+    /// The start time of every segment and the end of the last, s.
+    pub fn segment_starts(&self) -> impl Iterator<Item = f64> + '_ {
+        self.starts.iter().map(|s| s.0)
+    }
+
     /// Total duration of the segments, s.
     pub fn duration_s(&self) -> f64 {
         self.starts.last().map_or(0.0, |s| s.0)

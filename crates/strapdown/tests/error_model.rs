@@ -125,7 +125,8 @@ fn constant_sources_match_the_mechanisation() {
             "north tilt",
             level,
             Source::Attitude {
-                var: [tilt * tilt, 0.0, 0.0],
+                mean: [0.0; 3],
+                cov: [[tilt * tilt, 0.0, 0.0], [0.0; 3], [0.0; 3]],
             },
             ([0.0; 3], [0.0; 3]),
             [tilt, 0.0, 0.0],
@@ -134,7 +135,8 @@ fn constant_sources_match_the_mechanisation() {
             "heading",
             turned,
             Source::Attitude {
-                var: [0.0, 0.0, 1e-6],
+                mean: [0.0; 3],
+                cov: [[0.0; 3], [0.0; 3], [0.0, 0.0, 1e-6]],
             },
             ([0.0; 3], [0.0; 3]),
             [0.0, 0.0, 1e-3],
