@@ -240,8 +240,10 @@ pub fn round_laws(
     total
         .iter()
         .zip(&unit_vertical)
-        .map(|(m, unit)| {
+        .zip(times_s)
+        .map(|((m, unit), &t_s)| {
             channel_laws_of(
+                t_s,
                 m,
                 &frame,
                 unit,
@@ -263,7 +265,9 @@ struct Frame {
 }
 
 /// The laws of one time from the summed moments (NED states dr, dv, psi).
+#[allow(clippy::too_many_arguments)]
 fn channel_laws_of(
+    t_s: f64,
     m: &ErrorMoments,
     frame: &Frame,
     unit_vertical: &ErrorMoments,
@@ -298,6 +302,7 @@ fn channel_laws_of(
     let value = |mean: f64, var: f64| Law::Value {
         mean,
         std: var.max(0.0).sqrt(),
+        allowance: 0.0,
     };
     let worst_angle = (0..3)
         .map(|i| e_mean[i].hypot(e_cov[(i, i)].max(0.0).sqrt()))
@@ -337,6 +342,30 @@ fn channel_laws_of(
             }
         }
     }
+    // The other products the first-order model drops: an attitude error of size a composes with
+    // another at O(a^2) (the angles' own readout) and turns the specific force by g a^2 / 2
+    // (grown at most as on the flat Earth, t and t^2 / 2, the Schuler loop only bounds it). Where
+    // a channel's first-order law is not far above them, as when it is driven only through Earth
+    // rate (a heading error's roll, pitch and horizontal error early on), the law is withheld.
+    let a2 = worst_angle * worst_angle;
+    for (q, law) in NavQuantity::ALL.iter().zip(laws.iter_mut()) {
+        let bound = match q {
+            Roll | Pitch | Yaw => a2,
+            VelNorth | VelEast | VelHorizontal => gravity_mps2 * a2 / 2.0 * t_s,
+            PosNorth | PosEast | PosHorizontal => gravity_mps2 * a2 / 2.0 * t_s * t_s / 2.0,
+            _ => 0.0,
+        };
+        if let Some(first) = law.rms() {
+            if bound > 0.1 * first {
+                *law = Law::NotApplicable(format!(
+                    "first-order law incomplete: products of the attitude errors (up to {worst_angle:.3e} rad) may reach {bound:.3e}, over 10 % of the law {first:.3e}"
+                ));
+            } else if let Law::Value { allowance, .. } = law {
+                // Below 10 %: the bound is the law's own stated uncertainty.
+                *allowance = bound / first;
+            }
+        }
+    }
     for (q, law) in NavQuantity::ALL.iter().zip(laws.iter_mut()) {
         let angle = matches!(q, Roll | Pitch | Yaw);
         if let Some(why) = missing_all.or(if angle { None } else { missing_nav }) {
@@ -373,10 +402,12 @@ fn horizontal(m: &ErrorMoments, first: usize, not_gaussian: bool) -> Law {
         return Law::Value {
             mean: f64::NAN,
             std: rms2.sqrt(),
+            allowance: 0.0,
         };
     };
     Law::Value {
         mean,
         std: (rms2 - mean * mean).max(0.0).sqrt(),
+        allowance: 0.0,
     }
 }

@@ -41,9 +41,12 @@ pub struct Term {
 }
 
 /// Law of one channel at one time: signed mean and standard deviation, or why there is none.
+/// `allowance`: the law's own stated relative uncertainty beyond the report's general ones (the
+/// round Earth's bound on the products of errors the first-order model drops; 0 for the flat
+/// closed forms), added to the interval of the simulated / law ratio.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Law {
-    Value { mean: f64, std: f64 },
+    Value { mean: f64, std: f64, allowance: f64 },
     NotApplicable(String),
 }
 
@@ -51,8 +54,8 @@ impl Law {
     pub fn rms(&self) -> Option<f64> {
         match self {
             // A NaN mean marks "mean unknown" (mixed horizontal case): std then holds the rms.
-            Law::Value { mean, std } if mean.is_nan() => Some(*std),
-            Law::Value { mean, std } => Some(mean.hypot(*std)),
+            Law::Value { mean, std, .. } if mean.is_nan() => Some(*std),
+            Law::Value { mean, std, .. } => Some(mean.hypot(*std)),
             Law::NotApplicable(_) => None,
         }
     }
@@ -365,6 +368,7 @@ pub fn channel_laws(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
             Law::Value {
                 mean: mean[i],
                 std: var[i].sqrt(),
+                allowance: 0.0,
             }
         }
     };
@@ -400,7 +404,15 @@ pub fn channel_laws(terms: &[Term], ctx: &LawContext, t_s: f64) -> Vec<Law> {
 /// and random components that are not Gaussian (`gaussian = false`: a random-phase sinusoid),
 /// report only the rms (mean = NaN marks "mean unknown").
 fn horizontal_law(north: &Law, east: &Law, gaussian: bool) -> Law {
-    let (Law::Value { mean: mn, std: sn }, Law::Value { mean: me, std: se }) = (north, east) else {
+    let (
+        Law::Value {
+            mean: mn, std: sn, ..
+        },
+        Law::Value {
+            mean: me, std: se, ..
+        },
+    ) = (north, east)
+    else {
         let why = [north, east]
             .iter()
             .find_map(|l| match l {
@@ -419,9 +431,11 @@ fn horizontal_law(north: &Law, east: &Law, gaussian: bool) -> Law {
         return Law::Value {
             mean: f64::NAN,
             std: rms2.sqrt(),
+            allowance: 0.0,
         };
     };
     Law::Value {
+        allowance: 0.0,
         mean,
         // Rounding can make the difference slightly negative; NaN must stay NaN.
         std: {
@@ -823,7 +837,7 @@ mod tests {
             source: LawSource::Bias(b),
         }];
         let laws = channel_laws(&terms, &ctx(), 10.0);
-        let Law::Value { mean, std } = laws[NavQuantity::PosNorth as usize] else {
+        let Law::Value { mean, std, .. } = laws[NavQuantity::PosNorth as usize] else {
             panic!()
         };
         assert_eq!(std, 0.0);
@@ -847,7 +861,8 @@ mod tests {
             laws[NavQuantity::Roll as usize],
             Law::Value {
                 mean: 0.0,
-                std: 0.0
+                std: 0.0,
+                allowance: 0.0
             }
         );
         // Large angle.

@@ -19,6 +19,16 @@ use noise::SensorModel;
 
 const RUNS: u64 = 2000;
 
+/// These laws are the flat Earth's closed forms: the scenarios run on it unless they name their
+/// own `[earth]` (the round Earth's laws are checked in round_earth_laws.rs).
+fn earth_table(scenario_extra: &str) -> &'static str {
+    if scenario_extra.contains("[earth]") {
+        ""
+    } else {
+        "[earth]\nmodel = \"flat\"\n"
+    }
+}
+
 fn simulate(
     sensor_toml: &str,
     scenario_extra: &str,
@@ -33,7 +43,8 @@ fn simulate(
     .unwrap_or_else(|e| panic!("{e}"));
     let scenario = Scenario::from_toml_str(
         &format!(
-            "sensor = \"x.toml\"\nduration_s = {duration_s}\nrate_hz = {rate_hz}\nruns = {runs}\nseed = 1\n{scenario_extra}"
+            "sensor = \"x.toml\"\nduration_s = {duration_s}\nrate_hz = {rate_hz}\nruns = {runs}\nseed = 1\n{scenario_extra}\n{}",
+            earth_table(scenario_extra)
         ),
         "test-scenario.toml",
     )
