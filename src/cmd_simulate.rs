@@ -314,7 +314,17 @@ fn horizontal_table(s: &mut String, r: &DriftReport) {
             r.active_terms.join(", ")
         }
     );
-    let _ = writeln!(s, "\nhorizontal position error vs time; law = closed form of the active terms, ratio = rms/law rms [99.9 % interval], * = outside");
+    let _ = writeln!(s, "Earth: {}", r.earth.describe());
+    let round = r.earth.model == "wgs84";
+    let _ = writeln!(
+        s,
+        "\nhorizontal position error vs time; law = {} of the active terms, ratio = rms/law rms [99.9 % interval], * = outside",
+        if round {
+            "the round-Earth error model"
+        } else {
+            "closed form"
+        }
+    );
     let _ = writeln!(
         s,
         "{:>10} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}  ratio",
@@ -334,6 +344,24 @@ fn horizontal_table(s: &mut String, r: &DriftReport) {
             fmt::quantity_opt(h, c.law_mean),
             fmt::quantity_opt(h, c.law_rms),
             fmt_ratio(c)
+        );
+    }
+    if let Some((cp, flat)) = r
+        .checkpoints
+        .last()
+        .and_then(|cp| Some((cp, cp.quantities[h].flat_law_rms?)))
+    {
+        let c = &cp.quantities[h];
+        let _ = writeln!(
+            s,
+            "at {}: rms {} on this round Earth (law {}); Woodman's flat Earth's law for the same terms: {}{}",
+            fmt::time(cp.t_s),
+            fmt::quantity_value(h, c.rms),
+            fmt::quantity_opt(h, c.law_rms),
+            fmt::quantity_value(h, flat),
+            c.law_rms
+                .map(|l| format!(" (round / flat {:.3})", l / flat))
+                .unwrap_or_default()
         );
     }
 }

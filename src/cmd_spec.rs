@@ -329,7 +329,7 @@ fn drift_table(s: &mut String, doc: &SpecDoc) {
     use std::fmt::Write as _;
     let _ = writeln!(
         s,
-        "\ndrift, static and level ({} Monte Carlo, {} runs): heading rms and horizontal position, simulation / law",
+        "\ndrift, static and level, on the round, rotating WGS-84 Earth at 45 deg N with the height held ({} Monte Carlo, {} runs): heading rms and horizontal position, simulation / law",
         fmt::rate(doc.drift_rate_hz),
         doc.sensors.first().map_or(0, |x| x.spec.drift_runs)
     );

@@ -59,6 +59,10 @@ pub struct QuantityReport {
     pub mean_ratio_hi: Option<f64>,
     /// Why there is no law, when there is none.
     pub law_note: Option<String>,
+    /// On the round Earth, for a static level north-facing IMU: what the flat Earth's closed
+    /// forms (Woodman's) would give for the same terms, rms, beside the round Earth's `law_rms`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flat_law_rms: Option<f64>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -202,6 +206,19 @@ pub fn build_report(
         .map(|&step| step as f64 * dt_s)
         .collect();
     let all = all_laws(terms, ctx, &times);
+    // The flat Earth's laws beside the round Earth's, where they hold (static level north-facing).
+    let flat: Option<Vec<Vec<Law>>> = (ctx.earth.round().is_some()
+        && ctx.static_level
+        && ctx.attitude == strapdown::Attitude::identity())
+    .then(|| {
+        let flat_ctx = LawContext {
+            earth: EarthModel::Flat {
+                gravity_mps2: ctx.gravity_mps2,
+            },
+            ..ctx.clone()
+        };
+        all_laws(terms, &flat_ctx, &times)
+    });
     let checkpoints = meta
         .checkpoint_steps
         .iter()
@@ -237,6 +254,10 @@ pub fn build_report(
                         mean_ratio_lo: None,
                         mean_ratio_hi: None,
                         law_note: None,
+                        flat_law_rms: flat
+                            .as_ref()
+                            .and_then(|f| f[cp][q as usize].rms())
+                            .and_then(finite),
                     };
                     // The law's own stated uncertainty (0 for the flat closed forms).
                     let allowance = match law {
