@@ -26,6 +26,8 @@ pub struct Args {
     pub model: PathBuf,
     #[command(flatten)]
     pub log_args: LogArgs,
+    #[command(flatten)]
+    pub earth: crate::log_input::EarthArgs,
     /// Master seed of the simulated logs (written into the outputs)
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -107,6 +109,7 @@ fn drift_protocol(args: &Args) -> Option<diagnose::protocol::Protocol> {
         initialisation: args.init.unwrap_or(Initialisation::Perfect),
         horizons_s: args.horizons.clone(),
         overlapping: false,
+        latitude_deg: args.earth.latitude_deg(),
     })
 }
 
@@ -210,6 +213,7 @@ fn run_inner(args: &Args) -> Result<()> {
         initialisation: diagnose::protocol::Initialisation::Perfect,
         horizons_s: args.horizons.clone(),
         overlapping: false,
+        latitude_deg: args.earth.latitude_deg(),
     });
     crate::cmd_drift::check_sampling(&protocol, input.dt_s, longest)?;
     // An output filter in the model must fit the log's rate.
@@ -228,6 +232,7 @@ fn run_inner(args: &Args) -> Result<()> {
         min_delta_bic: args.min_delta_bic,
         tau_min_s: args.tau_min,
         drift_protocol: drift_protocol(args),
+        latitude_deg: args.earth.latitude_deg(),
         ..Settings::default()
     };
     let started = std::time::Instant::now();

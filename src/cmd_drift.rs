@@ -48,6 +48,8 @@ pub struct Args {
     pub model: PathBuf,
     #[command(flatten)]
     pub log_args: LogArgs,
+    #[command(flatten)]
+    pub earth: crate::log_input::EarthArgs,
     /// Bias calibration before each segment: none, log-mean, or window:TIME (the mean over TIME before each segment)
     #[arg(long, default_value = "log-mean", value_name = "HOW", value_parser = calibration)]
     pub calibration: Calibration,
@@ -117,6 +119,7 @@ fn protocol(args: &Args) -> Protocol {
         initialisation: args.init,
         horizons_s: args.horizons.clone(),
         overlapping: args.overlap,
+        latitude_deg: args.earth.latitude_deg(),
     }
 }
 

@@ -31,6 +31,43 @@ pub struct LogArgs {
     pub columns: Vec<String>,
 }
 
+/// Where a static log was recorded, for the commands that dead-reckon it (flatten into a
+/// command's Args): the round, rotating WGS-84 Earth at `--latitude` (height held), or Woodman's
+/// flat Earth with `--flat-earth`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct EarthArgs {
+    /// Latitude the logs were recorded at, deg (north positive; -89..89): the segments are
+    /// dead-reckoned on the rotating WGS-84 Earth there, Earth rate kept as signal
+    #[arg(long, value_name = "DEG", default_value_t = diagnose::protocol::DEFAULT_LATITUDE_DEG,
+          allow_hyphen_values = true, value_parser = latitude_deg)]
+    pub latitude: f64,
+    /// Dead-reckon on Woodman's flat, non-rotating Earth instead (no Earth rate, constant g)
+    #[arg(long, conflicts_with = "latitude")]
+    pub flat_earth: bool,
+}
+
+impl EarthArgs {
+    /// The protocol's `latitude_deg`: None on the flat Earth.
+    pub fn latitude_deg(&self) -> Option<f64> {
+        (!self.flat_earth).then_some(self.latitude)
+    }
+}
+
+/// A latitude in degrees, -89..89 (the north-east-down frame is singular at the poles).
+fn latitude_deg(text: &str) -> std::result::Result<f64, String> {
+    let v: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("expected a latitude in degrees, e.g. 45 or -33.9, got {text:?}"))?;
+    if v.is_finite() && v.abs() <= 89.0 {
+        Ok(v)
+    } else {
+        Err(format!(
+            "expected a latitude in [-89, 89] deg (the north-east-down frame is singular at the poles), got {v}"
+        ))
+    }
+}
+
 /// The flag that sets each reader setting.
 pub fn flag(setting: Setting) -> &'static str {
     match setting {

@@ -182,7 +182,7 @@ class DiagnoseResult(_Document):
 def diagnose(logs, model, rate=None, gyro_unit=None, accel_unit=None, time_unit=None,
              columns=None, topic=None, seed=1, seeds=16, rounds=6, horizons=(60.0, 3600.0),
              min_delta_bic=16.0, tau_min=0.0, check=None, drift_check=False, calibration=None,
-             init=None, threads=None):
+             init=None, threads=None, latitude=45.0):
     """``imudrift diagnose LOG... --model MODEL``: where the model and the measured static log
     disagree, which effect is missing, the corrected model; the same numbers as the CLI.
 
@@ -194,7 +194,9 @@ def diagnose(logs, model, rate=None, gyro_unit=None, accel_unit=None, time_unit=
     options: ``seed``, ``seeds`` (simulated logs per band), ``rounds``, ``horizons`` (s),
     ``min_delta_bic``, ``tau_min`` (s), ``check`` (held-out logs), ``drift_check``,
     ``calibration`` (``"none"``, ``"log-mean"``, ``"window:60"``), ``init`` (``"perfect"``,
-    ``"level:10"``), ``threads``. The GIL is released while it works; the library has no stop
+    ``"level:10"``), ``threads``, ``latitude`` (deg: the logs are dead-reckoned on the rotating
+    WGS-84 Earth there, Earth rate kept as signal; ``None``: Woodman's flat Earth, the CLI's
+    ``--flat-earth``). The GIL is released while it works; the library has no stop
     flag for a diagnosis, so Ctrl-C is raised when it finishes.
 
     >>> r = imudrift.diagnose("adis16405_imu1.csv.gz", "configs/sensors/adis16405.toml",
@@ -213,6 +215,7 @@ def diagnose(logs, model, rate=None, gyro_unit=None, accel_unit=None, time_unit=
         "calibration": calibration,
         "init": init,
         "threads": None if threads is None else int(threads),
+        "latitude": None if latitude is None else float(latitude),
     }
     reader = reader_settings(rate, gyro_unit, accel_unit, time_unit, columns, topic)
     held = [] if check is None else _logs(check, rate)
@@ -253,7 +256,7 @@ class DriftResult(_Document):
 def drift(logs, model, rate=None, gyro_unit=None, accel_unit=None, time_unit=None, columns=None,
           topic=None, calibration="log-mean", init="perfect", horizons=(10.0, 60.0, 600.0, 3600.0),
           overlap=False, replicates=40, exact_parameters=False, one_structure=False, seed=1,
-          threads=None):
+          threads=None, latitude=45.0):
     """``imudrift drift LOG... --model MODEL``: the drift measured on static logs against the
     drift the model predicts under one protocol, with intervals and a verdict; the same numbers
     as the CLI.
@@ -263,7 +266,8 @@ def drift(logs, model, rate=None, gyro_unit=None, accel_unit=None, time_unit=Non
     (s), ``overlap`` (half-overlapping segments); ``replicates`` simulated experiments for the
     model's 95 % band; ``exact_parameters`` takes a diagnosed model's levels as exact (no
     parametric bootstrap); ``one_structure`` takes its structure as certain (no averaging over
-    the ``[[alternatives]]`` a diagnosed model lists); ``seed``; ``threads``. The GIL is released while it works; the library
+    the ``[[alternatives]]`` a diagnosed model lists); ``seed``; ``threads``; ``latitude`` (deg,
+    or ``None`` for the flat Earth, as for :func:`diagnose`). The GIL is released while it works; the library
     has no stop flag for the check, so Ctrl-C is raised when it finishes.
 
     >>> r = imudrift.drift(["adis16405_imu1.csv.gz", "adis16405_imu2.csv.gz"],
@@ -280,6 +284,7 @@ def drift(logs, model, rate=None, gyro_unit=None, accel_unit=None, time_unit=Non
         "one_structure": bool(one_structure),
         "seed": int(seed),
         "threads": None if threads is None else int(threads),
+        "latitude": None if latitude is None else float(latitude),
     }
     reader = reader_settings(rate, gyro_unit, accel_unit, time_unit, columns, topic)
     return DriftResult(_drift(_logs(logs, rate), _sensor_arg(model), reader, settings))

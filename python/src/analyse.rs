@@ -338,6 +338,18 @@ pub struct DiagnoseArgs {
     calibration: Option<String>,
     init: Option<String>,
     threads: Option<usize>,
+    latitude: Option<f64>,
+}
+
+/// `latitude` (deg, -89..89), or None for Woodman's flat Earth, as the CLI's `--latitude` /
+/// `--flat-earth`.
+fn latitude(value: Option<f64>) -> PyResult<Option<f64>> {
+    match value {
+        Some(v) if !(v.is_finite() && v.abs() <= 89.0) => Err(invalid(format!(
+            "latitude {v}: expected a latitude in [-89, 89] deg (the north-east-down frame is singular at the poles), or None for the flat Earth"
+        ))),
+        v => Ok(v),
+    }
 }
 
 fn check_diagnose_args(a: &DiagnoseArgs) -> PyResult<()> {
@@ -426,6 +438,7 @@ pub fn diagnose_run<'py>(
             .unwrap_or(Initialisation::Perfect),
         horizons_s: settings.horizons.clone(),
         overlapping: false,
+        latitude_deg: latitude(settings.latitude)?,
     };
     check_logs(&logs, &protocol, &m, &model_name)?;
     check_memory(&logs, settings.threads)?;
@@ -437,6 +450,7 @@ pub fn diagnose_run<'py>(
         horizons_s: settings.horizons.clone(),
         min_delta_bic: settings.min_delta_bic,
         tau_min_s: settings.tau_min,
+        latitude_deg: protocol.latitude_deg,
         drift_protocol: (asked || logs.len() > 1).then_some(protocol),
         ..diagnose::Settings::default()
     };
@@ -495,6 +509,7 @@ pub struct DriftArgs {
     one_structure: bool,
     seed: u64,
     threads: Option<usize>,
+    latitude: Option<f64>,
 }
 
 /// `imudrift drift LOG... --model MODEL --json`: the document's text.
@@ -524,6 +539,7 @@ pub fn drift_run<'py>(
         initialisation: initialisation(&settings.init)?,
         horizons_s: settings.horizons.clone(),
         overlapping: settings.overlap,
+        latitude_deg: latitude(settings.latitude)?,
     };
     let (model_text, model_name) = model_arg;
     let m = model(&model_text, &model_name)?;

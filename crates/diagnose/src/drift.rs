@@ -55,13 +55,22 @@ impl SegmentDrift {
 /// channel (None) reads its ideal value. Segments are consecutive, non-overlapping, of
 /// `round(horizon_s / dt_s)` samples each; a horizon longer than the log gives no segment. This
 /// is the default drift protocol (`protocol::Protocol::default()`: the log-mean calibration, a
-/// perfect start), computed by the same code as `imudrift drift`.
-pub fn segment_drift(channels: &[Option<&[f64]>; 6], dt_s: f64, horizon_s: f64) -> SegmentDrift {
+/// perfect start) on the Earth of `latitude_deg` (`protocol::earth_at`), computed by the same
+/// code as `imudrift drift`.
+pub fn segment_drift(
+    channels: &[Option<&[f64]>; 6],
+    dt_s: f64,
+    horizon_s: f64,
+    latitude_deg: Option<f64>,
+) -> SegmentDrift {
     let e = crate::protocol::segment_errors(
         channels,
         dt_s,
         horizon_s,
-        &crate::protocol::Protocol::default(),
+        &crate::protocol::Protocol {
+            latitude_deg,
+            ..Default::default()
+        },
     );
     SegmentDrift {
         horizon_s,
@@ -86,7 +95,7 @@ mod tests {
         let eps = 1e-3;
         let n = 20_000;
         let gy: Vec<f64> = (0..n).map(|k| if k < n / 2 { eps } else { -eps }).collect();
-        let d = segment_drift(&[None, Some(&gy), None, None, None, None], dt, 10.0);
+        let d = segment_drift(&[None, Some(&gy), None, None, None, None], dt, 10.0, None);
         assert_eq!(d.horizontal_m.len(), 2);
         let t: f64 = 10.0;
         let law = G_MPS2 * eps * t.powi(3) / 6.0;
@@ -110,7 +119,7 @@ mod tests {
         let eps = 2e-3;
         let n = 4000;
         let gz: Vec<f64> = (0..n).map(|k| if k < n / 2 { eps } else { -eps }).collect();
-        let d = segment_drift(&[None, None, Some(&gz), None, None, None], dt, 20.0);
+        let d = segment_drift(&[None, None, Some(&gz), None, None, None], dt, 20.0, None);
         assert!(
             (d.heading_rad[0] - eps * 20.0).abs() < 1e-12,
             "{:?}",
@@ -131,12 +140,12 @@ mod tests {
         let eps = 0.02;
         let n = 2000;
         let ax: Vec<f64> = (0..n).map(|k| if k < n / 2 { eps } else { -eps }).collect();
-        let d = segment_drift(&[None, None, None, Some(&ax), None, None], dt, 10.0);
+        let d = segment_drift(&[None, None, None, Some(&ax), None, None], dt, 10.0, None);
         let law = eps * 100.0 / 2.0;
         for &p in &d.horizontal_m {
             assert!((p / law - 1.0).abs() < 2.0 * dt / 10.0, "{p} vs {law}");
         }
-        let none = segment_drift(&[None, None, None, Some(&ax), None, None], dt, 3600.0);
+        let none = segment_drift(&[None, None, None, Some(&ax), None, None], dt, 3600.0, None);
         assert!(none.horizontal_m.is_empty());
         assert!(none.summary().horizontal_rms_m.is_nan());
     }

@@ -625,11 +625,14 @@ fn simulate_experiments<'m>(
                 .unwrap_or(0);
             LogJob {
                 model: model_of(r),
-                setup: SimSetup::plain(
-                    dt_s,
-                    samples,
-                    noise::ImuChannels::from_fn(|c| log.channels[c].is_some()),
-                ),
+                setup: SimSetup {
+                    latitude_deg: settings.protocol.latitude_deg,
+                    ..SimSetup::plain(
+                        dt_s,
+                        samples,
+                        noise::ImuChannels::from_fn(|c| log.channels[c].is_some()),
+                    )
+                },
                 seed: settings.seed,
                 run: (r * logs.len() + l) as u64,
             }

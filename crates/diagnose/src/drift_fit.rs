@@ -115,11 +115,14 @@ impl UnitDrift<'_> {
         let k = self.decimation();
         let dt_u = self.dt_s * k as f64;
         let lengths: Vec<usize> = self.samples.iter().map(|n| n / k).collect();
-        let setup = SimSetup::plain(
-            dt_u,
-            lengths.iter().copied().max().unwrap_or(0),
-            noise::ImuChannels::from_fn(|i| i == c),
-        );
+        let setup = SimSetup {
+            latitude_deg: self.protocol.latitude_deg,
+            ..SimSetup::plain(
+                dt_u,
+                lengths.iter().copied().max().unwrap_or(0),
+                noise::ImuChannels::from_fn(|i| i == c),
+            )
+        };
         let nh = self.protocol.horizons_s.len();
         let jobs: Vec<LogJob> = (0..self.logs as u64)
             .map(|s| LogJob {

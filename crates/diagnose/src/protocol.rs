@@ -10,11 +10,46 @@
 //! pitch = atan2(f_x, sqrt(f_y^2 + f_z^2)), heading north). Each segment is then dead-reckoned
 //! from rest with the project's mechanisation (`strapdown`, `Accurate` scheme) and its error
 //! against the static truth read at the end (`strapdown::nav_error`).
+//!
+//! The Earth the segments are dead-reckoned on is the protocol's `latitude_deg`: the round,
+//! rotating WGS-84 Earth at that latitude with the height held (a known height), or Woodman's
+//! flat, non-rotating Earth (`None`). On the round Earth a static log's gyros read Earth rate and
+//! its accelerometers local gravity: the calibration refers every channel to what a static, level,
+//! north-facing IMU reads there (`strapdown::RoundEarth::static_imu`), so Earth rate is kept as
+//! signal and only the rest is removed as bias; logs simulated from a model read the same ideal
+//! values ([`Protocol::ideal`]).
 
 use noise::units::STANDARD_GRAVITY_MPS2 as G_MPS2;
 use noise::Channel;
 use serde::Serialize;
-use strapdown::{nav_error, Attitude, NavState, Scheme, StrapdownLanes};
+use strapdown::earth::Place;
+use strapdown::{nav_error, Attitude, EarthModel, NavState, RoundEarth, Scheme, Vertical};
+
+/// The latitude a log is taken to be recorded at when none is given, deg (the scenarios'
+/// default, montecarlo's `DEFAULT_LATITUDE_DEG`).
+pub const DEFAULT_LATITUDE_DEG: f64 = 45.0;
+
+/// The round, rotating WGS-84 Earth at `latitude_deg` with the height held at 0 m, or Woodman's
+/// flat Earth (`None`).
+pub fn earth_at(latitude_deg: Option<f64>) -> EarthModel {
+    match latitude_deg {
+        None => EarthModel::Flat {
+            gravity_mps2: G_MPS2,
+        },
+        Some(lat) => EarthModel::Round(RoundEarth {
+            vertical: Vertical::Held,
+            ..RoundEarth::at(Place::from_deg(lat, 0.0, 0.0))
+        }),
+    }
+}
+
+/// What a static, level, north-facing IMU reads on [`earth_at`]`(latitude_deg)` (gx gy gz ax ay
+/// az): on the flat Earth zero rate and (0, 0, -g); on the round one Earth rate
+/// (Omega cos L, 0, -Omega sin L) and normal gravity.
+pub fn ideal_at(latitude_deg: Option<f64>) -> [f64; 6] {
+    let (g, f) = earth_at(latitude_deg).static_imu(&Attitude::identity());
+    [g.0.x, g.0.y, g.0.z, f.0.x, f.0.y, f.0.z]
+}
 
 /// How the bias is removed before each segment.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -85,6 +120,9 @@ pub struct Protocol {
     pub horizons_s: Vec<f64>,
     /// Segments start every half segment instead of every segment.
     pub overlapping: bool,
+    /// The latitude of the round, rotating Earth the segments are dead-reckoned on, deg (height
+    /// held at 0 m); `None`: Woodman's flat Earth.
+    pub latitude_deg: Option<f64>,
 }
 
 impl Default for Protocol {
@@ -94,11 +132,23 @@ impl Default for Protocol {
             initialisation: Initialisation::Perfect,
             horizons_s: vec![10.0, 60.0, 600.0, 3600.0],
             overlapping: false,
+            latitude_deg: Some(DEFAULT_LATITUDE_DEG),
         }
     }
 }
 
 impl Protocol {
+    /// The Earth the segments are dead-reckoned on.
+    pub fn earth(&self) -> EarthModel {
+        earth_at(self.latitude_deg)
+    }
+
+    /// What a static, level, north-facing IMU reads on the protocol's Earth (gx gy gz ax ay az):
+    /// the values the calibration refers each channel to and simulated logs are built on.
+    pub fn ideal(&self) -> [f64; 6] {
+        ideal_at(self.latitude_deg)
+    }
+
     /// The protocol in words, for reports.
     pub fn describe(&self) -> String {
         let cal = match self.calibration {
@@ -114,8 +164,16 @@ impl Protocol {
                 "roll and pitch levelled from the accelerometers over the {window_s} s before each segment"
             ),
         };
+        let earth = match self.latitude_deg {
+            None => "on the flat, non-rotating Earth (Woodman)".to_string(),
+            Some(lat) => format!(
+                "on the rotating WGS-84 Earth at {:.4} deg {}, height held",
+                lat.abs(),
+                if lat < 0.0 { "S" } else { "N" }
+            ),
+        };
         format!(
-            "{cal}; {init}; {} segments",
+            "{cal}; {init}; {} segments; {earth}",
             if self.overlapping {
                 "half-overlapping"
             } else {
@@ -414,19 +472,21 @@ fn segment_errors_with(
     } else {
         len
     };
+    let ideal = protocol.ideal();
+    let earth = protocol.earth();
     let segments: Vec<Segment> = (lead..=n - len)
         .step_by(stride)
-        .map(|start| Segment::new(start, dt_s, protocol, means))
+        .map(|start| Segment::new(start, dt_s, protocol, means, &ideal))
         .collect();
     // Up to eight segments at a time in the strapdown's lanes (each lane's numbers are those of
     // a one-lane integrator, bit for bit), the last group in as few lanes as hold it.
     let truth = NavState::default();
     for group in segments.chunks(SEGMENT_LANES) {
         let ends: Vec<NavState> = match group.len() {
-            1 => integrate_segments::<1>(channels, dt_s, len, group).to_vec(),
-            2 => integrate_segments::<2>(channels, dt_s, len, group).to_vec(),
-            3 | 4 => integrate_segments::<4>(channels, dt_s, len, group)[..group.len()].to_vec(),
-            _ => integrate_segments::<SEGMENT_LANES>(channels, dt_s, len, group)[..group.len()]
+            1 => integrate_segments::<1>(channels, dt_s, len, group, &earth, &ideal).to_vec(),
+            2 => integrate_segments::<2>(channels, dt_s, len, group, &earth, &ideal).to_vec(),
+            3 | 4 => integrate_segments::<4>(channels, dt_s, len, group, &earth, &ideal)[..group.len()].to_vec(),
+            _ => integrate_segments::<SEGMENT_LANES>(channels, dt_s, len, group, &earth, &ideal)[..group.len()]
                 .to_vec(),
         };
         for end in &ends {
@@ -444,10 +504,6 @@ fn segment_errors_with(
 /// Segments dead-reckoned together, one per strapdown lane.
 const SEGMENT_LANES: usize = 8;
 
-/// The specific force of a static level IMU, and its zero rate: the readings the calibration
-/// refers each channel to (gx gy gz ax ay az).
-const IDEAL: [f64; 6] = [0.0, 0.0, 0.0, 0.0, 0.0, -G_MPS2];
-
 /// One segment: its first sample, the bias removed from each channel and its initial state.
 #[derive(Clone, Copy)]
 struct Segment {
@@ -458,15 +514,21 @@ struct Segment {
 
 impl Segment {
     /// The user's calibration and initialisation before the segment starting at `start`.
-    fn new(start: usize, dt_s: f64, protocol: &Protocol, means: &Means) -> Segment {
+    fn new(
+        start: usize,
+        dt_s: f64,
+        protocol: &Protocol,
+        means: &Means,
+        ideal: &[f64; 6],
+    ) -> Segment {
         let offset: [f64; 6] = std::array::from_fn(|ch| match protocol.calibration {
             Calibration::None => 0.0,
-            Calibration::LogMean => means.whole[ch].map_or(0.0, |m| m - IDEAL[ch]),
+            Calibration::LogMean => means.whole[ch].map_or(0.0, |m| m - ideal[ch]),
             Calibration::Window { window_s } => {
                 let w = window_samples(window_s, dt_s);
                 means
                     .window(ch, start - w, start)
-                    .map_or(0.0, |m| m - IDEAL[ch])
+                    .map_or(0.0, |m| m - ideal[ch])
             }
         });
         let attitude = match protocol.initialisation {
@@ -476,7 +538,7 @@ impl Segment {
                 let f: [f64; 3] = std::array::from_fn(|a| {
                     means
                         .window(3 + a, start - w, start)
-                        .map_or(IDEAL[3 + a], |m| m - offset[3 + a])
+                        .map_or(ideal[3 + a], |m| m - offset[3 + a])
                 });
                 let roll = (-f[1]).atan2(-f[2]);
                 let pitch = f[0].atan2(f[1].hypot(f[2]));
@@ -528,10 +590,12 @@ fn integrate_segments<const L: usize>(
     dt_s: f64,
     len: usize,
     segments: &[Segment],
+    earth: &EarthModel,
+    ideal: &[f64; 6],
 ) -> [NavState; L] {
     let lane: [Segment; L] = std::array::from_fn(|l| segments[l.min(segments.len() - 1)]);
     let init: [NavState; L] = std::array::from_fn(|l| lane[l].init);
-    let mut nav = StrapdownLanes::<L>::new(Scheme::Accurate, &init, G_MPS2);
+    let mut nav = earth.lanes::<L>(Scheme::Accurate, &init);
     nav.integrate(len, dt_s, |first, chunk| {
         for (c, channel) in channels.iter().enumerate() {
             for (l, seg) in lane.iter().enumerate() {
@@ -540,7 +604,7 @@ fn integrate_segments<const L: usize>(
                     prefetch(x, from + PREFETCH_AHEAD);
                 }
                 for (j, s) in chunk.iter_mut().enumerate() {
-                    s[c][l] = channel.map_or(IDEAL[c], |x| x[from + j] - seg.offset[c]);
+                    s[c][l] = channel.map_or(ideal[c], |x| x[from + j] - seg.offset[c]);
                 }
             }
         }

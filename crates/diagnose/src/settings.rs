@@ -36,6 +36,10 @@ pub struct Settings {
     /// The drift protocol of the drift check in the loop (docs/diagnose.md, "Drift in the loop"),
     /// or None (no drift check).
     pub drift_protocol: Option<crate::protocol::Protocol>,
+    /// The latitude of the round, rotating Earth the logs are dead-reckoned on (the drift step
+    /// and the simulated logs; a drift protocol carries the same), deg; `None`: Woodman's flat
+    /// Earth.
+    pub latitude_deg: Option<f64>,
 }
 
 impl Default for Settings {
@@ -50,6 +54,7 @@ impl Default for Settings {
             effects_per_round: 3,
             tau_min_s: 0.0,
             drift_protocol: None,
+            latitude_deg: Some(crate::protocol::DEFAULT_LATITUDE_DEG),
         }
     }
 }

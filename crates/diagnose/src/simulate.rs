@@ -5,7 +5,7 @@
 //! any thread count. The run writes its Allan deviations at the measured tau grid and the segment
 //! drifts of its log into the run's output row.
 
-use crate::drift::{segment_drift, SegmentDrift, G_MPS2};
+use crate::drift::{segment_drift, SegmentDrift};
 use crate::gap::Band;
 use crate::protocol::{all_segment_errors, Protocol, Quantity, SegmentErrors};
 use allan::{DataKind, EdfMethod, Estimator, Options, TauGrid};
@@ -29,6 +29,10 @@ pub struct SimSetup<'a> {
     pub temperature_c: Option<&'a [f64]>,
     /// Fitted temperature-bias coefficient per channel (SI per degC), applied to the measured temperature.
     pub temp_coeff: ImuChannels<f64>,
+    /// The latitude of the round Earth the logs are simulated and dead-reckoned on, deg (`None`:
+    /// the flat Earth): the simulated IMU reads what a static, level, north-facing one reads
+    /// there (`protocol::ideal_at`), as the drift protocol assumes.
+    pub latitude_deg: Option<f64>,
 }
 
 impl SimSetup<'static> {
@@ -43,6 +47,7 @@ impl SimSetup<'static> {
             horizons_s: Vec::new(),
             temperature_c: None,
             temp_coeff: ImuChannels::default(),
+            latitude_deg: Protocol::default().latitude_deg,
         }
     }
 }
@@ -278,9 +283,11 @@ fn static_logs_into(
         .zip(runs)
         .map(|(m, &run)| ImuErrors::new(m, setup.dt_s, seed, run))
         .collect();
-    // A static level IMU reads zero rate and specific force (0, 0, -g) (docs/cli.md convention).
-    let gyro = Vector3::zeros();
-    let accel = Vector3::new(0.0, 0.0, -G_MPS2);
+    // A static, level, north-facing IMU on the protocol's Earth (on the flat one: zero rate and
+    // specific force (0, 0, -g), docs/cli.md convention).
+    let i = crate::protocol::ideal_at(setup.latitude_deg);
+    let gyro = Vector3::new(i[0], i[1], i[2]);
+    let accel = Vector3::new(i[3], i[4], i[5]);
     // Each channel owns its random streams, so generating only the active ones changes nothing else.
     for (c, ch) in Channel::ALL.into_iter().enumerate() {
         let mut lanes: Vec<&mut noise::ChannelErrors> = errors
@@ -431,6 +438,7 @@ impl Kernel<'_> {
                 && p.initialisation == Protocol::default().initialisation
                 && !p.overlapping
                 && p.horizons_s == self.setup.horizons_s
+                && p.latitude_deg == self.setup.latitude_deg
         });
         let mut row = m * self.lengths.len();
         for (d, &n) in self.lengths.iter().enumerate() {
@@ -441,7 +449,7 @@ impl Kernel<'_> {
                     let e = &protocol_errors[d][h];
                     (&e.heading_rad, &e.pos_horizontal_m)
                 } else {
-                    own = segment_drift(&chans, self.setup.dt_s, horizon);
+                    own = segment_drift(&chans, self.setup.dt_s, horizon, self.setup.latitude_deg);
                     (&own.heading_rad, &own.horizontal_m)
                 };
                 for j in 0..self.segments[d][h] {
@@ -708,6 +716,7 @@ mod tests {
             horizons_s: vec![5.0],
             temperature_c: None,
             temp_coeff: ImuChannels::default(),
+            latitude_deg: Protocol::default().latitude_deg,
         };
         (model, setup)
     }

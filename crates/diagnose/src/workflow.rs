@@ -242,6 +242,7 @@ impl<'a> Run<'a> {
                 None
             },
             temp_coeff: ImuChannels::default(),
+            latitude_deg: s.settings.latitude_deg,
         };
         let sim0 = Self::band(model, &setup, &plan, s.settings, s.observer)?;
         let logs = s.logs;
@@ -875,7 +876,12 @@ impl<'a> Run<'a> {
             ..Default::default()
         };
         for l in &self.logs {
-            all.extend(&segment_drift(&l.channels.0, l.dt_s, horizon_s));
+            all.extend(&segment_drift(
+                &l.channels.0,
+                l.dt_s,
+                horizon_s,
+                self.settings.latitude_deg,
+            ));
         }
         all
     }

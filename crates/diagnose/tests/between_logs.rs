@@ -35,6 +35,7 @@ fn protocol() -> Protocol {
         initialisation: Initialisation::Perfect,
         horizons_s: vec![60.0, 300.0],
         overlapping: false,
+        latitude_deg: diagnose::protocol::Protocol::default().latitude_deg,
     }
 }
 

@@ -26,6 +26,7 @@ fn run(threads: usize) -> SimResult {
         horizons_s: vec![10.0],
         temperature_c: None,
         temp_coeff: noise::ImuChannels::default(),
+        latitude_deg: diagnose::protocol::Protocol::default().latitude_deg,
     };
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)

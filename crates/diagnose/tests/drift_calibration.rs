@@ -72,6 +72,7 @@ fn generated_logs_fall_inside_the_band_about_95_percent_of_the_time() {
         initialisation: Initialisation::Perfect,
         horizons_s: vec![10.0, 60.0],
         overlapping: false,
+        latitude_deg: diagnose::protocol::Protocol::default().latitude_deg,
     };
     assert_coverage(&coverage(40, 30_000, 0.02, &protocol, 100), 0.88..=0.99);
 }
@@ -104,6 +105,7 @@ fn calibration_figure() {
         initialisation: Initialisation::Levelled { window_s: 30.0 },
         horizons_s: vec![10.0, 60.0, 600.0],
         overlapping: false,
+        latitude_deg: diagnose::protocol::Protocol::default().latitude_deg,
     };
     assert_coverage(
         &coverage(200, 180_000, 0.02, &protocol, 100),

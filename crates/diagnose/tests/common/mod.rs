@@ -62,6 +62,7 @@ impl GeneratedLog {
             horizons_s: vec![60.0],
             temperature_c: None,
             temp_coeff: noise::ImuChannels::default(),
+            latitude_deg: diagnose::protocol::Protocol::default().latitude_deg,
         };
         let channels = static_log(model, &setup, seed, 0).0;
         let temperature_c = record_temperature.then(|| {
