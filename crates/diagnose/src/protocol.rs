@@ -485,8 +485,11 @@ fn segment_errors_with(
         let ends: Vec<NavState> = match group.len() {
             1 => integrate_segments::<1>(channels, dt_s, len, group, &earth, &ideal).to_vec(),
             2 => integrate_segments::<2>(channels, dt_s, len, group, &earth, &ideal).to_vec(),
-            3 | 4 => integrate_segments::<4>(channels, dt_s, len, group, &earth, &ideal)[..group.len()].to_vec(),
-            _ => integrate_segments::<SEGMENT_LANES>(channels, dt_s, len, group, &earth, &ideal)[..group.len()]
+            3 | 4 => integrate_segments::<4>(channels, dt_s, len, group, &earth, &ideal)
+                [..group.len()]
+                .to_vec(),
+            _ => integrate_segments::<SEGMENT_LANES>(channels, dt_s, len, group, &earth, &ideal)
+                [..group.len()]
                 .to_vec(),
         };
         for end in &ends {
@@ -708,8 +711,10 @@ mod tests {
                 let starts = (p.lead(0.01)..=n - len).step_by(stride);
                 let mut count = 0;
                 for (i, start) in starts.enumerate() {
-                    let seg = Segment::new(start, 0.01, p, &means);
-                    let end = integrate_segments::<1>(&refs, 0.01, len, &[seg])[0];
+                    let seg = Segment::new(start, 0.01, p, &means, &p.ideal());
+                    let end =
+                        integrate_segments::<1>(&refs, 0.01, len, &[seg], &p.earth(), &p.ideal())
+                            [0];
                     let e = nav_error(&end, &NavState::default());
                     assert_eq!(got.heading_rad[i].to_bits(), e.yaw_rad.to_bits());
                     assert_eq!(got.roll_rad[i].to_bits(), e.roll_rad.to_bits());
@@ -742,6 +747,7 @@ mod tests {
                 initialisation: Initialisation::Levelled { window_s: 3.0 },
                 horizons_s: vec![],
                 overlapping,
+                latitude_deg: None,
             };
             for h in [1.0, 9.99, 33.0, 100.0, 200.0] {
                 let cut = segment_errors(&chans, 0.01, h, &p).len();
@@ -751,6 +757,12 @@ mod tests {
     }
     #[test]
     fn window_calibration_removes_a_constant_bias() {
+        // The calibration's algebra on Woodman's flat Earth (a levelled, tilted start reads no
+        // Earth rate there; the round Earth's readings are tested through the commands).
+        let flat = || Protocol {
+            latitude_deg: None,
+            ..Protocol::default()
+        };
         let n = 20_000;
         let dt = 0.01;
         let ax = vec![0.05; n];
@@ -758,7 +770,7 @@ mod tests {
         let refs: [Option<&[f64]>; 6] = [None, None, None, Some(&ax), None, Some(&az)];
         let raw = Protocol {
             calibration: Calibration::None,
-            ..Protocol::default()
+            ..flat()
         };
         let e = segment_errors(&refs, dt, 10.0, &raw);
         // Woodman eq (10): s = eps t^2 / 2 for the uncalibrated bias.
@@ -767,7 +779,7 @@ mod tests {
         let windowed = Protocol {
             calibration: Calibration::Window { window_s: 5.0 },
             initialisation: Initialisation::Levelled { window_s: 5.0 },
-            ..Protocol::default()
+            ..flat()
         };
         let e = segment_errors(&refs, dt, 10.0, &windowed);
         assert_eq!(e.len(), (n - 500) / 1000);
@@ -777,7 +789,7 @@ mod tests {
         let levelled = Protocol {
             calibration: Calibration::None,
             initialisation: Initialisation::Levelled { window_s: 5.0 },
-            ..Protocol::default()
+            ..flat()
         };
         let e = segment_errors(&refs, dt, 10.0, &levelled);
         assert!(e.pos_horizontal_m.iter().all(|p| p.abs() < 1e-6), "{e:?}");
