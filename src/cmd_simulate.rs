@@ -489,7 +489,23 @@ fn svg(r: &DriftReport, q: NavQuantity) -> String {
                 col(&|c| c.law_rms.unwrap_or(nan)),
                 PALETTE[4],
             ),
-        ],
+        ]
+        .into_iter()
+        .chain(
+            // On the round Earth: Woodman's flat-Earth law for the same terms, for comparison.
+            r.checkpoints
+                .iter()
+                .any(|c| c.quantities[q.name()].flat_law_rms.is_some())
+                .then(|| {
+                    Series::dashed(
+                        "flat-Earth law rms",
+                        t.clone(),
+                        col(&|c| c.flat_law_rms.unwrap_or(nan)),
+                        PALETTE[3],
+                    )
+                }),
+        )
+        .collect(),
         bands: vec![Band {
             name: "p5-p95".into(),
             x: t.clone(),
