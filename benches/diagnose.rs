@@ -30,6 +30,7 @@ fn setup(grid_m: Vec<usize>) -> SimSetup<'static> {
         horizons_s: vec![60.0],
         temperature_c: None,
         temp_coeff: noise::ImuChannels::default(),
+        latitude_deg: diagnose::protocol::Protocol::default().latitude_deg,
     }
 }
 
