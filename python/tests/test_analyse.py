@@ -97,6 +97,20 @@ def test_drift_to_dict_equals_the_cli_json(adis_logs):
     assert set(df["verdict"]) <= {"inside", "above", "below", "not_informed"}
 
 
+def test_drift_latitude_is_the_clis(adis_logs):
+    """``latitude`` is the CLI's ``--latitude`` (``None``: ``--flat-earth``); out of range: a
+    ValueError naming it."""
+    for lat, flags in [(30.0, ["--latitude", "30"]), (None, ["--flat-earth"])]:
+        c = cli("drift", *adis_logs, "--model", ADIS, "--rate", "100", "--horizons", "60",
+                "--replicates", "10", *flags)
+        r = imudrift.drift(adis_logs, imudrift.Sensor(ADIS), rate=100, horizons=[60],
+                           replicates=10, latitude=lat)
+        assert_same(r.to_dict(), c)
+    with pytest.raises(ValueError, match="latitude"):
+        imudrift.drift(adis_logs, imudrift.Sensor(ADIS), rate=100, horizons=[60],
+                       replicates=10, latitude=95.0)
+
+
 def synthetic_log(tmp_path):
     """A 10-minute static MTx log at 100 Hz as a DataFrame and as a CSV file of the same values."""
     df = imudrift.generate(imudrift.Sensor(MTX), duration_s=600, rate_hz=100, seed=3)
