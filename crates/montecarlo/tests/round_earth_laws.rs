@@ -278,3 +278,23 @@ fn a_tilt_oscillates_at_the_schuler_period() {
         assert!((p / period - 1.0).abs() < 5e-3, "{p} s against {period} s");
     }
 }
+
+/// The unaided vertical channel (`vertical = "free"`): its divergence (time constant
+/// sqrt(R / 2g), about 570 s) is in the laws and the Monte Carlo follows it, 30 min.
+#[test]
+fn the_free_vertical_channel_diverges_as_its_law() {
+    use NavQuantity::*;
+    let r = simulate(
+        &model("[accel.all]\nwhite_noise = \"50 ug/sqrt(Hz)\"\nturn_on_bias = \"20 ug\"\n"),
+        "duration_s = 1800.0\nrate_hz = 10.0\n[earth]\nvertical = \"free\"\n[checkpoints]\nlog_count = 8\nfirst_s = 60.0\n",
+        300,
+    );
+    check("free vertical", &r, &[PosDown, VelDown, PosHorizontal]);
+    // The turn-on bias alone gives (b / w^2)(cosh(w t) - 1), w = sqrt(2 g / R): at 30 min 2.2
+    // times the flat Earth's b t^2 / 2; with the white noise the law is above that.
+    let last = &r.checkpoints.last().unwrap().quantities;
+    let flat = 20e-6 * 9.80665 * 1800.0f64.powi(2) / 2.0;
+    let law = last["pos_down_m"].law_rms.unwrap();
+    eprintln!("pos_down at 30 min: law rms {law:.1} m, flat b t^2/2 {flat:.1} m");
+    assert!(law > 2.0 * flat, "{law} against {flat}");
+}
