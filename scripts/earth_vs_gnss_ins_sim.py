@@ -5,11 +5,13 @@ rotation: `ref_frame=0`).
 
 Both integrate an ideal static, level, north-facing IMU at 45 deg N, 10 Hz, once without errors
 and once with a constant x-gyro bias of 0.1 deg/h; the difference of the two solutions is the
-bias's position error, so each mechanisation's own integration error cancels. gnss-ins-sim leaves
-the vertical channel free, so imudrift is run with its vertical channel free too
-(`strapdown::Vertical::Free`; the library's `earth_gyro_bias` example), and also held, for the
-closed form R eps (t - sin(w_s t) / w_s). Pass: imudrift's horizontal error within 2 % of
-gnss-ins-sim's at 10 min, 30 min and 1 h.
+bias's position error, so each mechanisation's own integration error cancels. imudrift runs the
+same experiment as a user would: `imudrift simulate` of a scenario with `[earth] model = "wgs84"`,
+`latitude_deg = 45`, a sensor whose only error is `[gyro.x] constant_bias = "0.1 deg/h"` (its
+static mechanisation is exact to rounding, so the error is the bias's). gnss-ins-sim leaves the
+vertical channel free, so the scenario says `vertical = "free"` too; it is also run with the height
+held (the default), for the closed form R eps (t - sin(w_s t) / w_s). Pass: imudrift's horizontal
+error within 2 % of gnss-ins-sim's at 10 min, 30 min and 1 h.
 
 gnss-ins-sim is not vendored: pass a checkout (`git clone https://github.com/Aceinna/gnss-ins-sim`;
 the figures in docs/strapdown.md used commit 966ff27). Needs numpy (and what gnss-ins-sim imports).
@@ -98,13 +100,24 @@ def main():
         n, e = metres(biased[k, 0] - ideal[k, 0], biased[k, 1] - ideal[k, 1], lat0)
         ref[t] = math.hypot(n, e)
     ours = {}
-    for vertical in ('free', 'held'):
-        out = subprocess.run(
-            ['cargo', 'run', '--release', '-q', '-p', 'imudrift-strapdown', '--example',
-             'earth_gyro_bias', '--', str(LAT_DEG), str(RATE_HZ), str(BIAS_DEG_H),
-             ','.join('%g' % t for t in times), vertical],
-            cwd=root, check=True, capture_output=True, text=True).stdout
-        ours[vertical] = {round(r['t_s']): r['horizontal_m'] for r in json.loads(out)}
+    subprocess.run(['cargo', 'build', '--release', '-q'], cwd=root, check=True)
+    binary = os.path.join(root, 'target', 'release', 'imudrift')
+    with tempfile.TemporaryDirectory() as tmp:
+        sensor = os.path.join(tmp, 'biased.toml')
+        with open(sensor, 'w') as f:
+            f.write('name = "x gyro bias"\n[gyro.x]\nconstant_bias = "%g deg/h"\n' % BIAS_DEG_H)
+        for vertical in ('free', 'held'):
+            scenario = os.path.join(tmp, 'earth-%s.toml' % vertical)
+            with open(scenario, 'w') as f:
+                f.write('sensor = "biased.toml"\nduration_s = %g\nrate_hz = %g\nruns = 1\n'
+                        '[earth]\nmodel = "wgs84"\nlatitude_deg = %g\nvertical = "%s"\n'
+                        '[checkpoints]\ntimes_s = [%s]\n'
+                        % (duration, RATE_HZ, LAT_DEG, vertical, ', '.join('%g' % t for t in times)))
+            out = subprocess.run([binary, 'simulate', scenario, '--json'], check=True,
+                                 capture_output=True, text=True).stdout
+            doc = json.loads(out)
+            ours[vertical] = {round(c['t_s']): c['channels']['pos_horizontal_m']['mean']
+                              for c in doc['checkpoints']}
     g = 9.8062  # normal gravity at 45 deg N, for the closed forms' printout only
     r = math.sqrt(A * (1 - E2) / (1 - E2 * 0.5) ** 1.5 * A / math.sqrt(1 - E2 * 0.5))
     ws = math.sqrt(g / r)
