@@ -2,13 +2,15 @@
 """The ADIS16405 drift check on the round Earth at several latitudes and on the flat Earth.
 
 The logs' latitude is unknown; this shows which verdicts depend on it. Runs `imudrift drift` on
-ADIS16405 runs 1-6 pooled against a model (default: the datasheet model) under the default
+ADIS16405 runs (default 1-6 pooled; `--runs 4,5,6`) against a model (default: the datasheet
+model; e.g. one `imudrift diagnose` fitted on other runs) under the default
 protocol and the window/levelled one, horizons 60 s, 10 min, 1 h, 40 simulated experiments,
 seed 1, for --flat-earth and --latitude 0, 30, 45, 60, and prints a markdown table of the cells
 (heading / roll / pitch / horizontal position: `in` or the verdict and measured/model rms) and the
 joint test.
 
     IMUDRIFT_DATA=<folder of the real logs> python3 scripts/drift_latitudes.py [--model M.toml]
+        [--runs 4,5,6] [--earths flat,0,30,45,60]
 """
 import argparse, json, os, pathlib, subprocess, sys
 
@@ -19,15 +21,17 @@ if not data:
 ap = argparse.ArgumentParser()
 ap.add_argument("--model", default=str(root / "configs/sensors/adis16405.toml"))
 ap.add_argument("--bin", default=str(root / "target/release/imudrift"))
+ap.add_argument("--runs", default="1,2,3,4,5,6", help="which ADIS16405 runs, e.g. 4,5,6")
+ap.add_argument("--earths", default="flat,0,30,45,60", help="flat and latitudes in deg")
 a = ap.parse_args()
-logs = [f"{data}/adis16405_imudata/adis16405_imu{i}.csv.gz" for i in range(1, 7)]
+logs = [f"{data}/adis16405_imudata/adis16405_imu{i}.csv.gz" for i in a.runs.split(",")]
 flags = ["--model", a.model, "--rate", "100", "--gyro-unit", "deg/s", "--accel-unit", "g",
          "--col", "gx=gyro_x_dps,gy=gyro_y_dps,gz=gyro_z_dps,ax=acc_x_g,ay=acc_y_g,az=acc_z_g",
          "--horizons", "60s,10min,1h", "--replicates", "40", "--seed", "1", "--json"]
 protocols = {"log mean, perfect start": [],
              "window 60 s, levelled 60 s": ["--calibration", "window:60s", "--init", "level:60s"]}
-earths = {"flat": ["--flat-earth"], "0 deg": ["--latitude", "0"], "30 deg": ["--latitude", "30"],
-          "45 deg": ["--latitude", "45"], "60 deg": ["--latitude", "60"]}
+earths = {("flat" if e == "flat" else f"{e} deg"):
+          (["--flat-earth"] if e == "flat" else ["--latitude", e]) for e in a.earths.split(",")}
 quantities = ["heading_rad", "roll_rad", "pitch_rad", "pos_horizontal_m"]
 print("| protocol | Earth | 60 s | 10 min | 1 h | joint test |")
 print("|---|---|---|---|---|---|")

@@ -180,7 +180,7 @@ def build_commands(ctx):
         return [b, "allan", adis[0], "--rate", "100", "--json"]
 
     def simulate(b, out):  # the scenario's 500 runs and its ablation table, as shipped
-        return [b, "simulate", SCENARIO, "--json"] + (["--runs", "48"] if q else [])
+        return [b, "simulate", ctx.scenario_for(b), "--json"] + (["--runs", "48"] if q else [])
 
     def generate(b, out):
         return [b, "generate", MTX, "--duration", "10min" if q else "1h", "--rate", "100",
@@ -248,10 +248,37 @@ class Context:
         self.adis_logs = []
         self.shards = {}
         self.notes = []
+        self.scenarios = {}
+
+    def scenario_for(self, binary):
+        """The shipped scenario, or for a binary older than the `[earth]` table (which refuses
+        it) the same file without its `[earth] model = "flat"` table: the same experiment on
+        that binary's only Earth, the flat one."""
+        if binary not in self.scenarios:
+            probe = subprocess.run([binary, "simulate", SCENARIO, "--runs", "1", "--json",
+                                    "--no-ablation"], capture_output=True, text=True)
+            if probe.returncode == 0 or "unknown field `earth`" not in probe.stderr:
+                self.scenarios[binary] = SCENARIO
+            else:
+                text = Path(SCENARIO).read_text()
+                flat = "[earth]\nmodel = \"flat\"\n"
+                if flat not in text:
+                    raise TimingError(f"{binary} refuses {SCENARIO}'s [earth] table")
+                copy = self.tmp / "mtx-static-60s-before-earth.toml"
+                copy.write_text(text.replace(flat, "").replace(
+                    'sensor = "../sensors/mtx.toml"',
+                    f'sensor = "{Path(MTX).resolve()}"'))
+                self.scenarios[binary] = str(copy)
+                self.notes.append(f"simulate and merge: {SCENARIO} has `[earth] model = \"flat\"`, "
+                                  "which the old binary does not know: it runs the same file "
+                                  "without that table ($TMP/mtx-static-60s-before-earth.toml), "
+                                  "the same experiment on its only Earth, the flat one.")
+        return self.scenarios[binary]
 
     def shard_argv(self, binary, i, out):
         """`simulate --shard i/4` of the scenario (48 runs with --quick)."""
-        return [binary, "simulate", SCENARIO, "--shard", f"{i}/{SHARDS}", "--out", str(out)] \
+        return [binary, "simulate", self.scenario_for(binary), "--shard", f"{i}/{SHARDS}",
+                "--out", str(out)] \
             + (["--runs", "48"] if self.quick else [])
 
     def placeholders(self):
