@@ -178,6 +178,8 @@ fn log_channels(log: &logio::Log) -> Result<LogInput<'_>> {
 fn run_inner(args: &Args) -> Result<()> {
     let model = crate::files::sensor_model(&args.model)?;
     crate::model_notes::print(&model, args.horizons.iter().copied().reduce(f64::max));
+    args.earth
+        .note(args.horizons.iter().copied().fold(0.0, f64::max));
     let logs = args.log_args.read_all(&args.logs)?;
     for log in &logs {
         eprintln!("{}: {}", log.source, log_input::mapping_text(log));

@@ -194,6 +194,8 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
     let model_file = files::read_config(&args.model)?;
     let model = files::sensor_model_of(&model_file)?;
     crate::model_notes::print(&model, args.horizons.iter().copied().reduce(f64::max));
+    args.earth
+        .note(args.horizons.iter().copied().fold(0.0, f64::max));
     let fitted = fitted_on(args, &model_file)?;
     let alternatives = alternatives(args, &model_file)?;
     let logs = args.log_args.read_all(&args.logs)?;

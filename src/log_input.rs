@@ -36,11 +36,10 @@ pub struct LogArgs {
 /// flat Earth with `--flat-earth`.
 #[derive(clap::Args, Clone, Debug)]
 pub struct EarthArgs {
-    /// Latitude the logs were recorded at, deg (north positive; -89..89): the segments are
-    /// dead-reckoned on the rotating WGS-84 Earth there, Earth rate kept as signal
-    #[arg(long, value_name = "DEG", default_value_t = diagnose::protocol::DEFAULT_LATITUDE_DEG,
-          allow_hyphen_values = true, value_parser = latitude_deg)]
-    pub latitude: f64,
+    /// Latitude the logs were recorded at, deg (north positive; -89..89; default 45): the
+    /// segments are dead-reckoned on the rotating WGS-84 Earth there, Earth rate kept as signal
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true, value_parser = latitude_deg)]
+    pub latitude: Option<f64>,
     /// Dead-reckon on Woodman's flat, non-rotating Earth instead (no Earth rate, constant g)
     #[arg(long, conflicts_with = "latitude")]
     pub flat_earth: bool,
@@ -49,7 +48,25 @@ pub struct EarthArgs {
 impl EarthArgs {
     /// The protocol's `latitude_deg`: None on the flat Earth.
     pub fn latitude_deg(&self) -> Option<f64> {
-        (!self.flat_earth).then_some(self.latitude)
+        (!self.flat_earth).then_some(
+            self.latitude
+                .unwrap_or(diagnose::protocol::DEFAULT_LATITUDE_DEG),
+        )
+    }
+
+    /// A note when the latitude was left at its default and a horizon reaches beyond a few
+    /// minutes: a sensor whose attitude errors grow to degrees mixes Earth rate into its heading
+    /// there, so such verdicts can depend on where the logs were recorded (docs/drift.md, "The
+    /// logs' latitude").
+    pub fn note(&self, longest_horizon_s: f64) {
+        if self.latitude.is_none() && !self.flat_earth && longest_horizon_s > 300.0 {
+            eprintln!(
+                "note: the logs' latitude was not given: they are dead-reckoned on the rotating Earth at {} deg N; \
+                 over horizons beyond a few minutes large attitude errors couple Earth rate into the heading, \
+                 so give --latitude where the verdicts there matter (docs/drift.md, \"The logs' latitude\")",
+                diagnose::protocol::DEFAULT_LATITUDE_DEG
+            );
+        }
     }
 }
 
