@@ -5,10 +5,10 @@
 //! flat Earth's closed forms (`laws`), which it replaces whenever a scenario runs on `wgs84`.
 
 use crate::laws::{
-    channel_laws, horizontal_rayleigh_mean, Entry, Law, LawContext, Term, SMALL_ANGLE_LIMIT_RAD,
+    channel_laws, horizontal_magnitude, Entry, Law, LawContext, Term, SMALL_ANGLE_LIMIT_RAD,
 };
 use crate::nav_quantity::NavQuantity;
-use nalgebra::{Matrix2, Matrix3, Vector3};
+use nalgebra::{Matrix3, Vector3};
 use noise::LawSource;
 use strapdown::error_model::{moments, window_reference, ErrorMoments, Sensor, Source};
 use strapdown::{Attitude, EarthModel, RoundEarth, Vertical};
@@ -379,35 +379,16 @@ fn channel_laws_of(
     laws
 }
 
-/// Law of the horizontal magnitude of states `first` (north) and `first + 1` (east): its rms
-/// always (rms^2 = E n^2 + E e^2); its mean for deterministic components (|mean|) and for
-/// zero-mean Gaussian ones, correlated on the rotating Earth, through the principal axes of
-/// their covariance (the Rayleigh-type mean of [`horizontal_rayleigh_mean`]); else unknown
-/// (mean NaN, as the flat laws mark it).
+/// Law of the horizontal magnitude of states `first` (north) and `first + 1` (east), correlated
+/// on the rotating Earth (`laws::horizontal_magnitude`).
 fn horizontal(m: &ErrorMoments, first: usize, not_gaussian: bool) -> Law {
-    let (mn, me) = (m.mean[first], m.mean[first + 1]);
-    let cov = Matrix2::new(
-        m.cov[(first, first)],
+    horizontal_magnitude(
+        [m.mean[first], m.mean[first + 1]],
+        [
+            m.cov[(first, first)].max(0.0).sqrt(),
+            m.cov[(first + 1, first + 1)].max(0.0).sqrt(),
+        ],
         m.cov[(first, first + 1)],
-        m.cov[(first + 1, first)],
-        m.cov[(first + 1, first + 1)],
-    );
-    let rms2 = mn * mn + me * me + cov[(0, 0)] + cov[(1, 1)];
-    let mean = if cov[(0, 0)] == 0.0 && cov[(1, 1)] == 0.0 {
-        mn.hypot(me)
-    } else if mn == 0.0 && me == 0.0 && !not_gaussian {
-        let eig = cov.symmetric_eigenvalues();
-        horizontal_rayleigh_mean(eig[0].max(0.0).sqrt(), eig[1].max(0.0).sqrt())
-    } else {
-        return Law::Value {
-            mean: f64::NAN,
-            std: rms2.sqrt(),
-            allowance: 0.0,
-        };
-    };
-    Law::Value {
-        mean,
-        std: (rms2 - mean * mean).max(0.0).sqrt(),
-        allowance: 0.0,
-    }
+        !not_gaussian,
+    )
 }

@@ -422,11 +422,33 @@ fn horizontal_law(north: &Law, east: &Law, gaussian: bool) -> Law {
             .unwrap_or_default();
         return Law::NotApplicable(why);
     };
+    horizontal_magnitude([*mn, *me], [*sn, *se], 0.0, gaussian)
+}
+
+/// The law of the horizontal magnitude of Gaussian components of means `mean`, standard
+/// deviations `std` and covariance `cross` (0 on the flat Earth, where the channels are
+/// independent; the rotating Earth couples them): rms^2 = m_n^2 + s_n^2 + m_e^2 + s_e^2 always; the
+/// mean |mean| for deterministic components, the Rayleigh-type mean of the covariance's principal
+/// axes for zero-mean Gaussian ones ([`horizontal_rayleigh_mean`]; the axes are the channels when
+/// `cross` is 0), else unknown (NaN).
+pub(crate) fn horizontal_magnitude(
+    mean: [f64; 2],
+    std: [f64; 2],
+    cross: f64,
+    gaussian: bool,
+) -> Law {
+    let ([mn, me], [sn, se]) = (mean, std);
     let rms2 = mn * mn + sn * sn + me * me + se * se;
-    let mean = if *sn == 0.0 && *se == 0.0 {
-        mn.hypot(*me)
-    } else if *mn == 0.0 && *me == 0.0 && gaussian {
-        horizontal_rayleigh_mean(*sn, *se)
+    let mean = if sn == 0.0 && se == 0.0 {
+        mn.hypot(me)
+    } else if mn == 0.0 && me == 0.0 && gaussian {
+        if cross == 0.0 {
+            horizontal_rayleigh_mean(sn, se)
+        } else {
+            let eig =
+                nalgebra::Matrix2::new(sn * sn, cross, cross, se * se).symmetric_eigenvalues();
+            horizontal_rayleigh_mean(eig[0].max(0.0).sqrt(), eig[1].max(0.0).sqrt())
+        }
     } else {
         return Law::Value {
             mean: f64::NAN,
