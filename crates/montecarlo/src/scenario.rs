@@ -692,6 +692,17 @@ mod tests {
                 format!("{MIN}[terms]\nwithout = [\"gyro\", \"magneto\"]\n"),
                 "terms.without",
             ),
+            (format!("{MIN}[earth]\nmodel = \"sphere\"\n"), "earth.model"),
+            (format!("{MIN}[earth]\nlatitude_deg = 95.0\n"), "earth.latitude_deg"),
+            (format!("{MIN}[earth]\nlatitude_deg = nan\n"), "earth.latitude_deg"),
+            (format!("{MIN}[earth]\nlongitude_deg = -181.0\n"), "earth.longitude_deg"),
+            (format!("{MIN}[earth]\nheight_m = 1e6\n"), "earth.height_m"),
+            (format!("{MIN}[earth]\nvertical = \"baro\"\n"), "earth.vertical"),
+            (format!("{MIN}gravity_mps2 = 9.8\n"), "gravity_mps2"),
+            (
+                format!("{MIN}[earth]\nmodel = \"flat\"\nlatitude_deg = 10.0\n"),
+                "earth.latitude_deg",
+            ),
         ];
         let s = Scenario::from_toml_str(
             &format!("{MIN}[terms]\nbias_calibration_window_s = 10.0\n"),
