@@ -101,6 +101,8 @@ impl EarthModel {
 pub struct EarthTrajectory {
     motion: AnyTrajectory,
     earth: EarthModel,
+    /// The round Earth's start-place constants, computed once (not per sample).
+    origin: Option<Origin>,
 }
 
 /// 3-point Gauss-Legendre nodes on [0, 1] and weights (sum 1).
@@ -125,7 +127,12 @@ impl EarthTrajectory {
     /// `motion` on `earth`; its ideal accelerometer outputs must use the earth's gravity at the
     /// start place (`TrajectorySpec::build_with_gravity(earth.gravity_mps2())`).
     pub fn new(motion: AnyTrajectory, earth: EarthModel) -> EarthTrajectory {
-        EarthTrajectory { motion, earth }
+        let origin = earth.round().map(|e| Origin::new(*e));
+        EarthTrajectory {
+            motion,
+            earth,
+            origin,
+        }
     }
 
     pub fn motion(&self) -> &AnyTrajectory {
@@ -202,10 +209,9 @@ impl EarthTrajectory {
 impl Trajectory for EarthTrajectory {
     fn truth(&self, t_s: f64) -> NavState {
         let state = self.motion.truth(t_s);
-        match &self.earth {
-            EarthModel::Round(e) if !self.stays() => {
-                let origin = Origin::new(*e);
-                let geo = self.geodetic(&origin, t_s);
+        match &self.origin {
+            Some(origin) if !self.stays() => {
+                let geo = self.geodetic(origin, t_s);
                 NavState {
                     position: NavVector(origin.ned_of(geo[0], geo[1], geo[2]).into()),
                     ..state
@@ -225,11 +231,13 @@ impl Trajectory for EarthTrajectory {
             let (w, _) = e.static_imu(&s.attitude);
             return (BodyVector(g.0 + w.0), f);
         }
-        let origin = Origin::new(*e);
+        let Some(origin) = &self.origin else {
+            return (g, f);
+        };
         let h = t1_s - t0_s;
         let (mut dg, mut df) = (Vector3::zeros(), Vector3::zeros());
         for (x, wt) in GL3 {
-            let (a, b) = self.earth_terms(e, &origin, t0_s + x * h);
+            let (a, b) = self.earth_terms(e, origin, t0_s + x * h);
             dg += wt * a;
             df += wt * b;
         }

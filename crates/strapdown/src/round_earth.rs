@@ -77,7 +77,7 @@ impl RoundEarth {
 }
 
 /// The start place's constants the step needs (computed once).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Origin {
     pub earth: RoundEarth,
     pub sin0: f64,
