@@ -1,5 +1,5 @@
 //! `imudrift diagnose LOG.csv --model SENSOR.toml`: where the model and the measurement disagree,
-//! which effect is missing, the corrected model, and the gap before and after (docs/cli.md, "The
+//! which effect is missing, the corrected model, and the gap before and after (docs/diagnose.md, "The
 //! diagnose workflow").
 
 use crate::log_input::{self, LogArgs};

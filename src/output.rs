@@ -261,9 +261,10 @@ pub fn print_stdout(text: &str) -> Result<()> {
         .context("cannot write to standard output")
 }
 
-/// A command's answer, by the one convention of every command (docs/cli.md, "Output streams"):
-/// the human text on stdout, or with `--json` the JSON document on stdout and the text on stderr
-/// (so a person watching still reads it). Progress, notes and warnings go to stderr elsewhere.
+/// A command's answer, by the one convention of every command (docs/cli.md, "Conventions shared
+/// by every command"): the human text on stdout, or with `--json` the JSON document on stdout and
+/// the text on stderr (so a person watching still reads it). Progress, notes and warnings go to
+/// stderr elsewhere.
 pub fn answer(text: &str, json: Option<&str>) -> Result<()> {
     match json {
         Some(doc) => {

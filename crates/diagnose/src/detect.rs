@@ -1,5 +1,6 @@
-//! Time-domain detectors beside the Allan gap (docs/diagnose.md, "Real-sensor effects"): effects that
-//! are deterministic or not stationary, which an Allan curve hides or mistakes for noise.
+//! Time-domain detectors beside the Allan gap (docs/real-effects.md, "What diagnose does with
+//! them"): effects that are deterministic or not stationary, which an Allan curve hides or mistakes
+//! for noise.
 //!
 //! - Outliers: samples far from the median of their neighbours, in robust standard deviations.
 //! - Temperature: least-squares regression of the channel on the log's temperature column.

@@ -328,8 +328,8 @@ fn binomial_acceptance_matches_a_direct_sum() {
 }
 
 /// The same with `diagnose`'s whole workflow as the fit (its own choice of terms from `START`),
-/// asserted like the figure: what issue 23 asks of the whole chain (docs/drift.md, "Calibration,
-/// end to end"). Ignored in CI for its length (about 12 minutes on the shared 2-core machine; the
+/// asserted like the figure: what issue 23 asks of the whole chain (docs/drift.md, "Calibration
+/// of the method"). Ignored in CI for its length (about 12 minutes on the shared 2-core machine; the
 /// `Levels` version above runs instead). Run with `cargo test --release -p imudrift-diagnose --test
 /// band_calibration diagnosed -- --ignored --nocapture`.
 #[test]

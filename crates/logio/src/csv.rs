@@ -37,7 +37,7 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
     }
     let (header, header_line, pos) = find_header(bytes, pos, source)?;
     let names = header_names(&header, header_line, source, opts)?;
-    // Which channel and unit each column holds (docs/cli.md, "Log columns").
+    // Which channel and unit each column holds (docs/cli.md, "Log files").
     let (uses, skipped) = map_header(&names, &opts.columns, opts.units)
         .map_err(|p| LogError::new(source, p).at_line(header_line))?;
     // Skipped columns may hold anything (a frame_id, a status word); they are not read.
