@@ -1,6 +1,6 @@
 //! `imudrift diagnose LOG.csv --model SENSOR.toml`: where the model and the measurement disagree,
-//! which effect is missing, the corrected model, and the gap before and after (docs/diagnose.md, "The
-//! diagnose workflow").
+//! which effect is missing, the corrected model, and the gap before and after (docs/diagnose.md,
+//! "The diagnose workflow").
 
 use crate::log_input::{self, LogArgs};
 use crate::output::write_string;
