@@ -69,35 +69,37 @@ pub fn check_environment() -> Result<()> {
     Ok(())
 }
 
-/// A sample rate given on the command line, Hz, finite and > 0.
-pub fn check_rate_hz(flag: &str, rate_hz: f64) -> Result<f64> {
-    if !(rate_hz.is_finite() && rate_hz > 0.0) {
-        bail!("{flag}: expected a sample rate in Hz > 0, found {rate_hz}");
+/// The command line's name of a request's setting (its flag), for the request layer's messages.
+pub fn flag(s: request::Setting) -> &'static str {
+    use request::Setting;
+    match s {
+        Setting::Runs => "--runs",
+        Setting::Seed => "--seed",
+        Setting::Duration => "--duration",
+        Setting::Rate => "--rate",
+        Setting::Threads => "--threads",
+        Setting::Only => "--only",
+        Setting::Without => "--without",
+        Setting::Shard => "--shard i/k",
+        Setting::Merge => "`imudrift merge`",
+        Setting::Output => "-o",
     }
-    Ok(rate_hz)
 }
 
-/// Most worker threads a command starts: four per core, and at least 64.
-fn max_threads() -> usize {
-    std::thread::available_parallelism().map_or(1, |n| n.get()) * 4
+/// A request error told with the command line's flags.
+pub fn request_error(e: request::RequestError) -> anyhow::Error {
+    anyhow::anyhow!(e.render(&flag))
 }
 
-/// The one rayon pool of every command: `--threads N` workers (absent or 0: one per core).
-/// Results never depend on N; N beyond [`max_threads`] is refused rather than started.
+/// A sample rate given on the command line (`--rate`), Hz, finite and > 0.
+pub fn check_rate_hz(rate_hz: f64) -> Result<f64> {
+    request::simulate::check_rate(rate_hz).map_err(request_error)
+}
+
+/// The one rayon pool of every command: `--threads N` workers (absent or 0: one per core;
+/// `request::pool`).
 pub fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
-    let n = threads.unwrap_or(0);
-    let max = max_threads().max(64);
-    if n > max {
-        bail!(
-            "--threads {n}: expected at most {max} (this machine has {} cores; 0 or no --threads uses them all)",
-            std::thread::available_parallelism().map_or(1, |n| n.get())
-        );
-    }
-    use anyhow::Context as _;
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(n)
-        .build()
-        .context("cannot start the worker threads")
+    request::pool::pool(threads).map_err(request_error)
 }
 
 /// A term filter as the options that make it (for reports), e.g. `--without gyro.white_noise`:

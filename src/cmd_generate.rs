@@ -6,11 +6,13 @@
 //! are generated in parallel and the bytes do not depend on the thread count. The file appears only
 //! when complete (src/output.rs).
 
-use crate::cli::check_rate_hz;
+use crate::cli::request_error;
 use crate::output;
 use anyhow::{bail, Result};
-use noise::{Channel, ImuErrors, SensorModel, StaticLevel, TermFilter, CHANNEL_NAMES};
+use noise::{Channel, ImuErrors, StaticLevel, CHANNEL_NAMES};
 use rayon::prelude::*;
+use request::generate::{GeneratePlan, GenerateRequest};
+use request::SensorSource;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -52,44 +54,26 @@ pub struct Args {
     pub json: bool,
 }
 
-/// A validated generation request.
-struct Plan {
-    model: SensorModel,
-    filter: TermFilter,
-    rate_hz: f64,
-    samples: u64,
-}
-
-/// Highest sample rate a generated log may have, Hz.
-const MAX_RATE_HZ: f64 = 1e6;
 /// Upper estimate of one CSV row (t, six channels, temp; shortest round-trip numbers of up to
 /// 24 characters each), bytes.
 const BYTES_PER_ROW: f64 = 8.0 * 25.0;
 
-fn plan(args: &Args) -> Result<Plan> {
-    let model = crate::files::sensor_model(&args.sensor)?;
-    let filter = noise::TermFilter::new(args.only.as_deref(), &args.without);
-    check_rate_hz("--rate", args.rate)?;
-    let duration_s = args.duration;
-    let samples = (duration_s * args.rate).round();
-    if !(1.0..=1e12).contains(&samples) {
-        bail!(
-            "--duration {} s at --rate {} gives {samples} samples; expected 1 to 1e12",
-            args.duration,
-            args.rate
-        );
-    }
-    if args.rate > MAX_RATE_HZ {
-        bail!("--rate {}: expected at most {MAX_RATE_HZ:e} Hz", args.rate);
-    }
-    crate::experiment_run::check_work(
-        &model,
-        1.0,
-        samples,
-        &format!("-o {}", args.output.display()),
-        "generate a shorter log or at a lower --rate",
-    )?;
-    // The log must fit where it goes: refuse before writing rather than fill the disk.
+/// The request of the command line, checked (`request::generate`), and the checks only a file
+/// output has: the log must fit where it goes.
+fn plan(args: &Args) -> Result<GeneratePlan> {
+    let req = GenerateRequest {
+        sensor: SensorSource::Path(args.sensor.clone()),
+        duration_s: args.duration,
+        rate_hz: args.rate,
+        seed: args.seed,
+        run: args.run,
+        only: args.only.clone(),
+        without: args.without.clone(),
+        output: Some(args.output.display().to_string()),
+    };
+    let plan = req.validate().map_err(request_error)?;
+    let samples = plan.samples as f64;
+    // Refuse before writing rather than fill the disk.
     if std::fs::metadata(&args.output).map_or(true, |m| m.is_file()) {
         let dir = match args.output.parent() {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
@@ -109,32 +93,14 @@ fn plan(args: &Args) -> Result<Plan> {
         }
     }
     // An --only list that keeps none of the model's terms leaves an ideal IMU: allowed, but say so.
-    if let Some(only) = filter.only_terms() {
-        if !only
-            .iter()
-            .any(|&(sensor, effect)| model.has(sensor, effect))
-        {
-            eprintln!(
-                "note: {} has none of the --only terms; the log is an ideal IMU",
-                args.sensor.display()
-            );
-        }
-    }
-    // An output filter must fit the rate (a low-pass cutoff below the internal Nyquist frequency).
-    let model = model.filtered(&filter);
-    crate::model_notes::print(&model, None);
-    ImuErrors::check_rate(&model, 1.0 / args.rate).map_err(|e| {
-        anyhow::anyhow!(
-            "{}: {e}; lower the cutoff or raise --rate",
+    if plan.only_keeps_nothing {
+        eprintln!(
+            "note: {} has none of the --only terms; the log is an ideal IMU",
             args.sensor.display()
-        )
-    })?;
-    Ok(Plan {
-        model,
-        filter,
-        rate_hz: args.rate,
-        samples: samples as u64,
-    })
+        );
+    }
+    crate::model_notes::print(&plan.model, None);
+    Ok(plan)
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -180,7 +146,7 @@ pub fn run(args: Args) -> Result<()> {
 
 fn write_log(
     w: &mut dyn Write,
-    plan: &Plan,
+    plan: &GeneratePlan,
     args: &Args,
     pool: &rayon::ThreadPool,
     progress: &crate::progress::Progress,

@@ -42,7 +42,7 @@ fn parse_fraction(text: &str) -> Result<f64> {
 pub fn run(args: Args) -> Result<()> {
     let model = crate::files::sensor_model(&args.sensor)?;
     let target = parse_fraction(&args.uncertainty)?;
-    let rate_hz = check_rate_hz("--rate", args.rate)?;
+    let rate_hz = check_rate_hz(args.rate)?;
     if !(MIN_RATE_HZ..=MAX_RATE_HZ).contains(&rate_hz) {
         bail!("--rate: expected {MIN_RATE_HZ} to {MAX_RATE_HZ} Hz, found {rate_hz}");
     }

@@ -1,20 +1,18 @@
 //! `imudrift simulate SCENARIO.toml`: Monte Carlo drift run; every navigation-error quantity beside
 //! its growth law.
 
-use crate::cli::pool;
-use crate::experiment_run::{
-    ablation_experiments, check_memory, execute, experiment_from, read_inputs, scenario_edits,
-};
+use crate::cli::{pool, request_error};
+use crate::experiment_run::execute;
 use crate::fmt;
 use crate::output::{ensure_dir, write_atomic, write_string};
 use crate::plot::{Band, LogLogPlot, Series, PALETTE};
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use montecarlo::ablation::{self, AblationRow};
-use montecarlo::experiment::{Experiment, Overrides};
+use montecarlo::experiment::Experiment;
 use montecarlo::job::{self, reference_out, FlagCount, ReferenceOut};
 use montecarlo::nav_quantity::NavQuantity;
 use montecarlo::report::DriftReport;
-use montecarlo::runner::Shard;
+use request::simulate::{SimulateJob, SimulateRequest, Subject};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -72,68 +70,64 @@ pub fn run(args: Args) -> Result<()> {
         (Some(dir), Some(_)) => Some(crate::output::prepare_shared_dir(dir)?),
         (None, _) => None,
     };
-    let edits = scenario_edits(args.duration, args.rate)?;
-    let (inputs, _) = read_inputs(&args.scenario, &edits)?;
-    let overrides = Overrides {
+    let job = SimulateRequest {
+        subject: Subject::Path(args.scenario.clone()),
         runs: args.runs,
         seed: args.seed,
+        duration_s: args.duration,
+        rate_hz: args.rate,
         only: args.only.clone(),
         without: args.without.clone(),
-    };
-    let exp = experiment_from(&inputs, &overrides)?;
+        ablation: match (args.ablation, args.no_ablation) {
+            (true, _) => Some(true),
+            (_, true) => Some(false),
+            _ => None,
+        },
+    }
+    .validate()
+    .map_err(request_error)?;
+    if let Some(p) = &job.sensor_path {
+        crate::output::note_inputs([p]);
+    }
     let pool = pool(args.threads)?;
-    let with_ablation = args.ablation || (exp.scenario.ablation && !args.no_ablation);
-    let subs = if with_ablation {
-        ablation_experiments(&inputs, &overrides)?
-    } else {
-        Vec::new()
-    };
-    let subs = with_ablation.then_some(subs.as_slice());
     let run = |e: &Experiment, runs: std::ops::Range<u64>, label: &str| {
         Some(pool.install(|| execute(e, runs, label)))
     };
     if let Some(text) = &args.shard {
-        return run_shard(&args, text, inputs, &overrides, &exp, subs, &run);
+        return run_shard(&args, text, &job, &run);
     }
-    let n_subs = subs.map_or(0, <[_]>::len) as u64;
-    check_memory(&exp, exp.runs)?;
-    crate::experiment_run::check_experiment_work(&exp, exp.runs * (1 + 2 * n_subs))?;
-    let Some(sim) = job::simulate(&exp, subs, &run) else {
+    job.check_size(job.exp.runs).map_err(request_error)?;
+    let Some(sim) = job::simulate(&job.exp, job.subs(), &run) else {
         bail!("interrupted");
     };
     emit(
         &sim.report,
-        &exp,
+        &job.exp,
         sim.ablation.as_deref(),
         args.json,
         args.out.as_deref(),
     )
 }
 
-/// `--shard i/k`: run the slice of the runs (and of every ablation sub-experiment, `subs`) and
-/// write the shard file `merge` reads.
-fn run_shard(
-    args: &Args,
-    text: &str,
-    inputs: crate::experiment_run::Inputs,
-    overrides: &Overrides,
-    exp: &Experiment,
-    subs: Option<&[ablation::TermExperiments]>,
-    run: &job::RunRange<'_>,
-) -> Result<()> {
-    let shard = Shard::parse(text).context("--shard")?;
+/// `--shard i/k`: run the slice of the runs (and of every ablation sub-experiment) and write the
+/// shard file `merge` reads.
+fn run_shard(args: &Args, text: &str, job: &SimulateJob, run: &job::RunRange<'_>) -> Result<()> {
+    let shard = request::simulate::parse_shard(text).map_err(request_error)?;
     let Some(dir) = &args.out else {
         bail!("--shard: expected --out DIR for the shard file");
     };
-    let range = shard.runs(exp.runs);
-    let shard_runs = (range.end - range.start) * (1 + 2 * subs.map_or(0, <[_]>::len) as u64);
-    check_memory(exp, shard_runs)?;
-    crate::experiment_run::check_experiment_work(exp, shard_runs)?;
+    let exp = &job.exp;
+    job.shard_runs(shard).map_err(request_error)?;
     // The file without its values yet: its experiment is checked against the directory's other
     // shards before any work.
-    let mut file = job::empty_shard(inputs, overrides, shard, subs.is_some());
+    let mut file = job::empty_shard(
+        job.inputs.clone(),
+        &job.overrides,
+        shard,
+        job.subs.is_some(),
+    );
     crate::experiment_run::refuse_other_experiments(dir, &file, exp)?;
-    if job::fill_shard(&mut file, exp, subs, run).is_none() {
+    if job::fill_shard(&mut file, exp, job.subs(), run).is_none() {
         bail!("interrupted");
     }
     ensure_dir(dir)?;
@@ -147,7 +141,7 @@ fn run_shard(
         shard.runs(exp.runs),
         exp.runs,
         file.matrix.runs(),
-        subs.map_or(String::new(), |subs| format!(
+        job.subs.as_ref().map_or(String::new(), |subs| format!(
             " (and {} ablation sub-runs)",
             2 * subs.len()
         )),

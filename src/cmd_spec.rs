@@ -5,7 +5,7 @@
 //! simulated 12 h, 100 Hz static log (Woodman's Allan method).
 
 use crate::cli::pool;
-use crate::experiment_run::{check_memory, execute};
+use crate::experiment_run::execute;
 use crate::fmt;
 use crate::output::{write_atomic, write_string};
 use anyhow::{Context, Result};
@@ -147,8 +147,7 @@ fn compare_sensor(
     let name = path.display().to_string();
     let model = crate::files::sensor_model(path)?.filtered(filter);
     let exp = spec_job::experiment(&model, settings, seed, &name).map_err(with_flags)?;
-    check_memory(&exp, exp.runs)?;
-    crate::experiment_run::check_experiment_work(&exp, exp.runs)?;
+    crate::experiment_run::check_size(&exp, exp.runs)?;
     if let Some(d) = settings.readback_duration_s() {
         eprintln!(
             "{}: reading back a {}, {} static log ...",

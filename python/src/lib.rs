@@ -536,9 +536,6 @@ fn read_log_columns<'py>(
     Ok(d)
 }
 
-/// Highest sample rate of a generated log, Hz (the `generate` command's limit).
-const MAX_GENERATE_RATE_HZ: f64 = 1e6;
-
 /// A static, level IMU log generated from a sensor model ([`noise::ImuErrors::fill_static`]), the
 /// values `imudrift generate` writes for the same model, seed and run: `t` (k / rate, s), the six
 /// channels gx..az (rad/s, m/s^2) and `temp` (degC), and the model's name.
@@ -556,18 +553,24 @@ fn generate_columns<'py>(
     only: Option<Vec<String>>,
     without: Vec<String>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    if !(rate_hz.is_finite() && rate_hz > 0.0 && rate_hz <= MAX_GENERATE_RATE_HZ) {
-        return Err(invalid(format!(
-            "rate_hz {rate_hz}: expected a rate in Hz, > 0 and at most {MAX_GENERATE_RATE_HZ:e}"
-        )));
+    let plan = request::generate::GenerateRequest {
+        sensor: request::SensorSource::Text {
+            text: sensor_text.to_string(),
+            source: source.to_string(),
+        },
+        duration_s,
+        rate_hz,
+        seed,
+        run,
+        only: only.as_deref().map(|t| sim::terms("only", t)).transpose()?,
+        without: sim::terms("without", &without)?,
+        output: None,
     }
-    let samples = (duration_s * rate_hz).round();
-    if !(1.0..=1e12).contains(&samples) {
-        return Err(invalid(format!(
-            "duration_s {duration_s} at rate_hz {rate_hz} gives {samples} samples; expected 1 to 1e12"
-        )));
-    }
-    // Eight float64 columns, held twice at most (here and in the DataFrame).
+    .validate()
+    .map_err(sim::request_error)?;
+    let samples = plan.samples as f64;
+    // Eight float64 columns, held twice at most (here and in the DataFrame): a limit of the
+    // arrays Python returns (the CLI writes its log in blocks).
     let need = samples * 8.0 * 8.0 * 2.0;
     if let Some(free) = logio::available_memory_bytes() {
         if need > free as f64 {
@@ -578,15 +581,8 @@ fn generate_columns<'py>(
             )));
         }
     }
-    let model =
-        noise::SensorModel::from_text(sensor_text, source).map_err(|e| invalid(e.to_string()))?;
-    // The CLI's --only / --without (`noise::TermFilter`).
-    let only = only.as_deref().map(|t| sim::terms("only", t)).transpose()?;
-    let without = sim::terms("without", &without)?;
-    let model = model.filtered(&noise::TermFilter::new(only.as_deref(), &without));
+    let model = plan.model;
     let dt_s = 1.0 / rate_hz;
-    noise::ImuErrors::check_rate(&model, dt_s)
-        .map_err(|e| invalid(format!("{source}: {e}; lower the cutoff or raise rate_hz")))?;
     let n = samples as usize;
     let (cols, temp) = sim::detached(py, || {
         let mut errors = noise::ImuErrors::new(&model, dt_s, seed, run);
@@ -601,14 +597,14 @@ fn generate_columns<'py>(
         let temp: Vec<f64> = (0..n as u64).map(|k| errors.temperature_c(k)).collect();
         (cols, temp)
     })?;
-    for (name, c) in noise::CHANNEL_NAMES.iter().zip(&cols) {
-        if let Some(k) = c.iter().position(|v| !v.is_finite()) {
-            return Err(invalid(format!(
-                "channel {name} is {} at sample {k}: the model's values overflow; check their units",
-                c[k]
-            )));
-        }
-    }
+    request::generate::GeneratePlan::check_finite(
+        0,
+        noise::Channel::ALL
+            .iter()
+            .zip(&cols)
+            .map(|(&c, v)| (c, v.as_slice())),
+    )
+    .map_err(sim::request_error)?;
     let d = PyDict::new(py);
     d.set_item("sensor", &model.name)?;
     // t = k / rate from the integer index (docs/architecture.md: never t += dt).

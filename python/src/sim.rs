@@ -6,133 +6,48 @@
 //! the runner before its next run (`montecarlo::run_range_until`).
 
 use crate::{invalid, LogUnreadable};
-use montecarlo::experiment::{Experiment, ExperimentError, Overrides};
-use montecarlo::job::{self, Inputs, JobError, ScenarioEdits, Simulated};
-use montecarlo::shard::{ShardFile, SHARD_FORMAT};
-use montecarlo::{NavQuantity, Shard};
+use montecarlo::experiment::Experiment;
+use montecarlo::job::{self, Simulated};
+use montecarlo::NavQuantity;
 use numpy::{IntoPyArray, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
-use std::path::Path;
+use request::simulate::{MergeRequest, ShardInput, SimulateJob, SimulateRequest, Subject};
+use request::{RequestError, Setting};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 /// How often a running call checks for Ctrl-C (well under the second it must stop within).
 const SIGNAL_POLL: Duration = Duration::from_millis(100);
 
-/// Most bytes of a sensor model or scenario file (the CLI's limit, `src/files.rs`).
-const MAX_CONFIG_BYTES: u64 = 16 << 20;
-
 /// An error and its causes as the CLI prints them (`error: {e:#}`: joined by ": ").
 pub use noise::text::error_chain as message;
 
-/// A job error as `InvalidInput`, named by the Python argument where it comes from one.
-fn job_error(e: JobError) -> PyErr {
-    match e {
-        JobError::Experiment(ExperimentError::NoRuns) => {
-            invalid("runs: expected an integer >= 1".into())
-        }
-        other => invalid(message(&other)),
+/// The Python name of a request's setting (its argument), for the request layer's messages.
+pub fn argument(s: Setting) -> &'static str {
+    match s {
+        Setting::Shard => "simulate_shard",
+        other => other.name(),
     }
 }
 
-/// A file that cannot be read (an `OSError`) or whose text is not usable (a `ValueError`).
-pub enum ReadError {
-    Unreadable(String),
-    Invalid(String),
-}
-
-impl ReadError {
-    /// The error with `prefix: ` before its message.
-    fn within(self, prefix: &str) -> ReadError {
-        match self {
-            ReadError::Unreadable(m) => ReadError::Unreadable(format!("{prefix}: {m}")),
-            ReadError::Invalid(m) => ReadError::Invalid(format!("{prefix}: {m}")),
-        }
+/// A request error as Python raises it: a file the system cannot read is `LogUnreadable` (an
+/// `OSError`), anything else `InvalidInput` (a `ValueError`); settings named by [`argument`].
+pub fn request_error(e: RequestError) -> PyErr {
+    let m = e.render(&argument);
+    if e.is_unreadable() {
+        LogUnreadable::new_err(m)
+    } else {
+        invalid(m)
     }
-}
-
-impl From<ReadError> for PyErr {
-    fn from(e: ReadError) -> PyErr {
-        match e {
-            ReadError::Unreadable(m) => LogUnreadable::new_err(m),
-            ReadError::Invalid(m) => invalid(m),
-        }
-    }
-}
-
-/// A text file read as the CLI reads a sensor model or scenario: its name and text.
-pub fn read_config(path: &Path) -> Result<(String, String), ReadError> {
-    let name = path.display().to_string();
-    let bytes = logio::read_capped(path, MAX_CONFIG_BYTES).map_err(|e| {
-        ReadError::Unreadable(format!(
-            "cannot read {name} as a sensor model, scenario or noise file: {e}"
-        ))
-    })?;
-    let text = noise::utf8_text(bytes, &name).map_err(|e| ReadError::Invalid(message(&e)))?;
-    Ok((name, text))
 }
 
 /// What is simulated: a scenario (or sensor) file, or a sensor's text with its name.
 #[derive(FromPyObject)]
-pub enum Subject {
+pub enum SubjectArg {
     /// (sensor text, its source name): simulated in the default static scenario.
     Sensor(String, String),
     Path(std::path::PathBuf),
-}
-
-/// The job's inputs, as `imudrift simulate` reads them from the same file (with `--duration`,
-/// `--rate`), or a sensor's text in the default static scenario.
-fn inputs(subject: &Subject, edits: &ScenarioEdits) -> Result<Inputs, ReadError> {
-    let (scenario_source, scenario_toml) = match subject {
-        Subject::Path(path) => {
-            let (given, text) = read_config(path)?;
-            job::scenario_for_file(path, &given, &text)
-        }
-        Subject::Sensor(_, source) => {
-            let p = Path::new(source);
-            let name = |f: Option<&std::ffi::OsStr>, or: &str| {
-                f.map_or(or.to_string(), |f| f.to_string_lossy().into_owned())
-            };
-            (
-                format!("default static scenario for {source}"),
-                job::default_scenario_toml(
-                    &name(p.file_name(), source),
-                    &name(p.file_stem(), "sensor"),
-                ),
-            )
-        }
-    };
-    let scenario_toml = job::edit_scenario_toml(&scenario_toml, edits).map_err(|e| {
-        ReadError::Invalid(format!(
-            "cannot read scenario {scenario_source} as TOML: {e}"
-        ))
-    })?;
-    let (sensor_source, sensor_toml) = match subject {
-        Subject::Sensor(text, source) => (source.clone(), text.clone()),
-        Subject::Path(path) => {
-            let scenario =
-                montecarlo::scenario::Scenario::from_toml_str(&scenario_toml, &scenario_source)
-                    .map_err(|e| ReadError::Invalid(message(&e)))?;
-            read_config(&job::sensor_path(path, &scenario)).map_err(|e| {
-                e.within(&format!("{scenario_source}: key `sensor`: the sensor file"))
-            })?
-        }
-    };
-    Ok(Inputs {
-        scenario_source,
-        scenario_toml,
-        sensor_source,
-        sensor_toml,
-    })
-}
-
-/// The experiment of a call, with what it was built from and its ablation sub-experiments.
-struct Job {
-    inputs: Inputs,
-    overrides: Overrides,
-    exp: Experiment,
-    subs: Option<Vec<montecarlo::ablation::TermExperiments>>,
 }
 
 /// The call's settings (the CLI's options of `simulate`, by their Python names).
@@ -152,93 +67,52 @@ pub struct Settings {
 
 /// Term selectors (`gyro.white_noise`, `accel`) named by the argument that gave them.
 pub fn terms(arg: &str, texts: &[String]) -> PyResult<Vec<noise::TermSelector>> {
-    texts
-        .iter()
-        .map(|t| noise::TermSelector::parse(t).map_err(|e| invalid(format!("{arg}: {e}"))))
-        .collect()
+    let setting = if arg == "only" {
+        Setting::Only
+    } else {
+        Setting::Without
+    };
+    request::simulate::terms(setting, texts).map_err(request_error)
 }
 
-fn job_of(subject: &Subject, s: &Settings) -> PyResult<Job> {
-    if let Some(r) = s.rate_hz.filter(|r| !(r.is_finite() && *r > 0.0)) {
-        return Err(invalid(format!(
-            "rate_hz: expected a sample rate in Hz > 0, found {r}"
-        )));
-    }
-    let edits = ScenarioEdits {
-        duration_s: s.duration_s,
-        rate_hz: s.rate_hz,
-    };
-    let inputs = inputs(subject, &edits)?;
-    let overrides = Overrides {
+/// The checked job of a call (`request::simulate`).
+fn job_of(subject: SubjectArg, s: &Settings) -> PyResult<SimulateJob> {
+    SimulateRequest {
+        subject: match subject {
+            SubjectArg::Sensor(text, source) => Subject::Sensor { text, source },
+            SubjectArg::Path(p) => Subject::Path(p),
+        },
         runs: s.runs,
         seed: s.seed,
+        duration_s: s.duration_s,
+        rate_hz: s.rate_hz,
         only: s.only.as_deref().map(|t| terms("only", t)).transpose()?,
         without: terms("without", &s.without)?,
-    };
-    let exp = job::parse_inputs(&inputs, &overrides).map_err(job_error)?.2;
-    let subs = match s.ablation.unwrap_or(exp.scenario.ablation) {
-        true => Some(job::ablation_experiments(&inputs, &overrides).map_err(job_error)?),
-        false => None,
-    };
-    Ok(Job {
-        inputs,
-        overrides,
-        exp,
-        subs,
-    })
-}
-
-/// Refuse `runs` runs of the job (its ablation sub-runs counted) whose per-run values would not
-/// fit in memory or whose work is beyond the CLI's limit (`montecarlo::job`), before any work.
-fn check_size(job: &Job, runs: u64) -> PyResult<()> {
-    let all_runs = runs * (1 + 2 * job.subs.as_ref().map_or(0, Vec::len) as u64);
-    check_experiment_size(&job.exp, runs, all_runs)
+        ablation: s.ablation,
+    }
+    .validate()
+    .map_err(request_error)
 }
 
 /// Refuse `runs` runs of `exp` whose per-run values would not fit in memory, or `all_runs` runs
-/// (sub-experiments counted) whose work is beyond the CLI's limit (`montecarlo::job`).
+/// (sub-experiments counted) whose work is beyond the limit (`request::simulate`).
 pub fn check_experiment_size(exp: &Experiment, runs: u64, all_runs: u64) -> PyResult<()> {
-    let gib = |b: f64| b / f64::from(1u32 << 30);
-    let bytes = job::value_bytes(exp, runs);
-    let limit = logio::available_memory_bytes()
-        .map_or(job::MAX_VALUE_BYTES, |a| a.min(job::MAX_VALUE_BYTES));
-    if bytes > limit {
-        return Err(invalid(format!(
-            "runs: {runs} runs x {} checkpoints keep {:.2} GiB of per-run values (limit {:.2} GiB); split them with simulate_shard and merge, or use fewer checkpoints",
-            exp.scenario.checkpoint_steps.len(),
-            gib(bytes as f64),
-            gib(limit as f64)
-        )));
-    }
-    let work = job::work_samples(exp, all_runs);
-    if work.is_nan() || work > job::MAX_WORK_SAMPLES {
-        return Err(invalid(format!(
-            "{}: {all_runs} run(s) are {work:.2e} samples of work (limit {:.0e}, about 3 h on 2 cores): use fewer runs, a shorter duration_s or a lower rate_hz (or split the runs with simulate_shard)",
-            exp.scenario.name,
-            job::MAX_WORK_SAMPLES
-        )));
-    }
-    Ok(())
+    request::simulate::check_memory(exp, runs).map_err(request_error)?;
+    request::simulate::check_work(
+        &exp.model,
+        all_runs as f64,
+        exp.scenario.duration_s * exp.scenario.rate_hz,
+        &exp.scenario.name,
+        request::error::Remedy::Simulate,
+    )
+    .map_err(request_error)
 }
 
 /// The call's own rayon pool of `threads` workers (None or 0: one per core), dropped when the
 /// call returns: no library code runs in the process-wide rayon pool, whose threads a forked
 /// child would not have (its first parallel call would then wait for ever).
 pub fn call_pool(threads: Option<usize>) -> PyResult<rayon::ThreadPool> {
-    let n = threads.unwrap_or(0);
-    let max = std::thread::available_parallelism().map_or(1, |n| n.get()) * 4;
-    if n > max.max(64) {
-        return Err(invalid(format!(
-            "threads {n}: expected at most {} (0 or None uses every core)",
-            max.max(64)
-        )));
-    }
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(n)
-        .build()
-        .map_err(|e| {
-            pyo3::exceptions::PyOSError::new_err(format!("cannot start the worker threads: {e}"))
-        })
+    request::pool::pool(threads).map_err(request_error)
 }
 
 /// `work` with the GIL released, in a pool of the call's own ([`call_pool`], one worker per
@@ -332,13 +206,13 @@ fn result_dict<'py>(
 #[pyfunction]
 pub fn simulate_run<'py>(
     py: Python<'py>,
-    subject: Subject,
+    subject: SubjectArg,
     settings: Settings,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let job = job_of(&subject, &settings)?;
-    check_size(&job, job.exp.runs)?;
+    let job = job_of(subject, &settings)?;
+    job.check_size(job.exp.runs).map_err(request_error)?;
     let sim = run_job(py, settings.threads, |run| {
-        job::simulate(&job.exp, job.subs.as_deref(), run)
+        job::simulate(&job.exp, job.subs(), run)
     })?;
     result_dict(py, sim, &job.exp)
 }
@@ -348,20 +222,14 @@ pub fn simulate_run<'py>(
 #[pyfunction]
 pub fn simulate_shard_bytes<'py>(
     py: Python<'py>,
-    subject: Subject,
+    subject: SubjectArg,
     index: u64,
     count: u64,
     settings: Settings,
 ) -> PyResult<Bound<'py, PyBytes>> {
-    if count == 0 || index >= count {
-        return Err(invalid(format!(
-            "shard {index}/{count}: expected integers 0 <= index < count"
-        )));
-    }
-    let job = job_of(&subject, &settings)?;
-    let shard = Shard { index, count };
-    let range = shard.runs(job.exp.runs);
-    check_size(&job, range.end - range.start)?;
+    let shard = request::simulate::shard(index, count).map_err(request_error)?;
+    let job = job_of(subject, &settings)?;
+    job.shard_runs(shard).map_err(request_error)?;
     let mut file = job::empty_shard(
         job.inputs.clone(),
         &job.overrides,
@@ -369,7 +237,7 @@ pub fn simulate_shard_bytes<'py>(
         job.subs.is_some(),
     );
     let file = run_job(py, settings.threads, |run| {
-        job::fill_shard(&mut file, &job.exp, job.subs.as_deref(), run).map(|()| file)
+        job::fill_shard(&mut file, &job.exp, job.subs(), run).map(|()| file)
     })?;
     let bytes =
         serde_json::to_vec(&file).map_err(|e| invalid(format!("cannot write the shard: {e}")))?;
@@ -380,27 +248,16 @@ pub fn simulate_shard_bytes<'py>(
 /// what one `simulate` computes.
 #[pyfunction]
 pub fn merge_shards<'py>(py: Python<'py>, shards: Vec<Vec<u8>>) -> PyResult<Bound<'py, PyDict>> {
-    if shards.is_empty() {
-        return Err(invalid(
-            "merge: expected the shards of a job, got none".into(),
-        ));
-    }
-    let mut files = Vec::new();
-    for (i, bytes) in shards.iter().enumerate() {
-        let name = format!("shards[{i}]");
-        let file: ShardFile = serde_json::from_slice(bytes)
-            .map_err(|e| invalid(format!("{name}: not an imudrift shard file: {e}")))?;
-        if file.format != SHARD_FORMAT {
-            return Err(invalid(format!(
-                "{name}: key `format`: expected `{SHARD_FORMAT}`, got `{}`",
-                file.format
-            )));
-        }
-        files.push((name, file));
-    }
-    let (inputs, overrides, exp) = job::shard_experiment(&files[0].1)
-        .map_err(|e| invalid(format!("shards[0]: the stored scenario: {}", message(&e))))?;
-    let sim = detached(py, || job::merge(files, &inputs, &overrides, &exp))?
-        .map_err(|e| invalid(message(&e)))?;
+    let shards = shards
+        .into_iter()
+        .enumerate()
+        .map(|(i, bytes)| ShardInput::Bytes {
+            name: format!("shards[{i}]"),
+            bytes,
+        })
+        .collect();
+    let job = MergeRequest { shards }.validate().map_err(request_error)?;
+    let exp = job.exp.clone();
+    let sim = detached(py, || job.merge())?.map_err(request_error)?;
     result_dict(py, sim, &exp)
 }

@@ -59,7 +59,7 @@ def test_text_and_path_agree_and_seed_matters():
 
 def test_errors():
     path = os.path.join(SENSORS, "mtx.toml")
-    with pytest.raises(imudrift.InvalidInput, match="rate_hz 0"):
+    with pytest.raises(imudrift.InvalidInput, match="rate_hz: expected a sample rate in Hz > 0, found 0"):
         imudrift.generate(path, 10, 0)
     with pytest.raises(imudrift.InvalidInput, match="gives 0 samples"):
         imudrift.generate(path, 0.001, 100)

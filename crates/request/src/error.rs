@@ -1,0 +1,281 @@
+//! Why a request cannot be carried out: one error type for every command, each setting named
+//! through the front end's [`Names`] ([`RequestError::render`]).
+
+use crate::setting::{Names, Setting};
+use montecarlo::experiment::ExperimentError;
+use montecarlo::job::{JobError, MAX_VALUE_BYTES, MAX_WORK_SAMPLES};
+use noise::text::error_chain;
+
+pub type Result<T> = std::result::Result<T, RequestError>;
+
+/// What a piece of work is cut down by, when it is more than [`MAX_WORK_SAMPLES`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Remedy {
+    /// A Monte Carlo run: fewer runs, shorter, a lower rate, or shards.
+    Simulate,
+    /// A generated log: shorter or at a lower rate.
+    Generate,
+}
+
+/// A file named by a request that cannot be read, or whose text is not usable.
+#[derive(Debug)]
+pub struct FileError {
+    /// The file as given.
+    pub name: String,
+    /// What it was read as ("a sensor model, scenario or noise file").
+    pub what: &'static str,
+    /// Where it was named ("scenarios/x.toml: key `sensor`: the sensor file"), if not directly.
+    pub within: Option<String>,
+    pub problem: FileProblem,
+}
+
+#[derive(Debug)]
+pub enum FileProblem {
+    /// The operating system's error (missing, a directory, too large, ...).
+    Io(std::io::Error),
+    /// The bytes are not text (UTF-8), or the text is not a sensor model.
+    Text(Box<noise::ConfigError>),
+}
+
+impl std::error::Error for FileError {}
+
+impl std::fmt::Display for FileError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if let Some(w) = &self.within {
+            write!(f, "{w}: ")?;
+        }
+        match &self.problem {
+            FileProblem::Io(e) => write!(f, "cannot read {} as {}: {e}", self.name, self.what),
+            FileProblem::Text(e) => write!(f, "{}", error_chain(e)),
+        }
+    }
+}
+
+/// Why a request cannot be carried out.
+#[derive(Debug)]
+pub enum RequestError {
+    File(FileError),
+    /// A scenario text (after the front end's edits) that is not TOML.
+    ScenarioNotToml {
+        source_name: String,
+        message: String,
+    },
+    /// The scenario, sensor model or experiment refused by its library.
+    Job(Box<JobError>),
+    /// A term switch that does not parse (`setting`: `Only` or `Without`).
+    Terms {
+        setting: Setting,
+        message: String,
+    },
+    Rate(f64),
+    RateTooHigh {
+        rate_hz: f64,
+        max_hz: f64,
+    },
+    /// A duration and rate giving no sample or too many.
+    Samples {
+        duration_s: f64,
+        rate_hz: f64,
+        samples: f64,
+    },
+    /// A model whose output filter does not fit the sample rate.
+    FilterRate {
+        source_name: String,
+        message: String,
+    },
+    Threads {
+        n: usize,
+        max: usize,
+        cores: usize,
+    },
+    PoolStart(String),
+    /// Per-run values beyond the memory limit.
+    Memory {
+        runs: u64,
+        checkpoints: usize,
+        bytes: u64,
+        limit: u64,
+    },
+    /// Work beyond [`MAX_WORK_SAMPLES`]; `what` names the job.
+    Work {
+        what: String,
+        runs: f64,
+        samples: f64,
+        decimation: f64,
+        work: f64,
+        remedy: Remedy,
+    },
+    /// A shard that is not `i/k` with 0 <= i < k.
+    Shard(String),
+    /// A merge of no shard.
+    NoShards,
+    /// A shard's bytes that are not a shard file.
+    NotShard {
+        name: String,
+        message: String,
+    },
+    ShardFormat {
+        name: String,
+        found: String,
+    },
+    /// A shard's stored scenario or sensor that no longer builds.
+    StoredScenario {
+        name: String,
+        source: Box<JobError>,
+    },
+    /// Shards that do not belong together.
+    Merge(Box<montecarlo::job::MergeError>),
+    /// Generated values that overflow (`channel` at sample `k`).
+    Overflow {
+        channel: &'static str,
+        value: f64,
+        k: usize,
+    },
+}
+
+impl RequestError {
+    /// Whether the error is a file the system could not read (an `OSError` in Python), rather
+    /// than an input that is not usable.
+    pub fn is_unreadable(&self) -> bool {
+        matches!(
+            self,
+            RequestError::File(FileError {
+                problem: FileProblem::Io(_),
+                ..
+            })
+        )
+    }
+
+    /// The message, each setting named by `names`.
+    pub fn render(&self, names: Names) -> String {
+        let n = |s| names(s);
+        match self {
+            RequestError::File(e) => e.to_string(),
+            RequestError::ScenarioNotToml {
+                source_name,
+                message,
+            } => format!("cannot read scenario {source_name} as TOML: {message}"),
+            RequestError::Job(e) if matches!(**e, JobError::Experiment(ExperimentError::NoRuns)) => {
+                format!("{}: expected an integer >= 1", n(Setting::Runs))
+            }
+            RequestError::Job(e) => error_chain(&**e),
+            RequestError::Terms { setting, message } => format!("{}: {message}", n(*setting)),
+            RequestError::Rate(r) => format!(
+                "{}: expected a sample rate in Hz > 0, found {r}",
+                n(Setting::Rate)
+            ),
+            RequestError::RateTooHigh { rate_hz, max_hz } => {
+                format!("{} {rate_hz}: expected at most {max_hz:e} Hz", n(Setting::Rate))
+            }
+            RequestError::Samples {
+                duration_s,
+                rate_hz,
+                samples,
+            } => format!(
+                "{} {duration_s} s at {} {rate_hz} gives {samples} samples; expected 1 to 1e12",
+                n(Setting::Duration),
+                n(Setting::Rate)
+            ),
+            RequestError::FilterRate {
+                source_name,
+                message,
+            } => format!(
+                "{source_name}: {message}; lower the cutoff or raise {}",
+                n(Setting::Rate)
+            ),
+            RequestError::Threads { n: t, max, cores } => format!(
+                "{} {t}: expected at most {max} (this machine has {cores} cores; 0 or none uses them all)",
+                n(Setting::Threads)
+            ),
+            RequestError::PoolStart(e) => format!("cannot start the worker threads: {e}"),
+            RequestError::Memory {
+                runs,
+                checkpoints,
+                bytes,
+                limit,
+            } => format!(
+                "{}: {runs} runs x {checkpoints} checkpoints keep {} of per-run values (limit {}); split them with {} and {}, or use fewer checkpoints",
+                n(Setting::Runs),
+                logio::byte_size(*bytes as f64),
+                if *limit == MAX_VALUE_BYTES {
+                    "8 GiB".to_string()
+                } else {
+                    format!("{}, the memory available", logio::byte_size(*limit as f64))
+                },
+                n(Setting::Shard),
+                n(Setting::Merge)
+            ),
+            RequestError::Work {
+                what,
+                runs,
+                samples,
+                decimation,
+                work,
+                remedy,
+            } => {
+                let filter = if *decimation > 1.0 {
+                    format!(" x decimation {decimation}")
+                } else {
+                    String::new()
+                };
+                let remedy = match remedy {
+                    Remedy::Simulate => format!(
+                        "use fewer {}, a shorter {} or a lower {} (or split the runs with {})",
+                        n(Setting::Runs),
+                        n(Setting::Duration),
+                        n(Setting::Rate),
+                        n(Setting::Shard)
+                    ),
+                    Remedy::Generate => {
+                        format!("generate a shorter log or at a lower {}", n(Setting::Rate))
+                    }
+                };
+                format!(
+                    "{what}: {runs:.3e} run(s) x {samples:.3e} samples{filter} are {work:.2e} samples of work (limit {MAX_WORK_SAMPLES:.0e}, about 3 h on 2 cores): {remedy}"
+                )
+            }
+            RequestError::Shard(text) => format!(
+                "{}: shard `{text}`: expected `i/k` with integers 0 <= i < k (e.g. `0/4`, as Slurm's SLURM_ARRAY_TASK_ID/array size)",
+                n(Setting::Shard)
+            ),
+            RequestError::NoShards => format!(
+                "{}: expected the shards of a job, got none",
+                n(Setting::Merge)
+            ),
+            RequestError::NotShard { name, message } => {
+                format!("{name}: not an imudrift shard file: {message}")
+            }
+            RequestError::ShardFormat { name, found } => format!(
+                "{name}: key `format`: expected `{}`, got `{found}`",
+                montecarlo::shard::SHARD_FORMAT
+            ),
+            RequestError::StoredScenario { name, source } => {
+                format!("{name}: the stored scenario: {}", error_chain(&**source))
+            }
+            RequestError::Merge(e) => error_chain(&**e),
+            RequestError::Overflow { channel, value, k } => format!(
+                "channel {channel} is {value} at sample {k}: the model's values overflow; check their units"
+            ),
+        }
+    }
+}
+
+impl std::fmt::Display for RequestError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.render(&Setting::name))
+    }
+}
+
+impl std::error::Error for RequestError {}
+
+impl From<JobError> for RequestError {
+    fn from(e: JobError) -> Self {
+        RequestError::Job(Box::new(e))
+    }
+}
+
+impl From<FileError> for RequestError {
+    fn from(e: FileError) -> Self {
+        RequestError::File(e)
+    }
+}
