@@ -83,6 +83,8 @@ pub fn flag(s: request::Setting) -> &'static str {
         Setting::Shard => "--shard i/k",
         Setting::Merge => "`imudrift merge`",
         Setting::Output => "-o",
+        Setting::Columns => "--col",
+        Setting::Channels => "--channels",
     }
 }
 

@@ -10,9 +10,10 @@ use allan::fit::{Fit, TERM_NAMES};
 use allan::sheet::{Reading, SheetReadings, TermStatus};
 use allan::{AllanPoint, Estimator, Options, TauGrid};
 use anyhow::{bail, Result};
-use logio::Log;
+use logio::{Log, Quantity};
 use noise::noise_file::AxisValue;
 use rayon::prelude::*;
+use request::error::LeaveOut;
 use serde_json::{json, Map, Value};
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -90,6 +91,7 @@ const MIN_USABLE_TAUS: usize = 2;
 
 /// The analysis of one channel.
 pub struct ChannelResult {
+    pub quantity: Quantity,
     pub name: String,
     pub unit: &'static str,
     pub points: Vec<AllanPoint>,
@@ -143,21 +145,16 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
     eprintln!("{}: {}", log.source, log_input::mapping_text(&log));
     crate::plausibility::print(&log);
     stage("read + parse");
-    let names = channel_names(args, &log)?;
-    crate::log_input::refuse_constant(
-        &log,
-        names.iter().map(String::as_str),
-        "leave it out with --channels",
-    )?;
+    let quantities = channel_quantities(args, &log)?;
+    request::logs::refuse_constant(&log, quantities.iter().copied(), LeaveOut::Channel)
+        .map_err(crate::cli::request_error)?;
     // The channels are analysed by value: each one's phase is computed in its own buffer.
     let samples = log.len();
     let mut log = log;
-    let mut work: Vec<(String, Vec<f64>)> = Vec::new();
-    for name in names {
-        if let Some(data) = log.channels.remove(&name) {
-            work.push((name, data));
-        }
-    }
+    let work: Vec<(Quantity, Vec<f64>)> = quantities
+        .into_iter()
+        .filter_map(|q| Some((q, log.take(q)?)))
+        .collect();
     let dt_s = log.dt_s();
     // A fitted term is claimed at a family-wise false-claim rate of 1 % per log: over the five
     // terms of every channel analysed (docs/allan.md "Resolved terms"). The thresholds come from
@@ -184,7 +181,7 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
     }
     let results: Vec<ChannelResult> = work
         .into_par_iter()
-        .map(|(name, data)| analyse(data, &name, dt_s, est, grid, opts, &stage))
+        .map(|(q, data)| analyse(data, q, dt_s, est, grid, opts, &stage))
         .collect();
     stage("all channels");
     check_usable(&log, samples, &results)?;
@@ -200,8 +197,8 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
     let json = format!("{}\n", serde_json::to_string_pretty(&doc)?);
     output::answer(&table, args.json.then_some(json.as_str()))?;
     stage("printed");
-    let per_channel: [Option<(AxisValue, AxisValue)>; 6] = std::array::from_fn(|c| {
-        let r = results.iter().find(|r| r.name == noise::CHANNEL_NAMES[c])?;
+    let per_channel = noise::ImuChannels::from_fn(|c| {
+        let r = results.iter().find(|r| r.quantity == Quantity::Imu(c))?;
         noise_file_values(r)
     });
     args.noise_file.write(
@@ -218,25 +215,29 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
 
 /// The channels to analyse: `--channels` (each must be in the log), else every channel but the
 /// temperature, in log order.
-fn channel_names(args: &Args, log: &Log) -> Result<Vec<String>> {
+fn channel_quantities(args: &Args, log: &Log) -> Result<Vec<Quantity>> {
     if args.channels.is_empty() {
         return Ok(log
             .order
             .iter()
-            .filter(|n| n.as_str() != "temp")
-            .cloned()
+            .copied()
+            .filter(|q| *q != Quantity::Temperature)
             .collect());
     }
-    for c in &args.channels {
-        if !log.channels.contains_key(c) {
-            bail!(
-                "--channels: {}: no channel {c:?} (channels: {})",
-                log.source,
-                log.order.join(", ")
-            );
-        }
-    }
-    Ok(args.channels.clone())
+    args.channels
+        .iter()
+        .map(|c| {
+            Quantity::of_channel(c)
+                .filter(|q| log.order.contains(q))
+                .ok_or_else(|| {
+                    anyhow::anyhow!(
+                        "--channels: {}: no channel {c:?} (channels: {})",
+                        log.source,
+                        log.order_names().join(", ")
+                    )
+                })
+        })
+        .collect()
 }
 
 /// Refuse a curve with fewer than [`MIN_USABLE_TAUS`] averaging times that have at least 9
@@ -289,7 +290,7 @@ fn write_files(
 /// Deviation curve, intervals and fit of one channel ([`allan::analyse_rate`]).
 pub fn analyse(
     data: Vec<f64>,
-    name: &str,
+    quantity: Quantity,
     dt_s: f64,
     est: Estimator,
     grid: &TauGrid,
@@ -302,11 +303,13 @@ pub fn analyse(
         sheet,
         terms,
     } = allan::analyse_rate(data, dt_s, est, grid, opts, &|s| {
+        let name = quantity.channel();
         stage(&format!("{name}: {s}"))
     });
     ChannelResult {
-        name: name.to_string(),
-        unit: Log::unit_of(name),
+        quantity,
+        name: quantity.channel().to_string(),
+        unit: Log::unit_of(quantity),
         points,
         fit,
         sheet,

@@ -6,7 +6,6 @@ use crate::log_input::{self, LogArgs};
 use crate::output::write_string;
 use crate::plot::{Band, LogLogPlot, Series};
 use anyhow::{anyhow, bail, Context, Result};
-use diagnose::drift::CHANNELS;
 use diagnose::report::{ChannelReport, DriftRow, FoundEffect};
 use diagnose::{diagnose_runs, DiagnoseError, Diagnosis, LogInput, Settings};
 use noise::noise_file::AxisValue;
@@ -152,27 +151,10 @@ pub fn run(args: Args) -> Result<()> {
 }
 
 /// The channels of a log as diagnose reads them, once checked: a log without a gyro or
-/// accelerometer channel, or with a constant one, is refused.
+/// accelerometer channel, or with a constant one, is refused (`request::logs`).
 fn log_channels(log: &logio::Log) -> Result<LogInput<'_>> {
-    let channels = noise::ImuChannels::from_fn(|c| log.channels.get(c.name()).map(Vec::as_slice));
-    if channels.values().iter().all(Option::is_none) {
-        bail!(
-            "{}: no gyro or accelerometer channel (expected columns gx gy gz ax ay az, or map them with --col gx=NAME; columns: {})",
-            log.source,
-            log.order.join(", ")
-        );
-    }
-    // A constant channel has no Allan curve: comparing it with the model would say nothing.
-    log_input::refuse_constant(
-        log,
-        CHANNELS,
-        "leave the column out or map another one with --col",
-    )?;
-    Ok(LogInput {
-        dt_s: log.dt_s(),
-        channels,
-        temperature_c: log.channels.get("temp").map(Vec::as_slice),
-    })
+    request::logs::check_imu(log).map_err(crate::cli::request_error)?;
+    Ok(request::logs::log_input(log, true))
 }
 
 fn run_inner(args: &Args) -> Result<()> {
@@ -251,13 +233,7 @@ fn run_inner(args: &Args) -> Result<()> {
     let mut checks = Vec::new();
     for path in &args.check {
         let held = args.log_args.read(path)?;
-        let input = LogInput {
-            dt_s: held.dt_s(),
-            channels: noise::ImuChannels::from_fn(|c| {
-                held.channels.get(c.name()).map(Vec::as_slice)
-            }),
-            temperature_c: held.channels.get("temp").map(Vec::as_slice),
-        };
+        let input = request::logs::log_input(&held, true);
         let gaps = result
             .check(&input)
             .with_context(|| format!("checking {}", held.source))?;
@@ -267,7 +243,7 @@ fn run_inner(args: &Args) -> Result<()> {
         human.push_str(&checks_text(&checks));
     }
     let doc = json_document(&result, &logs, &args.model, &corrected, &checks)?;
-    let per_channel: [Option<(AxisValue, AxisValue)>; 6] = noise::Channel::ALL.map(|c| {
+    let per_channel = noise::ImuChannels::from_fn(|c| {
         result
             .channels
             .contains_key(c.name())
@@ -693,13 +669,21 @@ fn runs_markdown(result: &Diagnosis) -> String {
         s,
         "\n## Runs\n\nThe logs are runs of one sensor fitted together: the table above is of their pooled Allan variances. Each run's gap against one log of the original model -> of the corrected model, and what the time-domain detectors found in it.\n"
     );
-    let _ = writeln!(s, "| run | samples | {} | found |", CHANNELS.join(" | "));
-    let _ = writeln!(s, "|---|---|{}---|", "---|".repeat(CHANNELS.len()));
+    let _ = writeln!(
+        s,
+        "| run | samples | {} | found |",
+        noise::Channel::ALL.map(noise::Channel::name).join(" | ")
+    );
+    let _ = writeln!(
+        s,
+        "|---|---|{}---|",
+        "---|".repeat(noise::Channel::ALL.len())
+    );
     for (i, run) in result.runs.iter().enumerate() {
-        let cells: Vec<String> = CHANNELS
+        let cells: Vec<String> = noise::Channel::ALL
             .iter()
             .map(|ch| {
-                run.channels.get(*ch).map_or("-".into(), |c| {
+                run.channels.get(ch.name()).map_or("-".into(), |c| {
                     format!("{:.2} -> {:.2}", c.gap_initial, c.gap_final)
                 })
             })
@@ -839,13 +823,17 @@ fn markdown_report(
             s,
             "\n## Held-out logs\n\nGap of logs the diagnosis did not see, with the original model -> the corrected model.\n"
         );
-        let _ = writeln!(s, "| log | {} |", CHANNELS.join(" | "));
-        let _ = writeln!(s, "|---|{}", "---|".repeat(CHANNELS.len()));
+        let _ = writeln!(
+            s,
+            "| log | {} |",
+            noise::Channel::ALL.map(noise::Channel::name).join(" | ")
+        );
+        let _ = writeln!(s, "|---|{}", "---|".repeat(noise::Channel::ALL.len()));
         for (log, gaps) in checks {
-            let cells: Vec<String> = CHANNELS
+            let cells: Vec<String> = noise::Channel::ALL
                 .iter()
                 .map(|ch| {
-                    gaps.get(*ch).map_or("-".into(), |g| {
+                    gaps.get(ch.name()).map_or("-".into(), |g| {
                         format!("{:.2} -> {:.2}", g.gap_model, g.gap_corrected)
                     })
                 })
@@ -864,7 +852,7 @@ fn markdown_report(
 
 fn plot(name: &str, r: &ChannelReport, result: &Diagnosis) -> String {
     let c = &r.curves;
-    let unit = logio::Log::unit_of(name);
+    let unit = logio::Quantity::of_channel(name).map_or("1", logio::Log::unit_of);
     let pooled = !result.runs.is_empty();
     let mut series = vec![
         Series::new(

@@ -9,7 +9,6 @@ use crate::plot::{Band, LogLogPlot, Series};
 use anyhow::{anyhow, bail, Context, Result};
 use diagnose::alternatives::Alternative;
 use diagnose::document::ProtocolSetting;
-use diagnose::drift::CHANNELS;
 use diagnose::drift_check::{
     check_drift_averaged, simulated_logs_averaged, CheckError, CheckSettings, DriftCheck, Verdict,
 };
@@ -202,19 +201,16 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
     for log in &logs {
         eprintln!("{}: {}", log.source, log_input::mapping_text(log));
         crate::plausibility::print(log);
-        log_input::refuse_constant(
+        request::logs::refuse_constant(
             log,
-            CHANNELS,
-            "leave the column out or map another one with --col",
-        )?;
+            log.order.iter().copied(),
+            request::error::LeaveOut::Column,
+        )
+        .map_err(crate::cli::request_error)?;
     }
     let inputs: Vec<LogInput> = logs
         .iter()
-        .map(|l| LogInput {
-            dt_s: l.dt_s(),
-            channels: noise::ImuChannels::from_fn(|c| l.channels.get(c.name()).map(Vec::as_slice)),
-            temperature_c: None,
-        })
+        .map(|l| request::logs::log_input(l, false))
         .collect();
     if let Some(first) = inputs.first() {
         let longest = logs.iter().map(logio::Log::len).max().unwrap_or(0);

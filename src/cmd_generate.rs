@@ -9,7 +9,7 @@
 use crate::cli::request_error;
 use crate::output;
 use anyhow::{bail, Result};
-use noise::{Channel, ImuErrors, StaticLevel, CHANNEL_NAMES};
+use noise::{Channel, ImuErrors, StaticLevel};
 use rayon::prelude::*;
 use request::generate::{GeneratePlan, GenerateRequest};
 use request::SensorSource;
@@ -171,7 +171,7 @@ fn write_log(
         w,
         "# static level IMU, body FRD: gyro rad/s, accel m/s^2 (specific force, gravity on az), temp degC"
     )?;
-    writeln!(w, "t,{},temp", CHANNEL_NAMES.join(","))?;
+    writeln!(w, "t,{},temp", Channel::ALL.map(Channel::name).join(","))?;
 
     let mut errors = ImuErrors::new(&plan.model, dt_s, args.seed, args.run);
     let ideal = StaticLevel::STANDARD.inputs();
@@ -200,12 +200,12 @@ fn write_log(
                     out[..n]
                         .iter()
                         .position(|v| !v.is_finite())
-                        .map(|i| (c, k0 + i as u64, out[i]))
+                        .map(|i| (Channel::ALL[c], k0 + i as u64, out[i]))
                 });
                 if let Some((c, k, v)) = bad {
                     let _ = tx.send(Err(format!(
                         "channel {} is {v} at sample {k} (t = {} s): the model's values overflow; check their units",
-                        CHANNEL_NAMES[c],
+                        c.name(),
                         k as f64 / plan.rate_hz
                     )));
                     return;

@@ -190,30 +190,6 @@ fn fits_side_by_side(paths: &[PathBuf], available: Option<u64>) -> bool {
     total <= available / 2
 }
 
-/// Refuse a constant channel among `names` (a stuck or disconnected sensor, a column of zeros
-/// or of any one value): it has no noise to analyse, and every command that reads a log refuses
-/// it with this one message; `remedy` says how to leave it out with the command's options.
-pub fn refuse_constant<'a>(
-    log: &Log,
-    names: impl IntoIterator<Item = &'a str>,
-    remedy: &str,
-) -> Result<()> {
-    for name in names {
-        let Some(d) = log.channels.get(name) else {
-            continue;
-        };
-        if let Some(&first) = d.first() {
-            if d.iter().all(|&v| v == first) {
-                bail!(
-                    "{}: channel {name} is constant ({first}): it has no noise to analyse (a stuck or disconnected sensor, or a column of zeros?); {remedy}",
-                    log.source
-                );
-            }
-        }
-    }
-    Ok(())
-}
-
 /// Read a log; a reader error is told with the flags that set what it names.
 pub fn read_log(path: &Path, opts: &ReadOptions) -> Result<Log> {
     logio::read_log(path, opts).map_err(|e| anyhow::Error::new(WithFlags(e)))

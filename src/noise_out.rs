@@ -72,11 +72,11 @@ impl NoiseFileArgs {
         Ok(())
     }
 
-    /// Write the file if asked. `per_channel[c]` = (noise density, random walk) of channel c
-    /// (gx gy gz ax ay az), `None` where the log has no such channel.
+    /// Write the file if asked. `per_channel[c]` = (noise density, random walk) of channel c,
+    /// `None` where the log has no such channel.
     pub fn write(
         &self,
-        per_channel: &[Option<(AxisValue, AxisValue)>; 6],
+        per_channel: &noise::ImuChannels<Option<(AxisValue, AxisValue)>>,
         update_rate_hz: f64,
         origin: &str,
         log_topic: Option<&str>,
@@ -84,9 +84,10 @@ impl NoiseFileArgs {
         let Some(path) = &self.kalibr else {
             return Ok(());
         };
-        let missing: Vec<&str> = (0..6)
-            .filter(|&c| per_channel[c].is_none())
-            .map(|c| noise::CHANNEL_NAMES[c])
+        let missing: Vec<&str> = per_channel
+            .iter()
+            .filter(|(_, v)| v.is_none())
+            .map(|(c, _)| c.name())
             .collect();
         if !missing.is_empty() {
             bail!(
@@ -95,30 +96,15 @@ impl NoiseFileArgs {
                 missing.join(", ")
             );
         }
-        let get = |c: usize, which: usize| -> AxisValue {
-            let (n, k) = per_channel[c].clone().expect("checked above");
-            if which == 0 {
-                n
-            } else {
-                k
-            }
-        };
-        let axes = |first: usize, which: usize| -> [AxisValue; 3] {
-            std::array::from_fn(|a| get(first + a, which))
-        };
-        let values = NoiseValues {
-            gyro_noise_density: axes(0, 0),
-            gyro_random_walk: axes(0, 1),
-            accel_noise_density: axes(3, 0),
-            accel_random_walk: axes(3, 1),
-            rostopic: self
-                .rostopic
+        let values = NoiseValues::from_channels(
+            |c| per_channel[c].clone().expect("checked above"),
+            self.rostopic
                 .clone()
                 .or(log_topic.map(str::to_string))
                 .unwrap_or_else(|| "/imu0".into()),
             update_rate_hz,
-            origin: origin.to_string(),
-        };
+            origin.to_string(),
+        );
         let inflation = Inflation {
             factor: self.inflate,
             setting: "--inflate",

@@ -3,7 +3,8 @@
 //! 1 m/s^2 (a log in g read as m/s^2) or near 96 m/s^2 (in m/s^2 read as g); a gyro whose noise
 //! density or rates no gyro has in the unit it was read in (a log in deg/s read as rad/s).
 
-use logio::Log;
+use logio::{Log, Quantity};
+use noise::{Channel, Sensor};
 
 /// Standard gravity, m/s^2 (noise::units, CGPM 1901).
 const G: f64 = noise::units::STANDARD_GRAVITY_MPS2;
@@ -22,8 +23,8 @@ pub fn warnings(log: &Log) -> Vec<String> {
     if let Some(text) = accel_magnitude(log) {
         w.push(text);
     }
-    for ch in ["gx", "gy", "gz"] {
-        if let Some(text) = log.channels.get(ch).and_then(|d| gyro_check(log, ch, d)) {
+    for ch in Channel::of(Sensor::Gyro) {
+        if let Some(text) = log.channel(ch).and_then(|d| gyro_check(log, ch, d)) {
             w.push(text);
         }
     }
@@ -38,10 +39,10 @@ pub fn print(log: &Log) {
 }
 
 /// How a channel's unit was chosen, for the message ("the unit deg/s from the column name").
-fn unit_said(log: &Log, ch: &str) -> String {
+fn unit_said(log: &Log, ch: Channel) -> String {
     log.columns
         .iter()
-        .find(|c| c.channel == ch)
+        .find(|c| c.quantity == Quantity::Imu(ch))
         .map_or_else(String::new, |c| {
             format!(" (column {}, read as {})", c.column, c.unit)
         })
@@ -50,11 +51,8 @@ fn unit_said(log: &Log, ch: &str) -> String {
 /// The mean magnitude of the accelerometer vector over the log (samples with all three axes):
 /// standard gravity on a log at rest, about it on a moving one.
 fn accel_magnitude(log: &Log) -> Option<String> {
-    let (x, y, z) = (
-        log.channels.get("ax")?,
-        log.channels.get("ay")?,
-        log.channels.get("az")?,
-    );
+    let [x, y, z] = Channel::of(Sensor::Accel).map(|c| log.channel(c));
+    let (x, y, z) = (x?, y?, z?);
     let n = x.len().min(y.len()).min(z.len());
     if n == 0 {
         return None;
@@ -65,7 +63,7 @@ fn accel_magnitude(log: &Log) -> Option<String> {
         / n as f64;
     let ratio = mean / G;
     let near = |target: f64| (ratio / target).ln().abs() < 0.25f64.ln_1p();
-    let said = unit_said(log, "ax");
+    let said = unit_said(log, Channel::Ax);
     let hint = if near(1.0) {
         return None;
     } else if near(1.0 / G) {
@@ -89,7 +87,7 @@ fn accel_magnitude(log: &Log) -> Option<String> {
 
 /// A gyro channel whose noise density (from sample-to-sample differences: Var(y_k+1 - y_k) =
 /// 2 N^2 / dt for white rate noise, IEEE 952 Annex C) or typical rate no gyro has in rad/s.
-fn gyro_check(log: &Log, ch: &str, d: &[f64]) -> Option<String> {
+fn gyro_check(log: &Log, ch: Channel, d: &[f64]) -> Option<String> {
     if d.len() < 3 {
         return None;
     }

@@ -14,7 +14,7 @@ from ._document import Document as _Document
 from ._log import reader_settings
 from ._sensor import Sensor
 
-_CHANNELS = ("gx", "gy", "gz", "ax", "ay", "az")
+from ._imudrift import CHANNELS as _CHANNELS, TEMPERATURE as _TEMPERATURE
 
 
 def _terms(t):
@@ -121,7 +121,7 @@ def _log_arg(x, rate):
     if hasattr(x, "columns") and attrs is not None:  # a pandas DataFrame (read_log's columns)
         r = rate if rate is not None else attrs.get("rate_hz")
         source = attrs.get("source", "<DataFrame>")
-        cols = {c: x[c].to_numpy() for c in list(_CHANNELS) + ["temp"] if c in x.columns}
+        cols = {c: x[c].to_numpy() for c in list(_CHANNELS) + [_TEMPERATURE] if c in x.columns}
     elif isinstance(x, dict):
         r, source = rate, "<arrays>"
         cols = dict(x)

@@ -13,6 +13,9 @@ class LogUnreadable(OSError): ...
 _F64 = npt.NDArray[np.float64]
 _Taus = Union[str, Sequence[float], _F64]
 
+CHANNELS: List[str]
+TEMPERATURE: str
+
 def allantools_dev(
     data: _F64, rate: float, data_type: str, function: str, taus: Optional[_Taus] = None
 ) -> Tuple[_F64, _F64, _F64, _F64]: ...

@@ -12,11 +12,10 @@ use diagnose::drift_check::{check_drift_averaged, CheckError, CheckSettings};
 use diagnose::protocol::{Calibration, Initialisation, Protocol};
 use diagnose::{DiagnoseError, LogInput};
 use montecarlo::spec_job::{self, SpecDoc, SpecError, SpecRequest, SpecSetting, SpecSettings};
-use noise::{ImuChannels, SensorModel};
+use noise::SensorModel;
 use numpy::PyReadonlyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 fn model(text: &str, source: &str) -> PyResult<SensorModel> {
@@ -123,51 +122,33 @@ pub struct ArrayLog<'py> {
 
 /// A log read or given, in SI, with its `columns[]` / `skipped_columns[]` JSON.
 struct OwnedLog {
-    source: String,
-    rate_hz: f64,
-    channels: BTreeMap<String, Vec<f64>>,
+    log: logio::Log,
     columns: (serde_json::Value, serde_json::Value),
 }
 
 impl OwnedLog {
     fn len(&self) -> usize {
-        self.channels.values().next().map_or(0, Vec::len)
+        self.log.len()
     }
 
     fn input(&self, temperature: bool) -> LogInput<'_> {
-        LogInput {
-            dt_s: 1.0 / self.rate_hz,
-            channels: ImuChannels::from_fn(|c| self.channels.get(c.name()).map(Vec::as_slice)),
-            temperature_c: if temperature {
-                self.channels.get("temp").map(Vec::as_slice)
-            } else {
-                None
-            },
-        }
+        request::logs::log_input(&self.log, temperature)
     }
 }
 
 /// Read or take each log, refusing one without a gyro or accelerometer channel, with a constant
-/// channel, or with samples that are not finite.
+/// channel, or with samples that are not finite (`request::logs`).
 fn logs_of(py: Python<'_>, logs: Vec<LogArg<'_>>, reader: &ReaderArgs) -> PyResult<Vec<OwnedLog>> {
     let opts = read_options(reader)?;
     let mut out = Vec::new();
     for log in logs {
-        let owned = match log {
-            LogArg::Path(path) => {
-                let log = detached(py, || read_log_file(&path, &opts))??;
-                let columns = log.columns_json(&crate::read_log_argument);
-                OwnedLog {
-                    source: log.source,
-                    rate_hz: log.rate_hz,
-                    channels: log.channels,
-                    columns,
-                }
-            }
+        let log = match log {
+            LogArg::Path(path) => detached(py, || read_log_file(&path, &opts))??,
             LogArg::Arrays(a) => array_log(a)?,
         };
-        check_channels(&owned)?;
-        out.push(owned);
+        request::logs::check_imu(&log).map_err(crate::sim::request_error)?;
+        let columns = log.columns_json(&crate::read_log_argument);
+        out.push(OwnedLog { log, columns });
     }
     if out.is_empty() {
         return Err(invalid("logs: expected at least one log".into()));
@@ -177,22 +158,9 @@ fn logs_of(py: Python<'_>, logs: Vec<LogArg<'_>>, reader: &ReaderArgs) -> PyResu
 
 /// A log given as arrays: its channels named as the reader names them, in SI; its columns are
 /// "from the name" with the "default" (SI) unit, as the reader says of such a file.
-fn array_log(a: ArrayLog<'_>) -> PyResult<OwnedLog> {
-    if !logio::valid_rate_hz(a.rate_hz) {
-        return Err(invalid(format!(
-            "{}: rate_hz: expected a sample rate in Hz > 0, found {}",
-            a.source, a.rate_hz
-        )));
-    }
-    let mut channels = BTreeMap::new();
-    let mut columns = Vec::new();
+fn array_log(a: ArrayLog<'_>) -> PyResult<logio::Log> {
+    let mut series = Vec::new();
     for (name, array) in &a.channels {
-        if !(name == "temp" || noise::Channel::from_name(name).is_some()) {
-            return Err(invalid(format!(
-                "{}: {name:?} is not one of gx, gy, gz, ax, ay, az, temp",
-                a.source
-            )));
-        }
         let v = array
             .as_slice()
             .map_err(|_| {
@@ -202,57 +170,9 @@ fn array_log(a: ArrayLog<'_>) -> PyResult<OwnedLog> {
                 ))
             })?
             .to_vec();
-        if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-            return Err(invalid(format!(
-                "{}: {name}[{i}] is {}: every sample must be finite",
-                a.source, v[i]
-            )));
-        }
-        let unit = if name == "temp" {
-            "degC"
-        } else {
-            logio::Log::unit_of(name)
-        };
-        columns.push(serde_json::json!({
-            "column": name, "channel": name, "unit": unit,
-            "channel_from": "name", "unit_from": "default",
-        }));
-        channels.insert(name.clone(), v);
+        series.push((name.clone(), v));
     }
-    Ok(OwnedLog {
-        source: a.source,
-        rate_hz: a.rate_hz,
-        channels,
-        columns: (columns.into(), serde_json::Value::Array(Vec::new())),
-    })
-}
-
-/// A log without a gyro or accelerometer channel, or with a constant one, says nothing.
-fn check_channels(log: &OwnedLog) -> PyResult<()> {
-    if noise::Channel::ALL
-        .iter()
-        .all(|c| !log.channels.contains_key(c.name()))
-    {
-        return Err(invalid(format!(
-            "{}: no gyro or accelerometer channel (expected gx gy gz ax ay az, or map columns with columns={{\"gx\": NAME}})",
-            log.source
-        )));
-    }
-    for c in noise::Channel::ALL {
-        let Some(d) = log.channels.get(c.name()) else {
-            continue;
-        };
-        if let Some(&first) = d.first() {
-            if d.iter().all(|&v| v == first) {
-                return Err(invalid(format!(
-                    "{}: channel {} is constant ({first}): it has no noise to analyse (a stuck or disconnected sensor, or a column of zeros?); leave it out",
-                    log.source,
-                    c.name()
-                )));
-            }
-        }
-    }
-    Ok(())
+    request::logs::from_series(&a.source, a.rate_hz, series).map_err(crate::sim::request_error)
 }
 
 /// The protocol's settings by the names of the Python arguments.
@@ -290,7 +210,7 @@ fn check_logs(
     model: &SensorModel,
     model_name: &str,
 ) -> PyResult<()> {
-    let dt_s = 1.0 / logs[0].rate_hz;
+    let dt_s = 1.0 / logs[0].log.rate_hz;
     let longest = logs.iter().map(OwnedLog::len).max().unwrap_or(0);
     document::check_sampling(protocol, dt_s, longest)
         .map_err(|e| invalid(e.render(&protocol_argument)))?;
@@ -315,7 +235,7 @@ fn check_memory(logs: &[OwnedLog], threads: Option<usize>) -> PyResult<()> {
         if need > available {
             return Err(invalid(format!(
                 "{}: simulating logs of {longest} samples on {threads} threads needs about {:.1} GiB and {:.1} GiB is available: use fewer threads or a shorter log",
-                logs[0].source,
+                logs[0].log.source,
                 need as f64 / (1u64 << 30) as f64,
                 available as f64 / (1u64 << 30) as f64
             )));
@@ -454,7 +374,7 @@ pub fn diagnose_run<'py>(
         drift_protocol: (asked || logs.len() > 1).then_some(protocol),
         ..diagnose::Settings::default()
     };
-    let sources: Vec<String> = logs.iter().map(|l| l.source.clone()).collect();
+    let sources: Vec<String> = logs.iter().map(|l| l.log.source.clone()).collect();
     let (result, checks) = run_job(py, settings.threads, |_| {
         let result = match diagnose::diagnose_runs(&inputs, &m, &s, &()) {
             Ok(r) => r,
@@ -469,8 +389,8 @@ pub fn diagnose_run<'py>(
         let mut checks: HeldOutChecks = Vec::new();
         for h in &held {
             match result.check(&h.input(true)) {
-                Ok(gaps) => checks.push((h.source.clone(), gaps)),
-                Err(e) => return Some(Err(format!("checking {}: {}", h.source, message(&e)))),
+                Ok(gaps) => checks.push((h.log.source.clone(), gaps)),
+                Err(e) => return Some(Err(format!("checking {}: {}", h.log.source, message(&e)))),
             }
         }
         Some(Ok((result, checks)))
@@ -577,7 +497,7 @@ pub fn drift_run<'py>(
             logs.len()
         ))
     })?;
-    let sources: Vec<String> = logs.iter().map(|l| l.source.clone()).collect();
+    let sources: Vec<String> = logs.iter().map(|l| l.log.source.clone()).collect();
     let doc = document::drift_document(&result, &sources, &model_name)
         .map_err(|e| invalid(format!("cannot serialise the drift check: {e}")))?;
     Ok(doc.to_string())

@@ -513,23 +513,18 @@ fn read_log_columns<'py>(
     reader: ReaderArgs,
 ) -> PyResult<Bound<'py, PyDict>> {
     let opts = read_options(&reader)?;
-    let log = sim::detached(py, || read_log_file(&path, &opts))??;
-    let logio::Log {
-        source,
-        rate_hz,
-        t_s,
-        mut channels,
-        order,
-        ..
-    } = log;
+    let mut log = sim::detached(py, || read_log_file(&path, &opts))??;
     let d = PyDict::new(py);
-    d.set_item("source", source)?;
-    d.set_item("rate_hz", rate_hz)?;
-    d.set_item("t", t_s.map(|t| t.into_pyarray(py)))?;
+    d.set_item("source", &log.source)?;
+    d.set_item("rate_hz", log.rate_hz)?;
+    d.set_item(
+        "t",
+        log.take(logio::Quantity::Time).map(|t| t.into_pyarray(py)),
+    )?;
     let mut cols = Vec::new();
-    for name in order {
-        if let Some(v) = channels.remove(&name) {
-            cols.push((name, v.into_pyarray(py)));
+    for q in log.order.clone() {
+        if let Some(v) = log.take(q) {
+            cols.push((q.channel(), v.into_pyarray(py)));
         }
     }
     d.set_item("channels", cols)?;
@@ -610,8 +605,8 @@ fn generate_columns<'py>(
     // t = k / rate from the integer index (docs/architecture.md: never t += dt).
     let t: Vec<f64> = (0..n as u64).map(|k| k as f64 / rate_hz).collect();
     d.set_item("t", t.into_pyarray(py))?;
-    for (name, c) in noise::CHANNEL_NAMES.iter().zip(cols) {
-        d.set_item(*name, c.into_pyarray(py))?;
+    for (c, values) in noise::Channel::ALL.iter().zip(cols) {
+        d.set_item(c.name(), values.into_pyarray(py))?;
     }
     d.set_item("temp", temp.into_pyarray(py))?;
     Ok(d)
@@ -620,6 +615,12 @@ fn generate_columns<'py>(
 /// The module `imudrift._imudrift`.
 #[pymodule]
 fn _imudrift(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // The channel names in log-column order, and the temperature's (noise::Channel, logio).
+    m.add(
+        "CHANNELS",
+        noise::Channel::ALL.map(noise::Channel::name).to_vec(),
+    )?;
+    m.add("TEMPERATURE", logio::Quantity::Temperature.channel())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("InvalidInput", m.py().get_type::<InvalidInput>())?;
     m.add_function(wrap_pyfunction!(allantools_dev, m)?)?;

@@ -93,25 +93,12 @@ pub fn sensor_noise_file(
             })
         })
         .collect::<PyResult<_>>()?;
-    let axes = |first: usize, which: usize| {
-        std::array::from_fn(|a| {
-            let (n, k) = per[first + a].clone();
-            if which == 0 {
-                n
-            } else {
-                k
-            }
-        })
-    };
-    let values = NoiseValues {
-        gyro_noise_density: axes(0, 0),
-        gyro_random_walk: axes(0, 1),
-        accel_noise_density: axes(3, 0),
-        accel_random_walk: axes(3, 1),
-        rostopic: rostopic.to_string(),
-        update_rate_hz: rate_hz,
-        origin: format!("the sensor model {} ({source})", m.name),
-    };
+    let values = NoiseValues::from_channels(
+        |c| per[c.index()].clone(),
+        rostopic.to_string(),
+        rate_hz,
+        format!("the sensor model {} ({source})", m.name),
+    );
     Ok(write_noise_file(&values, flavor, Inflation::NONE))
 }
 

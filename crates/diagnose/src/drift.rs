@@ -14,9 +14,6 @@ use serde::Serialize;
 /// Standard gravity, m/s^2 (the noise crate's definition, shared by the workspace).
 pub use noise::units::STANDARD_GRAVITY_MPS2 as G_MPS2;
 
-/// Channels of an IMU log in the order gx gy gz ax ay az.
-pub use noise::CHANNEL_NAMES as CHANNELS;
-
 /// Heading and horizontal position error at the end of every full segment of one length.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct SegmentDrift {

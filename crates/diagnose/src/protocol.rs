@@ -538,10 +538,11 @@ impl Segment {
             Initialisation::Perfect => Attitude::identity(),
             Initialisation::Levelled { window_s } => {
                 let w = window_samples(window_s, dt_s);
-                let f: [f64; 3] = std::array::from_fn(|a| {
+                let f: [f64; 3] = noise::Channel::of(noise::Sensor::Accel).map(|c| {
+                    let ch = c.index();
                     means
-                        .window(3 + a, start - w, start)
-                        .map_or(ideal[3 + a], |m| m - offset[3 + a])
+                        .window(ch, start - w, start)
+                        .map_or(ideal[ch], |m| m - offset[ch])
                 });
                 let roll = (-f[1]).atan2(-f[2]);
                 let pitch = f[0].atan2(f[1].hypot(f[2]));

@@ -16,10 +16,8 @@ use noise::{Channel, Sensor};
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Quantity {
     Time,
-    /// Gyro axis 0, 1, 2 (x, y, z).
-    Gyro(usize),
-    /// Accelerometer axis 0, 1, 2.
-    Accel(usize),
+    /// A gyro or accelerometer channel.
+    Imu(Channel),
     Temperature,
 }
 
@@ -28,9 +26,16 @@ impl Quantity {
     pub fn channel(self) -> &'static str {
         match self {
             Quantity::Time => "t",
-            Quantity::Gyro(a) => Channel::new(Sensor::Gyro, a).name(),
-            Quantity::Accel(a) => Channel::new(Sensor::Accel, a).name(),
+            Quantity::Imu(c) => c.name(),
             Quantity::Temperature => "temp",
+        }
+    }
+
+    /// The sensor of a gyro or accelerometer channel.
+    pub fn sensor(self) -> Option<Sensor> {
+        match self {
+            Quantity::Imu(c) => Some(c.sensor()),
+            _ => None,
         }
     }
 
@@ -39,10 +44,7 @@ impl Quantity {
         match name {
             "t" => Some(Quantity::Time),
             "temp" => Some(Quantity::Temperature),
-            _ => Channel::from_name(name).map(|c| match c.sensor() {
-                Sensor::Gyro => Quantity::Gyro(c.axis()),
-                Sensor::Accel => Quantity::Accel(c.axis()),
-            }),
+            _ => Channel::from_name(name).map(Quantity::Imu),
         }
     }
 }
@@ -252,11 +254,10 @@ pub fn recognise(name: &str) -> Result<Recognised, NotRecognised> {
         )),
     };
     Ok(Recognised {
-        quantity: if is_gyro {
-            Quantity::Gyro(axis)
-        } else {
-            Quantity::Accel(axis)
-        },
+        quantity: Quantity::Imu(Channel::new(
+            if is_gyro { Sensor::Gyro } else { Sensor::Accel },
+            axis,
+        )),
         unit,
     })
 }
@@ -336,7 +337,9 @@ impl Source {
 pub struct ColumnUse {
     /// The file's column name.
     pub column: String,
-    /// The canonical channel (`t`, `gx` .. `az`, `temp`).
+    /// What the column holds.
+    pub quantity: Quantity,
+    /// Its canonical name (`t`, `gx` .. `az`, `temp`).
     pub channel: &'static str,
     /// The unit of the file's values (converted to SI on reading).
     pub unit: &'static str,
@@ -477,8 +480,7 @@ pub fn map_header(
         // The unit the name states, if it is one of this quantity's.
         let named = match (&recognised, quantity) {
             (Ok(r), _) if r.quantity == quantity => r.unit,
-            (Ok(r), Quantity::Gyro(_)) if matches!(r.quantity, Quantity::Gyro(_)) => r.unit,
-            (Ok(r), Quantity::Accel(_)) if matches!(r.quantity, Quantity::Accel(_)) => r.unit,
+            (Ok(r), Quantity::Imu(c)) if r.quantity.sensor() == Some(c.sensor()) => r.unit,
             _ => None,
         };
         // Canonical names and explicit mappings default to SI (docs/cli.md); other recognised
@@ -486,9 +488,9 @@ pub fn map_header(
         let may_default =
             channel_from == Source::Setting(Setting::Columns) || name.trim() == channel;
         let (unit, to_si, unit_from) = match quantity {
-            Quantity::Gyro(_) | Quantity::Accel(_) => {
-                let (sensor, from_name, option, setting, si_unit) = match quantity {
-                    Quantity::Gyro(_) => (
+            Quantity::Imu(c) => {
+                let (sensor, from_name, option, setting, si_unit) = match c.sensor() {
+                    Sensor::Gyro => (
                         Sensor::Gyro,
                         match named {
                             Some(NamedUnit::Gyro(u)) => Some((u.name(), u.to_si())),
@@ -543,6 +545,7 @@ pub fn map_header(
         taken.push((channel, i));
         uses[i] = Some(ColumnUse {
             column: name.clone(),
+            quantity,
             channel,
             unit,
             channel_from,
@@ -575,26 +578,34 @@ mod tests {
         use NamedUnit as U;
         use Quantity::*;
         let cases: &[(&str, Quantity, Option<NamedUnit>)] = &[
-            ("gx", Gyro(0), None),
-            ("az", Accel(2), None),
-            ("gyro_x", Gyro(0), None),
-            ("gyr_y", Gyro(1), None),
-            ("wx", Gyro(0), None),
-            ("omega_z", Gyro(2), None),
-            ("angular_velocity.x", Gyro(0), None),
-            ("field.angular_velocity.y", Gyro(1), None),
-            ("gyro_x_dps", Gyro(0), Some(U::Gyro(G::DegPerS))),
-            ("gyro_x_rad_s", Gyro(0), Some(U::Gyro(G::RadPerS))),
-            ("Gyro_X [deg/s]", Gyro(0), Some(U::Gyro(G::DegPerS))),
-            ("gyro_out_x", Gyro(0), None),
-            ("gyro_meas_z", Gyro(2), None),
-            ("acc_x", Accel(0), None),
-            ("accel_y", Accel(1), None),
-            ("linear_acceleration.z", Accel(2), None),
-            ("acc_x_g", Accel(0), Some(U::Accel(A::G))),
-            ("acc_x_mps2", Accel(0), Some(U::Accel(A::MPerS2))),
-            ("accel_z (m/s^2)", Accel(2), Some(U::Accel(A::MPerS2))),
-            ("accx_mg", Accel(0), Some(U::Accel(A::MilliG))),
+            ("gx", Imu(Channel::Gx), None),
+            ("az", Imu(Channel::Az), None),
+            ("gyro_x", Imu(Channel::Gx), None),
+            ("gyr_y", Imu(Channel::Gy), None),
+            ("wx", Imu(Channel::Gx), None),
+            ("omega_z", Imu(Channel::Gz), None),
+            ("angular_velocity.x", Imu(Channel::Gx), None),
+            ("field.angular_velocity.y", Imu(Channel::Gy), None),
+            ("gyro_x_dps", Imu(Channel::Gx), Some(U::Gyro(G::DegPerS))),
+            ("gyro_x_rad_s", Imu(Channel::Gx), Some(U::Gyro(G::RadPerS))),
+            (
+                "Gyro_X [deg/s]",
+                Imu(Channel::Gx),
+                Some(U::Gyro(G::DegPerS)),
+            ),
+            ("gyro_out_x", Imu(Channel::Gx), None),
+            ("gyro_meas_z", Imu(Channel::Gz), None),
+            ("acc_x", Imu(Channel::Ax), None),
+            ("accel_y", Imu(Channel::Ay), None),
+            ("linear_acceleration.z", Imu(Channel::Az), None),
+            ("acc_x_g", Imu(Channel::Ax), Some(U::Accel(A::G))),
+            ("acc_x_mps2", Imu(Channel::Ax), Some(U::Accel(A::MPerS2))),
+            (
+                "accel_z (m/s^2)",
+                Imu(Channel::Az),
+                Some(U::Accel(A::MPerS2)),
+            ),
+            ("accx_mg", Imu(Channel::Ax), Some(U::Accel(A::MilliG))),
             ("t", Time, None),
             ("t_s", Time, Some(U::Time(TimeUnit::S))),
             ("time", Time, None),
@@ -605,24 +616,40 @@ mod tests {
             ("%time", Time, Some(U::Time(TimeUnit::Ns))),
             ("temp", Temperature, None),
             ("temperature_c", Temperature, Some(U::Celsius)),
-            ("w_RS_S_x [rad s^-1]", Gyro(0), Some(U::Gyro(G::RadPerS))),
-            ("a_RS_S_z [m s^-2]", Accel(2), Some(U::Accel(A::MPerS2))),
-            ("imu_gyro_y_dps", Gyro(1), Some(U::Gyro(G::DegPerS))),
-            ("imu0/angular_velocity/z", Gyro(2), None),
-            ("AngularVelocity.X", Gyro(0), None),
-            ("gyroX", Gyro(0), None),
-            ("LinearAcceleration_Y", Accel(1), None),
-            ("acc_x [m/s²]", Accel(0), Some(U::Accel(A::MPerS2))),
-            ("Gyr_Z (°/s)", Gyro(2), Some(U::Gyro(G::DegPerS))),
-            ("Gyroscope x (rad/s)", Gyro(0), Some(U::Gyro(G::RadPerS))),
+            (
+                "w_RS_S_x [rad s^-1]",
+                Imu(Channel::Gx),
+                Some(U::Gyro(G::RadPerS)),
+            ),
+            (
+                "a_RS_S_z [m s^-2]",
+                Imu(Channel::Az),
+                Some(U::Accel(A::MPerS2)),
+            ),
+            (
+                "imu_gyro_y_dps",
+                Imu(Channel::Gy),
+                Some(U::Gyro(G::DegPerS)),
+            ),
+            ("imu0/angular_velocity/z", Imu(Channel::Gz), None),
+            ("AngularVelocity.X", Imu(Channel::Gx), None),
+            ("gyroX", Imu(Channel::Gx), None),
+            ("LinearAcceleration_Y", Imu(Channel::Ay), None),
+            ("acc_x [m/s²]", Imu(Channel::Ax), Some(U::Accel(A::MPerS2))),
+            ("Gyr_Z (°/s)", Imu(Channel::Gz), Some(U::Gyro(G::DegPerS))),
+            (
+                "Gyroscope x (rad/s)",
+                Imu(Channel::Gx),
+                Some(U::Gyro(G::RadPerS)),
+            ),
             (
                 "Acceleration z (m/s^2)",
-                Accel(2),
+                Imu(Channel::Az),
                 Some(U::Accel(A::MPerS2)),
             ),
             ("Time (s)", Time, Some(U::Time(TimeUnit::S))),
-            ("AccX", Accel(0), None),
-            ("Gyro_X(dps)", Gyro(0), Some(U::Gyro(G::DegPerS))),
+            ("AccX", Imu(Channel::Ax), None),
+            ("Gyro_X(dps)", Imu(Channel::Gx), Some(U::Gyro(G::DegPerS))),
         ];
         for &(name, quantity, unit) in cases {
             assert_eq!(q(name), (quantity, unit), "{name}");

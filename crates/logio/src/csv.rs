@@ -2,7 +2,7 @@
 //! lines, a general path that names the line and column of anything wrong), the time column's
 //! checks and the units mapped to SI.
 
-use crate::columns::map_header;
+use crate::columns::{map_header, Quantity};
 use crate::error::{At, LogError, Problem, Result};
 use crate::file::advise_huge_pages;
 use crate::float::{fast_f64, number};
@@ -10,9 +10,8 @@ use crate::limits::{
     quote_prefix, valid_rate_hz, valid_value, MAX_ABS_VALUE, MAX_LOG_RATE_HZ, MIN_LOG_RATE_HZ,
 };
 use crate::log::{Log, ReadOptions};
-use noise::Channel;
+use noise::ImuChannels;
 use rayon::prelude::*;
-use std::collections::BTreeMap;
 
 /// Parse log text (already decompressed).
 pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> {
@@ -50,7 +49,8 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
             format!("{n_rows} data rows; at least 2 are needed"),
         ));
     }
-    let mut channels = BTreeMap::new();
+    let mut channels = ImuChannels::<Option<Vec<f64>>>::default();
+    let mut temperature_c = None;
     let mut order = Vec::new();
     let mut t_s = None;
     let mut used = Vec::new();
@@ -59,15 +59,17 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
         if u.to_si != 1.0 {
             data.iter_mut().for_each(|v| *v *= u.to_si);
         }
-        if u.channel == "t" {
-            t_s = Some(data);
-        } else {
-            order.push(u.channel.to_string());
-            channels.insert(u.channel.to_string(), data);
+        match u.quantity {
+            Quantity::Time => t_s = Some(data),
+            Quantity::Imu(c) => channels[c] = Some(data),
+            Quantity::Temperature => temperature_c = Some(data),
+        }
+        if u.quantity != Quantity::Time {
+            order.push(u.quantity);
         }
         used.push(u);
     }
-    if !channels.keys().any(|c| Channel::from_name(c).is_some()) {
+    if channels.iter().all(|(_, v)| v.is_none()) {
         let problem = Problem::NoImuColumn { header: names };
         return Err(LogError::new(source, problem).at_line(header_line));
     }
@@ -78,6 +80,7 @@ pub fn parse_log(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<Log> 
         rate_hz,
         t_s,
         channels,
+        temperature_c,
         order,
         columns: used,
         skipped,

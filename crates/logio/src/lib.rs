@@ -28,19 +28,19 @@ mod limits;
 mod log;
 mod units;
 
-pub use columns::{ColumnUse, SkipReason, Skipped, Source, UnitOptions};
+pub use columns::{ColumnUse, Quantity, SkipReason, Skipped, Source, UnitOptions};
 pub use csv::parse_log;
 pub use error::{byte_size, sig, At, LogError, Problem, Result, Setting, SettingNames};
 pub use file::{available_memory_bytes, read_capped};
 pub use limits::{
     quote_prefix, valid_rate_hz, valid_value, MAX_ABS_VALUE, MAX_LOG_RATE_HZ, MIN_LOG_RATE_HZ,
 };
-pub use log::{Log, ReadOptions};
+pub use log::{Log, ReadOptions, SeriesError};
 pub use units::{AccelUnit, GyroUnit, TimeUnit};
 
 use file::{check_fits, gunzip, FileBytes};
 use noise::{Channel, Sensor};
-use std::collections::BTreeMap;
+
 use std::path::Path;
 
 /// Standard gravity for `g` units (m/s^2): the noise crate's one definition.
@@ -67,7 +67,7 @@ fn read_bag(path: &Path, format: bag::Format, opts: &ReadOptions) -> Result<Log>
         index: k + 1,
     };
     let rate_hz = csv::rate_of(Some(&t), opts.rate_hz, &source, &locate)?;
-    let mut channels = BTreeMap::new();
+    let mut channels = noise::ImuChannels::<Option<Vec<f64>>>::default();
     let mut order = Vec::new();
     let mut columns = Vec::new();
     let bag::ImuSeries { gyro, accel, .. } = series;
@@ -78,20 +78,22 @@ fn read_bag(path: &Path, format: bag::Format, opts: &ReadOptions) -> Result<Log>
         };
         columns.push(ColumnUse {
             column: format!("{topic} {field}.{}", noise::AXIS_NAMES[channel.axis()]),
+            quantity: Quantity::Imu(channel),
             channel: channel.name(),
             unit,
             channel_from: Source::ImuMessage,
             unit_from: Source::Rep103,
             to_si: 1.0,
         });
-        order.push(channel.name().to_string());
-        channels.insert(channel.name().to_string(), data);
+        order.push(Quantity::Imu(channel));
+        channels[channel] = Some(data);
     }
     Ok(Log {
         source,
         rate_hz,
         t_s: Some(t),
         channels,
+        temperature_c: None,
         order,
         columns,
         skipped: Vec::new(),

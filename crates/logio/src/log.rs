@@ -1,9 +1,8 @@
 //! The log a reader returns (SI units, channels by name) and the settings a reader is told.
 
-use crate::columns::{ColumnUse, Skipped, Source, UnitOptions};
+use crate::columns::{ColumnUse, Quantity, Skipped, Source, UnitOptions};
 use crate::error::SettingNames;
-use noise::{Channel, Sensor};
-use std::collections::BTreeMap;
+use noise::{Channel, ImuChannels, Sensor};
 
 /// A log in SI units.
 #[derive(Clone, Debug)]
@@ -14,10 +13,12 @@ pub struct Log {
     pub rate_hz: f64,
     /// Time column, s (if the file had one).
     pub t_s: Option<Vec<f64>>,
-    /// Channels by name (canonical where mapped), SI units for gyro and accel channels.
-    pub channels: BTreeMap<String, Vec<f64>>,
-    /// Channel names in file order (without `t`).
-    pub order: Vec<String>,
+    /// The gyro and accelerometer channels the log has, SI units (rad/s, m/s^2).
+    pub channels: ImuChannels<Option<Vec<f64>>>,
+    /// The temperature column, degC, if the log has one.
+    pub temperature_c: Option<Vec<f64>>,
+    /// The quantities in file order (without the time).
+    pub order: Vec<Quantity>,
     /// How each used column was mapped (file order, `t` included).
     pub columns: Vec<ColumnUse>,
     /// Columns not used, with the reason.
@@ -29,7 +30,38 @@ pub struct Log {
 impl Log {
     /// Number of samples.
     pub fn len(&self) -> usize {
-        self.channels.values().next().map_or(0, Vec::len)
+        self.series().next().map_or(0, |(_, v)| v.len())
+    }
+
+    /// A channel's samples, if the log has it.
+    pub fn channel(&self, c: Channel) -> Option<&[f64]> {
+        self.channels[c].as_deref()
+    }
+
+    /// Take a series out of the log (its samples move to the caller).
+    pub fn take(&mut self, q: Quantity) -> Option<Vec<f64>> {
+        match q {
+            Quantity::Imu(c) => self.channels[c].take(),
+            Quantity::Temperature => self.temperature_c.take(),
+            Quantity::Time => self.t_s.take(),
+        }
+    }
+
+    /// Every series the log has (channels, then the temperature), with its quantity.
+    pub fn series(&self) -> impl Iterator<Item = (Quantity, &[f64])> {
+        self.channels
+            .iter()
+            .filter_map(|(c, v)| Some((Quantity::Imu(c), v.as_deref()?)))
+            .chain(
+                self.temperature_c
+                    .as_deref()
+                    .map(|v| (Quantity::Temperature, v)),
+            )
+    }
+
+    /// The names of the log's quantities in file order (`gx`, `temp`, ...).
+    pub fn order_names(&self) -> Vec<&'static str> {
+        self.order.iter().map(|q| q.channel()).collect()
     }
 
     /// Whether the log has no samples (never true for a log `read_log` returns).
@@ -101,13 +133,15 @@ impl Log {
         )
     }
 
-    /// SI unit of a channel, for tables and plots.
-    pub fn unit_of(name: &str) -> &'static str {
-        match Channel::from_name(name).map(Channel::sensor) {
-            Some(Sensor::Gyro) => "rad/s",
-            Some(Sensor::Accel) => "m/s^2",
-            None if name == "temp" => "degC",
-            None => "1",
+    /// SI unit of a quantity, for tables and plots.
+    pub fn unit_of(q: Quantity) -> &'static str {
+        match q {
+            Quantity::Imu(c) => match c.sensor() {
+                Sensor::Gyro => "rad/s",
+                Sensor::Accel => "m/s^2",
+            },
+            Quantity::Temperature => "degC",
+            Quantity::Time => "s",
         }
     }
 }
@@ -124,4 +158,117 @@ pub struct ReadOptions {
     pub columns: Vec<(String, String)>,
     /// The sensor_msgs/Imu topic of a bag or MCAP file (default: the only one).
     pub topic: Option<String>,
+}
+
+/// Why series given as arrays (a front end's own log, not a file) are not a log.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SeriesError {
+    #[error("{source_name}: rate_hz: expected a sample rate in Hz > 0, found {rate_hz}")]
+    Rate { source_name: String, rate_hz: f64 },
+    #[error("{source_name}: {name:?} is not one of gx, gy, gz, ax, ay, az, temp")]
+    Name { source_name: String, name: String },
+    #[error("{source_name}: {name} given twice")]
+    Twice { source_name: String, name: String },
+    #[error("{source_name}: {name}[{index}] is {value}: every sample must be finite and of magnitude below {max:e}")]
+    Value {
+        source_name: String,
+        name: String,
+        index: usize,
+        value: f64,
+        max: f64,
+    },
+    #[error("{source_name}: {name} has {got} samples and {first} has {expected}: every series must have one sample per time step")]
+    Length {
+        source_name: String,
+        name: String,
+        got: usize,
+        first: String,
+        expected: usize,
+    },
+    #[error("{source_name}: {count} samples: at least 2 are needed")]
+    TooShort { source_name: String, count: usize },
+}
+
+impl Log {
+    /// A log from series a front end holds (named `gx` .. `az`, `temp`, SI units), checked as the
+    /// reader checks a file's: the rate, every value finite and below the reader's bound, one
+    /// length, at least two samples. Its columns are "from the name" with the SI ("default") unit,
+    /// as the reader says of a file with those names.
+    pub fn from_series(
+        source: &str,
+        rate_hz: f64,
+        series: Vec<(String, Vec<f64>)>,
+    ) -> std::result::Result<Log, SeriesError> {
+        let source_name = source.to_string();
+        if !crate::valid_rate_hz(rate_hz) {
+            return Err(SeriesError::Rate {
+                source_name,
+                rate_hz,
+            });
+        }
+        let mut log = Log {
+            source: source_name.clone(),
+            rate_hz,
+            t_s: None,
+            channels: ImuChannels::default(),
+            temperature_c: None,
+            order: Vec::new(),
+            columns: Vec::new(),
+            skipped: Vec::new(),
+            topic: None,
+        };
+        let mut first: Option<(String, usize)> = None;
+        for (name, values) in series {
+            let quantity = match Quantity::of_channel(&name) {
+                Some(q @ (Quantity::Imu(_) | Quantity::Temperature)) => q,
+                _ => return Err(SeriesError::Name { source_name, name }),
+            };
+            if log.order.contains(&quantity) {
+                return Err(SeriesError::Twice { source_name, name });
+            }
+            if let Some(index) = values.iter().position(|&v| !crate::valid_value(v)) {
+                return Err(SeriesError::Value {
+                    source_name,
+                    name,
+                    index,
+                    value: values[index],
+                    max: crate::limits::MAX_ABS_VALUE,
+                });
+            }
+            match &first {
+                Some((f, n)) if *n != values.len() => {
+                    return Err(SeriesError::Length {
+                        source_name,
+                        name,
+                        got: values.len(),
+                        first: f.clone(),
+                        expected: *n,
+                    })
+                }
+                Some(_) => {}
+                None => first = Some((name.clone(), values.len())),
+            }
+            log.columns.push(ColumnUse {
+                column: name.clone(),
+                quantity,
+                channel: quantity.channel(),
+                unit: Log::unit_of(quantity),
+                channel_from: Source::Name,
+                unit_from: Source::Default,
+                to_si: 1.0,
+            });
+            log.order.push(quantity);
+            match quantity {
+                Quantity::Imu(c) => log.channels[c] = Some(values),
+                _ => log.temperature_c = Some(values),
+            }
+        }
+        if let Some((_, n)) = first.filter(|(_, n)| *n < 2) {
+            return Err(SeriesError::TooShort {
+                source_name,
+                count: n,
+            });
+        }
+        Ok(log)
+    }
 }

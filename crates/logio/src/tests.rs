@@ -27,11 +27,11 @@ fn reads_comments_units_and_mapping() {
     let log = parse_log(text, "x.csv", &o).unwrap();
     assert_eq!(log.len(), 3);
     // Unrecognised columns are skipped and listed, never analysed without a quantity and unit.
-    assert_eq!(log.order, vec!["gx", "az"]);
+    assert_eq!(log.order_names(), vec!["gx", "az"]);
     assert_eq!(log.skipped.len(), 1);
     assert_eq!(log.skipped[0].column, "other");
-    assert!((log.channels["gx"][1] - 2.0f64.to_radians()).abs() < 1e-15);
-    assert!((log.channels["az"][0] + STANDARD_GRAVITY_MPS2).abs() < 1e-12);
+    assert!((log.channel(Channel::Gx).unwrap()[1] - 2.0f64.to_radians()).abs() < 1e-15);
+    assert!((log.channel(Channel::Az).unwrap()[0] + STANDARD_GRAVITY_MPS2).abs() < 1e-12);
     assert_eq!(log.rate_hz, 100.0);
     // The same without --col and without the unit options: the names say it all.
     let o = ReadOptions {
@@ -216,7 +216,7 @@ fn error_line_numbers_across_parallel_chunks() {
     let good = s.replace("oops", "1.0");
     let log = parse_log(good.as_bytes(), "big.csv", &o).unwrap();
     assert_eq!(log.len(), 50_000);
-    assert_eq!(log.channels["gx"][49_999], 49_999.0 * 0.5);
+    assert_eq!(log.channel(Channel::Gx).unwrap()[49_999], 49_999.0 * 0.5);
 }
 
 #[test]
@@ -239,7 +239,7 @@ fn large_file_is_mapped_and_reads_as_parsed() {
     assert_eq!(read.len(), 120_000);
     assert_eq!(read.channels, parsed.channels);
     assert_eq!(read.t_s, parsed.t_s);
-    assert_eq!(read.channels["gx"][96], 96.0 * -0.05);
+    assert_eq!(read.channel(Channel::Gx).unwrap()[96], 96.0 * -0.05);
 }
 
 #[test]
@@ -263,7 +263,7 @@ fn comments_and_blank_lines_inside_large_chunks() {
         want.push(v);
     }
     let log = parse_log(s.as_bytes(), "c.csv", &opts()).unwrap();
-    assert_eq!(log.channels["gx"], want);
+    assert_eq!(log.channel(Channel::Gx).unwrap(), want);
     let lines: Vec<&str> = s.lines().collect();
     let bad = lines.len() - 1234;
     let broken: String = lines
@@ -294,9 +294,9 @@ fn euroc_style_comment_header_with_units_in_brackets() {
     let log = parse_log(text, "data.csv", &opts()).unwrap();
     assert_eq!(log.len(), 3);
     assert!((log.rate_hz - 200.0).abs() < 0.1, "{}", log.rate_hz);
-    assert_eq!(log.order, vec!["gx", "gy", "gz", "ax", "ay", "az"]);
+    assert_eq!(log.order_names(), vec!["gx", "gy", "gz", "ax", "ay", "az"]);
     assert_eq!(
-        log.channels["ax"][0],
+        log.channel(Channel::Ax).unwrap()[0],
         "8.1476917083333333".parse::<f64>().unwrap()
     );
     assert!(
@@ -339,7 +339,7 @@ fn rostopic_csv_with_text_columns() {
     };
     let log = parse_log(text, "echo.csv", &o).unwrap();
     assert!((log.rate_hz - 100.0).abs() < 1e-6);
-    assert_eq!(log.channels["gz"], vec![0.3; 3]);
+    assert_eq!(log.channel(Channel::Gz).unwrap(), vec![0.3; 3]);
     let skipped: Vec<&str> = log.skipped.iter().map(|s| s.column.as_str()).collect();
     assert!(
         skipped.contains(&"field.header.frame_id")

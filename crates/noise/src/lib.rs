@@ -45,7 +45,7 @@ pub use effect::{Sensor, TermFilter, TermSelector, TermSelectorError};
 pub use law_source::{LawSource, LawSourceContext};
 pub use model::{AxisModel, SensorModel, TriadModel};
 pub use model_error::ModelError;
-pub use process::{ChannelErrors, ImuErrors, CHANNEL_NAMES};
+pub use process::{ChannelErrors, ImuErrors};
 pub use static_level::StaticLevel;
 pub use temperature::TemperatureProfile;
 pub use terms::bias_instability::{BiasInstability, BiasRandomWalk, Flicker};

@@ -63,6 +63,29 @@ pub struct NoiseValues {
     pub origin: String,
 }
 
+impl NoiseValues {
+    /// The values of every channel, `per(c)` = (noise density, random walk) of channel `c`.
+    pub fn from_channels(
+        per: impl Fn(crate::Channel) -> (AxisValue, AxisValue),
+        rostopic: String,
+        update_rate_hz: f64,
+        origin: String,
+    ) -> NoiseValues {
+        use crate::{Channel, Sensor};
+        let density = |s| Channel::of(s).map(|c| per(c).0);
+        let walk = |s| Channel::of(s).map(|c| per(c).1);
+        NoiseValues {
+            gyro_noise_density: density(Sensor::Gyro),
+            gyro_random_walk: walk(Sensor::Gyro),
+            accel_noise_density: density(Sensor::Accel),
+            accel_random_walk: walk(Sensor::Accel),
+            rostopic,
+            update_rate_hz,
+            origin,
+        }
+    }
+}
+
 /// The margin multiplied into the four written values, and the name of the setting that gave it
 /// (written into the header comment: a front end passes its own name for it, e.g. its option).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -18,9 +18,6 @@ pub use crate::terms::quantization::Quantizer;
 pub use crate::terms::resonance::Resonator;
 pub use crate::terms::white_noise::WhiteNoiseSampler;
 
-/// Channel order of `ImuErrors` and of generated logs.
-pub const CHANNEL_NAMES: [&str; 6] = ["gx", "gy", "gz", "ax", "ay", "az"];
-
 /// Samples per sub-block of `ChannelErrors::fill_static` (any value gives the same values).
 const FILL_CHUNK: usize = 512;
 /// Raw (internal-rate) samples per sub-block behind an output filter, at least one output sample's
@@ -57,13 +54,8 @@ pub struct ChannelErrors {
 impl ChannelErrors {
     /// Each term of the channel's axis makes its generator (its per-run draws from its own
     /// stream); the input terms fold into the row and bias, the others run per sample.
-    fn new(model: &SensorModel, channel: usize, dt_s: f64, seed: u64, run: u64) -> ChannelErrors {
-        let sensor = if channel < 3 {
-            Sensor::Gyro
-        } else {
-            Sensor::Accel
-        };
-        let axis_index = channel % 3;
+    fn new(model: &SensorModel, channel: Channel, dt_s: f64, seed: u64, run: u64) -> ChannelErrors {
+        let (sensor, axis_index) = (channel.sensor(), channel.axis());
         let axis = model.axis(sensor, axis_index);
         // The raw processes run at the filter's internal interval.
         let output_filter = axis.get::<OutputFilter>();
@@ -618,7 +610,7 @@ impl ImuErrors {
             "sample interval must be > 0, got {dt_s}"
         );
         ImuErrors {
-            channels: std::array::from_fn(|c| ChannelErrors::new(model, c, dt_s, seed, run)),
+            channels: Channel::ALL.map(|c| ChannelErrors::new(model, c, dt_s, seed, run)),
             temperature: model.temperature.clone(),
             dt_s,
         }

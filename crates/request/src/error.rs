@@ -17,6 +17,15 @@ pub enum Remedy {
     Generate,
 }
 
+/// How a constant channel is left out with a front end's settings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LeaveOut {
+    /// Leave its column out of the log, or map another one (`diagnose`, `drift`).
+    Column,
+    /// Leave it out of the channels analysed (`allan`).
+    Channel,
+}
+
 /// A file named by a request that cannot be read, or whose text is not usable.
 #[derive(Debug)]
 pub struct FileError {
@@ -125,6 +134,20 @@ pub enum RequestError {
     },
     /// Shards that do not belong together.
     Merge(Box<montecarlo::job::MergeError>),
+    /// A log with no gyro or accelerometer channel (`columns`: its quantities in file order).
+    NoImuChannel {
+        source_name: String,
+        columns: String,
+    },
+    /// A constant channel: no noise to analyse.
+    Constant {
+        source_name: String,
+        channel: &'static str,
+        value: f64,
+        leave_out: LeaveOut,
+    },
+    /// Series given as arrays that are not a log.
+    Series(logio::SeriesError),
     /// Generated values that overflow (`channel` at sample `k`).
     Overflow {
         channel: &'static str,
@@ -253,6 +276,29 @@ impl RequestError {
                 format!("{name}: the stored scenario: {}", error_chain(&**source))
             }
             RequestError::Merge(e) => error_chain(&**e),
+            RequestError::NoImuChannel {
+                source_name,
+                columns,
+            } => format!(
+                "{source_name}: no gyro or accelerometer channel (expected columns gx gy gz ax ay az, or map them with {} gx=NAME; columns: {columns})",
+                n(Setting::Columns)
+            ),
+            RequestError::Constant {
+                source_name,
+                channel,
+                value,
+                leave_out,
+            } => format!(
+                "{source_name}: channel {channel} is constant ({value}): it has no noise to analyse (a stuck or disconnected sensor, or a column of zeros?); {}",
+                match leave_out {
+                    LeaveOut::Column => format!(
+                        "leave the column out or map another one with {}",
+                        n(Setting::Columns)
+                    ),
+                    LeaveOut::Channel => format!("leave it out with {}", n(Setting::Channels)),
+                }
+            ),
+            RequestError::Series(e) => e.to_string(),
             RequestError::Overflow { channel, value, k } => format!(
                 "channel {channel} is {value} at sample {k}: the model's values overflow; check their units"
             ),

@@ -31,6 +31,7 @@
 pub mod error;
 pub mod files;
 pub mod generate;
+pub mod logs;
 pub mod pool;
 pub mod setting;
 pub mod simulate;

@@ -23,6 +23,10 @@ pub enum Setting {
     Merge,
     /// The generated log's output (the CLI's `-o FILE`; Python returns a DataFrame).
     Output,
+    /// The column mapping of a log (`--col`, `columns`).
+    Columns,
+    /// The channels to analyse (`--channels`, `channels`).
+    Channels,
 }
 
 impl Setting {
@@ -40,6 +44,8 @@ impl Setting {
             Setting::Shard => "shard",
             Setting::Merge => "merge",
             Setting::Output => "output",
+            Setting::Columns => "columns",
+            Setting::Channels => "channels",
         }
     }
 }
