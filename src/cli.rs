@@ -85,6 +85,13 @@ pub fn flag(s: request::Setting) -> &'static str {
         Setting::Output => "-o",
         Setting::Columns => "--col",
         Setting::Channels => "--channels",
+        Setting::Seeds => "--seeds",
+        Setting::Rounds => "--rounds",
+        Setting::MinDeltaBic => "--min-delta-bic",
+        Setting::TauMin => "--tau-min",
+        Setting::Horizons => "--horizons",
+        Setting::Latitude => "--latitude",
+        Setting::Replicates => "--replicates",
     }
 }
 

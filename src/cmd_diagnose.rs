@@ -2,14 +2,16 @@
 //! which effect is missing, the corrected model, and the gap before and after (docs/diagnose.md,
 //! "The diagnose workflow").
 
+use crate::cli::request_error;
 use crate::log_input::{self, LogArgs};
 use crate::output::write_string;
 use crate::plot::{Band, LogLogPlot, Series};
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{anyhow, Context, Result};
 use diagnose::report::{ChannelReport, DriftRow, FoundEffect};
 use diagnose::{diagnose_runs, DiagnoseError, Diagnosis, LogInput, Settings};
 use noise::noise_file::AxisValue;
 use noise::SensorModel;
+use request::diagnose::{DiagnoseRequest, ProtocolRequest};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -27,25 +29,27 @@ pub struct Args {
     pub log_args: LogArgs,
     #[command(flatten)]
     pub earth: crate::log_input::EarthArgs,
-    /// Master seed of the simulated logs (written into the outputs)
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Simulated logs per model band
-    #[arg(long, default_value_t = 16)]
-    pub seeds: usize,
-    /// Add-and-resimulate rounds at most
-    #[arg(long, default_value_t = 6)]
-    pub rounds: usize,
+    /// Master seed of the simulated logs (written into the outputs) [default: 1]
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Simulated logs per model band [default: 16]
+    #[arg(long)]
+    pub seeds: Option<usize>,
+    /// Add-and-resimulate rounds at most [default: 6]
+    #[arg(long)]
+    pub rounds: Option<usize>,
     /// Drift horizons: a comma list of times, e.g. 60,3600 or 1min,1h (a bare number is seconds)
-    #[arg(long, value_delimiter = ',', default_value = "1min,1h", value_parser = crate::cli::duration_s)]
-    pub horizons: Vec<f64>,
+    /// [default: 1min,1h]
+    #[arg(long, value_delimiter = ',', value_parser = crate::cli::duration_s)]
+    pub horizons: Option<Vec<f64>>,
     /// BIC improvement an effect needs to be named (> 10 is "very strong" evidence, Kass & Raftery
-    /// 1995; 16 keeps false alarms near 1e-3 per clean 6-channel log)
-    #[arg(long, default_value_t = 16.0)]
-    pub min_delta_bic: f64,
-    /// Leave out taus below this time (a bare number is seconds), e.g. where the sensor's anti-alias filter shapes the curve
-    #[arg(long, default_value = "0", value_name = "TIME", value_parser = crate::cli::duration_or_zero_s)]
-    pub tau_min: f64,
+    /// 1995; 16 keeps false alarms near 1e-3 per clean 6-channel log) [default: 16]
+    #[arg(long)]
+    pub min_delta_bic: Option<f64>,
+    /// Leave out taus below this time (a bare number is seconds), e.g. where the sensor's
+    /// anti-alias filter shapes the curve [default: 0]
+    #[arg(long, value_name = "TIME", value_parser = crate::cli::duration_or_zero_s)]
+    pub tau_min: Option<f64>,
     /// Held-out logs (same rate, length and columns) to check the corrected model on: their gap with
     /// the original and with the corrected model (repeat or comma-separate)
     #[arg(long, value_delimiter = ',', value_name = "LOG")]
@@ -86,33 +90,28 @@ impl diagnose::Observer for Stages {
 
 /// A diagnose error, one about a setting named by the option that sets it.
 fn with_flags(e: DiagnoseError) -> anyhow::Error {
-    match e {
-        DiagnoseError::NoTaus { tau_min_s } => {
-            anyhow!("no Allan point at or above --tau-min {tau_min_s} s")
-        }
-        DiagnoseError::SeedsForRuns { seeds, runs } => anyhow!(
-            "--seeds {seeds} for {runs} logs: a band pooled over {runs} runs needs more simulated logs than runs (e.g. --seeds {})",
-            (runs + 1).max(16)
-        ),
-        e => e.into(),
+    anyhow!(request::diagnose::diagnose_error(&e, &crate::cli::flag))
+}
+
+/// The request of the command line (`request::diagnose`: one set of defaults and checks).
+fn request(args: &Args) -> DiagnoseRequest {
+    DiagnoseRequest {
+        logs: args.logs.len(),
+        seed: args.seed,
+        seeds: args.seeds,
+        rounds: args.rounds,
+        min_delta_bic: args.min_delta_bic,
+        tau_min_s: args.tau_min,
+        drift_check: args.drift_check,
+        protocol: ProtocolRequest {
+            calibration: args.calibration,
+            initialisation: args.init,
+            horizons_s: args.horizons.clone(),
+            overlapping: false,
+            earth: args.earth.earth(),
+        },
     }
 }
-
-/// The drift check's protocol (the `drift` command's, on diagnose's horizons), when it runs: with
-/// several logs, or when asked for.
-fn drift_protocol(args: &Args) -> Option<diagnose::protocol::Protocol> {
-    use diagnose::protocol::{Calibration, Initialisation, Protocol};
-    let asked = args.drift_check || args.calibration.is_some() || args.init.is_some();
-    (asked || args.logs.len() > 1).then(|| Protocol {
-        calibration: args.calibration.unwrap_or(Calibration::LogMean),
-        initialisation: args.init.unwrap_or(Initialisation::Perfect),
-        horizons_s: args.horizons.clone(),
-        overlapping: false,
-        latitude_deg: args.earth.latitude_deg(),
-    })
-}
-
-use diagnose::settings::{MAX_ROUNDS, MAX_SEEDS};
 
 pub fn run(args: Args) -> Result<()> {
     crate::output::note_inputs(args.logs.iter().chain([&args.model]).chain(&args.check));
@@ -123,31 +122,9 @@ pub fn run(args: Args) -> Result<()> {
         .as_deref()
         .map(crate::output::prepare_dir)
         .transpose()?;
-    if args.seeds < 2 {
-        bail!(
-            "--seeds {}: at least 2 simulated logs are needed for a band",
-            args.seeds
-        );
-    }
-    // The band's own error falls as 1/sqrt(seeds): beyond a few thousand logs it is negligible
-    // and the run only takes longer (each log is as long as the measured one).
-    if args.seeds > MAX_SEEDS {
-        bail!(
-            "--seeds {}: expected at most {MAX_SEEDS} simulated logs per band",
-            args.seeds
-        );
-    }
-    if args.rounds > MAX_ROUNDS {
-        bail!("--rounds {}: expected at most {MAX_ROUNDS}", args.rounds);
-    }
-    if !args.min_delta_bic.is_finite() || args.min_delta_bic < 0.0 {
-        bail!(
-            "--min-delta-bic {}: expected a number >= 0",
-            args.min_delta_bic
-        );
-    }
+    let settings = request(&args).validate().map_err(request_error)?;
     let pool = crate::cli::pool(args.threads)?;
-    pool.install(|| run_inner(&args))
+    pool.install(|| run_inner(&args, &settings))
 }
 
 /// The channels of a log as diagnose reads them, once checked: a log without a gyro or
@@ -157,11 +134,12 @@ fn log_channels(log: &logio::Log) -> Result<LogInput<'_>> {
     Ok(request::logs::log_input(log, true))
 }
 
-fn run_inner(args: &Args) -> Result<()> {
+fn run_inner(args: &Args, settings: &Settings) -> Result<()> {
     let model = crate::files::sensor_model(&args.model)?;
-    crate::model_notes::print(&model, args.horizons.iter().copied().reduce(f64::max));
+    let horizons = &settings.horizons_s;
+    crate::model_notes::print(&model, horizons.iter().copied().reduce(f64::max));
     args.earth
-        .note(args.horizons.iter().copied().fold(0.0, f64::max));
+        .note(horizons.iter().copied().fold(0.0, f64::max));
     let logs = args.log_args.read_all(&args.logs)?;
     for log in &logs {
         eprintln!("{}: {}", log.source, log_input::mapping_text(log));
@@ -173,32 +151,15 @@ fn run_inner(args: &Args) -> Result<()> {
         .map(|l| l.source.as_str())
         .collect::<Vec<_>>()
         .join(", ");
-    // Each worker holds a simulated six-channel log of the longest run's length (and its phase):
-    // refuse logs whose simulation would not fit rather than be killed for memory halfway.
     let longest = logs.iter().map(logio::Log::len).max().unwrap_or(0);
-    let need = rayon::current_num_threads() as u64 * 6 * longest as u64 * 16;
-    if let Some(available) = logio::available_memory_bytes() {
-        if need > available {
-            bail!(
-                "{}: simulating logs of {} samples on {} threads needs about {:.1} GiB and {:.1} GiB is available: use fewer --threads or a shorter log",
-                log.source,
-                longest,
-                rayon::current_num_threads(),
-                need as f64 / (1u64 << 30) as f64,
-                available as f64 / (1u64 << 30) as f64
-            );
-        }
-    }
+    request::diagnose::check_simulation_memory(&log.source, longest, rayon::current_num_threads())
+        .map_err(request_error)?;
     let inputs: Vec<LogInput> = logs.iter().map(log_channels).collect::<Result<_>>()?;
     let input = inputs[0];
-    let longest = logs.iter().map(logio::Log::len).max().unwrap_or(0);
-    let protocol = drift_protocol(args).unwrap_or_else(|| diagnose::protocol::Protocol {
-        calibration: diagnose::protocol::Calibration::LogMean,
-        initialisation: diagnose::protocol::Initialisation::Perfect,
-        horizons_s: args.horizons.clone(),
-        overlapping: false,
-        latitude_deg: args.earth.latitude_deg(),
-    });
+    let protocol = request(args)
+        .protocol
+        .protocol(horizons)
+        .map_err(request_error)?;
     crate::cmd_drift::check_sampling(&protocol, input.dt_s, longest)?;
     // An output filter in the model must fit the log's rate.
     noise::ImuErrors::check_rate(&model, input.dt_s).map_err(|e| {
@@ -208,20 +169,9 @@ fn run_inner(args: &Args) -> Result<()> {
             crate::fmt::rate(1.0 / input.dt_s)
         )
     })?;
-    let settings = Settings {
-        seed: args.seed,
-        seeds: args.seeds,
-        max_rounds: args.rounds,
-        horizons_s: args.horizons.clone(),
-        min_delta_bic: args.min_delta_bic,
-        tau_min_s: args.tau_min,
-        drift_protocol: drift_protocol(args),
-        latitude_deg: args.earth.latitude_deg(),
-        ..Settings::default()
-    };
     let started = std::time::Instant::now();
     let stages = Stages(crate::progress::Progress::stages("diagnose"));
-    let result = diagnose_runs(&inputs, &model, &settings, &stages);
+    let result = diagnose_runs(&inputs, &model, settings, &stages);
     stages.0.finish();
     let result = result
         .map_err(with_flags)
@@ -263,7 +213,7 @@ fn run_inner(args: &Args) -> Result<()> {
     crate::output::answer(&human, args.json.then_some(format!("{doc}\n").as_str()))?;
     if let Some(dir) = &args.out {
         let _set = crate::output::begin_set(dir)?;
-        let toml_name = format!("{}-diagnosed.toml", file_stem(&args.model));
+        let toml_name = request::diagnose::diagnosed_model_name(&args.model.display().to_string());
         write_string(&dir.join(&toml_name), &corrected)?;
         write_string(&dir.join("diagnose.json"), &doc)?;
         for (name, report) in &result.channels {
@@ -282,12 +232,6 @@ fn run_inner(args: &Args) -> Result<()> {
         );
     }
     Ok(())
-}
-
-fn file_stem(path: &Path) -> String {
-    path.file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "sensor".into())
 }
 
 /// The corrected model as TOML (`diagnose::document`), in the units and conventions of the

@@ -6,7 +6,7 @@ use crate::files::{self, TextFile};
 use crate::log_input::{self, LogArgs};
 use crate::output::write_string;
 use crate::plot::{Band, LogLogPlot, Series};
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{anyhow, Context, Result};
 use diagnose::alternatives::Alternative;
 use diagnose::document::ProtocolSetting;
 use diagnose::drift_check::{
@@ -15,6 +15,7 @@ use diagnose::drift_check::{
 use diagnose::fitted_on::FittedOn;
 use diagnose::protocol::{Calibration, Initialisation, Protocol, Quantity};
 use diagnose::LogInput;
+use request::diagnose::{DriftRequest, ProtocolRequest};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -29,12 +30,7 @@ impl diagnose::Observer for Simulated {
 
 /// A drift-check error, one about a setting named by the option that sets it.
 fn with_flags(e: CheckError) -> anyhow::Error {
-    match e {
-        CheckError::Replicates(n) => anyhow!(
-            "--replicates {n}: at least 10 simulated experiments are needed for a 95 % band"
-        ),
-        e => anyhow!("{e}"),
-    }
+    anyhow!(request::diagnose::check_error(&e, &crate::cli::flag))
 }
 
 #[derive(clap::Args)]
@@ -49,21 +45,25 @@ pub struct Args {
     pub log_args: LogArgs,
     #[command(flatten)]
     pub earth: crate::log_input::EarthArgs,
-    /// Bias calibration before each segment: none, log-mean, or window:TIME (the mean over TIME before each segment)
-    #[arg(long, default_value = "log-mean", value_name = "HOW", value_parser = calibration)]
-    pub calibration: Calibration,
-    /// Initial attitude: perfect, or level:TIME (roll and pitch from the accelerometers over TIME before each segment)
-    #[arg(long, default_value = "perfect", value_name = "HOW", value_parser = initialisation)]
-    pub init: Initialisation,
-    /// Horizons (segment lengths): a comma list of times, e.g. 10,60,10min,1h
-    #[arg(long, value_delimiter = ',', default_value = "10s,1min,10min,1h", value_parser = crate::cli::duration_s)]
-    pub horizons: Vec<f64>,
+    /// Bias calibration before each segment: none, log-mean, or window:TIME (the mean over TIME
+    /// before each segment) [default: log-mean]
+    #[arg(long, value_name = "HOW", value_parser = calibration)]
+    pub calibration: Option<Calibration>,
+    /// Initial attitude: perfect, or level:TIME (roll and pitch from the accelerometers over TIME
+    /// before each segment) [default: perfect]
+    #[arg(long, value_name = "HOW", value_parser = initialisation)]
+    pub init: Option<Initialisation>,
+    /// Horizons (segment lengths): a comma list of times, e.g. 10,60,10min,1h [default:
+    /// 10s,1min,10min,1h]
+    #[arg(long, value_delimiter = ',', value_parser = crate::cli::duration_s)]
+    pub horizons: Option<Vec<f64>>,
     /// Half-overlapping segments instead of consecutive ones
     #[arg(long)]
     pub overlap: bool,
     /// Simulated experiments for the model's 95 % band (each: one simulated log per measured log)
-    #[arg(long, default_value_t = 40)]
-    pub replicates: usize,
+    /// [default: 40]
+    #[arg(long)]
+    pub replicates: Option<usize>,
     /// Take the model's levels as exact even when it records the data they were fitted on (its
     /// [fitted_on] table, written by `diagnose`): no parametric bootstrap
     #[arg(long)]
@@ -72,9 +72,9 @@ pub struct Args {
     /// apart from it (its [[alternatives]], written by `diagnose`): no averaging over them
     #[arg(long)]
     pub one_structure: bool,
-    /// Master seed of the simulated logs (written into the outputs)
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
+    /// Master seed of the simulated logs (written into the outputs) [default: 1]
+    #[arg(long)]
+    pub seed: Option<u64>,
     /// Print one JSON document on stdout (human text on stderr)
     #[arg(long)]
     pub json: bool,
@@ -112,13 +112,19 @@ pub(crate) fn check_sampling(protocol: &Protocol, dt_s: f64, samples: usize) -> 
         .map_err(|e| anyhow!(e.render(&protocol_flag)))
 }
 
-fn protocol(args: &Args) -> Protocol {
-    Protocol {
-        calibration: args.calibration,
-        initialisation: args.init,
-        horizons_s: args.horizons.clone(),
-        overlapping: args.overlap,
-        latitude_deg: args.earth.latitude_deg(),
+/// The request of the command line (`request::diagnose::DriftRequest`: one set of defaults and
+/// checks).
+fn request(args: &Args) -> DriftRequest {
+    DriftRequest {
+        protocol: ProtocolRequest {
+            calibration: args.calibration,
+            initialisation: args.init,
+            horizons_s: args.horizons.clone(),
+            overlapping: args.overlap,
+            earth: args.earth.earth(),
+        },
+        replicates: args.replicates,
+        seed: args.seed,
     }
 }
 
@@ -129,15 +135,11 @@ pub fn run(args: Args) -> Result<()> {
         .as_deref()
         .map(crate::output::prepare_dir)
         .transpose()?;
-    let protocol = protocol(&args);
-    if args.replicates < 10 || args.replicates > 100_000 {
-        bail!(
-            "--replicates {}: expected 10 to 100000 simulated experiments",
-            args.replicates
-        );
-    }
+    let settings = request(&args)
+        .validate()
+        .map_err(crate::cli::request_error)?;
     let pool = crate::cli::pool(args.threads)?;
-    pool.install(|| run_inner(&args, protocol))
+    pool.install(|| run_inner(&args, settings))
 }
 
 /// The data the model's levels were fitted on (`diagnose::document::fitted_on_of`).
@@ -189,24 +191,21 @@ fn alternatives(args: &Args, model_file: &TextFile) -> Result<Vec<Alternative>> 
         .with_context(|| name.clone())
 }
 
-fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
+fn run_inner(args: &Args, settings: CheckSettings) -> Result<()> {
+    let protocol = &settings.protocol;
     let model_file = files::read_config(&args.model)?;
     let model = files::sensor_model_of(&model_file)?;
-    crate::model_notes::print(&model, args.horizons.iter().copied().reduce(f64::max));
+    let horizons = &protocol.horizons_s;
+    crate::model_notes::print(&model, horizons.iter().copied().reduce(f64::max));
     args.earth
-        .note(args.horizons.iter().copied().fold(0.0, f64::max));
+        .note(horizons.iter().copied().fold(0.0, f64::max));
     let fitted = fitted_on(args, &model_file)?;
     let alternatives = alternatives(args, &model_file)?;
     let logs = args.log_args.read_all(&args.logs)?;
     for log in &logs {
         eprintln!("{}: {}", log.source, log_input::mapping_text(log));
         crate::plausibility::print(log);
-        request::logs::refuse_constant(
-            log,
-            log.order.iter().copied(),
-            request::error::LeaveOut::Column,
-        )
-        .map_err(crate::cli::request_error)?;
+        request::logs::check_imu(log).map_err(crate::cli::request_error)?;
     }
     let inputs: Vec<LogInput> = logs
         .iter()
@@ -214,7 +213,7 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
         .collect();
     if let Some(first) = inputs.first() {
         let longest = logs.iter().map(logio::Log::len).max().unwrap_or(0);
-        check_sampling(&protocol, first.dt_s, longest)?;
+        check_sampling(protocol, first.dt_s, longest)?;
     }
     // An output filter in the model must fit the logs' rate.
     if let Some(first) = inputs.first() {
@@ -226,17 +225,6 @@ fn run_inner(args: &Args, protocol: Protocol) -> Result<()> {
             )
         })?;
     }
-    if inputs
-        .iter()
-        .any(|i| i.channels.values().iter().all(Option::is_none))
-    {
-        bail!("a log has no gyro or accelerometer channel");
-    }
-    let settings = CheckSettings {
-        protocol,
-        replicates: args.replicates,
-        seed: args.seed,
-    };
     let started = std::time::Instant::now();
     let structures = Structures {
         model: &model,

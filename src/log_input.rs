@@ -46,12 +46,14 @@ pub struct EarthArgs {
 }
 
 impl EarthArgs {
-    /// The protocol's `latitude_deg`: None on the flat Earth.
-    pub fn latitude_deg(&self) -> Option<f64> {
-        (!self.flat_earth).then_some(
-            self.latitude
-                .unwrap_or(diagnose::protocol::DEFAULT_LATITUDE_DEG),
-        )
+    /// Where the logs were recorded, as the request layer takes it.
+    pub fn earth(&self) -> request::diagnose::Earth {
+        use request::diagnose::Earth;
+        match (self.flat_earth, self.latitude) {
+            (true, _) => Earth::Flat,
+            (false, Some(v)) => Earth::Latitude(v),
+            (false, None) => Earth::DefaultLatitude,
+        }
     }
 
     /// A note when the latitude was left at its default and a horizon reaches beyond a few

@@ -15,6 +15,7 @@ from ._log import reader_settings
 from ._sensor import Sensor
 
 from ._imudrift import CHANNELS as _CHANNELS, TEMPERATURE as _TEMPERATURE
+from ._imudrift import DIAGNOSE_DEFAULTS as _DD, DRIFT_DEFAULTS as _FD
 
 
 def _terms(t):
@@ -145,10 +146,6 @@ def _logs(logs, rate):
     return [_log_arg(logs, rate)]
 
 
-def _model_name(model):
-    return getattr(model, "_source", None) or os.fspath(model)
-
-
 class DiagnoseResult(_Document):
     """The result of :func:`diagnose`: ``to_dict()`` is ``imudrift diagnose --json``;
     ``effects`` the effects found (one dict per channel and effect: ``channel, effect, kind,
@@ -180,9 +177,11 @@ class DiagnoseResult(_Document):
 
 
 def diagnose(logs, model, rate=None, gyro_unit=None, accel_unit=None, time_unit=None,
-             columns=None, topic=None, seed=1, seeds=16, rounds=6, horizons=(60.0, 3600.0),
-             min_delta_bic=16.0, tau_min=0.0, check=None, drift_check=False, calibration=None,
-             init=None, threads=None, latitude=45.0):
+             columns=None, topic=None, seed=_DD["seed"], seeds=_DD["seeds"],
+             rounds=_DD["rounds"], horizons=tuple(_DD["horizons"]),
+             min_delta_bic=_DD["min_delta_bic"], tau_min=_DD["tau_min"], check=None,
+             drift_check=False, calibration=None, init=None, threads=None,
+             latitude=_DD["latitude"]):
     """``imudrift diagnose LOG... --model MODEL``: where the model and the measured static log
     disagree, which effect is missing, the corrected model; the same numbers as the CLI.
 
@@ -220,8 +219,6 @@ def diagnose(logs, model, rate=None, gyro_unit=None, accel_unit=None, time_unit=
     reader = reader_settings(rate, gyro_unit, accel_unit, time_unit, columns, topic)
     held = [] if check is None else _logs(check, rate)
     raw = _diagnose(_logs(logs, rate), _sensor_arg(model), reader, settings, held)
-    stem = os.path.splitext(os.path.basename(_model_name(model)))[0] or "sensor"
-    raw = dict(raw, corrected_source=f"{stem}-diagnosed.toml")
     return DiagnoseResult(raw)
 
 
@@ -254,9 +251,9 @@ class DriftResult(_Document):
 
 
 def drift(logs, model, rate=None, gyro_unit=None, accel_unit=None, time_unit=None, columns=None,
-          topic=None, calibration="log-mean", init="perfect", horizons=(10.0, 60.0, 600.0, 3600.0),
-          overlap=False, replicates=40, exact_parameters=False, one_structure=False, seed=1,
-          threads=None, latitude=45.0):
+          topic=None, calibration="log-mean", init="perfect", horizons=tuple(_FD["horizons"]),
+          overlap=False, replicates=_FD["replicates"], exact_parameters=False,
+          one_structure=False, seed=_FD["seed"], threads=None, latitude=_FD["latitude"]):
     """``imudrift drift LOG... --model MODEL``: the drift measured on static logs against the
     drift the model predicts under one protocol, with intervals and a verdict; the same numbers
     as the CLI.

@@ -15,6 +15,8 @@ _Taus = Union[str, Sequence[float], _F64]
 
 CHANNELS: List[str]
 TEMPERATURE: str
+DIAGNOSE_DEFAULTS: Dict[str, Any]
+DRIFT_DEFAULTS: Dict[str, Any]
 
 def allantools_dev(
     data: _F64, rate: float, data_type: str, function: str, taus: Optional[_Taus] = None

@@ -5,17 +5,20 @@
 //! within a second (the runner's stop flag); its readback, `diagnose` and `drift` have no stop
 //! flag in the library, so a Ctrl-C during them is raised when they finish.
 
-use crate::sim::{check_experiment_size, detached, message, run_job, terms};
+use crate::sim::{
+    argument, check_experiment_size, detached, message, request_error, run_job, terms,
+};
 use crate::{invalid, read_log_file, read_options, ReaderArgs};
 use diagnose::document::{self, DiagnoseSources, HeldOutChecks, ProtocolSetting};
-use diagnose::drift_check::{check_drift_averaged, CheckError, CheckSettings};
+use diagnose::drift_check::check_drift_averaged;
 use diagnose::protocol::{Calibration, Initialisation, Protocol};
-use diagnose::{DiagnoseError, LogInput};
+use diagnose::LogInput;
 use montecarlo::spec_job::{self, SpecDoc, SpecError, SpecRequest, SpecSetting, SpecSettings};
 use noise::SensorModel;
 use numpy::PyReadonlyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use request::diagnose::{DiagnoseRequest, DriftRequest, Earth, ProtocolRequest};
 use std::path::PathBuf;
 
 fn model(text: &str, source: &str) -> PyResult<SensorModel> {
@@ -230,30 +233,20 @@ fn check_memory(logs: &[OwnedLog], threads: Option<usize>) -> PyResult<()> {
         .filter(|&n| n > 0)
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let longest = logs.iter().map(OwnedLog::len).max().unwrap_or(0);
-    let need = threads as u64 * 6 * longest as u64 * 16;
-    if let Some(available) = logio::available_memory_bytes() {
-        if need > available {
-            return Err(invalid(format!(
-                "{}: simulating logs of {longest} samples on {threads} threads needs about {:.1} GiB and {:.1} GiB is available: use fewer threads or a shorter log",
-                logs[0].log.source,
-                need as f64 / (1u64 << 30) as f64,
-                available as f64 / (1u64 << 30) as f64
-            )));
-        }
-    }
-    Ok(())
+    request::diagnose::check_simulation_memory(&logs[0].log.source, longest, threads)
+        .map_err(request_error)
 }
 
 /// `imudrift.diagnose`'s settings (the CLI's options by their Python names).
 #[derive(FromPyObject)]
 #[pyo3(from_item_all)]
 pub struct DiagnoseArgs {
-    seed: u64,
-    seeds: usize,
-    rounds: usize,
-    horizons: Vec<f64>,
-    min_delta_bic: f64,
-    tau_min: f64,
+    seed: Option<u64>,
+    seeds: Option<usize>,
+    rounds: Option<usize>,
+    horizons: Option<Vec<f64>>,
+    min_delta_bic: Option<f64>,
+    tau_min: Option<f64>,
     drift_check: bool,
     calibration: Option<String>,
     init: Option<String>,
@@ -261,65 +254,27 @@ pub struct DiagnoseArgs {
     latitude: Option<f64>,
 }
 
-/// `latitude` (deg, -89..89), or None for Woodman's flat Earth, as the CLI's `--latitude` /
+/// `latitude` (deg), or None for Woodman's flat Earth, as the CLI's `--latitude` /
 /// `--flat-earth`.
-fn latitude(value: Option<f64>) -> PyResult<Option<f64>> {
-    match value {
-        Some(v) if !(v.is_finite() && v.abs() <= 89.0) => Err(invalid(format!(
-            "latitude {v}: expected a latitude in [-89, 89] deg (the north-east-down frame is singular at the poles), or None for the flat Earth"
-        ))),
-        v => Ok(v),
-    }
+fn earth(value: Option<f64>) -> Earth {
+    value.map_or(Earth::Flat, Earth::Latitude)
 }
 
-fn check_diagnose_args(a: &DiagnoseArgs) -> PyResult<()> {
-    use diagnose::settings::{MAX_ROUNDS, MAX_SEEDS};
-    if a.seeds < 2 {
-        return Err(invalid(format!(
-            "seeds {}: at least 2 simulated logs are needed for a band",
-            a.seeds
-        )));
-    }
-    if a.seeds > MAX_SEEDS {
-        return Err(invalid(format!(
-            "seeds {}: expected at most {MAX_SEEDS} simulated logs per band",
-            a.seeds
-        )));
-    }
-    if a.rounds > MAX_ROUNDS {
-        return Err(invalid(format!(
-            "rounds {}: expected at most {MAX_ROUNDS}",
-            a.rounds
-        )));
-    }
-    if !a.min_delta_bic.is_finite() || a.min_delta_bic < 0.0 {
-        return Err(invalid(format!(
-            "min_delta_bic {}: expected a number >= 0",
-            a.min_delta_bic
-        )));
-    }
-    if !(a.tau_min.is_finite() && a.tau_min >= 0.0) {
-        return Err(invalid(format!(
-            "tau_min {}: expected a time >= 0",
-            a.tau_min
-        )));
-    }
-    if let Some(h) = a.horizons.iter().find(|h| !(h.is_finite() && **h > 0.0)) {
-        return Err(invalid(format!("horizons: expected times > 0, found {h}")));
-    }
-    Ok(())
-}
-
-/// A diagnose error, one about a setting named by the Python argument that sets it.
-fn diagnose_error(e: DiagnoseError) -> String {
-    match e {
-        DiagnoseError::NoTaus { tau_min_s } => format!("no Allan point at or above tau_min {tau_min_s} s"),
-        DiagnoseError::SeedsForRuns { seeds, runs } => format!(
-            "seeds {seeds} for {runs} logs: a band pooled over {runs} runs needs more simulated logs than runs (e.g. seeds={})",
-            (runs + 1).max(16)
-        ),
-        e => message(&e),
-    }
+/// The protocol's settings as the request layer takes them.
+fn protocol_request(
+    calibration_text: Option<&str>,
+    init_text: Option<&str>,
+    horizons_s: Option<Vec<f64>>,
+    overlapping: bool,
+    latitude: Option<f64>,
+) -> PyResult<ProtocolRequest> {
+    Ok(ProtocolRequest {
+        calibration: calibration_text.map(calibration).transpose()?,
+        initialisation: init_text.map(initialisation).transpose()?,
+        horizons_s,
+        overlapping,
+        earth: earth(latitude),
+    })
 }
 
 /// `imudrift diagnose LOG... --model MODEL --json`: `document` (the JSON text) and `corrected`
@@ -333,7 +288,27 @@ pub fn diagnose_run<'py>(
     settings: DiagnoseArgs,
     check: Vec<LogArg<'py>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    check_diagnose_args(&settings)?;
+    let request = DiagnoseRequest {
+        logs: logs.len(),
+        seed: settings.seed,
+        seeds: settings.seeds,
+        rounds: settings.rounds,
+        min_delta_bic: settings.min_delta_bic,
+        tau_min_s: settings.tau_min,
+        drift_check: settings.drift_check,
+        protocol: protocol_request(
+            settings.calibration.as_deref(),
+            settings.init.as_deref(),
+            settings.horizons.clone(),
+            false,
+            settings.latitude,
+        )?,
+    };
+    let s = request.validate().map_err(request_error)?;
+    let protocol = request
+        .protocol
+        .protocol(&s.horizons_s)
+        .map_err(request_error)?;
     let (model_text, model_name) = model_arg;
     let m = model(&model_text, &model_name)?;
     let logs = logs_of(py, logs, &reader)?;
@@ -342,38 +317,9 @@ pub fn diagnose_run<'py>(
     } else {
         logs_of(py, check, &reader)?
     };
-    let asked = settings.drift_check || settings.calibration.is_some() || settings.init.is_some();
-    let protocol = Protocol {
-        calibration: settings
-            .calibration
-            .as_deref()
-            .map(calibration)
-            .transpose()?
-            .unwrap_or(Calibration::LogMean),
-        initialisation: settings
-            .init
-            .as_deref()
-            .map(initialisation)
-            .transpose()?
-            .unwrap_or(Initialisation::Perfect),
-        horizons_s: settings.horizons.clone(),
-        overlapping: false,
-        latitude_deg: latitude(settings.latitude)?,
-    };
     check_logs(&logs, &protocol, &m, &model_name)?;
     check_memory(&logs, settings.threads)?;
     let inputs: Vec<LogInput> = logs.iter().map(|l| l.input(true)).collect();
-    let s = diagnose::Settings {
-        seed: settings.seed,
-        seeds: settings.seeds,
-        max_rounds: settings.rounds,
-        horizons_s: settings.horizons.clone(),
-        min_delta_bic: settings.min_delta_bic,
-        tau_min_s: settings.tau_min,
-        latitude_deg: protocol.latitude_deg,
-        drift_protocol: (asked || logs.len() > 1).then_some(protocol),
-        ..diagnose::Settings::default()
-    };
     let sources: Vec<String> = logs.iter().map(|l| l.log.source.clone()).collect();
     let (result, checks) = run_job(py, settings.threads, |_| {
         let result = match diagnose::diagnose_runs(&inputs, &m, &s, &()) {
@@ -382,7 +328,7 @@ pub fn diagnose_run<'py>(
                 return Some(Err(format!(
                     "diagnosing {} against {model_name}: {}",
                     sources.join(", "),
-                    diagnose_error(e)
+                    request::diagnose::diagnose_error(&e, &argument)
                 )))
             }
         };
@@ -413,6 +359,10 @@ pub fn diagnose_run<'py>(
     let d = PyDict::new(py);
     d.set_item("document", doc.to_string())?;
     d.set_item("corrected", corrected)?;
+    d.set_item(
+        "corrected_source",
+        request::diagnose::diagnosed_model_name(&model_name),
+    )?;
     Ok(d)
 }
 
@@ -420,14 +370,14 @@ pub fn diagnose_run<'py>(
 #[derive(FromPyObject)]
 #[pyo3(from_item_all)]
 pub struct DriftArgs {
-    calibration: String,
-    init: String,
-    horizons: Vec<f64>,
+    calibration: Option<String>,
+    init: Option<String>,
+    horizons: Option<Vec<f64>>,
     overlap: bool,
-    replicates: usize,
+    replicates: Option<usize>,
     exact_parameters: bool,
     one_structure: bool,
-    seed: u64,
+    seed: Option<u64>,
     threads: Option<usize>,
     latitude: Option<f64>,
 }
@@ -441,26 +391,20 @@ pub fn drift_run<'py>(
     reader: ReaderArgs,
     settings: DriftArgs,
 ) -> PyResult<String> {
-    if settings.replicates < 10 || settings.replicates > 100_000 {
-        return Err(invalid(format!(
-            "replicates {}: expected 10 to 100000 simulated experiments",
-            settings.replicates
-        )));
+    let s = DriftRequest {
+        protocol: protocol_request(
+            settings.calibration.as_deref(),
+            settings.init.as_deref(),
+            settings.horizons.clone(),
+            settings.overlap,
+            settings.latitude,
+        )?,
+        replicates: settings.replicates,
+        seed: settings.seed,
     }
-    if let Some(h) = settings
-        .horizons
-        .iter()
-        .find(|h| !(h.is_finite() && **h > 0.0))
-    {
-        return Err(invalid(format!("horizons: expected times > 0, found {h}")));
-    }
-    let protocol = Protocol {
-        calibration: calibration(&settings.calibration)?,
-        initialisation: initialisation(&settings.init)?,
-        horizons_s: settings.horizons.clone(),
-        overlapping: settings.overlap,
-        latitude_deg: latitude(settings.latitude)?,
-    };
+    .validate()
+    .map_err(request_error)?;
+    let protocol = &s.protocol;
     let (model_text, model_name) = model_arg;
     let m = model(&model_text, &model_name)?;
     let fitted = document::fitted_on_of(&model_text, &model_name, settings.exact_parameters)
@@ -468,13 +412,8 @@ pub fn drift_run<'py>(
     let alternatives = document::alternatives_of(&model_text, &model_name, settings.one_structure)
         .map_err(|e| invalid(format!("{model_name}: {}", message(&e))))?;
     let logs = logs_of(py, logs, &reader)?;
-    check_logs(&logs, &protocol, &m, &model_name)?;
+    check_logs(&logs, protocol, &m, &model_name)?;
     let inputs: Vec<LogInput> = logs.iter().map(|l| l.input(false)).collect();
-    let s = CheckSettings {
-        protocol,
-        replicates: settings.replicates,
-        seed: settings.seed,
-    };
     let result = run_job(py, settings.threads, |_| {
         Some(check_drift_averaged(
             &inputs,
@@ -486,12 +425,7 @@ pub fn drift_run<'py>(
         ))
     })?
     .map_err(|e| {
-        let msg = match e {
-            CheckError::Replicates(n) => format!(
-                "replicates {n}: at least 10 simulated experiments are needed for a 95 % band"
-            ),
-            e => message(&e),
-        };
+        let msg = request::diagnose::check_error(&e, &argument);
         invalid(format!(
             "checking the drift of {} log(s) against {model_name}: {msg}",
             logs.len()

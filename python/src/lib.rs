@@ -621,6 +621,25 @@ fn _imudrift(m: &Bound<'_, PyModule>) -> PyResult<()> {
         noise::Channel::ALL.map(noise::Channel::name).to_vec(),
     )?;
     m.add("TEMPERATURE", logio::Quantity::Temperature.channel())?;
+    // The defaults of diagnose and drift, the request layer's (`request::diagnose`): the Python
+    // signatures show them and pass what the user gave.
+    let d = diagnose::Settings::default();
+    let lat = diagnose::protocol::DEFAULT_LATITUDE_DEG;
+    let diagnose_defaults = PyDict::new(m.py());
+    diagnose_defaults.set_item("seed", d.seed)?;
+    diagnose_defaults.set_item("seeds", d.seeds)?;
+    diagnose_defaults.set_item("rounds", d.max_rounds)?;
+    diagnose_defaults.set_item("horizons", d.horizons_s.clone())?;
+    diagnose_defaults.set_item("min_delta_bic", d.min_delta_bic)?;
+    diagnose_defaults.set_item("tau_min", d.tau_min_s)?;
+    diagnose_defaults.set_item("latitude", lat)?;
+    m.add("DIAGNOSE_DEFAULTS", diagnose_defaults)?;
+    let drift_defaults = PyDict::new(m.py());
+    drift_defaults.set_item("horizons", request::diagnose::DRIFT_HORIZONS_S.to_vec())?;
+    drift_defaults.set_item("replicates", request::diagnose::DRIFT_REPLICATES)?;
+    drift_defaults.set_item("seed", d.seed)?;
+    drift_defaults.set_item("latitude", lat)?;
+    m.add("DRIFT_DEFAULTS", drift_defaults)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("InvalidInput", m.py().get_type::<InvalidInput>())?;
     m.add_function(wrap_pyfunction!(allantools_dev, m)?)?;

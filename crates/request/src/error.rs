@@ -148,6 +148,22 @@ pub enum RequestError {
     },
     /// Series given as arrays that are not a log.
     Series(logio::SeriesError),
+    TooFewSeeds(usize),
+    TooManySeeds(usize),
+    Rounds(usize),
+    MinDeltaBic(f64),
+    TauMin(f64),
+    Horizon(f64),
+    Latitude(f64),
+    Replicates(usize),
+    /// Simulated logs that would not fit in memory.
+    SimulationMemory {
+        source_name: String,
+        samples: usize,
+        threads: usize,
+        need: u64,
+        available: u64,
+    },
     /// Generated values that overflow (`channel` at sample `k`).
     Overflow {
         channel: &'static str,
@@ -299,6 +315,49 @@ impl RequestError {
                 }
             ),
             RequestError::Series(e) => e.to_string(),
+            RequestError::SimulationMemory {
+                source_name,
+                samples,
+                threads,
+                need,
+                available,
+            } => format!(
+                "{source_name}: simulating logs of {samples} samples on {threads} threads needs about {:.1} GiB and {:.1} GiB is available: use fewer {} or a shorter log",
+                *need as f64 / (1u64 << 30) as f64,
+                *available as f64 / (1u64 << 30) as f64,
+                n(Setting::Threads)
+            ),
+            RequestError::Replicates(v) => format!(
+                "{} {v}: expected {} to {} simulated experiments",
+                n(Setting::Replicates),
+                crate::diagnose::MIN_REPLICATES,
+                crate::diagnose::MAX_REPLICATES
+            ),
+            RequestError::TooFewSeeds(v) => format!(
+                "{} {v}: at least 2 simulated logs are needed for a band",
+                n(Setting::Seeds)
+            ),
+            RequestError::TooManySeeds(v) => format!(
+                "{} {v}: expected at most {} simulated logs per band",
+                n(Setting::Seeds),
+                diagnose::settings::MAX_SEEDS
+            ),
+            RequestError::Rounds(v) => format!(
+                "{} {v}: expected at most {}",
+                n(Setting::Rounds),
+                diagnose::settings::MAX_ROUNDS
+            ),
+            RequestError::MinDeltaBic(v) => {
+                format!("{} {v}: expected a number >= 0", n(Setting::MinDeltaBic))
+            }
+            RequestError::TauMin(v) => format!("{} {v}: expected a time >= 0", n(Setting::TauMin)),
+            RequestError::Horizon(v) => {
+                format!("{}: expected times > 0, found {v}", n(Setting::Horizons))
+            }
+            RequestError::Latitude(v) => format!(
+                "{} {v}: expected a latitude in [-89, 89] deg (the north-east-down frame is singular at the poles)",
+                n(Setting::Latitude)
+            ),
             RequestError::Overflow { channel, value, k } => format!(
                 "channel {channel} is {value} at sample {k}: the model's values overflow; check their units"
             ),

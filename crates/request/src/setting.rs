@@ -27,6 +27,20 @@ pub enum Setting {
     Columns,
     /// The channels to analyse (`--channels`, `channels`).
     Channels,
+    /// Simulated logs per band.
+    Seeds,
+    /// Add-and-resimulate rounds.
+    Rounds,
+    /// BIC improvement an effect needs.
+    MinDeltaBic,
+    /// Shortest tau used.
+    TauMin,
+    /// Drift horizons.
+    Horizons,
+    /// Where the logs were recorded.
+    Latitude,
+    /// Simulated experiments of a drift band.
+    Replicates,
 }
 
 impl Setting {
@@ -46,6 +60,13 @@ impl Setting {
             Setting::Output => "output",
             Setting::Columns => "columns",
             Setting::Channels => "channels",
+            Setting::Seeds => "seeds",
+            Setting::Rounds => "rounds",
+            Setting::MinDeltaBic => "min_delta_bic",
+            Setting::TauMin => "tau_min",
+            Setting::Horizons => "horizons",
+            Setting::Latitude => "latitude",
+            Setting::Replicates => "replicates",
         }
     }
 }
