@@ -2,7 +2,7 @@
 //! the model predicts under one protocol, with intervals and a verdict (docs/drift.md,
 //! docs/cli.md for the JSON).
 
-use crate::files::{self, TextFile};
+use crate::files;
 use crate::log_input::{self, LogArgs};
 use crate::output::write_string;
 use crate::plot::{Band, LogLogPlot, Series};
@@ -15,7 +15,7 @@ use diagnose::drift_check::{
 use diagnose::fitted_on::FittedOn;
 use diagnose::protocol::{Calibration, Initialisation, Protocol, Quantity};
 use diagnose::LogInput;
-use request::diagnose::{DriftRequest, ProtocolRequest};
+use request::diagnose::{DriftRequest, ModelUnderTest, ProtocolRequest};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -142,13 +142,6 @@ pub fn run(args: Args) -> Result<()> {
     pool.install(|| run_inner(&args, settings))
 }
 
-/// The data the model's levels were fitted on (`diagnose::document::fitted_on_of`).
-fn fitted_on(args: &Args, model_file: &TextFile) -> Result<Option<FittedOn>> {
-    let TextFile { name, text } = model_file;
-    diagnose::document::fitted_on_of(text, name, args.exact_parameters)
-        .with_context(|| name.clone())
-}
-
 /// The model to check against: its structures and the data its levels were fitted on.
 struct Structures<'a> {
     model: &'a noise::SensorModel,
@@ -184,23 +177,19 @@ impl Structures<'_> {
     }
 }
 
-/// The structures the model lists beside its own (`diagnose::document::alternatives_of`).
-fn alternatives(args: &Args, model_file: &TextFile) -> Result<Vec<Alternative>> {
-    let TextFile { name, text } = model_file;
-    diagnose::document::alternatives_of(text, name, args.one_structure)
-        .with_context(|| name.clone())
-}
-
 fn run_inner(args: &Args, settings: CheckSettings) -> Result<()> {
     let protocol = &settings.protocol;
     let model_file = files::read_config(&args.model)?;
-    let model = files::sensor_model_of(&model_file)?;
+    let ModelUnderTest {
+        model,
+        fitted_on: fitted,
+        alternatives,
+    } = ModelUnderTest::read(&model_file, args.exact_parameters, args.one_structure)
+        .map_err(crate::cli::request_error)?;
     let horizons = &protocol.horizons_s;
     crate::model_notes::print(&model, horizons.iter().copied().reduce(f64::max));
     args.earth
         .note(horizons.iter().copied().fold(0.0, f64::max));
-    let fitted = fitted_on(args, &model_file)?;
-    let alternatives = alternatives(args, &model_file)?;
     let logs = args.log_args.read_all(&args.logs)?;
     for log in &logs {
         eprintln!("{}: {}", log.source, log_input::mapping_text(log));

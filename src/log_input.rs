@@ -72,19 +72,11 @@ impl EarthArgs {
     }
 }
 
-/// A latitude in degrees, -89..89 (the north-east-down frame is singular at the poles).
+/// A latitude in degrees (its range is the request layer's rule, `request::diagnose::Earth`).
 fn latitude_deg(text: &str) -> std::result::Result<f64, String> {
-    let v: f64 = text
-        .trim()
+    text.trim()
         .parse()
-        .map_err(|_| format!("expected a latitude in degrees, e.g. 45 or -33.9, got {text:?}"))?;
-    if v.is_finite() && v.abs() <= 89.0 {
-        Ok(v)
-    } else {
-        Err(format!(
-            "expected a latitude in [-89, 89] deg (the north-east-down frame is singular at the poles), got {v}"
-        ))
-    }
+        .map_err(|_| format!("expected a latitude in degrees, e.g. 45 or -33.9, got {text:?}"))
 }
 
 /// The flag that sets each reader setting.

@@ -18,7 +18,7 @@ use noise::SensorModel;
 use numpy::PyReadonlyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use request::diagnose::{DiagnoseRequest, DriftRequest, Earth, ProtocolRequest};
+use request::diagnose::{DiagnoseRequest, DriftRequest, Earth, ModelUnderTest, ProtocolRequest};
 use std::path::PathBuf;
 
 fn model(text: &str, source: &str) -> PyResult<SensorModel> {
@@ -406,11 +406,19 @@ pub fn drift_run<'py>(
     .map_err(request_error)?;
     let protocol = &s.protocol;
     let (model_text, model_name) = model_arg;
-    let m = model(&model_text, &model_name)?;
-    let fitted = document::fitted_on_of(&model_text, &model_name, settings.exact_parameters)
-        .map_err(|e| invalid(format!("{model_name}: {}", message(&e))))?;
-    let alternatives = document::alternatives_of(&model_text, &model_name, settings.one_structure)
-        .map_err(|e| invalid(format!("{model_name}: {}", message(&e))))?;
+    let ModelUnderTest {
+        model: m,
+        fitted_on: fitted,
+        alternatives,
+    } = ModelUnderTest::read(
+        &request::TextFile {
+            name: model_name.clone(),
+            text: model_text,
+        },
+        settings.exact_parameters,
+        settings.one_structure,
+    )
+    .map_err(request_error)?;
     let logs = logs_of(py, logs, &reader)?;
     check_logs(&logs, protocol, &m, &model_name)?;
     let inputs: Vec<LogInput> = logs.iter().map(|l| l.input(false)).collect();

@@ -210,3 +210,38 @@ pub fn check_error(e: &CheckError, names: Names) -> String {
         e => noise::text::error_chain(e),
     }
 }
+
+/// A model to check drift against, read once: the sensor model, the data its levels were fitted
+/// on (its `[fitted_on]` table, written by `diagnose`) and the structures it lists beside its own
+/// (`[[alternatives]]`).
+pub struct ModelUnderTest {
+    pub model: noise::SensorModel,
+    pub fitted_on: Option<diagnose::fitted_on::FittedOn>,
+    pub alternatives: Vec<diagnose::alternatives::Alternative>,
+}
+
+impl ModelUnderTest {
+    /// Read `file`: the model, and unless `exact_parameters` / `one_structure` say to take its
+    /// levels as exact / its structure as certain, its fitted-on data and alternatives.
+    pub fn read(
+        file: &crate::files::TextFile,
+        exact_parameters: bool,
+        one_structure: bool,
+    ) -> Result<ModelUnderTest> {
+        let model = crate::files::model_of(file)?;
+        let tables = |message: String| RequestError::ModelTables {
+            name: file.name.clone(),
+            message,
+        };
+        let fitted_on = diagnose::document::fitted_on_of(&file.text, &file.name, exact_parameters)
+            .map_err(|e| tables(noise::text::error_chain(&e)))?;
+        let alternatives =
+            diagnose::document::alternatives_of(&file.text, &file.name, one_structure)
+                .map_err(|e| tables(noise::text::error_chain(&e)))?;
+        Ok(ModelUnderTest {
+            model,
+            fitted_on,
+            alternatives,
+        })
+    }
+}

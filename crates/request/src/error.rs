@@ -156,6 +156,11 @@ pub enum RequestError {
     Horizon(f64),
     Latitude(f64),
     Replicates(usize),
+    /// A diagnosed model's own tables (`[fitted_on]`, `[[alternatives]]`) that do not read.
+    ModelTables {
+        name: String,
+        message: String,
+    },
     /// Simulated logs that would not fit in memory.
     SimulationMemory {
         source_name: String,
@@ -315,6 +320,7 @@ impl RequestError {
                 }
             ),
             RequestError::Series(e) => e.to_string(),
+            RequestError::ModelTables { name, message } => format!("{name}: {message}"),
             RequestError::SimulationMemory {
                 source_name,
                 samples,

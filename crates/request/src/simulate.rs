@@ -93,16 +93,22 @@ impl SimulateRequest {
             duration_s: self.duration_s,
             rate_hz: self.rate_hz,
         };
-        let (inputs, sensor_path) = inputs(&self.subject, &edits)?;
+        // Each text is parsed once: the scenario (to find its sensor), then the model.
+        let (inputs, scenario, sensor_path) = inputs(&self.subject, &edits)?;
         let overrides = Overrides {
             runs: self.runs,
             seed: self.seed,
             only: self.only.clone(),
             without: self.without.clone(),
         };
-        let exp = job::parse_inputs(&inputs, &overrides)?.2;
+        let model = noise::SensorModel::from_text(&inputs.sensor_toml, &inputs.sensor_source)
+            .map_err(JobError::from)?;
+        let exp = Experiment::new(scenario.clone(), &model, &overrides).map_err(JobError::from)?;
         let subs = match self.ablation.unwrap_or(exp.scenario.ablation) {
-            true => Some(job::ablation_experiments(&inputs, &overrides)?),
+            true => Some(
+                montecarlo::ablation::experiments(&scenario, &model, &overrides, &exp)
+                    .map_err(JobError::from)?,
+            ),
             false => None,
         };
         Ok(SimulateJob {
@@ -118,7 +124,7 @@ impl SimulateRequest {
 /// The job's inputs: a scenario file and the sensor it names (relative to it), a sensor file in
 /// the default static scenario, or a sensor's text in the default static scenario; `edits`
 /// applied to the scenario's text (the text a shard stores).
-fn inputs(subject: &Subject, edits: &ScenarioEdits) -> Result<(Inputs, Option<PathBuf>)> {
+fn inputs(subject: &Subject, edits: &ScenarioEdits) -> Result<(Inputs, Scenario, Option<PathBuf>)> {
     let (scenario_source, scenario_toml) = match subject {
         Subject::Path(path) => {
             let TextFile { name, text } = read_config(path)?;
@@ -144,11 +150,11 @@ fn inputs(subject: &Subject, edits: &ScenarioEdits) -> Result<(Inputs, Option<Pa
             message: e.to_string(),
         }
     })?;
+    let scenario = Scenario::from_toml_str(&scenario_toml, &scenario_source)
+        .map_err(|e| RequestError::from(JobError::from(e)))?;
     let (sensor_source, sensor_toml, sensor_path) = match subject {
         Subject::Sensor { text, source } => (source.clone(), text.clone(), None),
         Subject::Path(path) => {
-            let scenario = Scenario::from_toml_str(&scenario_toml, &scenario_source)
-                .map_err(|e| RequestError::from(JobError::from(e)))?;
             let sensor_path = job::sensor_path(path, &scenario);
             let file = read_config(&sensor_path).map_err(|e| FileError {
                 within: Some(format!("{scenario_source}: key `sensor`: the sensor file")),
@@ -168,6 +174,7 @@ fn inputs(subject: &Subject, edits: &ScenarioEdits) -> Result<(Inputs, Option<Pa
             sensor_source,
             sensor_toml,
         },
+        scenario,
         sensor_path,
     ))
 }
