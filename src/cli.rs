@@ -17,28 +17,11 @@ pub fn duration_or_zero_s(text: &str) -> std::result::Result<f64, String> {
 /// A confidence level: `1sigma` (erf(1/sqrt 2) = 0.6827, SP 1065 §5.3), a fraction (`0.95`) or
 /// a percentage (`95%`); strictly between 0 and 1.
 pub fn confidence(text: &str) -> std::result::Result<f64, String> {
-    let t = text.trim();
-    let level = if matches!(t, "1sigma" | "1-sigma") {
-        allan::ONE_SIGMA_CI
-    } else if let Some(pct) = t.strip_suffix('%') {
-        pct.trim().parse::<f64>().map(|p| p / 100.0).map_err(|_| {
-            format!(
-                "expected 1sigma, a fraction such as 0.95 or a percentage such as 95%, got `{t}`"
-            )
-        })?
-    } else {
-        t.parse::<f64>().map_err(|_| {
-            format!(
-                "expected 1sigma, a fraction such as 0.95 or a percentage such as 95%, got `{t}`"
-            )
-        })?
-    };
-    if !(level > 0.0 && level < 1.0) {
-        return Err(format!(
-            "expected a level between 0 and 1 (0 % and 100 %), got `{t}`"
-        ));
-    }
-    Ok(level)
+    // clap puts the flag before the message: the request's own words follow it.
+    request::allan::parse_confidence(text).map_err(|e| {
+        let m = e.render(&|_| "");
+        m.trim_start_matches([' ', ':']).to_string()
+    })
 }
 
 /// Check the environment variables imudrift reads, before any work: a value that is not what
@@ -92,6 +75,8 @@ pub fn flag(s: request::Setting) -> &'static str {
         Setting::Horizons => "--horizons",
         Setting::Latitude => "--latitude",
         Setting::Replicates => "--replicates",
+        Setting::Confidence => "--confidence",
+        Setting::Data => "the log",
     }
 }
 

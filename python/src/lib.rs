@@ -53,13 +53,9 @@ fn data_kind(data_type: &str) -> PyResult<DataKind> {
 }
 
 fn check_rate(rate: f64) -> PyResult<()> {
-    if rate.is_finite() && rate > 0.0 {
-        Ok(())
-    } else {
-        Err(invalid(format!(
-            "rate {rate}: expected a sampling rate in Hz, finite and > 0"
-        )))
-    }
+    request::allan::check_rate(rate)
+        .map(|_| ())
+        .map_err(allan_error)
 }
 
 /// The samples, copied out of the numpy array while the GIL is held (the library then works on
@@ -335,6 +331,14 @@ fn fit_dict<'py>(
     Ok(d)
 }
 
+/// A request error of `imudrift.allan`, whose rate argument is `rate` (allantools' name).
+fn allan_error(e: request::RequestError) -> PyErr {
+    invalid(e.render(&|s| match s {
+        request::Setting::Rate => "rate",
+        other => sim::argument(other),
+    }))
+}
+
 /// The analysis `imudrift allan` does for one channel ([`allan::analyse`]): deviations, noise
 /// type and EDF per tau, chi-squared intervals, and the IEEE 952 fit (Allan-variance estimators).
 #[pyfunction]
@@ -351,14 +355,10 @@ fn allan_analysis<'py>(
     edf: &str,
     stable32_stop: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
-    check_rate(rate)?;
+    request::allan::check_rate(rate).map_err(allan_error)?;
     let kind = data_kind(data_type)?;
     let est = self::estimator(estimator)?;
-    if !(confidence > 0.0 && confidence < 1.0) {
-        return Err(invalid(format!(
-            "confidence {confidence}: expected a level between 0 and 1"
-        )));
-    }
+    request::allan::check_confidence(confidence).map_err(allan_error)?;
     let opts = Options {
         edf: edf_method(edf)?,
         confidence,
@@ -366,6 +366,8 @@ fn allan_analysis<'py>(
         ..Options::default()
     };
     let data = samples(&data)?;
+    // The rules of a log's samples (`request::allan`; the CLI's reader applies the same).
+    request::allan::check_samples(&data).map_err(allan_error)?;
     let n_phase = phase_len(data.len(), kind);
     let grid = match &taus {
         TausArg::Name(text) => TauGrid::parse(text).ok_or_else(|| {

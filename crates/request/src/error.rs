@@ -156,6 +156,16 @@ pub enum RequestError {
     Horizon(f64),
     Latitude(f64),
     Replicates(usize),
+    /// A log's sample rate outside what a log can have.
+    LogRate(f64),
+    Confidence(f64),
+    ConfidenceText(String),
+    TooFewSamples(usize),
+    Sample {
+        index: usize,
+        value: f64,
+    },
+    ConstantSamples(f64),
     /// A diagnosed model's own tables (`[fitted_on]`, `[[alternatives]]`) that do not read.
     ModelTables {
         name: String,
@@ -321,6 +331,33 @@ impl RequestError {
             ),
             RequestError::Series(e) => e.to_string(),
             RequestError::ModelTables { name, message } => format!("{name}: {message}"),
+            RequestError::LogRate(r) => format!(
+                "{} {r}: expected a sample rate in Hz from {:e} to {:e}",
+                n(Setting::Rate),
+                logio::MIN_LOG_RATE_HZ,
+                logio::MAX_LOG_RATE_HZ
+            ),
+            RequestError::Confidence(c) => format!(
+                "{} {c}: expected a level between 0 and 1 (0 % and 100 %)",
+                n(Setting::Confidence)
+            ),
+            RequestError::ConfidenceText(t) => format!(
+                "{}: expected 1sigma, a fraction such as 0.95 or a percentage such as 95%, got `{t}`",
+                n(Setting::Confidence)
+            ),
+            RequestError::TooFewSamples(k) => format!(
+                "{}: {k} samples: at least 2 are needed",
+                n(Setting::Data)
+            ),
+            RequestError::Sample { index, value } => format!(
+                "{}[{index}] is {value}: every sample must be finite and of magnitude below {:e} (a NaN gap is not bridged)",
+                n(Setting::Data),
+                logio::MAX_ABS_VALUE
+            ),
+            RequestError::ConstantSamples(v) => format!(
+                "{}: every sample is {v}: a constant channel has no noise to analyse (a stuck or disconnected sensor, or a column of zeros?)",
+                n(Setting::Data)
+            ),
             RequestError::SimulationMemory {
                 source_name,
                 samples,

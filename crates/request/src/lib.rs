@@ -28,6 +28,7 @@
 //! assert!(bad.validate().unwrap_err().render(&cli).starts_with("--rate -5"));
 //! ```
 
+pub mod allan;
 pub mod diagnose;
 pub mod error;
 pub mod files;

@@ -41,6 +41,10 @@ pub enum Setting {
     Latitude,
     /// Simulated experiments of a drift band.
     Replicates,
+    /// A confidence level.
+    Confidence,
+    /// Samples given as an array.
+    Data,
 }
 
 impl Setting {
@@ -67,6 +71,8 @@ impl Setting {
             Setting::Horizons => "horizons",
             Setting::Latitude => "latitude",
             Setting::Replicates => "replicates",
+            Setting::Confidence => "confidence",
+            Setting::Data => "data",
         }
     }
 }
