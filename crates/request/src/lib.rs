@@ -41,3 +41,136 @@ pub mod simulate;
 pub use error::{RequestError, Result};
 pub use files::{SensorSource, TextFile};
 pub use setting::{Names, Setting};
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    fn shipped(path: &str) -> PathBuf {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").join(path)
+    }
+
+    /// A scenario file and a sensor file give the same experiment through the request as the
+    /// shard format stores it; edits reach the scenario.
+    #[test]
+    fn a_simulate_request_builds_its_experiment_once() {
+        let mut req = simulate::SimulateRequest::new(simulate::Subject::Path(shipped(
+            "configs/scenarios/mtx-static-60s.toml",
+        )));
+        req.runs = Some(7);
+        req.duration_s = Some(2.0);
+        let job = req.validate().unwrap();
+        assert_eq!(job.exp.runs, 7);
+        assert_eq!(job.exp.scenario.duration_s, 2.0);
+        assert!(job.sensor_path.unwrap().ends_with("sensors/mtx.toml"));
+        assert!(job.inputs.scenario_toml.contains("duration_s = 2.0"));
+        let sensor = simulate::SimulateRequest::new(simulate::Subject::Path(shipped(
+            "configs/sensors/mtx.toml",
+        )))
+        .validate()
+        .unwrap();
+        assert!(sensor.inputs.scenario_source.starts_with("default static scenario for"));
+    }
+
+    /// Each setting is named the front end's way; a missing file is a file error that says so.
+    #[test]
+    fn errors_name_settings_through_the_front_end() {
+        let mut req = simulate::SimulateRequest::new(simulate::Subject::Path(shipped(
+            "configs/scenarios/mtx-static-60s.toml",
+        )));
+        req.rate_hz = Some(-1.0);
+        let e = req.validate().err().unwrap();
+        let cli = |s: Setting| if s == Setting::Rate { "--rate" } else { "?" };
+        assert_eq!(e.render(&cli), "--rate: expected a sample rate in Hz > 0, found -1");
+        assert_eq!(e.to_string(), "rate_hz: expected a sample rate in Hz > 0, found -1");
+        req.rate_hz = None;
+        req.runs = Some(0);
+        let e = req.validate().err().unwrap();
+        assert_eq!(e.render(&Setting::name), "runs: expected an integer >= 1");
+        let missing = simulate::SimulateRequest::new(simulate::Subject::Path(shipped(
+            "configs/no-such-file.toml",
+        )))
+        .validate()
+        .err()
+        .unwrap();
+        assert!(missing.is_unreadable(), "{missing}");
+        assert!(missing.to_string().contains("cannot read"), "{missing}");
+    }
+
+    /// The defaults are diagnose's own; the drift check runs by default with several logs.
+    #[test]
+    fn diagnose_and_drift_defaults_are_held_once() {
+        let d = ::diagnose::Settings::default();
+        let one = diagnose::DiagnoseRequest {
+            logs: 1,
+            ..Default::default()
+        }
+        .validate()
+        .unwrap();
+        assert_eq!((one.seed, one.seeds, one.max_rounds), (d.seed, d.seeds, d.max_rounds));
+        assert_eq!(one.horizons_s, d.horizons_s);
+        assert!(one.drift_protocol.is_none());
+        let two = diagnose::DiagnoseRequest {
+            logs: 2,
+            ..Default::default()
+        }
+        .validate()
+        .unwrap();
+        assert!(two.drift_protocol.is_some());
+        let seeds = diagnose::DiagnoseRequest {
+            seeds: Some(1),
+            ..Default::default()
+        }
+        .validate()
+        .err()
+        .unwrap();
+        assert!(seeds.to_string().starts_with("seeds 1: at least 2"), "{seeds}");
+        let drift = diagnose::DriftRequest::default().validate().unwrap();
+        assert_eq!(drift.protocol.horizons_s, diagnose::DRIFT_HORIZONS_S.to_vec());
+        assert_eq!(drift.replicates, diagnose::DRIFT_REPLICATES);
+        let far = diagnose::DriftRequest {
+            protocol: diagnose::ProtocolRequest {
+                earth: diagnose::Earth::Latitude(95.0),
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        assert!(far.validate().err().unwrap().to_string().starts_with("latitude 95"));
+    }
+
+    /// Samples an analysis cannot use are refused before it starts.
+    #[test]
+    fn unusable_samples_are_refused() {
+        assert!(allan::check_samples(&[1.0, 2.0]).is_ok());
+        for bad in [vec![0.0; 100], vec![1.0], vec![1.0, f64::NAN], vec![1.0, 1e200]] {
+            assert!(allan::check_samples(&bad).is_err(), "{bad:?}");
+        }
+        assert!(allan::check_rate(1e300).is_err());
+        assert_eq!(allan::parse_confidence("95%").unwrap(), 0.95);
+        assert!(allan::parse_confidence("1.5").is_err());
+    }
+
+    /// Series a front end holds become a log only when they are one: known names, one length.
+    #[test]
+    fn series_become_a_log_only_when_they_are_one() {
+        let ok = logs::from_series(
+            "<arrays>",
+            100.0,
+            vec![("gx".into(), vec![0.1, 0.2, 0.3]), ("temp".into(), vec![20.0; 3])],
+        )
+        .unwrap();
+        assert_eq!(ok.channel(noise::Channel::Gx), Some(&[0.1, 0.2, 0.3][..]));
+        assert_eq!(ok.temperature_c.as_deref(), Some(&[20.0; 3][..]));
+        let uneven = logs::from_series(
+            "<arrays>",
+            100.0,
+            vec![("gx".into(), vec![0.1, 0.2, 0.3]), ("gy".into(), vec![0.1])],
+        );
+        assert!(uneven.err().unwrap().to_string().contains("gy has 1 samples"));
+        let constant = logs::from_series("<arrays>", 100.0, vec![("gx".into(), vec![0.0; 10])])
+            .unwrap();
+        let e = logs::check_imu(&constant).err().unwrap();
+        assert!(e.to_string().contains("channel gx is constant"), "{e}");
+    }
+}
