@@ -13,7 +13,7 @@
 //! // A sensor's text, 2 s at 100 Hz: checked once, the same way for every front end.
 //! let req = GenerateRequest {
 //!     sensor: request::SensorSource::Text {
-//!         text: "name = \"toy\"\n[gyro]\nwhite_noise = \"0.1 deg/sqrt(h)\"\n".into(),
+//!         text: "name = \"toy\"\n[gyro.all]\nwhite_noise = \"0.1 deg/sqrt(h)\"\n".into(),
 //!         source: "toy.toml".into(),
 //!     },
 //!     duration_s: 2.0,
@@ -25,7 +25,7 @@
 //! // A bad rate names the setting the way the front end calls it.
 //! let bad = GenerateRequest { rate_hz: -5.0, ..req };
 //! let cli = |s: Setting| if s == Setting::Rate { "--rate" } else { "?" };
-//! assert!(bad.validate().unwrap_err().render(&cli).starts_with("--rate -5"));
+//! assert!(bad.validate().unwrap_err().render(&cli).starts_with("--rate: expected a sample rate"));
 //! ```
 
 pub mod allan;
@@ -59,12 +59,12 @@ mod tests {
             "configs/scenarios/mtx-static-60s.toml",
         )));
         req.runs = Some(7);
-        req.duration_s = Some(2.0);
+        req.duration_s = Some(120.0);
         let job = req.validate().unwrap();
         assert_eq!(job.exp.runs, 7);
-        assert_eq!(job.exp.scenario.duration_s, 2.0);
+        assert_eq!(job.exp.scenario.duration_s, 120.0);
         assert!(job.sensor_path.unwrap().ends_with("sensors/mtx.toml"));
-        assert!(job.inputs.scenario_toml.contains("duration_s = 2.0"));
+        assert!(job.inputs.scenario_toml.contains("duration_s = 120.0"));
         let sensor = simulate::SimulateRequest::new(simulate::Subject::Path(shipped(
             "configs/sensors/mtx.toml",
         )))
