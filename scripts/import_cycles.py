@@ -17,8 +17,9 @@ A depends on B when
   that defines it (b), not of the facade's;
 - A calls a method defined in B: `x.foo()` (or `x.foo::<T>()`) in A where `fn foo` is defined in
   an `impl` or `trait` block of B and of no other file of the crate. A method name defined in
-  several files is ambiguous (which one a call reaches needs types) and is ignored, as are the
-  names of std's common methods and traits (`new`, `len`, `iter`, `clone`, `fmt`, `from`, `into`,
+  several files, or also by another crate of the workspace (`x.decimation()` may be noise's
+  `OutputFilter::decimation` in diagnose), is ambiguous (which one a call reaches needs types)
+  and is ignored, as are the names of std's common methods and traits (`new`, `len`, `iter`, `clone`, `fmt`, `from`, `into`,
   `default`, ... : COMMON below), which a call far more often means than the crate's own.
 Not counted:
 - a parent's `pub use` of its own descendants (the crate's or module's facade publishing its
@@ -245,15 +246,19 @@ def resolve(crate, cur, segs, facade=None):
     return base
 
 
-def analyse(label, roots):
-    """The crate's dependency edges between files: {(a, b): (line in a, what)}."""
+def parse_crate(label, root):
     crate = Crate(label)
-    for root in roots:
-        crate.modules[()] = root
-        pending = [(root, ())]
-        while pending:
-            file, path = pending.pop()
-            parse_file(crate, file, path, pending)
+    crate.modules[()] = root
+    pending = [(root, ())]
+    while pending:
+        file, path = pending.pop()
+        parse_file(crate, file, path, pending)
+    return crate
+
+
+def analyse(crate, foreign=frozenset()):
+    """The crate's dependency edges between files: {(a, b): (line in a, what)}. `foreign`: the
+    method names the workspace's other crates define (a call of one is ambiguous)."""
     facade = {}  # (module, name it re-exports from a descendant) -> the module defining it
     for file, cur, segs, line, is_pub in crate.uses:
         target = resolve(crate, cur, segs)
@@ -273,7 +278,7 @@ def analyse(label, roots):
         edges.setdefault((file, dst), (line, "::".join(segs)))
     for file, name, line in crate.calls:
         defined = crate.methods.get(name, ())
-        if name in COMMON or len(defined) != 1:
+        if name in COMMON or name in foreign or len(defined) != 1:
             continue
         (dst,) = defined
         if dst != file:
@@ -358,11 +363,15 @@ def main():
     here = os.path.dirname(os.path.abspath(__file__))
     root = os.path.abspath(args[0] if args else os.path.join(here, ".."))
     total = 0
-    for label, roots in rust_source.crates(root):
-        # The lib and the binary's main.rs are separate crates: analyse each root on its own.
+    # The lib and the binary's main.rs are separate crates: each root is analysed on its own.
+    parsed = [(label, [parse_crate(label, r) for r in roots])
+              for label, roots in rust_source.crates(root)]
+    for label, crates in parsed:
         found = files = 0
-        for r in roots:
-            edges = analyse(label, [r])
+        for crate in crates:
+            foreign = {name for _, others in parsed for c in others if c is not crate
+                       for name in c.methods}
+            edges = analyse(crate, foreign)
             succ = {}
             for a, b in edges:
                 succ.setdefault(a, set()).add(b)
