@@ -19,8 +19,10 @@ A depends on B when
   an `impl` or `trait` block of B and of no other file of the crate. A method name defined in
   several files, or also by another crate of the workspace (`x.decimation()` may be noise's
   `OutputFilter::decimation` in diagnose), is ambiguous (which one a call reaches needs types)
-  and is ignored, as are the names of std's common methods and traits (`new`, `len`, `iter`, `clone`, `fmt`, `from`, `into`,
-  `default`, ... : COMMON below), which a call far more often means than the crate's own.
+  and is ignored, as are the names of std's common methods and traits (`new`, `len`, `iter`,
+  `clone`, `fmt`, `from`, `into`, `default`, ...: COMMON below), which a call far more often
+  means than the crate's own. Calls are matched by name only: a crate's method that shares its
+  name with a method of a non-workspace dependency not in COMMON is taken as the crate's.
 Not counted:
 - a parent's `pub use` of its own descendants (the crate's or module's facade publishing its
   tree, not code that uses it);
