@@ -50,7 +50,7 @@ mod sum;
 pub use analysis::{analyse, analyse_rate, Analysis};
 pub use grid::TauGrid;
 pub use phase::{rate_to_phase, rate_to_phase_in_place, rate_to_phase_into};
-pub use series::Series;
+pub use series::{deviation, deviation_with, Series};
 pub use sum::compensated_sum;
 
 use serde::{Deserialize, Serialize};
@@ -212,29 +212,6 @@ impl Default for Options {
             claims: claims::ClaimLevel::default(),
         }
     }
-}
-
-/// Deviation curve with default options (Greenhall EDF, one-sigma interval, Stable32 stop ratio).
-pub fn deviation(
-    data: &[f64],
-    kind: DataKind,
-    tau0_s: f64,
-    est: Estimator,
-    grid: &TauGrid,
-) -> Vec<AllanPoint> {
-    deviation_with(data, kind, tau0_s, est, grid, &Options::default())
-}
-
-/// Deviation curve with explicit options.
-pub fn deviation_with(
-    data: &[f64],
-    kind: DataKind,
-    tau0_s: f64,
-    est: Estimator,
-    grid: &TauGrid,
-    opts: &Options,
-) -> Vec<AllanPoint> {
-    Series::new(data, kind, tau0_s).deviation(est, grid, opts)
 }
 
 #[cfg(test)]

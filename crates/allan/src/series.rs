@@ -304,3 +304,26 @@ impl<'a> Series<'a> {
         }
     }
 }
+
+/// Deviation curve with default options (Greenhall EDF, one-sigma interval, Stable32 stop ratio).
+pub fn deviation(
+    data: &[f64],
+    kind: DataKind,
+    tau0_s: f64,
+    est: Estimator,
+    grid: &TauGrid,
+) -> Vec<AllanPoint> {
+    deviation_with(data, kind, tau0_s, est, grid, &Options::default())
+}
+
+/// Deviation curve with explicit options.
+pub fn deviation_with(
+    data: &[f64],
+    kind: DataKind,
+    tau0_s: f64,
+    est: Estimator,
+    grid: &TauGrid,
+    opts: &Options,
+) -> Vec<AllanPoint> {
+    Series::new(data, kind, tau0_s).deviation(est, grid, opts)
+}

@@ -35,6 +35,7 @@
 //! too, uncentred, from a unit reference level: its draws are the refits' (0 or above), so that
 //! the levels it trades with (a flicker level against a rate random walk) spread as they would.
 
+use crate::candidates::drawn;
 use crate::fitted_on::FittedOn;
 use crate::model_terms::{fitted_term, set_term, squared_level};
 use crate::simulate::{adev_at, map_static_logs, LogJob, SimSetup};
@@ -43,19 +44,6 @@ use noise::{AxisModel, Channel, Effect, ImuChannels, SensorModel, Term};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::BTreeMap;
-
-/// The effects whose level is drawn (module doc).
-const DRAWN: [Effect; 9] = [
-    Effect::Quantization,
-    Effect::WhiteNoise,
-    Effect::OutputWhiteNoise,
-    Effect::BiasInstability,
-    Effect::RateRandomWalk,
-    Effect::GaussMarkov,
-    Effect::SlowGaussMarkov,
-    Effect::Sinusoidal,
-    Effect::Resonance,
-];
 
 /// Most levels refitted together on one channel (the refit tries every subset of them).
 const MAX_TERMS: usize = 10;
@@ -241,9 +229,9 @@ impl ChannelFit {
 
 /// The terms of channel `ch` whose level is drawn (module doc), each at its reference level.
 fn drawn_terms(model: &SensorModel, ch: Channel) -> Vec<DrawnTerm> {
-    DRAWN
-        .iter()
-        .filter_map(|&effect| {
+    drawn()
+        .into_iter()
+        .filter_map(|effect| {
             let p = fitted_term(model, ch, effect)?;
             let fitted_c = squared_level(Some(p));
             let reference = if fitted_c > 0.0 {

@@ -11,27 +11,228 @@ use noise::{
     WhiteNoise,
 };
 
-/// Effects diagnose fits to the Allan gap (docs/diagnose.md list; the output filter is tried beside
-/// them; white noise on the output register only on a channel that has one: without a filter it is
-/// the same process as `white_noise`). The temperature bias is not among them: it is regressed on the log's temperature column in
-/// the time domain (`detect`, step 0), where its phase is seen; its Allan signature alone cannot
-/// tell it from a slow bias wander.
-pub const CANDIDATES: [Effect; 9] = [
-    Effect::Quantization,
-    Effect::WhiteNoise,
-    Effect::OutputWhiteNoise,
-    Effect::BiasInstability,
-    Effect::RateRandomWalk,
-    Effect::RateRamp,
-    Effect::GaussMarkov,
-    Effect::Sinusoidal,
-    Effect::Resonance,
-];
+/// A one-level term at a level on a channel that lacks it ([`level_term`]).
+type AtLevel = fn(&SensorModel, Channel, f64) -> Result<Term, ModelError>;
+/// Allan variance per unit squared level at tau, sample interval dt, with B = 1 in the flicker
+/// band, behind the channel's output filter where it has one ([`unit_signature`]).
+type UnitSignature = fn(f64, f64, &Flicker, Option<&FilteredAllan>) -> f64;
+/// Allan variance per unit squared level at a shape parameter, tau, sample interval dt, behind the
+/// channel's output filter where it has one ([`unit_family_signature`]).
+type FamilySignature = fn(f64, f64, f64, Option<&FilteredAllan>) -> f64;
+/// A family's shape grid (lowest, highest, per decade) from the shortest and longest measured tau
+/// and the sample interval ([`shape_grid`]).
+type ShapeRange = fn(f64, f64, f64) -> (f64, f64, f64);
+
+/// What diagnose does with an effect: [`role`] is the one place that names every effect of the
+/// noise crate's registry for diagnose (an exhaustive match, so an effect added there does not
+/// compile until it has its row here). Its free parameters are the term's own
+/// (`TermKind::FREE_PARAMETERS`, [`Effect::free_parameters`]).
+#[derive(Clone, Copy)]
+pub struct Role {
+    /// Its place in diagnose's order of effects: the Allan-gap candidates are tried, and the
+    /// bootstrap's levels drawn, in this order ([`candidates`], [`drawn`]).
+    pub order: u8,
+    /// Fitted to the Allan gap (step 4, [`candidates`]).
+    pub candidate: bool,
+    /// Its place among the drift loop's candidates ([`drift_candidates`]), if it is one.
+    pub drift: Option<u8>,
+    /// Its level is drawn by the parametric bootstrap (`bootstrap`, [`drawn`]).
+    pub drawn: bool,
+    /// Its level has a sign (a ramp, a temperature coefficient): its squared level loses it, so
+    /// the joint re-level leaves it out (`relevel`).
+    pub signed: bool,
+    /// The term at a level where the model has none ([`level_term`]).
+    pub at_level: Option<AtLevel>,
+    /// Its Allan variance per unit squared level ([`unit_signature`]).
+    pub unit_signature: Option<UnitSignature>,
+    /// Its Allan variance per unit squared level at a shape ([`unit_family_signature`]).
+    pub family_signature: Option<FamilySignature>,
+    /// Its shape grid ([`shape_grid`]).
+    pub shape_range: Option<ShapeRange>,
+}
+
+impl Role {
+    /// An effect diagnose neither fits nor draws, after those it does.
+    const NONE: Role = Role {
+        order: u8::MAX,
+        candidate: false,
+        drift: None,
+        drawn: false,
+        signed: false,
+        at_level: None,
+        unit_signature: None,
+        family_signature: None,
+        shape_range: None,
+    };
+}
+
+/// Diagnose's row of `effect` (docs/diagnose.md). The candidates of the Allan gap: the output filter
+/// is tried beside them; white noise on the output register only on a channel that has one (without
+/// a filter it is the same process as `white_noise`). The temperature bias is not among them: it is
+/// regressed on the log's temperature column in the time domain (`detect`, step 0), where its phase
+/// is seen; its Allan signature alone cannot tell it from a slow bias wander. The drift loop's
+/// Gauss-Markov candidate goes into the channel's `gauss_markov` slot when that is free or already
+/// holds a slow term, else into `slow_gauss_markov` (`drift_fit`). Drawn by the bootstrap: the
+/// stochastic levels.
+pub fn role(effect: Effect) -> Role {
+    match effect {
+        Effect::Quantization => Role {
+            order: 0,
+            candidate: true,
+            drawn: true,
+            at_level: Some(|_, _, level| Ok(Quantization::new(level)?.into())),
+            unit_signature: Some(|tau_s, _, _, _| cf::quantization_avar(1.0, tau_s)),
+            ..Role::NONE
+        },
+        Effect::WhiteNoise => Role {
+            order: 1,
+            candidate: true,
+            drawn: true,
+            at_level: Some(|_, _, level| Ok(WhiteNoise::new(level)?.into())),
+            unit_signature: Some(|tau_s, _, _, fa| match fa {
+                Some(fa) => fa.white_noise(1.0, tau_s),
+                None => cf::white_noise_avar(1.0, tau_s),
+            }),
+            ..Role::NONE
+        },
+        Effect::OutputWhiteNoise => Role {
+            order: 2,
+            candidate: true,
+            drawn: true,
+            at_level: Some(|_, _, level| Ok(OutputWhiteNoise::new(level)?.into())),
+            unit_signature: Some(|tau_s, _, _, _| cf::white_noise_avar(1.0, tau_s)),
+            ..Role::NONE
+        },
+        Effect::BiasInstability => Role {
+            order: 3,
+            candidate: true,
+            drift: Some(1),
+            drawn: true,
+            at_level: Some(|model, ch, level| {
+                Ok(BiasInstability::Flicker(flicker_band(model, ch).with_level(level)?).into())
+            }),
+            unit_signature: Some(|tau_s, dt_s, flicker, fa| match fa {
+                Some(fa) => BiasInstability::Flicker(flicker.clone())
+                    .allan_variance_filtered(tau_s, dt_s, fa)
+                    .unwrap_or(f64::NAN),
+                None => flicker.avar_sampled(tau_s, dt_s),
+            }),
+            ..Role::NONE
+        },
+        Effect::RateRandomWalk => Role {
+            order: 4,
+            candidate: true,
+            drift: Some(0),
+            drawn: true,
+            at_level: Some(|_, _, level| Ok(RateRandomWalk::new(level)?.into())),
+            unit_signature: Some(|tau_s, dt_s, _, fa| match fa {
+                Some(fa) => fa.random_walk(1.0, tau_s),
+                None => cf::rate_random_walk_avar_sampled(1.0, tau_s, dt_s),
+            }),
+            ..Role::NONE
+        },
+        Effect::RateRamp => Role {
+            order: 5,
+            candidate: true,
+            drift: Some(2),
+            signed: true,
+            at_level: Some(|_, _, level| Ok(RateRamp::new(level)?.into())),
+            unit_signature: Some(|tau_s, _, _, _| cf::rate_ramp_avar(1.0, tau_s)),
+            ..Role::NONE
+        },
+        Effect::GaussMarkov => Role {
+            order: 6,
+            candidate: true,
+            drift: Some(3),
+            drawn: true,
+            family_signature: Some(gauss_markov_signature),
+            shape_range: Some(|tau_min_s, tau_max_s, _| {
+                let p = cf::GAUSS_MARKOV_ADEV_PEAK_TAU_PER_TC;
+                (tau_min_s / (3.0 * p), 3.0 * tau_max_s / p, 8.0)
+            }),
+            ..Role::NONE
+        },
+        Effect::SlowGaussMarkov => Role {
+            order: 7,
+            drawn: true,
+            family_signature: Some(gauss_markov_signature),
+            ..Role::NONE
+        },
+        Effect::Sinusoidal => Role {
+            order: 8,
+            candidate: true,
+            drawn: true,
+            family_signature: Some(|shape, tau_s, dt_s, fa| match fa {
+                Some(fa) => fa.sinusoid(1.0, shape, tau_s),
+                None => cf::sinusoid_avar_sampled(1.0, shape, tau_s, dt_s),
+            }),
+            shape_range: Some(|tau_min_s, tau_max_s, dt_s| {
+                (
+                    1.0 / (4.0 * tau_max_s),
+                    0.25 / dt_s.max(tau_min_s / 4.0),
+                    200.0,
+                )
+            }),
+            ..Role::NONE
+        },
+        Effect::Resonance => Role {
+            order: 9,
+            candidate: true,
+            drawn: true,
+            ..Role::NONE
+        },
+        Effect::TemperatureBias => Role {
+            signed: true,
+            at_level: Some(|_, _, level| Ok(TemperatureBias::new(level)?.into())),
+            ..Role::NONE
+        },
+        Effect::ConstantBias
+        | Effect::TurnOnBias
+        | Effect::ScaleFactor
+        | Effect::Misalignment
+        | Effect::Outliers
+        | Effect::WarmupTransient
+        | Effect::OutputFilter => Role::NONE,
+    }
+}
+
+/// A Gauss-Markov process' signature at correlation time `shape` (both Gauss-Markov slots).
+fn gauss_markov_signature(shape: f64, tau_s: f64, dt_s: f64, fa: Option<&FilteredAllan>) -> f64 {
+    match fa {
+        Some(fa) => fa.gauss_markov(1.0, shape, tau_s),
+        None => cf::gauss_markov_avar_sampled(1.0, shape, tau_s, dt_s),
+    }
+}
+
+/// The effects of `keep`'s rows in `place` order.
+fn effects_by(keep: impl Fn(&Role) -> Option<u8>) -> Vec<Effect> {
+    let mut v: Vec<(u8, Effect)> = Effect::ALL
+        .into_iter()
+        .filter_map(|e| keep(&role(e)).map(|at| (at, e)))
+        .collect();
+    v.sort_by_key(|&(at, _)| at);
+    v.into_iter().map(|(_, e)| e).collect()
+}
+
+/// Effects diagnose fits to the Allan gap, in the order tried ([`Role::candidate`]).
+pub fn candidates() -> Vec<Effect> {
+    effects_by(|r| r.candidate.then_some(r.order))
+}
+
+/// The candidates of the drift loop, in the order tried ([`Role::drift`]).
+pub fn drift_candidates() -> Vec<Effect> {
+    effects_by(|r| r.drift)
+}
+
+/// The effects whose level the bootstrap draws, in diagnose's order ([`Role::drawn`]).
+pub fn drawn() -> Vec<Effect> {
+    effects_by(|r| r.drawn.then_some(r.order))
+}
 
 /// A one-level candidate `effect` (quantisation, white noise before or after the output filter,
 /// flicker bias instability, rate random walk, rate ramp, temperature coefficient) at `level` on channel `ch`: the model's own term at
 /// that level (its other parameters kept, e.g. flicker's band), else a new one (flicker on the
-/// channel's band), through the term's validating constructor.
+/// channel's band), through the term's validating constructor ([`Role::at_level`]).
 pub fn level_term(
     model: &SensorModel,
     ch: Channel,
@@ -41,24 +242,14 @@ pub fn level_term(
     if let Some(own) = fitted_term(model, ch, effect) {
         return own.with_level(level);
     }
-    Ok(match effect {
-        Effect::Quantization => Quantization::new(level)?.into(),
-        Effect::WhiteNoise => WhiteNoise::new(level)?.into(),
-        Effect::OutputWhiteNoise => OutputWhiteNoise::new(level)?.into(),
-        Effect::BiasInstability => {
-            BiasInstability::Flicker(flicker_band(model, ch).with_level(level)?).into()
-        }
-        Effect::RateRandomWalk => RateRandomWalk::new(level)?.into(),
-        Effect::RateRamp => RateRamp::new(level)?.into(),
-        Effect::TemperatureBias => TemperatureBias::new(level)?.into(),
-        _ => {
-            return Err(ModelError {
-                what: "level",
-                expected: "a one-level effect",
-                found: level,
-            })
-        }
-    })
+    match role(effect).at_level {
+        Some(at_level) => at_level(model, ch, level),
+        None => Err(ModelError {
+            what: "level",
+            expected: "a one-level effect",
+            found: level,
+        }),
+    }
 }
 
 /// The docs/cli.md parameters of a candidate's term, with the white-noise density `n` an output
@@ -69,25 +260,13 @@ pub fn named(term: &Term, white_n: Option<f64>) -> Vec<(&'static str, f64)> {
     v
 }
 
-/// Number of free parameters of a candidate (for the information criterion).
-pub fn free_parameters(effect: Effect) -> usize {
-    match effect {
-        Effect::GaussMarkov
-        | Effect::SlowGaussMarkov
-        | Effect::Sinusoidal
-        | Effect::OutputFilter => 2,
-        Effect::Resonance => 3,
-        _ => 1,
-    }
-}
-
 /// Allan variance per unit squared level at tau (for the one-level terms), for sample interval dt,
 /// as the channel generates the term: behind the channel's output filter `fa` where the term acts
 /// before it (`ErrorTerm::allan_variance_filtered`, noise::filter), as it is without one. White
 /// noise on the output register, quantisation and a ramp are the same either way (the first two act
 /// after the filter; unit DC gain keeps a ramp a ramp). Bias instability is flicker as the noise
 /// crate realises it (a Gauss-Markov sum over a band of correlation times, plateau 0.664 B inside
-/// it), with B = 1 in `flicker`.
+/// it), with B = 1 in `flicker` ([`Role::unit_signature`]; NaN for an effect without one).
 pub fn unit_signature(
     effect: Effect,
     tau_s: f64,
@@ -95,24 +274,15 @@ pub fn unit_signature(
     flicker: &Flicker,
     fa: Option<&FilteredAllan>,
 ) -> f64 {
-    match (effect, fa) {
-        (Effect::WhiteNoise, Some(fa)) => fa.white_noise(1.0, tau_s),
-        (Effect::BiasInstability, Some(fa)) => BiasInstability::Flicker(flicker.clone())
-            .allan_variance_filtered(tau_s, dt_s, fa)
-            .unwrap_or(f64::NAN),
-        (Effect::RateRandomWalk, Some(fa)) => fa.random_walk(1.0, tau_s),
-        (Effect::Quantization, _) => cf::quantization_avar(1.0, tau_s),
-        (Effect::WhiteNoise | Effect::OutputWhiteNoise, _) => cf::white_noise_avar(1.0, tau_s),
-        (Effect::BiasInstability, None) => flicker.avar_sampled(tau_s, dt_s),
-        (Effect::RateRandomWalk, None) => cf::rate_random_walk_avar_sampled(1.0, tau_s, dt_s),
-        (Effect::RateRamp, _) => cf::rate_ramp_avar(1.0, tau_s),
-        _ => f64::NAN,
-    }
+    role(effect)
+        .unit_signature
+        .map_or(f64::NAN, |f| f(tau_s, dt_s, flicker, fa))
 }
 
 /// Allan variance per unit squared level for a shaped term at shape parameter `shape` (a
 /// Gauss-Markov correlation time, a sinusoid's frequency), behind the channel's output filter `fa`
-/// where it has one (both act before the filter; the generator adds a filtered sinusoid's output).
+/// where it has one (both act before the filter; the generator adds a filtered sinusoid's output;
+/// [`Role::family_signature`], NaN for an effect without one).
 pub fn unit_family_signature(
     effect: Effect,
     shape: f64,
@@ -120,17 +290,9 @@ pub fn unit_family_signature(
     dt_s: f64,
     fa: Option<&FilteredAllan>,
 ) -> f64 {
-    match (effect, fa) {
-        (Effect::GaussMarkov | Effect::SlowGaussMarkov, Some(fa)) => {
-            fa.gauss_markov(1.0, shape, tau_s)
-        }
-        (Effect::GaussMarkov | Effect::SlowGaussMarkov, None) => {
-            cf::gauss_markov_avar_sampled(1.0, shape, tau_s, dt_s)
-        }
-        (Effect::Sinusoidal, Some(fa)) => fa.sinusoid(1.0, shape, tau_s),
-        (Effect::Sinusoidal, None) => cf::sinusoid_avar_sampled(1.0, shape, tau_s, dt_s),
-        _ => f64::NAN,
-    }
+    role(effect)
+        .family_signature
+        .map_or(f64::NAN, |f| f(shape, tau_s, dt_s, fa))
 }
 
 /// The Allan-variance view of channel `ch`'s output filter at sample interval `dt_s`, if it has one.
@@ -143,20 +305,13 @@ pub fn filtered_allan(model: &SensorModel, ch: Channel, dt_s: f64) -> Option<Fil
 /// the shortest and three times the longest tau, 8 per decade. Sinusoid: frequencies from 1/(4 tau_max)
 /// to 1/(4 dt) (at least four samples per period: faster sinusoids alias on an octave grid, where their
 /// Allan lobes are indistinguishable from quantisation; the PSD is the tool for those, Hou 4.64 note),
-/// 200 per decade, because the Allan lobes of a sinusoid at tau >> 1/f0 move with small changes of f0.
+/// 200 per decade, because the Allan lobes of a sinusoid at tau >> 1/f0 move with small changes of f0
+/// ([`Role::shape_range`]).
 pub fn shape_grid(effect: Effect, tau_min_s: f64, tau_max_s: f64, dt_s: f64) -> Vec<f64> {
-    let (lo, hi, per_decade) = match effect {
-        Effect::GaussMarkov => {
-            let p = cf::GAUSS_MARKOV_ADEV_PEAK_TAU_PER_TC;
-            (tau_min_s / (3.0 * p), 3.0 * tau_max_s / p, 8.0)
-        }
-        Effect::Sinusoidal => (
-            1.0 / (4.0 * tau_max_s),
-            0.25 / dt_s.max(tau_min_s / 4.0),
-            200.0,
-        ),
-        _ => return Vec::new(),
+    let Some(range) = role(effect).shape_range else {
+        return Vec::new();
     };
+    let (lo, hi, per_decade) = range(tau_min_s, tau_max_s, dt_s);
     if hi <= lo {
         return Vec::new();
     }

@@ -42,7 +42,7 @@
 //! statistic is scaled to its null distribution under the model, not to our tests.
 
 use crate::candidates::{
-    filtered_allan, free_parameters, level_term, shape_search_penalty, unit_family_signature,
+    drift_candidates, filtered_allan, level_term, shape_search_penalty, unit_family_signature,
     unit_signature,
 };
 use crate::drift_gap::DriftFit;
@@ -55,16 +55,6 @@ use crate::protocol::{all_segment_errors, Protocol, Quantity};
 use crate::simulate::{map_static_logs, LogJob, SimSetup};
 use crate::trials::{at_squared_level, Named, Trial};
 use noise::{Channel, Effect, GaussMarkov, ModelError, SensorModel, SlowGaussMarkov, Term};
-
-/// The candidates of the drift loop, in the order tried. The Gauss-Markov candidate goes into the
-/// channel's `gauss_markov` slot when that is free or already holds a slow term, else into
-/// `slow_gauss_markov` (`gauss_markov_slot`).
-pub const DRIFT_CANDIDATES: [Effect; 4] = [
-    Effect::RateRandomWalk,
-    Effect::BiasInstability,
-    Effect::RateRamp,
-    Effect::GaussMarkov,
-];
 
 /// Correlation times of the Gauss-Markov candidate per longest averaging time tau_max: at and
 /// beyond it (a shorter one the Allan curve resolves itself).
@@ -311,7 +301,7 @@ impl DriftFitInput<'_> {
         };
         let tau_max = self.measured.tau_s.last().copied().unwrap_or(1.0);
         let mut out = Vec::new();
-        for candidate in DRIFT_CANDIDATES {
+        for candidate in drift_candidates() {
             if candidate == Effect::BiasInstability
                 && has_random_walk_bias_instability(self.model, self.channel)
             {
@@ -410,7 +400,7 @@ impl DriftFitInput<'_> {
         } else {
             minimise(&chi, c0, c_unit)
         };
-        let (k, m) = (free_parameters(effect), f.len() + self.drift.len());
+        let (k, m) = (effect.free_parameters(), f.len() + self.drift.len());
         let base = chi(c0);
         let mut best = Level {
             c,

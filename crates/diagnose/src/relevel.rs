@@ -23,6 +23,7 @@
 //! naming an effect needs (`min_delta_bic`); the others are held and the rest refitted, so only levels the data call
 //! wrong are changed and named.
 
+use crate::candidates::role;
 use crate::fit::CHI2_1_95;
 use crate::fit::{aic, bic, birge_scale, fit_linear, linear_interval, predicted_ln_adev, FitData};
 use crate::trials::{at_squared_level, Named, Trial};
@@ -53,7 +54,7 @@ fn c0_of(t: &Trial) -> f64 {
 /// level above 0, with its own shape; not an output filter (it refits its white noise with it),
 /// nor a signed level (a ramp, a temperature coefficient: their squared level loses the sign).
 fn joinable(trials: &[Trial]) -> Vec<&Trial> {
-    let unsigned = |e: Effect| !matches!(e, Effect::RateRamp | Effect::TemperatureBias);
+    let unsigned = |e: Effect| !role(e).signed;
     trials
         .iter()
         .filter(|t| t.effect != Effect::OutputFilter && unsigned(t.effect))

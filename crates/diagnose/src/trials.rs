@@ -1,9 +1,9 @@
 //! Step 4: every candidate effect fitted to one channel's gap.
 
 use crate::candidates::{
-    filter_grid, filtered_allan, free_parameters, level_term, named, resonance_grid,
+    candidates, filter_grid, filtered_allan, level_term, named, resonance_grid,
     resonance_refinement, resonance_signature, shape_grid, shape_search_penalty,
-    unit_family_signature, unit_signature, white_signature, CANDIDATES,
+    unit_family_signature, unit_signature, white_signature,
 };
 use crate::fit::predicted_ln_adev;
 use crate::fit::{
@@ -101,7 +101,7 @@ pub(crate) fn at_squared_level(named: &Named, c: f64) -> Named {
     out
 }
 
-/// Fit every candidate to one channel; the trials are in CANDIDATES order, the output filter last.
+/// Fit every candidate to one channel; the trials are in `candidates()` order, the output filter last.
 pub(crate) fn trials(input: &ChannelFit) -> Vec<Trial> {
     let ln_meas: Vec<f64> = input.measured.adev.iter().map(|a| a.ln()).collect();
     let data = FitData {
@@ -112,7 +112,7 @@ pub(crate) fn trials(input: &ChannelFit) -> Vec<Trial> {
     };
     let ch = input.channel;
     let mut out = Vec::new();
-    for effect in CANDIDATES {
+    for effect in candidates() {
         // A Woodman random-walk bias instability occupies the axis's one bias-instability slot; a flicker
         // candidate would replace it, so it is not offered (its level shows as a rate random walk).
         if effect == Effect::BiasInstability && has_random_walk_bias_instability(input.model, ch) {
@@ -183,7 +183,7 @@ fn fit_shaped(
     };
     // Shape interval at the 95 % threshold widened by this fit's Birge ratio; a line's frequency
     // is the spectrum's, known to half the resolution it was measured to.
-    let scale = birge_scale(ff.fit.chi2, free_parameters(effect), m);
+    let scale = birge_scale(ff.fit.chi2, effect.free_parameters(), m);
     let (shape_lo, shape_hi) = match (from_lines, input.line_frequency_resolution_hz) {
         (true, Some(df)) => (ff.shape - 0.5 * df, ff.shape + 0.5 * df),
         _ => ff.shape_interval(CHI2_1_95 * scale * scale),
@@ -254,7 +254,7 @@ fn fit_resonance(input: &ChannelFit, data: &FitData, current: Option<&Term>) -> 
     // Shape interval: the grid's shapes within the 95 % threshold (Birge-widened) of the best.
     let scale = birge_scale(
         fit.chi2,
-        free_parameters(Effect::Resonance),
+        Effect::Resonance.free_parameters(),
         search.tau.len(),
     );
     let near: Vec<(f64, f64)> = (0..fits.len())
@@ -397,7 +397,7 @@ fn trial(data: &FitData, effect: Effect, current: Option<&Term>, fitted: Fitted)
         signature: f,
         penalty,
     } = fitted;
-    let (k, m) = (free_parameters(effect), data.ln_meas.len());
+    let (k, m) = (effect.free_parameters(), data.ln_meas.len());
     let c0 = squared_level(current);
     let scale = birge_scale(fit.chi2, k, m);
     // (For the ramp: the profile interval of the Allan fit alone, around its own optimum.)
@@ -471,7 +471,7 @@ fn filter_trial(input: &ChannelFit, data: &FitData) -> Option<Trial> {
         .collect();
     search.refine(&mut tried);
     let (chi2, b) = search.simplest(tried)?;
-    let (k, m) = (free_parameters(Effect::OutputFilter), search.tau.len());
+    let (k, m) = (Effect::OutputFilter.free_parameters(), search.tau.len());
     let scale = birge_scale(chi2, k, m);
     let (c_lo, c_hi) = b.interval(search.data, search.c0);
     let lo = (c_lo / (scale * scale).max(1.0)).min(b.fit.c);
@@ -692,7 +692,7 @@ impl<'a> FilterSearch<'a> {
     fn simplest(&self, tried: Vec<(f64, OutputFilterFit)>) -> Option<(f64, OutputFilterFit)> {
         let m = self.tau.len();
         let best_chi2 = tried.iter().map(|t| t.0).fold(f64::INFINITY, f64::min);
-        let alike = 6.0 * birge_scale(best_chi2, free_parameters(Effect::OutputFilter), m).powi(2);
+        let alike = 6.0 * birge_scale(best_chi2, Effect::OutputFilter.free_parameters(), m).powi(2);
         tried
             .into_iter()
             .filter(|t| t.0 <= best_chi2 + alike)

@@ -1,10 +1,9 @@
 //! The exact Allan variance of the noise terms behind a sensor's digital output filter
 //! (`crate::terms::output_filter`), at the output rate and after decimation.
 
-use crate::terms::output_filter::OutputFilter;
 use num_complex::Complex64;
 
-/// Exact Allan variance of each noise term after an [`OutputFilter`] (and its decimation), at output
+/// Exact Allan variance of each noise term after an output filter ([`FilteredAllan::new`]) (and its decimation), at output
 /// interval `dt_s` and tau = m dt_s (overlapping-estimator expectation).
 ///
 /// Derivation (ours; checked against brute-force quadratic forms in the tests). The Allan
@@ -50,62 +49,16 @@ pub(crate) fn allan_weight_acf(k: i64, m: i64) -> f64 {
     }
 }
 
-/// Filters [`FilteredAllan::new`] remembers per thread: `imudrift diagnose` builds the same few
-/// thousand candidate filters tens of thousands of times (a golden-section search revisits its
-/// points, every channel's round rebuilds its model's filter; 59 003 builds of 13 146 distinct
-/// filters for one ADIS16405 log, 2026-11-26).
-const REMEMBERED: usize = 256;
-
-thread_local! {
-    /// The last [`REMEMBERED`] filters built on this thread, oldest first, with their output interval.
-    static BUILT: std::cell::RefCell<std::collections::VecDeque<(OutputFilter, u64, FilteredAllan)>> =
-        std::cell::RefCell::default();
-}
-
 impl FilteredAllan {
-    /// The Allan forms behind `filter` at output interval `dt_s`: remembered per thread (a
-    /// deterministic function of its arguments, so a remembered one is the one built anew).
-    pub fn new(filter: &OutputFilter, dt_s: f64) -> FilteredAllan {
-        let key = dt_s.to_bits();
-        let hit = BUILT.with(|b| {
-            b.borrow()
-                .iter()
-                .rev()
-                .find(|(f, d, _)| *d == key && f == filter)
-                .map(|(_, _, fa)| fa.clone())
-        });
-        if let Some(fa) = hit {
-            return fa;
-        }
-        let fa = Self::build(filter, dt_s);
-        BUILT.with(|b| {
-            let mut b = b.borrow_mut();
-            if b.len() == REMEMBERED {
-                b.pop_front();
-            }
-            b.push_back((*filter, key, fa.clone()));
-        });
-        fa
-    }
-
-    fn build(filter: &OutputFilter, dt_s: f64) -> FilteredAllan {
-        let h = filter.impulse_response(dt_s);
-        let l = h.len();
-        // The filter's autocorrelation A_h(d) = sum_i h_i h_{i+d}: directly for short responses,
-        // through the FFT for long ones (a low-pass far below the rate responds for thousands of
-        // samples, and every candidate filter of diagnose builds one).
-        let a_h = if l <= 256 {
-            (0..l)
-                .map(|d| (0..l - d).map(|i| h[i] * h[i + d]).sum())
-                .collect()
-        } else {
-            crate::fft::autocorrelation(&h)
-        };
+    /// The forms of a filter with autocorrelation `a_h` (A_h(d), d = 0..L-1) and `decimation`, at
+    /// output interval `dt_s` and internal interval `dt_i` ([`FilteredAllan::new`], built in
+    /// `crate::terms::output_filter`, the filter's file).
+    pub(crate) fn from_parts(a_h: Vec<f64>, decimation: usize, dt_s: f64, dt_i: f64) -> Self {
         FilteredAllan {
             a_h,
-            decimation: filter.decimation() as usize,
+            decimation,
             dt_s,
-            dt_i: filter.internal_dt(dt_s),
+            dt_i,
         }
     }
 
@@ -272,7 +225,7 @@ impl FilteredAllan {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::terms::output_filter::FilterKind;
+    use crate::terms::output_filter::{FilterKind, OutputFilter};
 
     /// Raw-sample weights of m^2-scaled... the Allan difference sum_n w_n z_n written on the internal
     /// samples x (index 0 = the earliest sample any output uses).

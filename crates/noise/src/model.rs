@@ -5,6 +5,7 @@
 //! convention (docs/model.md §2): Q (signal·s), N (signal·sqrt(s)), B (signal), K (signal/sqrt(s)),
 //! R (signal/s).
 
+use crate::config::read::OtherTerms;
 use crate::effect::{Effect, Sensor, TermFilter};
 use crate::filter::FilteredAllan;
 use crate::temperature::TemperatureProfile;
@@ -144,6 +145,19 @@ impl AxisModel {
             }
         }
         out
+    }
+}
+
+impl OtherTerms for AxisModel {
+    fn allan_variance_with(&self, position: usize, avar: Option<f64>, tau_s: f64) -> f64 {
+        self.terms
+            .iter()
+            .enumerate()
+            .filter_map(|(i, t)| match i == position {
+                true => avar,
+                false => t.as_ref()?.as_error_term().allan_variance(tau_s),
+            })
+            .sum()
     }
 }
 #[derive(Clone, Debug, Default, PartialEq)]

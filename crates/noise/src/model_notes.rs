@@ -1,7 +1,8 @@
 //! One rule, in every command, for the parts a sensor model lacks: a note naming what is assumed
 //! perfect (a triad or an axis with no error term at all), and a note where a triad's model has
-//! no long-term term (bias instability, rate random walk, rate ramp, Gauss-Markov, temperature)
-//! and the horizon is long enough for such terms to dominate a real sensor's drift.
+//! no long-term term (`TermKind::LONG_TERM`: bias instability, rate random walk, rate ramp,
+//! Gauss-Markov, temperature) and the horizon is long enough for such terms to dominate a real
+//! sensor's drift.
 
 use crate::{Effect, Sensor, SensorModel};
 
@@ -10,16 +11,6 @@ use crate::{Effect, Sensor, SensorModel};
 /// deviation between about 10 s and 100 s (docs/model.md §2, e.g. the ADIS16405 curve's minimum
 /// region starts near 10 s), so from 100 s on a model without it is optimistic.
 pub const LONG_HORIZON_S: f64 = 100.0;
-
-/// The terms that shape drift at long horizons.
-const LONG_TERM: [Effect; 6] = [
-    Effect::BiasInstability,
-    Effect::RateRandomWalk,
-    Effect::RateRamp,
-    Effect::GaussMarkov,
-    Effect::SlowGaussMarkov,
-    Effect::TemperatureBias,
-];
 
 fn sensor_words(s: Sensor) -> (&'static str, &'static str) {
     match s {
@@ -56,7 +47,9 @@ pub fn notes(model: &SensorModel, horizon_s: Option<f64>) -> Vec<String> {
                 bare.join(", ")
             ));
         }
-        let long = axes.iter().any(|a| LONG_TERM.iter().any(|&e| a.has(e)));
+        let long = axes
+            .iter()
+            .any(|a| Effect::ALL.iter().any(|&e| e.is_long_term() && a.has(e)));
         if let (false, Some(h)) = (long, horizon_s) {
             if h >= LONG_HORIZON_S {
                 notes.push(format!(

@@ -13,6 +13,7 @@
 //! values. One value per sensor: these tools take no per-axis values, so the largest of the three
 //! axes is written (the worst axis, stated in the file) and each axis is given in a comment.
 
+pub use crate::config::error::NoiseFileError;
 use crate::model::{AxisModel, SensorModel, TriadModel};
 use crate::temperature::TemperatureProfile;
 use crate::terms::rate_random_walk::RateRandomWalk;
@@ -334,15 +335,6 @@ fn sci(v: f64) -> String {
         }
         None => t,
     }
-}
-
-/// A noise file that cannot be used: the file, the line where known, the key and what was expected.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("{file}{at}: {message}", at = line.map(|l| format!(":{l}")).unwrap_or_default())]
-pub struct NoiseFileError {
-    pub file: String,
-    pub line: Option<usize>,
-    pub message: String,
 }
 
 /// The key spellings of each value: Kalibr / OpenVINS, then VINS-Fusion.

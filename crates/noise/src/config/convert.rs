@@ -3,12 +3,12 @@
 
 use super::error::ConfigError;
 use super::raw::*;
-use super::read::{signal_of, Ctx, ReadContext, Text};
+use super::read::{Ctx, ReadContext, Text};
 use crate::effect::Sensor;
 use crate::model::*;
 use crate::temperature::TemperatureProfile;
 use crate::terms::{Effect, RawAxis};
-use crate::units::Quantity;
+use crate::units::{Quantity, Signal};
 use crate::AXIS_NAMES;
 
 /// The `[temperature]` table: the profile and the reference temperature (25 degC when absent).
@@ -224,6 +224,7 @@ fn convert_axis(
                 key: format!("{}.{from}.{}", sensor.name(), effect.name()),
                 sig: signal_of(sensor),
                 others: &m,
+                position: effect as usize,
             };
             if let Some(term) = table.read(effect, &cx) {
                 let term = term?;
@@ -232,4 +233,11 @@ fn convert_axis(
         }
     }
     Ok(m)
+}
+
+pub(crate) fn signal_of(sensor: Sensor) -> Signal {
+    match sensor {
+        Sensor::Gyro => Signal::AngularRate,
+        Sensor::Accel => Signal::Acceleration,
+    }
 }

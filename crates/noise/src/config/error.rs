@@ -8,7 +8,7 @@ pub enum ConfigError {
     Parse { file: String, message: String },
     /// A Kalibr / OpenVINS / VINS-Fusion noise file that cannot be used.
     #[error(transparent)]
-    NoiseFile(#[from] crate::noise_file::NoiseFileError),
+    NoiseFile(#[from] NoiseFileError),
     /// A value that parses but is not acceptable.
     #[error("{file}{at}: key `{key}`: expected {expected}, found {found}", at = line.map(|l| format!(":{l}")).unwrap_or_default())]
     Invalid {
@@ -19,4 +19,13 @@ pub enum ConfigError {
         expected: String,
         found: String,
     },
+}
+
+/// A noise file that cannot be used: the file, the line where known, the key and what was expected.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{file}{at}: {message}", at = line.map(|l| format!(":{l}")).unwrap_or_default())]
+pub struct NoiseFileError {
+    pub file: String,
+    pub line: Option<usize>,
+    pub message: String,
 }

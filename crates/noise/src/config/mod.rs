@@ -37,8 +37,6 @@ mod write;
 pub use error::ConfigError;
 pub use write::UnitStyle;
 
-pub(crate) use read::signal_of;
-
 use crate::effect::Sensor;
 use crate::model::*;
 use convert::{convert_temperature, convert_triad};

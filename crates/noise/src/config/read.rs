@@ -3,8 +3,6 @@
 //! of its key (`terms/<effect>.rs`).
 
 use super::error::ConfigError;
-use crate::effect::Sensor;
-use crate::model::AxisModel;
 use crate::model_error::ModelError;
 use crate::units::{parse_quantity, unit_part, Quantity, Signal};
 
@@ -128,21 +126,24 @@ impl Ctx<'_> {
     }
 }
 
-pub(crate) fn signal_of(sensor: Sensor) -> Signal {
-    match sensor {
-        Sensor::Gyro => Signal::AngularRate,
-        Sensor::Accel => Signal::Acceleration,
-    }
-}
-
 /// What a term reads its key with: the file, the key's full name (`gyro.x.white_noise`, or
 /// `gyro.all.white_noise` when the value comes from the `all` table), the axis' signal and the
-/// terms of the axis read before it (bias instability's `allan_minimum` convention needs them).
+/// terms of the axis read before it (bias instability's `allan_minimum` convention needs them),
+/// with the position of the effect being read in `Effect::ALL`.
 pub struct ReadContext<'a> {
     pub(crate) ctx: &'a Ctx<'a>,
     pub(crate) key: String,
     pub(crate) sig: Signal,
-    pub(crate) others: &'a AxisModel,
+    pub(crate) others: &'a dyn OtherTerms,
+    pub(crate) position: usize,
+}
+
+/// The terms of an axis read before a term that reads them, as that term sees them: the axis
+/// model (`AxisModel`) implements it. A trait, as the terms cannot name the model made of them.
+pub(crate) trait OtherTerms {
+    /// The axis' closed-form Allan variance at `tau_s` (`AxisModel::allan_variance`, summed in
+    /// `Effect` order) with `avar` as the Allan variance of the term at `position`.
+    fn allan_variance_with(&self, position: usize, avar: Option<f64>, tau_s: f64) -> f64;
 }
 
 impl ReadContext<'_> {

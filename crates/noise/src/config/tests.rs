@@ -61,7 +61,7 @@ fn allan_minimum_convention_reproduces_the_minimum() {
     let Some(BiasInstability::Flicker(f)) = axis.get::<crate::BiasInstability>() else {
         panic!("flicker expected")
     };
-    let (min, _) = model_adev_minimum(axis, f);
+    let (min, _) = model_adev_minimum(&|tau| axis.allan_variance(tau), f);
     assert!((min / 0.010f64.to_radians() - 1.0).abs() < 1e-9);
     // B is smaller than min/0.664: white noise and RRW contribute to the minimum too.
     let min_only = 0.010f64.to_radians() / cf::FLICKER_PLATEAU_PER_B;

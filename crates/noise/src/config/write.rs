@@ -1,6 +1,6 @@
 //! The model written back as a sensor TOML (SI units, every axis explicit).
 
-use super::signal_of;
+use super::convert::signal_of;
 use crate::effect::Sensor;
 use crate::model::*;
 use crate::temperature::TemperatureProfile;
@@ -158,9 +158,9 @@ fn allan_minimum_value(a: &AxisModel, f: &Flicker, cx: &WriteContext) -> Option<
             others.remove(e);
         }
     }
-    let floor = model_adev_minimum(&others, f).0;
+    let floor = model_adev_minimum(&|tau| others.allan_variance(tau), f).0;
     others.set_term(BiasInstability::Flicker(f.clone()));
-    let minimum = model_adev_minimum(&others, f).0;
+    let minimum = model_adev_minimum(&|tau| others.allan_variance(tau), f).0;
     if !(minimum.is_finite() && minimum - floor > 1e-3 * minimum) {
         return None;
     }

@@ -8,11 +8,10 @@ use super::term::{
 };
 use crate::closed_form as cf;
 use crate::config::error::ConfigError;
-use crate::config::read::{in_units_of, ReadContext, Text};
+use crate::config::read::{in_units_of, OtherTerms, ReadContext, Text};
 use crate::discrete::RandomWalk;
 use crate::filter::FilteredAllan;
 use crate::law_source::{LawSource, LawSourceContext};
-use crate::model::AxisModel;
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
 use crate::ImuRng;
@@ -239,10 +238,11 @@ fn plateau_taus(f: &Flicker) -> Vec<f64> {
 }
 
 /// Minimum over the plateau taus of the total closed-form Allan deviation.
-pub(crate) fn model_adev_minimum(axis: &AxisModel, band: &Flicker) -> (f64, f64) {
+/// `avar` is the axis' closed-form Allan variance at a tau (`AxisModel::allan_variance`).
+pub(crate) fn model_adev_minimum(avar: &dyn Fn(f64) -> f64, band: &Flicker) -> (f64, f64) {
     plateau_taus(band)
         .into_iter()
-        .map(|tau| (axis.allan_variance(tau).sqrt(), tau))
+        .map(|tau| (avar(tau).sqrt(), tau))
         .fold((f64::INFINITY, 0.0), |a, b| if b.0 < a.0 { b } else { a })
 }
 
@@ -250,13 +250,14 @@ pub(crate) fn model_adev_minimum(axis: &AxisModel, band: &Flicker) -> (f64, f64)
 /// terms alone already exceed it. The minimum grows monotonically with B, so bisection converges.
 fn solve_b_for_minimum(
     target: f64,
-    others: &AxisModel,
+    others: &dyn OtherTerms,
+    position: usize,
     flicker: &dyn Fn(f64) -> Flicker,
 ) -> Result<f64, f64> {
     let min_with = |b: f64| {
-        let mut axis = others.clone();
-        axis.set_term(BiasInstability::Flicker(flicker(b)));
-        model_adev_minimum(&axis, &flicker(b)).0
+        let term = BiasInstability::Flicker(flicker(b));
+        let avar = |tau: f64| others.allan_variance_with(position, term.allan_variance(tau), tau);
+        model_adev_minimum(&avar, &flicker(b)).0
     };
     let floor = min_with(0.0);
     if floor >= target {
@@ -436,7 +437,7 @@ fn read_flicker(
     };
     let b = match raw.convention.as_ref().map(|c| c.get_ref().as_str()) {
         Some("ieee") => value,
-        Some("allan_minimum") => solve_b_for_minimum(value, cx.others, &flicker).map_err(|floor| {
+        Some("allan_minimum") => solve_b_for_minimum(value, cx.others, cx.position, &flicker).map_err(|floor| {
             cx.ctx.invalid_at(
                 &cx.sub("value"),
                 Some(value_text),
@@ -606,6 +607,8 @@ impl ErrorTerm for BiasInstability {
 
 impl TermKind for BiasInstability {
     const STOCHASTIC: bool = true;
+    const LONG_TERM: bool = true;
+    const FREE_PARAMETERS: usize = 1;
     const SHOWS_IN_STATIC_LOG: bool = true;
     /// A plain value, or a table ([`RawBiasInstability`]).
     type Raw = toml::Spanned<RawBiasField>;

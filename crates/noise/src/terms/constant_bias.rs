@@ -42,6 +42,8 @@ impl ErrorTerm for ConstantBias {
 
 impl TermKind for ConstantBias {
     const STOCHASTIC: bool = false;
+    const LONG_TERM: bool = false;
+    const FREE_PARAMETERS: usize = 1;
     const SHOWS_IN_STATIC_LOG: bool = false;
     type Raw = Text;
     const EXAMPLE: Option<&'static str> =

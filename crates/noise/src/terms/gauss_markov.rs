@@ -91,6 +91,8 @@ impl ErrorTerm for GaussMarkov {
 
 impl TermKind for GaussMarkov {
     const STOCHASTIC: bool = true;
+    const LONG_TERM: bool = true;
+    const FREE_PARAMETERS: usize = 2;
     const SHOWS_IN_STATIC_LOG: bool = true;
     type Raw = RawGaussMarkov;
 

@@ -48,6 +48,8 @@ impl ErrorTerm for Misalignment {
 
 impl TermKind for Misalignment {
     const STOCHASTIC: bool = false;
+    const LONG_TERM: bool = false;
+    const FREE_PARAMETERS: usize = 2;
     const SHOWS_IN_STATIC_LOG: bool = false;
     /// Two angles, `misalignment = [a, b]`.
     type Raw = Vec<Text>;

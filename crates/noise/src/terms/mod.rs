@@ -72,6 +72,20 @@ macro_rules! registry {
                 }
             }
 
+            /// Does it shape drift at long horizons ([`TermKind::LONG_TERM`])?
+            pub fn is_long_term(self) -> bool {
+                match self {
+                    $(Effect::$effect => <$file::$ty as TermKind>::LONG_TERM,)+
+                }
+            }
+
+            /// The parameters a fit of it adjusts ([`TermKind::FREE_PARAMETERS`]).
+            pub fn free_parameters(self) -> usize {
+                match self {
+                    $(Effect::$effect => <$file::$ty as TermKind>::FREE_PARAMETERS,)+
+                }
+            }
+
             /// Is its key read after the axis' other terms ([`TermKind::READS_OTHER_TERMS`])?
             pub(crate) fn reads_other_terms(self) -> bool {
                 match self {

@@ -85,6 +85,8 @@ impl ErrorTerm for Outliers {
 
 impl TermKind for Outliers {
     const STOCHASTIC: bool = true;
+    const LONG_TERM: bool = false;
+    const FREE_PARAMETERS: usize = 2;
     const SHOWS_IN_STATIC_LOG: bool = true;
     type Raw = RawOutliers;
     const EXAMPLE: Option<&'static str> =

@@ -25,6 +25,7 @@
 use super::term::{note_value_units, ErrorTerm, GenContext, NoGenerator, TermKind, WriteContext};
 use crate::config::error::ConfigError;
 use crate::config::read::{Integer, ReadContext, Text};
+use crate::filter::FilteredAllan;
 use crate::law_source::{LawSource, LawSourceContext};
 use crate::model_error::{check, ModelError};
 use crate::units::{Quantity, Signal};
@@ -300,6 +301,8 @@ impl ErrorTerm for OutputFilter {
 
 impl TermKind for OutputFilter {
     const STOCHASTIC: bool = false;
+    const LONG_TERM: bool = false;
+    const FREE_PARAMETERS: usize = 2;
     const SHOWS_IN_STATIC_LOG: bool = true;
     type Raw = RawOutputFilter;
     const EXAMPLE: Option<&'static str> = Some("output_filter = { kind = \"lowpass2\", cutoff = \"25 Hz\", decimation = 4 } or { kind = \"bartlett\", taps = 8 }");
@@ -630,6 +633,66 @@ impl FilterState {
 }
 
 /// A valid term of the effect, for the registry's tests (`terms::samples`).
+/// Filters [`FilteredAllan::new`] (the filter's exact Allan forms, `crate::filter`) remembers per thread: `imudrift diagnose` builds the same few
+/// thousand candidate filters tens of thousands of times (a golden-section search revisits its
+/// points, every channel's round rebuilds its model's filter; 59 003 builds of 13 146 distinct
+/// filters for one ADIS16405 log, 2026-11-26).
+const REMEMBERED: usize = 256;
+
+thread_local! {
+    /// The last [`REMEMBERED`] filters built on this thread, oldest first, with their output interval.
+    static BUILT: std::cell::RefCell<std::collections::VecDeque<(OutputFilter, u64, FilteredAllan)>> =
+        std::cell::RefCell::default();
+}
+
+impl FilteredAllan {
+    /// The Allan forms behind `filter` at output interval `dt_s`: remembered per thread (a
+    /// deterministic function of its arguments, so a remembered one is the one built anew).
+    pub fn new(filter: &OutputFilter, dt_s: f64) -> FilteredAllan {
+        let key = dt_s.to_bits();
+        let hit = BUILT.with(|b| {
+            b.borrow()
+                .iter()
+                .rev()
+                .find(|(f, d, _)| *d == key && f == filter)
+                .map(|(_, _, fa)| fa.clone())
+        });
+        if let Some(fa) = hit {
+            return fa;
+        }
+        let fa = Self::build(filter, dt_s);
+        BUILT.with(|b| {
+            let mut b = b.borrow_mut();
+            if b.len() == REMEMBERED {
+                b.pop_front();
+            }
+            b.push_back((*filter, key, fa.clone()));
+        });
+        fa
+    }
+
+    fn build(filter: &OutputFilter, dt_s: f64) -> FilteredAllan {
+        let h = filter.impulse_response(dt_s);
+        let l = h.len();
+        // The filter's autocorrelation A_h(d) = sum_i h_i h_{i+d}: directly for short responses,
+        // through the FFT for long ones (a low-pass far below the rate responds for thousands of
+        // samples, and every candidate filter of diagnose builds one).
+        let a_h = if l <= 256 {
+            (0..l)
+                .map(|d| (0..l - d).map(|i| h[i] * h[i + d]).sum())
+                .collect()
+        } else {
+            crate::fft::autocorrelation(&h)
+        };
+        FilteredAllan::from_parts(
+            a_h,
+            filter.decimation() as usize,
+            dt_s,
+            filter.internal_dt(dt_s),
+        )
+    }
+}
+
 #[cfg(test)]
 pub(crate) fn sample() -> OutputFilter {
     OutputFilter::new(FilterKind::Bartlett { taps: 8 }, 2).unwrap()

@@ -66,6 +66,8 @@ impl ErrorTerm for OutputWhiteNoise {
 
 impl TermKind for OutputWhiteNoise {
     const STOCHASTIC: bool = true;
+    const LONG_TERM: bool = false;
+    const FREE_PARAMETERS: usize = 1;
     const SHOWS_IN_STATIC_LOG: bool = true;
     type Raw = Text;
     const EXAMPLE: Option<&'static str> = Some(

@@ -60,6 +60,8 @@ impl ErrorTerm for Quantization {
 
 impl TermKind for Quantization {
     const STOCHASTIC: bool = true;
+    const LONG_TERM: bool = false;
+    const FREE_PARAMETERS: usize = 1;
     const SHOWS_IN_STATIC_LOG: bool = true;
     type Raw = Text;
     const EXAMPLE: Option<&'static str> = Some("quantization = \"0.001 deg\"");

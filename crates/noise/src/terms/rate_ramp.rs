@@ -54,6 +54,8 @@ impl ErrorTerm for RateRamp {
 
 impl TermKind for RateRamp {
     const STOCHASTIC: bool = false;
+    const LONG_TERM: bool = true;
+    const FREE_PARAMETERS: usize = 1;
     const SHOWS_IN_STATIC_LOG: bool = true;
     type Raw = Text;
     const EXAMPLE: Option<&'static str> = Some("rate_ramp = \"0.01 deg/h/h\"");

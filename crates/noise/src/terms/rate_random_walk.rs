@@ -64,6 +64,8 @@ impl ErrorTerm for RateRandomWalk {
 
 impl TermKind for RateRandomWalk {
     const STOCHASTIC: bool = true;
+    const LONG_TERM: bool = true;
+    const FREE_PARAMETERS: usize = 1;
     const SHOWS_IN_STATIC_LOG: bool = true;
     type Raw = Text;
     const EXAMPLE: Option<&'static str> = Some("rate_random_walk = \"0.5 deg/h/sqrt(h)\"");

@@ -126,6 +126,8 @@ impl ErrorTerm for Resonance {
 
 impl TermKind for Resonance {
     const STOCHASTIC: bool = true;
+    const LONG_TERM: bool = false;
+    const FREE_PARAMETERS: usize = 3;
     const SHOWS_IN_STATIC_LOG: bool = true;
     type Raw = RawResonance;
     const EXAMPLE: Option<&'static str> =

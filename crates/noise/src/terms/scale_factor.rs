@@ -44,6 +44,8 @@ impl ErrorTerm for ScaleFactor {
 
 impl TermKind for ScaleFactor {
     const STOCHASTIC: bool = false;
+    const LONG_TERM: bool = false;
+    const FREE_PARAMETERS: usize = 1;
     const SHOWS_IN_STATIC_LOG: bool = false;
     type Raw = Text;
     const EXAMPLE: Option<&'static str> = Some("scale_factor = \"0.1 %\"");

@@ -125,6 +125,8 @@ impl ErrorTerm for Sinusoid {
 
 impl TermKind for Sinusoid {
     const STOCHASTIC: bool = false;
+    const LONG_TERM: bool = false;
+    const FREE_PARAMETERS: usize = 2;
     const SHOWS_IN_STATIC_LOG: bool = true;
     type Raw = RawSinusoid;
 

@@ -75,6 +75,8 @@ impl ErrorTerm for SlowGaussMarkov {
 
 impl TermKind for SlowGaussMarkov {
     const STOCHASTIC: bool = true;
+    const LONG_TERM: bool = true;
+    const FREE_PARAMETERS: usize = 2;
     const SHOWS_IN_STATIC_LOG: bool = true;
     type Raw = RawGaussMarkov;
     const EXAMPLE: Option<&'static str> =

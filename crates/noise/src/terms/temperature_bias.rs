@@ -69,6 +69,8 @@ impl ErrorTerm for TemperatureBias {
 
 impl TermKind for TemperatureBias {
     const STOCHASTIC: bool = false;
+    const LONG_TERM: bool = true;
+    const FREE_PARAMETERS: usize = 1;
     const SHOWS_IN_STATIC_LOG: bool = false;
     type Raw = Text;
     const EXAMPLE: Option<&'static str> = Some("temperature_bias = \"0.01 deg/s/degC\"");

@@ -110,6 +110,13 @@ pub trait TermKind: ErrorTerm + Sized {
     /// Does a static log's Allan deviation show it (the terms `AxisModel::stochastic_only`
     /// keeps: the stochastic ones, the rate ramp, the sinusoid and the output filter)?
     const SHOWS_IN_STATIC_LOG: bool;
+    /// Does it shape drift at long horizons, where white noise alone understates a real sensor's
+    /// drift (`model_notes`: a triad without any such term is noted as optimistic)?
+    const LONG_TERM: bool;
+    /// The parameters a fit of the term to an Allan curve adjusts (its level and shape
+    /// parameters, with the white-noise density an output filter is fitted with), as an
+    /// information criterion counts them.
+    const FREE_PARAMETERS: usize;
 
     /// The config key's value as serde reads it from an axis table (units still in strings).
     type Raw: serde::de::DeserializeOwned + Clone;

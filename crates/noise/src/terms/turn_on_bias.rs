@@ -43,6 +43,8 @@ impl ErrorTerm for TurnOnBias {
 
 impl TermKind for TurnOnBias {
     const STOCHASTIC: bool = false;
+    const LONG_TERM: bool = false;
+    const FREE_PARAMETERS: usize = 1;
     const SHOWS_IN_STATIC_LOG: bool = false;
     type Raw = Text;
     const EXAMPLE: Option<&'static str> = Some("turn_on_bias = \"3 deg/s\"");

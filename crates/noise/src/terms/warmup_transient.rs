@@ -83,6 +83,8 @@ impl ErrorTerm for WarmupTransient {
 
 impl TermKind for WarmupTransient {
     const STOCHASTIC: bool = false;
+    const LONG_TERM: bool = false;
+    const FREE_PARAMETERS: usize = 2;
     const SHOWS_IN_STATIC_LOG: bool = false;
     type Raw = RawWarmupTransient;
     const EXAMPLE: Option<&'static str> = Some("warmup_transient = { amplitude = \"0.03 deg/s\", time_constant = \"600 s\", per_run = false }");

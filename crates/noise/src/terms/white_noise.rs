@@ -61,6 +61,8 @@ impl ErrorTerm for WhiteNoise {
 
 impl TermKind for WhiteNoise {
     const STOCHASTIC: bool = true;
+    const LONG_TERM: bool = false;
+    const FREE_PARAMETERS: usize = 1;
     const SHOWS_IN_STATIC_LOG: bool = true;
     type Raw = Text;
     const EXAMPLE: Option<&'static str> =
