@@ -88,7 +88,12 @@ pub fn weighted_mean(values: &[f64], weights: &[f64]) -> f64 {
 pub fn weighted_mean_square(values: &[f64], weights: &[f64]) -> f64 {
     debug_assert_eq!(values.len(), weights.len());
     let w = weights.iter().sum::<f64>();
-    values.iter().zip(weights).map(|(x, w)| w * x * x).sum::<f64>() / w
+    values
+        .iter()
+        .zip(weights)
+        .map(|(x, w)| w * x * x)
+        .sum::<f64>()
+        / w
 }
 
 /// The quantile at probability `p` (clamped to [0, 1]) of an ascending slice by linear
@@ -197,7 +202,9 @@ mod tests {
     /// The operation order is the one the callers wrote by hand: the same bits.
     #[test]
     fn operation_order_is_left_to_right_then_divide() {
-        let v: Vec<f64> = (1..=101).map(|k| (k as f64 * 0.37).sin() * 1e3 + 0.1).collect();
+        let v: Vec<f64> = (1..=101)
+            .map(|k| (k as f64 * 0.37).sin() * 1e3 + 0.1)
+            .collect();
         let n = v.len() as f64;
         let m = v.iter().sum::<f64>() / n;
         assert_eq!(mean(&v).to_bits(), m.to_bits());
