@@ -57,6 +57,8 @@ fn accel_magnitude(log: &Log) -> Option<String> {
     if n == 0 {
         return None;
     }
+    // The mean magnitude summed as the samples come (`stats::mean`'s order) rather than through
+    // a copy of the log's length: a log may fill most of the memory its reader allowed.
     let mean = (0..n)
         .map(|k| (x[k] * x[k] + y[k] * y[k] + z[k] * z[k]).sqrt())
         .sum::<f64>()
@@ -92,9 +94,11 @@ fn gyro_check(log: &Log, ch: Channel, d: &[f64]) -> Option<String> {
         return None;
     }
     let dt = 1.0 / log.rate_hz;
+    // The mean square of the differences (about 0, not their sample variance), summed as they
+    // come rather than through a copy for `stats::mean_square` (as the mean magnitude above).
     let diff_var = d.windows(2).map(|w| (w[1] - w[0]).powi(2)).sum::<f64>() / (d.len() - 1) as f64;
     let n = (diff_var * dt / 2.0).sqrt();
-    let rms = (d.iter().map(|v| v * v).sum::<f64>() / d.len() as f64).sqrt();
+    let rms = stats::rms(d);
     let said = unit_said(log, ch);
     if rms > MAX_GYRO_RATE_RAD_S {
         return Some(format!(

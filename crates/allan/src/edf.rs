@@ -360,7 +360,7 @@ pub fn autocorr_noise_id_detail(
             } else {
                 averaged = data[..blocks * m]
                     .chunks_exact(m)
-                    .map(|c| c.iter().sum::<f64>() / m as f64)
+                    .map(stats::mean)
                     .collect();
                 &averaged
             };
@@ -402,7 +402,8 @@ pub fn rate_noise_id_detail_fn(n: usize, y: impl Fn(usize) -> f64, d_max: u32) -
     }
     // Least-squares line in the centred index t_k = k - c: a = mean, b = sum(t y) / sum(t^2),
     // sum(t^2) = n (n^2 - 1) / 12.
-    // Four lanes (k mod 4): independent addition chains, added in a fixed order.
+    // Four lanes (k mod 4): independent addition chains, added in a fixed order (so the mean
+    // `a` below is not `stats::mean`'s left-to-right sum: this pass is the hot one).
     let c = (n as f64 - 1.0) / 2.0;
     let (mut syl, mut styl) = ([0.0f64; 4], [0.0f64; 4]);
     let groups = n / 4;

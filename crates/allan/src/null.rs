@@ -234,7 +234,8 @@ pub fn tail_of(stats: &[[f64; 5]]) -> Option<([f64; 5], [f64; 5])> {
         let mut v: Vec<f64> = stats.iter().map(|s| s[j]).collect();
         v.sort_by(f64::total_cmp);
         start[j] = v[r - exceed - 1];
-        scale[j] = v[r - exceed..].iter().map(|x| x - start[j]).sum::<f64>() / exceed as f64;
+        let excess: Vec<f64> = v[r - exceed..].iter().map(|x| x - start[j]).collect();
+        scale[j] = ::stats::mean(&excess);
     }
     Some((start, scale))
 }

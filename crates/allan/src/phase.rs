@@ -109,7 +109,8 @@ impl PhasePlan {
         use rayon::prelude::*;
         let n = rate.len();
         // The mean only keeps the phase small: any rounding in it adds a linear phase trend,
-        // which every estimator's differences cancel. Plain 8-lane sums are accurate enough.
+        // which every estimator's differences cancel. Plain 8-lane sums are accurate enough (and
+        // not `stats::mean`'s left-to-right sum: the block sums are the lanes' order).
         let block_sums: Vec<f64> = rate.par_chunks(PHASE_BLOCK).map(block_sum).collect();
         let mean = block_sums.iter().sum::<f64>() / n.max(1) as f64;
         // Compensated sum of (y - mean) of every block: (sum, error).

@@ -453,7 +453,8 @@ pub fn draw_models_on(
     for (k, f) in fits.iter().enumerate() {
         let mut row = Vec::new();
         for (j, t) in f.terms.iter().enumerate() {
-            let mean = s.iter().map(|r| r[k][j]).sum::<f64>() / replicates.max(1) as f64;
+            // One multiplier per replicate (none: NaN, and the level is not informed).
+            let mean = stats::mean(&s.iter().map(|r| r[k][j]).collect::<Vec<f64>>());
             row.push(mean > 0.0);
             if t.fitted_c > 0.0 {
                 for r in s.iter_mut() {

@@ -229,15 +229,14 @@ pub fn coloured_variance(w: &[f64], dt_s: f64, levels: &NoiseLevels) -> f64 {
 /// Least-squares fit of x on (1, g): the coefficient of g, its weights w (x . w = coefficient), and
 /// the residual. None when g is constant.
 pub fn regress(x: &[f64], g: &[f64]) -> Option<(f64, Vec<f64>, Vec<f64>)> {
-    let n = x.len() as f64;
-    let gm = g.iter().sum::<f64>() / n;
+    let gm = stats::mean(g);
     let sgg: f64 = g.iter().map(|v| (v - gm) * (v - gm)).sum();
     if sgg <= 0.0 || !sgg.is_finite() {
         return None;
     }
     let w: Vec<f64> = g.iter().map(|v| (v - gm) / sgg).collect();
     let c: f64 = w.iter().zip(x).map(|(a, b)| a * b).sum();
-    let xm = x.iter().sum::<f64>() / n;
+    let xm = stats::mean(x);
     let resid = x
         .iter()
         .zip(g)
@@ -250,7 +249,7 @@ pub fn regress(x: &[f64], g: &[f64]) -> Option<(f64, Vec<f64>, Vec<f64>)> {
 pub fn detrend(v: &[f64]) -> Vec<f64> {
     let n = v.len() as f64;
     let km = (n - 1.0) / 2.0;
-    let vm = v.iter().sum::<f64>() / n;
+    let vm = stats::mean(v);
     let (mut skv, mut skk) = (0.0, 0.0);
     for (k, &x) in v.iter().enumerate() {
         let d = k as f64 - km;
@@ -270,7 +269,7 @@ pub fn detrend(v: &[f64]) -> Vec<f64> {
 pub fn regress_detrended(x: &[f64], g: &[f64]) -> Option<(f64, Vec<f64>, Vec<f64>)> {
     let gt = detrend(g);
     let sgg: f64 = gt.iter().map(|v| v * v).sum();
-    let gm = g.iter().sum::<f64>() / g.len() as f64;
+    let gm = stats::mean(g);
     let centred: f64 = g.iter().map(|v| (v - gm) * (v - gm)).sum();
     if sgg <= 1e-9 * centred || !sgg.is_finite() {
         return None;
@@ -302,7 +301,7 @@ pub fn regression(x: &[f64], g: &[f64], dt_s: f64, floor: &NoiseLevels) -> Optio
     let (c, w, resid) = regress(x, g)?;
     let levels = noise_levels(&resid, dt_s).at_least(floor);
     let sd = coloured_variance(&w, dt_s, &levels).max(0.0).sqrt();
-    let gm = g.iter().sum::<f64>() / g.len() as f64;
+    let gm = stats::mean(g);
     let corrected = x.iter().zip(g).map(|(xi, gi)| xi - c * (gi - gm)).collect();
     Some(Regression {
         coefficient: c,
@@ -381,7 +380,7 @@ pub fn fit_transient(x: &[f64], dt_s: f64, floor: &NoiseLevels) -> Option<Transi
     // Remove the exponential itself (mean kept), not its detrended shape: the straight line it was
     // fitted beside belongs to the data, and subtracting c (g - its line) would add c x that line,
     // a spurious ramp of slope ~ c tau / T^2 that a long tau makes large enough to be named.
-    let gm = g.iter().sum::<f64>() / n as f64;
+    let gm = stats::mean(&g);
     Some(Transient {
         amplitude: c,
         tau_s: tau,
@@ -820,7 +819,7 @@ mod tests {
                 b
             })
             .collect();
-        let sd = (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt();
+        let sd = stats::rms(&x);
         let hampel_alone = {
             let mut buf = Vec::new();
             let r: Vec<f64> = (0..x.len())

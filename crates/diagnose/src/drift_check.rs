@@ -145,14 +145,13 @@ const BETWEEN_LOGS_LEVEL: f64 = 0.05;
 fn ln_ms_variance<'a>(per_log: impl Iterator<Item = &'a [f64]>) -> Option<f64> {
     let ln: Vec<f64> = per_log
         .filter(|v| !v.is_empty())
-        .map(|v| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).ln())
+        .map(|v| stats::mean_square(v).ln())
         .filter(|x| x.is_finite())
         .collect();
     if ln.len() < 2 {
         return None;
     }
-    let m = ln.iter().sum::<f64>() / ln.len() as f64;
-    Some(ln.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (ln.len() - 1) as f64)
+    Some(stats::sample_variance(&ln))
 }
 
 /// The likely cause of a verdict outside the band (module doc): which channels, which kind of
@@ -336,7 +335,7 @@ fn effective_count(per_log: &[&[f64]], overlapping: bool) -> f64 {
     let (mut num, mut den) = (0.0, 0.0);
     for v in per_log.iter().filter(|v| v.len() >= 8) {
         let sq: Vec<f64> = v.iter().map(|x| x * x).collect();
-        let m = sq.iter().sum::<f64>() / sq.len() as f64;
+        let m = stats::mean(&sq);
         num += sq.windows(2).map(|w| (w[0] - m) * (w[1] - m)).sum::<f64>();
         den += sq.iter().map(|x| (x - m) * (x - m)).sum::<f64>();
     }
@@ -752,7 +751,7 @@ impl Experiment<'_> {
         let (band_lo, band_hi) = crate::drift_joint::band(&rep_rms);
         let all_sorted = abs_sorted(&all);
         Ok(Model {
-            mean: all_sorted.iter().sum::<f64>() / all_sorted.len() as f64,
+            mean: stats::mean(&all_sorted),
             p50: stats::quantile(&all_sorted, 0.5),
             p95: stats::quantile(&all_sorted, 0.95),
             rms: stats::rms(&all),
@@ -831,10 +830,14 @@ fn measured_stats(
     let n_eff = effective_count(&seqs, overlapping);
     let lo_q = allan::chi2::chi2_ppf(0.975, n_eff);
     let hi_q = allan::chi2::chi2_ppf(0.025, n_eff);
-    let mean = sorted.iter().sum::<f64>() / sorted.len() as f64;
-    let sd = (sorted.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>()
-        / (sorted.len().max(2) - 1) as f64)
-        .sqrt();
+    let mean = stats::mean(&sorted);
+    // One segment (or none) has no spread to estimate: 0 (the sample deviation's NaN would
+    // make the interval NaN).
+    let sd = if sorted.len() < 2 {
+        0.0
+    } else {
+        stats::sample_std(&sorted)
+    };
     let half = 1.959_963_984_540_054 * sd / n_eff.sqrt();
     Measured {
         mean,

@@ -138,6 +138,8 @@ impl UnitDrift<'_> {
             }
             acc
         });
+        // The pooled mean square from each log's sum of squares and count (no log's segments
+        // are kept to hand to `stats::mean_square`); none: 0.
         (0..nh)
             .map(|h| {
                 let count: usize = sums.iter().map(|a| a[h].1).sum();

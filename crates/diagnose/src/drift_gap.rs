@@ -230,7 +230,12 @@ fn log_mean_squares(
                 .iter()
                 .map(|&(h, q)| {
                     let v = log[d][h].values(q);
-                    v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64
+                    // No segment: 0 (module doc's sums over none).
+                    if v.is_empty() {
+                        0.0
+                    } else {
+                        stats::mean_square(v)
+                    }
                 })
                 .collect()
         })
@@ -257,7 +262,7 @@ fn pooled_correlation(
             .map(|&(h, _)| simulated.first().map_or(0, |log| log[d][h].len()) as f64)
             .collect();
         let mean: Vec<f64> = (0..k)
-            .map(|i| ms.iter().map(|m| m[i]).sum::<f64>() / logs)
+            .map(|i| stats::mean(&ms.iter().map(|m| m[i]).collect::<Vec<f64>>()))
             .collect();
         for i in 0..k {
             for j in 0..k {
@@ -304,7 +309,7 @@ fn pooled_mean_square(
             .collect();
         let n = simulated.first().map_or(0, |log| log[d][h].len()) as f64;
         let m = stats::mean(&ms);
-        let v = ms.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (ms.len() as f64 - 1.0);
+        let v = stats::sample_variance(&ms);
         n_all += n;
         mean += n * m;
         var += n * n * v;

@@ -126,7 +126,7 @@ pub fn joint_check(cells: &[Cell]) -> Option<JointCheck> {
             .collect();
         // ln RMS about the members' mean (the leave-one-out sums below then keep their digits).
         let ln: Vec<f64> = x.iter().map(|v| v.ln()).collect();
-        let centre = ln.iter().sum::<f64>() / members as f64;
+        let centre = stats::mean(&ln);
         let ln: Vec<f64> = ln.iter().map(|v| v - centre).collect();
         // The members sorted once, and each member's place there: its band is that of the
         // others, the sorted list without it (`band_without`).
@@ -137,6 +137,8 @@ pub fn joint_check(cells: &[Cell]) -> Option<JointCheck> {
         for (r, &j) in order.iter().enumerate() {
             rank[j] = r;
         }
+        // Every member's leave-one-out mean and variance from the two sums, in one pass (not
+        // `stats::sample_variance` per member, R passes).
         let (sum, sum2) = ln.iter().fold((0.0, 0.0), |(s, q), v| (s + v, q + v * v));
         let others = (members - 1) as f64;
         for i in 0..members {

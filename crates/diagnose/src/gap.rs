@@ -53,15 +53,15 @@ impl Band {
         for i in 0..m {
             let mut col: Vec<f64> = per_seed.iter().map(|s| s[i]).collect();
             let lns: Vec<f64> = col.iter().map(|a| a.max(f64::MIN_POSITIVE).ln()).collect();
-            let mean = lns.iter().sum::<f64>() / s_count as f64;
+            let mean = stats::mean(&lns);
             let var = if s_count > 1 {
-                lns.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / (s_count - 1) as f64
+                stats::sample_variance(&lns)
             } else {
                 0.0
             };
             ln_mean[i] = mean;
             ln_sd[i] = var.sqrt();
-            avar_mean[i] = col.iter().map(|a| a * a).sum::<f64>() / s_count as f64;
+            avar_mean[i] = stats::mean_square(&col);
             col.sort_by(f64::total_cmp);
             adev_lo[i] = quantile_sorted(&col, 0.025);
             adev_hi[i] = quantile_sorted(&col, 0.975);
@@ -256,7 +256,7 @@ mod tests {
         let seeds: Vec<Vec<f64>> = (1..=5).map(|k| vec![k as f64]).collect();
         let b = Band::from_seeds(&tau, &seeds);
         let lns: Vec<f64> = (1..=5).map(|k| (k as f64).ln()).collect();
-        let mean = lns.iter().sum::<f64>() / 5.0;
+        let mean = stats::mean(&lns);
         assert!((b.ln_mean[0] - mean).abs() < 1e-15);
         assert!((b.avar_mean[0] - 11.0).abs() < 1e-12); // (1+4+9+16+25)/5
         assert!((b.adev_lo[0] - 1.1).abs() < 1e-12); // 0.025*4 = 0.1 of the way from 1 to 2

@@ -56,12 +56,9 @@ fn pool_point(points: &[&AllanPoint]) -> AllanPoint {
     if let [one] = points {
         return (*one).clone();
     }
-    let w: f64 = points.iter().map(|p| p.n_terms as f64).sum();
-    let avar = points
-        .iter()
-        .map(|p| p.n_terms as f64 * p.dev * p.dev)
-        .sum::<f64>()
-        / w;
+    let devs: Vec<f64> = points.iter().map(|p| p.dev).collect();
+    let weights: Vec<f64> = points.iter().map(|p| p.n_terms as f64).collect();
+    let avar = stats::weighted_mean_square(&devs, &weights);
     let edf: f64 = points.iter().map(|p| p.edf).sum();
     let dev = avar.sqrt();
     let (lo, hi) = allan::chi2::confidence_interval(dev, edf, allan::ONE_SIGMA_CI);

@@ -384,6 +384,8 @@ impl Means {
             .unwrap_or(0);
         let windows = matches!(protocol.calibration, Calibration::Window { .. })
             || matches!(protocol.initialisation, Initialisation::Levelled { .. });
+        // The means of the six channels from their sums in one pass (`channel_sums`, each in
+        // `stats::mean`'s left-to-right order), not six passes of `stats::mean`; none: 0.
         let sums = channel_sums(channels, n);
         let whole = std::array::from_fn(|ch| {
             channels[ch].map(|_| if n == 0 { 0.0 } else { sums[ch] / n as f64 })

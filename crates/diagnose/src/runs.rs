@@ -67,12 +67,8 @@ fn value(f: &Finding, name: &str) -> f64 {
 fn outliers(found: &[&Finding], hours: f64) -> Finding {
     let counts: Vec<f64> = found.iter().map(|f| value(f, "count")).collect();
     let count: f64 = counts.iter().sum();
-    let size = found
-        .iter()
-        .zip(&counts)
-        .map(|(f, c)| c * value(f, "size"))
-        .sum::<f64>()
-        / count;
+    let sizes: Vec<f64> = found.iter().map(|f| value(f, "size")).collect();
+    let size = stats::weighted_mean(&sizes, &counts);
     let rate = count / hours;
     // Poisson 95 % bounds on the rate (normal approximation with continuity), as for one run.
     let (lo, hi) = (
@@ -83,7 +79,8 @@ fn outliers(found: &[&Finding], hours: f64) -> Finding {
         .iter()
         .map(|f| value(f, "threshold_sigma"))
         .fold(f64::NEG_INFINITY, f64::max);
-    let n_without = found.iter().map(|f| value(f, "n_without")).sum::<f64>() / found.len() as f64;
+    let n_without: Vec<f64> = found.iter().map(|f| value(f, "n_without")).collect();
+    let n_without = stats::mean(&n_without);
     Finding {
         // A rate or size the constructor refuses keeps the first run's (validated) term.
         term: noise::Outliers::new(rate, size).map_or_else(|_| found[0].term.clone(), Into::into),
@@ -100,16 +97,17 @@ fn outliers(found: &[&Finding], hours: f64) -> Finding {
 }
 
 fn temperature(found: &[&Finding]) -> Finding {
-    let (mut sw, mut swc) = (0.0, 0.0);
-    for f in found {
-        let p = f.parameters[0];
-        let sd = (p.3 - p.2) / (2.0 * Z_95);
-        let w = if sd > 0.0 { 1.0 / (sd * sd) } else { 1.0 };
-        sw += w;
-        swc += w * p.1;
-    }
-    let c = swc / sw;
-    let sd = sw.recip().sqrt();
+    // Inverse-variance weights (1 where a run gave no interval).
+    let (values, weights): (Vec<f64>, Vec<f64>) = found
+        .iter()
+        .map(|f| {
+            let p = f.parameters[0];
+            let sd = (p.3 - p.2) / (2.0 * Z_95);
+            (p.1, if sd > 0.0 { 1.0 / (sd * sd) } else { 1.0 })
+        })
+        .unzip();
+    let c = stats::weighted_mean(&values, &weights);
+    let sd = weights.iter().sum::<f64>().recip().sqrt();
     Finding {
         // A coefficient that is not a finite number keeps the first run's (validated) term.
         term: noise::TemperatureBias::new(c).map_or_else(|_| found[0].term.clone(), Into::into),
@@ -120,10 +118,10 @@ fn temperature(found: &[&Finding]) -> Finding {
 }
 
 fn transient(found: &[&Finding]) -> Finding {
-    let n = found.len() as f64;
     let amplitudes: Vec<f64> = found.iter().map(|f| value(f, "amplitude")).collect();
-    let amplitude = (amplitudes.iter().map(|a| a * a).sum::<f64>() / n).sqrt();
-    let tau_s = (found.iter().map(|f| value(f, "tau_s").ln()).sum::<f64>() / n).exp();
+    let amplitude = stats::rms(&amplitudes);
+    let ln_tau: Vec<f64> = found.iter().map(|f| value(f, "tau_s").ln()).collect();
+    let tau_s = stats::mean(&ln_tau).exp();
     let bound = |name: &str, j: usize, pick: fn(f64, f64) -> f64, start: f64| {
         found
             .iter()
@@ -166,10 +164,10 @@ pub(crate) fn ramp_slope(logs: &[LogInput], c: Channel) -> f64 {
     if let [(_, r)] = slopes[..] {
         return r;
     }
-    let n: f64 = slopes.iter().map(|s| s.0).sum();
-    let mean = slopes.iter().map(|(w, r)| w * r).sum::<f64>() / n;
-    let rms = (slopes.iter().map(|(w, r)| w * r * r).sum::<f64>() / n).sqrt();
-    if n > 0.0 {
+    let (lengths, rates): (Vec<f64>, Vec<f64>) = slopes.into_iter().unzip();
+    let mean = stats::weighted_mean(&rates, &lengths);
+    let rms = stats::weighted_mean_square(&rates, &lengths).sqrt();
+    if lengths.iter().sum::<f64>() > 0.0 {
         rms.copysign(mean)
     } else {
         0.0

@@ -812,8 +812,7 @@ mod tests {
                 0.5 * (avar / runs as f64).ln()
             })
             .collect();
-        let m = truth.iter().sum::<f64>() / truth.len() as f64;
-        let var = truth.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (truth.len() - 1) as f64;
+        let var = stats::sample_variance(&truth);
         assert!(
             (mean_var / var - 1.0).abs() < REL_TOL,
             "{mean_var} vs {var}"

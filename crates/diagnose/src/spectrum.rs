@@ -47,7 +47,7 @@ pub fn welch_runs(xs: &[&[f64]], seg: usize) -> (Vec<f64>, usize) {
     let mut k = 0;
     for x in xs {
         for part in x.chunks_exact(seg) {
-            let mean = part.iter().sum::<f64>() / seg as f64;
+            let mean = stats::mean(part);
             for i in 0..seg {
                 re[i] = (part[i] - mean) * window[i];
                 im[i] = 0.0;
@@ -192,7 +192,7 @@ allan::wide_variant! {
             (rot.map(|r| r.0), rot.map(|r| r.1));
         let mut total = [0.0; FREQ_LANES];
         for seg_x in xs.iter().flat_map(|x| x.chunks_exact(seg)) {
-            let mean = seg_x.iter().sum::<f64>() / seg as f64;
+            let mean = stats::mean(seg_x);
             let (mut re, mut im) = ([0.0; FREQ_LANES], [0.0; FREQ_LANES]);
             let (mut c, mut sn) = ([1.0; FREQ_LANES], [0.0; FREQ_LANES]);
             for (v, wn) in seg_x.iter().zip(window) {

@@ -17,6 +17,31 @@
 //! Errors ([`LogError`]) name the file, the line (or message) and the column, and say what was
 //! expected. They name the reader's settings ([`Setting`]), never a front end's flags: a front
 //! end renders them with its own names ([`LogError::render`]).
+//!
+//! A small CSV log with a time column in seconds, gyro columns in deg/s and accelerometer columns
+//! in g, read into SI channels under their canonical names:
+//!
+//! ```
+//! use std::io::Write;
+//!
+//! let mut file = tempfile::Builder::new().suffix(".csv").tempfile().unwrap();
+//! writeln!(file, "# a comment line").unwrap();
+//! writeln!(file, "t,gyro_x_dps,gyro_y_dps,gyro_z_dps,acc_x_g,acc_y_g,acc_z_g").unwrap();
+//! for k in 0..5 {
+//!     let t = k as f64 * 0.01;
+//!     writeln!(file, "{t},180,0,-90,0,0,-1").unwrap();
+//! }
+//! file.flush().unwrap();
+//! let log = logio::read_log(file.path(), &logio::ReadOptions::default()).unwrap();
+//! assert_eq!(log.len(), 5);
+//! assert!((log.rate_hz - 100.0).abs() < 1e-9);
+//! assert_eq!(log.order, ["gx", "gy", "gz", "ax", "ay", "az"]);
+//! let pi = std::f64::consts::PI;
+//! assert!(log.channels["gx"].iter().all(|&w| (w - pi).abs() < 1e-12)); // 180 deg/s
+//! assert!(log.channels["gz"].iter().all(|&w| (w + pi / 2.0).abs() < 1e-12));
+//! assert!(log.channels["az"].iter().all(|&a| (a + 9.80665).abs() < 1e-12)); // -1 g
+//! assert!(log.skipped.is_empty());
+//! ```
 
 pub mod bag;
 mod columns;

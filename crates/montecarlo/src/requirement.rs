@@ -277,24 +277,17 @@ pub fn evaluate(req: &Requirement, values: &[f64], informed: bool) -> Requiremen
                 )
             }
             None => {
-                let mean = abs.iter().sum::<f64>() / n as f64;
+                let mean = ::stats::mean(&abs);
                 let sq: Vec<f64> = abs.iter().map(|v| v * v).collect();
-                let mean_sq = sq.iter().sum::<f64>() / n as f64;
-                let var = |xs: &[f64], m: f64| {
-                    if n < 2 {
-                        f64::NAN
-                    } else {
-                        xs.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (n - 1) as f64
-                    }
-                };
+                let mean_sq = ::stats::mean(&sq);
                 match req.statistic {
                     Statistic::Mean => {
-                        let se = (var(&abs, mean) / n as f64).sqrt();
+                        let se = (::stats::sample_variance(&abs) / n as f64).sqrt();
                         (Some(mean), Some(mean - Z_95 * se), Some(mean + Z_95 * se))
                     }
                     _ => {
                         // rms = sqrt(mean of x^2): interval of the mean of x^2, then the root.
-                        let se = (var(&sq, mean_sq) / n as f64).sqrt();
+                        let se = (::stats::sample_variance(&sq) / n as f64).sqrt();
                         (
                             Some(mean_sq.sqrt()),
                             Some((mean_sq - Z_95 * se).max(0.0).sqrt()),

@@ -143,6 +143,11 @@ pub struct Summary {
 
 /// Streaming (Welford) count/mean/M2 accumulator, also of x^2 for the rms interval.
 /// Welford's update: B. P. Welford, Technometrics 4(3) 1962; Chan et al. (1979) for `merge`.
+///
+/// Not `::stats::mean` / `sample_variance`: Welford's update rounds differently from a sum
+/// divided once (the last bits of the reported mean, std and rms, which documented outputs
+/// compare byte for byte, come from this order), and it keeps one pass over the runs with
+/// `merge` for shards. It stays here, montecarlo's only streaming statistic.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct Moments {
     pub count: u64,
@@ -283,10 +288,8 @@ mod tests {
             .map(|i| ((i * 7919) % 1013) as f64 * 0.01 - 3.0)
             .collect();
         let s = summarise(&xs);
-        let n = xs.len() as f64;
-        let mean = xs.iter().sum::<f64>() / n;
-        let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-        let ms = xs.iter().map(|x| x * x).sum::<f64>() / n;
+        let (mean, var) = (::stats::mean(&xs), ::stats::sample_variance(&xs));
+        let ms = ::stats::mean_square(&xs);
         // Relative 1e-12: two summation orders of 1000 terms differ by a few ulps.
         assert!((s.mean - mean).abs() < 1e-12 * mean.abs().max(1.0));
         assert!((s.std - var.sqrt()).abs() < 1e-12 * var.sqrt());

@@ -1,24 +1,99 @@
-//! Statistics of a set of values shared by every crate of the workspace: [`mean`], [`rms`],
-//! [`quantile`] (of an ascending slice) and [`median`].
+//! Statistics of a set of values shared by every crate of the workspace: [`mean`],
+//! [`mean_square`], [`rms`], [`sample_variance`] and [`sample_std`] (divisor n - 1),
+//! [`weighted_mean`] and [`weighted_mean_square`], [`quantile`] (of an ascending slice) and
+//! [`median`].
 //!
-//! One rule on empty input: every function returns NaN. An empty set has no mean, RMS or
-//! quantile, and a NaN cannot pass for a measured zero (it shows as `NaN`, or `null` in JSON, and
-//! fails every comparison); a caller that means something else for an empty set says so where it
-//! calls. A NaN among the values propagates to the result of `mean` and `rms`; `quantile` and
-//! `median` order values with `f64::total_cmp` (NaN after +inf).
+//! One rule on empty input: every function returns NaN (and so do the sample variance and
+//! standard deviation of a single value, which have no spread to estimate from). An empty set has
+//! no mean, RMS or quantile, and a NaN cannot pass for a measured zero (it shows as `NaN`, or
+//! `null` in JSON, and fails every comparison); a caller that means something else for an empty
+//! set says so where it calls. A NaN among the values propagates to the result of the means,
+//! RMS and variances; `quantile` and `median` order values with `f64::total_cmp` (NaN after
+//! +inf).
 //!
-//! No units: results carry the unit of the values. The operation order of each function is
-//! fixed (documented outputs are compared byte for byte), so results are the same bits
-//! wherever they are computed.
+//! No units: results carry the unit of the values (the square of it for [`mean_square`],
+//! [`weighted_mean_square`] and [`sample_variance`]). The operation order of each function is
+//! fixed and stated in its documentation (documented outputs are compared byte for byte), so
+//! results are the same bits wherever they are computed: every sum runs left to right in slice
+//! order, then divides once. A caller that sums in another order (pairwise, lanes, Welford's
+//! update, compensated) does not call these functions.
+//!
+//! ```
+//! let v = [2.0, 4.0, 4.0, 4.0, 5.0, 5.0, 7.0, 9.0];
+//! assert_eq!(stats::mean(&v), 5.0);
+//! assert_eq!(stats::sample_variance(&v), 32.0 / 7.0);
+//! assert_eq!(stats::rms(&[3.0, -4.0]), 12.5f64.sqrt());
+//! // Type-7 quantiles of an ascending slice, numpy's default.
+//! let sorted = [1.0, 2.0, 3.0, 4.0, 10.0];
+//! assert_eq!(stats::quantile(&sorted, 0.5), 3.0);
+//! assert!((stats::quantile(&sorted, 0.95) - 8.8).abs() < 1e-12);
+//! assert_eq!(stats::median(&mut [4.0, 1.0, 3.0, 2.0]), 2.5);
+//! // Nothing to average: NaN, never a silent 0.
+//! assert!(stats::mean(&[]).is_nan());
+//! ```
 
 /// The arithmetic mean, sum / n in slice order (NaN for an empty slice).
+#[inline]
 pub fn mean(values: &[f64]) -> f64 {
     values.iter().sum::<f64>() / values.len() as f64
 }
 
-/// The root mean square sqrt(sum x^2 / n), summed in slice order (NaN for an empty slice).
+/// The mean square sum x^2 / n, each square `x * x` summed in slice order (NaN for an empty
+/// slice).
+#[inline]
+pub fn mean_square(values: &[f64]) -> f64 {
+    values.iter().map(|x| x * x).sum::<f64>() / values.len() as f64
+}
+
+/// The root mean square sqrt(sum x^2 / n): the square root of [`mean_square`] (NaN for an empty
+/// slice).
+#[inline]
 pub fn rms(values: &[f64]) -> f64 {
-    (values.iter().map(|x| x * x).sum::<f64>() / values.len() as f64).sqrt()
+    mean_square(values).sqrt()
+}
+
+/// The sample variance with divisor n - 1 (Bessel's correction), two passes: m = [`mean`], then
+/// sum (x - m) (x - m) in slice order, divided by n - 1 (NaN for fewer than two values).
+#[inline]
+pub fn sample_variance(values: &[f64]) -> f64 {
+    if values.is_empty() {
+        // The sum below would be 0 and the divisor -1: -0, not NaN.
+        return f64::NAN;
+    }
+    let m = mean(values);
+    values.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (values.len() as f64 - 1.0)
+}
+
+/// The sample standard deviation, the square root of [`sample_variance`] (divisor n - 1; NaN
+/// for fewer than two values).
+#[inline]
+pub fn sample_std(values: &[f64]) -> f64 {
+    sample_variance(values).sqrt()
+}
+
+/// The weighted mean sum w x / sum w: the products `w * x` summed in slice order, divided by the
+/// weights summed in slice order (NaN for empty slices or weights summing to zero). `values` and
+/// `weights` have the same length.
+#[inline]
+pub fn weighted_mean(values: &[f64], weights: &[f64]) -> f64 {
+    debug_assert_eq!(values.len(), weights.len());
+    let w = weights.iter().sum::<f64>();
+    values.iter().zip(weights).map(|(x, w)| w * x).sum::<f64>() / w
+}
+
+/// The weighted mean square sum w x^2 / sum w: the terms `w * x * x` (that is (w x) x) summed in
+/// slice order, divided by the weights summed in slice order (NaN for empty slices or weights
+/// summing to zero). `values` and `weights` have the same length.
+#[inline]
+pub fn weighted_mean_square(values: &[f64], weights: &[f64]) -> f64 {
+    debug_assert_eq!(values.len(), weights.len());
+    let w = weights.iter().sum::<f64>();
+    values
+        .iter()
+        .zip(weights)
+        .map(|(x, w)| w * x * x)
+        .sum::<f64>()
+        / w
 }
 
 /// The quantile at probability `p` (clamped to [0, 1]) of an ascending slice by linear
@@ -61,6 +136,10 @@ mod tests {
     fn empty_input_is_nan_everywhere() {
         assert!(mean(&[]).is_nan());
         assert!(rms(&[]).is_nan());
+        assert!(mean_square(&[]).is_nan());
+        assert!(sample_variance(&[]).is_nan() && sample_std(&[]).is_nan());
+        assert!(sample_variance(&[3.0]).is_nan());
+        assert!(weighted_mean(&[], &[]).is_nan() && weighted_mean_square(&[], &[]).is_nan());
         assert!(quantile(&[], 0.5).is_nan());
         assert!(median(&mut []).is_nan());
     }
@@ -91,5 +170,53 @@ mod tests {
         assert_eq!(mean(&[1.0, 2.0, 6.0]), 3.0);
         assert_eq!(rms(&[3.0, -4.0]), (12.5f64).sqrt());
         assert!(mean(&[1.0, f64::NAN]).is_nan() && rms(&[f64::NAN]).is_nan());
+    }
+
+    #[test]
+    fn variance_and_mean_square_against_hand_computed_values() {
+        // 2, 4, 4, 4, 5, 5, 7, 9: mean 5, squared deviations 9 1 1 1 0 0 4 16 = 32.
+        let v = [2.0, 4.0, 4.0, 4.0, 5.0, 5.0, 7.0, 9.0];
+        assert_eq!(sample_variance(&v), 32.0 / 7.0);
+        assert_eq!(sample_std(&v), (32.0f64 / 7.0).sqrt());
+        // Mean square 232 / 8 = 29; its root is the RMS.
+        assert_eq!(mean_square(&v), 29.0);
+        assert_eq!(rms(&v), 29f64.sqrt());
+        // Two values a, b: variance (a - b)^2 / 2.
+        assert_eq!(sample_variance(&[1.0, 4.0]), 4.5);
+        // A constant (whose mean is exact) has no spread.
+        assert_eq!(sample_variance(&[0.5; 7]), 0.0);
+    }
+
+    #[test]
+    fn weighted_means_against_hand_computed_values() {
+        // (1*1 + 3*2 + 0*5) / 4 = 7/4; (1*1 + 3*4 + 0*25) / 4 = 13/4.
+        let (x, w) = ([1.0, 2.0, 5.0], [1.0, 3.0, 0.0]);
+        assert_eq!(weighted_mean(&x, &w), 1.75);
+        assert_eq!(weighted_mean_square(&x, &w), 3.25);
+        // Equal weights: the plain mean and mean square.
+        let y = [0.5, -1.25, 3.0, 2.0];
+        assert_eq!(weighted_mean(&y, &[2.0; 4]), mean(&y));
+        assert_eq!(weighted_mean_square(&y, &[1.0; 4]), mean_square(&y));
+    }
+
+    /// The operation order is the one the callers wrote by hand: the same bits.
+    #[test]
+    fn operation_order_is_left_to_right_then_divide() {
+        let v: Vec<f64> = (1..=101)
+            .map(|k| (k as f64 * 0.37).sin() * 1e3 + 0.1)
+            .collect();
+        let n = v.len() as f64;
+        let m = v.iter().sum::<f64>() / n;
+        assert_eq!(mean(&v).to_bits(), m.to_bits());
+        let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64;
+        assert_eq!(sample_variance(&v).to_bits(), var.to_bits());
+        let ms = v.iter().map(|x| x * x).sum::<f64>() / n;
+        assert_eq!(mean_square(&v).to_bits(), ms.to_bits());
+        let w: Vec<f64> = (0..v.len()).map(|k| 1.0 + k as f64 / 7.0).collect();
+        let sw: f64 = w.iter().sum();
+        let wm = v.iter().zip(&w).map(|(x, w)| w * x).sum::<f64>() / sw;
+        assert_eq!(weighted_mean(&v, &w).to_bits(), wm.to_bits());
+        let wms = v.iter().zip(&w).map(|(x, w)| w * x * x).sum::<f64>() / sw;
+        assert_eq!(weighted_mean_square(&v, &w).to_bits(), wms.to_bits());
     }
 }
