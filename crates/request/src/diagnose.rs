@@ -190,7 +190,11 @@ impl DriftRequest {
     pub fn validate(&self) -> Result<CheckSettings> {
         let replicates = self.replicates.unwrap_or(DRIFT_REPLICATES);
         if !(MIN_REPLICATES..=MAX_REPLICATES).contains(&replicates) {
-            return Err(RequestError::Replicates(replicates));
+            return Err(RequestError::Replicates {
+                value: replicates,
+                min: MIN_REPLICATES,
+                max: MAX_REPLICATES,
+            });
         }
         Ok(CheckSettings {
             protocol: self.protocol.protocol(&DRIFT_HORIZONS_S)?,

@@ -155,7 +155,12 @@ pub enum RequestError {
     TauMin(f64),
     Horizon(f64),
     Latitude(f64),
-    Replicates(usize),
+    /// Simulated experiments outside `min..=max`.
+    Replicates {
+        value: usize,
+        min: usize,
+        max: usize,
+    },
     /// A log's sample rate outside what a log can have.
     LogRate(f64),
     Confidence(f64),
@@ -370,11 +375,9 @@ impl RequestError {
                 *available as f64 / (1u64 << 30) as f64,
                 n(Setting::Threads)
             ),
-            RequestError::Replicates(v) => format!(
-                "{} {v}: expected {} to {} simulated experiments",
-                n(Setting::Replicates),
-                crate::diagnose::MIN_REPLICATES,
-                crate::diagnose::MAX_REPLICATES
+            RequestError::Replicates { value, min, max } => format!(
+                "{} {value}: expected {min} to {max} simulated experiments",
+                n(Setting::Replicates)
             ),
             RequestError::TooFewSeeds(v) => format!(
                 "{} {v}: at least 2 simulated logs are needed for a band",

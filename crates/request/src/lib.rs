@@ -48,7 +48,9 @@ mod tests {
     use std::path::PathBuf;
 
     fn shipped(path: &str) -> PathBuf {
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").join(path)
+        PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../..")
+            .join(path)
     }
 
     /// A scenario file and a sensor file give the same experiment through the request as the
@@ -70,7 +72,10 @@ mod tests {
         )))
         .validate()
         .unwrap();
-        assert!(sensor.inputs.scenario_source.starts_with("default static scenario for"));
+        assert!(sensor
+            .inputs
+            .scenario_source
+            .starts_with("default static scenario for"));
     }
 
     /// Each setting is named the front end's way; a missing file is a file error that says so.
@@ -82,8 +87,14 @@ mod tests {
         req.rate_hz = Some(-1.0);
         let e = req.validate().err().unwrap();
         let cli = |s: Setting| if s == Setting::Rate { "--rate" } else { "?" };
-        assert_eq!(e.render(&cli), "--rate: expected a sample rate in Hz > 0, found -1");
-        assert_eq!(e.to_string(), "rate_hz: expected a sample rate in Hz > 0, found -1");
+        assert_eq!(
+            e.render(&cli),
+            "--rate: expected a sample rate in Hz > 0, found -1"
+        );
+        assert_eq!(
+            e.to_string(),
+            "rate_hz: expected a sample rate in Hz > 0, found -1"
+        );
         req.rate_hz = None;
         req.runs = Some(0);
         let e = req.validate().err().unwrap();
@@ -108,7 +119,10 @@ mod tests {
         }
         .validate()
         .unwrap();
-        assert_eq!((one.seed, one.seeds, one.max_rounds), (d.seed, d.seeds, d.max_rounds));
+        assert_eq!(
+            (one.seed, one.seeds, one.max_rounds),
+            (d.seed, d.seeds, d.max_rounds)
+        );
         assert_eq!(one.horizons_s, d.horizons_s);
         assert!(one.drift_protocol.is_none());
         let two = diagnose::DiagnoseRequest {
@@ -125,9 +139,15 @@ mod tests {
         .validate()
         .err()
         .unwrap();
-        assert!(seeds.to_string().starts_with("seeds 1: at least 2"), "{seeds}");
+        assert!(
+            seeds.to_string().starts_with("seeds 1: at least 2"),
+            "{seeds}"
+        );
         let drift = diagnose::DriftRequest::default().validate().unwrap();
-        assert_eq!(drift.protocol.horizons_s, diagnose::DRIFT_HORIZONS_S.to_vec());
+        assert_eq!(
+            drift.protocol.horizons_s,
+            diagnose::DRIFT_HORIZONS_S.to_vec()
+        );
         assert_eq!(drift.replicates, diagnose::DRIFT_REPLICATES);
         let far = diagnose::DriftRequest {
             protocol: diagnose::ProtocolRequest {
@@ -136,14 +156,24 @@ mod tests {
             },
             ..Default::default()
         };
-        assert!(far.validate().err().unwrap().to_string().starts_with("latitude 95"));
+        assert!(far
+            .validate()
+            .err()
+            .unwrap()
+            .to_string()
+            .starts_with("latitude 95"));
     }
 
     /// Samples an analysis cannot use are refused before it starts.
     #[test]
     fn unusable_samples_are_refused() {
         assert!(allan::check_samples(&[1.0, 2.0]).is_ok());
-        for bad in [vec![0.0; 100], vec![1.0], vec![1.0, f64::NAN], vec![1.0, 1e200]] {
+        for bad in [
+            vec![0.0; 100],
+            vec![1.0],
+            vec![1.0, f64::NAN],
+            vec![1.0, 1e200],
+        ] {
             assert!(allan::check_samples(&bad).is_err(), "{bad:?}");
         }
         assert!(allan::check_rate(1e300).is_err());
@@ -157,7 +187,10 @@ mod tests {
         let ok = logs::from_series(
             "<arrays>",
             100.0,
-            vec![("gx".into(), vec![0.1, 0.2, 0.3]), ("temp".into(), vec![20.0; 3])],
+            vec![
+                ("gx".into(), vec![0.1, 0.2, 0.3]),
+                ("temp".into(), vec![20.0; 3]),
+            ],
         )
         .unwrap();
         assert_eq!(ok.channel(noise::Channel::Gx), Some(&[0.1, 0.2, 0.3][..]));
@@ -167,9 +200,13 @@ mod tests {
             100.0,
             vec![("gx".into(), vec![0.1, 0.2, 0.3]), ("gy".into(), vec![0.1])],
         );
-        assert!(uneven.err().unwrap().to_string().contains("gy has 1 samples"));
-        let constant = logs::from_series("<arrays>", 100.0, vec![("gx".into(), vec![0.0; 10])])
-            .unwrap();
+        assert!(uneven
+            .err()
+            .unwrap()
+            .to_string()
+            .contains("gy has 1 samples"));
+        let constant =
+            logs::from_series("<arrays>", 100.0, vec![("gx".into(), vec![0.0; 10])]).unwrap();
         let e = logs::check_imu(&constant).err().unwrap();
         assert!(e.to_string().contains("channel gx is constant"), "{e}");
     }
