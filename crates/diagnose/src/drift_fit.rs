@@ -81,6 +81,9 @@ pub(crate) struct UnitDrift<'a> {
     pub(crate) seed: u64,
     /// Simulated logs per run length.
     pub(crate) logs: usize,
+    /// The front end's stop flag (`SimSetup::stop`): once set, no further log is simulated and
+    /// the mean squares are NaN (the caller sees the flag and drops them).
+    pub(crate) stop: Option<&'a std::sync::atomic::AtomicBool>,
 }
 
 impl UnitDrift<'_> {
@@ -122,6 +125,7 @@ impl UnitDrift<'_> {
                 lengths.iter().copied().max().unwrap_or(0),
                 noise::ImuChannels::from_fn(|i| i == c),
             )
+            .stopped_by(self.stop)
         };
         let nh = self.protocol.horizons_s.len();
         let jobs: Vec<LogJob> = (0..self.logs as u64)
@@ -132,7 +136,7 @@ impl UnitDrift<'_> {
                 run: UNIT_RUN_BASE + s,
             })
             .collect();
-        let sums: Vec<Vec<([f64; 5], usize)>> = map_static_logs(&jobs, |_, log| {
+        let sums: Option<Vec<Vec<([f64; 5], usize)>>> = map_static_logs(&jobs, |_, log| {
             let mut acc = vec![([0.0; 5], 0usize); nh];
             for &n in &lengths {
                 let chans = noise::ImuChannels::from_fn(|i| (i == c).then(|| &log[i][..n])).0;
@@ -148,6 +152,9 @@ impl UnitDrift<'_> {
             }
             acc
         });
+        let Some(sums) = sums else {
+            return vec![[f64::NAN; 5]; nh];
+        };
         (0..nh)
             .map(|h| {
                 let count: usize = sums.iter().map(|a| a[h].1).sum();
