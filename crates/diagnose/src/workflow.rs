@@ -641,7 +641,7 @@ fn keep_or_undo(
     ch.records.extend(rejected);
     ch.done = true;
     for (effect, previous) in p.changes.into_iter().rev() {
-        state.models.undo(c, effect, previous);
+        state.models.restore(c, effect, previous);
     }
     None
 }

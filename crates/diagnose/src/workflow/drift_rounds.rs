@@ -243,7 +243,7 @@ fn relevel_random_walk(
 ) -> Change {
     let effect = Effect::RateRandomWalk;
     let previous = current_term(&state.models.sim, c, effect);
-    state.models.undo(c, effect, p.term.clone());
+    state.models.restore(c, effect, p.term.clone());
     let zero = previous.as_ref().and_then(|t| t.with_level(0.0).ok());
     let Some(term) = p.term.clone().or(zero) else {
         return (c, effect, previous);
@@ -367,7 +367,7 @@ fn drift_resimulate(
         return Ok(Some(Drift::of(sim)));
     }
     for (c, effect, previous) in changes.into_iter().rev() {
-        state.models.undo(c, effect, previous);
+        state.models.restore(c, effect, previous);
     }
     Ok(None)
 }

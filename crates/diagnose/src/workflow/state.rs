@@ -114,8 +114,8 @@ impl Models {
         set_term(&mut self.out, c, term.clone());
     }
 
-    /// Put `previous` back as channel `c`'s `effect` in both models (None: remove it).
-    pub(super) fn undo(&mut self, c: Channel, effect: Effect, previous: Option<Term>) {
+    /// Set channel `c`'s `effect` to `previous` in both models (None: remove it), e.g. to undo a change.
+    pub(super) fn restore(&mut self, c: Channel, effect: Effect, previous: Option<Term>) {
         for model in [&mut self.sim, &mut self.out] {
             restore_term(model, c, effect, previous.clone());
         }
