@@ -12,9 +12,10 @@ import time
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
 MTX = os.path.join(ROOT, "configs", "sensors", "mtx.toml")
 
-# The stop itself must land within 1 s; the child's exit after it (the interpreter's shutdown)
-# is allowed this much on top, on a busy machine.
-EXIT_MARGIN_S = 0.5
+# The stop itself (SIGINT to KeyboardInterrupt) must land within 1 s; the child's exit after it
+# (the interpreter's shutdown: numpy, pandas) is allowed this much on top, on a busy machine
+# (0.9 s measured at a load of 13 on 2 cores).
+EXIT_MARGIN_S = 1.5
 
 CHILD = r"""
 import sys, time, imudrift
@@ -53,8 +54,9 @@ def interrupted(which, after_s):
 
 
 def check(which):
-    # 3 s in: past the detectors and the measurement, in the simulations.
-    out, raised, exited = interrupted(which, 3.0)
+    # 6 s in: past diagnose's detectors and measurement of the log (which have no stop inside)
+    # and the drift check's measured segments, in the simulations.
+    out, raised, exited = interrupted(which, 6.0)
     print(f"{which}: SIGINT to KeyboardInterrupt {raised} s, to exit {exited:.3f} s, "
           f"load {os.getloadavg()[0]:.1f}")
     assert "finished" not in out, "the work ended before the signal: make the input longer"

@@ -288,7 +288,10 @@ pub fn map_static_logs<R: Send>(
             let runs: Vec<u64> = group.iter().map(|&j| jobs[j].run).collect();
             let mut out = Vec::with_capacity(group.len());
             with_static_logs(&models, &first.setup, first.seed, &runs, |l, log| {
-                out.push((group[l], f(group[l], log)));
+                // A stop meanwhile: the rest of the group is not worked on (nor used).
+                if !first.setup.stopped() {
+                    out.push((group[l], f(group[l], log)));
+                }
             });
             out
         })
@@ -342,7 +345,8 @@ fn static_logs_into(
                 s.as_mut_slice()
             })
             .collect();
-        if setup.active[ch] {
+        // Once stopped, the logs keep their length but are not generated (nor used).
+        if setup.active[ch] && !setup.stopped() {
             let ideal = if ch.is_gyro() { &gyro } else { &accel };
             noise::ChannelErrors::fill_static_lanes(&mut lanes, 0, ideal, &mut series);
         }
@@ -420,7 +424,8 @@ impl RunKernel for Kernel<'_> {
         let models = vec![self.model; runs.len()];
         let mut rows = out.chunks_mut(width);
         with_static_logs(&models, self.setup, self.seed, &runs, |l, log| {
-            if let Some(row) = rows.next() {
+            // Once stopped the batch is not used (`run_range_until`): its rows are not worked out.
+            if let Some(row) = rows.next().filter(|_| !self.setup.stopped()) {
                 results[l] = self.rows(log, row);
             }
         });
