@@ -136,8 +136,8 @@ impl UnitDrift<'_> {
                 run: UNIT_RUN_BASE + s,
             })
             .collect();
-        let sums: Option<Vec<Vec<([f64; 5], usize)>>> = map_static_logs(&jobs, |_, log| {
-            let mut acc = vec![([0.0; 5], 0usize); nh];
+        let sums = map_static_logs(&jobs, |_, log| {
+            let mut acc: Vec<([f64; 5], usize)> = vec![([0.0; 5], 0usize); nh];
             for &n in &lengths {
                 let chans = noise::ImuChannels::from_fn(|i| (i == c).then(|| &log[i][..n])).0;
                 for (h, e) in all_segment_errors(&chans, dt_u, self.protocol)
