@@ -31,6 +31,7 @@ fn setup(grid_m: Vec<usize>) -> SimSetup<'static> {
         temperature_c: None,
         temp_coeff: noise::ImuChannels::default(),
         latitude_deg: diagnose::protocol::Protocol::default().latitude_deg,
+        stop: None,
     }
 }
 

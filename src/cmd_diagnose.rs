@@ -8,7 +8,7 @@ use crate::output::write_string;
 use crate::plot::{Band, LogLogPlot, Series};
 use anyhow::{anyhow, Context, Result};
 use diagnose::report::{ChannelReport, DriftRow, FoundEffect};
-use diagnose::{diagnose_runs, DiagnoseError, Diagnosis, LogInput, Settings};
+use diagnose::{diagnose_until, DiagnoseError, Diagnosis, LogInput, Settings};
 use noise::noise_file::AxisValue;
 use noise::SensorModel;
 use request::diagnose::{DiagnoseRequest, ProtocolRequest};
@@ -85,6 +85,9 @@ struct Stages(crate::progress::Progress);
 impl diagnose::Observer for Stages {
     fn step(&self, step: diagnose::Step) {
         self.0.stage(&step.to_string());
+    }
+    fn round_done(&self, done: &diagnose::RoundDone) {
+        self.0.stage(&done.to_string());
     }
 }
 
@@ -171,7 +174,7 @@ fn run_inner(args: &Args, settings: &Settings) -> Result<()> {
     })?;
     let started = std::time::Instant::now();
     let stages = Stages(crate::progress::Progress::stages("diagnose"));
-    let result = diagnose_runs(&inputs, &model, settings, &stages);
+    let result = diagnose_until(&inputs, &model, settings, &stages, &crate::output::STOP);
     stages.0.finish();
     let result = result
         .map_err(with_flags)

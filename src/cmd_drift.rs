@@ -10,7 +10,8 @@ use anyhow::{anyhow, Context, Result};
 use diagnose::alternatives::Alternative;
 use diagnose::document::ProtocolSetting;
 use diagnose::drift_check::{
-    check_drift_averaged, simulated_logs_averaged, CheckError, CheckSettings, DriftCheck, Verdict,
+    check_drift_until, simulated_logs_averaged, CheckError, CheckSettings, DriftCheck, Models,
+    Verdict,
 };
 use diagnose::fitted_on::FittedOn;
 use diagnose::protocol::{Calibration, Initialisation, Protocol, Quantity};
@@ -164,14 +165,12 @@ impl Structures<'_> {
             "logs",
             total,
         ));
-        let result = check_drift_averaged(
-            inputs,
-            self.model,
-            self.alternatives,
-            self.fitted,
-            settings,
-            &bar,
-        );
+        let models = Models {
+            model: self.model,
+            alternatives: self.alternatives,
+            fitted_on: self.fitted,
+        };
+        let result = check_drift_until(inputs, models, settings, &bar, &crate::output::STOP);
         bar.0.finish();
         result.map_err(with_flags)
     }

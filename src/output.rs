@@ -113,6 +113,11 @@ static SETS_OPEN: AtomicUsize = AtomicUsize::new(0);
 /// A termination signal arrived while a set was being written.
 static EXIT_PENDING: AtomicBool = AtomicBool::new(false);
 
+/// The stop flag of the libraries' long loops (`montecarlo::run_range_until`,
+/// `diagnose::diagnose_until`, `diagnose::drift_check::check_drift_until`): set by the signal
+/// handler, so that a run whose exit waits for an output set stops its work meanwhile.
+pub static STOP: AtomicBool = AtomicBool::new(false);
+
 /// The `--out` lock files held now (removed on a termination signal, as on a normal exit).
 static HELD_LOCKS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
@@ -135,6 +140,7 @@ fn exit_interrupted() -> ! {
 /// Called once at start-up.
 pub fn clean_up_on_signals() {
     let _ = ctrlc::set_handler(|| {
+        STOP.store(true, Ordering::SeqCst);
         if SETS_OPEN.load(Ordering::SeqCst) > 0 {
             EXIT_PENDING.store(true, Ordering::SeqCst);
         } else {

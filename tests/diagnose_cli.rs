@@ -42,6 +42,7 @@ fn write_log(dir: &Path) -> std::path::PathBuf {
         temperature_c: None,
         temp_coeff: noise::ImuChannels::default(),
         latitude_deg: diagnose::protocol::Protocol::default().latitude_deg,
+        stop: None,
     };
     // Seed 1. (The seed was 424 242 until the normal sampler changed, issue 26: with the new draws
     // that log gave k 27 % high with its 95 % interval missing the truth. The check below fails a

@@ -195,8 +195,8 @@ def diagnose(logs, model, rate=None, gyro_unit=None, accel_unit=None, time_unit=
     ``calibration`` (``"none"``, ``"log-mean"``, ``"window:60"``), ``init`` (``"perfect"``,
     ``"level:10"``), ``threads``, ``latitude`` (deg: the logs are dead-reckoned on the rotating
     WGS-84 Earth there, Earth rate kept as signal; ``None``: Woodman's flat Earth, the CLI's
-    ``--flat-earth``). The GIL is released while it works; the library has no stop
-    flag for a diagnosis, so Ctrl-C is raised when it finishes.
+    ``--flat-earth``). The GIL is released while it works; Ctrl-C stops it within a second
+    (``KeyboardInterrupt``).
 
     >>> r = imudrift.diagnose("adis16405_imu1.csv.gz", "configs/sensors/adis16405.toml",
     ...                       rate=100, horizons=[60])
@@ -264,8 +264,8 @@ def drift(logs, model, rate=None, gyro_unit=None, accel_unit=None, time_unit=Non
     model's 95 % band; ``exact_parameters`` takes a diagnosed model's levels as exact (no
     parametric bootstrap); ``one_structure`` takes its structure as certain (no averaging over
     the ``[[alternatives]]`` a diagnosed model lists); ``seed``; ``threads``; ``latitude`` (deg,
-    or ``None`` for the flat Earth, as for :func:`diagnose`). The GIL is released while it works; the library
-    has no stop flag for the check, so Ctrl-C is raised when it finishes.
+    or ``None`` for the flat Earth, as for :func:`diagnose`). The GIL is released while it works;
+    Ctrl-C stops it within a second (``KeyboardInterrupt``).
 
     >>> r = imudrift.drift(["adis16405_imu1.csv.gz", "adis16405_imu2.csv.gz"],
     ...                    "configs/sensors/adis16405.toml", rate=100, horizons=[60, 600])

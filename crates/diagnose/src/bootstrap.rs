@@ -44,6 +44,7 @@ use noise::{AxisModel, Channel, Effect, ImuChannels, SensorModel, Term};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::BTreeMap;
+use std::sync::atomic::AtomicBool;
 
 /// Most levels refitted together on one channel (the refit tries every subset of them).
 const MAX_TERMS: usize = 10;
@@ -87,6 +88,9 @@ pub enum BootstrapError {
     Rate(String),
     #[error("channel {channel} has {terms} levels to refit; at most {MAX_TERMS} are supported")]
     TooManyTerms { channel: &'static str, terms: usize },
+    /// The front end's stop flag was set (Ctrl-C): no draws.
+    #[error("stopped")]
+    Stopped,
 }
 
 /// A drawn term: the term at the reference level the multipliers refer to (the fitted one, or a
@@ -350,7 +354,8 @@ fn simulate_fitted_logs(
     fits: &[ChannelFit],
     (seed, first_run, replicates): (u64, u64, usize),
     tick: &(dyn Fn() + Sync),
-) -> Vec<Vec<Vec<Vec<f64>>>> {
+    stop: Option<&AtomicBool>,
+) -> Option<Vec<Vec<Vec<Vec<f64>>>>> {
     let logs = fitted.samples.len();
     let jobs: Vec<(usize, usize)> = (0..replicates)
         .flat_map(|r| (0..logs).map(move |t| (r, t)))
@@ -360,7 +365,8 @@ fn simulate_fitted_logs(
         .iter()
         .map(|&(r, t)| LogJob {
             model,
-            setup: SimSetup::plain(fitted.sample_interval_s, fitted.samples[t], active),
+            setup: SimSetup::plain(fitted.sample_interval_s, fitted.samples[t], active)
+                .stopped_by(stop),
             seed,
             run: first_run + (r * logs + t) as u64,
         })
@@ -379,9 +385,9 @@ fn simulate_fitted_logs(
             .collect();
         tick();
         out
-    });
+    })?;
     // Regroup as [replicate][channel][log].
-    (0..replicates)
+    let regrouped = (0..replicates)
         .map(|r| {
             (0..fits.len())
                 .map(|k| {
@@ -391,19 +397,22 @@ fn simulate_fitted_logs(
                 })
                 .collect()
         })
-        .collect()
+        .collect();
+    Some(regrouped)
 }
 
 /// Draw each replicate's levels (module doc). Replicate r's logs like the fitted ones are runs
 /// `first_run + r T + t` (t < T, the fitted logs) of `seed`: the caller keeps them apart from its
 /// own runs. `tick` is called once per simulated log (`replicates` times the fitted logs).
+/// Once `stop` is set no further log is simulated and the result is [`BootstrapError::Stopped`].
 pub fn draw_models(
     model: &SensorModel,
     fitted: &FittedOn,
     runs: (u64, u64, usize),
     tick: &(dyn Fn() + Sync),
+    stop: Option<&AtomicBool>,
 ) -> Result<Draws, BootstrapError> {
-    draw_models_on(model, fitted, ImuChannels([true; 6]), runs, tick)
+    draw_models_on(model, fitted, ImuChannels([true; 6]), runs, tick, stop)
 }
 
 /// [`draw_models`] on the channels `only` alone: only they are simulated and refitted, the other
@@ -416,6 +425,7 @@ pub fn draw_models_on(
     only: ImuChannels<bool>,
     (seed, first_run, replicates): (u64, u64, usize),
     tick: &(dyn Fn() + Sync),
+    stop: Option<&AtomicBool>,
 ) -> Result<Draws, BootstrapError> {
     noise::ImuErrors::check_rate(model, fitted.sample_interval_s)
         .map_err(|e| BootstrapError::Rate(e.to_string()))?;
@@ -437,7 +447,9 @@ pub fn draw_models_on(
         &fits,
         (seed, first_run, replicates),
         tick,
-    );
+        stop,
+    )
+    .ok_or(BootstrapError::Stopped)?;
     // Multipliers [replicate][channel][term] of the reference squared levels; those of a fitted
     // level centred on 1 by their bootstrap mean, those of a level fitted at 0 left as drawn.
     let mut s: Vec<Vec<Vec<f64>>> = avar

@@ -44,6 +44,7 @@ use noise::SensorModel;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Settings of a drift check.
 #[derive(Clone, Debug)]
@@ -321,6 +322,9 @@ pub enum CheckError {
     /// A structure of the model's `[[alternatives]]` that cannot run at the logs' rate.
     #[error("[[alternatives]] structure \"{label}\": {message}")]
     Structure { label: String, message: String },
+    /// The front end's stop flag was set (Ctrl-C): no check.
+    #[error("stopped")]
+    Stopped,
 }
 
 fn abs_sorted(v: &[f64]) -> Vec<f64> {
@@ -386,6 +390,40 @@ pub fn check_drift_averaged(
     settings: &CheckSettings,
     observer: &dyn Observer,
 ) -> Result<DriftCheck, CheckError> {
+    let never = AtomicBool::new(false);
+    let models = Models {
+        model: model_sensor,
+        alternatives,
+        fitted_on,
+    };
+    check_drift_until(logs, models, settings, observer, &never)
+}
+
+/// The model a drift check takes: the sensor model, its `[[alternatives]]` structures and the
+/// data it was fitted on (None: its levels taken as exact).
+#[derive(Clone, Copy)]
+pub struct Models<'a> {
+    pub model: &'a SensorModel,
+    pub alternatives: &'a [Alternative],
+    pub fitted_on: Option<&'a FittedOn>,
+}
+
+/// [`check_drift_averaged`] that a front end can stop (Ctrl-C): once `stop` is set no further
+/// log is simulated (a stop lands within one simulated log per worker thread) and the result
+/// is [`CheckError::Stopped`]. The same inputs give the same check as [`check_drift_averaged`].
+pub fn check_drift_until(
+    logs: &[LogInput],
+    models: Models,
+    settings: &CheckSettings,
+    observer: &dyn Observer,
+    stop: &AtomicBool,
+) -> Result<DriftCheck, CheckError> {
+    let Models {
+        model: model_sensor,
+        alternatives,
+        fitted_on,
+    } = models;
+    let stopped = || stop.load(Ordering::Relaxed);
     let dt_s = check_inputs(logs, settings)?;
     let p = &settings.protocol;
     // Measured segments per horizon, per log (kept apart for the effective count).
@@ -393,6 +431,9 @@ pub fn check_drift_averaged(
         .par_iter()
         .map(|l| all_segment_errors(&l.channels.0, dt_s, p))
         .collect();
+    if stopped() {
+        return Err(CheckError::Stopped);
+    }
     let plan = StructurePlan::new(model_sensor, alternatives, settings.replicates);
     // The model itself is checked by the caller; an alternative's output filter may not fit.
     for s in plan.structures.iter().skip(1) {
@@ -410,16 +451,21 @@ pub fn check_drift_averaged(
         fitted_on,
         (settings.seed, (settings.replicates * logs.len()) as u64),
         &|| progress.tick(),
+        stop,
     )?;
     let model_of = |r: usize| models.get(r).unwrap_or(model_sensor);
     let experiment = Experiment {
         logs,
         model: model_sensor,
         settings,
-        simulated: simulate_experiments(logs, &model_of, settings, dt_s, &progress),
+        simulated: simulate_experiments(logs, &model_of, settings, dt_s, &progress, stop)
+            .ok_or(CheckError::Stopped)?,
     };
     let mut horizons = Vec::new();
     for (hi, &h) in p.horizons_s.iter().enumerate() {
+        if stopped() {
+            return Err(CheckError::Stopped);
+        }
         let per_log: Vec<SegmentErrors> = by_log.iter().map(|l| l[hi].clone()).collect();
         horizons.push(experiment.check_horizon(hi, h, &per_log)?);
     }
@@ -490,7 +536,12 @@ impl StructurePlan {
         fitted_on: Option<&FittedOn>,
         (seed, first_run): (u64, u64),
         tick: &(dyn Fn() + Sync),
+        stop: &AtomicBool,
     ) -> Result<(Vec<SensorModel>, Option<ParameterSpread>), CheckError> {
+        let bootstrap = |e: BootstrapError| match e {
+            BootstrapError::Stopped => CheckError::Stopped,
+            e => CheckError::Bootstrap(e),
+        };
         let Some(f) = fitted_on else {
             if self.structures.len() == 1 {
                 return Ok((Vec::new(), None));
@@ -505,7 +556,14 @@ impl StructurePlan {
         };
         let logs = f.samples.len() as u64;
         let all = self.bootstrap_replicates(0);
-        let own = draw_models(&self.structures[0].model, f, (seed, first_run, all), tick)?;
+        let own = draw_models(
+            &self.structures[0].model,
+            f,
+            (seed, first_run, all),
+            tick,
+            Some(stop),
+        )
+        .map_err(bootstrap)?;
         let mut next_run = first_run + all as u64 * logs;
         let mut models = own.models;
         let mut r = self.counts[0];
@@ -522,7 +580,9 @@ impl StructurePlan {
                 changed,
                 (seed, next_run, reps),
                 tick,
-            )?;
+                Some(stop),
+            )
+            .map_err(bootstrap)?;
             next_run += reps as u64 * logs;
             for drawn in d.models.iter().take(n) {
                 for c in noise::Channel::ALL.into_iter().filter(|&c| changed[c]) {
@@ -606,7 +666,8 @@ fn simulate_experiments<'m>(
     settings: &CheckSettings,
     dt_s: f64,
     progress: &Progress,
-) -> Vec<Vec<SegmentErrors>> {
+    stop: &AtomicBool,
+) -> Option<Vec<Vec<SegmentErrors>>> {
     let jobs: Vec<(usize, usize)> = (0..settings.replicates)
         .flat_map(|r| (0..logs.len()).map(move |l| (r, l)))
         .collect();
@@ -631,6 +692,7 @@ fn simulate_experiments<'m>(
                         samples,
                         noise::ImuChannels::from_fn(|c| log.channels[c].is_some()),
                     )
+                    .stopped_by(Some(stop))
                 },
                 seed: settings.seed,
                 run: (r * logs.len() + l) as u64,

@@ -71,6 +71,9 @@ pub(crate) struct UnitDrift<'a> {
     pub(crate) seed: u64,
     /// Simulated logs per run length.
     pub(crate) logs: usize,
+    /// The front end's stop flag (`SimSetup::stop`): once set, no further log is simulated and
+    /// the mean squares are NaN (the caller sees the flag and drops them).
+    pub(crate) stop: Option<&'a std::sync::atomic::AtomicBool>,
 }
 
 impl UnitDrift<'_> {
@@ -112,6 +115,7 @@ impl UnitDrift<'_> {
                 lengths.iter().copied().max().unwrap_or(0),
                 noise::ImuChannels::from_fn(|i| i == c),
             )
+            .stopped_by(self.stop)
         };
         let nh = self.protocol.horizons_s.len();
         let jobs: Vec<LogJob> = (0..self.logs as u64)
@@ -122,8 +126,8 @@ impl UnitDrift<'_> {
                 run: UNIT_RUN_BASE + s,
             })
             .collect();
-        let sums: Vec<Vec<([f64; 5], usize)>> = map_static_logs(&jobs, |_, log| {
-            let mut acc = vec![([0.0; 5], 0usize); nh];
+        let sums = map_static_logs(&jobs, |_, log| {
+            let mut acc: Vec<([f64; 5], usize)> = vec![([0.0; 5], 0usize); nh];
             for &n in &lengths {
                 let chans = noise::ImuChannels::from_fn(|i| (i == c).then(|| &log[i][..n])).0;
                 for (h, e) in all_segment_errors(&chans, dt_u, self.protocol)
@@ -138,6 +142,9 @@ impl UnitDrift<'_> {
             }
             acc
         });
+        let Some(sums) = sums else {
+            return vec![[f64::NAN; 5]; nh];
+        };
         // The pooled mean square from each log's sum of squares and count (no log's segments
         // are kept to hand to `stats::mean_square`); none: 0.
         (0..nh)

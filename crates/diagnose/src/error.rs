@@ -1,4 +1,4 @@
-//! What can go wrong in diagnose: inputs the caller has to fix, or a failed simulation. An error
+//! What can go wrong in diagnose: inputs the caller has to fix, a failed simulation, or a stop. An error
 //! about a setting names the `Settings` field, never a front end's option.
 
 use crate::simulate::SimError;
@@ -50,6 +50,19 @@ pub enum DiagnoseError {
     SeedsForRuns { seeds: usize, runs: usize },
     #[error("no log to diagnose")]
     NoRuns,
-    #[error(transparent)]
-    Simulation(#[from] SimError),
+    /// A simulation run failed.
+    #[error("simulating the model failed in seed {run}: {message}")]
+    Simulation { run: u64, message: String },
+    /// The front end's stop flag was set (Ctrl-C): no diagnosis.
+    #[error("stopped")]
+    Stopped,
+}
+
+impl From<SimError> for DiagnoseError {
+    fn from(e: SimError) -> DiagnoseError {
+        match e {
+            SimError::Run { run, message } => DiagnoseError::Simulation { run, message },
+            SimError::Stopped => DiagnoseError::Stopped,
+        }
+    }
 }

@@ -74,7 +74,7 @@ pub mod workflow;
 
 pub use error::DiagnoseError;
 pub use input::LogInput;
-pub use observer::{Observer, Step};
+pub use observer::{Observer, RoundDone, Step};
 pub use report::Diagnosis;
 pub use settings::Settings;
-pub use workflow::{diagnose, diagnose_observed, diagnose_runs};
+pub use workflow::{diagnose, diagnose_observed, diagnose_runs, diagnose_until};

@@ -9,9 +9,10 @@ use crate::drift::{segment_drift, SegmentDrift};
 use crate::gap::Band;
 use crate::protocol::{all_segment_errors, Protocol, Quantity, SegmentErrors};
 use allan::{DataKind, EdfMethod, Estimator, Options, TauGrid};
-use montecarlo::{run_range, RunKernel};
+use montecarlo::{run_range_until, RunKernel};
 use nalgebra::Vector3;
 use noise::{Channel, ImuChannels, ImuErrors, SensorModel};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// What to simulate.
 #[derive(Clone, Debug)]
@@ -33,6 +34,21 @@ pub struct SimSetup<'a> {
     /// the flat Earth): the simulated IMU reads what a static, level, north-facing one reads
     /// there (`protocol::ideal_at`), as the drift protocol assumes.
     pub latitude_deg: Option<f64>,
+    /// A front end's stop flag (Ctrl-C; `montecarlo::run_range_until`'s): once set, no further
+    /// log is generated and the simulation returns [`SimError::Stopped`] (`None`: never stops).
+    pub stop: Option<&'a AtomicBool>,
+}
+
+impl SimSetup<'_> {
+    /// Has the front end asked to stop ([`SimSetup::stop`])?
+    pub fn stopped(&self) -> bool {
+        is_stopped(self.stop)
+    }
+}
+
+/// Is `stop` set (`None`: never)?
+pub fn is_stopped(stop: Option<&AtomicBool>) -> bool {
+    stop.is_some_and(|s| s.load(Ordering::Relaxed))
 }
 
 impl SimSetup<'static> {
@@ -48,7 +64,15 @@ impl SimSetup<'static> {
             temperature_c: None,
             temp_coeff: ImuChannels::default(),
             latitude_deg: Protocol::default().latitude_deg,
+            stop: None,
         }
+    }
+}
+
+impl<'a> SimSetup<'a> {
+    /// This setup, stopped by `stop` ([`SimSetup::stop`]).
+    pub fn stopped_by(self, stop: Option<&'a AtomicBool>) -> SimSetup<'a> {
+        SimSetup { stop, ..self }
     }
 }
 
@@ -65,12 +89,15 @@ pub struct SimResult {
     pub protocol_errors: Vec<Vec<Vec<SegmentErrors>>>,
 }
 
-/// Error of a simulation run (a non-finite sample or Allan value).
+/// Error of a simulation: a run failed (a non-finite sample or Allan value), or the front end
+/// stopped it.
 #[derive(Debug, thiserror::Error)]
-#[error("simulating the model failed in seed {run}: {message}")]
-pub struct SimError {
-    pub run: u64,
-    pub message: String,
+pub enum SimError {
+    #[error("simulating the model failed in seed {run}: {message}")]
+    Run { run: u64, message: String },
+    /// The setup's stop flag was set ([`SimSetup::stop`]): no result.
+    #[error("stopped")]
+    Stopped,
 }
 
 /// The runs a band pools (docs/diagnose.md, "Several runs"): each run's length, and per channel,
@@ -227,10 +254,12 @@ pub struct LogJob<'a> {
 /// `f(j, log)` of every job's log, in job order, in parallel: jobs of one setup (length, active
 /// channels, interval) generated [`LOG_LANES`] at a time side by side ([`with_static_logs`]). Each
 /// value is that of the log alone, so neither the grouping nor the thread count changes any.
+/// `None` when a job's stop flag was set ([`SimSetup::stop`]): the groups not started by then
+/// are skipped.
 pub fn map_static_logs<R: Send>(
     jobs: &[LogJob],
     f: impl Fn(usize, &ImuChannels<Vec<f64>>) -> R + Sync,
-) -> Vec<R> {
+) -> Option<Vec<R>> {
     use rayon::prelude::*;
     // Longest logs first: each thread's reused buffer then grows once, at its first group, instead
     // of being reallocated and copied whenever a longer log follows a shorter one.
@@ -252,11 +281,17 @@ pub fn map_static_logs<R: Send>(
         .par_iter()
         .map(|group| {
             let first = &jobs[group[0]];
+            if first.setup.stopped() {
+                return Vec::new();
+            }
             let models: Vec<&SensorModel> = group.iter().map(|&j| jobs[j].model).collect();
             let runs: Vec<u64> = group.iter().map(|&j| jobs[j].run).collect();
             let mut out = Vec::with_capacity(group.len());
             with_static_logs(&models, &first.setup, first.seed, &runs, |l, log| {
-                out.push((group[l], f(group[l], log)));
+                // A stop meanwhile: the rest of the group is not worked on (nor used).
+                if !first.setup.stopped() {
+                    out.push((group[l], f(group[l], log)));
+                }
             });
             out
         })
@@ -265,7 +300,7 @@ pub fn map_static_logs<R: Send>(
     for (j, r) in done.into_iter().flatten() {
         results[j] = Some(r);
     }
-    results.into_iter().flatten().collect()
+    results.into_iter().collect()
 }
 
 /// [`static_log`] of several runs side by side into `out`'s logs (their vectors' capacity
@@ -310,7 +345,8 @@ fn static_logs_into(
                 s.as_mut_slice()
             })
             .collect();
-        if setup.active[ch] {
+        // Once stopped, the logs keep their length but are not generated (nor used).
+        if setup.active[ch] && !setup.stopped() {
             let ideal = if ch.is_gyro() { &gyro } else { &accel };
             noise::ChannelErrors::fill_static_lanes(&mut lanes, 0, ideal, &mut series);
         }
@@ -388,7 +424,8 @@ impl RunKernel for Kernel<'_> {
         let models = vec![self.model; runs.len()];
         let mut rows = out.chunks_mut(width);
         with_static_logs(&models, self.setup, self.seed, &runs, |l, log| {
-            if let Some(row) = rows.next() {
+            // Once stopped the batch is not used (`run_range_until`): its rows are not worked out.
+            if let Some(row) = rows.next().filter(|_| !self.setup.stopped()) {
                 results[l] = self.rows(log, row);
             }
         });
@@ -534,9 +571,12 @@ pub fn simulate_runs(
         protocol: plan.protocol.as_ref(),
         protocol_segments: protocol_segments.clone(),
     };
-    let batch = run_range(&kernel, 0..seeds as u64, &|_| {});
+    let never = AtomicBool::new(false);
+    let stop = setup.stop.unwrap_or(&never);
+    let batch =
+        run_range_until(&kernel, 0..seeds as u64, &|_| {}, stop).ok_or(SimError::Stopped)?;
     if let Some(f) = batch.failures.first() {
-        return Err(SimError {
+        return Err(SimError::Run {
             run: f.run,
             message: f.message.clone(),
         });
@@ -717,6 +757,7 @@ mod tests {
             temperature_c: None,
             temp_coeff: ImuChannels::default(),
             latitude_deg: Protocol::default().latitude_deg,
+            stop: None,
         };
         (model, setup)
     }
@@ -845,7 +886,7 @@ mod tests {
                 .num_threads(threads)
                 .build()
                 .unwrap();
-            let got = pool.install(|| map_static_logs(&jobs, |_, log| log.clone()));
+            let got = pool.install(|| map_static_logs(&jobs, |_, log| log.clone()).unwrap());
             for (job, log) in jobs.iter().zip(&got) {
                 let alone = static_log(job.model, &job.setup, job.seed, job.run);
                 for ch in Channel::ALL {

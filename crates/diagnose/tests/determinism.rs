@@ -27,6 +27,7 @@ fn run(threads: usize) -> SimResult {
         temperature_c: None,
         temp_coeff: noise::ImuChannels::default(),
         latitude_deg: diagnose::protocol::Protocol::default().latitude_deg,
+        stop: None,
     };
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)

@@ -63,6 +63,7 @@ impl GeneratedLog {
             temperature_c: None,
             temp_coeff: noise::ImuChannels::default(),
             latitude_deg: diagnose::protocol::Protocol::default().latitude_deg,
+            stop: None,
         };
         let channels = static_log(model, &setup, seed, 0).0;
         let temperature_c = record_temperature.then(|| {
