@@ -199,7 +199,7 @@ fn run_inner(args: &Args, settings: &Settings) -> Result<()> {
     let per_channel = noise::ImuChannels::from_fn(|c| {
         result
             .channels
-            .contains_key(c.name())
+            .contains_key(&c)
             .then(|| model_noise_values(&result, c))
             .flatten()
     });
@@ -222,7 +222,7 @@ fn run_inner(args: &Args, settings: &Settings) -> Result<()> {
         for (name, report) in &result.channels {
             write_string(
                 &dir.join(format!("diagnose_{name}.svg")),
-                &plot(name, report, &result),
+                &plot(*name, report, &result),
             )?;
         }
         write_string(
@@ -253,9 +253,7 @@ fn corrected_model(
 
 /// Whether the log can inform a drift quantity (it has every channel it comes from).
 fn informed(result: &Diagnosis, q: diagnose::protocol::Quantity) -> bool {
-    q.needs()
-        .iter()
-        .all(|c| result.channels.contains_key(c.name()))
+    q.needs().iter().all(|c| result.channels.contains_key(&c))
 }
 
 fn drift_line(d: &DriftRow, heading: bool, horizontal: bool) -> String {
@@ -317,8 +315,8 @@ fn text_report(result: &Diagnosis, log: &str, model: &Path, elapsed_s: f64) -> S
                 "       {} {} ({}): {}; gap {:.2} -> {:.2}, {}{}{}",
                 e.kind,
                 e.effect,
-                crate::effect_text::model_text(e, name),
-                crate::effect_text::params_text(e, name),
+                crate::effect_text::model_text(e, *name),
+                crate::effect_text::params_text(e, *name),
                 e.gap_before,
                 e.gap_after,
                 crate::effect_text::evidence_text(e),
@@ -446,7 +444,7 @@ fn runs_text(result: &Diagnosis) -> String {
                     s,
                     "       {ch}: {} {}",
                     e.effect,
-                    crate::effect_text::params_text(e, ch)
+                    crate::effect_text::params_text(e, *ch)
                 );
             }
         }
@@ -630,7 +628,7 @@ fn runs_markdown(result: &Diagnosis) -> String {
         let cells: Vec<String> = noise::Channel::ALL
             .iter()
             .map(|ch| {
-                run.channels.get(ch.name()).map_or("-".into(), |c| {
+                run.channels.get(ch).map_or("-".into(), |c| {
                     format!("{:.2} -> {:.2}", c.gap_initial, c.gap_final)
                 })
             })
@@ -643,7 +641,7 @@ fn runs_markdown(result: &Diagnosis) -> String {
                     format!(
                         "{ch}: {} {}",
                         e.effect,
-                        crate::effect_text::params_text(e, ch)
+                        crate::effect_text::params_text(e, *ch)
                     )
                 })
             })
@@ -740,8 +738,8 @@ fn markdown_report(
                     "{} {} ({}): {}{}{}",
                     e.kind,
                     e.effect,
-                    crate::effect_text::model_text(e, name),
-                    crate::effect_text::params_text(e, name),
+                    crate::effect_text::model_text(e, *name),
+                    crate::effect_text::params_text(e, *name),
                     drift_gap_text(e),
                     if e.round == 0 {
                         format!("; {}", crate::effect_text::evidence_text(e))
@@ -780,7 +778,7 @@ fn markdown_report(
             let cells: Vec<String> = noise::Channel::ALL
                 .iter()
                 .map(|ch| {
-                    gaps.get(ch.name()).map_or("-".into(), |g| {
+                    gaps.get(ch).map_or("-".into(), |g| {
                         format!("{:.2} -> {:.2}", g.gap_model, g.gap_corrected)
                     })
                 })
@@ -797,9 +795,9 @@ fn markdown_report(
     s
 }
 
-fn plot(name: &str, r: &ChannelReport, result: &Diagnosis) -> String {
+fn plot(name: noise::Channel, r: &ChannelReport, result: &Diagnosis) -> String {
     let c = &r.curves;
-    let unit = logio::Quantity::of_channel(name).map_or("1", logio::Log::unit_of);
+    let unit = logio::Log::unit_of(logio::Quantity::Imu(name));
     let pooled = !result.runs.is_empty();
     let mut series = vec![
         Series::new(
@@ -830,7 +828,7 @@ fn plot(name: &str, r: &ChannelReport, result: &Diagnosis) -> String {
         "#8c564b", "#e377c2", "#bcbd22", "#17becf", "#9467bd", "#ff7f0e",
     ];
     for (i, run) in result.runs.iter().enumerate() {
-        if let Some(rc) = run.channels.get(name) {
+        if let Some(rc) = run.channels.get(&name) {
             series.push(Series {
                 markers: false,
                 ..Series::new(

@@ -37,7 +37,7 @@ pub fn corrected_model_toml(
                 "# {name}: {} {} {}",
                 e.kind,
                 e.effect,
-                params_text(e, name)
+                params_text(e, *name)
             );
         }
     }
@@ -81,7 +81,7 @@ pub fn corrected_model_toml(
 }
 
 /// A held-out log's gaps with the original and the corrected model, per channel, with its name.
-pub type HeldOutChecks = Vec<(String, BTreeMap<String, HeldOutGap>)>;
+pub type HeldOutChecks = Vec<(String, BTreeMap<noise::Channel, HeldOutGap>)>;
 
 /// Where a diagnosis came from, for its document.
 pub struct DiagnoseSources<'a> {

@@ -35,8 +35,12 @@ fn shown(key: &str, si_unit: &str) -> Shown {
 }
 
 /// The SI unit of a channel's samples (`gx`.. rad/s, `ax`.. m/s^2).
-fn si_unit_of(ch: &str) -> &'static str {
-    noise::Channel::from_name(ch).map_or("", |c| if c.is_gyro() { "rad/s" } else { "m/s^2" })
+fn si_unit_of(ch: noise::Channel) -> &'static str {
+    if ch.is_gyro() {
+        "rad/s"
+    } else {
+        "m/s^2"
+    }
 }
 
 /// The name a parameter is shown under (the JSON key without its unit suffix).
@@ -48,7 +52,7 @@ fn label(key: &str) -> &str {
 
 /// `b = 29.37 deg/h [26.32, 32.41]` for every parameter of `e` on channel `ch` (the filter's
 /// kind first); the white-noise level also per sqrt(Hz), as datasheets give it.
-pub fn params_text(e: &FoundEffect, ch: &str) -> String {
+pub fn params_text(e: &FoundEffect, ch: noise::Channel) -> String {
     let si_unit = si_unit_of(ch);
     let values = e.parameters.iter().map(|(k, &v)| {
         let (lo, hi) = (e.parameters_lo.get(k), e.parameters_hi.get(k));
@@ -86,7 +90,7 @@ pub fn params_text(e: &FoundEffect, ch: &str) -> String {
 }
 
 /// "model had b = 37.63 deg/h" for a wrong level, "not in the model" for a missing term.
-pub fn model_text(e: &FoundEffect, ch: &str) -> String {
+pub fn model_text(e: &FoundEffect, ch: noise::Channel) -> String {
     let si_unit = si_unit_of(ch);
     match &e.model_parameters {
         Some(p) => format!(

@@ -12,7 +12,10 @@ impl Diagnosis {
     /// The gap of another log of the same rate and length as a diagnosed run (data the diagnosis did
     /// not see) against the original model's band and the corrected model's band of one log, per
     /// channel.
-    pub fn check(&self, log: &LogInput) -> Result<BTreeMap<String, HeldOutGap>, DiagnoseError> {
+    pub fn check(
+        &self,
+        log: &LogInput,
+    ) -> Result<BTreeMap<noise::Channel, HeldOutGap>, DiagnoseError> {
         let samples = log.validate()?;
         let shape_error = || DiagnoseError::CheckShape {
             samples,
@@ -42,7 +45,7 @@ impl Diagnosis {
                 return Err(shape_error());
             }
             out.insert(
-                c.name().to_string(),
+                c,
                 HeldOutGap {
                     gap_model: gap(&m.curve, &restrict(b0, &m.idx)).rms,
                     gap_corrected: gap(&m.curve, &restrict(b1, &m.idx)).rms,

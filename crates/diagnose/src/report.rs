@@ -2,7 +2,7 @@
 
 use crate::drift::DriftSummary;
 use crate::gap::{Band, Disagreement};
-use noise::{Effect, ImuChannels, SensorModel};
+use noise::{Channel, Effect, ImuChannels, SensorModel};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -188,7 +188,7 @@ pub struct Diagnosis {
     pub rounds: usize,
     pub dt_s: f64,
     pub samples: usize,
-    pub channels: BTreeMap<String, ChannelReport>,
+    pub channels: BTreeMap<Channel, ChannelReport>,
     pub drift: Vec<DriftRow>,
     /// Several runs pooled: each run's curves, gaps and step-0 findings, in input order (absent
     /// for one log; docs/cli.md).
@@ -240,8 +240,8 @@ pub struct LogBands {
 #[derive(Clone, Debug, Serialize)]
 pub struct RunReport {
     pub samples: usize,
-    pub channels: BTreeMap<String, RunChannel>,
-    pub findings: BTreeMap<String, Vec<FoundEffect>>,
+    pub channels: BTreeMap<Channel, RunChannel>,
+    pub findings: BTreeMap<Channel, Vec<FoundEffect>>,
 }
 
 /// One run's channel.

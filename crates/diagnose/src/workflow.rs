@@ -745,10 +745,10 @@ fn run_reports(cx: &Context, state: &LoopState) -> Vec<RunReport> {
                     })
                     .collect();
                 if !found.is_empty() {
-                    findings.insert(c.name().to_string(), found);
+                    findings.insert(c, found);
                 }
                 channels.insert(
-                    c.name().to_string(),
+                    c,
                     RunChannel {
                         tau_s: m.curve.tau_s.clone(),
                         adev: m.curve.adev.clone(),
@@ -779,7 +779,7 @@ fn report(cx: Context, mut state: LoopState, drift: Drift) -> Diagnosis {
     let mut channels = BTreeMap::new();
     for c in Channel::ALL {
         if let Some(r) = channel_report(&cx, &state.bands, &mut state.channels[c], c) {
-            channels.insert(c.name().to_string(), r);
+            channels.insert(c, r);
         }
     }
     let log_bands = cx

@@ -183,7 +183,7 @@ fn check(trial: &Trial) -> Result<(), String> {
     let mut problems = Vec::new();
     for c in Channel::ALL {
         let name = c.name();
-        let report = &trial.result.channels[name];
+        let report = &trial.result.channels[&c];
         let named: Vec<&str> = report.effects.iter().map(|e| e.effect.name()).collect();
         match trial.channels.iter().position(|&h| h == c) {
             None => {
@@ -244,7 +244,7 @@ fn check(trial: &Trial) -> Result<(), String> {
     // DIAGNOSE_DUMP=1: on a failure, also print the found effects and the z-scores before and after.
     if !problems.is_empty() && std::env::var_os("DIAGNOSE_DUMP").is_some() {
         for &c in &trial.channels {
-            let r = &trial.result.channels[c.name()];
+            let r = &trial.result.channels[&c];
             eprintln!(
                 "{}: truth {:?}\n  effects {:?}\n  z0 {}\n  z1 {}",
                 c.name(),
@@ -365,7 +365,7 @@ fn temperature_ramp_cannot_be_told_from_rate_ramp() {
         noise::TemperatureBias::new(5e-5).unwrap().into(),
     );
     let d = run(&model, &base, 31, true);
-    let gy = &d.channels["gy"];
+    let gy = &d.channels[&noise::Channel::Gy];
     assert_eq!(gy.effects.len(), 1, "{:?}", gy.effects);
     let e = &gy.effects[0];
     let (named, other) = match e.effect.name() {
@@ -385,7 +385,7 @@ fn temperature_ramp_cannot_be_told_from_rate_ramp() {
         gy.gap_final
     );
     for (ch, r) in &d.channels {
-        if ch != "gy" {
+        if *ch != Channel::Gy {
             assert!(r.effects.is_empty(), "{ch}: {:?}", r.effects);
         }
     }

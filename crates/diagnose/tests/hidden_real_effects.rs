@@ -185,7 +185,7 @@ fn trial(kind: &str, t: u64) -> Result<(), String> {
     let mut problems = Vec::new();
     for c in Channel::ALL {
         let name = c.name();
-        let report = &result.channels[name];
+        let report = &result.channels[&c];
         let named: Vec<&str> = report.effects.iter().map(|e| e.effect.name()).collect();
         match truth.iter().find(|(h, _)| *h == c) {
             None => {
@@ -234,7 +234,7 @@ fn trial(kind: &str, t: u64) -> Result<(), String> {
     // DIAGNOSE_DUMP=1: on a failure, print each hidden channel's effects and z before and after.
     if !problems.is_empty() && std::env::var_os("DIAGNOSE_DUMP").is_some() {
         for c in channels.iter().map(|&i| Channel::ALL[i]) {
-            let r = &result.channels[c.name()];
+            let r = &result.channels[&c];
             eprintln!(
                 "{}: effects {:?}\n  z0 {}\n  z1 {}",
                 c.name(),

@@ -117,7 +117,7 @@ fn a_random_walk_one_run_cannot_resolve_is_named_from_pooled_runs() {
         })
         .collect();
     assert_eq!(fitted, vec!["gz:rate_random_walk".to_string()]);
-    let e = pooled.channels["gz"]
+    let e = pooled.channels[&noise::Channel::Gz]
         .effects
         .iter()
         .find(|e| e.round > 0)

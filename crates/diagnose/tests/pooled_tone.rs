@@ -53,7 +53,7 @@ fn tones_between_bins_are_named_at_the_spectrum_frequency() {
     .expect("diagnose runs");
     let resolution = 1.0 / (SAMPLES as f64 * common::DT_S);
     for c in Channel::ALL {
-        let report = &d.channels[c.name()];
+        let report = &d.channels[&c];
         let sinusoid = report
             .effects
             .iter()
