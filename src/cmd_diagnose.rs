@@ -253,7 +253,7 @@ fn corrected_model(
 
 /// Whether the log can inform a drift quantity (it has every channel it comes from).
 fn informed(result: &Diagnosis, q: diagnose::protocol::Quantity) -> bool {
-    q.needs().iter().all(|c| result.channels.contains_key(&c))
+    q.needs().iter().all(|c| result.channels.contains_key(c))
 }
 
 fn drift_line(d: &DriftRow, heading: bool, horizontal: bool) -> String {

@@ -19,7 +19,7 @@
 //! end renders them with its own names ([`LogError::render`]).
 //!
 //! A small CSV log with a time column in seconds, gyro columns in deg/s and accelerometer columns
-//! in g, read into SI channels under their canonical names:
+//! in g, read into SI channels, typed by [`noise::Channel`]:
 //!
 //! ```
 //! use std::io::Write;
@@ -35,11 +35,13 @@
 //! let log = logio::read_log(file.path(), &logio::ReadOptions::default()).unwrap();
 //! assert_eq!(log.len(), 5);
 //! assert!((log.rate_hz - 100.0).abs() < 1e-9);
-//! assert_eq!(log.order, ["gx", "gy", "gz", "ax", "ay", "az"]);
+//! assert_eq!(log.order_names(), ["gx", "gy", "gz", "ax", "ay", "az"]);
 //! let pi = std::f64::consts::PI;
-//! assert!(log.channels["gx"].iter().all(|&w| (w - pi).abs() < 1e-12)); // 180 deg/s
-//! assert!(log.channels["gz"].iter().all(|&w| (w + pi / 2.0).abs() < 1e-12));
-//! assert!(log.channels["az"].iter().all(|&a| (a + 9.80665).abs() < 1e-12)); // -1 g
+//! let channel = |c| log.channel(c).unwrap();
+//! use noise::Channel::{Az, Gx, Gz};
+//! assert!(channel(Gx).iter().all(|&w| (w - pi).abs() < 1e-12)); // 180 deg/s
+//! assert!(channel(Gz).iter().all(|&w| (w + pi / 2.0).abs() < 1e-12));
+//! assert!(channel(Az).iter().all(|&a| (a + 9.80665).abs() < 1e-12)); // -1 g
 //! assert!(log.skipped.is_empty());
 //! ```
 
