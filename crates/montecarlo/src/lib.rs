@@ -19,16 +19,17 @@
 //! Units are SI (rad, m, m/s, s). Frames: navigation NED, body forward-right-down; a static level
 //! IMU reads specific force (0, 0, -g).
 //!
-//! A tiny experiment from its texts: a gyro with white rate noise lying still for 2 s, 64 runs.
+//! A tiny experiment from its texts: a gyro with white rate noise lying still for 2 s on
+//! Woodman's flat Earth, 64 runs.
 //! Its heading error is a random walk, of rms N sqrt(t) (Woodman eq 29); the report puts each
 //! quantity's rms over the runs beside that law with a 99.9 % interval of their ratio.
 //!
 //! ```
-//! use montecarlo::experiment::{Experiment, Overrides};
-//! use montecarlo::scenario::Scenario;
+//! use imudrift_montecarlo::experiment::{Experiment, Overrides};
+//! use imudrift_montecarlo::scenario::Scenario;
 //!
 //! let scenario = Scenario::from_toml_str(
-//!     "name = \"tiny\"\nsensor = \"gyro.toml\"\nduration_s = 2.0\nrate_hz = 100.0\nruns = 64\nseed = 1\n",
+//!     "name = \"tiny\"\nsensor = \"gyro.toml\"\nduration_s = 2.0\nrate_hz = 100.0\nruns = 64\nseed = 1\n[earth]\nmodel = \"flat\"\n",
 //!     "tiny.toml",
 //! )
 //! .unwrap();
@@ -38,7 +39,7 @@
 //! )
 //! .unwrap();
 //! let exp = Experiment::new(scenario, &model, &Overrides::default()).unwrap();
-//! let batch = montecarlo::run_range(&exp.kernel(), 0..exp.runs, &|_| {});
+//! let batch = imudrift_montecarlo::run_range(&exp.kernel(), 0..exp.runs, &|_| {});
 //! let report = exp.report(&batch.matrix, &batch.failures);
 //! assert_eq!(report.runs_ok, 64);
 //! let last = report.checkpoints.last().unwrap();
