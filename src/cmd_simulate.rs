@@ -120,12 +120,7 @@ fn run_shard(args: &Args, text: &str, job: &SimulateJob, run: &job::RunRange<'_>
     job.shard_runs(shard).map_err(request_error)?;
     // The file without its values yet: its experiment is checked against the directory's other
     // shards before any work.
-    let mut file = job::empty_shard(
-        job.inputs.clone(),
-        &job.overrides,
-        shard,
-        job.subs.is_some(),
-    );
+    let mut file = job.empty_shard(shard);
     crate::experiment_run::refuse_other_experiments(dir, &file, exp)?;
     if job::fill_shard(&mut file, exp, job.subs(), run).is_none() {
         bail!("interrupted");

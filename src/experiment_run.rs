@@ -52,15 +52,7 @@ pub fn refuse_other_experiments(dir: &Path, file: &ShardFile, exp: &Experiment) 
 /// Refuse `runs` runs of `exp` whose per-run values would not fit or whose work is beyond the
 /// limit (`request::simulate`), before they are simulated.
 pub fn check_size(exp: &Experiment, runs: u64) -> Result<()> {
-    request::simulate::check_memory(exp, runs).map_err(request_error)?;
-    request::simulate::check_work(
-        &exp.model,
-        runs as f64,
-        exp.scenario.duration_s * exp.scenario.rate_hz,
-        &exp.scenario.name,
-        request::error::Remedy::Simulate,
-    )
-    .map_err(request_error)
+    request::simulate::check_experiment(exp, runs, runs).map_err(request_error)
 }
 
 /// Run `exp` over `runs`, with progress on stderr (`crate::progress`).

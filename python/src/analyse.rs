@@ -2,13 +2,13 @@
 //! `drift` through the same library code (`montecarlo::spec_job`, `diagnose::document`), each
 //! returning the text of the command's `--json` document. The work runs with the GIL released
 //! in a thread pool of the call's own. Ctrl-C: the calling thread checks Python's signals every
-//! [`SIGNAL_POLL`] and a pending `KeyboardInterrupt` sets the stop flag the libraries check
+//! 100 ms and a pending `KeyboardInterrupt` sets the stop flag the libraries check
 //! (`montecarlo::run_range_until`'s `AtomicBool`): `spec`'s drift runs ([`crate::sim::run_job`]),
 //! `diagnose` (`diagnose::diagnose_until`) and `drift` (`drift_check::check_drift_until`) stop
-//! within a second ([`run_until`]); `spec`'s readback has no stop and ends first.
+//! within a second ([`crate::sim::run_until`]); `spec`'s readback has no stop and ends first.
 
 use crate::sim::{
-    argument, call_pool, check_experiment_size, detached, message, request_error, run_job, terms,
+    argument, check_experiment_size, detached, message, request_error, run_job, run_until, terms,
 };
 use crate::{invalid, read_log_file, read_options, ReaderArgs};
 use diagnose::document::{self, DiagnoseSources, HeldOutChecks, ProtocolSetting};
@@ -22,8 +22,6 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use request::diagnose::{DiagnoseRequest, DriftRequest, Earth, ModelUnderTest, ProtocolRequest};
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Duration;
 
 fn model(text: &str, source: &str) -> PyResult<SensorModel> {
     SensorModel::from_text(text, source).map_err(|e| invalid(message(&e)))
@@ -58,53 +56,6 @@ pub struct SpecArgs {
     only: Option<Vec<String>>,
     without: Vec<String>,
     threads: Option<usize>,
-}
-
-/// How often a running call checks for Ctrl-C (well under the second it must stop within).
-const SIGNAL_POLL: Duration = Duration::from_millis(100);
-
-/// Run `work` on a thread pool of `threads` workers (None or 0: one per core) with the GIL
-/// released, checking for Ctrl-C meanwhile: a `KeyboardInterrupt` (or any error a signal handler
-/// raises) sets the stop flag `work` is given, waits for `work` to return (the libraries stop
-/// within a second) and is returned. `work`'s `None` is a stop.
-fn run_until<T: Send>(
-    py: Python<'_>,
-    threads: Option<usize>,
-    work: impl FnOnce(&AtomicBool) -> Option<T> + Send,
-) -> PyResult<T> {
-    let pool = call_pool(threads)?;
-    let stop = AtomicBool::new(false);
-    py.detach(|| {
-        std::thread::scope(|scope| {
-            let (tx, rx) = std::sync::mpsc::channel();
-            let stop = &stop;
-            let worker = scope.spawn(move || {
-                let _ = tx.send(pool.install(|| work(stop)));
-            });
-            loop {
-                match rx.recv_timeout(SIGNAL_POLL) {
-                    Ok(Some(done)) => return Ok(done),
-                    Ok(None) => {
-                        return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err(
-                            "interrupted",
-                        ))
-                    }
-                    Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
-                        if let Err(e) = Python::attach(|py| py.check_signals()) {
-                            stop.store(true, Ordering::Relaxed);
-                            let _ = worker.join();
-                            return Err(e);
-                        }
-                    }
-                    Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
-                        return Err(pyo3::exceptions::PyRuntimeError::new_err(
-                            "the worker thread panicked",
-                        ))
-                    }
-                }
-            }
-        })
-    })
 }
 
 /// `imudrift spec SENSOR... --json`: each sensor given as (its text, its source name), the

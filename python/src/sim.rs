@@ -97,15 +97,7 @@ fn job_of(subject: SubjectArg, s: &Settings) -> PyResult<SimulateJob> {
 /// Refuse `runs` runs of `exp` whose per-run values would not fit in memory, or `all_runs` runs
 /// (sub-experiments counted) whose work is beyond the limit (`request::simulate`).
 pub fn check_experiment_size(exp: &Experiment, runs: u64, all_runs: u64) -> PyResult<()> {
-    request::simulate::check_memory(exp, runs).map_err(request_error)?;
-    request::simulate::check_work(
-        &exp.model,
-        all_runs as f64,
-        exp.scenario.duration_s * exp.scenario.rate_hz,
-        &exp.scenario.name,
-        request::error::Remedy::Simulate,
-    )
-    .map_err(request_error)
+    request::simulate::check_experiment(exp, runs, all_runs).map_err(request_error)
 }
 
 /// The call's own rayon pool of `threads` workers (None or 0: one per core), dropped when the
@@ -124,24 +116,21 @@ pub fn detached<T: Send>(py: Python<'_>, work: impl FnOnce() -> T + Send) -> PyR
 
 /// Run `work` on a thread pool of `threads` workers (None or 0: one per core) with the GIL
 /// released, checking for Ctrl-C meanwhile: a `KeyboardInterrupt` (or any error a signal handler
-/// raises) stops the runs and is returned.
-pub fn run_job<T: Send>(
+/// raises) sets the stop flag `work` is given, waits for `work` to return (the libraries stop
+/// within a second) and is returned. `work`'s `None` is a stop.
+pub fn run_until<T: Send>(
     py: Python<'_>,
     threads: Option<usize>,
-    work: impl FnOnce(&job::RunRange<'_>) -> Option<T> + Send,
+    work: impl FnOnce(&AtomicBool) -> Option<T> + Send,
 ) -> PyResult<T> {
     let pool = call_pool(threads)?;
     let stop = AtomicBool::new(false);
-    let run = |e: &Experiment, runs: std::ops::Range<u64>, _label: &str| {
-        montecarlo::run_range_until(&e.kernel(), runs, &|_| {}, &stop)
-    };
     py.detach(|| {
         std::thread::scope(|scope| {
             let (tx, rx) = std::sync::mpsc::channel();
-            // The work runs in the call's pool, so that its own parallel parts (a readback, a
-            // diagnosis) use it too, and never the process-wide rayon pool.
+            let stop = &stop;
             let worker = scope.spawn(move || {
-                let _ = tx.send(pool.install(|| work(&run)));
+                let _ = tx.send(pool.install(|| work(stop)));
             });
             loop {
                 match rx.recv_timeout(SIGNAL_POLL) {
@@ -160,12 +149,27 @@ pub fn run_job<T: Send>(
                     }
                     Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
                         return Err(pyo3::exceptions::PyRuntimeError::new_err(
-                            "the simulation's worker thread panicked",
+                            "the worker thread panicked",
                         ))
                     }
                 }
             }
         })
+    })
+}
+
+/// [`run_until`] for Monte Carlo runs: `work` gets a runner that stops at the flag
+/// (`montecarlo::run_range_until`).
+pub fn run_job<T: Send>(
+    py: Python<'_>,
+    threads: Option<usize>,
+    work: impl FnOnce(&job::RunRange<'_>) -> Option<T> + Send,
+) -> PyResult<T> {
+    run_until(py, threads, |stop| {
+        let run = |e: &Experiment, runs: std::ops::Range<u64>, _label: &str| {
+            montecarlo::run_range_until(&e.kernel(), runs, &|_| {}, stop)
+        };
+        work(&run)
     })
 }
 
@@ -230,12 +234,7 @@ pub fn simulate_shard_bytes<'py>(
     let shard = request::simulate::shard(index, count).map_err(request_error)?;
     let job = job_of(subject, &settings)?;
     job.shard_runs(shard).map_err(request_error)?;
-    let mut file = job::empty_shard(
-        job.inputs.clone(),
-        &job.overrides,
-        shard,
-        job.subs.is_some(),
-    );
+    let mut file = job.empty_shard(shard);
     let file = run_job(py, settings.threads, |run| {
         job::fill_shard(&mut file, &job.exp, job.subs(), run).map(|()| file)
     })?;

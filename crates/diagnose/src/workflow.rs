@@ -615,11 +615,7 @@ fn keep_or_undo(
         .map(|(_, g)| g.rms)
         .unwrap_or(f64::NAN);
     let ch = &mut state.channels[c];
-    let first_new = ch
-        .effects
-        .iter()
-        .position(|e| e.round == round)
-        .unwrap_or(ch.effects.len());
+    let first_new = ch.first_in(round);
     for found in &mut ch.effects[first_new..] {
         found.gap_after = after;
     }

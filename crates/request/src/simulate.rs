@@ -193,13 +193,18 @@ impl SimulateJob {
     /// Refuse `runs` run indices whose per-run values would not fit in memory or whose work
     /// (ablation sub-runs counted) is beyond [`job::MAX_WORK_SAMPLES`], before any work.
     pub fn check_size(&self, runs: u64) -> Result<()> {
-        check_memory(&self.exp, runs * self.runs_per_index())?;
-        check_work(
-            &self.exp.model,
-            (runs * self.runs_per_index()) as f64,
-            self.exp.scenario.duration_s * self.exp.scenario.rate_hz,
-            &self.exp.scenario.name,
-            Remedy::Simulate,
+        let all = runs * self.runs_per_index();
+        check_experiment(&self.exp, all, all)
+    }
+
+    /// The shard file of `shard` without its values yet (its experiment can be checked against
+    /// other shards before any work).
+    pub fn empty_shard(&self, shard: Shard) -> ShardFile {
+        job::empty_shard(
+            self.inputs.clone(),
+            &self.overrides,
+            shard,
+            self.subs.is_some(),
         )
     }
 
@@ -219,6 +224,19 @@ pub fn parse_shard(text: &str) -> Result<Shard> {
 /// A shard from its two integers.
 pub fn shard(index: u64, count: u64) -> Result<Shard> {
     parse_shard(&format!("{index}/{count}"))
+}
+
+/// Refuse `runs` runs of `exp` whose per-run values would not fit in memory, or `all_runs` runs
+/// (sub-experiments counted) whose work is beyond [`job::MAX_WORK_SAMPLES`].
+pub fn check_experiment(exp: &Experiment, runs: u64, all_runs: u64) -> Result<()> {
+    check_memory(exp, runs)?;
+    check_work(
+        &exp.model,
+        all_runs as f64,
+        exp.scenario.duration_s * exp.scenario.rate_hz,
+        &exp.scenario.name,
+        Remedy::Simulate,
+    )
 }
 
 /// Refuse a run range whose per-run values (8 bytes per run, checkpoint and quantity) would not

@@ -330,11 +330,7 @@ fn drift_resimulate(
         let allan_after = gap_of(cx.measured[*c].as_ref(), sim.bands[*c].as_ref())
             .map_or(f64::NAN, |(_, g)| g.rms);
         let ch = &mut state.channels[*c];
-        let first_new = ch
-            .effects
-            .iter()
-            .position(|e| e.round == round)
-            .unwrap_or(ch.effects.len());
+        let first_new = ch.first_in(round);
         for e in &mut ch.effects[first_new..] {
             e.gap_after = allan_after;
             e.drift_gap_after = Some(after.gap);

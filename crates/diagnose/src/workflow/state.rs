@@ -107,6 +107,16 @@ pub(super) struct ChannelState {
     pub(super) alternatives: Vec<crate::alternatives::Alternative>,
 }
 
+impl ChannelState {
+    /// Where the effects named in `round` begin (they are the last ones found).
+    pub(super) fn first_in(&self, round: usize) -> usize {
+        self.effects
+            .iter()
+            .position(|e| e.round == round)
+            .unwrap_or(self.effects.len())
+    }
+}
+
 impl Models {
     /// Set `term` on channel `c` of both models.
     pub(super) fn set(&mut self, c: Channel, term: &Term) {
