@@ -23,7 +23,7 @@ imudrift is measured twice: with the full MTx model, and with exactly gnss-ins-s
 (white noise + one Gauss-Markov bias per gyro axis + accelerometer white noise; the script writes that
 sensor file and a copy of the scenario into a temporary directory): the like-for-like ratio.
 
-Usage: python3 scripts/bench_gnss_ins_sim.py --gnss-ins-sim /tmp/gis [--runs 20] [--imudrift-runs 2000]
+Usage: python3 scripts/bench_gnss_ins_sim.py --gnss-ins-sim <gnss-ins-sim checkout> [--runs 20] [--imudrift-runs 2000]
 """
 import argparse
 import json
