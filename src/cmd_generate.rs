@@ -196,18 +196,10 @@ fn write_log(
                             channel.fill_static(k0, &ideal[Channel::ALL[c]], &mut out[..n]);
                         })
                 });
-                let bad = block.iter().enumerate().find_map(|(c, out)| {
-                    out[..n]
-                        .iter()
-                        .position(|v| !v.is_finite())
-                        .map(|i| (Channel::ALL[c], k0 + i as u64, out[i]))
-                });
-                if let Some((c, k, v)) = bad {
-                    let _ = tx.send(Err(format!(
-                        "channel {} is {v} at sample {k} (t = {} s): the model's values overflow; check their units",
-                        c.name(),
-                        k as f64 / plan.rate_hz
-                    )));
+                // The one rule of generated values (`request::generate`), as Python applies it.
+                let channels = Channel::ALL.iter().zip(&block).map(|(&c, v)| (c, &v[..n]));
+                if let Err(e) = GeneratePlan::check_finite(k0, channels) {
+                    let _ = tx.send(Err(e.render(&crate::cli::flag)));
                     return;
                 }
                 let texts: Vec<Vec<u8>> = pool.install(|| {
