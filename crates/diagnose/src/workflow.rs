@@ -11,7 +11,7 @@ use crate::drift::{segment_drift, SegmentDrift};
 use crate::error::DiagnoseError;
 use crate::findings::{
     channel_curves, found_by_detector, found_by_fit, mark_stand_ins, merge_refinements,
-    rejected_record, trial_records, verdict, Choice,
+    trial_records, verdict, Choice,
 };
 use crate::fit::{bic, FitData};
 use crate::gap::{gap, Band, Curve, Gap};
@@ -629,12 +629,7 @@ fn keep_or_undo(
         return Some(named);
     }
     // The re-simulated model is no closer: undo this round's changes and stop here.
-    let rejected: Vec<CandidateRecord> = ch
-        .effects
-        .drain(first_new..)
-        .map(|e| rejected_record(round, e))
-        .collect();
-    ch.records.extend(rejected);
+    ch.reject_from(round, first_new);
     ch.done = true;
     for (effect, previous) in p.changes.into_iter().rev() {
         state.models.restore(c, effect, previous);

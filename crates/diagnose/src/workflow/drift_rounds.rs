@@ -14,7 +14,7 @@ use crate::drift_fit::{
 };
 use crate::drift_gap::DriftGap;
 use crate::error::DiagnoseError;
-use crate::findings::{found_by_fit, merge_refinements, rejected_record, Choice};
+use crate::findings::{found_by_fit, merge_refinements, Choice};
 use crate::gap::{gap, Band};
 use crate::model_terms::current_term;
 use crate::observer::{RoundDone, Step};
@@ -345,12 +345,7 @@ fn drift_resimulate(
             if !done.undone.contains(c) {
                 done.undone.push(*c);
             }
-            let rejected: Vec<CandidateRecord> = ch
-                .effects
-                .drain(first_new..)
-                .map(|e| rejected_record(round, e))
-                .collect();
-            ch.records.extend(rejected);
+            ch.reject_from(round, first_new);
         }
     }
     cx.observer.round_done(&done);

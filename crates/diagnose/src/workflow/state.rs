@@ -115,6 +115,17 @@ impl ChannelState {
             .position(|e| e.round == round)
             .unwrap_or(self.effects.len())
     }
+
+    /// Undo the effects named in `round` from position `first` on: each becomes a record of a
+    /// candidate rejected in that round.
+    pub(super) fn reject_from(&mut self, round: usize, first: usize) {
+        let rejected: Vec<CandidateRecord> = self
+            .effects
+            .drain(first..)
+            .map(|e| crate::findings::rejected_record(round, e))
+            .collect();
+        self.records.extend(rejected);
+    }
 }
 
 impl Models {
