@@ -135,14 +135,14 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
     let clock = std::time::Instant::now();
     let stage = |what: &str| {
         if args.timing {
-            eprintln!(
+            tell!(
                 "timing: {what} done at {:.1} ms",
                 clock.elapsed().as_secs_f64() * 1e3
             );
         }
     };
     let log = args.log_args.read(&args.log)?;
-    eprintln!("{}: {}", log.source, log_input::mapping_text(&log));
+    tell!("{}: {}", log.source, log_input::mapping_text(&log));
     crate::plausibility::print(&log);
     stage("read + parse");
     let quantities = channel_quantities(args, &log)?;
@@ -279,7 +279,7 @@ fn write_files(
         output::write_string(&dir.join(name), &plot(r, est, &log.source).to_svg())?;
     }
     stage("files written");
-    eprintln!(
+    tell!(
         "wrote allan.csv, allan.json and {} to {}",
         files.join(", "),
         dir.display()

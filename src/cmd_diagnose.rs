@@ -145,7 +145,7 @@ fn run_inner(args: &Args, settings: &Settings) -> Result<()> {
         .note(horizons.iter().copied().fold(0.0, f64::max));
     let logs = args.log_args.read_all(&args.logs)?;
     for log in &logs {
-        eprintln!("{}: {}", log.source, log_input::mapping_text(log));
+        tell!("{}: {}", log.source, log_input::mapping_text(log));
         crate::plausibility::print(log);
     }
     let log = &logs[0];
@@ -229,7 +229,7 @@ fn run_inner(args: &Args, settings: &Settings) -> Result<()> {
             &dir.join("report.md"),
             &markdown_report(&result, &sources, &args.model, &toml_name, &checks),
         )?;
-        eprintln!(
+        tell!(
             "wrote {} (report.md, diagnose.json, {toml_name}, diagnose_<channel>.svg)",
             dir.display()
         );

@@ -191,7 +191,7 @@ fn run_inner(args: &Args, settings: CheckSettings) -> Result<()> {
         .note(horizons.iter().copied().fold(0.0, f64::max));
     let logs = args.log_args.read_all(&args.logs)?;
     for log in &logs {
-        eprintln!("{}: {}", log.source, log_input::mapping_text(log));
+        tell!("{}: {}", log.source, log_input::mapping_text(log));
         crate::plausibility::print(log);
         request::logs::check_imu(log).map_err(crate::cli::request_error)?;
     }
@@ -244,7 +244,7 @@ fn run_inner(args: &Args, settings: CheckSettings) -> Result<()> {
                 write_string(&dir.join(format!("drift_{}.svg", q.name())), &svg)?;
             }
         }
-        eprintln!(
+        tell!(
             "wrote drift.json and drift_<quantity>.svg to {}",
             dir.display()
         );

@@ -94,7 +94,7 @@ fn plan(args: &Args) -> Result<GeneratePlan> {
     }
     // An --only list that keeps none of the model's terms leaves an ideal IMU: allowed, but say so.
     if plan.only_keeps_nothing {
-        eprintln!(
+        tell!(
             "note: {} has none of the --only terms; the log is an ideal IMU",
             args.sensor.display()
         );
@@ -116,7 +116,7 @@ pub fn run(args: Args) -> Result<()> {
     })?;
     progress.finish();
     let elapsed_s = started.elapsed().as_secs_f64();
-    eprintln!(
+    tell!(
         "wrote {} samples ({} at {}) of {} to {} in {elapsed_s:.2} s (seed {}, run {})",
         plan.samples,
         crate::fmt::time(plan.samples as f64 / plan.rate_hz),
@@ -198,7 +198,7 @@ fn write_log(
                 });
                 // The one rule of generated values (`request::generate`), as Python applies it.
                 let channels = Channel::ALL.iter().zip(&block).map(|(&c, v)| (c, &v[..n]));
-                if let Err(e) = GeneratePlan::check_finite(k0, channels) {
+                if let Err(e) = GeneratePlan::check_values(k0, channels) {
                     let _ = tx.send(Err(e.render(&crate::cli::flag)));
                     return;
                 }

@@ -129,7 +129,7 @@ fn run_shard(args: &Args, text: &str, job: &SimulateJob, run: &job::RunRange<'_>
     let path = dir.join(format!("shard-{}-of-{}.json", shard.index, shard.count));
     write_atomic(&path, |w| Ok(serde_json::to_writer(w, &file)?))?;
     report_failures(&file.failures);
-    eprintln!(
+    tell!(
         "shard {}/{}: runs {:?} of {}, {} finished{}; wrote {}",
         shard.index,
         shard.count,
@@ -147,10 +147,10 @@ fn run_shard(args: &Args, text: &str, job: &SimulateJob, run: &job::RunRange<'_>
 
 fn report_failures(failures: &[montecarlo::RunFailure]) {
     for f in failures.iter().take(10) {
-        eprintln!("warning: run {} failed: {}", f.run, f.message);
+        tell!("warning: run {} failed: {}", f.run, f.message);
     }
     if failures.len() > 10 {
-        eprintln!("warning: {} more runs failed", failures.len() - 10);
+        tell!("warning: {} more runs failed", failures.len() - 10);
     }
 }
 
@@ -182,7 +182,7 @@ pub fn emit(
             &dir.join("drift.svg"),
             &svg(report, NavQuantity::PosHorizontal),
         )?;
-        eprintln!("wrote {}/drift.{{json,csv,svg}}", dir.display());
+        tell!("wrote {}/drift.{{json,csv,svg}}", dir.display());
     }
     Ok(())
 }

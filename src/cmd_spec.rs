@@ -122,7 +122,7 @@ pub fn run(args: Args) -> Result<()> {
         for (name, svg) in &plots {
             write_string(&dir.join(name), svg)?;
         }
-        eprintln!(
+        tell!(
             "wrote {}/spec.json, spec.csv, drift.csv, {}",
             dir.display(),
             plots
@@ -149,7 +149,7 @@ fn compare_sensor(
     let exp = spec_job::experiment(&model, settings, seed, &name).map_err(with_flags)?;
     crate::experiment_run::check_size(&exp, exp.runs)?;
     if let Some(d) = settings.readback_duration_s() {
-        eprintln!(
+        tell!(
             "{}: reading back a {}, {} static log ...",
             model.name,
             fmt::time(d),
@@ -164,9 +164,11 @@ fn compare_sensor(
         .map_err(with_flags)?
         .context("the drift runs were stopped")?;
     for f in &failures {
-        eprintln!(
+        tell!(
             "warning: {}: drift run {} failed: {}",
-            model.name, f.run, f.message
+            model.name,
+            f.run,
+            f.message
         );
     }
     Ok(out)

@@ -62,7 +62,7 @@ impl EarthArgs {
     /// logs' latitude").
     pub fn note(&self, longest_horizon_s: f64) {
         if self.latitude.is_none() && !self.flat_earth && longest_horizon_s > 300.0 {
-            eprintln!(
+            tell!(
                 "note: the logs' latitude was not given: they are dead-reckoned on the rotating Earth at {} deg N; \
                  over horizons beyond a few minutes large attitude errors couple Earth rate into the heading, \
                  so give --latitude where the verdicts there matter (docs/drift.md, \"The logs' latitude\")",

@@ -82,7 +82,7 @@ fn man(out: Option<&std::path::Path>) -> anyhow::Result<()> {
     for (name, text) in &pages {
         output::write_string(&dir.join(name), text)?;
     }
-    eprintln!("wrote {} man pages to {}", pages.len(), dir.display());
+    tell!("wrote {} man pages to {}", pages.len(), dir.display());
     Ok(())
 }
 
@@ -103,7 +103,7 @@ fn main() -> std::process::ExitCode {
     };
     output::clean_up_on_signals();
     if let Err(e) = cli::check_environment() {
-        eprintln!("error: {e:#}");
+        tell!("error: {e:#}");
         return std::process::ExitCode::FAILURE;
     }
     let result = match cli.command {
@@ -121,7 +121,7 @@ fn main() -> std::process::ExitCode {
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            tell!("error: {e:#}");
             std::process::ExitCode::FAILURE
         }
     }

@@ -8,6 +8,6 @@ pub use noise::model_notes::notes;
 /// Print the notes on stderr ("note: ..."), the convention for notes (docs/cli.md).
 pub fn print(model: &SensorModel, horizon_s: Option<f64>) {
     for n in notes(model, horizon_s) {
-        eprintln!("note: {}: {n}", model.name);
+        tell!("note: {}: {n}", model.name);
     }
 }

@@ -111,7 +111,7 @@ impl NoiseFileArgs {
         };
         let text = write_noise_file(&values, self.noise_format.flavor(), inflation);
         crate::output::write_string(path, &text)?;
-        eprintln!(
+        tell!(
             "wrote {} ({} keys{})",
             path.display(),
             self.noise_format.name(),

@@ -129,7 +129,7 @@ fn exit_interrupted() -> ! {
             }
         }
     }
-    eprintln!("interrupted");
+    tell!("interrupted");
     std::process::exit(130);
 }
 
@@ -274,7 +274,7 @@ pub fn print_stdout(text: &str) -> Result<()> {
 pub fn answer(text: &str, json: Option<&str>) -> Result<()> {
     match json {
         Some(doc) => {
-            eprint!("{text}");
+            let _ = std::io::stderr().lock().write_all(text.as_bytes());
             print_stdout(doc)
         }
         None => print_stdout(text),

@@ -34,7 +34,7 @@ pub fn warnings(log: &Log) -> Vec<String> {
 /// Print the warnings on stderr (`warning: ...`), the convention for warnings (docs/cli.md).
 pub fn print(log: &Log) {
     for w in warnings(log) {
-        eprintln!("warning: {w}");
+        tell!("warning: {w}");
     }
 }
 

@@ -76,7 +76,7 @@ impl Progress {
         } else {
             f64::NAN
         };
-        eprintln!(
+        tell!(
             "{}: {done}/{} {} ({:.0} %), {elapsed:.0} s elapsed, ~{left:.0} s left",
             self.label,
             self.total,
@@ -105,7 +105,7 @@ impl Progress {
             return;
         }
         if let Some(elapsed) = self.line_due() {
-            eprintln!("{}: {what} ({elapsed:.0} s elapsed)", self.label);
+            tell!("{}: {what} ({elapsed:.0} s elapsed)", self.label);
         }
     }
 

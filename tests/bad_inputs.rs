@@ -259,11 +259,11 @@ fn every_run_failing_is_an_error() {
     let sensor = write(
         dir.path(),
         "huge.toml",
-        b"name = \"huge\"\n[gyro.all]\nconstant_bias = \"1e307 rad/s\"\n",
+        b"name = \"huge\"\n[gyro.all]\nconstant_bias = \"1e40 rad/s\"\n",
     );
     refused(
         &["simulate", &sensor, "--runs", "3", "--json"],
-        &["every one of the 3 runs failed", "not finite"],
+        &["every one of the 3 runs failed", "in one step"],
     );
     refused(
         &["spec", &sensor, "--runs", "3", "--times", "1"],
@@ -355,9 +355,10 @@ fn merge_refuses_corrupted_shards_with_the_reason() {
     }
 }
 
-/// Issue 27, item 3: a simulation whose runs are finite but whose statistics overflow (a bias of
-/// 1e200 mg, gravity of 1e300) is an error naming the statistic, channel and time, not a table
-/// of NaN with exit 0; `spec` likewise.
+/// Issue 27, item 3: a simulation whose runs are finite but whose statistics overflow (gravity of
+/// 1e300) is an error, not a table of NaN with exit 0. Issue 46, item 3: a model value beyond the
+/// one bound of a sane value (`noise::limits`, 1e100 in SI units; a bias of 1e200 mg) is refused
+/// where the model is read, by `simulate` and `spec` alike (it used to run, or fail run by run).
 #[test]
 fn simulations_whose_statistics_overflow_are_refused() {
     let dir = tempfile::tempdir().unwrap();
@@ -366,8 +367,10 @@ fn simulations_whose_statistics_overflow_are_refused() {
         "big.toml",
         b"name = \"big\"\n[accel.all]\nwhite_noise = \"0.004 m/s^2/sqrt(Hz)\"\nconstant_bias = \"1e200 mg\"\n",
     );
-    // On the round Earth (a bare sensor's default) the position leaves the ellipsoid's
-    // coordinates first: every run fails, by name; on the flat Earth the sums overflow.
+    let too_large = [
+        "big.toml: key `accel.all.constant_bias`",
+        "expected a magnitude below 1e100 (SI units), found 9.8066e197",
+    ];
     refused(
         &[
             "simulate",
@@ -378,25 +381,18 @@ fn simulations_whose_statistics_overflow_are_refused() {
             "10",
             "--json",
         ],
-        &[
-            "every one of the 5 runs failed",
-            "is not finite",
-            "check their units",
-        ],
+        &too_large,
     );
     refused(
         &["spec", &sensor, "--runs", "5", "--times", "10", "--json"],
-        &["every one of the 5 drift runs failed", "check their units"],
+        &too_large,
     );
     let flat = format!(
         "name = \"f\"\nsensor = {:?}\nduration_s = 10\n[earth]\nmodel = \"flat\"\n",
         sensor
     );
     let flat = write(dir.path(), "f.toml", flat.as_bytes());
-    refused(
-        &["simulate", &flat, "--runs", "5", "--json"],
-        &["of pos_", "at t = 0.1 s", "overflow the statistics"],
-    );
+    refused(&["simulate", &flat, "--runs", "5", "--json"], &too_large);
     let scenario = format!(
         "name = \"g\"\nsensor = {:?}\nduration_s = 10\ngravity_mps2 = 1e300\n[earth]\nmodel = \"flat\"\n",
         root().join("configs/sensors/mtx.toml")
@@ -416,7 +412,9 @@ fn generate_refuses_values_that_overflow() {
     let sensor = write(
         dir.path(),
         "ovf.toml",
-        b"name = \"ovf\"\n[gyro.all]\nconstant_bias = \"1.7e308 rad/s\"\nturn_on_bias = \"1e308 rad/s\"\n",
+        // Each value below the bound of a sane value; the sample, 10 degC from the reference,
+        // beyond it (issue 46, item 3: `generate` wrote it and `allan` refused to read it).
+        b"name = \"ovf\"\n[temperature]\nprofile = \"constant\"\nvalue = \"35 degC\"\nreference = \"25 degC\"\n[gyro.all]\ntemperature_bias = \"9e99 rad/s/degC\"\n",
     );
     let log = dir.path().join("o.csv");
     refused(
@@ -430,7 +428,10 @@ fn generate_refuses_values_that_overflow() {
             "-o",
             log.to_str().unwrap(),
         ],
-        &["is -inf at sample 0", "overflow"],
+        &[
+            "at sample 0: beyond the magnitude a log can hold (1e100",
+            "check their units",
+        ],
     );
     assert!(!log.exists(), "a partial log was left behind");
     // 1e12 samples (about 200 TB) used to start writing; now refused up front with the sizes.

@@ -594,7 +594,7 @@ fn generate_columns<'py>(
         let temp: Vec<f64> = (0..n as u64).map(|k| errors.temperature_c(k)).collect();
         (cols, temp)
     })?;
-    request::generate::GeneratePlan::check_finite(
+    request::generate::GeneratePlan::check_values(
         0,
         noise::Channel::ALL
             .iter()

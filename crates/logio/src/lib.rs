@@ -60,7 +60,8 @@ pub use csv::parse_log;
 pub use error::{byte_size, sig, At, LogError, Problem, Result, Setting, SettingNames};
 pub use file::{available_memory_bytes, read_capped};
 pub use limits::{
-    quote_prefix, valid_rate_hz, valid_value, MAX_ABS_VALUE, MAX_LOG_RATE_HZ, MIN_LOG_RATE_HZ,
+    has_spread, quote_prefix, spread, valid_rate_hz, valid_value, MAX_ABS_VALUE, MAX_LOG_RATE_HZ,
+    MIN_LOG_RATE_HZ, MIN_SPREAD,
 };
 pub use log::{Log, ReadOptions, SeriesError};
 pub use units::{AccelUnit, GyroUnit, TimeUnit};

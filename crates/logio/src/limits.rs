@@ -7,11 +7,7 @@ pub const MAX_LOG_RATE_HZ: f64 = 1e9;
 /// times of an analysis (up to 1e9 samples) leave the range of numbers their squares can hold.
 pub const MIN_LOG_RATE_HZ: f64 = 1e-6;
 
-/// Largest magnitude a value of a log may have (exclusive). Analyses sum squares of values and
-/// of their differences (the Allan variance, Allan 1966; least-squares fits): with |x| < 1e100
-/// a sum of 1e9 such squares stays below 1e210, far from the f64 overflow at 1.8e308
-/// (IEEE 754), while 1e150 and more overflow. No sensor's reading (or time stamp) comes near.
-pub const MAX_ABS_VALUE: f64 = 1e100;
+pub use noise::limits::{valid_value, MAX_ABS_VALUE};
 
 /// Whether `rate_hz` is a sample rate a log can have (finite, from [`MIN_LOG_RATE_HZ`] to
 /// [`MAX_LOG_RATE_HZ`]): the check of the rate setting, for front ends that validate early.
@@ -19,10 +15,34 @@ pub fn valid_rate_hz(rate_hz: f64) -> bool {
     (MIN_LOG_RATE_HZ..=MAX_LOG_RATE_HZ).contains(&rate_hz)
 }
 
-/// Whether `v` is a value a log can hold: finite and of magnitude below [`MAX_ABS_VALUE`].
-#[inline(always)]
-pub fn valid_value(v: f64) -> bool {
-    v.abs() < MAX_ABS_VALUE
+/// Smallest spread (largest minus smallest value) a series must have for an analysis to measure
+/// its noise. The Allan variance and the fits sum squares of differences of values (Allan 1966);
+/// differences below 1e-100 square to below 1e-200, and those below about 1.5e-154 underflow
+/// to zero or to subnormal numbers that have lost their digits (IEEE 754: the smallest normal
+/// double is 2.2e-308). A series whose values all lie within 1e-100 of each other is, to an
+/// analysis, constant: no sensor's noise is that small in any unit.
+pub const MIN_SPREAD: f64 = 1e-100;
+
+/// The spread of `values`: the largest minus the smallest (0 for none or one; finite for values
+/// a log can hold, [`valid_value`]).
+pub fn spread(values: &[f64]) -> f64 {
+    let (lo, hi) = values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+            (lo.min(v), hi.max(v))
+        });
+    if values.is_empty() {
+        0.0
+    } else {
+        hi - lo
+    }
+}
+
+/// Whether `values` vary enough for an analysis to measure their noise: a spread of at least
+/// [`MIN_SPREAD`]. A constant series (a stuck or disconnected sensor, a column of zeros) and one
+/// whose differences underflow when squared are refused alike.
+pub fn has_spread(values: &[f64]) -> bool {
+    spread(values) >= MIN_SPREAD
 }
 
 /// At most the first 40 characters of `text` (and "..." when cut), for messages that quote a
@@ -32,5 +52,25 @@ pub fn quote_prefix(text: &str) -> String {
     match text.char_indices().nth(MAX_CHARS) {
         None => format!("{text:?}"),
         Some((at, _)) => format!("{:?}... ({} bytes)", &text[..at], text.len()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spread_is_the_range_and_refuses_constant_and_underflowing_series() {
+        assert_eq!(spread(&[]), 0.0);
+        assert_eq!(spread(&[3.0]), 0.0);
+        assert_eq!(spread(&[1.0, -2.0, 0.5]), 3.0);
+        assert!(!has_spread(&[-9.81; 10]));
+        // Issue 46, item 2: 0 and 1e-160 alternating, or one 1e-300 among zeros, square to 0.
+        assert!(!has_spread(&[0.0, 1e-160, 0.0, 1e-160]));
+        assert!(!has_spread(&[0.0, 0.0, 1e-300, 0.0]));
+        // A real sensor's noise, however small, in any unit.
+        assert!(has_spread(&[1.0, 1.0 + f64::EPSILON]));
+        assert!(has_spread(&[0.0, 1e-99]));
+        assert!(has_spread(&[-1e99, 1e99]));
     }
 }

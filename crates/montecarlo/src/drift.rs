@@ -183,6 +183,14 @@ impl DriftKernel {
                         &mut outs,
                     ),
                 }
+                for (l, result) in results.iter_mut().enumerate() {
+                    if result.is_ok() {
+                        if let Some(e) = insane_sample(&block[l], n, k, self.dt_s) {
+                            *result =
+                                Err(RunError::Kernel(format!("run {}: {e}", first + l as u64)));
+                        }
+                    }
+                }
                 integrate_fast(&mut nav, &block, n, self.dt_s);
                 k += n as u64;
             }
@@ -205,6 +213,45 @@ impl DriftKernel {
             }
         }
     }
+}
+
+/// The largest angle the gyros may turn in one step, rad: a rotation vector longer than pi names
+/// the same attitude as a shorter one about the opposite axis (Savage, *Strapdown Analytics*,
+/// 2000, section 7.1.1.1), so a step beyond it cannot be integrated; real motion is sampled with
+/// many samples per turn (a gyro's rate limit of 2000 deg/s at 100 Hz turns 0.35 rad a step).
+pub const MAX_STEP_ROTATION_RAD: f64 = std::f64::consts::PI;
+
+/// Why the first `n` samples of one run's block (`[channel][sample]`, gyro x y z then
+/// accelerometer x y z; sample `i` at step `k + i`) cannot be integrated, if they cannot: a gyro
+/// sample turning more than [`MAX_STEP_ROTATION_RAD`] in one step of `dt_s`, or a sample that is
+/// not a value a sensor sample may have (`noise::limits::valid_value`, the readers' bound). One
+/// vectorised pass over the block; only a bad block is searched for its first bad sample.
+fn insane_sample(block: &[[f64; BLOCK]; 6], n: usize, k: u64, dt_s: f64) -> Option<String> {
+    let max_rate_sq = (MAX_STEP_ROTATION_RAD / dt_s).powi(2);
+    let [gx, gy, gz, ..] = block;
+    let too_fast = |i: usize| !((gx[i] * gx[i] + gy[i] * gy[i] + gz[i] * gz[i]) <= max_rate_sq);
+    let insane = |c: &[f64; BLOCK], i: usize| !noise::limits::valid_value(c[i]);
+    let bad = (0..n).fold(false, |bad, i| {
+        bad | too_fast(i) | block.iter().fold(false, |b, c| b | insane(c, i))
+    });
+    if !bad {
+        return None;
+    }
+    let i = (0..n).find(|&i| too_fast(i) || block.iter().any(|c| insane(c, i)))?;
+    let t_s = (k + i as u64) as f64 * dt_s;
+    let problem = match block.iter().position(|c| insane(c, i)) {
+        Some(c) => format!(
+            "sensor sample {} is {:e} at t = {t_s} s, beyond the magnitude a sample may have ({:e})",
+            noise::Channel::ALL[c].name(),
+            block[c][i],
+            noise::limits::MAX_ABS_VALUE
+        ),
+        None => format!(
+            "the gyros turn {:.3e} rad in one step at t = {t_s} s (|gyro| x dt; more than pi rad, which no step of the mechanisation can represent)",
+            (gx[i] * gx[i] + gy[i] * gy[i] + gz[i] * gz[i]).sqrt() * dt_s
+        ),
+    };
+    Some(problem)
 }
 
 /// Integrate `n` samples of every lane's block (`block[lane][channel][sample]`, gyro x y z then

@@ -56,6 +56,7 @@ mod effect;
 pub mod fft;
 pub mod filter;
 mod law_source;
+pub mod limits;
 mod model;
 mod model_error;
 pub mod model_notes;

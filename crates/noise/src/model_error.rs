@@ -1,5 +1,7 @@
 //! Why a value of a model is invalid, and the one range check every validating constructor uses.
 
+use crate::limits::valid_value;
+
 /// Why a model value is invalid (programmatic construction; configs report through `ConfigError`).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[error("{what}: expected {expected}, found {found}")]
@@ -9,32 +11,33 @@ pub struct ModelError {
     pub found: f64,
 }
 
-/// `value` if finite and > 0 (`positive`) or >= 0, else the error naming `what`.
+/// `value` if a sane value (`crate::limits::valid_value`: finite, magnitude below 1e100) and > 0
+/// (`positive`) or >= 0, else the error naming `what`.
 pub(crate) fn check(what: &'static str, value: f64, positive: bool) -> Result<f64, ModelError> {
-    let ok = value.is_finite() && if positive { value > 0.0 } else { value >= 0.0 };
+    let ok = valid_value(value) && if positive { value > 0.0 } else { value >= 0.0 };
     if ok {
         Ok(value)
     } else {
         Err(ModelError {
             what,
             expected: if positive {
-                "a finite value > 0"
+                "a value > 0 and below 1e100 (SI units)"
             } else {
-                "a finite value >= 0"
+                "a value >= 0 and below 1e100 (SI units)"
             },
             found: value,
         })
     }
 }
 
-/// `value` if finite (any sign), else the error naming `what`.
+/// `value` if a sane value (any sign; `crate::limits::valid_value`), else the error naming `what`.
 pub(crate) fn check_finite(what: &'static str, value: f64) -> Result<f64, ModelError> {
-    if value.is_finite() {
+    if valid_value(value) {
         Ok(value)
     } else {
         Err(ModelError {
             what,
-            expected: "a finite value",
+            expected: "a magnitude below 1e100 (SI units)",
             found: value,
         })
     }

@@ -38,8 +38,8 @@ pub fn parse_confidence(text: &str) -> Result<f64> {
 }
 
 /// Samples an analysis can use: at least two, each a value a log can hold (finite, magnitude
-/// below `logio::MAX_ABS_VALUE`), and not all one value (a constant channel has no noise to
-/// analyse: the CLI refuses such a column with the same words).
+/// below `logio::MAX_ABS_VALUE`), and not all one value (nor within `logio::MIN_SPREAD` of one: a constant channel has no
+/// noise to analyse: the CLI refuses such a column with the same words).
 pub fn check_samples(data: &[f64]) -> Result<()> {
     if data.len() < 2 {
         return Err(RequestError::TooFewSamples(data.len()));
@@ -50,8 +50,11 @@ pub fn check_samples(data: &[f64]) -> Result<()> {
             value: data[i],
         });
     }
-    if data.iter().all(|&v| v == data[0]) {
-        return Err(RequestError::ConstantSamples(data[0]));
+    if !logio::has_spread(data) {
+        return Err(RequestError::ConstantSamples {
+            value: data[0],
+            spread: logio::spread(data),
+        });
     }
     Ok(())
 }

@@ -143,7 +143,10 @@ pub enum RequestError {
     Constant {
         source_name: String,
         channel: &'static str,
+        /// Its first value.
         value: f64,
+        /// Its largest minus its smallest value (0, or below `logio::MIN_SPREAD`).
+        spread: f64,
         leave_out: LeaveOut,
     },
     /// Series given as arrays that are not a log.
@@ -170,7 +173,11 @@ pub enum RequestError {
         index: usize,
         value: f64,
     },
-    ConstantSamples(f64),
+    /// Samples all one value (`spread` 0) or within `logio::MIN_SPREAD` of `value`.
+    ConstantSamples {
+        value: f64,
+        spread: f64,
+    },
     /// A diagnosed model's own tables (`[fitted_on]`, `[[alternatives]]`) that do not read.
     ModelTables {
         name: String,
@@ -184,7 +191,8 @@ pub enum RequestError {
         need: u64,
         available: u64,
     },
-    /// Generated values that overflow (`channel` at sample `k`).
+    /// Generated values that overflow or exceed `noise::limits::MAX_ABS_VALUE` (`channel` at
+    /// sample `k`).
     Overflow {
         channel: &'static str,
         value: f64,
@@ -323,9 +331,11 @@ impl RequestError {
                 source_name,
                 channel,
                 value,
+                spread,
                 leave_out,
             } => format!(
-                "{source_name}: channel {channel} is constant ({value}): it has no noise to analyse (a stuck or disconnected sensor, or a column of zeros?); {}",
+                "{source_name}: channel {channel} is {}: it has no noise to analyse (a stuck or disconnected sensor, or a column of zeros?); {}",
+                constant_text(*value, *spread),
                 match leave_out {
                     LeaveOut::Column => format!(
                         "leave the column out or map another one with {}",
@@ -359,9 +369,14 @@ impl RequestError {
                 n(Setting::Data),
                 logio::MAX_ABS_VALUE
             ),
-            RequestError::ConstantSamples(v) => format!(
-                "{}: every sample is {v}: a constant channel has no noise to analyse (a stuck or disconnected sensor, or a column of zeros?)",
-                n(Setting::Data)
+            RequestError::ConstantSamples { value, spread } => format!(
+                "{}: {}: a constant channel has no noise to analyse (a stuck or disconnected sensor, or a column of zeros?)",
+                n(Setting::Data),
+                if *spread == 0.0 {
+                    format!("every sample is {value}")
+                } else {
+                    format!("the samples are {}", constant_text(*value, *spread))
+                }
             ),
             RequestError::SimulationMemory {
                 source_name,
@@ -405,7 +420,8 @@ impl RequestError {
                 n(Setting::Latitude)
             ),
             RequestError::Overflow { channel, value, k } => format!(
-                "channel {channel} is {value} at sample {k}: the model's values overflow; check their units"
+                "channel {channel} is {value:.4e} at sample {k}: beyond the magnitude a log can hold ({:e}, the bound every reader of logs holds); the model's values are far too large: check their units",
+                noise::limits::MAX_ABS_VALUE
             ),
         }
     }
@@ -428,5 +444,18 @@ impl From<JobError> for RequestError {
 impl From<FileError> for RequestError {
     fn from(e: FileError) -> Self {
         RequestError::File(e)
+    }
+}
+
+/// A constant series in words: "constant (V)", or for values that differ by less than
+/// `logio::MIN_SPREAD`, by how much and why that is constant to an analysis.
+fn constant_text(value: f64, spread: f64) -> String {
+    if spread == 0.0 {
+        format!("constant ({value})")
+    } else {
+        format!(
+            "constant to within {spread:e} (from {value}): values closer than {:e} differ by amounts whose squares underflow",
+            logio::MIN_SPREAD
+        )
     }
 }

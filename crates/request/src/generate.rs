@@ -114,14 +114,16 @@ impl GenerateRequest {
 }
 
 impl GeneratePlan {
-    /// The first value that is not finite among generated `channels` (its channel, the sample
-    /// index `k0 + i`) as the error that names it.
-    pub fn check_finite<'a>(
+    /// The first value that is not one a sample may have (`noise::limits::valid_value`: finite,
+    /// magnitude below 1e100, the bound every log reader holds) among generated `channels` (its
+    /// channel, the sample index `k0 + i`) as the error that names it: what `generate` writes,
+    /// `allan` and the other readers read back.
+    pub fn check_values<'a>(
         k0: u64,
         channels: impl IntoIterator<Item = (noise::Channel, &'a [f64])>,
     ) -> Result<()> {
         for (c, values) in channels {
-            if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            if let Some(i) = values.iter().position(|&v| !noise::limits::valid_value(v)) {
                 return Err(RequestError::Overflow {
                     channel: c.name(),
                     value: values[i],

@@ -30,7 +30,8 @@ pub fn check_imu(log: &Log) -> Result<()> {
 }
 
 /// Refuse a constant series among `quantities` of `log` (a stuck or disconnected sensor, a column
-/// of zeros or of any one value): it has no noise to analyse, and every command refuses it with
+/// of zeros or of any one value, or values within `logio::MIN_SPREAD` of each other, whose
+/// differences underflow when squared): it has no noise to analyse, and every command refuses it with
 /// this one message; `leave_out` says how with the command's settings.
 pub fn refuse_constant(
     log: &Log,
@@ -42,11 +43,12 @@ pub fn refuse_constant(
             continue;
         };
         if let Some(&first) = d.first() {
-            if d.iter().all(|&v| v == first) {
+            if !logio::has_spread(d) {
                 return Err(RequestError::Constant {
                     source_name: log.source.clone(),
                     channel: q.channel(),
                     value: first,
+                    spread: logio::spread(d),
                     leave_out,
                 });
             }

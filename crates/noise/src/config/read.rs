@@ -180,7 +180,11 @@ impl ReadContext<'_> {
 
     /// A value the term's constructor refuses, reported at `key`.
     pub(crate) fn refused(&self, key: &str, e: ModelError) -> ConfigError {
-        self.ctx.invalid(key, e.expected, e.to_string())
+        self.ctx.invalid(
+            key,
+            e.expected,
+            format!("{:.4e} in SI units ({})", e.found, e.what),
+        )
     }
 }
 
