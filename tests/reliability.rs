@@ -189,3 +189,66 @@ fn rotations_no_step_can_represent_fail_the_runs() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// Item 12: one log given twice (or a hard link to it, or a copy) counted as two runs: `drift`
+/// pooled 120 segments with a between-log spread of 0 and intervals sqrt(2) too narrow. Now
+/// `drift` and `diagnose` refuse it by content; different logs still pass.
+#[test]
+fn one_log_given_twice_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = write(dir.path(), "run1.csv", imu_log(3000).as_bytes());
+    let link = dir.path().join("link.csv");
+    std::fs::hard_link(&log, &link).unwrap();
+    let link = link.to_str().unwrap();
+    let copy = write(dir.path(), "copy.csv", imu_log(3000).as_bytes());
+    let other = imu_log(3001);
+    let other = write(dir.path(), "run2.csv", other.as_bytes());
+    let model = root().join("configs/sensors/mtx.toml");
+    let model = model.to_str().unwrap();
+    for (second, needle) in [
+        (log.as_str(), "run1.csv is given twice".to_string()),
+        (link, format!("{link} has the same samples as {log}")),
+        (
+            copy.as_str(),
+            format!("{copy} has the same samples as {log}"),
+        ),
+    ] {
+        for args in [
+            vec![
+                "drift",
+                &log,
+                second,
+                "--model",
+                model,
+                "--replicates",
+                "10",
+            ],
+            vec![
+                "diagnose", &log, second, "--model", model, "--seeds", "2", "--rounds", "1",
+            ],
+        ] {
+            let out = imudrift(&args);
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+            assert!(out.stdout.is_empty(), "{args:?} printed a result");
+            assert!(
+                err.contains(&needle) && err.contains("give each run once"),
+                "{args:?}: {err}"
+            );
+        }
+    }
+    let out = imudrift(&[
+        "drift",
+        &log,
+        &other,
+        "--model",
+        model,
+        "--replicates",
+        "10",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

@@ -158,6 +158,8 @@ fn logs_of(py: Python<'_>, logs: Vec<LogArg<'_>>, reader: &ReaderArgs) -> PyResu
     if out.is_empty() {
         return Err(invalid("logs: expected at least one log".into()));
     }
+    request::logs::refuse_repeated(out.iter().map(|l| &l.log))
+        .map_err(crate::sim::request_error)?;
     Ok(out)
 }
 

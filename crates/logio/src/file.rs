@@ -117,8 +117,9 @@ pub(crate) fn advise_huge_pages<T>(buf: &[T]) {
 const MAX_STREAM_BYTES: u64 = 1 << 30;
 
 /// Memory the system can still give (Linux `MemAvailable`), bytes, or less when the environment
-/// variable `IMUDRIFT_MEMORY_LIMIT` (bytes) says so (a share of a shared machine); `None` when
-/// neither is known.
+/// variable `IMUDRIFT_MEMORY_LIMIT` (bytes) says so (a share of a shared machine: the limit is
+/// the whole process's, so what the process holds already, [`resident_bytes`], is taken from
+/// it); `None` when neither is known.
 pub fn available_memory_bytes() -> Option<u64> {
     let system = std::fs::read_to_string("/proc/meminfo")
         .ok()
@@ -129,11 +130,22 @@ pub fn available_memory_bytes() -> Option<u64> {
         });
     let limit = std::env::var("IMUDRIFT_MEMORY_LIMIT")
         .ok()
-        .and_then(|v| v.trim().parse::<u64>().ok());
+        .and_then(|v| v.trim().parse::<u64>().ok())
+        .map(|limit| limit.saturating_sub(resident_bytes().unwrap_or(0)));
     match (system, limit) {
         (Some(a), Some(b)) => Some(a.min(b)),
         (a, b) => a.or(b),
     }
+}
+
+/// Bytes of memory this process holds now (Linux `/proc/self/statm`, resident pages), or `None`
+/// where that is not known.
+pub fn resident_bytes() -> Option<u64> {
+    let statm = std::fs::read_to_string("/proc/self/statm").ok()?;
+    let pages: u64 = statm.split_whitespace().nth(1)?.parse().ok()?;
+    // SAFETY: sysconf only reads a system constant.
+    let page = unsafe { libc::sysconf(libc::_SC_PAGESIZE) };
+    Some(pages * u64::try_from(page).ok().filter(|&p| p > 0).unwrap_or(4096))
 }
 
 /// Largest ratio of decompressed to compressed size a gzip log may have once

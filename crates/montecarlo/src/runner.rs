@@ -159,7 +159,11 @@ pub fn run_range_until<K: RunKernel>(
     stop: &AtomicBool,
 ) -> Option<BatchResult> {
     let width = kernel.checkpoints() * kernel.quantities();
-    let mut matrix = RunMatrix::new(kernel.checkpoints(), kernel.quantities());
+    let mut matrix = RunMatrix::with_capacity(
+        kernel.checkpoints(),
+        kernel.quantities(),
+        (runs.end - runs.start) as usize,
+    );
     let mut failures = Vec::new();
     let mut start = runs.start;
     while start < runs.end {

@@ -41,6 +41,20 @@ impl RunMatrix {
         }
     }
 
+    /// An empty matrix with room for `runs` runs: the values take exactly what
+    /// `job::value_bytes` counts (a matrix grown run by run holds up to twice that, and the
+    /// copies each doubling leaves behind).
+    pub fn with_capacity(checkpoints: usize, quantities: usize, runs: usize) -> RunMatrix {
+        RunMatrix {
+            checkpoints,
+            quantities,
+            run_ids: Vec::with_capacity(runs),
+            values: (0..checkpoints * quantities)
+                .map(|_| Vec::with_capacity(runs))
+                .collect(),
+        }
+    }
+
     /// Append one run; `row[cp * quantities + q]`. Runs must be pushed in ascending index order.
     pub fn push(&mut self, run: u64, row: &[f64]) {
         debug_assert_eq!(row.len(), self.checkpoints * self.quantities);

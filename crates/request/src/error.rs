@@ -191,6 +191,11 @@ pub enum RequestError {
         need: u64,
         available: u64,
     },
+    /// Two logs with the same samples: one run given twice.
+    RepeatedLog {
+        first: String,
+        second: String,
+    },
     /// Generated values that overflow or exceed `noise::limits::MAX_ABS_VALUE` (`channel` at
     /// sample `k`).
     Overflow {
@@ -418,6 +423,14 @@ impl RequestError {
             RequestError::Latitude(v) => format!(
                 "{} {v}: expected a latitude in [-89, 89] deg (the north-east-down frame is singular at the poles)",
                 n(Setting::Latitude)
+            ),
+            RequestError::RepeatedLog { first, second } => format!(
+                "{}: one run given twice would count as two runs and make every interval about sqrt(2) too narrow; give each run once",
+                if first == second {
+                    format!("{first} is given twice")
+                } else {
+                    format!("{second} has the same samples as {first}")
+                }
             ),
             RequestError::Overflow { channel, value, k } => format!(
                 "channel {channel} is {value:.4e} at sample {k}: beyond the magnitude a log can hold ({:e}, the bound every reader of logs holds); the model's values are far too large: check their units",

@@ -239,12 +239,21 @@ pub fn check_experiment(exp: &Experiment, runs: u64, all_runs: u64) -> Result<()
     )
 }
 
+/// Memory a simulation needs beside its per-run values and what the process holds before it
+/// starts: the workers' stacks and sample blocks, the statistics' sorted copy of one series, the
+/// report. Measured (peak RSS, `IMUDRIFT_MEMORY_LIMIT` of 60 MB, MTx, 1 s): 2 to 4 MiB; twice
+/// that is kept free, so that the limit holds for the whole process.
+pub const WORKING_BYTES: u64 = 8 << 20;
+
 /// Refuse a run range whose per-run values (8 bytes per run, checkpoint and quantity) would not
-/// fit in the memory available (at most [`job::MAX_VALUE_BYTES`]).
+/// fit in the memory available (`logio::available_memory_bytes`, which takes from a set limit
+/// what the process holds already) less [`WORKING_BYTES`], and at most
+/// [`job::MAX_VALUE_BYTES`].
 pub fn check_memory(exp: &Experiment, runs: u64) -> Result<()> {
     let bytes = job::value_bytes(exp, runs);
-    let limit = logio::available_memory_bytes()
-        .map_or(job::MAX_VALUE_BYTES, |a| a.min(job::MAX_VALUE_BYTES));
+    let limit = logio::available_memory_bytes().map_or(job::MAX_VALUE_BYTES, |a| {
+        a.saturating_sub(WORKING_BYTES).min(job::MAX_VALUE_BYTES)
+    });
     if bytes > limit {
         return Err(RequestError::Memory {
             runs,
