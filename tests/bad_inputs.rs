@@ -1284,3 +1284,117 @@ fn a_signal_leaves_no_lock_file() {
         assert!(left.is_empty(), "{signal}: left behind in --out: {left:?}");
     }
 }
+
+/// Issue 46, item 11: a full disk while `--out DIR` is written left the files written before
+/// (`allan.csv` without `allan.json`). The files of a command are one set: written into
+/// temporaries and moved into place only when all are complete; here the file size limit
+/// (`ulimit -f 4`: 4 KiB, with SIGXFSZ ignored so the write fails with EFBIG as on a full disk)
+/// lets `allan.csv` (1.2 KB) be written and not `allan.json` (4.9 KB). No new file and no
+/// temporary is left; the file already in the directory is untouched.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_failed_write_leaves_no_partial_out_set() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = write(dir.path(), "ok.csv", log_text(2000, "\n").as_bytes());
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    let script = format!(
+        "ulimit -f 4; trap '' XFSZ; exec '{}' allan '{log}' --out '{}'",
+        common::binary().display(),
+        out.display()
+    );
+    let run = Command::new("bash")
+        .args(["-c", &script])
+        .current_dir(root())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(1), "{err}");
+    assert!(err.contains("File too large"), "{err}");
+    let mut left: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    left.sort();
+    assert_eq!(left, ["notes.txt"], "{err}");
+    assert_eq!(
+        std::fs::read_to_string(out.join("notes.txt")).unwrap(),
+        "mine"
+    );
+}
+
+/// Issue 46, item 13: `kill -9` during `generate -o` left a hidden temporary file (460 MB) that
+/// no later run removed. Temporaries are named `.imudrift-partial-<pid>-<n>-<name>`; the next run
+/// writing into the directory removes those whose process is gone, and never a live run's.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_killed_run_leaves_a_temporary_the_next_run_removes() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let spawn_generate = |name: &str| {
+        command()
+            .args(["generate", "configs/sensors/mtx.toml", "--duration", "60h"])
+            .args(["--rate", "100", "-o", d.join(name).to_str().unwrap()])
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap()
+    };
+    let names = || -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    };
+    let wait_for_files = |n: usize| {
+        let started = std::time::Instant::now();
+        while names().len() < n && started.elapsed().as_secs() < 20 {
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        assert_eq!(names().len(), n, "{:?}", names());
+    };
+    let mut killed = spawn_generate("big.csv");
+    wait_for_files(1);
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    killed.kill().unwrap(); // SIGKILL
+    killed.wait().unwrap();
+    let leftover = names();
+    assert_eq!(leftover.len(), 1, "{leftover:?}");
+    assert!(leftover[0] != "big.csv", "{leftover:?}");
+    let short = |name: &str| {
+        ok(imudrift(&[
+            "generate",
+            "configs/sensors/mtx.toml",
+            "--duration",
+            "10",
+            "--rate",
+            "100",
+            "-o",
+            d.join(name).to_str().unwrap(),
+        ]))
+    };
+    short("big.csv");
+    assert_eq!(
+        names(),
+        ["big.csv"],
+        "the dead run's {:?} was not removed",
+        leftover[0]
+    );
+    let text = std::fs::read_to_string(d.join("big.csv")).unwrap();
+    let rows = text.lines().filter(|l| !l.starts_with('#')).count();
+    assert_eq!(rows, 1 + 1000, "10 s at 100 Hz and the header");
+    // A run still writing into the directory keeps its temporary.
+    let mut live = spawn_generate("live.csv");
+    wait_for_files(2);
+    let live_tmp = names();
+    short("other.csv");
+    let after = names();
+    live.kill().unwrap();
+    live.wait().unwrap();
+    let mut expected = live_tmp;
+    expected.push("other.csv".to_string());
+    expected.sort();
+    assert_eq!(after, expected, "a live run's temporary was removed");
+}
