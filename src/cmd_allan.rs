@@ -201,6 +201,8 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
         let r = results.iter().find(|r| r.quantity == Quantity::Imu(c))?;
         noise_file_values(r)
     });
+    // --kalibr and the --out files are one set: all of them, or none if one cannot be written.
+    let set = output::begin_set();
     args.noise_file.write(
         &per_channel,
         log.rate_hz,
@@ -208,7 +210,16 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
         log.topic.as_deref(),
     )?;
     if let Some(dir) = &args.out {
-        write_files(dir, &log, &results, est, &doc, &stage)?;
+        write_files(dir, &log, &results, est, &doc)?;
+    }
+    set.commit()?;
+    if let Some(dir) = &args.out {
+        stage("files written");
+        tell!(
+            "wrote allan.csv, allan.json and {} to {}",
+            svg_names(results.iter().map(|r| r.name.as_str())).join(", "),
+            dir.display()
+        );
     }
     Ok(())
 }
@@ -261,29 +272,21 @@ fn check_usable(log: &Log, samples: usize, results: &[ChannelResult]) -> Result<
     Ok(())
 }
 
-/// `--out DIR`: allan.csv, allan.json and one SVG per channel, as one set (`stage` marks the
-/// files written for `--timing`).
+/// `--out DIR`: allan.csv, allan.json and one SVG per channel (into the caller's set).
 fn write_files(
     dir: &std::path::Path,
     log: &Log,
     results: &[ChannelResult],
     est: Estimator,
     doc: &Value,
-    stage: &dyn Fn(&str),
 ) -> Result<()> {
-    let _set = output::begin_set(dir)?;
+    output::ensure_dir(dir)?;
     output::write_string(&dir.join("allan.csv"), &csv(results))?;
     output::write_string(&dir.join("allan.json"), &serde_json::to_string_pretty(doc)?)?;
     let files = svg_names(results.iter().map(|r| r.name.as_str()));
     for (r, name) in results.iter().zip(&files) {
         output::write_string(&dir.join(name), &plot(r, est, &log.source).to_svg())?;
     }
-    stage("files written");
-    tell!(
-        "wrote allan.csv, allan.json and {} to {}",
-        files.join(", "),
-        dir.display()
-    );
     Ok(())
 }
 

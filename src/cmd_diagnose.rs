@@ -148,7 +148,6 @@ fn run_inner(args: &Args, settings: &Settings) -> Result<()> {
         tell!("{}: {}", log.source, log_input::mapping_text(log));
         crate::plausibility::print(log);
     }
-    request::logs::refuse_repeated(&logs).map_err(crate::cli::request_error)?;
     let log = &logs[0];
     let sources = logs
         .iter()
@@ -204,6 +203,9 @@ fn run_inner(args: &Args, settings: &Settings) -> Result<()> {
             .then(|| model_noise_values(&result, c))
             .flatten()
     });
+    // The noise file and the --out files are one set: all of them, or none if one cannot be
+    // written.
+    let set = crate::output::begin_set();
     args.noise_file.write(
         &per_channel,
         log.rate_hz,
@@ -216,7 +218,7 @@ fn run_inner(args: &Args, settings: &Settings) -> Result<()> {
     )?;
     crate::output::answer(&human, args.json.then_some(format!("{doc}\n").as_str()))?;
     if let Some(dir) = &args.out {
-        let _set = crate::output::begin_set(dir)?;
+        crate::output::ensure_dir(dir)?;
         let toml_name = request::diagnose::diagnosed_model_name(&args.model.display().to_string());
         write_string(&dir.join(&toml_name), &corrected)?;
         write_string(&dir.join("diagnose.json"), &doc)?;
@@ -230,6 +232,10 @@ fn run_inner(args: &Args, settings: &Settings) -> Result<()> {
             &dir.join("report.md"),
             &markdown_report(&result, &sources, &args.model, &toml_name, &checks),
         )?;
+    }
+    set.commit()?;
+    if let Some(dir) = &args.out {
+        let toml_name = request::diagnose::diagnosed_model_name(&args.model.display().to_string());
         tell!(
             "wrote {} (report.md, diagnose.json, {toml_name}, diagnose_<channel>.svg)",
             dir.display()

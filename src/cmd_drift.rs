@@ -195,7 +195,6 @@ fn run_inner(args: &Args, settings: CheckSettings) -> Result<()> {
         crate::plausibility::print(log);
         request::logs::check_imu(log).map_err(crate::cli::request_error)?;
     }
-    request::logs::refuse_repeated(&logs).map_err(crate::cli::request_error)?;
     let inputs: Vec<LogInput> = logs
         .iter()
         .map(|l| request::logs::log_input(l, false))
@@ -238,13 +237,14 @@ fn run_inner(args: &Args, settings: CheckSettings) -> Result<()> {
     let doc = serde_json::to_string_pretty(&doc)?;
     crate::output::answer(&human, args.json.then_some(format!("{doc}\n").as_str()))?;
     if let Some(dir) = &args.out {
-        let _set = crate::output::begin_set(dir)?;
+        let set = crate::output::begin_out_set(dir)?;
         write_string(&dir.join("drift.json"), &doc)?;
         for q in Quantity::ALL {
             if let Some(svg) = plot(&result, q) {
                 write_string(&dir.join(format!("drift_{}.svg", q.name())), &svg)?;
             }
         }
+        set.commit()?;
         tell!(
             "wrote drift.json and drift_<quantity>.svg to {}",
             dir.display()

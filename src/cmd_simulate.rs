@@ -175,13 +175,14 @@ pub fn emit(
     let text = serde_json::to_string_pretty(&value)? + "\n";
     crate::output::answer(&human, json.then_some(text.as_str()))?;
     if let Some(dir) = out {
-        let _set = crate::output::begin_set(dir)?;
+        let set = crate::output::begin_out_set(dir)?;
         write_string(&dir.join("drift.json"), &text)?;
         write_atomic(&dir.join("drift.csv"), |w| write_csv(w, report))?;
         write_string(
             &dir.join("drift.svg"),
             &svg(report, NavQuantity::PosHorizontal),
         )?;
+        set.commit()?;
         tell!("wrote {}/drift.{{json,csv,svg}}", dir.display());
     }
     Ok(())

@@ -105,7 +105,7 @@ pub fn run(args: Args) -> Result<()> {
     let text = doc.to_json();
     crate::output::answer(&table(&doc), args.json.then_some(text.as_str()))?;
     if let Some(dir) = &args.out {
-        let _set = crate::output::begin_set(dir)?;
+        let set = crate::output::begin_out_set(dir)?;
         write_string(&dir.join("spec.json"), &text)?;
         write_spec_csv(dir, &doc)?;
         write_drift_csv(dir, &doc)?;
@@ -122,6 +122,7 @@ pub fn run(args: Args) -> Result<()> {
         for (name, svg) in &plots {
             write_string(&dir.join(name), svg)?;
         }
+        set.commit()?;
         tell!(
             "wrote {}/spec.json, spec.csv, drift.csv, {}",
             dir.display(),
@@ -166,9 +167,7 @@ fn compare_sensor(
     for f in &failures {
         tell!(
             "warning: {}: drift run {} failed: {}",
-            model.name,
-            f.run,
-            f.message
+            model.name, f.run, f.message
         );
     }
     Ok(out)

@@ -78,10 +78,11 @@ fn man(out: Option<&std::path::Path>) -> anyhow::Result<()> {
         let name: &'static str = Box::leak(format!("imudrift-{}", sub.get_name()).into_boxed_str());
         pages.push((format!("{name}.1"), render(sub.clone().name(name))?));
     }
-    let _set = output::begin_set(dir)?;
+    let set = output::begin_out_set(dir)?;
     for (name, text) in &pages {
         output::write_string(&dir.join(name), text)?;
     }
+    set.commit()?;
     tell!("wrote {} man pages to {}", pages.len(), dir.display());
     Ok(())
 }

@@ -1,12 +1,19 @@
 //! Output files that are never partial, never mixed and never left behind.
 //!
-//! - Every file is written to a temporary file in the destination directory and renamed into
-//!   place only when complete, so an error or a kill never leaves a partial file under the final
-//!   name. A path that is a symbolic link is written through (its target is replaced, the link
-//!   stays), and an existing file keeps its permissions.
+//! - Every file is written to a temporary file `.imudrift-partial-<pid>-<n>-<name>` in the
+//!   destination directory and renamed into place only when complete, so an error or a kill
+//!   never leaves a partial file under the final name. A path that is a symbolic link is written
+//!   through (its target is replaced, the link stays), and an existing file keeps its
+//!   permissions.
+//! - The files of one command (its `--out DIR` files, `--kalibr`, ...) are one set
+//!   ([`begin_set`]): each is written to its temporary file, and all are renamed into place only
+//!   when every one of them is complete ([`FileSet::commit`]); on an error (a full disk) the
+//!   temporaries are removed and no new file appears (the files already there stay as they were).
 //! - Temporary files are registered while they exist; SIGINT, SIGTERM and SIGHUP remove them
 //!   before the process exits, and wait for a set of output files being moved into place to be
-//!   complete (a `kill -9` cannot be caught: it may leave a `.tmp*` file, never a partial output).
+//!   complete. A `kill -9` cannot be caught: it may leave a `.imudrift-partial-*` file (never a
+//!   partial output), which the next run writing into that directory removes: a temporary whose
+//!   process is gone (no `/proc/<pid>`) and that no process holds locked ([`remove_leftovers`]).
 //! - `--out DIR` is created, checked writable and locked (`DIR/.imudrift.lock`) before any work,
 //!   so two runs writing the same directory cannot interleave their files.
 //! - No output replaces one of the command's inputs: the inputs are noted ([`note_inputs`]) and an
@@ -149,24 +156,62 @@ pub fn clean_up_on_signals() {
     });
 }
 
-/// The files of one `--out` set being written: a termination signal meanwhile takes effect when
-/// the set is complete (when this is dropped).
-#[must_use = "the set is protected only while this value lives"]
+/// The files of one command's output set: written into temporaries, moved into place together
+/// by [`FileSet::commit`]; dropped without it (an error), the temporaries are removed. A
+/// termination signal meanwhile takes effect when the set is done (when this is dropped).
+#[must_use = "the files are moved into place only by commit"]
 pub struct FileSet(());
+
+/// The finished temporary files of the open set, each with the path it replaces and the path
+/// named in messages.
+static PENDING: Mutex<Vec<(tempfile::NamedTempFile, PathBuf, PathBuf)>> = Mutex::new(Vec::new());
+
+impl FileSet {
+    /// Move every file of the set into place (renames in their own directories: the files are
+    /// complete already, so only a rename refused midway could leave part of a set).
+    pub fn commit(self) -> Result<()> {
+        let pending = std::mem::take(&mut *PENDING.lock().unwrap_or_else(|e| e.into_inner()));
+        let mut result = Ok(());
+        for (tmp, target, shown) in pending {
+            if result.is_ok() {
+                let path = tmp.path().to_path_buf();
+                result = tmp.persist(&target).map(drop).with_context(|| {
+                    format!("cannot move the finished file to {}", shown.display())
+                });
+                unregister(&path);
+            }
+            // After a failed rename, the remaining temporaries are dropped (removed) here.
+        }
+        result
+    }
+}
 
 impl Drop for FileSet {
     fn drop(&mut self) {
+        // Not committed (an error): remove the temporaries, no file of the set appears.
+        let pending = std::mem::take(&mut *PENDING.lock().unwrap_or_else(|e| e.into_inner()));
+        for (tmp, _, _) in pending {
+            let path = tmp.path().to_path_buf();
+            drop(tmp);
+            unregister(&path);
+        }
         if SETS_OPEN.fetch_sub(1, Ordering::SeqCst) == 1 && EXIT_PENDING.load(Ordering::SeqCst) {
             exit_interrupted();
         }
     }
 }
 
-/// Start writing the set of files of `--out DIR` (creating DIR if needed).
-pub fn begin_set(dir: &Path) -> Result<FileSet> {
-    ensure_dir(dir)?;
+/// Start the set of a command's output files: every [`write_atomic`] until the set is committed
+/// or dropped writes a temporary file that [`FileSet::commit`] moves into place with the others.
+pub fn begin_set() -> FileSet {
     SETS_OPEN.fetch_add(1, Ordering::SeqCst);
-    Ok(FileSet(()))
+    FileSet(())
+}
+
+/// Start the set of files of `--out DIR` (creating DIR if needed): [`begin_set`].
+pub fn begin_out_set(dir: &Path) -> Result<FileSet> {
+    ensure_dir(dir)?;
+    Ok(begin_set())
 }
 
 /// A registered temporary file: unregistered when dropped.
@@ -174,18 +219,134 @@ struct Registered(PathBuf);
 
 impl Registered {
     fn new(path: &Path) -> Registered {
-        if let Ok(mut list) = TEMPORARIES.lock() {
-            list.push(path.to_path_buf());
-        }
+        register(path);
         Registered(path.to_path_buf())
+    }
+}
+
+fn register(path: &Path) {
+    if let Ok(mut list) = TEMPORARIES.lock() {
+        list.push(path.to_path_buf());
     }
 }
 
 impl Drop for Registered {
     fn drop(&mut self) {
-        if let Ok(mut list) = TEMPORARIES.lock() {
-            list.retain(|p| p != &self.0);
+        unregister(&self.0);
+    }
+}
+
+fn unregister(path: &Path) {
+    if let Ok(mut list) = TEMPORARIES.lock() {
+        list.retain(|p| p != path);
+    }
+}
+
+/// The name every temporary output file starts with; then the writing process's id, `-`, a
+/// number and `-` and the name of the file it becomes.
+const PARTIAL_PREFIX: &str = ".imudrift-partial-";
+
+/// Temporary files made by this process (numbers them, so two never share a name).
+static PARTIAL_COUNT: AtomicUsize = AtomicUsize::new(0);
+
+/// Create the temporary file for `target` in `dir`, locked (so another run sees it is in use),
+/// removing first the leftovers of dead runs there.
+fn create_partial(dir: &Path, target: &Path) -> std::io::Result<tempfile::NamedTempFile> {
+    remove_leftovers(dir);
+    let name = target.file_name().map_or_else(String::new, |n| {
+        // Short enough that the prefix, pid and number keep it within 255 bytes.
+        let n = n.to_string_lossy();
+        let mut end = n.len().min(200);
+        while !n.is_char_boundary(end) {
+            end -= 1;
         }
+        n[..end].to_string()
+    });
+    let n = PARTIAL_COUNT.fetch_add(1, Ordering::SeqCst);
+    let prefix = format!("{PARTIAL_PREFIX}{}-{n}-{name}", std::process::id());
+    let tmp = match tempfile::Builder::new()
+        .prefix(&prefix)
+        .rand_bytes(0)
+        .tempfile_in(dir)
+    {
+        // The leftover of a dead process that had our id (no file of ours has this number).
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+            let _ = std::fs::remove_file(dir.join(&prefix));
+            tempfile::Builder::new()
+                .prefix(&prefix)
+                .rand_bytes(0)
+                .tempfile_in(dir)?
+        }
+        other => other?,
+    };
+    // An advisory lock held while the file is open: a run cleaning leftovers skips a locked one
+    // (a live writer whose pid it cannot see, in another pid namespace).
+    let _ = tmp.as_file().try_lock();
+    Ok(tmp)
+}
+
+/// Directories whose leftovers this process has removed already.
+static CLEANED: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Remove from `dir` (once per process) the temporary files of runs that died (`kill -9`, a power
+/// loss): regular files named exactly `.imudrift-partial-<pid>-<n>-<name>` whose process no
+/// longer exists and that no process holds locked. Anything else is left alone.
+pub fn remove_leftovers(dir: &Path) {
+    {
+        let Ok(mut cleaned) = CLEANED.lock() else {
+            return;
+        };
+        if cleaned.iter().any(|d| d == dir) {
+            return;
+        }
+        cleaned.push(dir.to_path_buf());
+    }
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(pid) = name.to_str().and_then(leftover_pid) else {
+            continue;
+        };
+        if pid == std::process::id() || process_alive(pid) {
+            continue;
+        }
+        let path = entry.path();
+        let regular = std::fs::symlink_metadata(&path).is_ok_and(|m| m.file_type().is_file());
+        if regular && !locked(&path) {
+            let _ = std::fs::remove_file(&path);
+        }
+    }
+}
+
+/// The process id of a temporary file's name `.imudrift-partial-<pid>-<n>-<name>`, if the name
+/// is exactly of that form.
+fn leftover_pid(name: &str) -> Option<u32> {
+    let rest = name.strip_prefix(PARTIAL_PREFIX)?;
+    let (pid, rest) = rest.split_once('-')?;
+    let (n, rest) = rest.split_once('-')?;
+    let digits = |s: &str| !s.is_empty() && s.len() <= 10 && s.bytes().all(|b| b.is_ascii_digit());
+    if !digits(pid) || !digits(n) || rest.is_empty() {
+        return None;
+    }
+    pid.parse().ok().filter(|&p| p > 0)
+}
+
+/// Whether process `pid` exists (Linux: `/proc/<pid>`; elsewhere assumed, so nothing is removed).
+fn process_alive(pid: u32) -> bool {
+    if cfg!(target_os = "linux") && Path::new("/proc/self").exists() {
+        Path::new("/proc").join(pid.to_string()).exists()
+    } else {
+        true
+    }
+}
+
+/// Whether another open file description holds a lock on `path` (a writer still at work).
+fn locked(path: &Path) -> bool {
+    match std::fs::File::open(path) {
+        Ok(f) => matches!(f.try_lock(), Err(std::fs::TryLockError::WouldBlock)),
+        Err(_) => true,
     }
 }
 
@@ -236,9 +397,9 @@ where
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    let tmp = tempfile::NamedTempFile::new_in(&dir)
+    let tmp = create_partial(&dir, &target)
         .with_context(|| format!("cannot create a temporary file in {}", dir.display()))?;
-    let _registered = Registered::new(tmp.path());
+    let registered = Registered::new(tmp.path());
     {
         let mut w = BufWriter::with_capacity(1 << 20, tmp.as_file());
         fill(&mut w).with_context(|| format!("while writing {}", path.display()))?;
@@ -252,6 +413,21 @@ where
         use std::os::unix::fs::PermissionsExt;
         let mode = std::fs::metadata(&target).map_or(0o644, |m| m.permissions().mode());
         let _ = std::fs::set_permissions(tmp.path(), std::fs::Permissions::from_mode(mode));
+    }
+    if SETS_OPEN.load(Ordering::SeqCst) > 0 {
+        // Part of a set: moved into place with the others by `FileSet::commit`, registered
+        // until then.
+        drop(registered);
+        register(tmp.path());
+        if let Ok(mut pending) = PENDING.lock() {
+            pending.push((tmp, target, path.to_path_buf()));
+            return Ok(());
+        }
+        unregister(tmp.path());
+        bail!(
+            "cannot write {}: the output set is unusable",
+            path.display()
+        );
     }
     tmp.persist(&target)
         .with_context(|| format!("cannot move the finished file to {}", path.display()))?;
@@ -313,7 +489,7 @@ impl Drop for OutLock {
 pub fn prepare_shared_dir(dir: &Path) -> Result<OutLock> {
     ensure_dir(dir)?;
     refuse_inputs_in_out_dir(dir)?;
-    tempfile::NamedTempFile::new_in(dir)
+    create_partial(dir, Path::new("check"))
         .map(drop)
         .with_context(|| format!("--out {}: cannot write files there", dir.display()))?;
     Ok(OutLock {

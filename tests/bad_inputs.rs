@@ -1090,7 +1090,8 @@ fn devices_and_pipes_are_read_with_a_bound() {
 /// Issue 27, item 10: a file of 10 GiB (sparse: it takes no disk) given as a sensor model, a
 /// scenario's sensor, a noise file or a shard is refused from its size before a byte is read
 /// (`simulate`, `spec`, `plan`, `merge`, `diagnose --model` allocated over 6 GB first); a device
-/// given as a config is read with the same 16 MiB bound.
+/// given as a config is read with the same 16 MiB bound (and `/dev/zero` is refused from its first
+/// block).
 #[cfg(target_os = "linux")]
 #[test]
 fn files_beyond_their_size_bound_are_refused_before_reading() {
@@ -1125,9 +1126,10 @@ fn files_beyond_their_size_bound_are_refused_before_reading() {
         &["simulate", &scenario, "--json"],
         &["key `sensor`", "big.toml"],
     );
+    // Refused from its first block since issue 46 (item 9), before the 16 MiB bound is reached.
     refused(
         &["simulate", "/dev/zero", "--json"],
-        &["not a regular file", "16.0 MiB"],
+        &["not a regular file", "contains NUL bytes"],
     );
     refused_with_memory(
         &["merge", &shard, "--json"],
@@ -1284,4 +1286,197 @@ fn a_signal_leaves_no_lock_file() {
             .collect();
         assert!(left.is_empty(), "{signal}: left behind in --out: {left:?}");
     }
+}
+
+/// Issue 46, item 11: a full disk while `--out DIR` is written left the files written before
+/// (`allan.csv` without `allan.json`). The files of a command are one set: written into
+/// temporaries and moved into place only when all are complete; here the file size limit
+/// (`ulimit -f 4`: 4 KiB, with SIGXFSZ ignored so the write fails with EFBIG as on a full disk)
+/// lets `allan.csv` (1.2 KB) be written and not `allan.json` (4.9 KB). No new file and no
+/// temporary is left; the file already in the directory is untouched.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_failed_write_leaves_no_partial_out_set() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = write(dir.path(), "ok.csv", log_text(2000, "\n").as_bytes());
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    let script = format!(
+        "ulimit -f 4; trap '' XFSZ; exec '{}' allan '{log}' --out '{}'",
+        common::binary().display(),
+        out.display()
+    );
+    let run = Command::new("bash")
+        .args(["-c", &script])
+        .current_dir(root())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(1), "{err}");
+    assert!(err.contains("File too large"), "{err}");
+    let mut left: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    left.sort();
+    assert_eq!(left, ["notes.txt"], "{err}");
+    assert_eq!(
+        std::fs::read_to_string(out.join("notes.txt")).unwrap(),
+        "mine"
+    );
+}
+
+/// Issue 46, item 13: `kill -9` during `generate -o` left a hidden temporary file (460 MB) that
+/// no later run removed. Temporaries are named `.imudrift-partial-<pid>-<n>-<name>`; the next run
+/// writing into the directory removes those whose process is gone, and never a live run's.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_killed_run_leaves_a_temporary_the_next_run_removes() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let spawn_generate = |name: &str| {
+        command()
+            .args(["generate", "configs/sensors/mtx.toml", "--duration", "60h"])
+            .args(["--rate", "100", "-o", d.join(name).to_str().unwrap()])
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap()
+    };
+    let names = || -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    };
+    let wait_for_files = |n: usize| {
+        let started = std::time::Instant::now();
+        while names().len() < n && started.elapsed().as_secs() < 20 {
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        assert_eq!(names().len(), n, "{:?}", names());
+    };
+    let mut killed = spawn_generate("big.csv");
+    wait_for_files(1);
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    killed.kill().unwrap(); // SIGKILL
+    killed.wait().unwrap();
+    let leftover = names();
+    assert_eq!(leftover.len(), 1, "{leftover:?}");
+    assert!(leftover[0] != "big.csv", "{leftover:?}");
+    let short = |name: &str| {
+        ok(imudrift(&[
+            "generate",
+            "configs/sensors/mtx.toml",
+            "--duration",
+            "10",
+            "--rate",
+            "100",
+            "-o",
+            d.join(name).to_str().unwrap(),
+        ]))
+    };
+    short("big.csv");
+    assert_eq!(
+        names(),
+        ["big.csv"],
+        "the dead run's {:?} was not removed",
+        leftover[0]
+    );
+    let text = std::fs::read_to_string(d.join("big.csv")).unwrap();
+    let rows = text.lines().filter(|l| !l.starts_with('#')).count();
+    assert_eq!(rows, 1 + 1000, "10 s at 100 Hz and the header");
+    // A run still writing into the directory keeps its temporary.
+    let mut live = spawn_generate("live.csv");
+    wait_for_files(2);
+    let live_tmp = names();
+    short("other.csv");
+    let after = names();
+    live.kill().unwrap();
+    live.wait().unwrap();
+    let mut expected = live_tmp;
+    expected.push("other.csv".to_string());
+    expected.sort();
+    assert_eq!(after, expected, "a live run's temporary was removed");
+}
+
+/// Issue 46, item 9: a sparse file (`truncate -s 10G`: it takes no disk) given as a log was read
+/// whole before it was refused (`allan`: 10.5 GB resident, killed at 120 s; `diagnose`: "contains
+/// NUL bytes" after 55 s), and `merge /dev/zero` read 7.8 GB first. Every reader now checks the
+/// first block of a file (64 KiB) for NUL bytes before reading the rest: refused at once, here
+/// from a 3 GiB sparse file (the test's bound of 2 s each; the old build took about 16 s for the
+/// first).
+#[cfg(target_os = "linux")]
+#[test]
+fn sparse_files_and_zeros_are_refused_from_their_first_block() {
+    use std::io::Write as _;
+    let dir = tempfile::tempdir().unwrap();
+    let sparse = |name: &str| {
+        let p = dir.path().join(name);
+        std::fs::File::create(&p).unwrap().set_len(3 << 30).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let log = sparse("sparse.csv");
+    let toml = dir.path().join("zeros.toml");
+    std::fs::write(&toml, vec![0u8; 8 << 20]).unwrap();
+    let toml = toml.to_str().unwrap();
+    let shard = sparse("shard-0-of-1.json");
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    gz.write_all(&vec![0u8; 4 << 20]).unwrap();
+    let gz = write(dir.path(), "zeros.csv.gz", &gz.finish().unwrap());
+    let model = "configs/sensors/mtx.toml";
+    let cases: [(&[&str], &str); 7] = [
+        (&["allan", &log, "--json"], "contains NUL bytes"),
+        (
+            &["diagnose", &log, "--model", model, "--json"],
+            "contains NUL bytes",
+        ),
+        (&["merge", &shard, "--json"], "contains NUL bytes"),
+        (&["merge", "/dev/zero", "--json"], "contains NUL bytes"),
+        (
+            &["allan", "/dev/zero", "--rate", "100", "--json"],
+            "contains NUL bytes",
+        ),
+        (&["simulate", toml, "--json"], "contains NUL bytes"),
+        (
+            &["allan", &gz, "--json"],
+            "decompresses to a text that contains NUL bytes",
+        ),
+    ];
+    for (args, needle) in cases {
+        let started = std::time::Instant::now();
+        refused(args, &[needle]);
+        let took = started.elapsed();
+        assert!(took.as_secs_f64() < 2.0, "{args:?} took {took:?}");
+    }
+}
+
+/// Issue 46, item 9: a log too large for the memory (`IMUDRIFT_MEMORY_LIMIT`) was counted row by
+/// row to its end before it was refused (61 s for 10 GiB). Its size and the rows of its first
+/// MiB estimate what it needs before the rest is read: a 3 GiB file (1 MiB of rows, then a
+/// sparse tail) under a 1 GB limit is refused at once.
+#[cfg(target_os = "linux")]
+#[test]
+fn logs_too_large_for_the_memory_are_refused_from_their_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut text = log_text(60_000, "\n");
+    assert!(text.len() > 1 << 20);
+    text.truncate(text.rfind('\n').unwrap() + 1);
+    let log = write(dir.path(), "big.csv", text.as_bytes());
+    std::fs::OpenOptions::new()
+        .write(true)
+        .open(&log)
+        .unwrap()
+        .set_len(3 << 30)
+        .unwrap();
+    let started = std::time::Instant::now();
+    refused_with_memory(
+        &["allan", &log, "--json"],
+        "1000000000",
+        &["estimated from its size, 3.00 GiB", "954 MiB is available"],
+    );
+    let took = started.elapsed();
+    assert!(took.as_secs_f64() < 2.0, "took {took:?}");
 }

@@ -26,31 +26,79 @@ impl FileBytes {
             }
         }
         if !meta.is_file() {
-            // A device or a pipe (/dev/zero, a FIFO) has no size to check: read it with a bound.
+            // A device or a pipe (/dev/zero, a FIFO) has no size to check: read it with a bound,
+            // its first block checked for NUL bytes before the rest is read.
             let limit = available_memory_bytes()
                 .map_or(MAX_STREAM_BYTES, |a| (a / 3).min(MAX_STREAM_BYTES));
-            return read_open_capped(&file, &meta, limit).map(FileBytes::Read);
+            return read_open_capped(&file, &meta, limit, FirstBlock::NoNul).map(FileBytes::Read);
         }
-        let mut buf = Vec::with_capacity(meta.len() as usize + 1);
-        (&file).read_to_end(&mut buf)?;
-        Ok(FileBytes::Read(buf))
+        // A small file is read whole (its memory is checked once read, with its columns'); a
+        // large one that cannot be mapped must fit in a third of the memory, as a decompressed
+        // log must. The first block is checked by the caller (it may be a bag).
+        let limit = match available_memory_bytes() {
+            Some(a) if meta.len() >= 1 << 20 => a / 3,
+            _ => u64::MAX,
+        };
+        read_open_capped(&file, &meta, limit, FirstBlock::Any).map(FileBytes::Read)
     }
 }
 
-/// A file's bytes, at most `max_bytes` of them: a regular file larger than that is refused from
-/// its size before a byte is read (a sparse 10 GB file allocates nothing); a device or a pipe,
-/// which has no size, is read up to the bound and refused past it (`/dev/zero` never ends). The
-/// error says which, with the bound; the caller names the file and what it is.
+/// A text file's bytes, at most `max_bytes` of them: a regular file larger than that is refused
+/// from its size before a byte is read (a sparse 10 GB file allocates nothing); a device or a
+/// pipe, which has no size, is read up to the bound and refused past it (`/dev/zero` never
+/// ends). Its first block ([`FIRST_BLOCK_BYTES`]) is checked before the rest is read: NUL bytes
+/// or bytes that are not UTF-8 there refuse it at once (a binary file, a sparse file, a device of
+/// zeros). The error says which, with the bound; the caller names the file and what it is.
 pub fn read_capped(path: &Path, max_bytes: u64) -> std::io::Result<Vec<u8>> {
     let file = std::fs::File::open(path)?;
     let meta = file.metadata()?;
-    read_open_capped(&file, &meta, max_bytes)
+    read_open_capped(&file, &meta, max_bytes, FirstBlock::Utf8)
+}
+
+/// Bytes of a file read and checked (text or not) before the rest is read: 64 KiB.
+pub const FIRST_BLOCK_BYTES: u64 = 64 << 10;
+
+/// What the first block of a file read with a bound must be.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum FirstBlock {
+    /// UTF-8 text without NUL bytes (a config, a shard).
+    Utf8,
+    /// Without NUL bytes (a CSV log, whose parser names a byte that is not UTF-8).
+    NoNul,
+    /// Anything (a bag).
+    Any,
+}
+
+/// Why `block`, the first bytes of a file, cannot be text: NUL bytes (a binary file, a sparse
+/// file, a device of zeros) or, when `utf8`, a byte that is not UTF-8 (with its line and column,
+/// as `noise::utf8_text` names one). A sequence cut by the block's end is not an error.
+pub fn first_block_problem(block: &[u8], utf8: bool) -> Option<String> {
+    if let Some(at) = memchr::memchr(0, block) {
+        return Some(format!(
+            "contains NUL bytes (the first at byte {}): not a text file",
+            at + 1
+        ));
+    }
+    if !utf8 {
+        return None;
+    }
+    let e = std::str::from_utf8(block).err()?;
+    e.error_len()?;
+    let at = e.valid_up_to();
+    let before = &block[..at];
+    let line = memchr::memchr_iter(b'\n', before).count() + 1;
+    let column = at - memchr::memrchr(b'\n', before).map_or(0, |i| i + 1) + 1;
+    Some(format!(
+        "line {line}, column {column}: byte 0x{:02x} is not UTF-8; save the file as UTF-8 text",
+        block[at]
+    ))
 }
 
 fn read_open_capped(
     file: &std::fs::File,
     meta: &std::fs::Metadata,
     max_bytes: u64,
+    first: FirstBlock,
 ) -> std::io::Result<Vec<u8>> {
     if meta.is_file() && meta.len() > max_bytes {
         return Err(std::io::Error::other(format!(
@@ -62,8 +110,21 @@ fn read_open_capped(
     let capacity = if meta.is_file() { meta.len() + 1 } else { 0 };
     let mut buf = Vec::with_capacity(capacity as usize);
     // A regular file that grows while it is read is bounded too.
-    file.take(max_bytes.saturating_add(1))
+    let mut reader = file.take(max_bytes.saturating_add(1));
+    (&mut reader)
+        .take(FIRST_BLOCK_BYTES)
         .read_to_end(&mut buf)?;
+    if first != FirstBlock::Any {
+        if let Some(problem) = first_block_problem(&buf, first == FirstBlock::Utf8) {
+            let device = if meta.is_file() {
+                ""
+            } else {
+                "not a regular file (a device or a pipe), and it "
+            };
+            return Err(std::io::Error::other(format!("{device}{problem}")));
+        }
+    }
+    reader.read_to_end(&mut buf)?;
     if buf.len() as u64 > max_bytes {
         let what = if meta.is_file() {
             "it grew while being read"
@@ -177,6 +238,15 @@ pub(crate) fn gunzip(raw: &[u8], source: &str, available: Option<u64>) -> Result
         if n == 0 {
             return Ok(out);
         }
+        if before == 0 {
+            let first = &out[..out.len().min(FIRST_BLOCK_BYTES as usize)];
+            if let Some(problem) = first_block_problem(first, false) {
+                return Err(LogError::content(
+                    source,
+                    format!("decompresses to a text that {problem}"),
+                ));
+            }
+        }
         let done = out.len() as u64;
         let consumed = (raw.len() - decoder.get_ref().len()).max(1) as u64;
         let problem = if done > limit {
@@ -242,8 +312,12 @@ fn too_big(rows: u64, cols: u64, need: u64, available: u64, at_least: &str) -> S
 }
 
 /// Refuse a log whose parsed columns (8 bytes per value, and as much again for the analyses'
-/// working copies) would not fit in the memory available.
+/// working copies) would not fit in the memory available: before reading past its first MiB when
+/// the rows of that MiB, scaled to the file's size, need more than twice the memory (rows of a
+/// log are of nearly one length: the margin covers a first MiB of shorter rows), else while the
+/// rows are counted, a MiB at a time, refused as soon as those counted need too much.
 pub(crate) fn check_fits(bytes: &[u8], source: &str, available: Option<u64>) -> Result<()> {
+    const STEP: usize = 1 << 20;
     let Some(available) = available else {
         return Ok(());
     };
@@ -252,16 +326,44 @@ pub(crate) fn check_fits(bytes: &[u8], source: &str, available: Option<u64>) -> 
     if upper <= available {
         return Ok(());
     }
-    let rows = bytes.iter().filter(|&&b| b == b'\n').count() as u64;
-    let first = bytes
-        .iter()
-        .position(|&b| b == b'\n')
-        .unwrap_or(bytes.len());
-    let cols = columns_of(&bytes[..first]);
-    let need = need_bytes(rows, cols);
-    if need > available {
-        let problem = too_big(rows, cols, need, available, "");
-        return Err(LogError::content(source, problem));
+    let cols = header_columns(bytes);
+    let sample = &bytes[..bytes.len().min(STEP)];
+    let sample_rows = memchr::memchr_iter(b'\n', sample).count() as u64;
+    if sample.len() < bytes.len() && sample_rows >= 2 {
+        let rows = (bytes.len() as f64 * sample_rows as f64 / sample.len() as f64) as u64;
+        let need = need_bytes(rows, cols);
+        if need / 2 > available {
+            let problem = format!(
+                "about {rows} rows (estimated from its size, {}, and the rows of its first MiB) x {cols} columns need about {} to analyse, and {} is available: split the log, or drop columns you do not need",
+                byte_size(bytes.len() as f64),
+                byte_size(need as f64),
+                byte_size(available as f64)
+            );
+            return Err(LogError::content(source, problem));
+        }
+    }
+    let mut rows = 0u64;
+    for (k, chunk) in bytes.chunks(STEP).enumerate() {
+        rows += memchr::memchr_iter(b'\n', chunk).count() as u64;
+        let need = need_bytes(rows, cols);
+        if need > available {
+            let last = (k + 1) * STEP >= bytes.len();
+            let at_least = if last { "" } else { " at least" };
+            return Err(LogError::content(
+                source,
+                too_big(rows, cols, need, available, at_least),
+            ));
+        }
     }
     Ok(())
+}
+
+/// The columns of a log's header: fields of its first line that is not a `#` comment.
+fn header_columns(bytes: &[u8]) -> u64 {
+    let first = bytes
+        .split(|&b| b == b'\n')
+        .take(1000)
+        .find(|l| !l.starts_with(b"#") && !l.starts_with(b"\xef\xbb\xbf#"))
+        .unwrap_or(bytes);
+    columns_of(&first[..first.len().min(1 << 20)])
 }

@@ -58,7 +58,7 @@ mod units;
 pub use columns::{ColumnUse, Quantity, SkipReason, Skipped, Source, UnitOptions};
 pub use csv::parse_log;
 pub use error::{byte_size, sig, At, LogError, Problem, Result, Setting, SettingNames};
-pub use file::{available_memory_bytes, read_capped};
+pub use file::{available_memory_bytes, first_block_problem, read_capped, FIRST_BLOCK_BYTES};
 pub use limits::{
     has_spread, quote_prefix, spread, valid_rate_hz, valid_value, MAX_ABS_VALUE, MAX_LOG_RATE_HZ,
     MIN_LOG_RATE_HZ, MIN_SPREAD,
@@ -149,7 +149,17 @@ pub fn read_log(path: &Path, opts: &ReadOptions) -> Result<Log> {
     // What the machine can hold: a log and its parsed columns must fit, or the read is refused
     // before it starts rather than ending in an out-of-memory kill.
     let available = available_memory_bytes();
-    if raw.starts_with(&[0x1f, 0x8b]) {
+    let gzip = raw.starts_with(&[0x1f, 0x8b]);
+    // A binary file, a sparse file or a device of zeros is refused from its first block, before
+    // the rest is read (a 10 GiB sparse file was read whole first).
+    let first = &raw[..raw.len().min(FIRST_BLOCK_BYTES as usize)];
+    if let Some(problem) = first_block_problem(first, false).filter(|_| !gzip) {
+        return Err(LogError::content(
+            &source,
+            format!("{problem} (expected a CSV log with a header such as `t,gx,gy,gz,ax,ay,az`)"),
+        ));
+    }
+    if gzip {
         let out = gunzip(&raw, &source, available)?;
         check_fits(&out, &source, available)?;
         parse_log(&out, &source, opts)
