@@ -27,12 +27,16 @@ while the deviations are computed.
 
 from ._imudrift import allantools_dev as _dev
 from ._samples import as_samples as _as_samples
+from . import _args
 
 __all__ = ["adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "totdev"]
 
 
 def _run(function, data, rate, data_type, taus):
-    return _dev(_as_samples(data), float(rate), data_type, function, taus)
+    if taus is not None and not isinstance(taus, str):
+        taus = _args.numbers_list("taus", taus)
+    return _dev(_as_samples(data), _args.number("rate", rate),
+                _args.text("data_type", data_type), function, taus)
 
 
 def adev(data, rate=1.0, data_type="phase", taus=None):

@@ -38,6 +38,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 
 /// The share of the simulated statistics that forms the tail fitted beyond the empirical
@@ -161,15 +162,31 @@ pub fn null_thresholds_with(
     opts: &Options,
     tick: &(dyn Fn(usize, usize) + Sync),
 ) -> NullThresholds {
+    let never = AtomicBool::new(false);
+    null_thresholds_until(n_rate, tau0_s, est, grid, opts, tick, &never)
+        .expect("a simulation without a stop request runs to its end")
+}
+
+/// [`null_thresholds_with`] that gives up when `stop` is set (read before each null log, one
+/// atomic load each): `None` then, and nothing is cached.
+pub fn null_thresholds_until(
+    n_rate: usize,
+    tau0_s: f64,
+    est: Estimator,
+    grid: &TauGrid,
+    opts: &Options,
+    tick: &(dyn Fn(usize, usize) + Sync),
+    stop: &AtomicBool,
+) -> Option<NullThresholds> {
     if opts.claims.replicates == 0 {
-        return NullThresholds {
+        return Some(NullThresholds {
             tail_start: [f64::NAN; 5],
             tail_scale: [f64::NAN; 5],
             threshold: [f64::INFINITY; 5],
-        };
+        });
     }
     if let Some(t) = tabulated_thresholds(n_rate, est, grid, opts) {
-        return t;
+        return Some(t);
     }
     let key: Key = (
         n_rate,
@@ -183,13 +200,13 @@ pub fn null_thresholds_with(
         .ok()
         .and_then(|c| c.as_ref().and_then(|m| m.get(&key).copied()))
     {
-        return t;
+        return Some(t);
     }
-    let t = simulated_thresholds_with(n_rate, tau0_s, est, grid, opts, tick);
+    let t = simulated_thresholds_until(n_rate, tau0_s, est, grid, opts, tick, stop)?;
     if let Ok(mut c) = CACHE.lock() {
         c.get_or_insert_with(HashMap::new).insert(key, t);
     }
-    t
+    Some(t)
 }
 
 /// One null log's statistics: those of Q, B, K, R from white rate noise, N's from white angle
@@ -209,7 +226,10 @@ pub fn replicate(
         |n: usize| -> Vec<f64> { (0..n).map(|_| StandardNormal.sample(&mut rng)).collect() };
     let stats_of = |data: Vec<f64>| {
         let series = Series::from_rate(data, tau0_s);
-        let (points, fit) = crate::curve::curve_and_fit(&series, est, grid, o, &|_| {});
+        // A null log runs to its end: the stop is read between the logs.
+        let never = AtomicBool::new(false);
+        let (points, fit) = crate::curve::curve_and_fit(&series, est, grid, o, &|_| {}, &never)
+            .expect("a null log without a stop request runs to its end");
         term_statistics(&points, &fit)
     };
     let white = stats_of(draw(n_rate));
@@ -269,14 +289,34 @@ pub fn null_statistics(
     replicates: usize,
     tick: &(dyn Fn(usize, usize) + Sync),
 ) -> Vec<[f64; 5]> {
+    let never = AtomicBool::new(false);
+    null_statistics_until(n_rate, tau0_s, est, grid, opts, replicates, tick, &never)
+        .expect("a simulation without a stop request runs to its end")
+}
+
+/// [`null_statistics`] that gives up when `stop` is set (read before each null log): `None`.
+#[allow(clippy::too_many_arguments)]
+pub fn null_statistics_until(
+    n_rate: usize,
+    tau0_s: f64,
+    est: Estimator,
+    grid: &TauGrid,
+    opts: &Options,
+    replicates: usize,
+    tick: &(dyn Fn(usize, usize) + Sync),
+    stop: &AtomicBool,
+) -> Option<Vec<[f64; 5]>> {
     let done = std::sync::atomic::AtomicUsize::new(0);
     (0..replicates)
         .into_par_iter()
         .map(|i| {
+            if stop.load(Ordering::Relaxed) {
+                return None;
+            }
             let s = replicate(i, n_rate, tau0_s, est, grid, opts);
-            let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
             tick(d, replicates);
-            s
+            Some(s)
         })
         .collect()
 }
@@ -290,21 +330,24 @@ pub fn simulated_thresholds(
     grid: &TauGrid,
     opts: &Options,
 ) -> NullThresholds {
-    simulated_thresholds_with(n_rate, tau0_s, est, grid, opts, &|_, _| {})
+    let never = AtomicBool::new(false);
+    simulated_thresholds_until(n_rate, tau0_s, est, grid, opts, &|_, _| {}, &never)
+        .expect("a simulation without a stop request runs to its end")
 }
 
-fn simulated_thresholds_with(
+fn simulated_thresholds_until(
     n_rate: usize,
     tau0_s: f64,
     est: Estimator,
     grid: &TauGrid,
     opts: &Options,
     tick: &(dyn Fn(usize, usize) + Sync),
-) -> NullThresholds {
+    stop: &AtomicBool,
+) -> Option<NullThresholds> {
     let level = opts.claims;
     let r = level.replicates;
-    let stats = null_statistics(n_rate, tau0_s, est, grid, opts, r, tick);
-    match tail_of(&stats) {
+    let stats = null_statistics_until(n_rate, tau0_s, est, grid, opts, r, tick, stop)?;
+    Some(match tail_of(&stats) {
         Some((start, scale)) => {
             let share = (TAIL_SHARE * r as f64).floor() / r as f64;
             thresholds_of(start, scale, share, &level)
@@ -314,5 +357,5 @@ fn simulated_thresholds_with(
             tail_scale: [f64::NAN; 5],
             threshold: [f64::INFINITY; 5],
         },
-    }
+    })
 }
