@@ -82,7 +82,10 @@ pub fn factors_of_seconds(taus_s: &[f64], rate_hz: f64, n_phase: usize) -> Resul
 }
 
 /// Refuse a channel's curve with fewer than [`MIN_USABLE_TAUS`] averaging times of at least 9
-/// intervals (Woodman's rule), as `imudrift allan` does for each channel of a log and
+/// intervals (Woodman's rule), or with a deviation whose square (the variance the fit and the
+/// intervals work on) is not a normal double: 0 (the samples' variations cancel at that tau),
+/// below about 1.5e-154 (samples of magnitude 1e-160 or 1e-300: their variance underflows and
+/// the fit divides by it), or not finite. As `imudrift allan` does for each channel of a log and
 /// `imudrift.allan` for its samples (`channel`: the log's channel, when there is one).
 pub fn check_curve(
     source_name: &str,
@@ -99,6 +102,14 @@ pub fn check_curve(
             usable,
             needed: MIN_USABLE_TAUS,
             empty: points.is_empty(),
+        });
+    }
+    if let Some(p) = points.iter().find(|p| !(p.dev * p.dev).is_normal()) {
+        return Err(RequestError::DegenerateDeviation {
+            source_name: source_name.to_string(),
+            channel: channel.map(str::to_string),
+            tau_s: p.tau_s,
+            dev: p.dev,
         });
     }
     Ok(())

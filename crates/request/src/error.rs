@@ -197,6 +197,14 @@ pub enum RequestError {
         /// No averaging time at all: the grid or tau list has none the samples can hold.
         empty: bool,
     },
+    /// A curve with a deviation whose square is not a normal double (0, underflowing, or not
+    /// finite): no fit or interval can use it.
+    DegenerateDeviation {
+        source_name: String,
+        channel: Option<String>,
+        tau_s: f64,
+        dev: f64,
+    },
     /// A deviation function (allantools' conventions) whose tau list leaves no point.
     NoPoint { function: String, samples: usize },
     /// A sensor model named by a one-line text that is neither an existing path nor a model's
@@ -423,6 +431,25 @@ impl RequestError {
                     )
                 } else {
                     String::new()
+                }
+            ),
+            RequestError::DegenerateDeviation {
+                source_name,
+                channel,
+                tau_s,
+                dev,
+            } => format!(
+                "{source_name}: the deviation{} at tau {} s is {}: its square is not a normal number (the samples' variations cancel there, or are too small to square: below about 1e-154), so no interval or fit can use it; {}",
+                channel
+                    .as_deref()
+                    .map(|c| format!(" of channel {c}"))
+                    .unwrap_or_default(),
+                number(*tau_s),
+                number(*dev),
+                if *dev == 0.0 || !dev.is_finite() {
+                    "check the samples"
+                } else {
+                    "scale the samples (another unit)"
                 }
             ),
             RequestError::NoPoint { function, samples } => format!(
