@@ -9,8 +9,8 @@ to `imudrift.allan`, the allantools functions, `drift`, `diagnose` (small sizes)
 durations: NaN, +-inf, 1e300, 5e-324, 2**70, negative, None, texts, complex).
 
 A call passes when it returns only finite numbers (None where the documents have nulls; NaN
-only in `lo`, `hi`, `edf` of `allan` where no interval is computed, as documented: with
-`edf="none"`, or at a tau whose EDF the estimator's formula does not give) or raises one of the documented exceptions: `imudrift.InvalidInput` (a ValueError)
+only in `lo`, `hi` (and `edf`) of `allan` where no interval is computed, as documented: with
+`edf="none"`, or at a tau whose EDF the estimator's formula does not give, EDF 0) or raises one of the documented exceptions: `imudrift.InvalidInput` (a ValueError)
 or `imudrift.LogUnreadable` (an OSError). Anything else is a failure: another exception (a
 TypeError, OverflowError, a Rust panic's PanicException), a non-finite or missing number, an
 empty result, or a crash of the process (the cases run in worker processes; a worker that dies
@@ -225,12 +225,13 @@ def bad_numbers(value, path="", allow_nan=()):
 
 def check_allan(r, kw):
     """Every column finite, except `lo`, `hi` and `edf` where no interval is computed (documented:
-    NaN there, never inf): `edf="none"`, or an averaging time whose EDF the estimator's formula
-    does not give (totdev's last taus of a short record); the fit's numbers finite."""
+    `lo` and `hi` NaN there, never inf): `edf="none"` (edf NaN), or an averaging time whose EDF
+    the estimator's formula does not give (edf 0: totdev's last tau of a short phase record);
+    the fit's numbers finite."""
     if len(r) == 0:
         return ["empty result"]
     cols = {c: getattr(r, c) for c in r._COLUMNS}
-    no_interval = np.isnan(r.edf)
+    no_interval = np.isnan(r.edf) | (r.edf <= 0)
     bad = bad_numbers({c: v for c, v in cols.items() if c not in ("lo", "hi", "edf")})
     for c in ("lo", "hi", "edf"):
         v = cols[c]

@@ -16,7 +16,7 @@ def as_samples(data, name="data"):
     except (TypeError, ValueError) as e:
         raise InvalidInput(f"{name}: expected an array of numbers ({e})") from None
     if a.dtype.kind not in "biufO":
-        raise InvalidInput(f"{name}: expected an array of real numbers, got dtype {a.dtype}")
+        raise InvalidInput(f"{name}: expected an array of numbers, got dtype {a.dtype}")
     try:
         a = np.ascontiguousarray(a, dtype=np.float64)
     except (TypeError, ValueError, OverflowError) as e:

@@ -206,7 +206,10 @@ pub enum RequestError {
         dev: f64,
     },
     /// A deviation function (allantools' conventions) whose tau list leaves no point.
-    NoPoint { function: String, samples: usize },
+    NoPoint {
+        function: String,
+        samples: usize,
+    },
     /// A sensor model named by a one-line text that is neither an existing path nor a model's
     /// text.
     NoSuchModel(String),
