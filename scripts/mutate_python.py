@@ -233,10 +233,12 @@ def check_allan(r, kw):
     cols = {c: getattr(r, c) for c in r._COLUMNS}
     no_interval = np.isnan(r.edf) | (r.edf <= 0)
     bad = bad_numbers({c: v for c, v in cols.items() if c not in ("lo", "hi", "edf")})
-    for c in ("lo", "hi", "edf"):
+    for c in ("lo", "hi"):
         v = cols[c]
         if not (np.all(np.isfinite(v[~no_interval])) and np.all(np.isnan(v[no_interval]))):
             bad.append("." + c)
+    if np.any(np.isinf(r.edf)):
+        bad.append(".edf")
     if kw.get("edf", "greenhall") != "none" and np.all(no_interval):
         bad.append(".edf: no interval at any tau")
     if r._fit is not None:
