@@ -221,23 +221,39 @@ pub fn replicate(
     grid: &TauGrid,
     o: &Options,
 ) -> [f64; 5] {
+    let never = AtomicBool::new(false);
+    replicate_until(i, n_rate, tau0_s, est, grid, o, &never)
+        .expect("a null log without a stop request runs to its end")
+}
+
+/// [`replicate`] that gives up when `stop` is set (`None` then): the flag is read by each of
+/// its two logs' curves (per factor), so a stop lands within one pass over a log's samples.
+fn replicate_until(
+    i: usize,
+    n_rate: usize,
+    tau0_s: f64,
+    est: Estimator,
+    grid: &TauGrid,
+    o: &Options,
+    stop: &AtomicBool,
+) -> Option<[f64; 5]> {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(0x6e75_6c6c ^ i as u64);
     let mut draw =
         |n: usize| -> Vec<f64> { (0..n).map(|_| StandardNormal.sample(&mut rng)).collect() };
     let stats_of = |data: Vec<f64>| {
         let series = Series::from_rate(data, tau0_s);
-        // A null log runs to its end: the stop is read between the logs.
-        let never = AtomicBool::new(false);
-        let (points, fit) = crate::curve::curve_and_fit(&series, est, grid, o, &|_| {}, &never)
-            .expect("a null log without a stop request runs to its end");
-        term_statistics(&points, &fit)
+        let (points, fit) = crate::curve::curve_and_fit(&series, est, grid, o, &|_| {}, stop)?;
+        Some(term_statistics(&points, &fit))
     };
-    let white = stats_of(draw(n_rate));
+    let white = stats_of(draw(n_rate))?;
+    if stop.load(Ordering::Relaxed) {
+        return None;
+    }
     let angle = draw(n_rate + 1);
-    let white_angle = stats_of(angle.windows(2).map(|a| (a[1] - a[0]) / tau0_s).collect());
+    let white_angle = stats_of(angle.windows(2).map(|a| (a[1] - a[0]) / tau0_s).collect())?;
     let mut t = white;
     t[1] = white_angle[1];
-    t
+    Some(t)
 }
 
 /// The upper tail of simulated null statistics: the empirical (1 - [`TAIL_SHARE`]) quantile and
@@ -294,7 +310,8 @@ pub fn null_statistics(
         .expect("a simulation without a stop request runs to its end")
 }
 
-/// [`null_statistics`] that gives up when `stop` is set (read before each null log): `None`.
+/// [`null_statistics`] that gives up when `stop` is set (read before each null log and by its
+/// curves, per factor): `None`.
 #[allow(clippy::too_many_arguments)]
 pub fn null_statistics_until(
     n_rate: usize,
@@ -313,7 +330,7 @@ pub fn null_statistics_until(
             if stop.load(Ordering::Relaxed) {
                 return None;
             }
-            let s = replicate(i, n_rate, tau0_s, est, grid, opts);
+            let s = replicate_until(i, n_rate, tau0_s, est, grid, opts, stop)?;
             let d = done.fetch_add(1, Ordering::Relaxed) + 1;
             tick(d, replicates);
             Some(s)
