@@ -30,7 +30,11 @@ class Sensor:
         if isinstance(x, Sensor):
             text, src = x._text, x._source
         elif isinstance(x, dict):
-            text, src = _toml_of_json(json.dumps(x)), "<sensor dict>.toml"
+            try:
+                as_json = json.dumps(x)
+            except (TypeError, ValueError) as e:
+                raise InvalidInput(f"sensor dict: {e}") from None
+            text, src = _toml_of_json(as_json), "<sensor dict>.toml"
         elif isinstance(x, os.PathLike):
             text, src = _source(os.fspath(x), True)
         elif isinstance(x, str):

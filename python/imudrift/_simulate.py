@@ -4,7 +4,7 @@
 import os
 
 from ._document import Document
-from ._imudrift import InvalidInput
+from ._imudrift import InvalidInput, LogUnreadable
 from . import _args
 from ._imudrift import merge_shards as _merge
 from ._imudrift import simulate_run as _simulate
@@ -119,10 +119,23 @@ def merge(shards):
     """``imudrift merge``: the shard files' bytes of :func:`simulate_shard` (or the CLI's shard
     files, read as bytes or given as paths), all ``count`` of them in any order, merged into the
     :class:`SimulateResult` a single :func:`simulate` gives."""
+    if isinstance(shards, (str, bytes, os.PathLike)):
+        shards = [shards]
+    try:
+        shards = list(shards)
+    except TypeError:
+        raise InvalidInput(
+            f"shards: expected a list of shards' bytes or paths, got {type(shards).__name__}") from None
     data = []
-    for s in shards:
+    for i, s in enumerate(shards):
         if isinstance(s, (str, os.PathLike)):
-            with open(s, "rb") as f:
-                s = f.read()
+            try:
+                with open(s, "rb") as f:
+                    s = f.read()
+            except OSError as e:
+                raise LogUnreadable(f"cannot read {os.fspath(s)} as a shard file: {e.strerror}") from None
+        if not isinstance(s, (bytes, bytearray, memoryview)):
+            raise InvalidInput(
+                f"shards[{i}]: expected a shard's bytes or a shard file's path, got {type(s).__name__}")
         data.append(bytes(s))
     return SimulateResult(_merge(data))

@@ -242,3 +242,16 @@ def test_mutated_inputs_give_finite_numbers_or_documented_errors():
     # 1500 cases of seed 46 (about 3 s; the seed differs from the full run's).
     failures = [f for f in (m.run_case(46, i) for i in range(1500)) if f]
     assert not failures, "\n".join(map(str, failures[:10]))
+
+
+def test_merge_and_sensor_dicts_refuse_what_they_cannot_use(tmp_path):
+    # Before: TypeError ('int' object is not iterable, Object of type float32 is not JSON
+    # serializable) and FileNotFoundError.
+    with pytest.raises(imudrift.InvalidInput, match="^shards: expected a list"):
+        imudrift.merge(3)
+    with pytest.raises(imudrift.InvalidInput, match=r"^shards\[0\]: expected a shard's bytes"):
+        imudrift.merge([5])
+    with pytest.raises(imudrift.LogUnreadable, match="as a shard file: No such file"):
+        imudrift.merge([str(tmp_path / "missing.json")])
+    with pytest.raises(imudrift.InvalidInput, match="^sensor dict: Object of type float32"):
+        imudrift.Sensor({"name": np.float32(1.0)})
