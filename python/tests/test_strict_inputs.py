@@ -3,7 +3,8 @@ documented exceptions (`imudrift.InvalidInput`, a ValueError; `imudrift.LogUnrea
 OSError) and the request layer's messages (crates/request): one test per reproduction of the
 issue, then a seeded mutation run (scripts/mutate_python.py, a CI-sized share of it).
 
-Run against the package as installed before these changes (main at 91a20e7): 22 of the first 23
+Run against the package installed in site-packages before these changes (built at 09:40 from
+another checkout, close to main 91a20e7; its commit not checked): 22 of the first 23
 tests failed; test_channels_of_unequal_length_are_refused passed (the request layer already
 refused them), and test_a_sample_of_1e200_is_refused_by_drift_and_diagnose failed only on the
 message (the value written out in 201 digits)."""
