@@ -77,6 +77,7 @@ pub fn flag(s: request::Setting) -> &'static str {
         Setting::Replicates => "--replicates",
         Setting::Confidence => "--confidence",
         Setting::Data => "the log",
+        Setting::Taus => "--grid",
     }
 }
 

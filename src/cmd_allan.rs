@@ -86,9 +86,6 @@ fn warnings(r: &ChannelResult) -> Vec<String> {
     w
 }
 
-/// Fewest averaging times with 9 or more intervals a channel must give (a slope needs two).
-const MIN_USABLE_TAUS: usize = 2;
-
 /// The analysis of one channel.
 pub struct ChannelResult {
     pub quantity: Quantity,
@@ -251,23 +248,12 @@ fn channel_quantities(args: &Args, log: &Log) -> Result<Vec<Quantity>> {
         .collect()
 }
 
-/// Refuse a curve with fewer than [`MIN_USABLE_TAUS`] averaging times that have at least 9
-/// intervals (Woodman's rule).
+/// Refuse a channel's curve with too few usable averaging times (`request::allan::check_curve`,
+/// the rule `imudrift.allan` applies too).
 fn check_usable(log: &Log, samples: usize, results: &[ChannelResult]) -> Result<()> {
     for r in results {
-        let usable = r.points.iter().filter(|p| p.woodman_ok()).count();
-        if usable < MIN_USABLE_TAUS {
-            bail!(
-                "{}: {samples} samples give {usable} averaging time(s) with at least 9 intervals (Woodman's rule) for channel {}; an Allan analysis needs at least {MIN_USABLE_TAUS}: use a longer log{}",
-                log.source,
-                r.name,
-                if r.points.is_empty() {
-                    " (the --grid has no averaging factor this log can hold)"
-                } else {
-                    ""
-                }
-            );
-        }
+        request::allan::check_curve(&log.source, Some(&r.name), samples, &r.points)
+            .map_err(crate::cli::request_error)?;
     }
     Ok(())
 }

@@ -167,7 +167,9 @@ fn compare_sensor(
     for f in &failures {
         tell!(
             "warning: {}: drift run {} failed: {}",
-            model.name, f.run, f.message
+            model.name,
+            f.run,
+            f.message
         );
     }
     Ok(out)

@@ -7,6 +7,7 @@ import numpy as np
 
 from ._imudrift import allan_analysis as _analysis
 from ._samples import as_samples as _as_samples
+from . import _args
 
 ONE_SIGMA = 0.6826894921370859  # erf(1/sqrt 2), NIST SP 1065 §5.3
 
@@ -173,14 +174,16 @@ def allan(
     >>> r = imudrift.allan(gyro, 100.0)
     >>> r.fit().terms["n"].value  # about 0.01 / sqrt(100) = 1e-3 rad/sqrt(s)
     """
+    rate = _args.number("rate", rate)
+    confidence = _args.number("confidence", confidence)
     raw = _analysis(
         _as_samples(data),
-        float(rate),
-        data_type,
-        estimator,
-        taus,
-        float(confidence),
-        edf,
+        rate,
+        _args.text("data_type", data_type),
+        _args.text("estimator", estimator),
+        taus if isinstance(taus, str) else _args.numbers_list("taus", taus),
+        confidence,
+        _args.text("edf", edf),
         bool(stable32_stop),
     )
-    return AllanResult(raw, estimator, float(rate), float(confidence))
+    return AllanResult(raw, estimator, rate, confidence)

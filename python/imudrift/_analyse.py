@@ -11,6 +11,8 @@ from ._imudrift import diagnose_run as _diagnose
 from ._imudrift import drift_run as _drift
 from ._imudrift import spec_run as _spec
 from ._document import Document as _Document
+from . import _args
+from ._samples import as_samples as _as_samples
 from ._log import reader_settings
 from ._sensor import Sensor
 
@@ -18,22 +20,27 @@ from ._imudrift import CHANNELS as _CHANNELS, TEMPERATURE as _TEMPERATURE
 from ._imudrift import DIAGNOSE_DEFAULTS as _DD, DRIFT_DEFAULTS as _FD
 
 
-def _terms(t):
-    return [t] if isinstance(t, str) else list(t)
+def _terms(name, t):
+    return _args.texts(name, t)
 
 
 def _seconds_list(name, xs):
     """Times in seconds: numbers, or texts with a unit the library reads ("10 min", "1h")."""
-    if isinstance(xs, (int, float, str)):
+    if isinstance(xs, (int, float, str, np.number)):
         xs = [xs]
+    try:
+        xs = list(xs)
+    except TypeError:
+        raise InvalidInput(f"{name}: expected times (s, or texts such as \"10 min\"), got "
+                           f"{type(xs).__name__}") from None
     out = []
-    for x in xs:
+    for i, x in enumerate(xs):
         if isinstance(x, str):
             from ._imudrift import seconds_of as _seconds_of
 
             out.append(_seconds_of(name, x))
         else:
-            out.append(float(x))
+            out.append(_args.number(f"{name}[{i}]", x))
     return out
 
 
@@ -100,16 +107,16 @@ def spec(sensors, times=None, require=None, runs=None, seed=1, rate_hz=100.0, re
     if isinstance(sensors, (str, os.PathLike, Sensor)):
         sensors = [sensors]
     settings = {
-        "require": [] if require is None else _terms(require),
+        "require": [] if require is None else _terms("require", require),
         "times": None if times is None else _seconds_list("times", times),
-        "rate_hz": float(rate_hz),
-        "runs": None if runs is None else int(runs),
-        "seed": int(seed),
+        "rate_hz": _args.number("rate_hz", rate_hz),
+        "runs": _args.optional_integer("runs", runs),
+        "seed": _args.integer("seed", seed),
         "readback": bool(readback),
-        "readback_duration_s": None if readback_duration_s is None else float(readback_duration_s),
-        "only": None if only is None else _terms(only),
-        "without": [] if without is None else _terms(without),
-        "threads": None if threads is None else int(threads),
+        "readback_duration_s": _args.optional_number("readback_duration_s", readback_duration_s),
+        "only": None if only is None else _terms("only", only),
+        "without": [] if without is None else _terms("without", without),
+        "threads": _args.optional_integer("threads", threads),
     }
     return SpecResult(_spec([_sensor_arg(s) for s in sensors], settings))
 
@@ -127,7 +134,16 @@ def _log_arg(x, rate):
         r, source = rate, "<arrays>"
         cols = dict(x)
     else:
-        a = np.asarray(x, dtype=np.float64)
+        if x is None:
+            raise InvalidInput("logs: expected a path, a DataFrame, a dict of channels or an "
+                               "n x 6 array (gx gy gz ax ay az), got None")
+        a = np.asarray(x)
+        if a.dtype.kind not in "biufO":
+            raise InvalidInput(f"logs: expected an n x 6 array of real numbers, got dtype {a.dtype}")
+        try:
+            a = np.asarray(a, dtype=np.float64)
+        except (TypeError, ValueError, OverflowError) as e:
+            raise InvalidInput(f"logs: expected an n x 6 array of real numbers ({e})") from None
         if a.ndim != 2 or a.shape[1] != 6:
             raise InvalidInput(
                 f"logs: expected a path, a DataFrame, a dict of channels or an n x 6 array "
@@ -136,8 +152,8 @@ def _log_arg(x, rate):
         cols = {c: a[:, i] for i, c in enumerate(_CHANNELS)}
     if r is None:
         raise InvalidInput(f"{source}: rate: the sample rate in Hz is needed for samples given as arrays")
-    channels = [(str(k), np.ascontiguousarray(v, dtype=np.float64)) for k, v in cols.items()]
-    return {"source": str(source), "rate_hz": float(r), "channels": channels}
+    channels = [(str(k), _as_samples(v, f"{source}: {k}")) for k, v in cols.items()]
+    return {"source": str(source), "rate_hz": _args.number("rate", r), "channels": channels}
 
 
 def _logs(logs, rate):
@@ -204,17 +220,17 @@ def diagnose(logs, model, rate=None, gyro_unit=None, accel_unit=None, time_unit=
     >>> r.corrected.to_toml()
     """
     settings = {
-        "seed": int(seed),
-        "seeds": int(seeds),
-        "rounds": int(rounds),
+        "seed": _args.integer("seed", seed),
+        "seeds": _args.integer("seeds", seeds),
+        "rounds": _args.integer("rounds", rounds),
         "horizons": _seconds_list("horizons", horizons),
-        "min_delta_bic": float(min_delta_bic),
-        "tau_min": float(tau_min),
+        "min_delta_bic": _args.number("min_delta_bic", min_delta_bic),
+        "tau_min": _args.number("tau_min", tau_min),
         "drift_check": bool(drift_check),
-        "calibration": calibration,
-        "init": init,
-        "threads": None if threads is None else int(threads),
-        "latitude": None if latitude is None else float(latitude),
+        "calibration": _args.optional_text("calibration", calibration),
+        "init": _args.optional_text("init", init),
+        "threads": _args.optional_integer("threads", threads),
+        "latitude": _args.optional_number("latitude", latitude),
     }
     reader = reader_settings(rate, gyro_unit, accel_unit, time_unit, columns, topic)
     held = [] if check is None else _logs(check, rate)
@@ -272,16 +288,16 @@ def drift(logs, model, rate=None, gyro_unit=None, accel_unit=None, time_unit=Non
     >>> r.to_pandas().query("verdict != 'inside'")
     """
     settings = {
-        "calibration": str(calibration),
-        "init": str(init),
+        "calibration": _args.text("calibration", calibration),
+        "init": _args.text("init", init),
         "horizons": _seconds_list("horizons", horizons),
         "overlap": bool(overlap),
-        "replicates": int(replicates),
+        "replicates": _args.integer("replicates", replicates),
         "exact_parameters": bool(exact_parameters),
         "one_structure": bool(one_structure),
-        "seed": int(seed),
-        "threads": None if threads is None else int(threads),
-        "latitude": None if latitude is None else float(latitude),
+        "seed": _args.integer("seed", seed),
+        "threads": _args.optional_integer("threads", threads),
+        "latitude": _args.optional_number("latitude", latitude),
     }
     reader = reader_settings(rate, gyro_unit, accel_unit, time_unit, columns, topic)
     return DriftResult(_drift(_logs(logs, rate), _sensor_arg(model), reader, settings))

@@ -3,6 +3,8 @@
 import os
 
 from ._imudrift import generate_columns as _generate
+from ._imudrift import sensor_source as _source
+from . import _args
 
 
 def generate(sensor, duration_s, rate_hz, seed=1, run=0, only=None, without=None):
@@ -27,17 +29,18 @@ def generate(sensor, duration_s, rate_hz, seed=1, run=0, only=None, without=None
         raise ImportError("imudrift.generate needs pandas: pip install pandas") from None
     if getattr(sensor, "_text", None) is not None:
         source, text = sensor._source, sensor._text
-    elif isinstance(sensor, os.PathLike) or (isinstance(sensor, str) and "\n" not in sensor and os.path.isfile(sensor)):
-        source = os.fspath(sensor)
-        with open(source, encoding="utf-8") as f:
-            text = f.read()
+    elif isinstance(sensor, os.PathLike):
+        text, source = _source(os.fspath(sensor), True)
     else:
-        source, text = "<sensor text>", str(sensor)
-    as_list = lambda t: [t] if isinstance(t, str) else list(t)
-    raw = _generate(text, source, float(duration_s), float(rate_hz), int(seed), int(run),
-                    None if only is None else as_list(only),
-                    [] if without is None else as_list(without))
+        # A path names the file; a model's text is read as such (request::files, the rule).
+        text, source = _source(_args.text("sensor", sensor), False)
+    duration_s = _args.number("duration_s", duration_s)
+    rate_hz = _args.number("rate_hz", rate_hz)
+    seed, run = _args.integer("seed", seed), _args.integer("run", run)
+    raw = _generate(text, source, duration_s, rate_hz, seed, run,
+                    None if only is None else _args.texts("only", only),
+                    [] if without is None else _args.texts("without", without))
     name = raw.pop("sensor")
     df = pd.DataFrame(raw)
-    df.attrs.update(sensor=name, seed=int(seed), run=int(run), rate_hz=float(rate_hz))
+    df.attrs.update(sensor=name, seed=seed, run=run, rate_hz=rate_hz)
     return df

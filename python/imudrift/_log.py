@@ -1,17 +1,27 @@
 """``imudrift.read_log``: a log file read by the command line's reader, as a pandas DataFrame."""
 
+import os
+
+from ._imudrift import InvalidInput
 from ._imudrift import read_log_columns as _read
+from . import _args
 
 
 def reader_settings(rate, gyro_unit, accel_unit, time_unit, columns, topic):
     """The reader's settings as the compiled module takes them (``read_log``'s arguments)."""
+    if columns is not None:
+        try:
+            columns = [(str(k), str(v)) for k, v in dict(columns).items()]
+        except (TypeError, ValueError):
+            raise InvalidInput(f"columns: expected a dict such as {{\"gx\": \"my_column\"}}, "
+                               f"got {type(columns).__name__}") from None
     return {
-        "rate": None if rate is None else float(rate),
-        "gyro_unit": gyro_unit,
-        "accel_unit": accel_unit,
-        "time_unit": time_unit,
-        "columns": None if columns is None else [(str(k), str(v)) for k, v in dict(columns).items()],
-        "topic": topic,
+        "rate": _args.optional_number("rate", rate),
+        "gyro_unit": _args.optional_text("gyro_unit", gyro_unit),
+        "accel_unit": _args.optional_text("accel_unit", accel_unit),
+        "time_unit": _args.optional_text("time_unit", time_unit),
+        "columns": columns,
+        "topic": _args.optional_text("topic", topic),
     }
 
 
@@ -34,7 +44,9 @@ def read_log(path, rate=None, gyro_unit=None, accel_unit=None, time_unit=None, c
         import pandas as pd
     except ImportError:
         raise ImportError("imudrift.read_log needs pandas: pip install pandas") from None
-    raw = _read(str(path), reader_settings(rate, gyro_unit, accel_unit, time_unit, columns, topic))
+    if not isinstance(path, (str, os.PathLike)):
+        raise InvalidInput(f"path: expected a file path, got {type(path).__name__}")
+    raw = _read(os.fspath(path), reader_settings(rate, gyro_unit, accel_unit, time_unit, columns, topic))
     data = {} if raw["t"] is None else {"t": raw["t"]}
     data.update(raw["channels"])
     df = pd.DataFrame(data)

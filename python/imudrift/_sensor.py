@@ -4,7 +4,10 @@ import json
 import os
 
 from ._imudrift import sensor_noise_file as _noise_file
+from ._imudrift import InvalidInput
 from ._imudrift import sensor_parse as _parse
+from ._imudrift import sensor_source as _source
+from . import _args
 from ._imudrift import sensor_toml_of_json as _toml_of_json
 
 
@@ -27,17 +30,20 @@ class Sensor:
         if isinstance(x, Sensor):
             text, src = x._text, x._source
         elif isinstance(x, dict):
-            text, src = _toml_of_json(json.dumps(x)), "<sensor dict>.toml"
-        elif isinstance(x, os.PathLike) or (isinstance(x, str) and "\n" not in x and os.path.isfile(x)):
-            src = os.fspath(x)
-            with open(src, encoding="utf-8") as f:
-                text = f.read()
-        elif isinstance(x, str) and "\n" not in x and x.strip().lower().endswith((".toml", ".yaml", ".yml")):
-            raise FileNotFoundError(f"cannot read {x} as a sensor model: no such file")
+            try:
+                as_json = json.dumps(x)
+            except (TypeError, ValueError) as e:
+                raise InvalidInput(f"sensor dict: {e}") from None
+            text, src = _toml_of_json(as_json), "<sensor dict>.toml"
+        elif isinstance(x, os.PathLike):
+            text, src = _source(os.fspath(x), True)
         elif isinstance(x, str):
-            text, src = x, "<sensor text>"
+            # An existing path is the file (a directory one that cannot be read); a line that is
+            # neither a path nor a model's text is a missing file (request::files, the rule).
+            text, src = _source(x, False)
         else:
-            raise TypeError(f"Sensor: expected a path, a text or a dict, got {type(x).__name__}")
+            raise InvalidInput(
+                f"Sensor: expected a path, a text or a dict, got {type(x).__name__}")
         self._text = text
         self._source = source if source is not None else src
         parsed = _parse(self._text, self._source)
@@ -67,7 +73,8 @@ class Sensor:
         noise density and random walk, the worst axis, per-axis values in comments. A model
         without a rate random walk gets the largest one its Allan curve allows (octave taus from
         1 / rate_hz to 1e4 s)."""
-        return _noise_file(self._text, self._source, flavor, float(rate_hz), rostopic)
+        return _noise_file(self._text, self._source, _args.text("flavor", flavor),
+                           _args.number("rate_hz", rate_hz), _args.text("rostopic", rostopic))
 
     def to_dict(self):
         """The TOML's keys and values as a dict (needs Python 3.11's tomllib or tomli)."""
@@ -101,6 +108,6 @@ def plan(sensor, uncertainty=0.1, duration_s=None, rate_hz=100.0):
         except ValueError:
             u = float("nan")
     else:
-        u = float(uncertainty)
-    d = None if duration_s is None else float(duration_s)
-    return json.loads(_plan(s._text, s._source, u, d, float(rate_hz)))
+        u = _args.number("uncertainty", uncertainty)
+    d = _args.optional_number("duration_s", duration_s)
+    return json.loads(_plan(s._text, s._source, u, d, _args.number("rate_hz", rate_hz)))

@@ -4,6 +4,8 @@
 import os
 
 from ._document import Document
+from ._imudrift import InvalidInput, LogUnreadable
+from . import _args
 from ._imudrift import merge_shards as _merge
 from ._imudrift import simulate_run as _simulate
 from ._imudrift import simulate_shard_bytes as _shard
@@ -60,21 +62,20 @@ def _subject(x):
         return (text, x._source)
     if isinstance(x, (str, os.PathLike)):
         return os.fspath(x)
-    raise TypeError(
-        f"expected a scenario or sensor file path or an imudrift.Sensor, got {type(x).__name__}")
+    raise InvalidInput(
+        f"scenario: expected a scenario or sensor file path or an imudrift.Sensor, got {type(x).__name__}")
 
 
 def _settings(runs, seed, duration_s, rate_hz, only, without, ablation, threads):
-    as_list = lambda t: [t] if isinstance(t, str) else list(t)
     return {
-        "runs": None if runs is None else int(runs),
-        "seed": None if seed is None else int(seed),
-        "duration_s": None if duration_s is None else float(duration_s),
-        "rate_hz": None if rate_hz is None else float(rate_hz),
-        "only": None if only is None else as_list(only),
-        "without": [] if without is None else as_list(without),
-        "ablation": ablation,
-        "threads": None if threads is None else int(threads),
+        "runs": _args.optional_integer("runs", runs),
+        "seed": _args.optional_integer("seed", seed),
+        "duration_s": _args.optional_number("duration_s", duration_s),
+        "rate_hz": _args.optional_number("rate_hz", rate_hz),
+        "only": None if only is None else _args.texts("only", only),
+        "without": [] if without is None else _args.texts("without", without),
+        "ablation": None if ablation is None else bool(ablation),
+        "threads": _args.optional_integer("threads", threads),
     }
 
 
@@ -110,17 +111,31 @@ def simulate_shard(scenario, index, count, runs=None, seed=None, threads=None, d
     True
     """
     s = _settings(runs, seed, duration_s, rate_hz, only, without, ablation, threads)
-    return _shard(_subject(scenario), int(index), int(count), s)
+    return _shard(_subject(scenario), _args.integer("index", index),
+                  _args.integer("count", count), s)
 
 
 def merge(shards):
     """``imudrift merge``: the shard files' bytes of :func:`simulate_shard` (or the CLI's shard
     files, read as bytes or given as paths), all ``count`` of them in any order, merged into the
     :class:`SimulateResult` a single :func:`simulate` gives."""
+    if isinstance(shards, (str, bytes, os.PathLike)):
+        shards = [shards]
+    try:
+        shards = list(shards)
+    except TypeError:
+        raise InvalidInput(
+            f"shards: expected a list of shards' bytes or paths, got {type(shards).__name__}") from None
     data = []
-    for s in shards:
+    for i, s in enumerate(shards):
         if isinstance(s, (str, os.PathLike)):
-            with open(s, "rb") as f:
-                s = f.read()
+            try:
+                with open(s, "rb") as f:
+                    s = f.read()
+            except OSError as e:
+                raise LogUnreadable(f"cannot read {os.fspath(s)} as a shard file: {e.strerror}") from None
+        if not isinstance(s, (bytes, bytearray, memoryview)):
+            raise InvalidInput(
+                f"shards[{i}]: expected a shard's bytes or a shard file's path, got {type(s).__name__}")
         data.append(bytes(s))
     return SimulateResult(_merge(data))

@@ -19,20 +19,27 @@ arrays, equal to allantools' results (tested to 1e-9 relative). The sums are tho
   ``estimator="totdev"`` follows Stable32.
 
 Where this module departs from allantools: bad input raises :class:`imudrift.InvalidInput` (a
-``ValueError``): empty data, a NaN or infinite sample (allantools trims NaNs at the ends of
-frequency data), a rate that is not finite and > 0, an unknown ``data_type`` or ``taus`` keyword,
-and a tau list that leaves no point (allantools raises ``UserWarning``). The GIL is released
+``ValueError``) with the request layer's message, as ``imudrift allan`` refuses it: samples an
+analysis cannot use (fewer than 2, a NaN or infinite sample (allantools trims NaNs at the ends
+of frequency data), a magnitude of 1e100 or more, all one value: allantools gives deviations of
+inf or 0), a rate outside 1e-6 to 1e9 Hz, an unknown ``data_type`` or ``taus`` keyword, an
+averaging time that is not finite and > 0 (allantools drops it), and a tau list that leaves no
+point (allantools raises ``UserWarning``). The GIL is released
 while the deviations are computed.
 """
 
 from ._imudrift import allantools_dev as _dev
 from ._samples import as_samples as _as_samples
+from . import _args
 
 __all__ = ["adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "totdev"]
 
 
 def _run(function, data, rate, data_type, taus):
-    return _dev(_as_samples(data), float(rate), data_type, function, taus)
+    if taus is not None and not isinstance(taus, str):
+        taus = _args.numbers_list("taus", taus)
+    return _dev(_as_samples(data), _args.number("rate", rate),
+                _args.text("data_type", data_type), function, taus)
 
 
 def adev(data, rate=1.0, data_type="phase", taus=None):

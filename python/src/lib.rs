@@ -67,12 +67,6 @@ fn samples(data: &PyReadonlyArray1<'_, f64>) -> PyResult<Vec<f64>> {
     if data.is_empty() {
         return Err(invalid("data is empty: expected samples".into()));
     }
-    if let Some(i) = data.iter().position(|v| !v.is_finite()) {
-        return Err(invalid(format!(
-            "data[{i}] is {}: every sample must be finite (a NaN gap is not bridged)",
-            data[i]
-        )));
-    }
     // One spare slot: the phase of n rate samples has n + 1 points and is built in this buffer
     // (`Series::from_rate`), which would otherwise be reallocated and copied for the last one.
     let mut owned = Vec::with_capacity(data.len() + 1);
@@ -80,16 +74,9 @@ fn samples(data: &PyReadonlyArray1<'_, f64>) -> PyResult<Vec<f64>> {
     Ok(owned)
 }
 
-/// Averaging factors of averaging times in seconds: allantools `tau_generator`,
-/// m = round(tau * rate) (half to even, numpy's `round`), kept when 0 < m < `n_phase`.
-fn factors_of_seconds(taus: &[f64], rate: f64, n_phase: usize) -> TauGrid {
-    let ms = taus
-        .iter()
-        .map(|t| (t * rate).round_ties_even())
-        .filter(|&m| m > 0.0 && m < n_phase as f64)
-        .map(|m| m as usize)
-        .collect();
-    TauGrid::Explicit(ms)
+/// The averaging factors of a tau list given in seconds (`request::allan::factors_of_seconds`).
+fn factors_of_seconds(taus: &[f64], rate: f64, n_phase: usize) -> PyResult<TauGrid> {
+    request::allan::factors_of_seconds(taus, rate, n_phase).map_err(allan_error)
 }
 
 /// Number of phase points the data gives (rate samples are integrated from x_0 = 0).
@@ -109,20 +96,11 @@ fn estimator(name: &str) -> PyResult<Estimator> {
     })
 }
 
-/// The first non-finite sample of `data`, as the error that names it.
-fn non_finite(data: &[f64]) -> Option<PyErr> {
-    let i = data.iter().position(|v| !v.is_finite())?;
-    Some(invalid(format!(
-        "data[{i}] is {}: every sample must be finite (a NaN gap is not bridged)",
-        data[i]
-    )))
-}
-
 /// The deviation curve from `allan`, computed with the GIL released on the numpy array in place
 /// (no copy: as numpy's own functions do, the array is read while other Python threads run, so
-/// it must not be changed meanwhile). Non-finite samples are refused: phase data by a scan
-/// first, rate data by its integral (any NaN or infinity makes the phase's mean, and so its
-/// last point, non-finite; the scan then finds it).
+/// it must not be changed meanwhile). Samples an analysis cannot use are refused first, by the
+/// rules of a log's samples (`request::allan::check_samples`: at least 2, finite, of magnitude
+/// below 1e100, not all one value).
 fn curve(
     py: Python<'_>,
     data: &[f64],
@@ -151,23 +129,11 @@ fn curve(
         None => None,
     };
     sim::detached(py, move || {
+        request::allan::check_samples(data).map_err(allan_error)?;
         let series = match phase_out {
-            None => {
-                if let Some(e) = non_finite(data) {
-                    return Err(e);
-                }
-                Series::new(data, DataKind::Phase, tau0_s)
-            }
+            None => Series::new(data, DataKind::Phase, tau0_s),
             Some(out) => {
                 allan::rate_to_phase_into(data, tau0_s, out);
-                if !out.last().is_some_and(|x| x.is_finite()) {
-                    return Err(non_finite(data).unwrap_or_else(|| {
-                        invalid(
-                            "the samples' sum overflows: their values are too large to integrate"
-                                .into(),
-                        )
-                    }));
-                }
                 // The estimators' sums need only the phase (allantools' functions identify no
                 // noise type): the integrated rate is used as phase data.
                 Series::new(out, DataKind::Phase, tau0_s)
@@ -213,7 +179,7 @@ fn allantools_dev<'py>(
     let grid = match taus {
         None => TauGrid::Octave,
         Some(TausArg::Seconds(s)) if s.is_empty() => TauGrid::Octave,
-        Some(TausArg::Seconds(s)) => factors_of_seconds(&s, rate, n_phase),
+        Some(TausArg::Seconds(s)) => factors_of_seconds(&s, rate, n_phase)?,
         Some(TausArg::Name(name)) => match name.as_str() {
             "octave" => TauGrid::Octave,
             "decade" => TauGrid::Decade,
@@ -233,11 +199,7 @@ fn allantools_dev<'py>(
     };
     let n = data.len();
     let points = curve(py, data, kind, rate, est, grid, opts)?;
-    if points.is_empty() {
-        return Err(invalid(format!(
-            "{function}: {n} samples leave no averaging time of the tau list with 2 or more terms"
-        )));
-    }
+    request::allan::check_points(function, n, &points).map_err(allan_error)?;
     // allantools reports tau = m / rate.
     let taus: Vec<f64> = points.iter().map(|p| p.m as f64 / rate).collect();
     let devs: Vec<f64> = points
@@ -375,20 +337,32 @@ fn allan_analysis<'py>(
                 "taus {text:?}: expected octave, decade, all, N/decade, or averaging times in seconds"
             ))
         })?,
-        TausArg::Seconds(s) => factors_of_seconds(s, rate, n_phase),
+        TausArg::Seconds(s) => factors_of_seconds(s, rate, n_phase)?,
     };
+    let n = data.len();
+    // Ctrl-C stops the analysis within a second (`sim::run_until`: the library reads the flag
+    // between its stages and before each simulated null log).
     let allan::Analysis {
         points, fit, sheet, ..
-    } = sim::detached(py, move || {
+    } = sim::run_until(py, None, |stop| {
         let tau0_s = 1.0 / rate;
         let quiet = |_: &str| {};
         match kind {
-            DataKind::Rate => allan::analyse_rate(data, tau0_s, est, &grid, &opts, &quiet),
-            DataKind::Phase => {
-                allan::analyse(&Series::new(&data, kind, tau0_s), est, &grid, &opts, &quiet)
+            DataKind::Rate => {
+                allan::analyse_rate_until(data, tau0_s, est, &grid, &opts, &quiet, stop)
             }
+            DataKind::Phase => allan::analyse_until(
+                &Series::new(&data, kind, tau0_s),
+                est,
+                &grid,
+                &opts,
+                &quiet,
+                stop,
+            ),
         }
     })?;
+    // The rule of a channel's curve (`request::allan::check_curve`; the CLI applies the same).
+    request::allan::check_curve("data", None, n, &points).map_err(allan_error)?;
     let d = PyDict::new(py);
     let col = |f: &dyn Fn(&AllanPoint) -> f64| -> Vec<f64> { points.iter().map(f).collect() };
     d.set_item("tau", col(&|p| p.tau_s).into_pyarray(py))?;
@@ -653,6 +627,7 @@ fn _imudrift(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sim::simulate_shard_bytes, m)?)?;
     m.add_function(wrap_pyfunction!(sim::merge_shards, m)?)?;
     m.add_function(wrap_pyfunction!(sensor::sensor_parse, m)?)?;
+    m.add_function(wrap_pyfunction!(sensor::sensor_source, m)?)?;
     m.add_function(wrap_pyfunction!(sensor::sensor_toml_of_json, m)?)?;
     m.add_function(wrap_pyfunction!(sensor::sensor_noise_file, m)?)?;
     m.add_function(wrap_pyfunction!(sensor::sensor_plan, m)?)?;

@@ -13,6 +13,24 @@ fn model(text: &str, source: &str) -> PyResult<SensorModel> {
     SensorModel::from_text(text, source).map_err(|e| invalid(message(&e)))
 }
 
+/// The (text, source name) of a sensor model named by one argument: a path object (`is_path`) is
+/// read as a file; a text as `request::files::SensorSource::of_argument` says (an existing path
+/// is the file, a directory one that cannot be read; a line that is neither a path nor a
+/// model's text is a missing file). Each file is read with the CLI's size bound; one that cannot
+/// be read is a `LogUnreadable` (an `OSError`) naming it.
+#[pyfunction]
+pub fn sensor_source(arg: &str, is_path: bool) -> PyResult<(String, String)> {
+    let source = if is_path {
+        request::SensorSource::Path(arg.into())
+    } else {
+        request::SensorSource::of_argument(arg).map_err(crate::sim::request_error)?
+    };
+    let file = source
+        .read()
+        .map_err(|e| crate::sim::request_error(e.into()))?;
+    Ok((file.text, file.name))
+}
+
 /// The model of a text (checked as the CLI checks it): its `name` and its canonical `toml`.
 #[pyfunction]
 pub fn sensor_parse<'py>(

@@ -3,9 +3,10 @@
 
 use crate::curve;
 use crate::fit::Fit;
-use crate::null::null_thresholds;
+use crate::null::null_thresholds_until;
 use crate::sheet::{sheet_readings, term_status, SheetReadings, TermStatus};
 use crate::{AllanPoint, Estimator, Options, Series, TauGrid};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// A channel's analysis.
 #[derive(Clone, Debug)]
@@ -33,9 +34,27 @@ pub fn analyse_rate(
     opts: &Options,
     stage: &(dyn Fn(&str) + Sync),
 ) -> Analysis {
+    let never = AtomicBool::new(false);
+    analyse_rate_until(data, dt_s, est, grid, opts, stage, &never)
+        .expect("an analysis without a stop request runs to its end")
+}
+
+/// [`analyse_rate`] that gives up when `stop` is set (Ctrl-C in a front end): `None` then.
+/// The flag is read between the stages and before each simulated null log
+/// ([`crate::null::null_thresholds_until`]), so a stop lands within one stage's pass over the
+/// samples (the deviations, the noise identification) or one null log per worker thread.
+pub fn analyse_rate_until(
+    data: Vec<f64>,
+    dt_s: f64,
+    est: Estimator,
+    grid: &TauGrid,
+    opts: &Options,
+    stage: &(dyn Fn(&str) + Sync),
+    stop: &AtomicBool,
+) -> Option<Analysis> {
     let series = Series::from_rate(data, dt_s);
     stage("phase");
-    analyse(&series, est, grid, opts, stage)
+    analyse_until(&series, est, grid, opts, stage, stop)
 }
 
 /// [`analyse_rate`] of a prepared series (rate or phase samples): every stage after the phase.
@@ -48,29 +67,61 @@ pub fn analyse(
     opts: &Options,
     stage: &(dyn Fn(&str) + Sync),
 ) -> Analysis {
+    let never = AtomicBool::new(false);
+    analyse_until(series, est, grid, opts, stage, &never)
+        .expect("an analysis without a stop request runs to its end")
+}
+
+/// [`analyse`] that gives up when `stop` is set: `None` then ([`analyse_rate_until`]).
+pub fn analyse_until(
+    series: &Series,
+    est: Estimator,
+    grid: &TauGrid,
+    opts: &Options,
+    stage: &(dyn Fn(&str) + Sync),
+    stop: &AtomicBool,
+) -> Option<Analysis> {
+    let stopped = || stop.load(Ordering::Relaxed);
+    if stopped() {
+        return None;
+    }
     let allan_variance = matches!(
         est,
         Estimator::NonOverlapping | Estimator::Overlapping | Estimator::Total
     );
     let (points, fit) = if allan_variance {
-        let (p, f) = curve::curve_and_fit(series, est, grid, opts, stage);
+        let (p, f) = curve::curve_and_fit(series, est, grid, opts, stage, stop)?;
         (p, Some(f))
     } else {
-        (curve::curve(series, est, grid, opts, stage), None)
+        (curve::curve(series, est, grid, opts, stage, stop)?, None)
     };
-    let terms = fit.as_ref().map(|f| {
-        let null = null_thresholds(series.rate_len(), series.tau0_s(), est, grid, opts);
-        term_status(f, &points, opts.confidence, &null)
-    });
+    if stopped() {
+        return None;
+    }
+    let terms = match fit.as_ref() {
+        Some(f) => {
+            let null = null_thresholds_until(
+                series.rate_len(),
+                series.tau0_s(),
+                est,
+                grid,
+                opts,
+                &|_, _| {},
+                stop,
+            )?;
+            Some(term_status(f, &points, opts.confidence, &null))
+        }
+        None => None,
+    };
     let sheet = fit
         .as_ref()
         .zip(terms.as_ref())
         .map(|(f, t)| sheet_readings(&points, f, opts.confidence, t));
     stage("resolved terms");
-    Analysis {
+    Some(Analysis {
         points,
         fit,
         sheet,
         terms,
-    }
+    })
 }

@@ -4,6 +4,7 @@
 use crate::fit::{fit_ieee952, Fit};
 use crate::{AllanPoint, EdfMethod, Estimator, Options, Series, TauGrid};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The deviation curve with its intervals and the IEEE 952 fit (no readings: the null
 /// simulation runs this on its logs).
@@ -13,40 +14,49 @@ pub(crate) fn curve_and_fit(
     grid: &TauGrid,
     opts: &Options,
     stage: &(dyn Fn(&str) + Sync),
-) -> (Vec<AllanPoint>, Fit) {
-    let points = curve(series, est, grid, opts, stage);
+    stop: &AtomicBool,
+) -> Option<(Vec<AllanPoint>, Fit)> {
+    let points = curve(series, est, grid, opts, stage, stop)?;
     let fit = fit_ieee952(&points);
     stage("fit");
-    (points, fit)
+    Some((points, fit))
 }
 
-/// The deviations, the noise identification and the intervals.
+/// The deviations, the noise identification and the intervals; `None` when `stop` is set (read
+/// before each factor's deviation pass or group of them, and before each factor's noise
+/// identification).
 pub(crate) fn curve(
     series: &Series,
     est: Estimator,
     grid: &TauGrid,
     opts: &Options,
     stage: &(dyn Fn(&str) + Sync),
-) -> Vec<AllanPoint> {
+    stop: &AtomicBool,
+) -> Option<Vec<AllanPoint>> {
+    let stopped = || stop.load(Ordering::Relaxed);
     let ms = series.grid_m(est, grid, opts.stable32_stop);
     let identify = opts.edf != EdfMethod::None && opts.alpha.is_none();
     let d = est.difference_order();
-    let (mut points, alphas) = rayon::join(
+    let (points, alphas) = rayon::join(
         || {
-            let r = series.raw_points(est, &ms);
+            let r = series.raw_points_until(est, &ms, stop);
             stage("deviations");
             r
         },
-        || -> Vec<(usize, Option<i32>)> {
+        || -> Option<Vec<(usize, Option<i32>)>> {
             if identify {
-                let r = ms.par_iter().map(|&m| (m, series.noise_id(m, d))).collect();
+                let r = ms
+                    .par_iter()
+                    .map(|&m| (!stopped()).then(|| (m, series.noise_id(m, d))))
+                    .collect();
                 stage("noise identification");
                 r
             } else {
-                ms.iter().map(|&m| (m, opts.alpha)).collect()
+                Some(ms.iter().map(|&m| (m, opts.alpha)).collect())
             }
         },
     );
+    let (mut points, alphas) = (points?, alphas?);
     if opts.edf != EdfMethod::None {
         let alphas: Vec<Option<i32>> = points
             .iter()
@@ -55,5 +65,5 @@ pub(crate) fn curve(
         series.attach_intervals_with_alphas(est, &mut points, &alphas, opts);
     }
     stage("intervals");
-    points
+    Some(points)
 }

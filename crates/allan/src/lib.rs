@@ -68,7 +68,7 @@ mod phase;
 mod series;
 mod sum;
 
-pub use analysis::{analyse, analyse_rate, Analysis};
+pub use analysis::{analyse, analyse_rate, analyse_rate_until, analyse_until, Analysis};
 pub use grid::TauGrid;
 pub use phase::{rate_to_phase, rate_to_phase_in_place, rate_to_phase_into};
 pub use series::{deviation, deviation_with, Series};

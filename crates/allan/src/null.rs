@@ -38,6 +38,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 
 /// The share of the simulated statistics that forms the tail fitted beyond the empirical
@@ -161,15 +162,31 @@ pub fn null_thresholds_with(
     opts: &Options,
     tick: &(dyn Fn(usize, usize) + Sync),
 ) -> NullThresholds {
+    let never = AtomicBool::new(false);
+    null_thresholds_until(n_rate, tau0_s, est, grid, opts, tick, &never)
+        .expect("a simulation without a stop request runs to its end")
+}
+
+/// [`null_thresholds_with`] that gives up when `stop` is set (read before each null log, one
+/// atomic load each): `None` then, and nothing is cached.
+pub fn null_thresholds_until(
+    n_rate: usize,
+    tau0_s: f64,
+    est: Estimator,
+    grid: &TauGrid,
+    opts: &Options,
+    tick: &(dyn Fn(usize, usize) + Sync),
+    stop: &AtomicBool,
+) -> Option<NullThresholds> {
     if opts.claims.replicates == 0 {
-        return NullThresholds {
+        return Some(NullThresholds {
             tail_start: [f64::NAN; 5],
             tail_scale: [f64::NAN; 5],
             threshold: [f64::INFINITY; 5],
-        };
+        });
     }
     if let Some(t) = tabulated_thresholds(n_rate, est, grid, opts) {
-        return t;
+        return Some(t);
     }
     let key: Key = (
         n_rate,
@@ -183,13 +200,13 @@ pub fn null_thresholds_with(
         .ok()
         .and_then(|c| c.as_ref().and_then(|m| m.get(&key).copied()))
     {
-        return t;
+        return Some(t);
     }
-    let t = simulated_thresholds_with(n_rate, tau0_s, est, grid, opts, tick);
+    let t = simulated_thresholds_until(n_rate, tau0_s, est, grid, opts, tick, stop)?;
     if let Ok(mut c) = CACHE.lock() {
         c.get_or_insert_with(HashMap::new).insert(key, t);
     }
-    t
+    Some(t)
 }
 
 /// One null log's statistics: those of Q, B, K, R from white rate noise, N's from white angle
@@ -204,20 +221,39 @@ pub fn replicate(
     grid: &TauGrid,
     o: &Options,
 ) -> [f64; 5] {
+    let never = AtomicBool::new(false);
+    replicate_until(i, n_rate, tau0_s, est, grid, o, &never)
+        .expect("a null log without a stop request runs to its end")
+}
+
+/// [`replicate`] that gives up when `stop` is set (`None` then): the flag is read by each of
+/// its two logs' curves (per factor), so a stop lands within one pass over a log's samples.
+fn replicate_until(
+    i: usize,
+    n_rate: usize,
+    tau0_s: f64,
+    est: Estimator,
+    grid: &TauGrid,
+    o: &Options,
+    stop: &AtomicBool,
+) -> Option<[f64; 5]> {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(0x6e75_6c6c ^ i as u64);
     let mut draw =
         |n: usize| -> Vec<f64> { (0..n).map(|_| StandardNormal.sample(&mut rng)).collect() };
     let stats_of = |data: Vec<f64>| {
         let series = Series::from_rate(data, tau0_s);
-        let (points, fit) = crate::curve::curve_and_fit(&series, est, grid, o, &|_| {});
-        term_statistics(&points, &fit)
+        let (points, fit) = crate::curve::curve_and_fit(&series, est, grid, o, &|_| {}, stop)?;
+        Some(term_statistics(&points, &fit))
     };
-    let white = stats_of(draw(n_rate));
+    let white = stats_of(draw(n_rate))?;
+    if stop.load(Ordering::Relaxed) {
+        return None;
+    }
     let angle = draw(n_rate + 1);
-    let white_angle = stats_of(angle.windows(2).map(|a| (a[1] - a[0]) / tau0_s).collect());
+    let white_angle = stats_of(angle.windows(2).map(|a| (a[1] - a[0]) / tau0_s).collect())?;
     let mut t = white;
     t[1] = white_angle[1];
-    t
+    Some(t)
 }
 
 /// The upper tail of simulated null statistics: the empirical (1 - [`TAIL_SHARE`]) quantile and
@@ -269,14 +305,35 @@ pub fn null_statistics(
     replicates: usize,
     tick: &(dyn Fn(usize, usize) + Sync),
 ) -> Vec<[f64; 5]> {
+    let never = AtomicBool::new(false);
+    null_statistics_until(n_rate, tau0_s, est, grid, opts, replicates, tick, &never)
+        .expect("a simulation without a stop request runs to its end")
+}
+
+/// [`null_statistics`] that gives up when `stop` is set (read before each null log and by its
+/// curves, per factor): `None`.
+#[allow(clippy::too_many_arguments)]
+pub fn null_statistics_until(
+    n_rate: usize,
+    tau0_s: f64,
+    est: Estimator,
+    grid: &TauGrid,
+    opts: &Options,
+    replicates: usize,
+    tick: &(dyn Fn(usize, usize) + Sync),
+    stop: &AtomicBool,
+) -> Option<Vec<[f64; 5]>> {
     let done = std::sync::atomic::AtomicUsize::new(0);
     (0..replicates)
         .into_par_iter()
         .map(|i| {
-            let s = replicate(i, n_rate, tau0_s, est, grid, opts);
-            let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            if stop.load(Ordering::Relaxed) {
+                return None;
+            }
+            let s = replicate_until(i, n_rate, tau0_s, est, grid, opts, stop)?;
+            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
             tick(d, replicates);
-            s
+            Some(s)
         })
         .collect()
 }
@@ -290,21 +347,24 @@ pub fn simulated_thresholds(
     grid: &TauGrid,
     opts: &Options,
 ) -> NullThresholds {
-    simulated_thresholds_with(n_rate, tau0_s, est, grid, opts, &|_, _| {})
+    let never = AtomicBool::new(false);
+    simulated_thresholds_until(n_rate, tau0_s, est, grid, opts, &|_, _| {}, &never)
+        .expect("a simulation without a stop request runs to its end")
 }
 
-fn simulated_thresholds_with(
+fn simulated_thresholds_until(
     n_rate: usize,
     tau0_s: f64,
     est: Estimator,
     grid: &TauGrid,
     opts: &Options,
     tick: &(dyn Fn(usize, usize) + Sync),
-) -> NullThresholds {
+    stop: &AtomicBool,
+) -> Option<NullThresholds> {
     let level = opts.claims;
     let r = level.replicates;
-    let stats = null_statistics(n_rate, tau0_s, est, grid, opts, r, tick);
-    match tail_of(&stats) {
+    let stats = null_statistics_until(n_rate, tau0_s, est, grid, opts, r, tick, stop)?;
+    Some(match tail_of(&stats) {
         Some((start, scale)) => {
             let share = (TAIL_SHARE * r as f64).floor() / r as f64;
             thresholds_of(start, scale, share, &level)
@@ -314,5 +374,5 @@ fn simulated_thresholds_with(
             tail_scale: [f64::NAN; 5],
             threshold: [f64::INFINITY; 5],
         },
-    }
+    })
 }

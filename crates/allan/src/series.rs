@@ -8,6 +8,12 @@ use crate::kernels::{
 use crate::phase::{rate_to_phase, rate_to_phase_in_place};
 use crate::{chi2, edf, AllanPoint, DataKind, EdfMethod, Estimator, Options, TauGrid};
 use std::borrow::Cow;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Factors of the overlapping estimators' shared passes between two reads of a stop flag
+/// ([`Series::raw_points_until`]): more than an octave or decade grid has (one pass), few enough
+/// that an "all" grid of a long record is stopped within a fraction of a second.
+pub(crate) const STOP_GROUP_FACTORS: usize = 64;
 
 /// A noise identification differs from the shorter tau's only when its estimate lies this many
 /// standard errors beyond the held type's rounding band (the normal 99.5 % point: a per-tau
@@ -110,13 +116,37 @@ impl<'a> Series<'a> {
     /// array is streamed from memory once instead of once per tau); the result is identical to
     /// [`Series::raw_point`] up to the order of the floating-point additions.
     pub fn raw_points(&self, est: Estimator, ms: &[usize]) -> Vec<AllanPoint> {
+        let never = AtomicBool::new(false);
+        self.raw_points_until(est, ms, &never)
+            .expect("deviations without a stop request run to their end")
+    }
+
+    /// [`Series::raw_points`] that gives up when `stop` is set (`None` then), read before each
+    /// factor's pass and, for the overlapping estimators, before each group of
+    /// `STOP_GROUP_FACTORS` factors of the shared passes (each factor's sum is its own lanes',
+    /// so the grouping leaves the result bit for bit the same; an octave or decade grid is one
+    /// group).
+    pub fn raw_points_until(
+        &self,
+        est: Estimator,
+        ms: &[usize],
+        stop: &AtomicBool,
+    ) -> Option<Vec<AllanPoint>> {
+        let stopped = || stop.load(Ordering::Relaxed);
         let multi = match est {
             Estimator::Overlapping => Some(2),
             Estimator::OverlappingHadamard => Some(3),
             _ => None,
         };
         let Some(order) = multi else {
-            return ms.iter().filter_map(|&m| self.raw_point(est, m)).collect();
+            let mut out = Vec::new();
+            for &m in ms {
+                if stopped() {
+                    return None;
+                }
+                out.extend(self.raw_point(est, m));
+            }
+            return Some(out);
         };
         let n = self.phase.len();
         let valid: Vec<usize> = ms
@@ -130,10 +160,21 @@ impl<'a> Series<'a> {
         // The blocked pass over the small factors and the streamed pass over the large ones run
         // side by side (each sum is computed by one thread in a fixed order: the result does not
         // depend on the threads; the large factors' sums are those of `raw_point`, bit for bit).
+        let in_groups = |ms: &[usize], sums: &dyn Fn(&[usize]) -> Vec<f64>| -> Option<Vec<f64>> {
+            let mut out = Vec::with_capacity(ms.len());
+            for group in ms.chunks(STOP_GROUP_FACTORS) {
+                if stopped() {
+                    return None;
+                }
+                out.extend(sums(group));
+            }
+            Some(out)
+        };
         let (sums, large_sums) = rayon::join(
-            || blocked_diff_sums_fast(&self.phase, &small, order),
-            || streamed_diff_sums_fast(&self.phase, &large, order),
+            || in_groups(&small, &|g| blocked_diff_sums_fast(&self.phase, g, order)),
+            || in_groups(&large, &|g| streamed_diff_sums_fast(&self.phase, g, order)),
         );
+        let (sums, large_sums) = (sums?, large_sums?);
         let large_points: Vec<AllanPoint> = large
             .iter()
             .zip(large_sums)
@@ -145,7 +186,7 @@ impl<'a> Series<'a> {
             .filter_map(|(&m, s)| self.point_from_sum(est, m, s, n - order * m))
             .collect();
         out.extend(large_points);
-        out
+        Some(out)
     }
 
     fn point_from_sum(

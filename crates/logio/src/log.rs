@@ -169,7 +169,7 @@ pub enum SeriesError {
     Name { source_name: String, name: String },
     #[error("{source_name}: {name} given twice")]
     Twice { source_name: String, name: String },
-    #[error("{source_name}: {name}[{index}] is {value}: every sample must be finite and of magnitude below {max:e}")]
+    #[error("{source_name}: {name}[{index}] is {value:e}: every sample must be finite and of magnitude below {max:e}")]
     Value {
         source_name: String,
         name: String,

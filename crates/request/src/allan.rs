@@ -58,3 +58,74 @@ pub fn check_samples(data: &[f64]) -> Result<()> {
     }
     Ok(())
 }
+
+/// Fewest averaging times with 9 or more intervals a channel's curve must give (a slope needs
+/// two).
+pub const MIN_USABLE_TAUS: usize = 2;
+
+/// Averaging factors of averaging times in seconds, as allantools' `tau_generator` makes them:
+/// m = round(tau * rate) (half to even, numpy's `round`), kept when 0 < m < `n_phase` (the
+/// number of phase points). A time that is not finite and > 0 is refused (allantools would give
+/// NaN or drop it without a word); times whose factor the samples cannot hold are dropped, as
+/// allantools does (the curve's own check then refuses a list that leaves none).
+pub fn factors_of_seconds(taus_s: &[f64], rate_hz: f64, n_phase: usize) -> Result<allan::TauGrid> {
+    if let Some(index) = taus_s.iter().position(|&t| !(t.is_finite() && t > 0.0)) {
+        return Err(RequestError::Tau {
+            index,
+            value: taus_s[index],
+        });
+    }
+    let ms = taus_s
+        .iter()
+        .map(|t| (t * rate_hz).round_ties_even())
+        .filter(|&m| m > 0.0 && m < n_phase as f64)
+        .map(|m| m as usize)
+        .collect();
+    Ok(allan::TauGrid::Explicit(ms))
+}
+
+/// Refuse a channel's curve with fewer than [`MIN_USABLE_TAUS`] averaging times of at least 9
+/// intervals (Woodman's rule), or with a deviation whose square (the variance the fit and the
+/// intervals work on) is not a normal double: 0 (the samples' variations cancel at that tau),
+/// below about 1.5e-154 (samples of magnitude 1e-160 or 1e-300: their variance underflows and
+/// the fit divides by it), or not finite. As `imudrift allan` does for each channel of a log and
+/// `imudrift.allan` for its samples (`channel`: the log's channel, when there is one).
+pub fn check_curve(
+    source_name: &str,
+    channel: Option<&str>,
+    samples: usize,
+    points: &[allan::AllanPoint],
+) -> Result<()> {
+    let usable = points.iter().filter(|p| p.woodman_ok()).count();
+    if usable < MIN_USABLE_TAUS {
+        return Err(RequestError::UnusableCurve {
+            source_name: source_name.to_string(),
+            channel: channel.map(str::to_string),
+            samples,
+            usable,
+            needed: MIN_USABLE_TAUS,
+            empty: points.is_empty(),
+        });
+    }
+    if let Some(p) = points.iter().find(|p| !(p.dev * p.dev).is_normal()) {
+        return Err(RequestError::DegenerateDeviation {
+            source_name: source_name.to_string(),
+            channel: channel.map(str::to_string),
+            tau_s: p.tau_s,
+            dev: p.dev,
+        });
+    }
+    Ok(())
+}
+
+/// Refuse a deviation function's result (allantools' conventions: any point of 2 or more terms)
+/// that has no point.
+pub fn check_points(function: &str, samples: usize, points: &[allan::AllanPoint]) -> Result<()> {
+    if points.is_empty() {
+        return Err(RequestError::NoPoint {
+            function: function.to_string(),
+            samples,
+        });
+    }
+    Ok(())
+}

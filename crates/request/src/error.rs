@@ -60,6 +60,16 @@ impl std::fmt::Display for FileError {
     }
 }
 
+/// A number as a message shows it: exactly, in scientific notation outside 1e-4 to 1e16 (a rate
+/// of 1e300 is "1e300", not its 301 digits).
+pub fn number(v: f64) -> String {
+    if v.is_finite() && v != 0.0 && !(1e-4..1e16).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
 /// Why a request cannot be carried out.
 #[derive(Debug)]
 pub enum RequestError {
@@ -178,6 +188,38 @@ pub enum RequestError {
         value: f64,
         spread: f64,
     },
+    /// An averaging time (s) that is not finite and > 0, at `index` of the list.
+    Tau {
+        index: usize,
+        value: f64,
+    },
+    /// A curve with fewer than `needed` averaging times of at least 9 intervals (Woodman's rule);
+    /// `channel` is the log's channel, when the samples are one.
+    UnusableCurve {
+        source_name: String,
+        channel: Option<String>,
+        samples: usize,
+        usable: usize,
+        needed: usize,
+        /// No averaging time at all: the grid or tau list has none the samples can hold.
+        empty: bool,
+    },
+    /// A curve with a deviation whose square is not a normal double (0, underflowing, or not
+    /// finite): no fit or interval can use it.
+    DegenerateDeviation {
+        source_name: String,
+        channel: Option<String>,
+        tau_s: f64,
+        dev: f64,
+    },
+    /// A deviation function (allantools' conventions) whose tau list leaves no point.
+    NoPoint {
+        function: String,
+        samples: usize,
+    },
+    /// A sensor model named by a one-line text that is neither an existing path nor a model's
+    /// text.
+    NoSuchModel(String),
     /// A diagnosed model's own tables (`[fitted_on]`, `[[alternatives]]`) that do not read.
     ModelTables {
         name: String,
@@ -214,7 +256,7 @@ impl RequestError {
             RequestError::File(FileError {
                 problem: FileProblem::Io(_),
                 ..
-            })
+            }) | RequestError::NoSuchModel(_)
         )
     }
 
@@ -233,8 +275,9 @@ impl RequestError {
             RequestError::Job(e) => error_chain(&**e),
             RequestError::Terms { setting, message } => format!("{}: {message}", n(*setting)),
             RequestError::Rate(r) => format!(
-                "{}: expected a sample rate in Hz > 0, found {r}",
-                n(Setting::Rate)
+                "{}: expected a sample rate in Hz > 0, found {}",
+                n(Setting::Rate),
+                number(*r)
             ),
             RequestError::RateTooHigh { rate_hz, max_hz } => {
                 format!("{} {rate_hz}: expected at most {max_hz:e} Hz", n(Setting::Rate))
@@ -352,14 +395,16 @@ impl RequestError {
             RequestError::Series(e) => e.to_string(),
             RequestError::ModelTables { name, message } => format!("{name}: {message}"),
             RequestError::LogRate(r) => format!(
-                "{} {r}: expected a sample rate in Hz from {:e} to {:e}",
+                "{} {}: expected a sample rate in Hz from {:e} to {:e}",
                 n(Setting::Rate),
+                number(*r),
                 logio::MIN_LOG_RATE_HZ,
                 logio::MAX_LOG_RATE_HZ
             ),
             RequestError::Confidence(c) => format!(
-                "{} {c}: expected a level between 0 and 1 (0 % and 100 %)",
-                n(Setting::Confidence)
+                "{} {}: expected a level between 0 and 1 (0 % and 100 %)",
+                n(Setting::Confidence),
+                number(*c)
             ),
             RequestError::ConfidenceText(t) => format!(
                 "{}: expected 1sigma, a fraction such as 0.95 or a percentage such as 95%, got `{t}`",
@@ -370,8 +415,9 @@ impl RequestError {
                 n(Setting::Data)
             ),
             RequestError::Sample { index, value } => format!(
-                "{}[{index}] is {value}: every sample must be finite and of magnitude below {:e} (a NaN gap is not bridged)",
+                "{}[{index}] is {}: every sample must be finite and of magnitude below {:e} (a NaN gap is not bridged)",
                 n(Setting::Data),
+                number(*value),
                 logio::MAX_ABS_VALUE
             ),
             RequestError::ConstantSamples { value, spread } => format!(
@@ -382,6 +428,59 @@ impl RequestError {
                 } else {
                     format!("the samples are {}", constant_text(*value, *spread))
                 }
+            ),
+            RequestError::Tau { index, value } => format!(
+                "{}[{index}] is {}: expected an averaging time in seconds, finite and > 0",
+                n(Setting::Taus),
+                number(*value)
+            ),
+            RequestError::UnusableCurve {
+                source_name,
+                channel,
+                samples,
+                usable,
+                needed,
+                empty,
+            } => format!(
+                "{source_name}: {samples} samples give {usable} averaging time(s) with at least 9 intervals (Woodman's rule){}; an Allan analysis needs at least {needed}: use a longer log{}",
+                channel
+                    .as_deref()
+                    .map(|c| format!(" for channel {c}"))
+                    .unwrap_or_default(),
+                if *empty {
+                    format!(
+                        " (the {} has no averaging factor this log can hold)",
+                        n(Setting::Taus)
+                    )
+                } else {
+                    String::new()
+                }
+            ),
+            RequestError::DegenerateDeviation {
+                source_name,
+                channel,
+                tau_s,
+                dev,
+            } => format!(
+                "{source_name}: the deviation{} at tau {} s is {}: its square is not a normal number (the samples' variations cancel there, or are too small to square: below about 1e-154), so no interval or fit can use it; {}",
+                channel
+                    .as_deref()
+                    .map(|c| format!(" of channel {c}"))
+                    .unwrap_or_default(),
+                number(*tau_s),
+                number(*dev),
+                if *dev == 0.0 || !dev.is_finite() {
+                    "check the samples"
+                } else {
+                    "scale the samples (another unit)"
+                }
+            ),
+            RequestError::NoPoint { function, samples } => format!(
+                "{function}: {samples} samples leave no averaging time of the {} with 2 or more terms",
+                n(Setting::Taus)
+            ),
+            RequestError::NoSuchModel(text) => format!(
+                "cannot read {text} as a sensor model: no such file (and not a model's text: a sensor TOML has `key = value` lines)"
             ),
             RequestError::SimulationMemory {
                 source_name,
@@ -416,10 +515,16 @@ impl RequestError {
             RequestError::MinDeltaBic(v) => {
                 format!("{} {v}: expected a number >= 0", n(Setting::MinDeltaBic))
             }
-            RequestError::TauMin(v) => format!("{} {v}: expected a time >= 0", n(Setting::TauMin)),
-            RequestError::Horizon(v) => {
-                format!("{}: expected times > 0, found {v}", n(Setting::Horizons))
-            }
+            RequestError::TauMin(v) => format!(
+                "{} {}: expected a time >= 0",
+                n(Setting::TauMin),
+                number(*v)
+            ),
+            RequestError::Horizon(v) => format!(
+                "{}: expected times > 0, found {}",
+                n(Setting::Horizons),
+                number(*v)
+            ),
             RequestError::Latitude(v) => format!(
                 "{} {v}: expected a latitude in [-89, 89] deg (the north-east-down frame is singular at the poles)",
                 n(Setting::Latitude)

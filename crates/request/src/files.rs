@@ -63,6 +63,25 @@ impl Default for SensorSource {
 }
 
 impl SensorSource {
+    /// A model as a front end's one text argument names it (Python's `Sensor("...")`, `model=`):
+    /// a text naming an existing path is that file (a directory is then a file that cannot be
+    /// read); another text of one line without `=` is neither a file nor a model's text (a
+    /// sensor TOML has `key = value` lines), and is refused as a missing file; anything else is
+    /// the model's text, named `<sensor text>` in messages.
+    pub fn of_argument(arg: &str) -> Result<SensorSource, crate::RequestError> {
+        let one_line = !arg.contains('\n');
+        if one_line && !arg.is_empty() && Path::new(arg).exists() {
+            return Ok(SensorSource::Path(PathBuf::from(arg)));
+        }
+        if one_line && !arg.contains('=') {
+            return Err(crate::RequestError::NoSuchModel(arg.to_string()));
+        }
+        Ok(SensorSource::Text {
+            text: arg.to_string(),
+            source: "<sensor text>".into(),
+        })
+    }
+
     /// The text and its name (a file read with [`read_config`]).
     pub fn read(&self) -> Result<TextFile, FileError> {
         match self {

@@ -181,6 +181,75 @@ mod tests {
         assert!(allan::parse_confidence("1.5").is_err());
     }
 
+    /// Tau lists in seconds: a time that is no time is refused by its index; times the samples
+    /// cannot hold are dropped (allantools); a curve needs 2 usable taus and normal variances.
+    #[test]
+    fn tau_lists_and_curves_are_checked_once() {
+        let grid = allan::factors_of_seconds(&[0.01, 0.02, 1e300], 100.0, 1000).unwrap();
+        assert_eq!(grid, ::allan::TauGrid::Explicit(vec![1, 2]));
+        for (bad, shown) in [(0.0, "0"), (-1.0, "-1"), (f64::NAN, "NaN"), (1e-300, "")] {
+            let r = allan::factors_of_seconds(&[0.01, bad], 100.0, 1000);
+            if shown.is_empty() {
+                // 1e-300 s is a time: its factor rounds to 0 and is dropped, as allantools does.
+                assert_eq!(r.unwrap(), ::allan::TauGrid::Explicit(vec![1]));
+            } else {
+                let e = r.err().unwrap().to_string();
+                assert!(e.starts_with(&format!("taus[1] is {shown}: ")), "{e}");
+            }
+        }
+        // Uniform noise from a multiplicative hash of the index (no generator needed: any
+        // series that is not constant gives positive deviations).
+        let white: Vec<f64> = (0..4000u64)
+            .map(|i| {
+                (i.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            })
+            .collect();
+        let curve = |scale: f64| {
+            let x: Vec<f64> = white.iter().map(|v| v * scale).collect();
+            ::allan::deviation(
+                &x,
+                ::allan::DataKind::Rate,
+                0.01,
+                ::allan::Estimator::Overlapping,
+                &::allan::TauGrid::Octave,
+            )
+        };
+        assert!(allan::check_curve("log", Some("gx"), 4000, &curve(1.0)).is_ok());
+        let tiny = allan::check_curve("log", Some("gx"), 4000, &curve(1e-160))
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            tiny.starts_with("log: the deviation of channel gx at tau 0.01 s is 0: its square"),
+            "{tiny}"
+        );
+        let one = allan::check_curve("log", None, 4000, &curve(1.0)[..1])
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(one.contains("give 1 averaging time(s)"), "{one}");
+        assert!(allan::check_points("oadev", 3, &[]).is_err());
+    }
+
+    /// A model named by one text: an existing path is the file, TOML text is text, anything
+    /// else a missing file (an unreadable one, like a directory).
+    #[test]
+    fn a_model_argument_is_a_path_or_a_text() {
+        let dir = env!("CARGO_MANIFEST_DIR");
+        assert!(matches!(
+            SensorSource::of_argument(dir).unwrap(),
+            SensorSource::Path(_)
+        ));
+        assert!(SensorSource::of_argument(dir).unwrap().read().is_err());
+        assert!(matches!(
+            SensorSource::of_argument("name = \"x\"").unwrap(),
+            SensorSource::Text { .. }
+        ));
+        let missing = SensorSource::of_argument("no/such/model").err().unwrap();
+        assert!(missing.is_unreadable());
+        assert!(missing.to_string().contains("no such file"), "{missing}");
+    }
+
     /// Series a front end holds become a log only when they are one: known names, one length.
     #[test]
     fn series_become_a_log_only_when_they_are_one() {

@@ -45,6 +45,9 @@ pub enum Setting {
     Confidence,
     /// Samples given as an array.
     Data,
+    /// The averaging times of an Allan analysis (the CLI's `--grid` of factors, Python's
+    /// `taus` in seconds).
+    Taus,
 }
 
 impl Setting {
@@ -73,6 +76,7 @@ impl Setting {
             Setting::Replicates => "replicates",
             Setting::Confidence => "confidence",
             Setting::Data => "data",
+            Setting::Taus => "taus",
         }
     }
 }
