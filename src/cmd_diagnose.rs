@@ -148,6 +148,7 @@ fn run_inner(args: &Args, settings: &Settings) -> Result<()> {
         tell!("{}: {}", log.source, log_input::mapping_text(log));
         crate::plausibility::print(log);
     }
+    request::logs::refuse_repeated(&logs).map_err(crate::cli::request_error)?;
     let log = &logs[0];
     let sources = logs
         .iter()

@@ -195,6 +195,7 @@ fn run_inner(args: &Args, settings: CheckSettings) -> Result<()> {
         crate::plausibility::print(log);
         request::logs::check_imu(log).map_err(crate::cli::request_error)?;
     }
+    request::logs::refuse_repeated(&logs).map_err(crate::cli::request_error)?;
     let inputs: Vec<LogInput> = logs
         .iter()
         .map(|l| request::logs::log_input(l, false))

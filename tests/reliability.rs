@@ -252,3 +252,24 @@ fn one_log_given_twice_is_refused() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// Item 10: long work in `allan` says where it is. The resolved-term thresholds come from the
+/// shipped null table for the default options (no simulation: a 5 M-sample log in under a
+/// second); other options simulate the null logs and print a line per interval
+/// (`IMUDRIFT_PROGRESS_INTERVAL_S`, 10 s by default) while they do.
+#[test]
+fn allan_null_simulation_prints_progress() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = write(dir.path(), "ok.csv", imu_log(3000).as_bytes());
+    let out = command()
+        .args(["allan", &log, "--channels", "gx", "--edf", "simple"])
+        .env("IMUDRIFT_PROGRESS_INTERVAL_S", "0")
+        .output()
+        .expect("run imudrift");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("null logs for the resolved-term thresholds") && err.contains("/200 logs"),
+        "{err}"
+    );
+}

@@ -229,7 +229,12 @@ pub const MAX_STEP_ROTATION_RAD: f64 = std::f64::consts::PI;
 fn insane_sample(block: &[[f64; BLOCK]; 6], n: usize, k: u64, dt_s: f64) -> Option<String> {
     let max_rate_sq = (MAX_STEP_ROTATION_RAD / dt_s).powi(2);
     let [gx, gy, gz, ..] = block;
-    let too_fast = |i: usize| !((gx[i] * gx[i] + gy[i] * gy[i] + gz[i] * gz[i]) <= max_rate_sq);
+    // Not `<=`: a NaN rate is too fast as well.
+    let too_fast = |i: usize| {
+        (gx[i] * gx[i] + gy[i] * gy[i] + gz[i] * gz[i])
+            .partial_cmp(&max_rate_sq)
+            .is_none_or(|o| o == std::cmp::Ordering::Greater)
+    };
     let insane = |c: &[f64; BLOCK], i: usize| !noise::limits::valid_value(c[i]);
     let bad = (0..n).fold(false, |bad, i| {
         bad | too_fast(i) | block.iter().fold(false, |b, c| b | insane(c, i))
