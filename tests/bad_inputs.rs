@@ -848,7 +848,7 @@ fn horizons_and_windows_must_fit_the_sampling() {
     let log = write(dir.path(), "still.csv", text.as_bytes());
     let model = "configs/sensors/mtx.toml";
     let drift = |extra: &[&str], needles: &[&str]| {
-        let mut args = vec!["drift", &log, &log, "--model", model, "--json"];
+        let mut args = vec!["drift", &log, "--model", model, "--json"];
         args.extend_from_slice(extra);
         refused(&args, needles);
     };
@@ -906,7 +906,6 @@ fn a_full_stdout_is_an_error_line_in_every_command() {
         vec!["diagnose", &log, "--model", model, "--json"],
         vec![
             "drift",
-            &log,
             &log,
             "--model",
             model,

@@ -178,9 +178,9 @@ pub(crate) fn advise_huge_pages<T>(buf: &[T]) {
 const MAX_STREAM_BYTES: u64 = 1 << 30;
 
 /// Memory the system can still give (Linux `MemAvailable`), bytes, or less when the environment
-/// variable `IMUDRIFT_MEMORY_LIMIT` (bytes) says so (a share of a shared machine: the limit is
-/// the whole process's, so what the process holds already, [`resident_bytes`], is taken from
-/// it); `None` when neither is known.
+/// variable `IMUDRIFT_MEMORY_LIMIT` (bytes) says so (a share of a shared machine); `None` when
+/// neither is known. A job whose memory grows with its size (a simulation's per-run values) takes
+/// what the process holds already ([`resident_bytes`]) from it.
 pub fn available_memory_bytes() -> Option<u64> {
     let system = std::fs::read_to_string("/proc/meminfo")
         .ok()
@@ -191,8 +191,7 @@ pub fn available_memory_bytes() -> Option<u64> {
         });
     let limit = std::env::var("IMUDRIFT_MEMORY_LIMIT")
         .ok()
-        .and_then(|v| v.trim().parse::<u64>().ok())
-        .map(|limit| limit.saturating_sub(resident_bytes().unwrap_or(0)));
+        .and_then(|v| v.trim().parse::<u64>().ok());
     match (system, limit) {
         (Some(a), Some(b)) => Some(a.min(b)),
         (a, b) => a.or(b),

@@ -58,7 +58,9 @@ mod units;
 pub use columns::{ColumnUse, Quantity, SkipReason, Skipped, Source, UnitOptions};
 pub use csv::parse_log;
 pub use error::{byte_size, sig, At, LogError, Problem, Result, Setting, SettingNames};
-pub use file::{available_memory_bytes, first_block_problem, read_capped, FIRST_BLOCK_BYTES};
+pub use file::{
+    available_memory_bytes, first_block_problem, read_capped, resident_bytes, FIRST_BLOCK_BYTES,
+};
 pub use limits::{
     has_spread, quote_prefix, spread, valid_rate_hz, valid_value, MAX_ABS_VALUE, MAX_LOG_RATE_HZ,
     MIN_LOG_RATE_HZ, MIN_SPREAD,

@@ -246,13 +246,17 @@ pub fn check_experiment(exp: &Experiment, runs: u64, all_runs: u64) -> Result<()
 pub const WORKING_BYTES: u64 = 8 << 20;
 
 /// Refuse a run range whose per-run values (8 bytes per run, checkpoint and quantity) would not
-/// fit in the memory available (`logio::available_memory_bytes`, which takes from a set limit
-/// what the process holds already) less [`WORKING_BYTES`], and at most
+/// fit in the memory available (`logio::available_memory_bytes`) less what the process holds
+/// already (`logio::resident_bytes`: the limit bounds the whole process) and [`WORKING_BYTES`],
+/// and at most
 /// [`job::MAX_VALUE_BYTES`].
 pub fn check_memory(exp: &Experiment, runs: u64) -> Result<()> {
     let bytes = job::value_bytes(exp, runs);
+    let held = logio::resident_bytes().unwrap_or(0);
     let limit = logio::available_memory_bytes().map_or(job::MAX_VALUE_BYTES, |a| {
-        a.saturating_sub(WORKING_BYTES).min(job::MAX_VALUE_BYTES)
+        a.saturating_sub(held)
+            .saturating_sub(WORKING_BYTES)
+            .min(job::MAX_VALUE_BYTES)
     });
     if bytes > limit {
         return Err(RequestError::Memory {
