@@ -904,15 +904,7 @@ fn a_full_stdout_is_an_error_line_in_every_command() {
         vec!["allan", &log],
         vec!["allan", &log, "--json"],
         vec!["diagnose", &log, "--model", model, "--json"],
-        vec![
-            "drift",
-            &log,
-            "--model",
-            model,
-            "--json",
-            "--horizons",
-            "1",
-        ],
+        vec!["drift", &log, "--model", model, "--json", "--horizons", "1"],
         vec![
             "generate",
             model,
