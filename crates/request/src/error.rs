@@ -569,10 +569,12 @@ impl From<FileError> for RequestError {
 /// `logio::MIN_SPREAD`, by how much and why that is constant to an analysis.
 fn constant_text(value: f64, spread: f64) -> String {
     if spread == 0.0 {
-        format!("constant ({value})")
+        format!("constant ({})", number(value))
     } else {
         format!(
-            "constant to within {spread:e} (from {value}): values closer than {:e} differ by amounts whose squares underflow",
+            "constant to within {} (from {}): values closer than {:e} differ by amounts whose squares underflow",
+            number(spread),
+            number(value),
             logio::MIN_SPREAD
         )
     }
