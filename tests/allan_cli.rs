@@ -1,6 +1,6 @@
 //! End-to-end tests of `imudrift allan`: reading CSV and gzip CSV, units, column mapping,
 //! outputs (table, JSON fields of docs/cli.md, CSV, SVG), errors with line numbers, and the
-//! command on the real ADIS16405 log against allantools' curve.
+//! stop at Stable32's largest averaging time or not (the real ADIS16405 log: allan_adis.rs).
 
 mod common;
 use common::command;
@@ -253,4 +253,41 @@ fn wrong_units_draw_a_plausibility_warning() {
         .unwrap();
     assert!(o.status.success());
     assert!(!String::from_utf8_lossy(&o.stderr).contains("warning:"));
+}
+
+#[test]
+fn no_stable32_stop_goes_on_to_the_last_tau_with_two_terms() {
+    // N = 1000 rate samples are N + 1 phase points; oadev at m has N + 1 - 2m terms, so the last
+    // m with 2 or more is (N - 1) / 2 = 499 (allantools' last tau for taus="all"); Stable32 stops
+    // at floor(N / 4) = 250 (SP 1065 / Riley's stop ratio 4).
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("log.csv");
+    write_log(&log, 1000, false);
+    let last = |extra: &[&str]| {
+        let o = command()
+            .args(["allan", log.to_str().unwrap(), "--col", "t=time_s,gx=wx"])
+            .args(["--grid", "all", "--json"])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let doc: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let gx = &doc["channels"]["gx"];
+        let m = gx["m"]
+            .as_array()
+            .unwrap()
+            .last()
+            .unwrap()
+            .as_u64()
+            .unwrap();
+        let lo = gx["adev_lo"].as_array().unwrap().last().unwrap().as_f64();
+        let hi = gx["adev_hi"].as_array().unwrap().last().unwrap().as_f64();
+        (m, lo, hi, doc["stable32_stop"].as_bool())
+    };
+    let (m, _, _, stop) = last(&[]);
+    assert_eq!((m, stop), (250, Some(true)));
+    let (m, lo, hi, stop) = last(&["--no-stable32-stop"]);
+    assert_eq!((m, stop), (499, Some(false)));
+    let (lo, hi) = (lo.unwrap(), hi.unwrap());
+    assert!(lo > 0.0 && hi > lo && hi.is_finite(), "{lo} {hi}");
 }
