@@ -183,11 +183,14 @@ def allan(
     confidence = _args.number("confidence", confidence)
     columns = _columns(data)
     if columns is not None:
-        return [
-            _one(_as_samples(c, f"data[:, {j}]"), rate, data_type, estimator, taus, confidence, edf,
-                 stable32_stop)
-            for j, c in enumerate(columns)
-        ]
+        results = []
+        for j, c in enumerate(columns):
+            try:
+                results.append(_one(_as_samples(c), rate, data_type, estimator, taus, confidence,
+                                    edf, stable32_stop))
+            except InvalidInput as e:
+                raise InvalidInput(f"data[:, {j}] (column {j} of {len(columns)}): {e}") from None
+        return results
     return _one(_as_samples(data), rate, data_type, estimator, taus, confidence, edf, stable32_stop)
 
 
