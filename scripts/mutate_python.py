@@ -227,7 +227,11 @@ def check_allan(r, kw):
     """Every column finite, except `lo`, `hi` and `edf` where no interval is computed (documented:
     `lo` and `hi` NaN there, never inf): `edf="none"` (edf NaN), or an averaging time whose EDF
     the estimator's formula does not give (edf 0: totdev's last tau of a short phase record);
-    the fit's numbers finite."""
+    the fit's numbers finite. An N x k array gives a list of k results: each checked."""
+    if isinstance(r, list):
+        if not r:
+            return ["empty list of results"]
+        return [f"[{j}]{b}" for j, one in enumerate(r) for b in check_allan(one, kw)]
     if len(r) == 0:
         return ["empty result"]
     cols = {c: getattr(r, c) for c in r._COLUMNS}

@@ -31,6 +31,11 @@ pub struct Args {
     /// Tau grid: octave, decade, all, N/decade, or a comma list of averaging factors m
     #[arg(long, default_value = "octave", value_parser = crate::cli::grid)]
     pub grid: crate::cli::GridArg,
+    /// Go on past Stable32's largest averaging time (N/5 for adev and hdev, N/4 for oadev, mdev
+    /// and ohdev, N/2 for totdev) to the last with 2 or more terms, as allantools does (Python:
+    /// `stable32_stop=False`); those points have few degrees of freedom and wide intervals
+    #[arg(long)]
+    pub no_stable32_stop: bool,
     /// Channels to analyse (default: every channel except temp)
     #[arg(long, value_delimiter = ',')]
     pub channels: Vec<String>,
@@ -122,6 +127,7 @@ pub fn run(args: Args) -> Result<()> {
     let opts = Options {
         edf,
         confidence: args.confidence,
+        stable32_stop: !args.no_stable32_stop,
         ..Options::default()
     };
     let pool = crate::cli::pool(args.threads)?;
@@ -183,14 +189,7 @@ fn run_inner(args: &Args, est: Estimator, grid: &TauGrid, opts: &Options) -> Res
     stage("all channels");
     check_usable(&log, samples, &results)?;
     let table = tables(&log, samples, &results, est, opts.confidence);
-    let doc = json_document(
-        &log,
-        samples,
-        &results,
-        est,
-        &args.grid.text,
-        opts.confidence,
-    );
+    let doc = json_document(&log, samples, &results, est, &args.grid.text, opts);
     let json = format!("{}\n", serde_json::to_string_pretty(&doc)?);
     output::answer(&table, args.json.then_some(json.as_str()))?;
     stage("printed");
@@ -553,8 +552,9 @@ fn json_document(
     results: &[ChannelResult],
     est: Estimator,
     grid: &str,
-    confidence: f64,
+    opts: &Options,
 ) -> Value {
+    let confidence = opts.confidence;
     let mut channels = Map::new();
     for r in results {
         let col = |f: &dyn Fn(&AllanPoint) -> f64| -> Value {
@@ -615,6 +615,7 @@ fn json_document(
         "rate_hz": log.rate_hz,
         "estimator": est.name(),
         "grid": grid,
+        "stable32_stop": opts.stable32_stop,
         "confidence": confidence,
         "columns": columns,
         "skipped_columns": skipped,

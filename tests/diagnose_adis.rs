@@ -23,11 +23,6 @@ const BEFORE_REAL_EFFECTS: [[f64; 6]; 5] = [
 
 const COLUMNS: &str = "gx=gyro_x_dps,gy=gyro_y_dps,gz=gyro_z_dps,ax=acc_x_g,ay=acc_y_g,az=acc_z_g";
 
-#[test]
-#[cfg_attr(
-    imudrift_no_data,
-    ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
-)]
 fn adis16405_run1_diagnosis_generalises_to_runs_2_to_6() {
     let dir = testkit::data_dir();
     let run = |i: u32| {
@@ -162,11 +157,6 @@ fn assert_tone(ch: &str, effects: &[serde_json::Value], what: &str) {
 /// holds its lines too close to pass for one in the 4096-sample search; each run's own shows its
 /// line, and the strongest in the runs' fine spectrum, 0.564 Hz, is the one named on ax, ay and az
 /// (before, a stand-in sinusoid at 5e-4..1e-3 Hz took the slot).
-#[test]
-#[cfg_attr(
-    imudrift_no_data,
-    ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
-)]
 fn adis16405_runs_pooled_name_the_accelerometer_tone() {
     let dir = testkit::data_dir();
     let runs: Vec<std::path::PathBuf> = (1..=6)
@@ -180,4 +170,17 @@ fn adis16405_runs_pooled_name_the_accelerometer_tone() {
         let effects = doc["channels"][ch]["effects"].as_array().expect("effects");
         assert_tone(ch, effects, "runs 1-6");
     }
+}
+
+fn main() -> std::process::ExitCode {
+    testkit::run_data_tests(&[
+        (
+            "adis16405_run1_diagnosis_generalises_to_runs_2_to_6",
+            adis16405_run1_diagnosis_generalises_to_runs_2_to_6,
+        ),
+        (
+            "adis16405_runs_pooled_name_the_accelerometer_tone",
+            adis16405_runs_pooled_name_the_accelerometer_tone,
+        ),
+    ])
 }

@@ -5,6 +5,7 @@ from typing import Dict, Optional
 
 import numpy as np
 
+from ._imudrift import InvalidInput
 from ._imudrift import allan_analysis as _analysis
 from ._samples import as_samples as _as_samples
 from . import _args
@@ -162,6 +163,10 @@ def allan(
     """Allan-family deviation of ``data`` sampled at ``rate`` Hz with confidence intervals, noise
     types and (adev, oadev, totdev) the IEEE 952 fit: what ``imudrift allan`` computes per channel.
 
+    ``data``: one channel (a 1-D array) gives one :class:`AllanResult`; an N x k array (one
+    channel per column, MATLAB ``allanvar``'s layout, e.g. a gyro triad or a DataFrame's values)
+    gives a list of k results, each the result of the 1-D call on its column.
+
     ``data_type``: ``"freq"`` (rate samples: gyro rate, specific force) or ``"phase"``.
     ``estimator``: adev, oadev, mdev, hdev, ohdev, totdev (Stable32's total deviation, bias
     corrected once the noise type is known). ``taus``: ``"octave"``, ``"decade"``, ``"all"``,
@@ -176,8 +181,38 @@ def allan(
     """
     rate = _args.number("rate", rate)
     confidence = _args.number("confidence", confidence)
+    columns = _columns(data)
+    if columns is not None:
+        results = []
+        for j, c in enumerate(columns):
+            try:
+                results.append(_one(_as_samples(c), rate, data_type, estimator, taus, confidence,
+                                    edf, stable32_stop))
+            except InvalidInput as e:
+                raise InvalidInput(f"data[:, {j}] (column {j} of {len(columns)}): {e}") from None
+        return results
+    return _one(_as_samples(data), rate, data_type, estimator, taus, confidence, edf, stable32_stop)
+
+
+def _columns(data):
+    """The columns of a 2-D array (N x k), or None when ``data`` is not 2-D (the 1-D path then
+    checks it)."""
+    if data is None or isinstance(data, (str, bytes)):
+        return None
+    try:
+        a = np.asarray(data)
+    except (TypeError, ValueError):
+        return None
+    if a.ndim != 2:
+        return None
+    if a.shape[1] == 0:
+        raise InvalidInput(f"data: an N x k array needs at least one column, got shape {a.shape}")
+    return [a[:, j] for j in range(a.shape[1])]
+
+
+def _one(samples, rate, data_type, estimator, taus, confidence, edf, stable32_stop):
     raw = _analysis(
-        _as_samples(data),
+        samples,
         rate,
         _args.text("data_type", data_type),
         _args.text("estimator", estimator),

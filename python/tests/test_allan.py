@@ -189,3 +189,26 @@ def test_a_forked_child_runs_allan():
     p.join(timeout=60)
     assert p.exitcode == 0
     assert n == len(imudrift.allan(np.random.default_rng(2).normal(0.0, 0.01, 30_000), 100.0).tau)
+
+
+def test_an_n_by_3_array_gives_three_channels_equal_to_three_1d_calls():
+    # MATLAB allanvar's layout: one channel per column.
+    x = np.random.default_rng(7).normal(0.0, [0.01, 0.02, 0.03], size=(20_000, 3))
+    results = imudrift.allan(x, 100.0)
+    assert isinstance(results, list) and len(results) == 3
+    for j, r in enumerate(results):
+        one = imudrift.allan(np.ascontiguousarray(x[:, j]), 100.0)
+        a, b = r.to_dict(), one.to_dict()
+        assert a.keys() == b.keys()
+        for k in ("tau", "deviation", "lo", "hi", "edf", "m"):
+            np.testing.assert_array_equal(a[k], b[k])
+        assert json.dumps(a["fit"], sort_keys=True) == json.dumps(b["fit"], sort_keys=True)
+
+
+def test_an_n_by_k_array_names_the_column_it_refuses():
+    x = np.random.default_rng(7).normal(size=(20_000, 2))
+    x[5, 1] = np.nan
+    with pytest.raises(imudrift.InvalidInput, match=r"data\[:, 1\]"):
+        imudrift.allan(x, 100.0)
+    with pytest.raises(imudrift.InvalidInput, match="at least one column"):
+        imudrift.allan(np.zeros((10, 0)), 100.0)

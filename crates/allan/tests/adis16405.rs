@@ -18,11 +18,6 @@ fn read_gz_text(path: &std::path::Path) -> String {
     s
 }
 
-#[test]
-#[cfg_attr(
-    imudrift_no_data,
-    ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
-)]
 fn adis16405_run1_matches_published_curve() {
     let dir = testkit::data_dir();
     let dir = dir.join("adis16405_imudata");
@@ -124,4 +119,11 @@ fn adis16405_run1_matches_published_curve() {
         assert!(e < 1e-8, "{} m={m}: {} vs {want}", f[i_col], p[0].dev);
     }
     eprintln!("ADIS16405 run 1: worst relative difference to allantools oadev {worst_at:.2e}");
+}
+
+fn main() -> std::process::ExitCode {
+    testkit::run_data_tests(&[(
+        "adis16405_run1_matches_published_curve",
+        adis16405_run1_matches_published_curve,
+    )])
 }

@@ -220,11 +220,6 @@ fn tables_in(dir: &Path, filter: impl Fn(&str) -> bool) -> Vec<std::path::PathBu
     v
 }
 
-#[test]
-#[cfg_attr(
-    imudrift_no_data,
-    ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
-)]
 fn phase_dat() {
     let dir = testkit::data_dir();
     let dir = dir.join("allantools/phasedat");
@@ -237,11 +232,6 @@ fn phase_dat() {
     finish(t, "PHASE.DAT");
 }
 
-#[test]
-#[cfg_attr(
-    imudrift_no_data,
-    ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
-)]
 fn cs5071a() {
     let dir = testkit::data_dir();
     let dir = dir.join("allantools/Cs5071A");
@@ -254,11 +244,6 @@ fn cs5071a() {
     finish(t, "Cs5071A");
 }
 
-#[test]
-#[cfg_attr(
-    imudrift_no_data,
-    ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
-)]
 fn gps_1pps() {
     let dir = testkit::data_dir();
     let dir = dir.join("allantools/gps");
@@ -270,11 +255,6 @@ fn gps_1pps() {
     finish(t, "GPS 1PPS");
 }
 
-#[test]
-#[cfg_attr(
-    imudrift_no_data,
-    ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
-)]
 fn keysight_noise_floor() {
     let dir = testkit::data_dir();
     let dir = dir.join("allantools/Keysight53230A_ti_noise_floor");
@@ -286,11 +266,6 @@ fn keysight_noise_floor() {
     finish(t, "53230A noise floor");
 }
 
-#[test]
-#[cfg_attr(
-    imudrift_no_data,
-    ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
-)]
 fn pink_frequency() {
     let dir = testkit::data_dir();
     let dir = dir.join("allantools/pink_frequency");
@@ -303,11 +278,6 @@ fn pink_frequency() {
     finish(t, "pink FM");
 }
 
-#[test]
-#[cfg_attr(
-    imudrift_no_data,
-    ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
-)]
 fn ocxo() {
     let dir = testkit::data_dir();
     let dir = dir.join("allantools/ocxo");
@@ -342,11 +312,6 @@ fn ocxo() {
     finish(t, "OCXO octave (with CI)");
 }
 
-#[test]
-#[cfg_attr(
-    imudrift_no_data,
-    ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
-)]
 fn nbs14() {
     let dir = testkit::data_dir();
     let dir = dir.join("allantools/nbs14");
@@ -423,11 +388,6 @@ fn nbs14() {
     assert_eq!(compared, 7 * 3 + 7 * 2 * 2);
 }
 
-#[test]
-#[cfg_attr(
-    imudrift_no_data,
-    ignore = "needs the real IMU logs and reference tables: set IMUDRIFT_DATA"
-)]
 fn noise_id_matches_stable32_alpha() {
     // allantools test_ocxo.py::test_noise_id: the lag-1 ACF noise type (from frequency data)
     // equals Stable32's alpha column of the OCXO MDEV table wherever N/AF > 20.
@@ -445,4 +405,20 @@ fn noise_id_matches_stable32_alpha() {
         checked += 1;
     }
     assert!(checked >= 10, "{checked}");
+}
+
+fn main() -> std::process::ExitCode {
+    testkit::run_data_tests(&[
+        ("phase_dat", phase_dat),
+        ("cs5071a", cs5071a),
+        ("gps_1pps", gps_1pps),
+        ("keysight_noise_floor", keysight_noise_floor),
+        ("pink_frequency", pink_frequency),
+        ("ocxo", ocxo),
+        ("nbs14", nbs14),
+        (
+            "noise_id_matches_stable32_alpha",
+            noise_id_matches_stable32_alpha,
+        ),
+    ])
 }

@@ -3,13 +3,45 @@
 //! test inputs ([`SplitMix64`]).
 //!
 //! Tests that need the real IMU logs and the reference tables read them from the directory named
-//! by the environment variable `IMUDRIFT_DATA` (`.ci/run` sets it). They are marked
-//! `#[cfg_attr(imudrift_no_data, ignore = ...)]` (the shared build script sets that cfg when the
-//! variable is unset), so without the data they show as ignored in the test summary; run anyway
-//! (e.g. `--include-ignored`) without the data, they panic with this explanation instead of
-//! passing.
+//! by the environment variable `IMUDRIFT_DATA` (`.ci/run` sets it), read when the tests run, not
+//! when they are compiled (so setting it rebuilds nothing). Their test files use their own
+//! harness, [`run_data_tests`]: without the data each such test shows as ignored in the test
+//! summary, with the reason; run anyway (e.g. `--include-ignored`) without the data, it fails with
+//! this explanation instead of passing.
 
 use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Why a data test is ignored: printed once by [`run_data_tests`] when the data are missing.
+pub const NO_DATA_REASON: &str =
+    "needs the real IMU logs and reference tables: set IMUDRIFT_DATA to their directory";
+
+/// Whether `IMUDRIFT_DATA` names a directory (read now, at run time).
+pub fn has_data() -> bool {
+    std::env::var_os("IMUDRIFT_DATA").is_some_and(|d| std::path::Path::new(&d).is_dir())
+}
+
+/// The `main` of a test file whose tests read the real data (`harness = false` in its
+/// `[[test]]` section): runs `tests` as `cargo test` runs `#[test]` functions (same arguments,
+/// filters and summary; a panic fails the test), each marked ignored when [`has_data`] is false.
+pub fn run_data_tests(tests: &[(&'static str, fn())]) -> ExitCode {
+    let args = libtest_mimic::Arguments::from_args();
+    let ignore = !has_data();
+    if ignore && !args.list {
+        eprintln!("note: {NO_DATA_REASON}; these tests are ignored");
+    }
+    let trials = tests
+        .iter()
+        .map(|&(name, test)| {
+            libtest_mimic::Trial::test(name, move || {
+                test();
+                Ok(())
+            })
+            .with_ignored_flag(ignore)
+        })
+        .collect();
+    libtest_mimic::run(&args, trials).exit_code()
+}
 
 /// The data directory named by `IMUDRIFT_DATA`.
 ///
