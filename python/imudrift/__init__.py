@@ -19,7 +19,7 @@ from ._generate import generate
 from ._sensor import Sensor, plan
 from ._simulate import SimulateResult, merge, simulate, simulate_shard
 from ._analyse import DiagnoseResult, DriftResult, SpecResult, diagnose, drift, spec
-from . import allantools
+from . import allantools, noise
 
 __all__ = [
     "__version__",
@@ -30,6 +30,7 @@ __all__ = [
     "Fit",
     "Term",
     "allantools",
+    "noise",
     "read_log",
     "generate",
     "Sensor",
