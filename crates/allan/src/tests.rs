@@ -58,7 +58,12 @@ fn naive(y: &[f64], est: Estimator, m: usize) -> f64 {
             }
             (s / (2.0 * (m * m) as f64 * c as f64)).sqrt()
         }
-        Estimator::Total => unreachable!(),
+        // Tested against their own definitions (total.rs) and allantools (Python tests).
+        Estimator::Total
+        | Estimator::ModifiedTotal
+        | Estimator::HadamardTotal
+        | Estimator::Theo1
+        | Estimator::TheoH => unreachable!(),
     }
 }
 
