@@ -93,24 +93,34 @@ fn window_value(xs: &[f64], m: usize, z: &mut [f64], prefix: &mut [f64]) -> f64 
     // A constant drops out of every second difference; removing the mean keeps the running
     // sums below small (their rounding is then that of the differences themselves).
     mean /= len as f64;
-    // prefix[p] = sum of the first p values of [reversed z, z, reversed z].
+    // prefix[p] = sum of the first p values of [reversed z, z, reversed z], from the one
+    // running sum of z (a chain of 3m additions; the 9m prefix values are then independent):
+    // with Z_k the sum of the first k values of z and Z = Z_{3m}, prefix[p] = Z - Z_{3m-p}
+    // (p <= 3m), Z + Z_{p-3m} (3m <= p <= 6m), 3Z - Z_{9m-p} (p >= 6m).
+    let (head, rest) = prefix.split_at_mut(len + 1);
+    let zsum = &mut head[..];
     let mut run = 0.0;
-    prefix[0] = 0.0;
-    let mut p = 1;
-    for &v in z.iter().rev() {
+    zsum[0] = 0.0;
+    for (k, &v) in z.iter().enumerate() {
         run += v - mean;
-        prefix[p] = run;
-        p += 1;
+        zsum[k + 1] = run;
     }
-    for &v in z.iter() {
-        run += v - mean;
-        prefix[p] = run;
-        p += 1;
+    let total = run;
+    // rest holds prefix[3m+1 ..= 9m]; head becomes prefix[0 ..= 3m] after the first part.
+    for (q, slot) in rest[..len].iter_mut().enumerate() {
+        // p = 3m + 1 + q in (3m, 6m]
+        *slot = total + zsum[q + 1];
     }
-    for &v in z.iter().rev() {
-        run += v - mean;
-        prefix[p] = run;
-        p += 1;
+    for (q, slot) in rest[len..].iter_mut().enumerate() {
+        // p = 6m + 1 + q in (6m, 9m]
+        *slot = 3.0 * total - zsum[len - 1 - q];
+    }
+    // prefix[p] = Z - Z_{3m-p} for p <= 3m, in place (p and 3m - p swap: the pairs are
+    // disjoint, each read before it is written).
+    for p in 0..=len / 2 {
+        let (a, b) = (zsum[p], zsum[len - p]);
+        zsum[p] = total - b;
+        zsum[len - p] = total - a;
     }
     // S_j - 2 S_{j+m} + S_{j+2m} = -P_j + 3 P_{j+m} - 3 P_{j+2m} + P_{j+3m}, j < 6m.
     let terms = 6 * m;
