@@ -2,6 +2,7 @@
 //! octave taus, in memory, with and without confidence intervals (noise identification +
 //! Greenhall EDF + chi-squared bounds), and the IEEE 952 fit. Compare with
 //! `scripts/bench_allantools.py`, which times allantools' `oadev` on the same kind of channel.
+//! `total_100k`: the modified total, Hadamard total and Theo1 kernels and MTIE.
 
 use allan::{DataKind, EdfMethod, Estimator, Options, TauGrid};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
@@ -67,5 +68,40 @@ fn bench(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench);
+/// The O(N m) kernels of issue 45 at one tau each (100,000 samples, m = 64; Theo1 at m = 128, the
+/// same N m / 2 work): throughput is counted in N m work units, so the figure is the time per
+/// subsequence-and-factor (ns per element), and MTIE's octave grid (O(N) per tau).
+fn bench_total(c: &mut Criterion) {
+    const N: usize = 100_000;
+    const M: usize = 64;
+    let y: Vec<f64> = channel()[..N].to_vec();
+    let series = allan::Series::new(&y, DataKind::Rate, 0.01);
+    let mut group = c.benchmark_group("total_100k");
+    group.sample_size(10);
+    group.throughput(Throughput::Elements((N * M) as u64));
+    for est in [
+        Estimator::ModifiedTotal,
+        Estimator::HadamardTotal,
+        Estimator::Theo1,
+    ] {
+        let m = if est == Estimator::Theo1 { 2 * M } else { M };
+        group.bench_function(format!("{}_m{m}", est.name()), |b| {
+            b.iter(|| series.raw_point(black_box(est), m))
+        });
+    }
+    group.throughput(Throughput::Elements(N as u64));
+    let x = series.phase().to_vec();
+    group.bench_function("mtie_octave", |b| {
+        b.iter(|| {
+            TauGrid::Octave
+                .ms(x.len())
+                .into_iter()
+                .filter_map(|m| allan::total::mtie(black_box(&x), m))
+                .count()
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench, bench_total);
 criterion_main!(benches);

@@ -136,6 +136,75 @@ fn thread_count_does_not_change_results() {
     assert_eq!(run("1"), run("2"));
 }
 
+/// Issue 45's estimators through the command: the JSON contract's fields, Theo1's tau 0.75 m tau0,
+/// TheoH's two parts, an interval around every deviation, no fit, and the same bytes for 1 and
+/// 2 threads (the subsequence sums are merged in a fixed order).
+#[test]
+fn total_family_and_theo_estimators() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("log.csv");
+    write_log(&log, 6_000, false);
+    for est in ["mtotdev", "htotdev", "theo1", "theoh"] {
+        let run = |threads: &str| {
+            let o = command()
+                .args([
+                    "allan",
+                    log.to_str().unwrap(),
+                    "--col",
+                    "t=time_s,gx=wx",
+                    "--json",
+                    "--estimator",
+                    est,
+                    "--threads",
+                    threads,
+                ])
+                .output()
+                .unwrap();
+            assert!(
+                o.status.success(),
+                "{est}: {}",
+                String::from_utf8_lossy(&o.stderr)
+            );
+            o.stdout
+        };
+        let out = run("2");
+        assert_eq!(out, run("1"), "{est}");
+        let j: serde_json::Value = serde_json::from_slice(&out).unwrap();
+        assert_eq!(j["estimator"], est);
+        let c = &j["channels"]["gx"];
+        let f = |k: &str| -> Vec<f64> {
+            c[k].as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect()
+        };
+        let (tau, dev, lo, hi, m) = (f("tau_s"), f("adev"), f("adev_lo"), f("adev_hi"), f("m"));
+        assert!(tau.len() >= 5, "{est}: {} taus", tau.len());
+        for i in 0..tau.len() {
+            assert!(lo[i] < dev[i] && dev[i] < hi[i], "{est} tau {}", tau[i]);
+            // Theo1's tau is 0.75 m tau0 (SP 1065 eq (30)); TheoH's from a tenth of the record
+            // (0.1 * 6000 sample intervals) on; the others m tau0.
+            let theo = est == "theo1" || (est == "theoh" && m[i] >= 600.0);
+            let want = if theo {
+                0.75 * (m[i] * 0.01)
+            } else {
+                m[i] * 0.01
+            };
+            assert!(
+                (tau[i] / want - 1.0).abs() < 1e-12,
+                "{est}: tau {} m {}",
+                tau[i],
+                m[i]
+            );
+        }
+        assert!(
+            c["fit"].as_object().unwrap().values().all(|v| v.is_null()),
+            "{est}"
+        );
+    }
+}
+
 /// The issue-24 case through the commands: a white-noise-only sensor (N = 0.5833 deg/sqrt(h) on
 /// every gyro, 0.12 m/s/sqrt(h) on every accelerometer), `imudrift generate` 10 min at 200 Hz,
 /// then `imudrift allan --json`: every white-noise reading holds its truth within its stated

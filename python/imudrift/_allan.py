@@ -169,7 +169,9 @@ def allan(
 
     ``data_type``: ``"freq"`` (rate samples: gyro rate, specific force) or ``"phase"``.
     ``estimator``: adev, oadev, mdev, hdev, ohdev, totdev (Stable32's total deviation, bias
-    corrected once the noise type is known). ``taus``: ``"octave"``, ``"decade"``, ``"all"``,
+    corrected once the noise type is known), mtotdev, htotdev (HTOT bias corrected as Stable32
+    does), theo1 (tau = 0.75 m / rate, even m), theoh (oadev below a tenth of the record,
+    bias-removed Theo1 beyond); docs/allan.md. ``taus``: ``"octave"``, ``"decade"``, ``"all"``,
     ``"N/decade"``, or averaging times in seconds. ``edf``: ``"greenhall"`` (noise identified per
     tau by the lag-1 ACF), ``"simple"`` (SP 1065 Table 5) or ``"none"``. ``stable32_stop``: stop
     at Stable32's largest averaging factor (N/4 for oadev).

@@ -21,6 +21,14 @@ DRIFT_DEFAULTS: Dict[str, Any]
 def allantools_dev(
     data: _F64, rate: float, data_type: str, function: str, taus: Optional[_Taus] = None
 ) -> Tuple[_F64, _F64, _F64, _F64]: ...
+def allantools_gradev(
+    data: _F64,
+    rate: float,
+    data_type: str,
+    taus: Optional[_Taus],
+    ci: float,
+    noisetype: str,
+) -> Tuple[_F64, _F64, Tuple[_F64, _F64], _F64]: ...
 def allan_analysis(
     data: _F64,
     rate: float,

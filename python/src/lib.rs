@@ -96,20 +96,19 @@ fn estimator(name: &str) -> PyResult<Estimator> {
     })
 }
 
-/// The deviation curve from `allan`, computed with the GIL released on the numpy array in place
-/// (no copy: as numpy's own functions do, the array is read while other Python threads run, so
-/// it must not be changed meanwhile). Samples an analysis cannot use are refused first, by the
-/// rules of a log's samples (`request::allan::check_samples`: at least 2, finite, of magnitude
-/// below 1e100, not all one value).
-fn curve(
+/// `work` on the phase of `data` (rate samples integrated as `imudrift allan` does), computed
+/// with the GIL released on the numpy array in place (no copy: as numpy's own functions do, the
+/// array is read while other Python threads run, so it must not be changed meanwhile). Samples
+/// an analysis cannot use are refused first, by the rules of a log's samples
+/// (`request::allan::check_samples`: at least 2, finite, of magnitude below 1e100, not all one
+/// value).
+fn with_phase<T: Send>(
     py: Python<'_>,
     data: &[f64],
     kind: DataKind,
     rate: f64,
-    est: Estimator,
-    grid: TauGrid,
-    opts: Options,
-) -> PyResult<Vec<AllanPoint>> {
+    work: impl FnOnce(&[f64]) -> T + Send,
+) -> PyResult<T> {
     if data.is_empty() {
         return Err(invalid("data is empty: expected samples".into()));
     }
@@ -130,17 +129,32 @@ fn curve(
     };
     sim::detached(py, move || {
         request::allan::check_samples(data).map_err(allan_error)?;
-        let series = match phase_out {
-            None => Series::new(data, DataKind::Phase, tau0_s),
+        Ok(match phase_out {
+            None => work(data),
             Some(out) => {
                 allan::rate_to_phase_into(data, tau0_s, out);
-                // The estimators' sums need only the phase (allantools' functions identify no
-                // noise type): the integrated rate is used as phase data.
-                Series::new(out, DataKind::Phase, tau0_s)
+                work(out)
             }
-        };
-        Ok(series.deviation(est, &grid, &opts))
+        })
     })?
+}
+
+/// The deviation curve from `allan` on the phase of `data` ([`with_phase`]).
+fn curve(
+    py: Python<'_>,
+    data: &[f64],
+    kind: DataKind,
+    rate: f64,
+    est: Estimator,
+    grid: TauGrid,
+    opts: Options,
+) -> PyResult<Vec<AllanPoint>> {
+    let tau0_s = 1.0 / rate;
+    // The estimators' sums need only the phase (allantools' functions identify no noise
+    // type): the integrated rate is used as phase data.
+    with_phase(py, data, kind, rate, move |x| {
+        Series::new(x, DataKind::Phase, tau0_s).deviation(est, &grid, &opts)
+    })
 }
 
 type Columns<'py> = (
@@ -150,9 +164,11 @@ type Columns<'py> = (
     Bound<'py, numpy::PyArray1<f64>>,
 );
 
-/// allantools' `adev, oadev, mdev, tdev, hdev, ohdev, totdev`: `(taus, devs, errs, ns)`.
-/// Its conventions: tau grid from the phase length, no Stable32 stop ratio, no total-variance
-/// bias correction, `errs = dev / sqrt(n)`, points with fewer than 2 terms dropped.
+/// allantools' `adev, oadev, mdev, tdev, hdev, ohdev, totdev, mtotdev, ttotdev, htotdev,
+/// theo1, mtie, tierms`: `(taus, devs, errs, ns)`. Its conventions: tau grid from the phase
+/// length, no Stable32 stop ratio, no total-variance bias correction, `errs = dev / sqrt(n)`
+/// (Theo1: dev / sqrt(N - m); TIE rms: 0), points with fewer than 2 terms dropped, Theo1's tau
+/// m / rate (not 0.75 m / rate).
 #[pyfunction]
 #[pyo3(signature = (data, rate, data_type, function, taus=None))]
 fn allantools_dev<'py>(
@@ -165,42 +181,66 @@ fn allantools_dev<'py>(
 ) -> PyResult<Columns<'py>> {
     check_rate(rate)?;
     let kind = data_kind(data_type)?;
-    // tdev is the modified deviation scaled: TVAR = tau^2/3 MVAR, SP 1065 eq (15).
-    let time_dev = function == "tdev";
-    let est = if time_dev {
-        Estimator::Modified
-    } else {
-        estimator(function)?
+    // tdev and ttotdev are the modified deviations scaled: TVAR = tau^2/3 MVAR, SP 1065
+    // eq (15); TTOT = tau^2/3 MTOT (SP 1065 eq (28) writes tau^3, a misprint allantools notes).
+    let time_dev = matches!(function, "tdev" | "ttotdev");
+    let time_error = matches!(function, "mtie" | "tierms");
+    let est = match function {
+        "tdev" => Estimator::Modified,
+        "ttotdev" => Estimator::ModifiedTotal,
+        // Not estimators of the curve: their own sums below (the grid's estimator is a name).
+        "mtie" | "tierms" => Estimator::Overlapping,
+        _ => estimator(function)?,
     };
     let data = data
         .as_slice()
         .map_err(|_| invalid("data: expected a contiguous 1-D float64 array".into()))?;
     let n_phase = phase_len(data.len(), kind);
-    let grid = match taus {
-        None => TauGrid::Octave,
-        Some(TausArg::Seconds(s)) if s.is_empty() => TauGrid::Octave,
-        Some(TausArg::Seconds(s)) => factors_of_seconds(&s, rate, n_phase)?,
-        Some(TausArg::Name(name)) => match name.as_str() {
-            "octave" => TauGrid::Octave,
-            "decade" => TauGrid::Decade,
-            "all" => TauGrid::All,
-            _ => {
-                return Err(invalid(format!(
-                    "taus {name:?}: expected \"all\", \"octave\", \"decade\" or averaging times in seconds"
-                )))
-            }
-        },
-    };
+    let grid = grid_of(taus, rate, n_phase)?;
+    let n = data.len();
+    if time_error {
+        let tie = function == "tierms";
+        let ms = grid.ms(n_phase);
+        let rows: Vec<(usize, f64, usize)> = with_phase(py, data, kind, rate, move |x| {
+            ms.iter()
+                .filter_map(|&m| {
+                    let r = if tie {
+                        allan::total::tie_rms(x, m)
+                    } else {
+                        allan::total::mtie(x, m)
+                    };
+                    r.filter(|&(_, k)| k > 1).map(|(v, k)| (m, v, k))
+                })
+                .collect()
+        })?;
+        if rows.is_empty() {
+            request::allan::check_points(function, n, &[]).map_err(allan_error)?;
+        }
+        let taus: Vec<f64> = rows.iter().map(|r| r.0 as f64 / rate).collect();
+        let devs: Vec<f64> = rows.iter().map(|r| r.1).collect();
+        let ns: Vec<f64> = rows.iter().map(|r| r.2 as f64).collect();
+        // allantools: MTIE's error bar dev / sqrt(n); TIE rms has none (0).
+        let errs: Vec<f64> = devs
+            .iter()
+            .zip(&ns)
+            .map(|(d, k)| if tie { 0.0 } else { d / k.sqrt() })
+            .collect();
+        return Ok((
+            taus.into_pyarray(py),
+            devs.into_pyarray(py),
+            errs.into_pyarray(py),
+            ns.into_pyarray(py),
+        ));
+    }
     let opts = Options {
         edf: EdfMethod::None,
         stable32_stop: false,
         totvar_bias_correction: false,
         ..Options::default()
     };
-    let n = data.len();
     let points = curve(py, data, kind, rate, est, grid, opts)?;
     request::allan::check_points(function, n, &points).map_err(allan_error)?;
-    // allantools reports tau = m / rate.
+    // allantools reports tau = m / rate (Theo1 too).
     let taus: Vec<f64> = points.iter().map(|p| p.m as f64 / rate).collect();
     let devs: Vec<f64> = points
         .iter()
@@ -214,13 +254,121 @@ fn allantools_dev<'py>(
         })
         .collect();
     let ns: Vec<f64> = points.iter().map(|p| p.n_terms as f64).collect();
-    // allantools' error bar: dev / sqrt(n), not a confidence interval.
-    let errs: Vec<f64> = devs.iter().zip(&ns).map(|(d, n)| d / n.sqrt()).collect();
+    // allantools' error bar: dev / sqrt(n), not a confidence interval; Theo1's divides by the
+    // number of outer terms N - m.
+    let errs: Vec<f64> = devs
+        .iter()
+        .zip(&points)
+        .map(|(d, p)| {
+            let k = if est == Estimator::Theo1 {
+                (n_phase - p.m) as f64
+            } else {
+                p.n_terms as f64
+            };
+            d / k.sqrt()
+        })
+        .collect();
     Ok((
         taus.into_pyarray(py),
         devs.into_pyarray(py),
         errs.into_pyarray(py),
         ns.into_pyarray(py),
+    ))
+}
+
+/// The factors of an allantools tau argument: `None` or an empty list is "octave", a keyword,
+/// or averaging times in seconds (`request::allan::factors_of_seconds`).
+fn grid_of(taus: Option<TausArg>, rate: f64, n_phase: usize) -> PyResult<TauGrid> {
+    Ok(match taus {
+        None => TauGrid::Octave,
+        Some(TausArg::Seconds(s)) if s.is_empty() => TauGrid::Octave,
+        Some(TausArg::Seconds(s)) => factors_of_seconds(&s, rate, n_phase)?,
+        Some(TausArg::Name(name)) => match name.as_str() {
+            "octave" => TauGrid::Octave,
+            "decade" => TauGrid::Decade,
+            "all" => TauGrid::All,
+            _ => {
+                return Err(invalid(format!(
+                    "taus {name:?}: expected \"all\", \"octave\", \"decade\" or averaging times in seconds"
+                )))
+            }
+        },
+    })
+}
+
+/// allantools' `gradev`: the gap-tolerant overlapping Allan deviation, NaN samples being gaps,
+/// `(taus, devs, [lo, hi], ns)` with `ns` the terms whose three phase points are present and
+/// [lo, hi] the chi-squared interval at level `ci` from SP 1065 Table 5's EDF for `noisetype`
+/// (`wp`, `wf`, `fp`, `ff`, `rf`; N - 1 degrees of freedom otherwise), N the phase points present.
+#[pyfunction]
+#[pyo3(signature = (data, rate, data_type, taus, ci, noisetype))]
+#[allow(clippy::type_complexity)]
+fn allantools_gradev<'py>(
+    py: Python<'py>,
+    data: PyReadonlyArray1<'py, f64>,
+    rate: f64,
+    data_type: &str,
+    taus: Option<TausArg>,
+    ci: f64,
+    noisetype: &str,
+) -> PyResult<(
+    Bound<'py, numpy::PyArray1<f64>>,
+    Bound<'py, numpy::PyArray1<f64>>,
+    (
+        Bound<'py, numpy::PyArray1<f64>>,
+        Bound<'py, numpy::PyArray1<f64>>,
+    ),
+    Bound<'py, numpy::PyArray1<f64>>,
+)> {
+    check_rate(rate)?;
+    let kind = data_kind(data_type)?;
+    request::allan::check_confidence(ci).map_err(allan_error)?;
+    // allantools maps "fp" to alpha = -2 (random-walk FM); flicker PM is alpha = +1 (SP 1065
+    // Table 5), which is what its docstring says "fp" means.
+    let alpha = match noisetype {
+        "wp" => 2,
+        "fp" => 1,
+        "wf" => 0,
+        "ff" => -1,
+        "rf" => -2,
+        _ => i32::MAX,
+    };
+    let data = samples(&data)?;
+    let n = data.len();
+    let tau0_s = 1.0 / rate;
+    let rows = sim::detached(py, move || -> PyResult<Vec<[f64; 5]>> {
+        request::allan::check_samples_with_gaps(&data).map_err(allan_error)?;
+        let phase = match kind {
+            DataKind::Phase => data,
+            DataKind::Rate => allan::total::rate_to_phase_with_gaps(&data, tau0_s),
+        };
+        let n_phase = phase.len();
+        let present = phase.iter().filter(|v| !v.is_nan()).count();
+        let grid = grid_of(taus, rate, n_phase)?;
+        Ok(grid
+            .ms(n_phase)
+            .into_iter()
+            .filter_map(|m| {
+                let (sum, count) = allan::total::gap_sum(&phase, m);
+                // allantools: sqrt(sum / 2n) / m * rate, points of fewer than 2 terms dropped.
+                (count > 1).then(|| {
+                    let dev = (sum / (2.0 * count as f64)).sqrt() / m as f64 * rate;
+                    let edf = allan::edf::simple(present, m, alpha);
+                    let (lo, hi) = allan::chi2::confidence_interval(dev, edf, ci);
+                    [m as f64 / rate, dev, lo, hi, count as f64]
+                })
+            })
+            .collect())
+    })??;
+    if rows.is_empty() {
+        request::allan::check_points("gradev", n, &[]).map_err(allan_error)?;
+    }
+    let col = |k: usize| -> Vec<f64> { rows.iter().map(|r| r[k]).collect() };
+    Ok((
+        col(0).into_pyarray(py),
+        col(1).into_pyarray(py),
+        (col(2).into_pyarray(py), col(3).into_pyarray(py)),
+        col(4).into_pyarray(py),
     ))
 }
 
@@ -619,6 +767,7 @@ fn _imudrift(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("InvalidInput", m.py().get_type::<InvalidInput>())?;
     m.add_function(wrap_pyfunction!(allantools_dev, m)?)?;
+    m.add_function(wrap_pyfunction!(allantools_gradev, m)?)?;
     m.add_function(wrap_pyfunction!(allan_analysis, m)?)?;
     m.add("LogUnreadable", m.py().get_type::<LogUnreadable>())?;
     m.add_function(wrap_pyfunction!(read_log_columns, m)?)?;

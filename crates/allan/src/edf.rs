@@ -4,7 +4,8 @@
 //!   stability variances based on finite differences", PTTI 2003 (Greenhall 2004), eqs (7)–(13)
 //!   and Tables 1–3, as implemented in allantools `ci.py::edf_greenhall` (docs/model.md §2.1).
 //! - Simple EDF formulas: NIST SP 1065 Table 5 (allantools `edf_simple`).
-//! - Total deviation EDF: NIST SP 1065 Table 7 (allantools `edf_totdev`).
+//! - Total deviation EDF: NIST SP 1065 Table 7 (allantools `edf_totdev`); modified total,
+//!   Hadamard total and Theo1: SP 1065 Tables 8, 9 and 10 ([`mtotdev`], [`htotdev`], [`theo1`]).
 //! - Noise identification by the lag-1 autocorrelation: W. J. Riley and C. A. Greenhall,
 //!   "Power law noise identification using the lag 1 autocorrelation", 2004
 //!   (allantools `autocorr_noise_id`).
@@ -44,6 +45,14 @@ pub fn edf_for(
         (Estimator::Hadamard, _) => g(3, false, false),
         (Estimator::OverlappingHadamard, _) => g(3, true, false),
         (Estimator::Total, _) => totdev(n - 1, m, alpha),
+        (Estimator::ModifiedTotal, _) => mtotdev(n, m, alpha),
+        (Estimator::HadamardTotal, _) if m == 1 => g(3, true, false),
+        (Estimator::HadamardTotal, _) => {
+            htotdev(n - 1, m, alpha).unwrap_or_else(|| g(3, true, false))
+        }
+        (Estimator::Theo1, _) => theo1(n, m, alpha),
+        (Estimator::TheoH, _) if crate::total::theoh_uses_avar(m, n) => g(2, true, false),
+        (Estimator::TheoH, _) => theo1(n, m, alpha),
     }
 }
 
@@ -275,6 +284,78 @@ pub fn totdev(n: usize, m: usize, alpha: i32) -> f64 {
         _ => return simple(n, m, alpha),
     };
     b * (n as f64 / m as f64) - c
+}
+
+/// NIST SP 1065 Table 8: EDF of the modified total variance, b (N/m) - c, for white and flicker
+/// PM, white, flicker and random-walk FM (allantools `edf_mtotdev`); `n` = phase points. Other
+/// noise types take the nearest row.
+pub fn mtotdev(n: usize, m: usize, alpha: i32) -> f64 {
+    let (b, c) = match alpha.clamp(-2, 2) {
+        2 => (1.90, 2.10),
+        1 => (1.20, 1.40),
+        0 => (1.10, 1.20),
+        -1 => (0.85, 0.50),
+        _ => (0.75, 0.31),
+    };
+    b * (n as f64 / m as f64) - c
+}
+
+/// NIST SP 1065 Table 9 (Howe et al. 2005): EDF of the Hadamard total variance,
+/// (T/tau) / (b0 + b1 tau/T), T/tau = n/m with `n` frequency points, for white, flicker and
+/// random-walk FM; `None` for other noise types (the caller falls back to the overlapping
+/// Hadamard variance's EDF).
+pub fn htotdev(n: usize, m: usize, alpha: i32) -> Option<f64> {
+    let (b0, b1) = match alpha {
+        0 => (0.546, 1.41),
+        -1 => (0.667, 2.00),
+        -2 => (0.909, 1.00),
+        _ => return None,
+    };
+    let ratio = n as f64 / m as f64;
+    Some(ratio / (b0 + b1 / ratio))
+}
+
+/// The Hadamard total variance's bias (its expectation over the Hadamard variance's) for
+/// white, flicker, random-walk, flicker-walk and random-run FM: 1 + a with a = -0.005, -0.149,
+/// -0.229, -0.283, -0.321 (Howe et al. 2005; the factors 0.995 ... 0.679 allantools' `htotdev`
+/// quotes from Riley); Stable32 divides it out (checked: its PHASE.DAT table with and without
+/// the correction differ by 0.995 in the variance at alpha = 0). 1 for phase noise.
+pub fn htotvar_bias(alpha: i32) -> f64 {
+    1.0 + match alpha {
+        0 => -0.005,
+        -1 => -0.149,
+        -2 => -0.229,
+        -3 => -0.283,
+        a if a <= -4 => -0.321,
+        _ => 0.0,
+    }
+}
+
+/// EDF of Theo1 at averaging factor m (`n` phase points), with r = 0.75 m the Theo1 tau in
+/// sample intervals: NIST SP 1065 Table 10 (Howe & Tasset 2004), for white and flicker PM,
+/// white, flicker and random-walk FM (other noise types take the nearest row):
+/// - WPM: 0.86 (N + 1)(N - 4r/3) / (N - r) * r / (r + 1.14)
+/// - FPM: (4.798 N^2 - 6.374 N r + 12.387 r) / (sqrt(r + 36.6) (N - r)) * r / (r + 0.3)
+/// - WFM: ((4.1 N + 0.8)/r - (3.1 N + 6.5)/N) * r^1.5 / (r^1.5 + 5.2)
+/// - FFM: (2 N^2 - 1.3 N r - 3.5 r) / (N r) * r^3 / (r^3 + 2.3)
+/// - RWFM: (4.4 N - 2)/(2.9 r) * ((4.4 N - 1)^2 - 8.6 r (4.4 N - 1) + 11.4 r^2) / (4.4 N - 3)^2
+pub fn theo1(n: usize, m: usize, alpha: i32) -> f64 {
+    let n = n as f64;
+    let r = 0.75 * m as f64;
+    match alpha.clamp(-2, 2) {
+        2 => 0.86 * (n + 1.0) * (n - 4.0 * r / 3.0) / (n - r) * r / (r + 1.14),
+        1 => {
+            (4.798 * n * n - 6.374 * n * r + 12.387 * r) / ((r + 36.6).sqrt() * (n - r)) * r
+                / (r + 0.3)
+        }
+        0 => ((4.1 * n + 0.8) / r - (3.1 * n + 6.5) / n) * r.powf(1.5) / (r.powf(1.5) + 5.2),
+        -1 => (2.0 * n * n - 1.3 * n * r - 3.5 * r) / (n * r) * r.powi(3) / (r.powi(3) + 2.3),
+        _ => {
+            let a = 4.4 * n - 1.0;
+            (4.4 * n - 2.0) / (2.9 * r) * (a * a - 8.6 * r * a + 11.4 * r * r)
+                / (4.4 * n - 3.0).powi(2)
+        }
+    }
 }
 
 /// NIST SP 1065 §5.2.11: the total variance is biased low for flicker and random-walk FM by

@@ -148,6 +148,13 @@ pub(crate) fn estimator_sum(x: &[f64], est: Estimator, m: usize) -> Option<(f64,
             });
             Some((s, n - 2))
         }
+        // Their sums need more than one pass over the phase (subsequences, frequency, a bias
+        // factor): `crate::total`, reached through `Series::raw_point`.
+        Estimator::ModifiedTotal => crate::total::total_window_sum(x, m),
+        Estimator::Theo1 => crate::total::theo1_sum(x, m),
+        Estimator::HadamardTotal | Estimator::TheoH => {
+            unreachable!("Series::raw_point computes {est:?} from its parts")
+        }
     }
 }
 

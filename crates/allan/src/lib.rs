@@ -11,7 +11,10 @@
 //! - overlapping Allan deviation, SP 1065 eq (11),
 //! - modified Allan deviation, SP 1065 eq (14),
 //! - Hadamard and overlapping Hadamard deviation, SP 1065 eqs (18) and (20),
-//! - total deviation, SP 1065 eq (25) (doubly reflected phase).
+//! - total deviation, SP 1065 eq (25) (doubly reflected phase),
+//! - modified total and Hadamard total deviation, SP 1065 eq (27) and §5.2.13, Theo1, SP 1065
+//!   eq (30) (tau = 0.75 m tau0, even m), and TheoH, SP 1065 §5.2.14 ([`total`], which also
+//!   holds the gap-tolerant Allan sum and the time-interval errors MTIE and TIE rms).
 //!
 //! Rate samples y_k (one per `tau0_s`) are turned into phase x_0 = 0, x_n = tau0 * sum_{k<n} (y_k - mean)
 //! (docs/model.md §2.1; the mean removal is allantools' `frequency2phase`), summed with compensated
@@ -67,6 +70,7 @@ mod kernels;
 mod phase;
 mod series;
 mod sum;
+pub mod total;
 
 pub use analysis::{analyse, analyse_rate, analyse_rate_until, analyse_until, Analysis};
 pub use grid::TauGrid;
@@ -100,17 +104,32 @@ pub enum Estimator {
     OverlappingHadamard,
     /// Total deviation, SP 1065 eq (25).
     Total,
+    /// Modified total deviation, SP 1065 eq (27): each 3m-point subsequence detrended and
+    /// reflected (Howe & Vernotte 1999).
+    ModifiedTotal,
+    /// Hadamard total deviation, SP 1065 §5.2.13 (Howe et al. 2005): the modified total's
+    /// reflection on frequency data; insensitive to a rate ramp.
+    HadamardTotal,
+    /// Theo1, SP 1065 eq (30) (Howe & Tasset 2004): even factors m, tau = 0.75 m tau0.
+    Theo1,
+    /// TheoH, SP 1065 §5.2.14: the overlapping Allan deviation below a tenth of the record,
+    /// bias-removed Theo1 (TheoBR) beyond.
+    TheoH,
 }
 
 impl Estimator {
     /// All estimators, in a fixed order.
-    pub const ALL: [Estimator; 6] = [
+    pub const ALL: [Estimator; 10] = [
         Estimator::NonOverlapping,
         Estimator::Overlapping,
         Estimator::Modified,
         Estimator::Hadamard,
         Estimator::OverlappingHadamard,
         Estimator::Total,
+        Estimator::ModifiedTotal,
+        Estimator::HadamardTotal,
+        Estimator::Theo1,
+        Estimator::TheoH,
     ];
 
     /// Short name as used on the command line and by allantools (`adev`, `oadev`, ...).
@@ -122,10 +141,15 @@ impl Estimator {
             Estimator::Hadamard => "hdev",
             Estimator::OverlappingHadamard => "ohdev",
             Estimator::Total => "totdev",
+            Estimator::ModifiedTotal => "mtotdev",
+            Estimator::HadamardTotal => "htotdev",
+            Estimator::Theo1 => "theo1",
+            Estimator::TheoH => "theoh",
         }
     }
 
-    /// Parse a short name (`adev`, `oadev`, `mdev`, `hdev`, `ohdev`, `totdev`).
+    /// Parse a short name (`adev`, `oadev`, `mdev`, `hdev`, `ohdev`, `totdev`, `mtotdev`,
+    /// `htotdev`, `theo1`, `theoh`).
     pub fn from_name(name: &str) -> Option<Estimator> {
         Estimator::ALL.into_iter().find(|e| e.name() == name)
     }
@@ -133,19 +157,21 @@ impl Estimator {
     /// Stable32's "stop ratio": the largest averaging factor is N / ratio with N the number
     /// of frequency points (Riley, "Evolution of frequency stability analysis software",
     /// Table III; quoted in allantools `tau_generator`). Checked against the last rows of
-    /// the Stable32 octave and decade tables.
+    /// the Stable32 octave and decade tables (adev to totdev; the others are the table's).
     pub fn stable32_stop_ratio(self) -> usize {
         match self {
             Estimator::NonOverlapping | Estimator::Hadamard => 5,
             Estimator::Overlapping | Estimator::Modified | Estimator::OverlappingHadamard => 4,
-            Estimator::Total => 2,
+            Estimator::Total | Estimator::ModifiedTotal => 2,
+            Estimator::HadamardTotal => 3,
+            Estimator::Theo1 | Estimator::TheoH => 1,
         }
     }
 
     /// Order of the difference: 2 for Allan-type, 3 for Hadamard-type (Greenhall's d).
     pub fn difference_order(self) -> u32 {
         match self {
-            Estimator::Hadamard | Estimator::OverlappingHadamard => 3,
+            Estimator::Hadamard | Estimator::OverlappingHadamard | Estimator::HadamardTotal => 3,
             _ => 2,
         }
     }

@@ -6,7 +6,7 @@ use crate::kernels::{
     BLOCKED_MAX_M,
 };
 use crate::phase::{rate_to_phase, rate_to_phase_in_place};
-use crate::{chi2, edf, AllanPoint, DataKind, EdfMethod, Estimator, Options, TauGrid};
+use crate::{chi2, edf, total, AllanPoint, DataKind, EdfMethod, Estimator, Options, TauGrid};
 use std::borrow::Cow;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -106,9 +106,89 @@ impl<'a> Series<'a> {
     }
 
     /// The deviation at averaging factor `m` without interval (`None` if fewer than 2 terms).
+    /// TheoH computes its bias factor here for this one point (see [`Series::raw_points`] for
+    /// a curve, which computes it once).
     pub fn raw_point(&self, est: Estimator, m: usize) -> Option<AllanPoint> {
-        let (sum_sq, n_terms) = estimator_sum_fast(&self.phase, est, m)?;
-        self.point_from_sum(est, m, sum_sq, n_terms)
+        match est {
+            Estimator::ModifiedTotal => {
+                let (sum, n) = total::total_window_sum(&self.phase, m)?;
+                self.point_from_sum(est, m, sum, n)
+            }
+            // At m = 1 the overlapping Hadamard deviation, as Stable32 and allantools do
+            // (Riley: "for best consistency, the overlapping Hadamard variance is used instead
+            // of the Hadamard total variance at m = 1").
+            Estimator::HadamardTotal if m == 1 => {
+                let (sum, n) = estimator_sum_fast(&self.phase, Estimator::OverlappingHadamard, 1)?;
+                self.point_from_sum(Estimator::OverlappingHadamard, 1, sum, n)
+            }
+            Estimator::HadamardTotal => {
+                let (sum, n) = total::total_window_sum(&self.frequency(), m)?;
+                self.point_from_sum(est, m, sum, n)
+            }
+            Estimator::Theo1 => {
+                let (sum, n) = total::theo1_sum(&self.phase, m)?;
+                self.point_from_sum(est, m, sum, n)
+            }
+            Estimator::TheoH => self.theoh_point(m, &|| self.theo_bias_factor()),
+            _ => {
+                let (sum_sq, n_terms) = estimator_sum_fast(&self.phase, est, m)?;
+                self.point_from_sum(est, m, sum_sq, n_terms)
+            }
+        }
+    }
+
+    /// The frequency (rate) the phase integrates: (x_{k+1} - x_k) / tau0, the Hadamard total
+    /// deviation's input (allantools `phase2frequency`; for rate input the rate less its mean,
+    /// which the subsequences' detrending removes anyway).
+    fn frequency(&self) -> Vec<f64> {
+        let rate = 1.0 / self.tau0_s;
+        self.phase
+            .windows(2)
+            .map(|w| (w[1] - w[0]) * rate)
+            .collect()
+    }
+
+    /// TheoBR's bias factor (SP 1065 §5.2.14, Taylor & Howe 2010): the mean over
+    /// i = 0..=n of AVAR(m = 9 + 3i) / Theo1(m = 12 + 4i), the two at the same tau
+    /// ((9 + 3i) tau0 = 0.75 (12 + 4i) tau0), n = floor(0.1 N / 3) - 3 with N phase points.
+    /// `None` when the record is too short for one ratio (N < 120).
+    pub fn theo_bias_factor(&self) -> Option<f64> {
+        let n = self.phase.len();
+        let top = (0.1 * n as f64 / 3.0).floor() as i64 - 3;
+        if top < 0 {
+            return None;
+        }
+        let ratios: Vec<f64> = (0..=top as usize)
+            .map(|i| {
+                let avar = self
+                    .raw_point(Estimator::Overlapping, 9 + 3 * i)?
+                    .dev
+                    .powi(2);
+                let theo = self.raw_point(Estimator::Theo1, 12 + 4 * i)?.dev.powi(2);
+                Some(avar / theo)
+            })
+            .collect::<Option<_>>()?;
+        Some(ratios.iter().sum::<f64>() / ratios.len() as f64)
+    }
+
+    /// TheoH at factor m (SP 1065 §5.2.14): the overlapping Allan deviation at tau = m tau0 below a
+    /// tenth of the record ([`total::theoh_uses_avar`]), else for even m from 0.75 m tau0 = a
+    /// tenth of the record on, TheoBR = sqrt(kf) Theo1 with kf from `bias` (computed only when
+    /// needed); `None` for the factors between the two parts, odd factors of the TheoBR part and
+    /// factors beyond the record.
+    fn theoh_point(&self, m: usize, bias: &dyn Fn() -> Option<f64>) -> Option<AllanPoint> {
+        let n = self.phase.len();
+        if total::theoh_uses_avar(m, n) {
+            let mut p = self.raw_point(Estimator::Overlapping, m)?;
+            p.m = m;
+            return Some(p);
+        }
+        if !total::theoh_uses_theo(m, n) {
+            return None;
+        }
+        let mut p = self.raw_point(Estimator::Theo1, m)?;
+        p.dev *= bias()?.sqrt();
+        Some(p)
     }
 
     /// The deviations at all `ms` without intervals, skipping factors with fewer than 2 terms.
@@ -133,6 +213,19 @@ impl<'a> Series<'a> {
         stop: &AtomicBool,
     ) -> Option<Vec<AllanPoint>> {
         let stopped = || stop.load(Ordering::Relaxed);
+        if est == Estimator::TheoH {
+            // The bias factor once for the curve, when a factor needs it.
+            let kf = std::cell::OnceCell::new();
+            let bias = || *kf.get_or_init(|| self.theo_bias_factor());
+            let mut out = Vec::new();
+            for &m in ms {
+                if stopped() {
+                    return None;
+                }
+                out.extend(self.theoh_point(m, &bias));
+            }
+            return Some(out);
+        }
         let multi = match est {
             Estimator::Overlapping => Some(2),
             Estimator::OverlappingHadamard => Some(3),
@@ -213,6 +306,25 @@ impl<'a> Series<'a> {
             }
             // SP 1065 eq (25): Tot sigma^2 = sum / (2 tau^2 (N - 2))
             Estimator::Total => sum_sq / (2.0 * tau_s * tau_s * n_terms as f64),
+            // SP 1065 eq (27): Mod Tot sigma^2 = sum over the N - 3m + 1 subsequences of their
+            // (1/6m) sums (the m-averages' second differences squared), / (2 tau^2 (N - 3m + 1))
+            Estimator::ModifiedTotal => sum_sq / (2.0 * tau_s * tau_s * n_terms as f64),
+            // SP 1065 §5.2.13 (allantools `calc_htotdev_freq`): the same on frequency data, / 6
+            // (the Hadamard variance's 1/6) and the number of subsequences
+            Estimator::HadamardTotal => sum_sq / (6.0 * n_terms as f64),
+            // SP 1065 eq (30): Theo1 = sum / (0.75 (N - m) (m tau0)^2); n_terms = (N - m) m/2
+            Estimator::Theo1 => {
+                let outer = 2 * n_terms / m;
+                sum_sq / (0.75 * outer as f64 * tau_s * tau_s)
+            }
+            // TheoH's points are those of its parts (`theoh_point`).
+            Estimator::TheoH => return None,
+        };
+        // Theo1 reports tau = 0.75 m tau0 (SP 1065 eq (30), Stable32's "Theo1 Tau").
+        let tau_s = if est == Estimator::Theo1 {
+            0.75 * tau_s
+        } else {
+            tau_s
         };
         Some(AllanPoint {
             tau_s,
@@ -273,6 +385,9 @@ impl<'a> Series<'a> {
             p.alpha = alpha;
             if est == Estimator::Total && opts.totvar_bias_correction {
                 p.dev /= edf::totvar_bias(alpha, p.m, n_phase - 1).sqrt();
+            }
+            if est == Estimator::HadamardTotal && p.m > 1 && opts.totvar_bias_correction {
+                p.dev /= edf::htotvar_bias(alpha).sqrt();
             }
             p.edf = edf::edf_for(est, opts.edf, alpha, p.m, n_phase, p.n_terms);
             let (lo, hi) = chi2::confidence_interval(p.dev, p.edf, opts.confidence);

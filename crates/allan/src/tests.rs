@@ -58,7 +58,12 @@ fn naive(y: &[f64], est: Estimator, m: usize) -> f64 {
             }
             (s / (2.0 * (m * m) as f64 * c as f64)).sqrt()
         }
-        Estimator::Total => unreachable!(),
+        // Tested against their own definitions (total.rs) and allantools (Python tests).
+        Estimator::Total
+        | Estimator::ModifiedTotal
+        | Estimator::HadamardTotal
+        | Estimator::Theo1
+        | Estimator::TheoH => unreachable!(),
     }
 }
 
@@ -376,4 +381,109 @@ fn blocked_kernel_sums_each_lane_in_index_order() {
             assert_eq!(s.to_bits(), plain.to_bits(), "order {order} m {m}");
         }
     }
+}
+
+#[test]
+fn theoh_is_avar_below_a_tenth_of_the_record_and_bias_removed_theo1_beyond() {
+    // SP 1065 §5.2.14 written out: AVAR at m tau0 < 0.1 T, TheoBR = kf Theo1 at even m with
+    // 0.75 m tau0 >= 0.1 T, kf the mean of AVAR(9 + 3i) / Theo1(12 + 4i), i = 0..=n,
+    // n = floor(0.1 N / 3) - 3 (N phase points), from the two estimators' own curves.
+    let y = series(2999, 41);
+    let tau0 = 0.01;
+    let s = Series::new(&y, DataKind::Rate, tau0);
+    let n = s.phase_len();
+    assert_eq!(n, 3000);
+    let top = (0.1 * n as f64 / 3.0).floor() as usize - 3;
+    let dev = |est, m| s.raw_point(est, m).unwrap().dev;
+    let kf = (0..=top)
+        .map(|i| {
+            dev(Estimator::Overlapping, 9 + 3 * i).powi(2)
+                / dev(Estimator::Theo1, 12 + 4 * i).powi(2)
+        })
+        .sum::<f64>()
+        / (top + 1) as f64;
+    assert_eq!(s.theo_bias_factor(), Some(kf));
+    let opts = Options {
+        edf: EdfMethod::None,
+        ..Options::default()
+    };
+    let points = s.deviation(Estimator::TheoH, &TauGrid::All, &opts);
+    // 0.1 T = 299.9 samples: AVAR for m <= 299, TheoBR for even m >= 400 (0.75 m >= 299.9).
+    let (avar, theo): (Vec<_>, Vec<_>) = points.iter().partition(|p| p.m <= 299);
+    assert_eq!(avar.len(), 299);
+    assert_eq!(theo.first().map(|p| p.m), Some(400));
+    assert_eq!(theo.last().map(|p| p.m), Some(2998));
+    for p in avar {
+        // The same sums: bit for bit.
+        assert_eq!(p.dev, dev(Estimator::Overlapping, p.m), "m={}", p.m);
+        assert_eq!(p.tau_s, p.m as f64 * tau0);
+    }
+    for p in theo {
+        assert_eq!(p.m % 2, 0);
+        assert_eq!(p.tau_s, 0.75 * (p.m as f64 * tau0));
+        let want = kf.sqrt() * dev(Estimator::Theo1, p.m);
+        assert!(((p.dev - want) / want).abs() < 1e-15, "m={}", p.m);
+    }
+}
+
+#[test]
+fn theo_bias_factor_identifies_the_noise_as_howe_and_tasset_tabulate() {
+    // Expected AVAR / Theo1 (Howe & Tasset 2004, quoted in SP 1065 §5.2.14 and Riley's TheoBR
+    // code): 1.0 for white FM, about 0.4 for white PM (0.09 + 0.74 / r^0.4 at r = 0.75 m, 0.40 to
+    // 0.22 over the factors kf averages here). Riley classifies the noise by kf against the
+    // geometric means of neighbouring types' factors: white FM between sqrt(0.6 * 1.0) = 0.775
+    // and sqrt(1.0 * 1.71) = 1.308, white PM below sqrt(0.4 * 0.6) = 0.490. Over 200 seeds of
+    // these 8192-point records (`theo_bias_factor_spread`, docs/allan.md) white FM's kf ranged
+    // 0.764 to 1.297 (a few records below the band), white PM's 0.172 to 0.175; the seeds here
+    // are fixed draws inside (the test is deterministic; it fails if kf's definition changes).
+    for seed in [1u64, 2, 3] {
+        let white_fm = series(8191, seed);
+        let kf = Series::new(&white_fm, DataKind::Rate, 1.0)
+            .theo_bias_factor()
+            .unwrap();
+        assert!(
+            (0.775..1.308).contains(&kf),
+            "white FM seed {seed}: kf {kf}"
+        );
+        let white_pm = series(8192, seed + 100);
+        let kf = Series::new(&white_pm, DataKind::Phase, 1.0)
+            .theo_bias_factor()
+            .unwrap();
+        assert!(kf < 0.490, "white PM seed {seed}: kf {kf}");
+    }
+}
+
+#[test]
+#[ignore = "the spread of the TheoBR bias factor over 200 seeds (docs/allan.md): --ignored --nocapture"]
+fn theo_bias_factor_spread() {
+    let (mut fm, mut pm) = (Vec::new(), Vec::new());
+    for seed in 0..200u64 {
+        fm.push(
+            Series::new(&series(8191, seed), DataKind::Rate, 1.0)
+                .theo_bias_factor()
+                .unwrap(),
+        );
+        pm.push(
+            Series::new(&series(8192, seed + 1000), DataKind::Phase, 1.0)
+                .theo_bias_factor()
+                .unwrap(),
+        );
+    }
+    let range = |v: &[f64]| {
+        (
+            v.iter().cloned().fold(f64::MAX, f64::min),
+            v.iter().cloned().fold(f64::MIN, f64::max),
+        )
+    };
+    let fm_outside = fm.iter().filter(|k| !(0.775..1.308).contains(*k)).count();
+    let pm_outside = pm.iter().filter(|&&k| k >= 0.490).count();
+    eprintln!(
+        "white FM kf range {:?}, {fm_outside} of 200 outside [0.775, 1.308); white PM kf range {:?}, {pm_outside} of 200 at or above 0.490",
+        range(&fm),
+        range(&pm)
+    );
+    // Riley's classification by kf is a statistic: on 8192-point records it misreads white FM
+    // on a few records in a hundred at most (measured: docs/allan.md), white PM never.
+    assert!(fm_outside <= 6, "{fm_outside}");
+    assert_eq!(pm_outside, 0);
 }

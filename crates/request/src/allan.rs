@@ -59,6 +59,23 @@ pub fn check_samples(data: &[f64]) -> Result<()> {
     Ok(())
 }
 
+/// Samples with gaps, for the gap-tolerant Allan deviation (allantools `gradev`): a NaN is a
+/// gap; the samples present follow [`check_samples`] (an infinite sample or one of magnitude
+/// 1e100 or more is refused by its index, fewer than 2 present or all one value is refused).
+pub fn check_samples_with_gaps(data: &[f64]) -> Result<()> {
+    if let Some(i) = data
+        .iter()
+        .position(|&v| !v.is_nan() && !logio::valid_value(v))
+    {
+        return Err(RequestError::Sample {
+            index: i,
+            value: data[i],
+        });
+    }
+    let present: Vec<f64> = data.iter().copied().filter(|v| !v.is_nan()).collect();
+    check_samples(&present)
+}
+
 /// Fewest averaging times with 9 or more intervals a channel's curve must give (a slope needs
 /// two).
 pub const MIN_USABLE_TAUS: usize = 2;

@@ -176,6 +176,14 @@ mod tests {
         ] {
             assert!(allan::check_samples(&bad).is_err(), "{bad:?}");
         }
+        assert!(allan::check_samples_with_gaps(&[1.0, f64::NAN, 2.0]).is_ok());
+        for bad in [
+            vec![f64::NAN, 1.0, f64::NAN],
+            vec![1.0, f64::NAN, 1.0],
+            vec![1.0, f64::INFINITY, 2.0],
+        ] {
+            assert!(allan::check_samples_with_gaps(&bad).is_err(), "{bad:?}");
+        }
         assert!(allan::check_rate(1e300).is_err());
         assert_eq!(allan::parse_confidence("95%").unwrap(), 0.95);
         assert!(allan::parse_confidence("1.5").is_err());
