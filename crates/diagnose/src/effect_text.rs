@@ -89,6 +89,28 @@ pub fn params_text(e: &FoundEffect, ch: noise::Channel) -> String {
         .join(", ")
 }
 
+/// Values of parameter `key` on channel `ch` (SI) in the unit a spec sheet writes it in, 3
+/// significant digits, the unit once after the last: `values_text("n", gz, &[a, b])` is
+/// "2.30, 2.41 deg/sqrt(h)" (`drift`'s model levels; the JSON keeps SI).
+pub fn values_text(key: &str, ch: noise::Channel, values: &[f64]) -> String {
+    match shown(key, si_unit_of(ch)) {
+        Shown::Discrete(unit) => values
+            .iter()
+            .map(|&v| format!("{}{unit}", trimmed(v, 6)))
+            .collect::<Vec<_>>()
+            .join(", "),
+        Shown::Scaled(scale, unit) => {
+            let nums: Vec<String> = values.iter().map(|&v| sig(v * scale, 3)).collect();
+            let space = if unit.is_empty() || unit.starts_with('/') {
+                ""
+            } else {
+                " "
+            };
+            format!("{}{space}{unit}", nums.join(", "))
+        }
+    }
+}
+
 /// "model had b = 37.63 deg/h" for a wrong level, "not in the model" for a missing term.
 pub fn model_text(e: &FoundEffect, ch: noise::Channel) -> String {
     let si_unit = si_unit_of(ch);
