@@ -87,7 +87,7 @@ fn largest_misfit(r: &ChannelResult, f: &Fit) -> Option<(f64, f64)> {
 }
 
 /// Each resolved term's refit range in spec-sheet units ("N 2.27-2.33 deg/sqrt(h)") and whether
-/// it leaves value +- [`SPREAD_SIGMAS`] sigma.
+/// it leaves value +- [`SPREAD_SIGMAS`] sigma or lies wholly on one side of the value.
 fn spread_parts(r: &ChannelResult) -> Vec<(String, bool)> {
     let (Some(f), Some(status), Some(spread)) = (&r.fit, &r.terms, &r.spread) else {
         return Vec::new();
@@ -103,8 +103,12 @@ fn spread_parts(r: &ChannelResult) -> Vec<(String, bool)> {
             let t = t.filter(|_| status[j].resolved)?;
             let (scale, shown) = (&units[j + 1].0, &units[j + 1].1);
             let (lo, hi) = (spread.lo[j], spread.hi[j]);
-            let beyond =
-                lo < t.value - SPREAD_SIGMAS * t.sigma || hi > t.value + SPREAD_SIGMAS * t.sigma;
+            // Beyond +- 2 sigma, or every refit on one side of the whole fit's value (no three
+            // quarters of the curve give it: the value rests on the misfit's balance).
+            let beyond = lo < t.value - SPREAD_SIGMAS * t.sigma
+                || hi > t.value + SPREAD_SIGMAS * t.sigma
+                || t.value < lo
+                || t.value > hi;
             Some((
                 format!(
                     "{} {}-{} {shown} ({} +- {} printed)",
@@ -171,7 +175,7 @@ fn warnings(r: &ChannelResult) -> Vec<String> {
             .collect();
         if f.reduced_chi2 > FIT_CHI2_WARNING && !moved.is_empty() {
             w.push(format!(
-                "the IEEE 952 fit does not describe the curve (reduced chi-square {:.1}, expected below {:.1}) and the value of {} depends on the taus fitted beyond {SPREAD_SIGMAS} sigma: refitted without each quarter of the taus in turn, {}; quote that range, not the +-; `imudrift diagnose` names the effects outside the five terms",
+                "the IEEE 952 fit does not describe the curve (reduced chi-square {:.1}, expected below {:.1}) and the value of {} depends on the taus fitted more than its +- says (a refit beyond {SPREAD_SIGMAS} sigma, or every refit on one side of it): refitted without each quarter of the taus in turn, {}; quote that range, not the +-; `imudrift diagnose` names the effects outside the five terms",
                 f.reduced_chi2,
                 FIT_CHI2_WARNING,
                 if moved.len() == 1 { "this term" } else { "these terms" },

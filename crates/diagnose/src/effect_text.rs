@@ -53,6 +53,11 @@ fn label(key: &str) -> &str {
 /// `b = 29.37 deg/h [26.32, 32.41]` for every parameter of `e` on channel `ch` (the filter's
 /// kind first); the white-noise level also per sqrt(Hz), as datasheets give it.
 pub fn params_text(e: &FoundEffect, ch: noise::Channel) -> String {
+    // A model's own term refitted to level 0 is removed from the corrected model: the finding is
+    // its absence, not an effect of size 0.
+    if e.zero_level {
+        return "removed from the model: the log shows none of it (fitted level 0)".into();
+    }
     let si_unit = si_unit_of(ch);
     let values = e.parameters.iter().map(|(k, &v)| {
         let (lo, hi) = (e.parameters_lo.get(k), e.parameters_hi.get(k));

@@ -291,3 +291,87 @@ fn parameters_of(trial: &Trial, named: &Named, dt_s: f64) -> Parameters {
     }
     p
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn found(
+        effect: Effect,
+        kind: FindingKind,
+        round: usize,
+        level: f64,
+        dbic: f64,
+    ) -> FoundEffect {
+        let values: BTreeMap<String, f64> = [("sigma".to_string(), level), ("tau_s".into(), 0.013)]
+            .into_iter()
+            .collect();
+        FoundEffect {
+            effect,
+            parameters: values.clone().into(),
+            parameters_lo: values.clone(),
+            parameters_hi: values,
+            kind,
+            model_parameters: None,
+            gap_before: 17.0,
+            gap_predicted: 13.0,
+            gap_after: 13.0,
+            delta_bic: dbic,
+            cannot_tell_from: Vec::new(),
+            round,
+            stand_in: false,
+            refinements: 0,
+            drift_gap_before: None,
+            drift_gap_after: None,
+            zero_level: level == 0.0,
+        }
+    }
+
+    /// Issue 45 item 5: an effect the model lacked, named in round 2 and refitted to level 0 in
+    /// round 3, is withdrawn (no entry of size 0 whose evidence is the sum of the two rounds'
+    /// gains), and comes back as a record with the naming's parameters and gain.
+    #[test]
+    fn a_named_effect_refitted_to_zero_is_withdrawn() {
+        let gm = Effect::GaussMarkov;
+        let white = Effect::WhiteNoise;
+        let mut effects = vec![
+            found(white, FindingKind::WrongLevel, 1, 6.7e-4, 98826.0),
+            found(gm, FindingKind::Missing, 2, 5.65e-4, 153.0),
+            found(gm, FindingKind::Missing, 3, 0.0, 471.0),
+        ];
+        let withdrawn = merge_refinements(&mut effects, 2);
+        assert_eq!(effects.len(), 1);
+        assert_eq!(effects[0].effect, white);
+        assert_eq!(withdrawn.len(), 1);
+        let w = &withdrawn[0];
+        assert!(w.effect.withdrawn && !w.effect.rejected && w.effect.effect == gm);
+        assert_eq!((w.round, w.delta_bic), (3, 153.0));
+        assert_eq!(w.parameters["sigma"], 5.65e-4);
+        assert_eq!(
+            serde_json::to_value(w.effect).unwrap(),
+            "gauss_markov withdrawn: a later round refitted its level to 0"
+        );
+    }
+
+    /// A refinement to another level than 0 still merges into the first entry, as before; a
+    /// model's own term refitted to 0 (kind `wrong_level`) is kept as the finding it is.
+    #[test]
+    fn other_refinements_merge_as_before() {
+        let gm = Effect::GaussMarkov;
+        let mut effects = vec![
+            found(gm, FindingKind::Missing, 2, 5.65e-4, 153.0),
+            found(gm, FindingKind::Missing, 3, 6.0e-4, 20.0),
+        ];
+        assert!(merge_refinements(&mut effects, 1).is_empty());
+        assert_eq!(effects.len(), 1);
+        assert_eq!(effects[0].parameters["sigma"], 6.0e-4);
+        assert_eq!((effects[0].delta_bic, effects[0].refinements), (173.0, 1));
+        let mut own = vec![
+            found(gm, FindingKind::WrongLevel, 1, 5.0e-4, 40.0),
+            found(gm, FindingKind::WrongLevel, 2, 0.0, 30.0),
+        ];
+        assert!(merge_refinements(&mut own, 1).is_empty());
+        assert_eq!(own.len(), 1);
+        assert!(own[0].zero_level);
+    }
+}
