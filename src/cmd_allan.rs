@@ -6,7 +6,7 @@
 use crate::log_input::{self, LogArgs};
 use crate::output;
 use crate::plot::{Band, LogLogPlot, Series, PALETTE};
-use allan::fit::{Fit, TERM_NAMES};
+use allan::fit::{Fit, SubrangeSpread, TERM_NAMES};
 use allan::sheet::{Reading, SheetReadings, TermStatus};
 use allan::{AllanPoint, Estimator, Options, TauGrid};
 use anyhow::{bail, Result};
@@ -64,7 +64,100 @@ pub struct Args {
 /// Reduced chi-square above which the IEEE 952 fit is reported as not describing the curve.
 const FIT_CHI2_WARNING: f64 = 25.0;
 
-/// What makes a channel's result weak though still meaningful (printed and in the JSON).
+/// A resolved coefficient whose refits on parts of the curve leave value +- this many of its
+/// standard errors depends on the taus fitted more than its +- says: its conclusion changes. Two
+/// sigma: the refits share three quarters of their points with the whole fit, so on a curve the
+/// five terms describe they stay well inside it (a leave-one-block-out refit of correlated
+/// points moves a coefficient by less than its own standard error, Efron & Tibshirani 1993
+/// §11.5); beyond it the misfit, not the scatter, moves the value.
+const SPREAD_SIGMAS: f64 = 2.0;
+
+/// The term labels of the text, in fit order.
+const TERM_LETTERS: [&str; 5] = ["Q", "N", "B", "K", "R"];
+
+/// Where the fit misses the curve most, counted in the point's own standard errors (the z that
+/// makes the chi-square, ln(dev / fit) sqrt(edf / 2), SP 1065 §5.2): that point's relative
+/// departure measured / fitted - 1 and its tau.
+fn largest_misfit(r: &ChannelResult, f: &Fit) -> Option<(f64, f64)> {
+    r.points
+        .iter()
+        .filter(|p| p.dev.is_finite() && p.dev > 0.0)
+        .map(|p| {
+            let ratio = p.dev / f.model_dev(p.tau_s);
+            let z = ratio.ln().abs() * (allan::fit::capped_edf(p) / 2.0).sqrt();
+            (z, ratio - 1.0, p.tau_s)
+        })
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, d, t)| (d, t))
+}
+
+/// Each resolved term's refit range in spec-sheet units ("N 2.27-2.33 deg/sqrt(h)") and whether
+/// it leaves value +- [`SPREAD_SIGMAS`] sigma or lies wholly on one side of the value.
+fn spread_parts(r: &ChannelResult) -> Vec<(String, bool)> {
+    let (Some(f), Some(status), Some(spread)) = (&r.fit, &r.terms, &r.spread) else {
+        return Vec::new();
+    };
+    if spread.refits == 0 {
+        return Vec::new();
+    }
+    let units = crate::fmt::allan_units(r.unit);
+    f.terms()
+        .iter()
+        .enumerate()
+        .filter_map(|(j, t)| {
+            let t = t.filter(|_| status[j].resolved)?;
+            let (scale, shown) = (&units[j + 1].0, &units[j + 1].1);
+            let (lo, hi) = (spread.lo[j], spread.hi[j]);
+            // Beyond +- 2 sigma, or every refit on one side of the whole fit's value (no three
+            // quarters of the curve give it: the value rests on the misfit's balance).
+            let beyond = lo < t.value - SPREAD_SIGMAS * t.sigma
+                || hi > t.value + SPREAD_SIGMAS * t.sigma
+                || t.value < lo
+                || t.value > hi;
+            Some((
+                format!(
+                    "{} {}-{} {shown} ({} +- {} printed)",
+                    TERM_LETTERS[j],
+                    crate::fmt::sig(lo * scale, 3),
+                    crate::fmt::sig(hi * scale, 3),
+                    crate::fmt::sig(t.value * scale, 4),
+                    crate::fmt::sig(t.sigma * scale, 2),
+                ),
+                beyond,
+            ))
+        })
+        .collect()
+}
+
+/// What the misfit of a fit the five terms cannot describe means for the numbers printed: the
+/// largest departure of the fitted curve from the measured one, and each resolved coefficient's
+/// range when refitted without each quarter of the taus in turn. None where the fit describes
+/// the curve (reduced chi-square at most [`FIT_CHI2_WARNING`]).
+fn misfit_note(r: &ChannelResult) -> Option<String> {
+    let f = r.fit.as_ref()?;
+    if f.reduced_chi2.is_nan() || f.reduced_chi2 <= FIT_CHI2_WARNING {
+        return None;
+    }
+    let (worst, at) = largest_misfit(r, f)?;
+    let parts: Vec<String> = spread_parts(r).into_iter().map(|(t, _)| t).collect();
+    Some(format!(
+        "the five IEEE 952 terms miss the curve (reduced chi-square {:.0}, a five-term curve gives below {:.0}: a filter, a sinusoid or a Gauss-Markov process shapes it, `imudrift diagnose` names them; most of its own standard errors at tau = {}, by {:+.1} %); refitted without each quarter of the taus in turn: {}",
+        f.reduced_chi2,
+        FIT_CHI2_WARNING,
+        crate::fmt::time(at),
+        100.0 * worst,
+        if parts.is_empty() {
+            "no resolved term".to_string()
+        } else {
+            parts.join(", ")
+        }
+    ))
+}
+
+/// What makes a channel's result weak though still meaningful (printed and in the JSON): a last
+/// point with under 2 degrees of freedom, and a fit that does not describe the curve where that
+/// changes a printed coefficient (a resolved term whose refits on parts of the curve leave its
+/// value +- 2 sigma; elsewhere the misfit is a note, [`misfit_note`], not a warning).
 fn warnings(r: &ChannelResult) -> Vec<String> {
     let mut w = Vec::new();
     if let Some(last) = r.points.last() {
@@ -79,12 +172,19 @@ fn warnings(r: &ChannelResult) -> Vec<String> {
     if let Some(f) = &r.fit {
         // The Allan points are correlated and the flicker model is a finite sum, so even logs made
         // from the five-term model give reduced chi-squares up to about 9 (30 channels of 2 h MTx
-        // logs, seeds 2-6); only a fit far beyond that is flagged.
-        let limit = FIT_CHI2_WARNING;
-        if f.reduced_chi2 > limit {
+        // logs, seeds 2-6); only a fit far beyond that is looked at.
+        let moved: Vec<String> = spread_parts(r)
+            .into_iter()
+            .filter(|(_, beyond)| *beyond)
+            .map(|(t, _)| t)
+            .collect();
+        if f.reduced_chi2 > FIT_CHI2_WARNING && !moved.is_empty() {
             w.push(format!(
-                "the IEEE 952 fit does not describe the curve (reduced chi-square {:.1}, expected below {:.1}): effects outside the five terms (a filter, a sinusoid, a Gauss-Markov process) shape it, so the fitted values are approximate; `imudrift diagnose` names such effects",
-                f.reduced_chi2, limit
+                "the IEEE 952 fit does not describe the curve (reduced chi-square {:.1}, expected below {:.1}) and the value of {} depends on the taus fitted more than its +- says (a refit beyond {SPREAD_SIGMAS} sigma, or every refit on one side of it): refitted without each quarter of the taus in turn, {}; quote that range, not the +-; `imudrift diagnose` names the effects outside the five terms",
+                f.reduced_chi2,
+                FIT_CHI2_WARNING,
+                if moved.len() == 1 { "this term" } else { "these terms" },
+                moved.join(", ")
             ));
         }
     }
@@ -104,6 +204,8 @@ pub struct ChannelResult {
     pub sheet: Option<SheetReadings>,
     /// Which fitted terms are resolved, and each one's bound (with the fit only).
     pub terms: Option<[TermStatus; 5]>,
+    /// The fit's coefficients refitted without each quarter of the taus (with the fit only).
+    pub spread: Option<SubrangeSpread>,
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -294,6 +396,9 @@ pub fn analyse(
         let name = quantity.channel();
         stage(&format!("{name}: {s}"))
     });
+    let spread = fit
+        .as_ref()
+        .map(|f| allan::fit::subrange_spread(&points, f));
     ChannelResult {
         quantity,
         name: quantity.channel().to_string(),
@@ -302,6 +407,7 @@ pub fn analyse(
         fit,
         sheet,
         terms,
+        spread,
     }
 }
 
@@ -330,14 +436,14 @@ fn tables(
             "\nchannel {} (deviation in {}; JSON and CSV in {})",
             r.name, units[0].1, r.unit
         );
-        points_table(&mut s, r, est, &units);
+        points_table(&mut s, r, &units);
         fit_lines(&mut s, r, est, &units, &level);
     }
     s
 }
 
 /// One channel's deviation at every tau with its interval, in spec-sheet units (`units[0]`).
-fn points_table(s: &mut String, r: &ChannelResult, est: Estimator, units: &[(f64, String); 6]) {
+fn points_table(s: &mut String, r: &ChannelResult, units: &[(f64, String); 6]) {
     let dev_scale = &units[0].0;
     let _ = writeln!(
         s,
@@ -345,11 +451,15 @@ fn points_table(s: &mut String, r: &ChannelResult, est: Estimator, units: &[(f64
         "tau", "m", "terms", "a", "edf", "dev_lo", "dev", "dev_hi"
     );
     let d = |v: f64| crate::fmt::sig(v * dev_scale, 4);
+    let mut few_bins = false;
     for p in &r.points {
-        let flag = if est == Estimator::NonOverlapping && !p.woodman_ok() {
-            " <9 bins"
-        } else {
+        // Woodman §5.1: fewer than 9 non-overlapping bins; such a point is shown and fitted,
+        // but no reading (line, minimum) is taken from it.
+        let flag = if p.woodman_ok() {
             ""
+        } else {
+            few_bins = true;
+            " <9 bins"
         };
         let _ = writeln!(
             s,
@@ -362,6 +472,12 @@ fn points_table(s: &mut String, r: &ChannelResult, est: Estimator, units: &[(f64
             d(p.lo),
             d(p.dev),
             d(p.hi)
+        );
+    }
+    if few_bins {
+        let _ = writeln!(
+            s,
+            "<9 bins: fewer than 9 non-overlapping averages of tau fit in the log (Woodman TR-696 §5.1); the point is shown and fitted, but no reading is taken from it"
         );
     }
 }
@@ -413,10 +529,19 @@ fn fit_lines(
         } else {
             String::new()
         };
+        // B is the fit's flicker coefficient, not the curve's minimum: its own Allan plateau is
+        // 0.664 B (docs/model.md §2), which the readings' minimum lies above.
+        let plateau = match t {
+            Some(t) if i == 2 && st.resolved => format!(
+                "; coefficient of the fit, its plateau 0.664 B = {} {shown}",
+                crate::fmt::sig(t.value * allan::fit::BI_PLATEAU_FACTOR * scale, 4)
+            ),
+            _ => String::new(),
+        };
         let _ = match t {
             Some(t) if st.resolved => writeln!(
                 s,
-                "  {label:<20} {} +- {} {shown}{alt}   ({:.4e} {})",
+                "  {label:<20} {} +- {} {shown}{alt}   ({:.4e} {}){plateau}",
                 crate::fmt::sig(t.value * scale, 4),
                 crate::fmt::sig(t.sigma * scale, 2),
                 t.value,
@@ -443,10 +568,72 @@ fn fit_lines(
             ),
         };
     }
-    for w in warnings(r) {
+    let warned = warnings(r);
+    for w in &warned {
         let _ = writeln!(s, "warning: {}: {w}", r.name);
     }
+    if let Some(note) = misfit_note(r) {
+        // With a warning on a coefficient, the note's figures are in it already.
+        if !warned
+            .iter()
+            .any(|w| w.contains("does not describe the curve"))
+        {
+            let _ = writeln!(s, "note: {}: {note}", r.name);
+        }
+    }
     reading_lines(s, unit, sheet, units, level);
+    let _ = write!(s, "{}", fit_and_readings(r, f, status, sheet, units));
+}
+
+/// Why the fit's N and B and the readings differ: they are different quantities. Printed where
+/// the fit resolves N (or B) and the ARW line (or the minimum) reads a value or bound beside it.
+fn fit_and_readings(
+    r: &ChannelResult,
+    f: &Fit,
+    status: &[TermStatus; 5],
+    sheet: &SheetReadings,
+    units: &[(f64, String); 6],
+) -> String {
+    let mut s = String::new();
+    let arw = &sheet.arw;
+    if let (Some(n), Some(line)) = (f.n.filter(|_| status[1].resolved), arw.value) {
+        // The share of the fitted curve that is not white noise over the line's taus: what the
+        // line reads as white noise and the fit gives to the other terms.
+        let other = r
+            .points
+            .iter()
+            .filter(|p| p.tau_s >= arw.tau_s[0] && p.tau_s <= arw.tau_s[1])
+            .map(|p| 1.0 - (f.term_dev(1, p.tau_s).unwrap_or(0.0) / f.model_dev(p.tau_s)).powi(2))
+            .fold(0.0f64, f64::max);
+        let _ = writeln!(
+            s,
+            "  fit N vs ARW line: different quantities, {} vs {} {} ({:+.1} %): the line reads the curve over tau = {} .. {} as white noise alone and leaves out tau < 10 samples (the sensor's filter); the fit's N is the white-noise term of all five fitted to every tau together (the other terms make up to {} % of the fitted curve over the line's taus); the noise file (--kalibr) takes the line",
+            crate::fmt::sig(n.value * units[2].0, 4),
+            crate::fmt::sig(line * units[2].0, 4),
+            units[2].1,
+            100.0 * (line / n.value - 1.0),
+            crate::fmt::time(arw.tau_s[0]),
+            crate::fmt::time(arw.tau_s[1]),
+            crate::fmt::sig(100.0 * other, 2),
+        );
+    }
+    if let Some(b) = f.b.filter(|_| status[2].resolved) {
+        let min = &sheet.bi_min;
+        let plateau = b.value * allan::fit::BI_PLATEAU_FACTOR;
+        let (verb, v) = match min.value {
+            Some(v) => ("is", v),
+            None => ("is below", min.bound),
+        };
+        let _ = writeln!(
+            s,
+            "  fit B vs Allan minimum: different quantities: B is the flicker coefficient of the fit (its plateau 0.664 B = {} {}); the minimum {verb} {} {} and is read off the curve alone, resolved only where the curve rises significantly after its lowest point; white noise and the other terms add to the plateau there",
+            crate::fmt::sig(plateau * units[3].0, 4),
+            units[3].1,
+            crate::fmt::sig(v * units[3].0, 3),
+            units[3].1,
+        );
+    }
+    s
 }
 
 /// The spec-sheet readings of one channel, each a value with its interval or a bound.
@@ -459,7 +646,7 @@ fn reading_lines(
 ) {
     let _ = writeln!(
         s,
-        "readings (IEEE 952 / Kalibr practice, {level} intervals; a reading the curve does not resolve is given as a bound):"
+        "readings of the curve alone (IEEE 952 / Kalibr practice, {level} intervals; a reading the curve does not resolve is given as a bound):"
     );
     let value = |rd: &Reading, (scale, shown): &(f64, String)| -> String {
         match rd.value {
@@ -510,15 +697,17 @@ fn reading_lines(
     );
     let bi = &sheet.bi_min;
     let b_scale = &units[3];
+    // The minimum as a B by the minimum convention (min / 0.664): named so, as the fit's B above
+    // is another quantity.
     let ieee = match bi.value {
         Some(v) => format!(
-            "; IEEE B = min/0.664 = {} {}; at tau = {}",
+            "; as B by the minimum convention, min/0.664 = {} {}; at tau = {}",
             crate::fmt::sig(allan::sheet::ieee_b(v) * b_scale.0, 4),
             b_scale.1,
             crate::fmt::time(bi.tau_s[0])
         ),
         None => format!(
-            "; IEEE B < {} {}",
+            "; as B by the minimum convention, min/0.664 < {} {}",
             crate::fmt::sig(allan::sheet::ieee_b(bi.bound) * b_scale.0, 3),
             b_scale.1
         ),
@@ -526,7 +715,7 @@ fn reading_lines(
     let _ = writeln!(
         s,
         "  {:<26} {}{ieee}",
-        "bias instability (minimum)",
+        "Allan minimum (bias inst.)",
         value(bi, b_scale)
     );
     let _ = writeln!(
@@ -604,6 +793,9 @@ fn json_document(
                 "fit_reduced_chi2": r.fit.as_ref().map_or(Value::Null, |f| num(f.reduced_chi2)),
                 "fit_model_error": r.fit.as_ref().map_or(Value::Null, |f| num(f.model_error)),
                 "readings": readings,
+                "readings_tau_max_s": r.points.iter().filter(|p| p.woodman_ok()).map(|p| p.tau_s).fold(None, |_, t| Some(t)),
+                "fit_subrange": subrange_json(r),
+                "fit_note": misfit_note(r),
                 "warnings": warnings(r),
             }),
         );
@@ -621,6 +813,25 @@ fn json_document(
         "skipped_columns": skipped,
         "channels": channels,
     })
+}
+
+/// `fit_subrange{term: [lo, hi]}`: each fitted term's smallest and largest value refitted
+/// without each quarter of the taus in turn (SI; null for a term the fit does not have, or
+/// without refits).
+fn subrange_json(r: &ChannelResult) -> Value {
+    let Some(spread) = r.spread.filter(|s| s.refits > 0) else {
+        return Value::Null;
+    };
+    let mut o = Map::new();
+    for (j, name) in TERM_NAMES.iter().enumerate() {
+        let v = if spread.lo[j].is_finite() && spread.hi[j].is_finite() {
+            json!([spread.lo[j], spread.hi[j]])
+        } else {
+            Value::Null
+        };
+        o.insert(name.to_string(), v);
+    }
+    Value::Object(o)
 }
 
 /// The readings in JSON: each under its name, `null` when the curve does not resolve it, with
@@ -677,39 +888,45 @@ fn readings_json(sheet: &SheetReadings) -> Value {
     Value::Object(o)
 }
 
-/// A channel's noise density and random walk for a noise file: the IEEE 952 fit's N and K with
-/// their standard errors; where the fit has no such term, the spec-sheet reading (the slope line
-/// touching the curve: for K an upper bound, the largest random walk the curve allows).
+/// A channel's noise density and random walk for a noise file: the readings a Kalibr user takes
+/// off the curve and `allan` prints, the ARW (the -1/2 line fitted where white noise dominates,
+/// read at tau = 1 s) and the RRW (the +1/2 line read at 3 s); where a line is not resolved, the
+/// IEEE 952 fit's N (K) if resolved, else the bound the curve sets (for K the largest random
+/// walk the curve allows). Each value says which it is (the file's per-axis comments).
 fn noise_file_values(r: &ChannelResult) -> Option<(AxisValue, AxisValue)> {
     let (fit, sheet, status) = (r.fit.as_ref()?, r.sheet.as_ref()?, r.terms.as_ref()?);
-    let n = match (fit.n, &sheet.arw.value) {
-        (Some(t), _) => AxisValue {
-            value: t.value,
-            how: format!("fit, sigma {:.2e}", t.sigma),
-        },
-        (None, Some(v)) => AxisValue {
-            value: *v,
+    let line = |rd: &Reading, what: &str, at: &str| -> Option<AxisValue> {
+        rd.value.map(|v| AxisValue {
+            value: v,
             how: format!(
-                "-1/2 line over tau = {} .. {}",
-                crate::fmt::time(sheet.arw.tau_s[0]),
-                crate::fmt::time(sheet.arw.tau_s[1])
+                "{what}: {} line over tau = {} .. {} read at {at}",
+                if what == "ARW" { "-1/2" } else { "+1/2" },
+                crate::fmt::time(rd.tau_s[0]),
+                crate::fmt::time(rd.tau_s[1])
             ),
-        },
-        (None, None) => AxisValue {
-            value: sheet.arw.bound,
-            how: "not resolved; bound: -1/2 line touching the curve".into(),
-        },
+        })
     };
-    let k = match fit.k {
-        Some(t) if status[3].resolved => AxisValue {
+    let fitted = |t: Option<allan::fit::Term>, j: usize, letter: &str| -> Option<AxisValue> {
+        t.filter(|_| status[j].resolved).map(|t| AxisValue {
             value: t.value,
-            how: format!("fit, sigma {:.2e}", t.sigma),
-        },
-        _ => AxisValue {
+            how: format!(
+                "IEEE 952 fit's {letter} (no resolved line), sigma {:.2e}",
+                t.sigma
+            ),
+        })
+    };
+    let n = line(&sheet.arw, "ARW", "1 s")
+        .or_else(|| fitted(fit.n, 1, "N"))
+        .unwrap_or_else(|| AxisValue {
+            value: status[1].bound,
+            how: "not resolved; bound: -1/2 line touching the curve".into(),
+        });
+    let k = line(&sheet.rrw, "RRW", "3 s")
+        .or_else(|| fitted(fit.k, 3, "K"))
+        .unwrap_or_else(|| AxisValue {
             value: status[3].bound,
             how: "not resolved; bound: +1/2 line touching the curve's upper interval ends".into(),
-        },
-    };
+        });
     Some((n, k))
 }
 
@@ -796,6 +1013,13 @@ fn plot(r: &ChannelResult, est: Estimator, source: &str) -> LogLogPlot {
         .skip(1)
         .map(|l| l.split_whitespace().collect::<Vec<_>>().join(" "))
         .collect();
+    // The points the readings leave out, as the table marks them.
+    if let Some(first) = r.points.iter().find(|p| !p.woodman_ok()) {
+        p.notes.push(format!(
+            "points from tau = {} on have fewer than 9 non-overlapping averages (Woodman §5.1): shown and fitted, no reading taken from them",
+            crate::fmt::time(first.tau_s)
+        ));
+    }
     p.in_spec_sheet_units(est.name(), r.unit)
 }
 

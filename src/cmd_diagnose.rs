@@ -223,6 +223,8 @@ fn run_inner(args: &Args, settings: &Settings) -> Result<()> {
         let toml_name = request::diagnose::diagnosed_model_name(&args.model.display().to_string());
         write_string(&dir.join(&toml_name), &corrected)?;
         write_string(&dir.join("diagnose.json"), &doc)?;
+        write_string(&dir.join("diagnose.csv"), &effects_csv(&result))?;
+        write_string(&dir.join("diagnose_drift.csv"), &drift_csv(&result))?;
         for (name, report) in &result.channels {
             write_string(
                 &dir.join(format!("diagnose_{name}.svg")),
@@ -238,11 +240,78 @@ fn run_inner(args: &Args, settings: &Settings) -> Result<()> {
     if let Some(dir) = &args.out {
         let toml_name = request::diagnose::diagnosed_model_name(&args.model.display().to_string());
         tell!(
-            "wrote {} (report.md, diagnose.json, {toml_name}, diagnose_<channel>.svg)",
+            "wrote {} (report.md, diagnose.json, diagnose.csv, diagnose_drift.csv, {toml_name}, diagnose_<channel>.svg)",
             dir.display()
         );
     }
     Ok(())
+}
+
+/// `diagnose.csv`: the effects table of the text answer, one row per channel, effect and
+/// parameter (SI, the JSON's names: `channels{ch: {gap_initial, gap_final, effects[{effect, kind,
+/// round, stand_in, parameters, parameters_lo, parameters_hi, gap_before, gap_after,
+/// delta_bic}]}}`); a channel without effects has one row with the effect fields empty. Channels
+/// in log-column order (gx gy gz ax ay az); `delta_bic` empty for a time-domain finding.
+fn effects_csv(result: &Diagnosis) -> String {
+    let mut s = String::from(
+        "channel,gap_initial,gap_final,round,kind,effect,stand_in,parameter,value,lo,hi,gap_before,gap_after,delta_bic\n",
+    );
+    let num = |v: Option<f64>| {
+        v.filter(|x| x.is_finite())
+            .map_or(String::new(), |x| format!("{x:e}"))
+    };
+    for (c, r) in &result.channels {
+        let head = format!("{},{:e},{:e}", c.name(), r.gap_initial, r.gap_final);
+        if r.effects.is_empty() {
+            let _ = writeln!(s, "{head},,,,,,,,,,,");
+        }
+        for e in &r.effects {
+            let mut params: Vec<(String, String)> = e
+                .parameters
+                .iter()
+                .map(|(k, &v)| (k.clone(), format!("{v:e}")))
+                .collect();
+            if let Some(kind) = e.parameters.kind {
+                params.insert(0, ("kind".into(), kind.into()));
+            }
+            for (k, v) in params {
+                let _ = writeln!(
+                    s,
+                    "{head},{},{},{},{},{k},{v},{},{},{},{},{}",
+                    e.round,
+                    e.kind,
+                    e.effect.name(),
+                    e.stand_in,
+                    num(e.parameters_lo.get(&k).copied()),
+                    num(e.parameters_hi.get(&k).copied()),
+                    num(Some(e.gap_before)),
+                    num(Some(e.gap_after)),
+                    num((e.round > 0).then_some(e.delta_bic)),
+                );
+            }
+        }
+    }
+    s
+}
+
+/// `diagnose_drift.csv`: the drift table of the text answer (RMS over segments of the heading
+/// and horizontal position error, rad and m), measured and with the model before and after.
+fn drift_csv(result: &Diagnosis) -> String {
+    let mut s = String::from("horizon_s,source,segments,heading_rms_rad,pos_horizontal_rms_m\n");
+    for d in &result.drift {
+        for (source, sum) in [
+            ("measured", &d.measured),
+            ("model_before", &d.model_initial),
+            ("model_after", &d.model_final),
+        ] {
+            let _ = writeln!(
+                s,
+                "{:e},{source},{},{:e},{:e}",
+                d.horizon_s, sum.segments, sum.heading_rms_rad, sum.horizontal_rms_m
+            );
+        }
+    }
+    s
 }
 
 /// The corrected model as TOML (`diagnose::document`), in the units and conventions of the

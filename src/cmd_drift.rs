@@ -240,6 +240,7 @@ fn run_inner(args: &Args, settings: CheckSettings) -> Result<()> {
     if let Some(dir) = &args.out {
         let set = crate::output::begin_out_set(dir)?;
         write_string(&dir.join("drift.json"), &doc)?;
+        write_string(&dir.join("drift.csv"), &csv(&result))?;
         for q in Quantity::ALL {
             if let Some(svg) = plot(&result, q) {
                 write_string(&dir.join(format!("drift_{}.svg", q.name())), &svg)?;
@@ -247,7 +248,7 @@ fn run_inner(args: &Args, settings: CheckSettings) -> Result<()> {
         }
         set.commit()?;
         tell!(
-            "wrote drift.json and drift_<quantity>.svg to {}",
+            "wrote drift.csv, drift.json and drift_<quantity>.svg to {}",
             dir.display()
         );
     }
@@ -406,27 +407,81 @@ fn parameters_text(r: &DriftCheck, exact_flag: bool) -> String {
         crate::fmt::rate(1.0 / f.sample_interval_s)
     );
     for (ch, levels) in &p.levels {
+        // Spec-sheet units (deg/sqrt(h), deg/h, ug/sqrt(Hz) ...) as `diagnose` writes the same
+        // levels; the JSON keeps SI.
+        let channel = noise::Channel::from_name(ch);
+        let text = |key: &str, v: &[f64]| match channel {
+            Some(c) => diagnose::effect_text::values_text(key, c, v),
+            None => v
+                .iter()
+                .map(|&x| crate::fmt::sig(x, 3))
+                .collect::<Vec<_>>()
+                .join(", "),
+        };
         let parts: Vec<String> = levels
             .iter()
             .map(|l| {
-                let range = if l.informed {
-                    format!(
-                        "[{}, {}]",
-                        crate::fmt::sig(l.p2_5, 3),
-                        crate::fmt::sig(l.p97_5, 3)
-                    )
+                let model = text(l.parameter, &[l.model]);
+                if l.informed {
+                    let range = text(l.parameter, &[l.p2_5, l.p97_5]);
+                    format!("{} {} = {model}, drawn [{range}]", l.effect, l.parameter)
                 } else {
-                    "(not informed: kept)".into()
-                };
-                format!(
-                    "{} {} {} {range}",
-                    l.effect,
-                    l.parameter,
-                    crate::fmt::sig(l.model, 3)
-                )
+                    format!(
+                        "{} {} = {model} (not informed: kept)",
+                        l.effect, l.parameter
+                    )
+                }
             })
             .collect();
         let _ = writeln!(s, "  {ch}: {}", parts.join("; "));
+    }
+    s
+}
+
+/// `drift.csv`: the table of the text answer, one row per horizon and quantity, SI units (rad, m,
+/// m/s, s), empty fields where a quantity is not informed; the JSON's names
+/// (`horizons[].channels{q: {measured{..}, model{..}, verdict, ratio, note, likely_cause}}`).
+fn csv(r: &DriftCheck) -> String {
+    let mut s = String::from(
+        "t_s,segments,quantity,measured_mean,measured_mean_lo,measured_mean_hi,measured_p50,measured_p95,\
+         measured_rms,measured_rms_lo,measured_rms_hi,measured_n_eff,model_mean,model_p50,model_p95,\
+         model_rms,model_band_lo,model_band_hi,ratio,verdict,note,likely_cause\n",
+    );
+    let num = |v: Option<f64>| {
+        v.filter(|x| x.is_finite())
+            .map_or(String::new(), |x| format!("{x:e}"))
+    };
+    for h in &r.horizons {
+        for q in Quantity::ALL {
+            let c = &h.channels[q.name()];
+            let m = c.measured.as_ref();
+            let b = c.model.as_ref();
+            let fields = [
+                format!("{:e}", h.t_s),
+                h.segments.to_string(),
+                q.name().to_string(),
+                num(m.map(|m| m.mean)),
+                num(m.map(|m| m.mean_lo)),
+                num(m.map(|m| m.mean_hi)),
+                num(m.map(|m| m.p50)),
+                num(m.map(|m| m.p95)),
+                num(m.map(|m| m.rms)),
+                num(m.map(|m| m.rms_lo)),
+                num(m.map(|m| m.rms_hi)),
+                num(m.map(|m| m.n_eff)),
+                num(b.map(|b| b.mean)),
+                num(b.map(|b| b.p50)),
+                num(b.map(|b| b.p95)),
+                num(b.map(|b| b.rms)),
+                num(b.map(|b| b.band_lo)),
+                num(b.map(|b| b.band_hi)),
+                num(c.ratio),
+                c.verdict.name().to_string(),
+                crate::fmt::csv_text(c.note.as_deref().unwrap_or("")),
+                crate::fmt::csv_text(c.likely_cause.as_deref().unwrap_or("")),
+            ];
+            let _ = writeln!(s, "{}", fields.join(","));
+        }
     }
     s
 }

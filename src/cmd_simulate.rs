@@ -199,14 +199,21 @@ fn write_csv(w: &mut dyn Write, r: &DriftReport) -> Result<()> {
         r.scenario, r.sensor, r.seed, r.runs, r.runs_ok
     )?;
     writeln!(w, "t_s,channel,mean,std,rms,p5,p50,p95,law_mean,law_std,law_rms,ratio,ratio_lo,ratio_hi,law_note")?;
+    // The heading error is `heading_rad` in every command (docs/cli.md); its row is repeated
+    // under the older name `yaw_rad`, as the JSON keeps both keys.
+    let rows = NavQuantity::ALL.into_iter().flat_map(|q| {
+        let alias = (q.label() != q.name()).then_some(q.name());
+        std::iter::once((q, q.label())).chain(alias.map(|a| (q, a)))
+    });
+    let rows: Vec<(NavQuantity, &str)> = rows.collect();
     for cp in &r.checkpoints {
-        for q in NavQuantity::ALL {
+        for &(q, name) in &rows {
             let c = &cp.quantities[q.name()];
             writeln!(
                 w,
                 "{},{},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{},{},{},{},{},{},{}",
                 cp.t_s,
-                q.name(),
+                name,
                 c.mean,
                 c.std,
                 c.rms,

@@ -8,7 +8,7 @@
 use imudrift::*;
 
 use clap::error::ErrorKind;
-use clap::{CommandFactory, Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 #[derive(Parser)]
 #[command(
@@ -52,16 +52,35 @@ enum Command {
     },
 }
 
+/// The whole command line, every option that takes a value accepting a negative number
+/// (`--rate -5`, `--latitude -33.9`): the value then reaches the option's own check, which says
+/// what the option expects (`--rate: expected a sample rate in Hz > 0, found -5`), where clap
+/// alone read `-5` as an unknown flag ("unexpected argument '-5' found"). Only a value that is a
+/// number is taken this way; every other word starting with `-` is still a flag.
+fn command() -> clap::Command {
+    fn negatives(cmd: clap::Command) -> clap::Command {
+        cmd.mut_args(|a| {
+            if a.get_action().takes_values() {
+                a.allow_negative_numbers(true)
+            } else {
+                a
+            }
+        })
+        .mut_subcommands(negatives)
+    }
+    negatives(Cli::command())
+}
+
 /// `imudrift completions SHELL`: clap_complete's script for the whole command line.
 fn completions(shell: clap_complete::Shell) -> anyhow::Result<()> {
     let mut buf = Vec::new();
-    clap_complete::generate(shell, &mut Cli::command(), "imudrift", &mut buf);
+    clap_complete::generate(shell, &mut command(), "imudrift", &mut buf);
     output::print_stdout(&String::from_utf8_lossy(&buf))
 }
 
 /// `imudrift man [--out DIR]`: clap_mangen's pages, the command's and one per subcommand.
 fn man(out: Option<&std::path::Path>) -> anyhow::Result<()> {
-    let cmd = Cli::command();
+    let cmd = command();
     let render = |c: clap::Command| -> anyhow::Result<String> {
         let mut buf = Vec::new();
         clap_mangen::Man::new(c).render(&mut buf)?;
@@ -84,11 +103,43 @@ fn man(out: Option<&std::path::Path>) -> anyhow::Result<()> {
     }
     set.commit()?;
     tell!("wrote {} man pages to {}", pages.len(), dir.display());
+    if let Some(note) = man_path_note(dir) {
+        tell!("note: {note}");
+    }
     Ok(())
 }
 
+/// Where `man` will not find the pages written to `dir`, what to do instead. `man NAME` looks in
+/// the `man1` directory of each root of the manual path, which `manpath` prints (man-db derives
+/// it from PATH: `~/.cargo/bin` on PATH puts `~/.cargo/share/man` on it, `~/.local/bin` puts
+/// `~/.local/share/man`, each only where that directory exists); None where `dir` is on it or
+/// `manpath` cannot be run (nothing to say).
+fn man_path_note(dir: &std::path::Path) -> Option<String> {
+    let out = std::process::Command::new("manpath").output().ok()?;
+    if !out.status.success() {
+        return None;
+    }
+    let roots = String::from_utf8_lossy(&out.stdout);
+    let dir = std::fs::canonicalize(dir).ok()?;
+    let found = dir.file_name().is_some_and(|n| n == "man1")
+        && roots.trim().split(':').any(|root| {
+            std::fs::canonicalize(root).is_ok_and(|r| Some(r.as_path()) == dir.parent())
+        });
+    (!found).then(|| {
+        format!(
+            "`man imudrift-allan` does not find these pages: man reads the man1 directory under each root of `manpath` ({}), and {} is not one; read a page with `man -l {}`, or write the pages into ~/.cargo/share/man/man1, which man searches while ~/.cargo/bin is on PATH",
+            roots.trim(),
+            dir.display(),
+            dir.join("imudrift-allan.1").display(),
+        )
+    })
+}
+
 fn main() -> std::process::ExitCode {
-    let cli = match Cli::try_parse() {
+    let cli = match command()
+        .try_get_matches()
+        .and_then(|m| Cli::from_arg_matches(&m))
+    {
         Ok(cli) => cli,
         Err(e) => {
             // A value a flag cannot take is an error like any other (status 1, docs/cli.md);

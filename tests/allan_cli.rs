@@ -274,7 +274,7 @@ fn white_noise_readings_are_right_and_claim_no_bias_instability() {
     // The text (on stderr with --json) says the same: bounds, no minimum.
     let text = String::from_utf8_lossy(&o.stderr);
     assert!(
-        text.matches("bias instability (minimum) not resolved: <")
+        text.matches("Allan minimum (bias inst.) not resolved: <")
             .count()
             == 6,
         "{text}"

@@ -170,10 +170,57 @@ fn adis16405_runs_pooled_name_the_accelerometer_tone() {
         let effects = doc["channels"][ch]["effects"].as_array().expect("effects");
         assert_tone(ch, effects, "runs 1-6");
     }
+    assert_no_zero_size(&doc, "runs 1-6");
+}
+
+/// No named effect has size 0 and the corrected model carries no term of size 0 (issue 45 item
+/// 5: runs 1-3 named `gauss_markov sigma = 0 deg/h, dBIC 624` on gz and wrote `sigma = "0 deg/s"`).
+/// The level is the effect's first parameter among q, n, b, k, r, sigma, amplitude, coefficient.
+fn assert_no_zero_size(doc: &serde_json::Value, what: &str) {
+    for (ch, c) in doc["channels"].as_object().expect("channels") {
+        for e in c["effects"].as_array().unwrap() {
+            let p = &e["parameters"];
+            let level = ["q", "n", "b", "k", "r", "sigma", "amplitude", "coefficient"]
+                .iter()
+                .find_map(|k| p[k].as_f64());
+            if let Some(v) = level {
+                assert!(v > 0.0, "{what} {ch}: {} of size 0: {e}", e["effect"]);
+            }
+        }
+    }
+    let toml = doc["corrected_model_toml"]
+        .as_str()
+        .expect("corrected model");
+    for line in toml.lines().filter(|l| !l.starts_with('#')) {
+        assert!(
+            !line.contains("= \"0 ") && !line.contains("sigma = 0"),
+            "{what}: a term of size 0 written: {line}"
+        );
+    }
+}
+
+/// Runs 1-3 and 4-6 diagnosed together: no effect of size 0 named or written (issue 45 item 5).
+fn adis16405_runs_name_no_effect_of_size_zero() {
+    let dir = testkit::data_dir();
+    for runs in [[1, 2, 3], [4, 5, 6]] {
+        let logs: Vec<std::path::PathBuf> = runs
+            .iter()
+            .map(|i| dir.join(format!("adis16405_imudata/adis16405_imu{i}.csv.gz")))
+            .collect();
+        let out = diagnose_command(&logs).output().expect("runs");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "diagnose failed: {stderr}");
+        let doc: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON on stdout");
+        assert_no_zero_size(&doc, &format!("runs {runs:?}"));
+    }
 }
 
 fn main() -> std::process::ExitCode {
     testkit::run_data_tests(&[
+        (
+            "adis16405_runs_name_no_effect_of_size_zero",
+            adis16405_runs_name_no_effect_of_size_zero,
+        ),
         (
             "adis16405_run1_diagnosis_generalises_to_runs_2_to_6",
             adis16405_run1_diagnosis_generalises_to_runs_2_to_6,

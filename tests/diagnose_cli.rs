@@ -145,6 +145,35 @@ fn diagnose_names_hidden_rrw_and_writes_outputs() {
     ] {
         assert!(out.join(f).is_file(), "--out lacks {f}");
     }
+    // The tables as CSV too (issue 45 item 6: `--out` writes CSV, JSON and SVG): the effects
+    // with their SI parameters as in the JSON, the drift rows.
+    let csv = std::fs::read_to_string(out.join("diagnose.csv")).expect("diagnose.csv");
+    let head = csv.lines().next().unwrap();
+    assert!(
+        head.starts_with("channel,gap_initial,gap_final,round,kind,effect"),
+        "{head}"
+    );
+    let k_row = csv
+        .lines()
+        .find(|l| l.starts_with("gx,") && l.contains(",rate_random_walk,") && l.contains(",k,"))
+        .unwrap_or_else(|| panic!("no gx k row in\n{csv}"));
+    let k_csv: f64 = k_row.split(',').nth(8).unwrap().parse().unwrap();
+    let k_json = doc["channels"]["gx"]["effects"][0]["parameters"]["k"]
+        .as_f64()
+        .unwrap();
+    assert_eq!(k_csv, k_json, "{k_row}");
+    assert_eq!(
+        csv.lines().filter(|l| l.starts_with("az,")).count(),
+        1,
+        "{csv}"
+    );
+    let drift =
+        std::fs::read_to_string(out.join("diagnose_drift.csv")).expect("diagnose_drift.csv");
+    assert!(
+        drift.starts_with("horizon_s,source,segments,heading_rms_rad"),
+        "{drift}"
+    );
+    assert_eq!(drift.lines().count(), 1 + 3, "{drift}");
     let corrected = std::fs::read_to_string(out.join("base-diagnosed.toml")).unwrap();
     let m = SensorModel::from_toml_str(&corrected, "base-diagnosed.toml")
         .expect("corrected model loads");

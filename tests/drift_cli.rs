@@ -275,3 +275,82 @@ fn alternatives_are_averaged_unless_one_structure_is_asked() {
         "{err}"
     );
 }
+
+/// `drift --out` writes the table as drift.csv beside drift.json (issue 45 item 6), and the model
+/// levels a `[fitted_on]` model's band draws are printed in spec-sheet units, as `diagnose`
+/// writes them (they were bare SI numbers: "white_noise n 0.000145 [...]").
+#[test]
+fn out_writes_the_table_as_csv_and_levels_in_sheet_units() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = generate(dir.path(), "a.csv", "21");
+    let model = dir.path().join("fitted.toml");
+    std::fs::write(
+        &model,
+        format!(
+            "{MODEL}\n[fitted_on]\nsample_interval_s = 0.02\nsamples = [30000]\nchannels = [\"gx\", \"gy\", \"gz\", \"ax\", \"ay\", \"az\"]\ntau_min_s = 0.0\n"
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let o = common::ok(imudrift(&[
+        "drift",
+        &a,
+        "--model",
+        model.to_str().unwrap(),
+        "--horizons",
+        "10,60",
+        "--replicates",
+        "10",
+        "--out",
+        out.to_str().unwrap(),
+    ]));
+    let text = String::from_utf8(o.stdout).unwrap();
+    let levels: Vec<&str> = text
+        .lines()
+        .skip_while(|l| !l.starts_with("model levels"))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .collect();
+    assert!(!levels.is_empty(), "{text}");
+    let gx = levels
+        .iter()
+        .find(|l| l.trim_start().starts_with("gx:"))
+        .unwrap();
+    // 0.5 deg/sqrt(h) and 10 deg/h as the model says them.
+    assert!(
+        gx.contains("n = 0.5 deg/sqrt(h)") || gx.contains("n = 0.500 deg/sqrt(h)"),
+        "{gx}"
+    );
+    assert!(gx.contains("deg/h"), "{gx}");
+    let ax = levels
+        .iter()
+        .find(|l| l.trim_start().starts_with("ax:"))
+        .unwrap();
+    assert!(
+        ax.contains("ug/sqrt(Hz)") || ax.contains("m/s/sqrt(h)"),
+        "{ax}"
+    );
+    let csv = std::fs::read_to_string(out.join("drift.csv")).expect("drift.csv");
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("drift.json")).unwrap()).unwrap();
+    let head: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    assert_eq!(&head[..3], &["t_s", "segments", "quantity"]);
+    // 2 horizons x 5 quantities; each row's measured rms is the JSON's.
+    assert_eq!(csv.lines().count(), 1 + 2 * 5, "{csv}");
+    let col = |n: &str| head.iter().position(|h| *h == n).unwrap();
+    for row in csv.lines().skip(1) {
+        let f: Vec<&str> = row.split(',').collect();
+        let t: f64 = f[col("t_s")].parse().unwrap();
+        let h = doc["horizons"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|h| h["t_s"].as_f64() == Some(t))
+            .unwrap();
+        let c = &h["channels"][f[col("quantity")]];
+        assert_eq!(f[col("verdict")], c["verdict"].as_str().unwrap(), "{row}");
+        if let Some(rms) = c["measured"]["rms"].as_f64() {
+            assert_eq!(f[col("measured_rms")].parse::<f64>().unwrap(), rms, "{row}");
+        }
+    }
+}

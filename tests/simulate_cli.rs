@@ -165,6 +165,16 @@ fn out_dir_gets_csv_json_svg() {
     }
     let csv = std::fs::read_to_string(Path::new(d).join("drift.csv")).unwrap();
     assert!(csv.lines().nth(1).unwrap().starts_with("t_s,channel,mean"));
+    // The heading is `heading_rad` as in every command (issue 45 item 6), its row repeated under
+    // the older `yaw_rad` with the same numbers.
+    let rest = |name: &str| -> Vec<String> {
+        csv.lines()
+            .filter(|l| l.split(',').nth(1) == Some(name))
+            .map(|l| l.split_once(name).unwrap().1.to_string())
+            .collect()
+    };
+    let (heading, yaw) = (rest("heading_rad"), rest("yaw_rad"));
+    assert!(!heading.is_empty() && heading == yaw, "{csv}");
     let svg = std::fs::read_to_string(Path::new(d).join("drift.svg")).unwrap();
     assert!(svg.contains("<svg") && svg.contains("law rms") && svg.contains("p5-p95"));
     let doc: serde_json::Value =

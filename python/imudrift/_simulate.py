@@ -11,18 +11,44 @@ from ._imudrift import simulate_run as _simulate
 from ._imudrift import simulate_shard_bytes as _shard
 
 
+class Quantities(list):
+    """The navigation-error quantities' names, one per column of ``SimulateResult.values``
+    (docs/cli.md: ``heading_rad`` for the heading error in every command). The older name
+    ``yaw_rad`` still finds the heading: ``index("yaw_rad")`` and ``"yaw_rad" in q`` accept it."""
+
+    ALIASES = {"yaw_rad": "heading_rad"}
+
+    def index(self, name, *args):
+        return super().index(self.ALIASES.get(name, name), *args)
+
+    def __contains__(self, name):
+        return super().__contains__(self.ALIASES.get(name, name))
+
+    def with_aliases(self):
+        """The names with each alias after the name it stands for (the rows of drift.csv)."""
+        out = []
+        for q in self:
+            out.append(q)
+            out.extend(a for a, n in self.ALIASES.items() if n == q)
+        return out
+
+
 class SimulateResult(Document):
     """The result of :func:`simulate` or :func:`merge`.
 
     - ``values``: per-run values, a numpy array runs x checkpoints x quantities (the runs that
       finished, in run-index order; ``run_ids`` gives their indices);
-    - ``t``: checkpoint times (s); ``quantities``: the navigation-error quantities' names
-      (``pos_north_m``, ..., the docs/cli.md names; angles in rad);
+    - ``t``: checkpoint times (s); ``quantities``: the navigation-error quantities' names, one
+      per column of ``values`` (``roll_rad``, ``pitch_rad``, ``heading_rad``, ``pos_north_m``,
+      ..., the docs/cli.md names; angles in rad). The heading error's older name ``yaw_rad`` is
+      accepted as an alias: ``quantities.index("yaw_rad")`` is the heading's column and
+      ``"yaw_rad" in quantities`` is true;
     - ``seed``, ``runs``, ``runs_ok``, ``scenario``, ``sensor``;
     - ``checkpoints``: per checkpoint ``t_s`` and ``channels`` {quantity: statistics and law:
       ``mean std rms p5 p50 p95 law_mean law_std law_rms ratio ratio_lo ratio_hi ...``};
     - ``to_dict()``: the document ``imudrift simulate --json`` prints, equal key by key;
-    - ``to_pandas()``: one row per checkpoint and quantity (the columns of drift.csv).
+    - ``to_pandas()``: one row per checkpoint and quantity (the rows and columns of drift.csv:
+      the heading under ``heading_rad`` and again under ``yaw_rad``, as in the JSON).
     """
 
     def __init__(self, raw):
@@ -30,12 +56,13 @@ class SimulateResult(Document):
         self.values = raw["values"]
         self.run_ids = raw["run_ids"]
         self.t = raw["t_s"]
-        self.quantities = list(raw["quantities"])
+        self.quantities = Quantities(raw["quantities"])
 
     def to_pandas(self):
         """One row per checkpoint and quantity: ``t_s, quantity, mean, std, rms, p5, p50, p95,
         law_mean, law_std, law_rms, ratio, ratio_lo, ratio_hi, law_note`` (None where there is no
-        law). Needs pandas."""
+        law); the heading's rows are under ``heading_rad`` and, repeated, under its older name
+        ``yaw_rad`` (the JSON keeps both keys too). Needs pandas."""
         try:
             import pandas as pd
         except ImportError:
@@ -44,7 +71,7 @@ class SimulateResult(Document):
                 "ratio", "ratio_lo", "ratio_hi", "law_note"]
         rows = []
         for cp in self._doc["checkpoints"]:
-            for q in self.quantities:
+            for q in self.quantities.with_aliases():
                 c = cp["channels"][q]
                 rows.append([cp["t_s"], q] + [c.get(k) for k in cols])
         return pd.DataFrame(rows, columns=["t_s", "quantity"] + cols)

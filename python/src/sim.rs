@@ -201,7 +201,7 @@ fn result_dict<'py>(
     d.set_item("t_s", t.into_pyarray(py))?;
     d.set_item(
         "quantities",
-        NavQuantity::ALL.map(NavQuantity::name).to_vec(),
+        NavQuantity::ALL.map(NavQuantity::label).to_vec(),
     )?;
     Ok(d)
 }

@@ -75,11 +75,49 @@ def test_values_array_and_pandas():
     last = r.checkpoints[-1]["channels"]["pos_horizontal_m"]
     assert np.mean(r.values[:, -1, h]) == pytest.approx(last["mean"], rel=1e-12)
     assert "ablation" not in r.to_dict()
+    # One name per quantity (docs/cli.md): the heading is heading_rad; yaw_rad still finds it.
+    assert "heading_rad" in r.quantities and r.quantities.count("yaw_rad") == 0
+    assert "yaw_rad" in r.quantities
+    assert r.quantities.index("yaw_rad") == r.quantities.index("heading_rad")
+    head = r.quantities.index("heading_rad")
+    cp_heading = r.checkpoints[-1]["channels"]["heading_rad"]
+    assert np.mean(r.values[:, -1, head]) == pytest.approx(cp_heading["mean"], rel=1e-12)
     pd = pytest.importorskip("pandas")
     df = r.to_pandas()
-    assert len(df) == n_cp * len(r.quantities)
+    # Every quantity once per checkpoint, and the heading's rows again under yaw_rad (drift.csv).
+    assert len(df) == n_cp * (len(r.quantities) + 1)
     row = df[(df.quantity == "pos_horizontal_m") & (df.t_s == r.t[-1])]
     assert row["rms"].item() == last["rms"]
+    h = df[df.quantity == "heading_rad"].reset_index(drop=True)
+    y = df[df.quantity == "yaw_rad"].reset_index(drop=True)
+    assert len(h) == n_cp and h.drop(columns="quantity").equals(y.drop(columns="quantity"))
+
+
+def test_to_pandas_is_the_clis_drift_csv(tmp_path):
+    """``to_pandas()`` has the rows of the CLI's drift.csv, quantity names included."""
+    r = imudrift.simulate(MTX, runs=20, duration_s=5)
+    subprocess.run([cli_binary(), "simulate", MTX, "--runs", "20", "--duration", "5",
+                    "--out", str(tmp_path)], check=True, capture_output=True)
+    rows = [l.split(",") for l in (tmp_path / "drift.csv").read_text().splitlines()
+            if not l.startswith("#")][1:]
+    pd = pytest.importorskip("pandas")
+    df = r.to_pandas()
+    assert [row[1] for row in rows] == list(df["quantity"])
+    assert [float(row[0]) for row in rows] == list(df["t_s"])
+
+
+def test_a_shipped_sensor_by_name_from_anywhere(tmp_path, monkeypatch):
+    """The README's ``Sensor("mtx")`` works from any directory: a shipped sensor's name reads
+    the TOML the repository ships (the same model as the file)."""
+    monkeypatch.chdir(tmp_path)
+    s = imudrift.Sensor("mtx")
+    assert s.name == imudrift.Sensor(MTX).name
+    assert s.to_toml() == imudrift.Sensor(MTX).to_toml()
+    a = imudrift.simulate("mtx", runs=10, duration_s=5)
+    b = imudrift.simulate(MTX, runs=10, duration_s=5)
+    assert a.to_dict()["checkpoints"] == b.to_dict()["checkpoints"]
+    with pytest.raises(OSError, match="nosuchsensor"):
+        imudrift.Sensor("nosuchsensor")
 
 
 def test_thread_count_does_not_change_results():

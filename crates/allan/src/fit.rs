@@ -227,6 +227,65 @@ pub fn fit_ieee952_terms(points: &[AllanPoint], allowed: FitTerms) -> Fit {
     }
 }
 
+/// The fit's coefficients refitted on parts of the curve: how much each one depends on which taus
+/// it is fitted to. Where the five terms do not describe the curve (reduced chi-square far above
+/// what the five-term model's own logs give), the statistical sigma says little about that; the
+/// spread of the refits says how much a coefficient moves with the taus, i.e. what the misfit
+/// means for the number printed.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SubrangeSpread {
+    /// Per term (q, n, b, k, r): the smallest and largest value over the refits (a refit without
+    /// the term counts as 0), SI; NaN for a term the whole fit does not have.
+    pub lo: [f64; 5],
+    pub hi: [f64; 5],
+    /// The number of refits (0: too few points to leave a part out).
+    pub refits: usize,
+}
+
+/// Parts of the curve left out in turn by [`subrange_spread`]: each quarter of its taus.
+pub const SUBRANGE_PARTS: usize = 4;
+
+/// The fit of `points` refitted [`SUBRANGE_PARTS`] times, each time without one contiguous part
+/// (a quarter) of its taus: a leave-one-block-out (delete-d jackknife over tau blocks, Efron &
+/// Tibshirani, *An Introduction to the Bootstrap*, 1993, §11.7), blocks because neighbouring
+/// Allan points are correlated. Each part holds at least 2 points; fewer than 8 usable points:
+/// no refit.
+pub fn subrange_spread(points: &[AllanPoint], fit: &Fit) -> SubrangeSpread {
+    let pts: Vec<AllanPoint> = points
+        .iter()
+        .filter(|p| p.dev.is_finite() && p.dev > 0.0)
+        .cloned()
+        .collect();
+    let n = pts.len();
+    let has = fit.terms().map(|t| t.is_some());
+    let mut lo = has.map(|h| if h { f64::INFINITY } else { f64::NAN });
+    let mut hi = has.map(|h| if h { f64::NEG_INFINITY } else { f64::NAN });
+    if n < 2 * SUBRANGE_PARTS {
+        return SubrangeSpread {
+            lo: [f64::NAN; 5],
+            hi: [f64::NAN; 5],
+            refits: 0,
+        };
+    }
+    for part in 0..SUBRANGE_PARTS {
+        let (a, b) = (part * n / SUBRANGE_PARTS, (part + 1) * n / SUBRANGE_PARTS);
+        let rest: Vec<AllanPoint> = pts[..a].iter().chain(&pts[b..]).cloned().collect();
+        let refit = fit_ieee952(&rest);
+        for (j, t) in refit.terms().iter().enumerate() {
+            if has[j] {
+                let v = t.map_or(0.0, |t| t.value);
+                lo[j] = lo[j].min(v);
+                hi[j] = hi[j].max(v);
+            }
+        }
+    }
+    SubrangeSpread {
+        lo,
+        hi,
+        refits: SUBRANGE_PARTS,
+    }
+}
+
 /// The m by which a curve of Allan variances `y` is scaled (by 4^-m) for the fit: 0 when its
 /// largest value lies within 1e-50 ..= 1e50, else the one bringing it near 1.
 fn range_exponent(y: &[f64]) -> i32 {

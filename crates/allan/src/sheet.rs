@@ -258,7 +258,7 @@ fn minimum_reading(points: &[&AllanPoint], confidence: f64) -> Reading {
         return Reading::bound(
             bound,
             format!(
-                "the curve still falls at its longest usable tau ({})",
+                "the curve still falls at {}, its longest tau with 9 or more non-overlapping averages (Woodman §5.1; a longer tau has too few to read a minimum from)",
                 tau_text(low.tau_s)
             ),
         );

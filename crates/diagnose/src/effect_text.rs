@@ -53,6 +53,11 @@ fn label(key: &str) -> &str {
 /// `b = 29.37 deg/h [26.32, 32.41]` for every parameter of `e` on channel `ch` (the filter's
 /// kind first); the white-noise level also per sqrt(Hz), as datasheets give it.
 pub fn params_text(e: &FoundEffect, ch: noise::Channel) -> String {
+    // A model's own term refitted to level 0 is removed from the corrected model: the finding is
+    // its absence, not an effect of size 0.
+    if e.zero_level {
+        return "removed from the model: the log shows none of it (fitted level 0)".into();
+    }
     let si_unit = si_unit_of(ch);
     let values = e.parameters.iter().map(|(k, &v)| {
         let (lo, hi) = (e.parameters_lo.get(k), e.parameters_hi.get(k));
@@ -87,6 +92,28 @@ pub fn params_text(e: &FoundEffect, ch: noise::Channel) -> String {
         .chain(values)
         .collect::<Vec<_>>()
         .join(", ")
+}
+
+/// Values of parameter `key` on channel `ch` (SI) in the unit a spec sheet writes it in, 3
+/// significant digits, the unit once after the last: `values_text("n", gz, &[a, b])` is
+/// "2.30, 2.41 deg/sqrt(h)" (`drift`'s model levels; the JSON keeps SI).
+pub fn values_text(key: &str, ch: noise::Channel, values: &[f64]) -> String {
+    match shown(key, si_unit_of(ch)) {
+        Shown::Discrete(unit) => values
+            .iter()
+            .map(|&v| format!("{}{unit}", trimmed(v, 6)))
+            .collect::<Vec<_>>()
+            .join(", "),
+        Shown::Scaled(scale, unit) => {
+            let nums: Vec<String> = values.iter().map(|&v| sig(v * scale, 3)).collect();
+            let space = if unit.is_empty() || unit.starts_with('/') {
+                ""
+            } else {
+                " "
+            };
+            format!("{}{space}{unit}", nums.join(", "))
+        }
+    }
 }
 
 /// "model had b = 37.63 deg/h" for a wrong level, "not in the model" for a missing term.

@@ -59,6 +59,7 @@ pub(crate) fn found_by_detector(
         stand_in: false,
         drift_gap_before: None,
         drift_gap_after: None,
+        zero_level: false,
     }
 }
 
@@ -92,7 +93,14 @@ pub(crate) fn found_by_fit(
         stand_in: false,
         drift_gap_before: None,
         drift_gap_after: None,
+        zero_level: is_removal(best),
     }
+}
+
+/// A trial whose fitted level is 0 (a level candidate's non-negative fit at its bound, or a
+/// re-levelled term set to 0): the change it makes removes the term.
+pub(crate) fn is_removal(t: &Trial) -> bool {
+    t.white_n.is_none() && t.term.level().is_some_and(|(_, v)| v == 0.0)
 }
 
 /// The records of the candidates weighed in one step (BIC and AIC gains over the unchanged model,
@@ -110,6 +118,7 @@ pub(crate) fn trial_records(
             effect: Candidate {
                 effect: t.effect,
                 rejected: false,
+                withdrawn: false,
             },
             delta_bic: base_bic - t.bic,
             delta_aic: chi2_base - t.aic,
@@ -125,6 +134,7 @@ pub(crate) fn rejected_record(round: usize, rejected: FoundEffect) -> CandidateR
         effect: Candidate {
             effect: rejected.effect,
             rejected: true,
+            withdrawn: false,
         },
         delta_bic: rejected.delta_bic,
         delta_aic: f64::NAN,
@@ -136,13 +146,41 @@ pub(crate) fn rejected_record(round: usize, rejected: FoundEffect) -> CandidateR
 /// rather than naming a second one: the earlier entry takes the new parameters and the new gap after,
 /// and keeps its kind, model parameters and gap before (the same holds for a second change of one
 /// effect within a round). `first_new` is where this round's entries start.
-pub(crate) fn merge_refinements(effects: &mut Vec<FoundEffect>, first_new: usize) {
+///
+/// A refinement to level 0 of an effect the model lacked (kind `missing`) withdraws it: the
+/// round removed the term (`workflow::accept`), so the effect is no finding, and its entry leaves
+/// the list and comes back as the record returned (its `delta_bic` the naming's, with the
+/// parameters it was named with). Summing the two rounds' gains into one entry named the effect
+/// with size 0 and the sum as its evidence (ADIS16405 runs 1-3, gz: a 13 ms Gauss-Markov
+/// stand-in named in round 2 with dBIC 153, refitted to 0 in round 3 with dBIC 471, was shown as
+/// `sigma = 0 deg/h, dBIC 624` and written into the corrected model).
+pub(crate) fn merge_refinements(
+    effects: &mut Vec<FoundEffect>,
+    first_new: usize,
+) -> Vec<CandidateRecord> {
+    let mut withdrawn = Vec::new();
     let mut i = first_new;
     while i < effects.len() {
         match effects[..i]
             .iter()
             .position(|e| e.effect == effects[i].effect)
         {
+            Some(j) if effects[i].zero_level && effects[j].kind == FindingKind::Missing => {
+                let last = effects.remove(i);
+                let first = effects.remove(j);
+                i -= 1;
+                withdrawn.push(CandidateRecord {
+                    round: last.round,
+                    effect: Candidate {
+                        effect: first.effect,
+                        rejected: false,
+                        withdrawn: true,
+                    },
+                    delta_bic: first.delta_bic,
+                    delta_aic: f64::NAN,
+                    parameters: first.parameters.values,
+                });
+            }
             Some(j) => {
                 let last = effects.remove(i);
                 let first = &mut effects[j];
@@ -154,10 +192,12 @@ pub(crate) fn merge_refinements(effects: &mut Vec<FoundEffect>, first_new: usize
                 first.delta_bic += last.delta_bic;
                 first.cannot_tell_from = last.cannot_tell_from;
                 first.refinements += 1;
+                first.zero_level = last.zero_level;
             }
             None => i += 1,
         }
     }
+    withdrawn
 }
 
 /// Shaped terms fitted where the model still disagrees are stand-ins, not physical findings. A
@@ -250,4 +290,88 @@ fn parameters_of(trial: &Trial, named: &Named, dt_s: f64) -> Parameters {
             .insert("noise_bandwidth_hz".into(), filter.noise_bandwidth_hz(dt_s));
     }
     p
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn found(
+        effect: Effect,
+        kind: FindingKind,
+        round: usize,
+        level: f64,
+        dbic: f64,
+    ) -> FoundEffect {
+        let values: BTreeMap<String, f64> = [("sigma".to_string(), level), ("tau_s".into(), 0.013)]
+            .into_iter()
+            .collect();
+        FoundEffect {
+            effect,
+            parameters: values.clone().into(),
+            parameters_lo: values.clone(),
+            parameters_hi: values,
+            kind,
+            model_parameters: None,
+            gap_before: 17.0,
+            gap_predicted: 13.0,
+            gap_after: 13.0,
+            delta_bic: dbic,
+            cannot_tell_from: Vec::new(),
+            round,
+            stand_in: false,
+            refinements: 0,
+            drift_gap_before: None,
+            drift_gap_after: None,
+            zero_level: level == 0.0,
+        }
+    }
+
+    /// Issue 45 item 5: an effect the model lacked, named in round 2 and refitted to level 0 in
+    /// round 3, is withdrawn (no entry of size 0 whose evidence is the sum of the two rounds'
+    /// gains), and comes back as a record with the naming's parameters and gain.
+    #[test]
+    fn a_named_effect_refitted_to_zero_is_withdrawn() {
+        let gm = Effect::GaussMarkov;
+        let white = Effect::WhiteNoise;
+        let mut effects = vec![
+            found(white, FindingKind::WrongLevel, 1, 6.7e-4, 98826.0),
+            found(gm, FindingKind::Missing, 2, 5.65e-4, 153.0),
+            found(gm, FindingKind::Missing, 3, 0.0, 471.0),
+        ];
+        let withdrawn = merge_refinements(&mut effects, 2);
+        assert_eq!(effects.len(), 1);
+        assert_eq!(effects[0].effect, white);
+        assert_eq!(withdrawn.len(), 1);
+        let w = &withdrawn[0];
+        assert!(w.effect.withdrawn && !w.effect.rejected && w.effect.effect == gm);
+        assert_eq!((w.round, w.delta_bic), (3, 153.0));
+        assert_eq!(w.parameters["sigma"], 5.65e-4);
+        assert_eq!(
+            serde_json::to_value(w.effect).unwrap(),
+            "gauss_markov withdrawn: a later round refitted its level to 0"
+        );
+    }
+
+    /// A refinement to another level than 0 still merges into the first entry, as before; a
+    /// model's own term refitted to 0 (kind `wrong_level`) is kept as the finding it is.
+    #[test]
+    fn other_refinements_merge_as_before() {
+        let gm = Effect::GaussMarkov;
+        let mut effects = vec![
+            found(gm, FindingKind::Missing, 2, 5.65e-4, 153.0),
+            found(gm, FindingKind::Missing, 3, 6.0e-4, 20.0),
+        ];
+        assert!(merge_refinements(&mut effects, 1).is_empty());
+        assert_eq!(effects.len(), 1);
+        assert_eq!(effects[0].parameters["sigma"], 6.0e-4);
+        assert_eq!((effects[0].delta_bic, effects[0].refinements), (173.0, 1));
+        let mut own = vec![
+            found(gm, FindingKind::WrongLevel, 1, 5.0e-4, 40.0),
+            found(gm, FindingKind::WrongLevel, 2, 0.0, 30.0),
+        ];
+        assert!(merge_refinements(&mut own, 1).is_empty());
+        assert_eq!(own.len(), 1);
+        assert!(own[0].zero_level);
+    }
 }

@@ -80,6 +80,10 @@ pub struct FoundEffect {
     pub drift_gap_before: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub drift_gap_after: Option<f64>,
+    /// The fitted level is 0: the change removes the term (never serialised; an effect of size 0
+    /// is not a finding, `findings::merge_refinements`).
+    #[serde(skip)]
+    pub zero_level: bool,
 }
 
 /// How a named effect differs from the model.
@@ -102,17 +106,25 @@ impl std::fmt::Display for FindingKind {
 }
 
 /// A weighed candidate: the effect, and whether it was named and then rejected because the gap
-/// did not shrink when the corrected model was re-simulated. Serialised (docs/cli.md) as the
-/// effect's name, followed for a rejected one by " rejected: gap did not shrink on re-simulation".
+/// did not shrink when the corrected model was re-simulated, or withdrawn because a later round
+/// refitted its level to 0. Serialised (docs/cli.md) as the effect's name, followed for a
+/// rejected one by " rejected: gap did not shrink on re-simulation" and for a withdrawn one by
+/// " withdrawn: a later round refitted its level to 0".
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Candidate {
     pub effect: Effect,
     pub rejected: bool,
+    pub withdrawn: bool,
 }
 
 impl Serialize for Candidate {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        if self.rejected {
+        if self.withdrawn {
+            s.collect_str(&format_args!(
+                "{} withdrawn: a later round refitted its level to 0",
+                self.effect
+            ))
+        } else if self.rejected {
             s.collect_str(&format_args!(
                 "{} rejected: gap did not shrink on re-simulation",
                 self.effect

@@ -17,7 +17,7 @@ use crate::fit::{bic, FitData};
 use crate::gap::{gap, Band, Curve, Gap};
 use crate::input::{validate_runs, LogInput};
 use crate::measure::{measure_runs, Measured, Runs};
-use crate::model_terms::{current_term, set_term};
+use crate::model_terms::{clear_term, current_term, set_term};
 use crate::observer::{Observer, RoundDone, Step};
 use crate::report::{
     CandidateRecord, ChannelReport, Diagnosis, DriftRow, FoundEffect, LogBands, RunChannel,
@@ -163,21 +163,30 @@ struct Pending {
 /// to set on the channel in order, the channel's effects after the round (those named before it
 /// and now), the candidates weighed, and the changes to check by re-simulation (None: no change).
 struct RoundOutcome {
-    terms: Vec<Term>,
+    terms: Vec<(Effect, Option<Term>)>,
     effects: Vec<FoundEffect>,
     records: Vec<CandidateRecord>,
     pending: Option<Pending>,
 }
 
 /// Step 4: put the chosen term into `model` on channel `c` and append it to `terms` (what the
-/// round then sets in both of the run's models); the changes made, each with the term before. A
-/// trial whose parameters the terms' constructors refuse changes nothing.
+/// round then sets in both of the run's models; None: the effect removed); the changes made, each
+/// with the term before. A trial whose parameters the terms' constructors refuse changes nothing.
+/// A trial whose fitted level is 0 (`findings::is_removal`) removes the term: a term of size 0
+/// would be written into the corrected model as `sigma = "0 deg/s"`.
 fn accept(
     model: &mut SensorModel,
-    terms: &mut Vec<Term>,
+    terms: &mut Vec<(Effect, Option<Term>)>,
     c: Channel,
     best: &Trial,
 ) -> Vec<(Effect, Option<Term>)> {
+    if crate::findings::is_removal(best) {
+        let effect = best.effect;
+        let before = current_term(model, c, effect);
+        clear_term(model, c, effect);
+        terms.push((effect, None));
+        return vec![(effect, before)];
+    }
     let mut new = vec![best.term.clone()];
     if let Some(n) = best.white_n {
         // The filter is fitted with the white-noise level: undoing it restores both.
@@ -190,7 +199,7 @@ fn accept(
     for term in new {
         changes.push((term.effect(), current_term(model, c, term.effect())));
         set_term(model, c, term.clone());
-        terms.push(term);
+        terms.push((term.effect(), Some(term)));
     }
     changes
 }
@@ -368,8 +377,8 @@ fn name_effects(cx: &Context, state: &mut LoopState, round: usize) -> Vec<Pendin
             state.channels[c].done = true;
             continue;
         };
-        for term in o.terms {
-            state.models.set(c, &term);
+        for (effect, term) in o.terms {
+            state.models.restore(c, effect, term);
         }
         state.channels[c].records.extend(o.records);
         state.channels[c].effects = o.effects;
@@ -625,7 +634,8 @@ fn keep_or_undo(
         for (mine, new) in state.bands.per_length.iter_mut().zip(&sim.log_bands) {
             mine.1[c] = new.1[c].clone();
         }
-        merge_refinements(&mut ch.effects, first_new);
+        let withdrawn = merge_refinements(&mut ch.effects, first_new);
+        ch.records.extend(withdrawn);
         return Some(named);
     }
     // The re-simulated model is no closer: undo this round's changes and stop here.

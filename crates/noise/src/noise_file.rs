@@ -244,8 +244,9 @@ fn write_header(
         v.origin
     );
     s.push_str(
-        "# Continuous-time densities: noise density = white noise N (Allan deviation at tau = 1 s),\n\
-         # random walk = rate random walk K (+1/2 slope read at tau = 3 s), IEEE 952.\n\
+        "# Continuous-time densities: noise density = white noise N, the value at tau = 1 s of the\n\
+         # Allan deviation's -1/2 line; random walk = rate random walk K, the +1/2 line's value at\n\
+         # tau = 3 s (IEEE 952 Annex C); each axis below says where its value comes from.\n\
          # Discrete at dt: noise sigma/sqrt(dt), random walk sigma*sqrt(dt).\n\
          # One value per sensor: the largest of the three axes (worst axis); each axis below.\n",
     );

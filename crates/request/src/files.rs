@@ -34,9 +34,52 @@ pub fn read_text(path: &Path, what: &'static str, max_bytes: u64) -> Result<Text
     Ok(TextFile { name, text })
 }
 
-/// [`read_text`] of a sensor model, scenario or noise file ([`MAX_CONFIG_BYTES`]).
+/// [`read_text`] of a sensor model, scenario or noise file ([`MAX_CONFIG_BYTES`]). A path that
+/// names no file and is a shipped sensor's name (`mtx`, [`SHIPPED_SENSORS`]) reads that sensor's
+/// TOML as the repository ships it (configs/sensors/NAME.toml, built into the program), so
+/// `imudrift simulate mtx` and Python's `Sensor("mtx")` work from any directory; a file of that
+/// name, where there is one, is read instead.
 pub fn read_config(path: &Path) -> Result<TextFile, FileError> {
+    if let Some(file) = shipped_sensor(path) {
+        return Ok(file);
+    }
     read_text(path, CONFIG_WHAT, MAX_CONFIG_BYTES)
+}
+
+/// The sensor models shipped in configs/sensors (name, TOML text), addressable by name wherever a
+/// sensor file is read ([`read_config`]).
+pub const SHIPPED_SENSORS: [(&str, &str); 5] = [
+    (
+        "adis16405",
+        include_str!("../../../configs/sensors/adis16405.toml"),
+    ),
+    (
+        "bmi088",
+        include_str!("../../../configs/sensors/bmi088.toml"),
+    ),
+    (
+        "gg1320an",
+        include_str!("../../../configs/sensors/gg1320an.toml"),
+    ),
+    (
+        "gg5300",
+        include_str!("../../../configs/sensors/gg5300.toml"),
+    ),
+    ("mtx", include_str!("../../../configs/sensors/mtx.toml")),
+];
+
+/// The shipped sensor a path names: a bare name of [`SHIPPED_SENSORS`] (no directory, no
+/// extension) where no file of that name exists.
+pub fn shipped_sensor(path: &Path) -> Option<TextFile> {
+    let name = path.to_str()?;
+    let (_, text) = SHIPPED_SENSORS.iter().find(|(n, _)| *n == name)?;
+    if path.exists() {
+        return None;
+    }
+    Some(TextFile {
+        name: name.to_string(),
+        text: text.to_string(),
+    })
 }
 
 /// Most bytes of shard files read together: a third of the memory available (their text, the
@@ -71,6 +114,9 @@ impl SensorSource {
     pub fn of_argument(arg: &str) -> Result<SensorSource, crate::RequestError> {
         let one_line = !arg.contains('\n');
         if one_line && !arg.is_empty() && Path::new(arg).exists() {
+            return Ok(SensorSource::Path(PathBuf::from(arg)));
+        }
+        if shipped_sensor(Path::new(arg)).is_some() {
             return Ok(SensorSource::Path(PathBuf::from(arg)));
         }
         if one_line && !arg.contains('=') {

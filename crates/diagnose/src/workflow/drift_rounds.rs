@@ -109,6 +109,7 @@ fn drift_choice(
             effect: Candidate {
                 effect: t.trial.effect,
                 rejected: false,
+                withdrawn: false,
             },
             delta_bic: t.delta_bic,
             delta_aic: f64::NAN,
@@ -130,7 +131,9 @@ fn drift_choice(
         .collect();
     let effect = best.trial.effect;
     let previous = current_term(&state.models.sim, c, effect);
-    state.models.set(c, &best.trial.term);
+    // A level refitted to 0 removes the term (`findings::is_removal`), as in the Allan rounds.
+    let kept_term = (!crate::findings::is_removal(&best.trial)).then(|| best.trial.term.clone());
+    state.models.restore(c, effect, kept_term);
     let mut delta_avar = best.trial.delta_avar.clone();
     if let Some(p) = &best.partner {
         for (d, r) in delta_avar.iter_mut().zip(&p.delta_avar) {
@@ -340,7 +343,8 @@ fn drift_resimulate(
                 let named = ch.effects[first_new..].iter().map(|e| e.effect).collect();
                 done.kept.push((*c, named));
             }
-            merge_refinements(&mut ch.effects, first_new);
+            let withdrawn = merge_refinements(&mut ch.effects, first_new);
+            ch.records.extend(withdrawn);
         } else {
             if !done.undone.contains(c) {
                 done.undone.push(*c);

@@ -12,7 +12,7 @@ use crate::fit::predicted_ln_adev;
 use crate::gap::{gap, Band, Gap};
 use crate::input::LogInput;
 use crate::measure::{restrict, Measured};
-use crate::model_terms::{restore_term, set_term};
+use crate::model_terms::restore_term;
 use crate::observer::Observer;
 use crate::protocol::SegmentErrors;
 use crate::report::{CandidateRecord, FoundEffect};
@@ -129,12 +129,6 @@ impl ChannelState {
 }
 
 impl Models {
-    /// Set `term` on channel `c` of both models.
-    pub(super) fn set(&mut self, c: Channel, term: &Term) {
-        set_term(&mut self.sim, c, term.clone());
-        set_term(&mut self.out, c, term.clone());
-    }
-
     /// Set channel `c`'s `effect` to `previous` in both models (None: remove it), e.g. to undo a change.
     pub(super) fn restore(&mut self, c: Channel, effect: Effect, previous: Option<Term>) {
         for model in [&mut self.sim, &mut self.out] {
