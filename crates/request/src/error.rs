@@ -481,7 +481,7 @@ impl RequestError {
             ),
             RequestError::NoSuchModel(text) => format!(
                 "cannot read {text} as a sensor model: no such file (and not a model's text: a sensor TOML has `key = value` lines, nor a shipped sensor's name: {})",
-                crate::files::SHIPPED_SENSORS.map(|(n, _)| n).join(", ")
+                crate::shipped::SHIPPED_SENSORS.map(|(n, _)| n).join(", ")
             ),
             RequestError::SimulationMemory {
                 source_name,

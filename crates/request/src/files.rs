@@ -46,27 +46,7 @@ pub fn read_config(path: &Path) -> Result<TextFile, FileError> {
     read_text(path, CONFIG_WHAT, MAX_CONFIG_BYTES)
 }
 
-/// The sensor models shipped in configs/sensors (name, TOML text), addressable by name wherever a
-/// sensor file is read ([`read_config`]).
-pub const SHIPPED_SENSORS: [(&str, &str); 5] = [
-    (
-        "adis16405",
-        include_str!("../../../configs/sensors/adis16405.toml"),
-    ),
-    (
-        "bmi088",
-        include_str!("../../../configs/sensors/bmi088.toml"),
-    ),
-    (
-        "gg1320an",
-        include_str!("../../../configs/sensors/gg1320an.toml"),
-    ),
-    (
-        "gg5300",
-        include_str!("../../../configs/sensors/gg5300.toml"),
-    ),
-    ("mtx", include_str!("../../../configs/sensors/mtx.toml")),
-];
+pub use crate::shipped::SHIPPED_SENSORS;
 
 /// The shipped sensor a path names: a bare name of [`SHIPPED_SENSORS`] (no directory, no
 /// extension) where no file of that name exists.

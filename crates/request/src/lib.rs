@@ -36,6 +36,7 @@ pub mod generate;
 pub mod logs;
 pub mod pool;
 pub mod setting;
+mod shipped;
 pub mod simulate;
 
 pub use error::{RequestError, Result};
