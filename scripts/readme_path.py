@@ -33,7 +33,7 @@ import tempfile
 import time
 from pathlib import Path
 
-COMPILING = re.compile(r"^\s*Compiling (\S+) v(\S+)", re.M)
+COMPILING = re.compile(r"^\s*Compiling (\S+) v(\S+)( \(.*\))?$", re.M)
 
 
 def blocks(readme):
@@ -104,8 +104,16 @@ def main():
         cpu1 = resource.getrusage(resource.RUSAGE_CHILDREN)
         cpu = (cpu1.ru_utime - cpu0.ru_utime) + (cpu1.ru_stime - cpu0.ru_stime)
         compiled = COMPILING.findall(proc.stdout)
+        # Registry crates by name and version (two versions of one crate, e.g. rand 0.8 and a
+        # dev-dependency's rand 0.10, are two crates); workspace crates (a path in the line) by
+        # their library files, since a test step prints "Compiling" for their test harnesses too.
+        for crate, version, path in COMPILING.findall(proc.stdout):
+            if not path:
+                made_in.setdefault(f"{crate} v{version}", []).append(name)
         for new in libraries() - before:
-            made_in.setdefault(new[3:].rsplit("-", 1)[0].split(".")[0], []).append(name)
+            lib = new[3:].rsplit("-", 1)[0].split(".")[0]
+            if lib.replace("_", "-").startswith("imudrift"):
+                made_in.setdefault(lib, []).append(name)
         steps.append((name, seconds, cpu, proc.returncode, compiled))
         print(f"[{seconds:7.1f} s, CPU {cpu:7.1f} s] exit {proc.returncode}, {len(compiled):3d} crates compiled: {name}",
               flush=True)
