@@ -13,7 +13,6 @@ on the whole log.
 Usage: python3 beside_allantools_estimators.py PATH/adis16405_imu1.csv.gz [short] [repeats]
 """
 
-import gzip
 import sys
 import time
 
@@ -21,17 +20,9 @@ import allantools
 import numpy as np
 
 import imudrift.allantools as ia
+from beside_allantools import gyro_z  # the same reader of the ADIS log (this directory)
 
 RATE_HZ = 100.0
-
-
-def gyro_z(path):
-    with gzip.open(path, "rt") if path.endswith(".gz") else open(path) as f:
-        for line in f:
-            if not line.startswith("#"):
-                col = line.strip().split(",").index("gyro_z_dps")
-                break
-        return np.loadtxt(f, delimiter=",", comments="#", usecols=col, dtype=np.float64)
 
 
 def timed(f, data):
