@@ -25,7 +25,9 @@ pub struct Args {
     pub log: PathBuf,
     #[command(flatten)]
     pub log_args: LogArgs,
-    /// Estimator: adev (non-overlapping, Woodman eq 19), oadev, mdev, hdev, ohdev, totdev
+    /// Estimator: adev (non-overlapping, Woodman eq 19), oadev, mdev, hdev, ohdev, totdev, mtotdev,
+    /// htotdev, theo1, theoh (NIST SP 1065 §5.2; the time-error metrics mtie, tierms and the gap-
+    /// tolerant gradev are in Python's `imudrift.allantools`)
     #[arg(long, default_value = "oadev", value_parser = crate::cli::named(Estimator::ALL, Estimator::name))]
     pub estimator: Estimator,
     /// Tau grid: octave, decade, all, N/decade, or a comma list of averaging factors m
