@@ -44,7 +44,10 @@ fn the_memory_limit_bounds_the_whole_process() {
     // the peak is the largest of every child's so far).
     for (limit, extra) in [
         (20_000_000u64, &["--runs", "150", "--ablation"][..]),
-        (60_000_000, &["--runs", "20000"][..]),
+        // 18 000 runs keep 37.8 MiB of per-run values, 4 MiB inside the 41.9 MiB the 60 MB limit
+        // leaves; 20 000 (42.0 MiB) sat on the edge and was refused where the process held a
+        // little more at the check (a fresh clone's test run).
+        (60_000_000, &["--runs", "18000"][..]),
     ] {
         let out = run(&limit.to_string(), extra);
         assert!(
