@@ -192,7 +192,8 @@ pub fn role(effect: Effect) -> Role {
         | Effect::Misalignment
         | Effect::Outliers
         | Effect::WarmupTransient
-        | Effect::OutputFilter => Role::NONE,
+        | Effect::OutputFilter
+        | Effect::PowerLaw => Role::NONE,
     }
 }
 
