@@ -7,8 +7,8 @@ use noise::closed_form as cf;
 use noise::filter::FilteredAllan;
 use noise::{
     BiasInstability, Channel, Effect, ErrorTerm, FilterKind, Flicker, ModelError, OutputFilter,
-    OutputWhiteNoise, Quantization, RateRamp, RateRandomWalk, SensorModel, TemperatureBias, Term,
-    WhiteNoise,
+    OutputWhiteNoise, PowerLaw, Quantization, RateRamp, RateRandomWalk, SensorModel,
+    TemperatureBias, Term, WhiteNoise,
 };
 
 /// A one-level term at a level on a channel that lacks it ([`level_term`]).
@@ -19,8 +19,8 @@ type UnitSignature = fn(f64, f64, &Flicker, Option<&FilteredAllan>) -> f64;
 /// Allan variance per unit squared level at a shape parameter, tau, sample interval dt, behind the
 /// channel's output filter where it has one ([`unit_family_signature`]).
 type FamilySignature = fn(f64, f64, f64, Option<&FilteredAllan>) -> f64;
-/// A family's shape grid (lowest, highest, per decade) from the shortest and longest measured tau
-/// and the sample interval ([`shape_grid`]).
+/// A family's shape grid (lowest, highest, per decade, or per unit on a linear grid) from the
+/// shortest and longest measured tau and the sample interval ([`shape_grid`]).
 type ShapeRange = fn(f64, f64, f64) -> (f64, f64, f64);
 
 /// What diagnose does with an effect: [`role`] is the one place that names every effect of the
@@ -49,6 +49,8 @@ pub struct Role {
     pub family_signature: Option<FamilySignature>,
     /// Its shape grid ([`shape_grid`]).
     pub shape_range: Option<ShapeRange>,
+    /// The grid is linear in the shape (a power law's slope alpha, negative), not log-spaced.
+    pub linear_shapes: bool,
 }
 
 impl Role {
@@ -63,6 +65,7 @@ impl Role {
         unit_signature: None,
         family_signature: None,
         shape_range: None,
+        linear_shapes: false,
     };
 }
 
@@ -181,6 +184,21 @@ pub fn role(effect: Effect) -> Role {
             drawn: true,
             ..Role::NONE
         },
+        Effect::PowerLaw => Role {
+            order: 10,
+            candidate: true,
+            drawn: true,
+            family_signature: Some(power_law_signature),
+            shape_range: Some(|_, _, _| {
+                (
+                    PowerLaw::ALPHA_MIN,
+                    PowerLaw::ALPHA_MAX,
+                    POWER_LAW_ALPHAS_PER_UNIT,
+                )
+            }),
+            linear_shapes: true,
+            ..Role::NONE
+        },
         Effect::TemperatureBias => Role {
             signed: true,
             at_level: Some(|_, _, level| Ok(TemperatureBias::new(level)?.into())),
@@ -201,6 +219,26 @@ fn gauss_markov_signature(shape: f64, tau_s: f64, dt_s: f64, fa: Option<&Filtere
     match fa {
         Some(fa) => fa.gauss_markov(1.0, shape, tau_s),
         None => cf::gauss_markov_avar_sampled(1.0, shape, tau_s, dt_s),
+    }
+}
+
+/// The power law's slopes tried: alpha from -1.9 to -0.1 in steps of 0.025 (73 values, a search
+/// cost of 2 ln 73 = 8.6). The step is well below the slope's interval on a 2^16-sample log
+/// (about +-0.1 at alpha = -1.5 beside white noise), so the grid does not widen the interval.
+const POWER_LAW_ALPHAS_PER_UNIT: f64 = 40.0;
+
+/// A power law's signature at slope `alpha`, level 1 at tau = 1 s on the default band (a new
+/// term's; `PowerLaw::with_alpha`), behind the channel's filter where it has one; NaN for a slope
+/// the noise crate refuses.
+fn power_law_signature(alpha: f64, tau_s: f64, dt_s: f64, fa: Option<&FilteredAllan>) -> f64 {
+    let Ok(p) = PowerLaw::with_alpha(alpha, 1.0, 1.0) else {
+        return f64::NAN;
+    };
+    match fa {
+        Some(fa) => p
+            .allan_variance_filtered(tau_s, dt_s, fa)
+            .unwrap_or(f64::NAN),
+        None => p.avar_at(tau_s, Some(dt_s)),
     }
 }
 
@@ -305,15 +343,28 @@ pub fn filtered_allan(model: &SensorModel, ch: Channel, dt_s: f64) -> Option<Fil
 /// the shortest and three times the longest tau, 8 per decade. Sinusoid: frequencies from 1/(4 tau_max)
 /// to 1/(4 dt) (at least four samples per period: faster sinusoids alias on an octave grid, where their
 /// Allan lobes are indistinguishable from quantisation; the PSD is the tool for those, Hou 4.64 note),
-/// 200 per decade, because the Allan lobes of a sinusoid at tau >> 1/f0 move with small changes of f0
-/// ([`Role::shape_range`]).
+/// 200 per decade, because the Allan lobes of a sinusoid at tau >> 1/f0 move with small changes of f0.
+/// Power law: its slope alpha over the range the noise crate accepts, linear in steps of 0.025
+/// ([`Role::shape_range`], [`Role::linear_shapes`]).
 pub fn shape_grid(effect: Effect, tau_min_s: f64, tau_max_s: f64, dt_s: f64) -> Vec<f64> {
-    let Some(range) = role(effect).shape_range else {
+    let r = role(effect);
+    let Some(range) = r.shape_range else {
         return Vec::new();
     };
     let (lo, hi, per_decade) = range(tau_min_s, tau_max_s, dt_s);
     if hi <= lo {
         return Vec::new();
+    }
+    if r.linear_shapes {
+        // Evenly spaced, rounded to 1e-9 so that a slope is written as its decimal (-1.05, not
+        // -1.0499999999999998) and clamped so that the ends stay inside the range.
+        let n = ((hi - lo) * per_decade).round().max(1.0) as usize;
+        return (0..=n)
+            .map(|j| {
+                let v = lo + (hi - lo) * j as f64 / n as f64;
+                ((v * 1e9).round() / 1e9).clamp(lo, hi)
+            })
+            .collect();
     }
     let n = ((hi / lo).log10() * per_decade).ceil().max(1.0) as usize;
     (0..=n)

@@ -201,7 +201,7 @@ fn likely_cause(
 
 /// A Gauss-Markov process faster than this, or a sinusoid above its inverse, is a short-time
 /// stand-in (what `diagnose` fits for an output filter's shape: correlation times of milliseconds,
-/// lines near the filter's cutoff); slower ones, and every random walk, flicker level and ramp,
+/// lines near the filter's cutoff); slower ones, and every random walk, flicker or power-law level and ramp,
 /// set the slow wander about the calibration.
 const STAND_IN_TIME_S: f64 = 1.0;
 
@@ -236,6 +236,7 @@ fn terms_by_time_scale(model: &SensorModel, channels: &[noise::Channel]) -> (Str
         }
         for e in [
             Effect::BiasInstability,
+            Effect::PowerLaw,
             Effect::RateRandomWalk,
             Effect::RateRamp,
         ] {

@@ -18,7 +18,7 @@ fn shown(key: &str, si_unit: &str) -> Shown {
     match key {
         "q" => u(1),
         "n" | "n_without" => u(2),
-        "b" => u(3),
+        "b" | "level" => u(3),
         "k" => u(4),
         "r" => u(5),
         "sigma" | "amplitude" | "size" => u(0),

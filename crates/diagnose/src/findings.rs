@@ -182,8 +182,9 @@ pub(crate) fn merge_refinements(
                 });
             }
             Some(j) => {
-                let last = effects.remove(i);
+                let mut last = effects.remove(i);
                 let first = &mut effects[j];
+                keep_found_intervals(first, &mut last);
                 first.parameters = last.parameters;
                 first.parameters_lo = last.parameters_lo;
                 first.parameters_hi = last.parameters_hi;
@@ -198,6 +199,31 @@ pub(crate) fn merge_refinements(
         }
     }
     withdrawn
+}
+
+/// A refinement keeps a shape where it is (a Gauss-Markov time, a sinusoid's frequency, a power
+/// law's slope: only the level is refitted), so its interval there is a point; the interval the
+/// shape was found with in the earlier round is the one that says how well it is known, and it
+/// stays with the finding. (Before, a power law's slope named in round 1 with [-1.70, -1.33] was
+/// reported as [-1.5, -1.5] after a later round refitted its level.)
+fn keep_found_intervals(first: &FoundEffect, last: &mut FoundEffect) {
+    for (key, &v) in last.parameters.iter() {
+        let (Some(lo), Some(hi)) = (last.parameters_lo.get(key), last.parameters_hi.get(key))
+        else {
+            continue;
+        };
+        let (Some(&v0), Some(&lo0), Some(&hi0)) = (
+            first.parameters.get(key),
+            first.parameters_lo.get(key),
+            first.parameters_hi.get(key),
+        ) else {
+            continue;
+        };
+        if *lo == v && *hi == v && v0 == v && lo0 < hi0 {
+            last.parameters_lo.insert(key.clone(), lo0);
+            last.parameters_hi.insert(key.clone(), hi0);
+        }
+    }
 }
 
 /// Shaped terms fitted where the model still disagrees are stand-ins, not physical findings. A

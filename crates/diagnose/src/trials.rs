@@ -15,7 +15,9 @@ use crate::model_terms::{
     fitted_term, flicker_band, has_random_walk_bias_instability, output_filter, squared_level,
 };
 use crate::spectrum::SpectralPeak;
-use noise::{Channel, Effect, FilterKind, GaussMarkov, OutputFilter, SensorModel, Sinusoid, Term};
+use noise::{
+    Channel, Effect, FilterKind, GaussMarkov, OutputFilter, PowerLaw, SensorModel, Sinusoid, Term,
+};
 use std::collections::BTreeMap;
 
 /// What one channel's candidates are fitted to: its model, measurement, band and gap, and what the
@@ -124,7 +126,9 @@ pub(crate) fn trials(input: &ChannelFit) -> Vec<Trial> {
         }
         let current = fitted_term(input.model, ch, effect);
         let fitted = match effect {
-            Effect::GaussMarkov | Effect::Sinusoidal => fit_shaped(input, &data, effect, current),
+            Effect::GaussMarkov | Effect::Sinusoidal | Effect::PowerLaw => {
+                fit_shaped(input, &data, effect, current)
+            }
             Effect::Resonance => fit_resonance(input, &data, current),
             _ => fit_level(input, &data, effect, current),
         };
@@ -136,7 +140,7 @@ pub(crate) fn trials(input: &ChannelFit) -> Vec<Trial> {
     out
 }
 
-/// A Gauss-Markov process or a sinusoid. A term the model has keeps its shape (a wrong level); an
+/// A Gauss-Markov process, a sinusoid or a power law. A term the model has keeps its shape (a wrong level); an
 /// absent one is searched over shapes. A new sinusoid takes its frequency from a line of the log's
 /// spectrum where the spectrum resolves one (`sinusoid_shapes`).
 fn fit_shaped(
@@ -179,6 +183,8 @@ fn fit_shaped(
     let term = match (current, effect) {
         (Some(own), _) => own.with_level(level).ok()?,
         (None, Effect::GaussMarkov) => GaussMarkov::new(level, ff.shape).ok()?.into(),
+        // Level at tau = 1 s on the default band, as `candidates::power_law_signature`.
+        (None, Effect::PowerLaw) => PowerLaw::with_alpha(ff.shape, level, 1.0).ok()?.into(),
         (None, _) => Sinusoid::new(level, ff.shape, None).ok()?.into(),
     };
     // Shape interval at the 95 % threshold widened by this fit's Birge ratio; a line's frequency

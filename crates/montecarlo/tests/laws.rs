@@ -403,3 +403,31 @@ fn bias_calibration_window_follows_its_law() {
         &[Roll, Pitch, Yaw, PosNorth, PosEast, PosHorizontal, VelNorth],
     );
 }
+
+#[test]
+fn power_law_follows_its_laws() {
+    use NavQuantity::*;
+    // Fractional power-law noise (the noise crate's band of Gauss-Markov components, weighted for
+    // S(f) ~ f^alpha): its law source is the same Gauss-Markov sum as flicker's, uncalibrated, calibrated at
+    // start and over a window. Slopes either side of flicker: -1.5 on the gyros (the ADEV rising as
+    // tau^0.25), -0.5 on the accelerometers (falling as tau^-0.25). Uncalibrated, the band's slow
+    // components are a bias of about 30 times the level at 1 s: the gyro level keeps the attitude
+    // error within the small-angle laws.
+    let power_law = "[gyro.all]\npower_law = { alpha = -1.5, level = \"0.0005 deg/s\" }\n[accel.all]\npower_law = { alpha = -0.5, level = \"0.001 m/s^2\", tau = \"10 s\" }\n";
+    let all = [Roll, Pitch, Yaw, PosNorth, PosEast, PosHorizontal, VelNorth];
+    for (name, scenario) in [
+        ("power_law", CHECKS.to_string()),
+        (
+            "power_law (calibrated at start)",
+            format!("[terms]\nbias_calibrated_at_start = true\n{CHECKS}"),
+        ),
+        (
+            "power_law (10 s calibration window)",
+            format!("[terms]\nbias_calibration_window_s = 10.0\n{CHECKS}"),
+        ),
+    ] {
+        let r = simulate(power_law, &scenario, 20.0, 50.0, RUNS);
+        let n = check(name, &r, &all);
+        assert!(n >= 6 * 8, "{name}: only {n} checks");
+    }
+}

@@ -13,6 +13,72 @@ use std::f64::consts::{LN_2, PI};
 /// sqrt(2 ln2 / pi) = 0.6643: the Allan-deviation plateau of flicker noise per unit IEEE B (Hou 4.38-4.50).
 pub const FLICKER_PLATEAU_PER_B: f64 = 0.664_282_470_267_960_1;
 
+/// Power-law noise S(f) = h f^alpha (one-sided PSD, -2 < alpha < 0): its Allan variance
+/// sigma^2(tau) = 2 int_0^inf S(f) sin^4(pi f tau) / (pi f tau)^2 df (NIST SP 1065, the conversion
+/// from the spectral density; IEEE Std 952-1997 Annex C with the two-sided PSD) is h K(alpha) tau^(-alpha-1), and this is K(alpha).
+///
+/// With x = pi f tau, K = 2 pi^(-1-alpha) M(alpha - 1), M(s) = int_0^inf x^(s-1) sin^4 x dx; from
+/// sin^4 = (3 - 4 cos 2x + cos 4x)/8 and int_0^inf x^(s-1) cos(a x) dx = Gamma(s) cos(pi s/2) a^(-s)
+/// (Gradshteyn & Ryzhik 3.761.9, continued to -4 < s < 0, where the constant's part vanishes),
+/// M(s) = Gamma(s) cos(pi s/2) (4^(-s) - 4 2^(-s)) / 8. Written in e = alpha + 1 (the pole of
+/// Gamma at s = -2 cancels): K = 4 cos(pi e/2) Gamma(1+e) (2 pi)^(-e) g(e) / ((2-e)(1-e)) with
+/// g(e) = (1 - 2^(-e))/e (ln 2 at e = 0). Its limits are SP 1065's power-law table: white FM
+/// (alpha = 0) h/(2 tau), flicker FM 2 ln2 h, random-walk FM (2 pi^2/3) h tau; checked against
+/// numerical quadrature in the tests (`power_law_constant_matches_quadrature`).
+pub fn power_law_avar_constant(alpha: f64) -> f64 {
+    let e = alpha + 1.0;
+    // (1 - 2^-e)/e = -expm1(-e ln2)/e, -> ln 2 as e -> 0.
+    let g = if e.abs() < 1e-12 {
+        LN_2
+    } else {
+        -(-e * LN_2).exp_m1() / e
+    };
+    4.0 * (PI * e / 2.0).cos() * gamma_near_one(1.0 + e) * (2.0 * PI).powf(-e) * g
+        / ((2.0 - e) * (1.0 - e))
+}
+
+/// The one-sided PSD coefficient h of S(f) = h f^alpha whose Allan deviation is `level` at
+/// `tau_ref_s` (`power_law_avar_constant`): h = level^2 / (K(alpha) tau_ref^(-alpha-1)).
+pub fn power_law_h(alpha: f64, level: f64, tau_ref_s: f64) -> f64 {
+    level * level / (power_law_avar_constant(alpha) * tau_ref_s.powf(-alpha - 1.0))
+}
+
+/// The weight c of a continuum of first-order Gauss-Markov processes, variance c T^beta d(ln T)
+/// (beta = -alpha - 1), whose PSD is h f^alpha: each has the Lorentzian S(f) = 4 s^2 T / (1 + (2 pi
+/// f T)^2) (one-sided), and int_0^inf c T^beta 4 T / (1 + (2 pi f T)^2) d(ln T) = 4 c (2 pi f)^alpha
+/// int_0^inf u^beta / (1 + u^2) du with the integral pi / (2 cos(pi beta / 2)) for -1 < beta < 1
+/// (Gradshteyn & Ryzhik 3.241.2), so c = h cos(pi beta / 2) / (2 pi (2 pi)^alpha). At alpha = -1
+/// this is IEEE flicker's sigma_0^2 = B^2 ln(rho) / pi per component (h = B^2 / pi, c = h).
+pub fn power_law_component_weight(alpha: f64, h: f64) -> f64 {
+    let beta = -alpha - 1.0;
+    h * (PI * beta / 2.0).cos() / (2.0 * PI * (2.0 * PI).powf(alpha))
+}
+
+/// Gamma(x) for 0 < x < 3 by the Lanczos approximation (Numerical Recipes 3rd ed. §6.1, g = 7,
+/// 9 coefficients; relative error below 1e-15 there), as `allan::chi2::ln_gamma` computes it.
+fn gamma_near_one(x: f64) -> f64 {
+    const G: f64 = 7.0;
+    const C: [f64; 9] = [
+        0.999_999_999_999_809_9,
+        676.520_368_121_885_1,
+        -1_259.139_216_722_402_8,
+        771.323_428_777_653_1,
+        -176.615_029_162_140_6,
+        12.507_343_278_686_905,
+        -0.138_571_095_265_720_12,
+        9.984_369_578_019_572e-6,
+        1.505_632_735_149_311_6e-7,
+    ];
+    let z = x - 1.0;
+    let t = z + G + 0.5;
+    let a = C
+        .iter()
+        .enumerate()
+        .skip(1)
+        .fold(C[0], |a, (i, &c)| a + c / (z + i as f64));
+    (2.0 * PI).sqrt() * t.powf(z + 0.5) * (-t).exp() * a
+}
+
 /// Quantisation noise Q: sigma^2 = 3 Q^2 / tau^2 (Hou 4.29). Exact for the sampled generator too,
 /// since a white phase error e_k gives E[(e_{n+2m} - 2e_{n+m} + e_n)^2]/(2 tau^2) = 3 var(e)/tau^2 (NIST SP 1065 eq 11).
 pub fn quantization_avar(q: f64, tau_s: f64) -> f64 {

@@ -91,6 +91,7 @@ pub use terms::misalignment::Misalignment;
 pub use terms::outliers::Outliers;
 pub use terms::output_filter::{FilterKind, OutputFilter, MAX_RESPONSE};
 pub use terms::output_white_noise::OutputWhiteNoise;
+pub use terms::power_law::PowerLaw;
 pub use terms::quantization::Quantization;
 pub use terms::rate_ramp::RateRamp;
 pub use terms::rate_random_walk::RateRandomWalk;

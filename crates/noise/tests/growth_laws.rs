@@ -7,7 +7,7 @@ mod common;
 use common::*;
 use noise::closed_form::{self as cf, Integration};
 use noise::units::STANDARD_GRAVITY_MPS2;
-use noise::{AxisModel, BiasInstability, Flicker, GaussMarkov, Resonance};
+use noise::{AxisModel, BiasInstability, Flicker, GaussMarkov, PowerLaw, Resonance};
 
 const SEED: u64 = 77;
 const RUNS: u64 = 4000;
@@ -227,6 +227,27 @@ fn flicker_integrals_follow_the_component_sum() {
     for (k, data) in [(1, &once), (2, &twice), (3, &thrice)] {
         let law = flicker.integrated_variance(t, k).unwrap();
         assert_variance(&format!("flicker {k}-fold"), data, law);
+    }
+}
+
+#[test]
+fn power_law_integrals_follow_the_component_sum() {
+    // As flicker's: band 1 s .. 1e4 s at 100 Hz, the growth law being the exact k-fold integrals
+    // of its Gauss-Markov components (its law source), for a slope either side of flicker.
+    for alpha in [-1.5, -0.5] {
+        let p = PowerLaw::new(alpha, 1e-3, 1.0, 1.0, 1e4, 2).unwrap();
+        let axis = noise::AxisModel::default().with(p.clone());
+        let (rate, n) = (100.0, 1000);
+        let t = n as f64 / rate;
+        let [once, twice, thrice] = integrals(&axis, rate, n);
+        for (k, data) in [(1, &once), (2, &twice), (3, &thrice)] {
+            let law: f64 = p
+                .components()
+                .iter()
+                .map(|&(tc, s)| cf::gauss_markov_kfold_variance(s, tc, t, k).unwrap())
+                .sum();
+            assert_variance(&format!("power law {alpha} {k}-fold"), data, law);
+        }
     }
 }
 

@@ -581,3 +581,64 @@ output_filter = { kind = "bartlett", taps = 16 }
         .to_toml_string_styled(&UnitStyle::from_config_text(text))
         .contains("deg/h/sqrt(h)"));
 }
+
+#[test]
+fn power_law_reads_writes_and_refuses() {
+    let text = "name = \"p\"\n[accel.x]\npower_law = { alpha = -1.4, level = \"20 ug\", tau = \"100 s\" }\n[accel.y]\npower_law = { alpha = -1, level = \"3 ug\", band = [\"1 s\", \"1e4 s\"], per_decade = 3 }\n[gyro.z]\npower_law = { alpha = -0.35, level = \"2 deg/h\" }\n";
+    let m = SensorModel::from_toml_str(text, "p.toml").unwrap();
+    let p = m.accel.axes[0].get::<crate::PowerLaw>().unwrap();
+    assert_eq!((p.alpha(), p.tau_ref_s(), p.per_decade()), (-1.4, 100.0, 1));
+    assert!((p.level() / (20e-6 * crate::units::STANDARD_GRAVITY_MPS2) - 1.0).abs() < 1e-12);
+    let q = m.accel.axes[1].get::<crate::PowerLaw>().unwrap();
+    assert_eq!(
+        (
+            q.alpha(),
+            q.tau_ref_s(),
+            q.tau_min_s(),
+            q.tau_max_s(),
+            q.per_decade()
+        ),
+        (-1.0, 1.0, 1.0, 1e4, 3)
+    );
+    // Written and read back bit for bit, in SI and in the config's own units.
+    let back = SensorModel::from_toml_str(&m.to_toml_string(), "written.toml").unwrap();
+    assert_eq!(m, back);
+    let styled = m.to_toml_string_styled(&UnitStyle::from_config_text(text));
+    assert!(
+        styled.contains("alpha = -1.4") && styled.contains("ug"),
+        "{styled}"
+    );
+    let back = SensorModel::from_toml_str(&styled, "styled.toml").unwrap();
+    let b = back.accel.axes[0].get::<crate::PowerLaw>().unwrap();
+    assert_eq!(b.alpha(), -1.4);
+    assert!((b.level() / p.level() - 1.0).abs() < 1e-4);
+
+    let axis = |line: &str| err(&format!("name = \"b\"\n[accel.x]\n{line}\n"));
+    let e = axis("power_law = { alpha = -2.0, level = \"20 ug\" }");
+    assert!(
+        e.starts_with("bad.toml:3: key `accel.x.power_law.alpha`") && e.contains("-1.9 to -0.1"),
+        "{e}"
+    );
+    let e = axis("power_law = { alpha = 0.5, level = \"20 ug\" }");
+    assert!(e.contains("accel.x.power_law.alpha"), "{e}");
+    let e = axis("power_law = { alpha = -1.5 }");
+    assert!(
+        e.contains("accel.x.power_law.level") && e.contains("nothing"),
+        "{e}"
+    );
+    let e = axis("power_law = { level = \"20 ug\" }");
+    assert!(e.contains("accel.x.power_law.alpha"), "{e}");
+    let e = axis("power_law = { alpha = -1.5, level = \"20 deg/h\" }");
+    assert!(e.contains("accel.x.power_law.level"), "{e}");
+    let e = axis("power_law = { alpha = -1.5, level = \"20 ug\", tau = \"3 ug\" }");
+    assert!(e.contains("accel.x.power_law.tau"), "{e}");
+    let e = axis("power_law = { alpha = -1.5, level = \"20 ug\", band = [\"10 s\", \"1 s\"] }");
+    assert!(
+        e.starts_with("bad.toml:3: key `accel.x.power_law.band`"),
+        "{e}"
+    );
+    let e = axis("power_law = { alpha = -1.5, level = \"20 ug\", per_decade = 0 }");
+    assert!(e.contains("accel.x.power_law.per_decade"), "{e}");
+    let e = axis("power_law = { alpha = -1.5, level = \"20 ug\", slope = 1 }");
+    assert!(e.contains("slope") && e.contains("line 3"), "{e}");
+}

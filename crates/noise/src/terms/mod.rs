@@ -13,6 +13,7 @@ pub mod misalignment;
 pub mod outliers;
 pub mod output_filter;
 pub mod output_white_noise;
+pub mod power_law;
 pub mod quantization;
 pub mod rate_ramp;
 pub mod rate_random_walk;
@@ -319,6 +320,8 @@ registry! {
     SlowGaussMarkov => slow_gauss_markov::SlowGaussMarkov,
     /// White noise on the output register, after the output filter.
     OutputWhiteNoise => output_white_noise::OutputWhiteNoise,
+    /// Fractional power-law noise, S(f) ~ f^alpha (a band of Gauss-Markov processes).
+    PowerLaw => power_law::PowerLaw,
 }
 
 /// The order a channel's terms act in within each [`Stage`] (`ChannelErrors`): the input terms, then
@@ -336,6 +339,7 @@ pub const GENERATION_ORDER: [Effect; Effect::COUNT] = [
     Effect::RateRamp,
     Effect::GaussMarkov,
     Effect::SlowGaussMarkov,
+    Effect::PowerLaw,
     Effect::Resonance,
     Effect::Sinusoidal,
     Effect::TemperatureBias,
@@ -361,6 +365,7 @@ pub const WRITE_ORDER: [Effect; Effect::COUNT] = [
     Effect::BiasInstability,
     Effect::GaussMarkov,
     Effect::SlowGaussMarkov,
+    Effect::PowerLaw,
     Effect::Sinusoidal,
     Effect::OutputFilter,
     Effect::Outliers,
