@@ -175,14 +175,25 @@ fn adis16405_runs_pooled_name_the_accelerometer_tone() {
 
 /// No named effect has size 0 and the corrected model carries no term of size 0 (issue 45 item
 /// 5: runs 1-3 named `gauss_markov sigma = 0 deg/h, dBIC 624` on gz and wrote `sigma = "0 deg/s"`).
-/// The level is the effect's first parameter among q, n, b, k, r, sigma, amplitude, coefficient.
+/// The level is the effect's first parameter among q, n, b, k, r, sigma, amplitude, coefficient,
+/// level (a power law's).
 fn assert_no_zero_size(doc: &serde_json::Value, what: &str) {
     for (ch, c) in doc["channels"].as_object().expect("channels") {
         for e in c["effects"].as_array().unwrap() {
             let p = &e["parameters"];
-            let level = ["q", "n", "b", "k", "r", "sigma", "amplitude", "coefficient"]
-                .iter()
-                .find_map(|k| p[k].as_f64());
+            let level = [
+                "q",
+                "n",
+                "b",
+                "k",
+                "r",
+                "sigma",
+                "amplitude",
+                "coefficient",
+                "level",
+            ]
+            .iter()
+            .find_map(|k| p[k].as_f64());
             if let Some(v) = level {
                 assert!(v > 0.0, "{what} {ch}: {} of size 0: {e}", e["effect"]);
             }

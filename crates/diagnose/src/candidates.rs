@@ -223,8 +223,9 @@ fn gauss_markov_signature(shape: f64, tau_s: f64, dt_s: f64, fa: Option<&Filtere
 }
 
 /// The power law's slopes tried: alpha from -1.9 to -0.1 in steps of 0.025 (73 values, a search
-/// cost of 2 ln 73 = 8.6). The step is well below the slope's interval on a 2^16-sample log
-/// (about +-0.1 at alpha = -1.5 beside white noise), so the grid does not widen the interval.
+/// cost of 2 ln 73 = 8.6). The step is a fraction of the slope's interval (0.15-0.20 wide at
+/// alpha = -1.5 beside white noise on 2^18 samples, about 0.4 on 2^16; tests/power_law.rs), so
+/// the grid's widening to the next slope outside adds little.
 const POWER_LAW_ALPHAS_PER_UNIT: f64 = 40.0;
 
 /// A power law's signature at slope `alpha`, level 1 at tau = 1 s on the default band (a new
