@@ -414,6 +414,7 @@ fn text_report(result: &Diagnosis, log: &str, model: &Path, elapsed_s: f64) -> S
         }
     }
     s.push_str(&runs_text(result));
+    s.push_str(&run_to_run_text(result));
     s.push_str(&drift_check_text(result));
     let _ = writeln!(
         s,
@@ -486,6 +487,40 @@ fn alternatives_text(result: &Diagnosis, indent: &str) -> String {
             what.join(", "),
             a.weight,
             a.delta_bic
+        );
+    }
+    s
+}
+
+/// Several runs: each channel's run-to-run variation of its slow group (docs/diagnose.md,
+/// "Runs that differ"), the estimate with its 95 % interval and the test against the null.
+fn run_to_run_text(result: &Diagnosis) -> String {
+    let mut s = String::new();
+    if result.run_to_run.is_empty() {
+        return s;
+    }
+    let _ = writeln!(
+        s,
+        "run-to-run variation (sd of ln level between power-ons of each channel's slow terms; named ones are written as `run_to_run`):"
+    );
+    for r in &result.run_to_run {
+        let runs: Vec<String> = r
+            .ln_multipliers
+            .iter()
+            .map(|x| format!("{x:+.2}"))
+            .collect();
+        let _ = writeln!(
+            s,
+            "  {} {}: spread {:.3} [{:.3}, {:.3}]  per-run ln level {}  p = {:.3} (chi2 {:.1e}) {}",
+            r.channel.name(),
+            r.effects.join("+"),
+            r.spread,
+            r.interval[0],
+            r.interval[1],
+            runs.join(" "),
+            r.p_value,
+            r.p_chi2,
+            if r.named { "named" } else { "not named" }
         );
     }
     s

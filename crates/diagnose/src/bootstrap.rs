@@ -124,7 +124,7 @@ struct ChannelFit {
 /// The EDF of the overlapping Allan variance at factor `m` of a log of `n` samples, for noise of
 /// Allan-variance slope `mu` (alpha = -mu - 1, SP 1065 Table 2, rounded and clamped to the
 /// power-law range; Greenhall & Riley 2004 through `allan::edf`).
-fn edf_at(mu: f64, m: usize, n: usize) -> f64 {
+pub(crate) fn edf_at(mu: f64, m: usize, n: usize) -> f64 {
     let alpha = (-mu - 1.0).round().clamp(-2.0, 2.0) as i32;
     let nu = allan::edf::edf_for(
         Estimator::Overlapping,
@@ -283,7 +283,7 @@ fn basis(
 }
 
 /// d ln A / d ln tau at grid point `i` (central between the neighbours, one-sided at the ends).
-fn local_slope(taus: &[f64], avar: &[f64], i: usize) -> f64 {
+pub(crate) fn local_slope(taus: &[f64], avar: &[f64], i: usize) -> f64 {
     if taus.len() < 2 {
         return -1.0;
     }

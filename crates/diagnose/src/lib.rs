@@ -62,6 +62,7 @@ pub mod observer;
 pub mod protocol;
 mod relevel;
 pub mod report;
+pub mod run_spread;
 mod runs;
 pub mod settings;
 pub mod simulate;

@@ -214,6 +214,10 @@ pub struct Diagnosis {
     /// (`alternatives`; the corrected model carries them for `drift`'s band).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub alternatives: Vec<crate::alternatives::Alternative>,
+    /// Several runs: each channel's run-to-run variation of its slow group, with its test and
+    /// interval (`run_spread`; the named ones are in the corrected model as `run_to_run`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub run_to_run: Vec<crate::run_spread::RunSpread>,
     /// Shortest tau analysed, s.
     pub tau_min_s: f64,
     /// The corrected model (written as TOML by the CLI).

@@ -129,7 +129,20 @@ pub fn diagnose_until(
     let drift = settle_drift(&cx, &state.models, drift)?;
     let drift = drift_rounds::drift_rounds(&cx, &mut state, drift)?;
     cx.check_stop()?;
-    Ok(report(cx, state, drift))
+    // Several runs: the run-to-run variation of each channel's slow group (`run_spread`), the
+    // named spreads written into the corrected model.
+    let spreads = crate::run_spread::estimate(
+        &state.models.out,
+        &cx.logs,
+        settings.tau_min_s,
+        settings.seed,
+        Some(stop),
+    )
+    .ok_or(DiagnoseError::Stopped)?;
+    state.models.out = crate::run_spread::with_named_spreads(&state.models.out, &spreads);
+    let mut diagnosis = report(cx, state, drift);
+    diagnosis.run_to_run = spreads;
+    Ok(diagnosis)
 }
 
 /// What a diagnosis starts from: the logs (runs) as measured, the logs after step 0's
@@ -805,6 +818,7 @@ fn report(cx: Context, mut state: LoopState, drift: Drift) -> Diagnosis {
         runs,
         drift_check,
         alternatives,
+        run_to_run: Vec::new(),
         tau_min_s: cx.settings.tau_min_s,
         model_final: state.models.out,
         grid_m: cx.grid_m,

@@ -33,10 +33,17 @@ fn diagnose_generated(
     .expect("diagnose runs")
 }
 
+/// The effects named, and the run-to-run spreads named (`run_spread`), as `channel:effect`.
 fn named(d: &Diagnosis) -> Vec<String> {
     d.channels
         .iter()
         .flat_map(|(ch, r)| r.effects.iter().map(move |e| format!("{ch}:{}", e.effect)))
+        .chain(
+            d.run_to_run
+                .iter()
+                .filter(|r| r.named)
+                .map(|r| format!("{}:run_to_run", r.channel)),
+        )
         .collect()
 }
 

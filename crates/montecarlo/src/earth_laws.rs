@@ -26,6 +26,62 @@ pub fn all_laws(terms: &[Term], ctx: &LawContext, times_s: &[f64]) -> Vec<Vec<La
     }
 }
 
+/// [`all_laws`] of a run-to-run mixture (docs/model.md §2.3): with `mixture` empty, the laws of
+/// `terms`; else each node's laws (`SensorModel::run_to_run_quadrature`, weights w summing to 1)
+/// combined as the law of the mixture: mean = sum w m_i, mean square = sum w (m_i^2 + s_i^2)
+/// (the moments of a mixture; exact for each node's Gaussian, and for the horizontal magnitude's
+/// Rayleigh-type mean, which is linear in the mixing). A horizontal mean unknown at a node (NaN)
+/// leaves the mixture's unknown; a node without a law gives none.
+pub fn mixture_laws(
+    terms: &[Term],
+    mixture: &[(f64, Vec<Term>)],
+    ctx: &LawContext,
+    times_s: &[f64],
+) -> Vec<Vec<Law>> {
+    if mixture.is_empty() {
+        return all_laws(terms, ctx, times_s);
+    }
+    let nodes: Vec<(f64, Vec<Vec<Law>>)> = mixture
+        .iter()
+        .map(|(w, t)| (*w, all_laws(t, ctx, times_s)))
+        .collect();
+    (0..times_s.len())
+        .map(|ti| {
+            (0..NavQuantity::ALL.len())
+                .map(|q| {
+                    let (mut mean, mut ms, mut allowance) = (0.0, 0.0, 0.0f64);
+                    for (w, laws) in &nodes {
+                        match &laws[ti][q] {
+                            Law::Value {
+                                mean: m,
+                                std: s,
+                                allowance: a,
+                            } => {
+                                // A NaN mean marks "mean unknown": std then holds the rms.
+                                let m2 = if m.is_nan() { 0.0 } else { m * m };
+                                mean += w * m;
+                                ms += w * (m2 + s * s);
+                                allowance = allowance.max(*a);
+                            }
+                            Law::NotApplicable(why) => return Law::NotApplicable(why.clone()),
+                        }
+                    }
+                    let std = if mean.is_nan() {
+                        ms.sqrt()
+                    } else {
+                        (ms - mean * mean).max(0.0).sqrt()
+                    };
+                    Law::Value {
+                        mean,
+                        std,
+                        allowance,
+                    }
+                })
+                .collect()
+        })
+        .collect()
+}
+
 /// The error-model sources of one term (a sum of Gauss-Markov processes gives one each), or why
 /// it has no law.
 fn sources(term: &Term, attitude: &Attitude) -> Result<Vec<Source>, String> {

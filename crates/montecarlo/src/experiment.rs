@@ -50,6 +50,10 @@ pub struct Experiment {
     pub only: Option<Vec<TermSelector>>,
     pub without: Vec<TermSelector>,
     pub terms: Vec<Term>,
+    /// The run-to-run mixture of the laws (docs/model.md §2.3): the law terms of the model at each
+    /// node of `SensorModel::run_to_run_quadrature`, with its weight; empty when no level varies
+    /// between runs (the laws are then those of `terms`).
+    pub mixture: Vec<(f64, Vec<Term>)>,
     pub law_context: LawContext,
 }
 
@@ -71,18 +75,27 @@ impl Experiment {
         let filter = TermFilter::new(only.as_deref(), &without);
         let model = model.filtered(&filter);
         noise::ImuErrors::check_rate(&model, scenario.dt_s())?;
-        let (terms, law_context) = law_terms(
-            &model,
-            &scenario.trajectory_spec,
-            &scenario.alignment,
-            &scenario.earth,
-            scenario.dt_s(),
-        );
-        let terms = if scenario.bias_calibrated_at_start {
-            calibrated_at_start(terms, scenario.bias_calibration_window_s)
-        } else {
-            terms
+        let terms_of = |model: &SensorModel| {
+            let (terms, law_context) = law_terms(
+                model,
+                &scenario.trajectory_spec,
+                &scenario.alignment,
+                &scenario.earth,
+                scenario.dt_s(),
+            );
+            let terms = if scenario.bias_calibrated_at_start {
+                calibrated_at_start(terms, scenario.bias_calibration_window_s)
+            } else {
+                terms
+            };
+            (terms, law_context)
         };
+        let (terms, law_context) = terms_of(&model);
+        let mixture = model
+            .run_to_run_quadrature()
+            .into_iter()
+            .map(|(w, m)| (w, terms_of(&m).0))
+            .collect();
         Ok(Experiment {
             scenario,
             model,
@@ -91,6 +104,7 @@ impl Experiment {
             only,
             without,
             terms,
+            mixture,
             law_context,
         })
     }
@@ -120,6 +134,7 @@ impl Experiment {
         build_report(
             &self.meta(),
             &self.terms,
+            &self.mixture,
             &self.law_context,
             matrix,
             failures,

@@ -3,7 +3,7 @@
 //! JSON fields: `seed`, `runs`, `checkpoints[]` with `t_s` and `channels{name: {mean, std, rms, p50,
 //! p95, law_std, ratio}}`; more fields are added, none renamed).
 
-use crate::earth_laws::all_laws;
+use crate::earth_laws::mixture_laws;
 use crate::laws::{Law, LawContext, Term};
 use crate::nav_quantity::NavQuantity;
 use crate::runner::RunFailure;
@@ -195,6 +195,7 @@ fn finite(x: f64) -> Option<f64> {
 pub fn build_report(
     meta: &ReportMeta,
     terms: &[Term],
+    mixture: &[(f64, Vec<Term>)],
     ctx: &LawContext,
     matrix: &RunMatrix,
     failures: &[RunFailure],
@@ -205,7 +206,7 @@ pub fn build_report(
         .iter()
         .map(|&step| step as f64 * dt_s)
         .collect();
-    let all = all_laws(terms, ctx, &times);
+    let all = mixture_laws(terms, mixture, ctx, &times);
     // The flat Earth's laws beside the round Earth's, where they hold (static level north-facing).
     let flat: Option<Vec<Vec<Law>>> = (ctx.earth.round().is_some()
         && ctx.static_level
@@ -217,7 +218,7 @@ pub fn build_report(
             },
             ..ctx.clone()
         };
-        all_laws(terms, &flat_ctx, &times)
+        mixture_laws(terms, mixture, &flat_ctx, &times)
     });
     let checkpoints = meta
         .checkpoint_steps

@@ -63,6 +63,7 @@ pub mod model_notes;
 pub mod noise_file;
 pub mod process;
 mod rng;
+pub mod run_to_run;
 mod static_level;
 mod temperature;
 pub mod terms;
@@ -143,6 +144,14 @@ pub(crate) fn calibration_rng(seed: u64, run: u64, channel: u64, effect: Effect)
         stream_key(seed, run),
         (1u64 << 33) | (channel << 8) | effect.stream_index(),
     )
+}
+
+/// The run-to-run stream of one channel of one run (the draw that sets this run's levels of the
+/// axis' `run_to_run` terms, `run_to_run::run_draw`): index 2^34 + channel, so disjoint from the
+/// term streams (below 2^11), `extra_rng` (2^32 + u32) and the calibration streams (2^33 + ...).
+/// No other stream is touched: a model without `run_to_run` gives the same values as before.
+pub(crate) fn run_to_run_rng(seed: u64, run: u64, channel: u64) -> ImuRng {
+    stream_rng(stream_key(seed, run), (1u64 << 34) | channel)
 }
 
 /// The sub-stream of one term of one channel of one run.

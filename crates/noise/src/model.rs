@@ -8,15 +8,20 @@
 use crate::config::read::OtherTerms;
 use crate::effect::{Effect, Sensor, TermFilter};
 use crate::filter::FilteredAllan;
+use crate::model_error::ModelError;
 use crate::temperature::TemperatureProfile;
 use crate::terms::output_filter::OutputFilter;
 use crate::terms::{Registered, Term};
+use std::collections::BTreeMap;
 
 /// The error model of one axis, SI: at most one term per effect, absent terms add nothing.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct AxisModel {
     /// The term of each effect, at the effect's position in `Effect::ALL`.
     terms: [Option<Term>; Effect::COUNT],
+    /// The run-to-run spread (sd of the natural log of the level between power-ons) of terms of
+    /// this axis that have a level (docs/model.md §2.3); absent terms have none.
+    run_to_run: BTreeMap<Effect, f64>,
 }
 
 impl AxisModel {
@@ -120,9 +125,77 @@ impl AxisModel {
         self.terms[effect as usize].is_some()
     }
 
-    /// Remove a term.
+    /// Remove a term (and its run-to-run spread).
     pub fn remove(&mut self, effect: Effect) {
         self.terms[effect as usize] = None;
+        self.run_to_run.remove(&effect);
+    }
+
+    /// The run-to-run spreads of the axis' terms (docs/model.md §2.3), in `Effect` order: the
+    /// standard deviation of the natural log of each listed level between power-ons.
+    pub fn run_to_run(&self) -> &BTreeMap<Effect, f64> {
+        &self.run_to_run
+    }
+
+    /// Set the run-to-run spread of `effect` (0 <= spread <= [`crate::run_to_run::MAX_SPREAD`]):
+    /// refused for a term the axis lacks or one without a level.
+    pub fn set_run_to_run(&mut self, effect: Effect, spread: f64) -> Result<(), ModelError> {
+        let Some(term) = self.term(effect) else {
+            return Err(ModelError {
+                what: "run_to_run",
+                expected: "a term the axis has",
+                found: spread,
+            });
+        };
+        if term.level().is_none() {
+            return Err(ModelError {
+                what: "run_to_run",
+                expected: "a term with a level",
+                found: spread,
+            });
+        }
+        if !(0.0..=crate::run_to_run::MAX_SPREAD).contains(&spread) {
+            return Err(ModelError {
+                what: "run_to_run",
+                expected: "a spread (sd of ln level) from 0 to 2",
+                found: spread,
+            });
+        }
+        self.run_to_run.insert(effect, spread);
+        Ok(())
+    }
+
+    /// Drop every run-to-run spread.
+    pub fn clear_run_to_run(&mut self) {
+        self.run_to_run.clear();
+    }
+
+    /// Does any listed term have a spread above 0 (so that a run draws its levels)?
+    pub fn varies_between_runs(&self) -> bool {
+        self.run_to_run.values().any(|&s| s > 0.0)
+    }
+
+    /// The axis as one power-on with draw `z` sees it: each listed term at level
+    /// `L exp(s z - s^2)` (docs/model.md §2.3), the spreads dropped; the others unchanged.
+    pub fn at_run_draw(&self, z: f64) -> AxisModel {
+        let mut out = self.clone();
+        out.run_to_run.clear();
+        for (&effect, &s) in &self.run_to_run {
+            if s == 0.0 {
+                continue;
+            }
+            let Some(term) = self.term(effect) else {
+                continue;
+            };
+            let Some((_, level)) = term.level() else {
+                continue;
+            };
+            let scaled = term
+                .with_level(level * crate::run_to_run::level_factor(s, z))
+                .expect("a positive finite multiple of a valid level is valid");
+            out.set_term(scaled);
+        }
+        out
     }
 
     /// The terms present with their parameters, in `Effect` order.
@@ -218,6 +291,46 @@ impl SensorModel {
             }
         }
         out
+    }
+}
+
+impl SensorModel {
+    /// The run-to-run mixture of the model as a product Gauss-Hermite rule
+    /// ([`crate::run_to_run::gauss_hermite_normal`]): (weight, the model at one node's draws,
+    /// spreads dropped), the weights summing to 1, so that E f(levels of a run) = sum w f(model at
+    /// node) for any law f of the levels (docs/model.md §2.3). One dimension per axis with a
+    /// spread above 0 (its own z); n nodes per dimension with n^d <=
+    /// [`crate::run_to_run::QUADRATURE_BUDGET`] (20 at most, 2 at least). Empty when no axis
+    /// varies between runs.
+    pub fn run_to_run_quadrature(&self) -> Vec<(f64, SensorModel)> {
+        use crate::run_to_run::{gauss_hermite_normal, QUADRATURE_BUDGET};
+        let axes: Vec<(Sensor, usize)> = Sensor::ALL
+            .into_iter()
+            .flat_map(|s| (0..3).map(move |a| (s, a)))
+            .filter(|&(s, a)| self.axis(s, a).varies_between_runs())
+            .collect();
+        if axes.is_empty() {
+            return Vec::new();
+        }
+        let d = axes.len() as u32;
+        let mut n = 20usize;
+        while n > 2 && n.pow(d) > QUADRATURE_BUDGET {
+            n -= 1;
+        }
+        let rule = gauss_hermite_normal(n);
+        (0..n.pow(d))
+            .map(|mut index| {
+                let mut m = self.clone();
+                let mut w = 1.0;
+                for &(s, a) in &axes {
+                    let (z, wi) = rule[index % n];
+                    index /= n;
+                    w *= wi;
+                    *m.axis_mut(s, a) = self.axis(s, a).at_run_draw(z);
+                }
+                (w, m)
+            })
+            .collect()
     }
 }
 

@@ -57,6 +57,15 @@ impl ChannelErrors {
     fn new(model: &SensorModel, channel: Channel, dt_s: f64, seed: u64, run: u64) -> ChannelErrors {
         let (sensor, axis_index) = (channel.sensor(), channel.axis());
         let axis = model.axis(sensor, axis_index);
+        // This power-on's levels (docs/model.md §2.3): one draw per run and axis from the
+        // channel's run-to-run stream, which no other draw uses; none without a spread.
+        let drawn;
+        let axis = if axis.varies_between_runs() {
+            drawn = axis.at_run_draw(crate::run_to_run::run_draw(seed, run, channel.index()));
+            &drawn
+        } else {
+            axis
+        };
         // The raw processes run at the filter's internal interval.
         let output_filter = axis.get::<OutputFilter>();
         let filter = output_filter.map(|f| FilterState::new(f, dt_s));

@@ -232,7 +232,69 @@ fn convert_axis(
             }
         }
     }
+    let (spreads, from) = match (&raw.run_to_run, &all.run_to_run) {
+        (Some(s), _) => (s, axis_name),
+        (None, Some(s)) => (s, "all"),
+        (None, None) => return Ok(m),
+    };
+    for (name, value) in spreads {
+        let key = format!("{}.{from}.run_to_run.{name}", sensor.name());
+        let span = Some(value.span());
+        let err = |expected: String, found: String| {
+            ctx.invalid_in_span(&key, span.clone(), expected, found)
+        };
+        let Some(effect) = Effect::from_name(name) else {
+            return Err(err(
+                "the name of a term of the axis with a level (such as rate_random_walk)".into(),
+                format!("`{name}`, not an effect"),
+            ));
+        };
+        let spread = read_spread(value.get_ref()).map_err(|found| {
+            err(
+                format!(
+                    "a spread from 0 to {} (the sd of the level's natural log between power-ons): a number, or a string such as \"30 %\"",
+                    crate::run_to_run::MAX_SPREAD
+                ),
+                found,
+            )
+        })?;
+        m.set_run_to_run(effect, spread).map_err(|e| {
+            let expected = match e.expected {
+                "a term the axis has" => format!(
+                    "a term the axis has (`{}.{axis_name}` has no `{name}`)",
+                    sensor.name()
+                ),
+                other => other.to_string(),
+            };
+            err(expected, value.get_ref().to_string())
+        })?;
+    }
     Ok(m)
+}
+
+/// A run-to-run spread as written: a number (0.3), or a string with a per-cent sign ("30 %") or
+/// without ("0.3"); the text found when it is neither or outside 0 ..= `MAX_SPREAD`.
+fn read_spread(value: &toml::Value) -> Result<f64, String> {
+    let v = match value {
+        toml::Value::Float(f) => *f,
+        toml::Value::Integer(i) => *i as f64,
+        toml::Value::String(t) => {
+            let t = t.trim();
+            let (number, scale) = match t.strip_suffix('%') {
+                Some(n) => (n.trim(), 0.01),
+                None => (t, 1.0),
+            };
+            number
+                .parse::<f64>()
+                .map(|v| v * scale)
+                .map_err(|_| value.to_string())?
+        }
+        _ => return Err(value.to_string()),
+    };
+    if !(0.0..=crate::run_to_run::MAX_SPREAD).contains(&v) {
+        return Err(value.to_string());
+    }
+    Ok(v)
 }
 
 pub(crate) fn signal_of(sensor: Sensor) -> Signal {

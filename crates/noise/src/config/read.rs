@@ -27,8 +27,19 @@ impl Ctx<'_> {
         expected: impl Into<String>,
         found: impl Into<String>,
     ) -> ConfigError {
-        let line = at.map(|t| {
-            let start = t.span().start.min(self.source.len());
+        self.invalid_in_span(key, at.map(|t| t.span()), expected, found)
+    }
+
+    /// An error about `key`, at the line of the byte range `span` of the file when known.
+    pub(crate) fn invalid_in_span(
+        &self,
+        key: &str,
+        span: Option<std::ops::Range<usize>>,
+        expected: impl Into<String>,
+        found: impl Into<String>,
+    ) -> ConfigError {
+        let line = span.map(|span| {
+            let start = span.start.min(self.source.len());
             1 + self.source.as_bytes()[..start]
                 .iter()
                 .filter(|&&b| b == b'\n')

@@ -8,6 +8,7 @@ use crate::terms::bias_instability::BiasInstability;
 use crate::terms::outliers::Outliers;
 use crate::terms::output_filter::{FilterKind, OutputFilter};
 use crate::terms::warmup_transient::WarmupTransient;
+use crate::terms::Effect;
 
 const BASIC: &str = r#"
 name = "test"
@@ -641,4 +642,122 @@ fn power_law_reads_writes_and_refuses() {
     assert!(e.contains("accel.x.power_law.per_decade"), "{e}");
     let e = axis("power_law = { alpha = -1.5, level = \"20 ug\", slope = 1 }");
     assert!(e.contains("slope") && e.contains("line 3"), "{e}");
+}
+
+const SPREAD: &str = r#"
+name = "spread"
+[gyro.all]
+white_noise = "0.2 deg/sqrt(h)"
+bias_instability = { value = "7 deg/h", convention = "ieee" }
+[gyro.z]
+white_noise = "0.2 deg/sqrt(h)"
+bias_instability = { value = "7 deg/h", convention = "ieee" }
+rate_random_walk = "3 deg/h/sqrt(h)"
+run_to_run = { rate_random_walk = 0.4, bias_instability = "30 %" }
+[accel.all]
+white_noise = "60 ug/sqrt(Hz)"
+run_to_run = { white_noise = 0 }
+"#;
+
+/// `run_to_run` (docs/model.md §2.3): read per axis (or from `all`), in numbers or per cent,
+/// written back exactly and in a config's style, and dropped with its term.
+#[test]
+fn run_to_run_reads_writes_and_round_trips() {
+    let m = SensorModel::from_toml_str(SPREAD, "spread.toml").unwrap();
+    let gz = &m.gyro.axes[2];
+    assert_eq!(
+        gz.run_to_run()
+            .iter()
+            .map(|(e, &s)| (*e, s))
+            .collect::<Vec<_>>(),
+        vec![
+            (Effect::BiasInstability, 0.3),
+            (Effect::RateRandomWalk, 0.4)
+        ]
+    );
+    assert!(gz.varies_between_runs());
+    assert!(m.gyro.axes[0].run_to_run().is_empty());
+    assert_eq!(
+        m.accel.axes[1].run_to_run().get(&Effect::WhiteNoise),
+        Some(&0.0)
+    );
+    assert!(!m.accel.axes[1].varies_between_runs());
+    let back = SensorModel::from_toml_str(&m.to_toml_string(), "w").unwrap();
+    assert_eq!(back, m);
+    let styled = m.to_toml_string_styled(&UnitStyle::from_config_text(SPREAD));
+    assert!(
+        styled.contains("run_to_run = { bias_instability = 0.3, rate_random_walk = 0.4 }"),
+        "{styled}"
+    );
+    assert_eq!(
+        SensorModel::from_toml_str(&styled, "s").unwrap().gyro.axes[2].run_to_run(),
+        gz.run_to_run()
+    );
+    let mut no_rrw = gz.clone();
+    no_rrw.remove(Effect::RateRandomWalk);
+    assert_eq!(no_rrw.run_to_run().len(), 1);
+    // A draw scales the listed levels by exp(s z - s^2) and drops the spreads.
+    let z = 1.3;
+    let drawn = gz.at_run_draw(z);
+    assert!(drawn.run_to_run().is_empty());
+    let level = |a: &AxisModel, e: Effect| a.term(e).unwrap().level().unwrap().1;
+    for (e, s) in [
+        (Effect::RateRandomWalk, 0.4),
+        (Effect::BiasInstability, 0.3),
+    ] {
+        let want = level(gz, e) * (s * z - s * s).exp();
+        assert!((level(&drawn, e) / want - 1.0).abs() < 1e-12, "{e:?}");
+    }
+    assert_eq!(
+        level(&drawn, Effect::WhiteNoise),
+        level(gz, Effect::WhiteNoise)
+    );
+}
+
+/// Bad spreads name the file, the line, the key and what was expected.
+#[test]
+fn bad_run_to_run_names_file_line_and_key() {
+    let axis = |spread: &str| {
+        err(&format!(
+            "name = \"b\"\n[gyro.x]\nwhite_noise = \"1 deg/sqrt(h)\"\nrate_ramp = \"1 deg/h/h\"\nrun_to_run = {{ {spread} }}\n"
+        ))
+    };
+    let e = axis("white_noize = 0.3");
+    assert!(
+        e.starts_with("bad.toml:5: key `gyro.x.run_to_run.white_noize`"),
+        "{e}"
+    );
+    assert!(e.contains("not an effect"), "{e}");
+    let e = axis("rate_random_walk = 0.3");
+    assert!(
+        e.starts_with("bad.toml:5: key `gyro.x.run_to_run.rate_random_walk`"),
+        "{e}"
+    );
+    assert!(e.contains("has no `rate_random_walk`"), "{e}");
+    for bad in [
+        "white_noise = -0.1",
+        "white_noise = 2.5",
+        "white_noise = \"250 %\"",
+        "white_noise = \"lots\"",
+        "white_noise = true",
+    ] {
+        let e = axis(bad);
+        assert!(
+            e.starts_with("bad.toml:5: key `gyro.x.run_to_run.white_noise`"),
+            "{bad}: {e}"
+        );
+        assert!(e.contains("a spread from 0 to 2"), "{bad}: {e}");
+    }
+    assert!(SensorModel::from_toml_str(
+        "name = \"b\"\n[gyro.x]\nwhite_noise = \"1 deg/sqrt(h)\"\nrun_to_run = { white_noise = \"200 %\" }\n",
+        "ok.toml"
+    )
+    .is_ok());
+    // A term without a level (the output filter) has no spread.
+    let e = err("name = \"b\"\n[gyro.x]\noutput_filter = { kind = \"moving_average\", taps = 4 }\nrun_to_run = { output_filter = 0.1 }\n");
+    assert!(
+        e.starts_with("bad.toml:4: key `gyro.x.run_to_run.output_filter`"),
+        "{e}"
+    );
+    assert!(e.contains("a term with a level"), "{e}");
 }

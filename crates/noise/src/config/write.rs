@@ -139,6 +139,15 @@ fn write_axis_with(
             let _ = writeln!(s, "{} = {value}", effect.name());
         }
     }
+    // The run-to-run spreads (docs/model.md §2.3), plain numbers, in `Effect` order.
+    if !a.run_to_run().is_empty() {
+        let items: Vec<String> = a
+            .run_to_run()
+            .iter()
+            .map(|(e, &v)| format!("{} = {}", e.name(), number(v)))
+            .collect();
+        let _ = writeln!(s, "run_to_run = {{ {} }}", items.join(", "));
+    }
 }
 
 /// Whether the bias instability is written in the `allan_minimum` convention.

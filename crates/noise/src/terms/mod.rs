@@ -120,6 +120,11 @@ macro_rules! registry {
         #[serde(deny_unknown_fields)]
         pub(crate) struct RawAxis {
             $($file: Option<<$file::$ty as TermKind>::Raw>,)+
+            /// The run-to-run spreads of the axis' terms (docs/model.md §2.3): effect name to
+            /// a number or a string such as "30 %" (read by `config::convert`).
+            pub(crate) run_to_run: Option<
+                std::collections::BTreeMap<String, toml::Spanned<toml::Value>>,
+            >,
         }
 
         impl RawAxis {

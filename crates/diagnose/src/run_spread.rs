@@ -1,0 +1,374 @@
+//! Run-to-run variation estimated from several runs (docs/diagnose.md, "Runs that differ"; the
+//! model's side is docs/model.md §2.3): does a channel's slow wander change from one power-on to
+//! the next by more than the runs' own sampling allows, and by how much?
+//!
+//! Per channel with a slow group (the terms that shape drift at long horizons,
+//! `Effect::is_long_term`, that a static log shows and that have a level above 0; Gauss-Markov
+//! processes of 1 s and more):
+//! 1. **Per-run multiplier.** Each run's overlapping Allan variances a_ri on an octave grid are
+//!    fitted as rest_i + q_r slow_i, rest the channel's other terms held at the pooled fit and
+//!    slow the group's Allan variance at its pooled levels (IEEE 952 Annex C: independent terms
+//!    add), by weighted least squares with the weights of `bootstrap.rs`, w_i = nu_i / (2 A_i^2)
+//!    (NIST SP 1065 §5.2, nu Greenhall's EDF for the local slope): q_r = sum w slow (a - rest) /
+//!    sum w slow^2, held at 1e-2 or above; ln m_r = ln(q_r) / 2 is the log of run r's group level
+//!    relative to the pooled one.
+//! 2. **Statistic.** V = the sample variance of ln m_r over the R runs.
+//! 3. **Null.** V of R simulated runs of the same lengths from the pooled model with no spread,
+//!    `NULL_REPLICATES` times, the same estimator. To keep within the budget the null runs are
+//!    simulated at D = 8 times the sample interval (power-of-two decimation, about 10 Hz for a
+//!    100 Hz log) without output filters and without tones above the coarser Nyquist frequency,
+//!    and the grid starts at 8 coarse samples (0.64 s at 100 Hz): the Allan variance at tau is the
+//!    variance of differences of tau-averages, which the finer samples do not change beyond the
+//!    terms dropped (the filter acts at the shortest taus, the tones dropped add at most their
+//!    sampled Allan variance, which both estimators take from their own model), and the estimator
+//!    of each (the measured runs' and the null's) uses its own model's curves, so each is unbiased
+//!    for its own data. p_mc = (1 + #{V_null >= V}) / (B + 1) (Davison & Hinkley 1997, §4.2.5).
+//! 4. **Estimate and interval.** Under a spread s, ln m_r = s z_r - s^2 + e_r with e_r the
+//!    estimation error, so V ~ (s^2 + sigma_e^2) chi2_{R-1} / (R - 1) for Gaussian parts, and
+//!    sigma_e^2 is the null's mean V. s^2 = max(0, V - sigma_e^2) (method of moments, the
+//!    random-effects estimator of DerSimonian & Laird 1986, Controlled Clinical Trials 7, 177-188,
+//!    with the within-run variance from the null), and the 95 % interval inverts the chi-square
+//!    test over s: s^2 in [(R-1) V / chi2_{0.975} - sigma_e^2, (R-1) V / chi2_{0.025} - sigma_e^2],
+//!    clamped at 0. p_chi2 = P(chi2_{R-1} >= (R-1) V / sigma_e^2) at s = 0.
+//! 5. **Naming.** The spread is named (and written into the corrected model as `run_to_run` on
+//!    the group) when p_chi2 <= `NAMING_ALPHA`, the naming rule's false-alarm rate per channel
+//!    (about 1e-3 per clean 6-channel log, docs/diagnose.md step 4), and the measured V is above
+//!    every null replicate (p_mc at its floor): the same false-alarm rate as the other effects,
+//!    from this test's own null. The chi-square form's calibration against the null replicates is
+//!    reported (`null_over_chi2_90`: the share of null V beyond the scaled chi-square's 90 %
+//!    point, 0.10 when it holds).
+
+use crate::bootstrap::{edf_at, local_slope};
+use crate::input::LogInput;
+use crate::simulate::{adev_at, map_static_logs, LogJob, SimSetup};
+use noise::{AxisModel, Channel, Effect, ImuChannels, SensorModel};
+use serde::Serialize;
+use std::sync::atomic::AtomicBool;
+
+/// Null replicates (sets of R simulated runs).
+pub const NULL_REPLICATES: usize = 100;
+/// The naming rule's false-alarm rate per channel: ~1e-3 per clean 6-channel log.
+pub const NAMING_ALPHA: f64 = 1e-3 / 6.0;
+/// The smallest squared multiplier a run is given (ln m >= -2.3: a run whose group is too weak
+/// to show is held at a tenth of the pooled level rather than sent to minus infinity).
+const Q_MIN: f64 = 1e-2;
+/// The first run index of the null's simulated runs (apart from every other simulation of
+/// `diagnose`, whose runs count up from 0).
+const NULL_FIRST_RUN: u64 = 1 << 40;
+/// The shortest averaging factor of the grid, in coarse (null) samples.
+const M_MIN: usize = 8;
+
+/// The estimate of one channel (JSON `run_to_run[]`, docs/cli.md).
+#[derive(Clone, Debug, Serialize)]
+pub struct RunSpread {
+    pub channel: Channel,
+    /// The slow group's terms, whose levels move together between runs.
+    pub effects: Vec<&'static str>,
+    /// ln m_r per run, in input order.
+    pub ln_multipliers: Vec<f64>,
+    /// V, the sample variance of the ln m_r.
+    pub variance: f64,
+    /// sigma_e^2: the null's mean V (the runs' sampling part).
+    pub null_variance: f64,
+    pub null_replicates: usize,
+    /// The share of null V beyond the scaled chi-square's 90 % point (0.10 if it holds).
+    pub null_over_chi2_90: f64,
+    /// Monte Carlo p-value of V against the null.
+    pub p_value: f64,
+    /// p of the scaled chi-square at s = 0.
+    pub p_chi2: f64,
+    /// The estimated spread s (sd of ln level between power-ons) and its 95 % interval.
+    pub spread: f64,
+    pub interval: [f64; 2],
+    /// Passed the naming rule (and was written into the corrected model).
+    pub named: bool,
+}
+
+/// The slow group of an axis: long-term terms a static log shows, with a level above 0; a
+/// Gauss-Markov process only with a correlation time of 1 s or more; the flicker bias
+/// instability only when the axis has no other: its plateau is measured at the middle averaging
+/// times, far more precisely per run than the wander beyond them, and one multiplier of both
+/// would follow the plateau and miss the wander a drift integrates (on the ADIS16405 runs, gz's
+/// flicker level varies by about 0.2 in ln between runs where its random walk's heading at 1 h
+/// varies tenfold).
+pub fn slow_group(axis: &AxisModel) -> Vec<Effect> {
+    let all = long_terms(axis);
+    if all.iter().any(|&e| e != Effect::BiasInstability) {
+        all.into_iter()
+            .filter(|&e| e != Effect::BiasInstability)
+            .collect()
+    } else {
+        all
+    }
+}
+
+/// The long-term terms of [`slow_group`] before the flicker rule.
+fn long_terms(axis: &AxisModel) -> Vec<Effect> {
+    axis.terms()
+        .filter(|t| {
+            let e = t.effect();
+            let level = t.level().map_or(0.0, |(_, v)| v.abs());
+            let slow_enough = t
+                .as_error_term()
+                .shape()
+                .iter()
+                .find(|(name, _)| *name == "tau_s")
+                .is_none_or(|&(_, tau)| tau >= 1.0);
+            e.is_long_term() && e.shows_in_static_log() && level > 0.0 && slow_enough
+        })
+        .map(|t| t.effect())
+        .collect()
+}
+
+/// The estimator's fixed parts on one grid: per tau the model's total, slow-group and rest Allan
+/// variances, and the local slope.
+struct GroupFit {
+    ms: Vec<usize>,
+    total: Vec<f64>,
+    slow: Vec<f64>,
+    rest: Vec<f64>,
+    mu: Vec<f64>,
+}
+
+impl GroupFit {
+    fn new(axis: &AxisModel, group: &[Effect], dt: f64, ms: Vec<usize>) -> GroupFit {
+        let taus: Vec<f64> = ms.iter().map(|&m| m as f64 * dt).collect();
+        let total = axis.allan_variance_sampled_many(&taus, dt);
+        let mut only = AxisModel::default();
+        if let Some(f) = axis.term(Effect::OutputFilter) {
+            only.set_term(f.clone());
+        }
+        for &e in group {
+            if let Some(t) = axis.term(e) {
+                only.set_term(t.clone());
+            }
+        }
+        let slow = only.allan_variance_sampled_many(&taus, dt);
+        let rest = total.iter().zip(&slow).map(|(t, s)| t - s).collect();
+        let mu = (0..taus.len())
+            .map(|i| local_slope(&taus, &total, i))
+            .collect();
+        GroupFit {
+            ms,
+            total,
+            slow,
+            rest,
+            mu,
+        }
+    }
+
+    /// ln m of one run of `n` samples with Allan variances `avar` (on the first `avar.len()` taus).
+    fn ln_multiplier(&self, avar: &[f64], n: usize) -> f64 {
+        let (mut num, mut den) = (0.0, 0.0);
+        for (i, &a) in avar.iter().enumerate() {
+            if !(a.is_finite() && self.total[i] > 0.0) {
+                continue;
+            }
+            let w = edf_at(self.mu[i], self.ms[i], n) / (2.0 * self.total[i] * self.total[i]);
+            num += w * self.slow[i] * (a - self.rest[i]);
+            den += w * self.slow[i] * self.slow[i];
+        }
+        if den > 0.0 {
+            0.5 * (num / den).max(Q_MIN).ln()
+        } else {
+            f64::NAN
+        }
+    }
+}
+
+/// Sample variance.
+fn sample_variance(x: &[f64]) -> f64 {
+    let n = x.len() as f64;
+    let mean = x.iter().sum::<f64>() / n;
+    x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)
+}
+
+/// The null's model: `model` without output filters and without tones the coarse interval
+/// cannot carry (a resonance or sinusoid above its Nyquist frequency).
+fn null_model(model: &SensorModel, dt_null: f64) -> SensorModel {
+    let mut m = model.clone();
+    for ch in Channel::ALL {
+        let axis = m.axis_mut(ch.sensor(), ch.axis());
+        axis.remove(Effect::OutputFilter);
+        axis.clear_run_to_run();
+        for e in [Effect::Sinusoidal, Effect::Resonance] {
+            let fast = axis.term(e).is_some_and(|t| {
+                t.as_error_term()
+                    .shape()
+                    .iter()
+                    .any(|(name, f)| *name == "frequency_hz" && *f >= 0.4 / dt_null)
+            });
+            if fast {
+                axis.remove(e);
+            }
+        }
+    }
+    if noise::ImuErrors::check_rate(&m, dt_null).is_err() {
+        for ch in Channel::ALL {
+            let axis = m.axis_mut(ch.sensor(), ch.axis());
+            axis.remove(Effect::Sinusoidal);
+            axis.remove(Effect::Resonance);
+        }
+    }
+    m
+}
+
+/// The run-to-run estimate of every channel of `model` with a slow group, from the runs `logs`
+/// (two or more, one sample interval). `seed` seeds the null's simulated runs. None when stopped.
+pub fn estimate(
+    model: &SensorModel,
+    logs: &[LogInput],
+    tau_min_s: f64,
+    seed: u64,
+    stop: Option<&AtomicBool>,
+) -> Option<Vec<RunSpread>> {
+    if logs.len() < 2 {
+        return Some(Vec::new());
+    }
+    let dt = logs[0].dt_s;
+    let decimation = 8usize;
+    let dt_null = dt * decimation as f64;
+    let samples: Vec<usize> = logs
+        .iter()
+        .map(|l| {
+            l.channels
+                .0
+                .iter()
+                .flatten()
+                .map(|c| c.len())
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    let n_max = *samples.iter().max()?;
+    // Coarse factors: M_MIN, 2 M_MIN, ... up to a quarter of the longest coarse run.
+    let coarse: Vec<usize> = std::iter::successors(Some(M_MIN), |m| m.checked_mul(2))
+        .take_while(|&m| m <= n_max / decimation / 4)
+        .filter(|&m| m as f64 * dt_null >= tau_min_s * (1.0 - 1e-9))
+        .collect();
+    if coarse.is_empty() {
+        return Some(Vec::new());
+    }
+    let fine: Vec<usize> = coarse.iter().map(|&m| m * decimation).collect();
+    let nulls = null_model(model, dt_null);
+    let channels: Vec<(Channel, Vec<Effect>)> = Channel::ALL
+        .into_iter()
+        .filter(|&c| logs.iter().all(|l| l.channels[c].is_some()))
+        .map(|c| (c, slow_group(model.axis(c.sensor(), c.axis()))))
+        .filter(|(c, g)| {
+            !g.is_empty() && slow_group(nulls.axis(c.sensor(), c.axis())).len() == g.len()
+        })
+        .collect();
+    if channels.is_empty() {
+        return Some(Vec::new());
+    }
+    let held = |n: usize, ms: &[usize]| ms.iter().filter(|&&m| m <= n / 4).count();
+    // The measured runs.
+    let measured: Vec<Vec<f64>> = channels
+        .iter()
+        .map(|(c, g)| {
+            let fit = GroupFit::new(model.axis(c.sensor(), c.axis()), g, dt, fine.clone());
+            logs.iter()
+                .zip(&samples)
+                .map(|(l, &n)| {
+                    let x = l.channels[*c].unwrap_or(&[]);
+                    let ms = &fine[..held(n, &fine)];
+                    let avar: Vec<f64> = adev_at(x, dt, ms).iter().map(|a| a * a).collect();
+                    fit.ln_multiplier(&avar, n)
+                })
+                .collect()
+        })
+        .collect();
+    // The null: NULL_REPLICATES sets of R runs at the coarse interval.
+    let active = ImuChannels::from_fn(|c| channels.iter().any(|(k, _)| *k == c));
+    let runs = logs.len();
+    let jobs: Vec<LogJob> = (0..NULL_REPLICATES * runs)
+        .map(|j| LogJob {
+            model: &nulls,
+            setup: SimSetup::plain(dt_null, samples[j % runs] / decimation, active)
+                .stopped_by(stop),
+            seed,
+            run: NULL_FIRST_RUN + j as u64,
+        })
+        .collect();
+    let null_fits: Vec<GroupFit> = channels
+        .iter()
+        .map(|(c, g)| GroupFit::new(nulls.axis(c.sensor(), c.axis()), g, dt_null, coarse.clone()))
+        .collect();
+    let per_job: Vec<Vec<f64>> = map_static_logs(&jobs, |j, log| {
+        let n = samples[j % runs] / decimation;
+        channels
+            .iter()
+            .zip(&null_fits)
+            .map(|((c, _), fit)| {
+                let ms = &coarse[..held(n, &coarse)];
+                let avar: Vec<f64> = adev_at(&log[*c], dt_null, ms)
+                    .iter()
+                    .map(|a| a * a)
+                    .collect();
+                fit.ln_multiplier(&avar, n)
+            })
+            .collect()
+    })?;
+    let r = runs as f64;
+    let out = channels
+        .iter()
+        .enumerate()
+        .map(|(k, (c, g))| {
+            let v = sample_variance(&measured[k]);
+            let null_v: Vec<f64> = (0..NULL_REPLICATES)
+                .map(|b| {
+                    let x: Vec<f64> = (0..runs).map(|t| per_job[b * runs + t][k]).collect();
+                    sample_variance(&x)
+                })
+                .collect();
+            let sigma2 = null_v.iter().sum::<f64>() / NULL_REPLICATES as f64;
+            let chi2_90 = allan::chi2::chi2_ppf(0.90, r - 1.0) / (r - 1.0) * sigma2;
+            let over =
+                null_v.iter().filter(|&&x| x > chi2_90).count() as f64 / NULL_REPLICATES as f64;
+            let p_value = (1 + null_v.iter().filter(|&&x| x >= v).count()) as f64
+                / (NULL_REPLICATES + 1) as f64;
+            let p_chi2 = if sigma2 > 0.0 && v.is_finite() {
+                1.0 - allan::chi2::chi2_cdf((r - 1.0) * v / sigma2, r - 1.0)
+            } else {
+                f64::NAN
+            };
+            let s2 = (v - sigma2).max(0.0);
+            let bound = |p: f64| {
+                ((r - 1.0) * v / allan::chi2::chi2_ppf(p, r - 1.0) - sigma2)
+                    .max(0.0)
+                    .sqrt()
+            };
+            let floor = 1.0 / (NULL_REPLICATES + 1) as f64;
+            RunSpread {
+                channel: *c,
+                effects: g.iter().map(|e| e.name()).collect(),
+                ln_multipliers: measured[k].clone(),
+                variance: v,
+                null_variance: sigma2,
+                null_replicates: NULL_REPLICATES,
+                null_over_chi2_90: over,
+                p_value,
+                p_chi2,
+                spread: s2.sqrt().min(noise::run_to_run::MAX_SPREAD),
+                interval: [bound(0.975), bound(0.025)],
+                named: p_chi2 <= NAMING_ALPHA && p_value <= floor * (1.0 + 1e-9),
+            }
+        })
+        .collect();
+    Some(out)
+}
+
+/// `model` with each named spread written on its group (`run_to_run`); the others unchanged.
+pub fn with_named_spreads(model: &SensorModel, spreads: &[RunSpread]) -> SensorModel {
+    let mut out = model.clone();
+    for s in spreads.iter().filter(|s| s.named) {
+        let axis = out.axis_mut(s.channel.sensor(), s.channel.axis());
+        for name in &s.effects {
+            if let Some(e) = Effect::from_name(name) {
+                let _ = axis.set_run_to_run(e, s.spread);
+            }
+        }
+    }
+    out
+}
