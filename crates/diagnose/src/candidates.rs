@@ -229,10 +229,23 @@ fn gauss_markov_signature(shape: f64, tau_s: f64, dt_s: f64, fa: Option<&Filtere
 const POWER_LAW_ALPHAS_PER_UNIT: f64 = 40.0;
 
 /// A power law's signature at slope `alpha`, level 1 at tau = 1 s on the default band (a new
-/// term's; `PowerLaw::with_alpha`), behind the channel's filter where it has one; NaN for a slope
-/// the noise crate refuses.
+/// term's; `PowerLaw::with_alpha`), behind the channel's filter where it has one.
 fn power_law_signature(alpha: f64, tau_s: f64, dt_s: f64, fa: Option<&FilteredAllan>) -> f64 {
-    let Ok(p) = PowerLaw::with_alpha(alpha, 1.0, 1.0) else {
+    power_law_like(None, alpha, tau_s, dt_s, fa)
+}
+
+/// A power law at slope `alpha` and level 1 with the conventions (reference time, band) of
+/// `own`, the model's term, or a new term's (tau = 1 s, default band) without one: its Allan
+/// variance at `tau_s`, behind the channel's filter where it has one. NaN for a slope the noise
+/// crate refuses.
+pub fn power_law_like(
+    own: Option<&PowerLaw>,
+    alpha: f64,
+    tau_s: f64,
+    dt_s: f64,
+    fa: Option<&FilteredAllan>,
+) -> f64 {
+    let Ok(p) = power_law_at(own, alpha, 1.0) else {
         return f64::NAN;
     };
     match fa {
@@ -240,6 +253,26 @@ fn power_law_signature(alpha: f64, tau_s: f64, dt_s: f64, fa: Option<&FilteredAl
             .allan_variance_filtered(tau_s, dt_s, fa)
             .unwrap_or(f64::NAN),
         None => p.avar_at(tau_s, Some(dt_s)),
+    }
+}
+
+/// A power law of slope `alpha` and `level` with `own`'s reference time and band, or a new
+/// term's (tau = 1 s, the default band).
+pub fn power_law_at(
+    own: Option<&PowerLaw>,
+    alpha: f64,
+    level: f64,
+) -> Result<PowerLaw, ModelError> {
+    match own {
+        Some(o) => PowerLaw::new(
+            alpha,
+            level,
+            o.tau_ref_s(),
+            o.tau_min_s(),
+            o.tau_max_s(),
+            o.per_decade(),
+        ),
+        None => PowerLaw::with_alpha(alpha, level, 1.0),
     }
 }
 

@@ -201,11 +201,11 @@ pub(crate) fn merge_refinements(
     withdrawn
 }
 
-/// A refinement keeps a shape where it is (a Gauss-Markov time, a sinusoid's frequency, a power
-/// law's slope: only the level is refitted), so its interval there is a point; the interval the
-/// shape was found with in the earlier round is the one that says how well it is known, and it
-/// stays with the finding. (Before, a power law's slope named in round 1 with [-1.70, -1.33] was
-/// reported as [-1.5, -1.5] after a later round refitted its level.)
+/// A refinement that keeps a shape where it is (a Gauss-Markov time, a sinusoid's frequency: only
+/// the level is refitted; a power law's slope is searched again, `trials::refit_power_law`) has a
+/// point for its interval there; the interval the shape was found with in the earlier round is the
+/// one that says how well it is known, and it stays with the finding. (Before, a shape named in
+/// round 1 with an interval was reported as [v, v] after a later round refitted its level.)
 fn keep_found_intervals(first: &FoundEffect, last: &mut FoundEffect) {
     for (key, &v) in last.parameters.iter() {
         let (Some(lo), Some(hi)) = (last.parameters_lo.get(key), last.parameters_hi.get(key))

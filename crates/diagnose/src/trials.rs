@@ -1,14 +1,14 @@
 //! Step 4: every candidate effect fitted to one channel's gap.
 
 use crate::candidates::{
-    candidates, filter_grid, filtered_allan, level_term, named, resonance_grid,
-    resonance_refinement, resonance_signature, shape_grid, shape_search_penalty,
+    candidates, filter_grid, filtered_allan, level_term, named, power_law_at, power_law_like,
+    resonance_grid, resonance_refinement, resonance_signature, shape_grid, shape_search_penalty,
     unit_family_signature, unit_signature, white_signature,
 };
 use crate::fit::predicted_ln_adev;
 use crate::fit::{
-    aic, bic, birge_scale, fit_family, fit_linear, linear_interval, FitData, LinearFit, CHI2_1_95,
-    CHI2_2_95,
+    aic, bic, birge_scale, fit_family, fit_linear, linear_interval, FamilyFit, FitData, LinearFit,
+    CHI2_1_95, CHI2_2_95,
 };
 use crate::gap::{Band, Curve, Gap};
 use crate::model_terms::{
@@ -125,6 +125,10 @@ pub(crate) fn trials(input: &ChannelFit) -> Vec<Trial> {
             continue;
         }
         let current = fitted_term(input.model, ch, effect);
+        if let Some(Term::PowerLaw(own)) = current {
+            out.extend(refit_power_law(input, &data, own));
+            continue;
+        }
         let fitted = match effect {
             Effect::GaussMarkov | Effect::Sinusoidal | Effect::PowerLaw => {
                 fit_shaped(input, &data, effect, current)
@@ -140,7 +144,8 @@ pub(crate) fn trials(input: &ChannelFit) -> Vec<Trial> {
     out
 }
 
-/// A Gauss-Markov process, a sinusoid or a power law. A term the model has keeps its shape (a wrong level); an
+/// A Gauss-Markov process, a sinusoid or a new power law (the model's own is
+/// [`refit_power_law`]'s). A term the model has keeps its shape (a wrong level); an
 /// absent one is searched over shapes. A new sinusoid takes its frequency from a line of the log's
 /// spectrum where the spectrum resolves one (`sinusoid_shapes`).
 fn fit_shaped(
@@ -200,6 +205,106 @@ fn fit_shaped(
         shape: ShapeInterval::Scalar(shape_lo, shape_hi),
         signature: sigs[j].clone(),
         penalty,
+    })
+}
+
+/// One slope's fit of [`refit_power_law`]: its signature f, the band's move c0 (f - f_old), the
+/// moved band (ln adev centre, mean Allan variance) and the level fitted there.
+struct SlopeFit {
+    f: Vec<f64>,
+    shift: Vec<f64>,
+    ln: Vec<f64>,
+    avar: Vec<f64>,
+    fit: LinearFit,
+}
+
+/// A power law the model has: its slope searched again over the grid (its reference time and band
+/// kept), because the slope is what the term says about the sensor and it moves as other terms
+/// join the channel (a Gauss-Markov time or a sinusoid's frequency is kept). A new slope changes the
+/// band by c f_new - c0 f_old, not by (c - c0) f: each slope's level is fitted to the band moved by
+/// c0 (f_new - f_old), as the joint re-level moves it for the other terms (`relevel::moved`), and
+/// that move is part of the change the trial predicts. Its signature stays the term's own, at its
+/// slope (what the re-level, which keeps shapes, moves).
+fn refit_power_law(input: &ChannelFit, data: &FitData, own: &PowerLaw) -> Option<Trial> {
+    let (tau, dt_s) = (&input.measured.tau_s, input.dt_s);
+    let m = tau.len();
+    let fa = filtered_allan(input.model, input.channel, dt_s);
+    let signature = |alpha: f64| -> Vec<f64> {
+        tau.iter()
+            .map(|&t| power_law_like(Some(own), alpha, t, dt_s, fa.as_ref()))
+            .collect()
+    };
+    let c0 = own.level() * own.level();
+    let f_old = signature(own.alpha());
+    let shapes = shape_grid(Effect::PowerLaw, tau[0], tau[m - 1], dt_s);
+    let penalty = shape_search_penalty(shapes.len());
+    // Per slope: its signature, the band moved to it at the old level, and the fit there.
+    let per_shape: Vec<SlopeFit> = shapes
+        .iter()
+        .map(|&alpha| {
+            let f = signature(alpha);
+            let shift: Vec<f64> = f.iter().zip(&f_old).map(|(n, o)| c0 * (n - o)).collect();
+            let ln: Vec<f64> = (0..m)
+                .map(|i| predicted_ln_adev(data.ln_band[i], data.avar_band[i], shift[i]))
+                .collect();
+            let avar: Vec<f64> = (0..m).map(|i| data.avar_band[i] + shift[i]).collect();
+            let moved = FitData {
+                ln_band: &ln,
+                avar_band: &avar,
+                ..data.clone()
+            };
+            let fit = fit_linear(&moved, &f, c0);
+            SlopeFit {
+                f,
+                shift,
+                ln,
+                avar,
+                fit,
+            }
+        })
+        .collect();
+    let jb = (0..shapes.len())
+        .min_by(|&a, &b| per_shape[a].fit.chi2.total_cmp(&per_shape[b].fit.chi2))?;
+    let SlopeFit {
+        f,
+        shift,
+        ln,
+        avar,
+        fit,
+    } = &per_shape[jb];
+    let ff = FamilyFit {
+        shape: shapes[jb],
+        fit: *fit,
+        shapes: shapes.clone(),
+        chi2_by_shape: per_shape.iter().map(|p| p.fit.chi2).collect(),
+    };
+    let k = Effect::PowerLaw.free_parameters();
+    let scale = birge_scale(fit.chi2, k, m);
+    let moved = FitData {
+        ln_band: ln,
+        avar_band: avar,
+        ..data.clone()
+    };
+    let (c_lo, c_hi) = linear_interval(&moved, f, c0, fit, CHI2_1_95 * scale * scale);
+    let term: Term = power_law_at(Some(own), ff.shape, fit.c.sqrt()).ok()?.into();
+    let (s_lo, s_hi) = ff.shape_interval(CHI2_1_95 * scale * scale);
+    let shape = ShapeInterval::Scalar(s_lo, s_hi);
+    let (lo, hi) = bounds(&term.parameters(), (c_lo, c_hi), &shape);
+    Some(Trial {
+        effect: Effect::PowerLaw,
+        term,
+        white_n: None,
+        lo,
+        hi,
+        model: Some(Term::PowerLaw(own.clone()).parameters()),
+        bic: bic(fit.chi2, k, m) + penalty,
+        aic: aic(fit.chi2, k) + penalty,
+        delta_avar: f
+            .iter()
+            .zip(shift)
+            .map(|(v, s)| (fit.c - c0) * v + s)
+            .collect(),
+        signature: f_old,
     })
 }
 
