@@ -51,22 +51,16 @@ impl Flicker {
         per_decade: u32,
     ) -> Result<Flicker, ModelError> {
         check("flicker B", b, false)?;
-        check("flicker band start", tau_min_s, true)?;
-        check("flicker band end", tau_max_s, true)?;
-        if tau_max_s <= tau_min_s {
-            return Err(ModelError {
-                what: "flicker band end",
-                expected: "a time longer than the band start",
-                found: tau_max_s,
-            });
-        }
-        if per_decade == 0 || per_decade > 20 {
-            return Err(ModelError {
-                what: "flicker per_decade",
-                expected: "1 to 20 components per decade",
-                found: f64::from(per_decade),
-            });
-        }
+        check_band(
+            [
+                "flicker band start",
+                "flicker band end",
+                "flicker per_decade",
+            ],
+            tau_min_s,
+            tau_max_s,
+            per_decade,
+        )?;
         Ok(Flicker {
             b,
             tau_min_s,
@@ -150,6 +144,34 @@ impl Flicker {
             .map(|&(tc, s)| cf::gauss_markov_kfold_variance(s, tc, t_s, k))
             .sum()
     }
+}
+
+/// The checks every band of log-spaced Gauss-Markov components shares (flicker, the power law):
+/// start and end finite and > 0, the end after the start, 1 to 20 components per decade.
+/// `names`: what the start, the end and the density are called in messages.
+pub(super) fn check_band(
+    names: [&'static str; 3],
+    tau_min_s: f64,
+    tau_max_s: f64,
+    per_decade: u32,
+) -> Result<(), ModelError> {
+    check(names[0], tau_min_s, true)?;
+    check(names[1], tau_max_s, true)?;
+    if tau_max_s <= tau_min_s {
+        return Err(ModelError {
+            what: names[1],
+            expected: "a time longer than the band start",
+            found: tau_max_s,
+        });
+    }
+    if per_decade == 0 || per_decade > 20 {
+        return Err(ModelError {
+            what: names[2],
+            expected: "1 to 20 components per decade",
+            found: f64::from(per_decade),
+        });
+    }
+    Ok(())
 }
 
 /// Bias instability in one of its two models.

@@ -77,22 +77,16 @@ impl PowerLaw {
         }
         check("power-law level", level, false)?;
         check("power-law reference tau", tau_ref_s, true)?;
-        check("power-law band start", tau_min_s, true)?;
-        check("power-law band end", tau_max_s, true)?;
-        if tau_max_s <= tau_min_s {
-            return Err(ModelError {
-                what: "power-law band end",
-                expected: "a time longer than the band start",
-                found: tau_max_s,
-            });
-        }
-        if per_decade == 0 || per_decade > 20 {
-            return Err(ModelError {
-                what: "power-law per_decade",
-                expected: "1 to 20 components per decade",
-                found: f64::from(per_decade),
-            });
-        }
+        super::bias_instability::check_band(
+            [
+                "power-law band start",
+                "power-law band end",
+                "power-law per_decade",
+            ],
+            tau_min_s,
+            tau_max_s,
+            per_decade,
+        )?;
         let components = (tau_max_s / tau_min_s).log10() * f64::from(per_decade);
         if components > MAX_COMPONENTS {
             return Err(ModelError {
