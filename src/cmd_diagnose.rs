@@ -511,7 +511,7 @@ fn run_to_run_text(result: &Diagnosis) -> String {
             .collect();
         let _ = writeln!(
             s,
-            "  {} {}: spread {:.3} [{:.3}, {:.3}]  per-run ln level {}  p = {:.3} (chi2 {:.1e}) {}",
+            "  {} {}: spread {:.3} [{:.3}, {:.3}]  per-run ln level {}  p = {:.3} (chi2 {}) {}",
             r.channel.name(),
             r.effects.join("+"),
             r.spread,
@@ -519,7 +519,12 @@ fn run_to_run_text(result: &Diagnosis) -> String {
             r.interval[1],
             runs.join(" "),
             r.p_value,
-            r.p_chi2,
+            // A tail probability below the double's reach prints as a bound, not as 0.
+            if r.p_chi2 < 1e-15 {
+                "< 1e-15".to_string()
+            } else {
+                format!("{:.1e}", r.p_chi2)
+            },
             if r.named { "named" } else { "not named" }
         );
     }
