@@ -492,7 +492,7 @@ fn alternatives_text(result: &Diagnosis, indent: &str) -> String {
     s
 }
 
-/// Several runs: each channel's run-to-run variation of its slow group (docs/diagnose.md,
+/// Several runs: each channel's run-to-run variation of its slow group and of its white noise (docs/diagnose.md,
 /// "Runs that differ"), the estimate with its 95 % interval and the test against the null.
 fn run_to_run_text(result: &Diagnosis) -> String {
     let mut s = String::new();
@@ -501,7 +501,7 @@ fn run_to_run_text(result: &Diagnosis) -> String {
     }
     let _ = writeln!(
         s,
-        "run-to-run variation (sd of ln level between power-ons of each channel's slow terms; named ones are written as `run_to_run`):"
+        "run-to-run variation (sd of ln level between power-ons of each channel's slow terms and of its white noise; named ones are written as `run_to_run`):"
     );
     for r in &result.run_to_run {
         let runs: Vec<String> = r

@@ -12,6 +12,12 @@
 //! families", Biometrika 76, 675-684), so the band of the replicates' statistic holds the spread of
 //! the data and of the fit.
 //!
+//! Decimated logs: long logs of 20 Hz and more are simulated at up to 8 times their sample
+//! interval (without output filters and tones above the coarse Nyquist frequency, `coarse_model`)
+//! and the refit's grid starts at 8 coarse samples, 1 s or sooner (0.64 s at 100 Hz): the levels'
+//! uncertainty comes from the long averaging times, which the finer samples do not change, at an
+//! eighth of the work (`bootstrap_decimation`).
+//!
 //! The refit, per channel: the Allan variance is the sum of the terms' (IEEE 952 Annex C; docs/model.md
 //! §2), each linear in its squared level, so with the terms' exact sampled Allan variances b_j(tau) at
 //! the fitted levels and the rest r(tau) held, the multipliers s_j >= 0 of the squared levels minimise
@@ -119,6 +125,10 @@ struct ChannelFit {
     weight_per_edf: Vec<f64>,
     /// Per log, per tau: the EDF.
     edf: Vec<Vec<f64>>,
+    /// The grid's sample interval: the fitted logs' times `decimation`.
+    dt: f64,
+    /// Samples of the fitted logs per sample of the grid's logs (1: the logs themselves).
+    decimation: usize,
 }
 
 /// The EDF of the overlapping Allan variance at factor `m` of a log of `n` samples, for noise of
@@ -142,15 +152,23 @@ pub(crate) fn edf_at(mu: f64, m: usize, n: usize) -> f64 {
 }
 
 impl ChannelFit {
-    /// The refit of channel `ch` of `model` on data like `fitted` (None: nothing to draw there).
-    fn new(model: &SensorModel, ch: Channel, fitted: &FittedOn) -> Option<ChannelFit> {
+    /// The refit of channel `ch` of `model` on data like `fitted`, seen at `decimation` times
+    /// its sample interval (None: nothing to draw there). With a decimation above 1 the grid
+    /// starts at `DECIMATED_M_MIN` coarse samples.
+    fn new(
+        model: &SensorModel,
+        ch: Channel,
+        fitted: &FittedOn,
+        decimation: usize,
+    ) -> Option<ChannelFit> {
         let terms = drawn_terms(model, ch);
         if terms.is_empty() || !fitted.channels[ch] {
             return None;
         }
-        let dt = fitted.sample_interval_s;
-        let n_max = *fitted.samples.iter().max()?;
-        let grid_m: Vec<usize> = std::iter::successors(Some(1usize), |m| m.checked_mul(2))
+        let dt = fitted.sample_interval_s * decimation as f64;
+        let n_max = *fitted.samples.iter().max()? / decimation;
+        let m_min = if decimation > 1 { DECIMATED_M_MIN } else { 1 };
+        let grid_m: Vec<usize> = std::iter::successors(Some(m_min), |m| m.checked_mul(2))
             .take_while(|&m| m <= n_max / 4)
             .filter(|&m| m as f64 * dt >= fitted.tau_min_s * (1.0 - 1e-9))
             .collect();
@@ -160,7 +178,7 @@ impl ChannelFit {
         let held = fitted
             .samples
             .iter()
-            .map(|&n| grid_m.iter().filter(|&&m| m <= n / 4).count())
+            .map(|&n| grid_m.iter().filter(|&&m| m <= n / decimation / 4).count())
             .collect();
         let taus: Vec<f64> = grid_m.iter().map(|&m| m as f64 * dt).collect();
         let total = model
@@ -192,7 +210,7 @@ impl ChannelFit {
             .iter()
             .map(|&n| {
                 (0..taus.len())
-                    .map(|i| edf_at(local_slope(&taus, &total, i), grid_m[i], n))
+                    .map(|i| edf_at(local_slope(&taus, &total, i), grid_m[i], n / decimation))
                     .collect()
             })
             .collect();
@@ -205,6 +223,8 @@ impl ChannelFit {
             rest,
             weight_per_edf,
             edf,
+            dt,
+            decimation,
         })
     }
 
@@ -357,6 +377,7 @@ fn simulate_fitted_logs(
     stop: Option<&AtomicBool>,
 ) -> Option<Vec<Vec<Vec<Vec<f64>>>>> {
     let logs = fitted.samples.len();
+    let (dt, decimation) = (fits[0].dt, fits[0].decimation);
     let jobs: Vec<(usize, usize)> = (0..replicates)
         .flat_map(|r| (0..logs).map(move |t| (r, t)))
         .collect();
@@ -365,8 +386,7 @@ fn simulate_fitted_logs(
         .iter()
         .map(|&(r, t)| LogJob {
             model,
-            setup: SimSetup::plain(fitted.sample_interval_s, fitted.samples[t], active)
-                .stopped_by(stop),
+            setup: SimSetup::plain(dt, fitted.samples[t] / decimation, active).stopped_by(stop),
             seed,
             run: first_run + (r * logs + t) as u64,
         })
@@ -377,10 +397,7 @@ fn simulate_fitted_logs(
             .iter()
             .map(|f| {
                 let ms = &f.grid_m[..f.held[t]];
-                adev_at(&log[f.ch], fitted.sample_interval_s, ms)
-                    .iter()
-                    .map(|a| a * a)
-                    .collect()
+                adev_at(&log[f.ch], dt, ms).iter().map(|a| a * a).collect()
             })
             .collect();
         tick();
@@ -429,12 +446,24 @@ pub fn draw_models_on(
 ) -> Result<Draws, BootstrapError> {
     noise::ImuErrors::check_rate(model, fitted.sample_interval_s)
         .map_err(|e| BootstrapError::Rate(e.to_string()))?;
-    let unfiltered = without_output_filters(model, fitted.sample_interval_s);
+    let dt_s = fitted.sample_interval_s;
+    let (unfiltered, decimation) = match bootstrap_decimation(fitted)
+        .and_then(|d| Some((coarse_model(model, dt_s * d as f64)?, d)))
+    {
+        Some(coarse) => coarse,
+        None => (without_output_filters(model, dt_s), 1),
+    };
     let fits: Vec<ChannelFit> = Channel::ALL
         .into_iter()
         .filter(|&ch| only[ch])
-        .filter_map(|ch| ChannelFit::new(&unfiltered, ch, fitted))
+        .filter_map(|ch| ChannelFit::new(&unfiltered, ch, fitted, decimation))
         .collect();
+    if fits.is_empty() {
+        let s: Vec<Vec<Vec<f64>>> = vec![Vec::new(); replicates];
+        let models = s.iter().map(|r| drawn_model(model, &fits, r)).collect();
+        let spread = spread(fitted, &fits, &s, &[]);
+        return Ok(Draws { models, spread });
+    }
     if let Some(f) = fits.iter().find(|f| f.terms.len() > MAX_TERMS) {
         return Err(BootstrapError::TooManyTerms {
             channel: f.ch.name(),
@@ -481,17 +510,74 @@ pub fn draw_models_on(
     Ok(Draws { models, spread })
 }
 
-/// `model` without its output filters: the bootstrap's logs are simulated at the output rate.
+/// The shortest averaging factor of a decimated bootstrap's grid, in coarse samples.
+const DECIMATED_M_MIN: usize = 8;
+/// The largest decimation of the bootstrap's logs (module doc, "Decimated logs").
+const DECIMATION: usize = 8;
+/// The longest first averaging time a decimated grid may start at (s).
+const DECIMATED_TAU_MAX_S: f64 = 1.0;
+
+/// The bootstrap's decimation for logs like `fitted`: the largest power of two up to
+/// [`DECIMATION`] whose grid starts at [`DECIMATED_TAU_MAX_S`] or sooner (`DECIMATED_M_MIN`
+/// coarse samples) and whose shortest log holds at least 2^12 coarse samples (8 octaves or
+/// more); None when not even 2 qualifies (the logs as they are: a 10 Hz log keeps its samples).
+fn bootstrap_decimation(fitted: &FittedOn) -> Option<usize> {
+    let n_min = fitted.samples.iter().copied().min().unwrap_or(0);
+    let dt = fitted.sample_interval_s;
+    [DECIMATION, 4, 2].into_iter().find(|&d| {
+        (DECIMATED_M_MIN * d) as f64 * dt <= DECIMATED_TAU_MAX_S * (1.0 + 1e-9)
+            && n_min / d >= 1 << 12
+    })
+}
+
+/// `model` as the bootstrap (and `run_spread`'s null) simulate it at the interval `dt_coarse`
+/// (a power-of-two multiple of the logs' `dt_s`): without output filters and without the tones
+/// the coarse interval cannot carry (a resonance or sinusoid at 0.4 / dt_coarse or above).
 ///
 /// An output filter (DC gain 1) shapes the Allan variance only at averaging times of the order of
-/// its length, and a decimating one makes every term run at the raw rate, up to 16 times the work.
-/// The refit needs only the *relative* spread of the levels, which comes from the long averaging
-/// times where a level has few degrees of freedom, and the draws are centred by their bootstrap
-/// mean (module doc), which absorbs what the filter changes in the Allan variances themselves; the
-/// basis columns and the simulated logs both come from this model, so they agree with each other.
-/// The drawn levels are then set on the filtered model (`drawn_model`). The end-to-end check is the
-/// calibration test (`tests/band_calibration.rs`). A model that cannot run at the output rate
-/// without its filters (a tone above the output Nyquist frequency) keeps them.
+/// its length, and a decimating one makes every term run at the raw rate, up to 16 times the work;
+/// the grid starts at `DECIMATED_M_MIN` coarse samples (8 logs' samples and more), where the
+/// Allan variance at tau is the variance of differences of tau-averages, which finer samples do
+/// not change beyond the terms dropped. The refit needs only the *relative* spread of the levels,
+/// which comes from the long averaging times where a level has few degrees of freedom, and the
+/// draws are centred by their bootstrap mean (module doc), which absorbs what the dropped terms
+/// change in the Allan variances themselves; the basis columns and the simulated logs both come
+/// from this model, so they agree with each other. A dropped tone's level is not drawn (kept as
+/// fitted, reported as not informed). The drawn levels are then set on the full model
+/// (`drawn_model`). The end-to-end check is the calibration test (`tests/band_calibration.rs`).
+/// None when the model cannot run at the coarse interval even without its tones.
+pub(crate) fn coarse_model(model: &SensorModel, dt_coarse: f64) -> Option<SensorModel> {
+    let mut m = model.clone();
+    for ch in Channel::ALL {
+        let axis = m.axis_mut(ch.sensor(), ch.axis());
+        axis.remove(Effect::OutputFilter);
+        for e in [Effect::Sinusoidal, Effect::Resonance] {
+            let fast = axis.term(e).is_some_and(|t| {
+                t.as_error_term()
+                    .shape()
+                    .iter()
+                    .any(|(name, f)| *name == "frequency_hz" && *f >= 0.4 / dt_coarse)
+            });
+            if fast {
+                axis.remove(e);
+            }
+        }
+    }
+    if noise::ImuErrors::check_rate(&m, dt_coarse).is_ok() {
+        return Some(m);
+    }
+    for ch in Channel::ALL {
+        let axis = m.axis_mut(ch.sensor(), ch.axis());
+        axis.remove(Effect::Sinusoidal);
+        axis.remove(Effect::Resonance);
+    }
+    noise::ImuErrors::check_rate(&m, dt_coarse)
+        .is_ok()
+        .then_some(m)
+}
+
+/// `model` without its output filters, at the logs' own interval (the bootstrap without
+/// decimation): a model that cannot run at `dt_s` without them keeps them.
 fn without_output_filters(model: &SensorModel, dt_s: f64) -> SensorModel {
     let mut m = model.clone();
     for ch in Channel::ALL {
@@ -524,7 +610,7 @@ pub fn fit_levels(
     for _ in 0..FIT_ROUNDS {
         let fits: Vec<ChannelFit> = Channel::ALL
             .into_iter()
-            .filter_map(|ch| ChannelFit::new(&current, ch, &fitted))
+            .filter_map(|ch| ChannelFit::new(&current, ch, &fitted, 1))
             .filter(|f| f.terms.len() <= MAX_TERMS)
             .collect();
         let s: Vec<Vec<f64>> = fits
@@ -605,6 +691,26 @@ fn spread(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The decimation: 8 for long 100 Hz logs (grid from 0.64 s), less where 8 coarse samples
+    /// would pass 1 s or the shortest log would hold under 2^12 coarse samples, none at 10 Hz.
+    #[test]
+    fn decimation_keeps_the_grid_start_and_length() {
+        let at = |dt: f64, samples: Vec<usize>| {
+            bootstrap_decimation(&FittedOn {
+                sample_interval_s: dt,
+                samples,
+                channels: ImuChannels([true; 6]),
+                tau_min_s: 0.0,
+            })
+        };
+        assert_eq!(at(0.01, vec![1_000_000, 1_000_000]), Some(8));
+        assert_eq!(at(0.01, vec![1_000_000, 20_000]), Some(4));
+        assert_eq!(at(0.01, vec![8_000]), None);
+        assert_eq!(at(0.05, vec![1_000_000]), Some(2));
+        assert_eq!(at(0.1, vec![216_000]), None);
+        assert_eq!(at(0.001, vec![1_000_000]), Some(8));
+    }
 
     /// NNLS against a brute-force check: an exact non-negative solution is found, and a column
     /// whose unconstrained coefficient is negative is set to 0 with the others refitted.

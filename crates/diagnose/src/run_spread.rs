@@ -2,16 +2,23 @@
 //! model's side is docs/model.md §2.3): does a channel's slow wander change from one power-on to
 //! the next by more than the runs' own sampling allows, and by how much?
 //!
-//! Per channel with a slow group (the terms that shape drift at long horizons,
+//! Per channel and group: the slow group (the terms that shape drift at long horizons,
 //! `Effect::is_long_term`, that a static log shows and that have a level above 0; Gauss-Markov
-//! processes of 1 s and more):
+//! processes of 1 s and more), and the short group (the white noise, which sets the drift at
+//! short horizons: a run's angle or velocity random walk). The two are estimated apart, as the
+//! model draws them apart (docs/model.md §2.3: one draw per axis for the long-term terms, another
+//! for the short-term ones):
 //! 1. **Per-run multiplier.** Each run's overlapping Allan variances a_ri on an octave grid are
-//!    fitted as rest_i + q_r slow_i, rest the channel's other terms held at the pooled fit and
-//!    slow the group's Allan variance at its pooled levels (IEEE 952 Annex C: independent terms
-//!    add), by weighted least squares with the weights of `bootstrap.rs`, w_i = nu_i / (2 A_i^2)
-//!    (NIST SP 1065 §5.2, nu Greenhall's EDF for the local slope): q_r = sum w slow (a - rest) /
-//!    sum w slow^2, held at 1e-2 or above; ln m_r = ln(q_r) / 2 is the log of run r's group level
-//!    relative to the pooled one.
+//!    fitted as rest_i + q_r slow_i + q'_r other_i, slow the group's Allan variance at its pooled
+//!    levels, other the channel's other group's (fitted jointly, so that a run whose wander is
+//!    high is not read as a high white noise where the two overlap) and rest the channel's other
+//!    terms held at the pooled fit (IEEE 952 Annex C: independent terms add), by weighted least
+//!    squares with the weights of `bootstrap.rs`, w_i = nu_i / (2 A_i^2) (NIST SP 1065 §5.2, nu
+//!    Greenhall's EDF for the local slope): the 2 x 2 normal equations, q and q' held at 1e-2 or
+//!    above (the other refitted where one is held); ln m_r = ln(q_r) / 2 is the log of run r's
+//!    group level relative to the pooled one. The grid starts at 8 coarse samples (below), so a
+//!    white-noise multiplier is the white level seen at 0.64 s and beyond at 100 Hz: the level
+//!    that sets the drift at the horizons of a few seconds and more.
 //! 2. **Statistic.** V = the sample variance of ln m_r over the R runs.
 //! 3. **Null.** V of R simulated runs of the same lengths from the pooled model with no spread,
 //!    `NULL_REPLICATES` times, the same estimator. To keep within the budget the null runs are
@@ -58,11 +65,13 @@ const NULL_FIRST_RUN: u64 = 1 << 40;
 /// The shortest averaging factor of the grid, in coarse (null) samples.
 const M_MIN: usize = 8;
 
-/// The estimate of one channel (JSON `run_to_run[]`, docs/cli.md).
+/// The estimate of one channel and group (JSON `run_to_run[]`, docs/cli.md).
 #[derive(Clone, Debug, Serialize)]
 pub struct RunSpread {
     pub channel: Channel,
-    /// The slow group's terms, whose levels move together between runs.
+    /// "long" (the slow group) or "short" (the white noise).
+    pub group: &'static str,
+    /// The group's terms, whose levels move together between runs.
     pub effects: Vec<&'static str>,
     /// ln m_r per run, in input order.
     pub ln_multipliers: Vec<f64>,
@@ -102,6 +111,32 @@ pub fn slow_group(axis: &AxisModel) -> Vec<Effect> {
     }
 }
 
+/// The short group of an axis: its white noise, when its level is above 0.
+pub fn short_group(axis: &AxisModel) -> Vec<Effect> {
+    axis.term(Effect::WhiteNoise)
+        .filter(|t| t.level().is_some_and(|(_, v)| v.abs() > 0.0))
+        .map(|_| vec![Effect::WhiteNoise])
+        .unwrap_or_default()
+}
+
+/// The group named `group` ("long": [`slow_group`], "short": [`short_group`]).
+fn group_of(axis: &AxisModel, group: &str) -> Vec<Effect> {
+    if group == "long" {
+        slow_group(axis)
+    } else {
+        short_group(axis)
+    }
+}
+
+/// The other group's name.
+fn other_kind(group: &str) -> &'static str {
+    if group == "long" {
+        "short"
+    } else {
+        "long"
+    }
+}
+
 /// The long-term terms of [`slow_group`] before the flicker rule.
 fn long_terms(axis: &AxisModel) -> Vec<Effect> {
     axis.terms()
@@ -120,31 +155,48 @@ fn long_terms(axis: &AxisModel) -> Vec<Effect> {
         .collect()
 }
 
-/// The estimator's fixed parts on one grid: per tau the model's total, slow-group and rest Allan
-/// variances, and the local slope.
+/// The estimator's fixed parts on one grid: per tau the model's total Allan variance, the
+/// group's, the channel's other group's (the short group for the slow one and the other way
+/// round; zero when the axis has none), the rest, and the local slope.
 struct GroupFit {
     ms: Vec<usize>,
     total: Vec<f64>,
     slow: Vec<f64>,
+    other: Vec<f64>,
     rest: Vec<f64>,
     mu: Vec<f64>,
 }
 
 impl GroupFit {
-    fn new(axis: &AxisModel, group: &[Effect], dt: f64, ms: Vec<usize>) -> GroupFit {
+    fn new(
+        axis: &AxisModel,
+        group: &[Effect],
+        other: &[Effect],
+        dt: f64,
+        ms: Vec<usize>,
+    ) -> GroupFit {
         let taus: Vec<f64> = ms.iter().map(|&m| m as f64 * dt).collect();
         let total = axis.allan_variance_sampled_many(&taus, dt);
-        let mut only = AxisModel::default();
-        if let Some(f) = axis.term(Effect::OutputFilter) {
-            only.set_term(f.clone());
-        }
-        for &e in group {
-            if let Some(t) = axis.term(e) {
-                only.set_term(t.clone());
+        let curve = |effects: &[Effect]| {
+            if effects.is_empty() {
+                return vec![0.0; taus.len()];
             }
-        }
-        let slow = only.allan_variance_sampled_many(&taus, dt);
-        let rest = total.iter().zip(&slow).map(|(t, s)| t - s).collect();
+            let mut only = AxisModel::default();
+            if let Some(f) = axis.term(Effect::OutputFilter) {
+                only.set_term(f.clone());
+            }
+            for &e in effects {
+                if let Some(t) = axis.term(e) {
+                    only.set_term(t.clone());
+                }
+            }
+            only.allan_variance_sampled_many(&taus, dt)
+        };
+        let slow = curve(group);
+        let other = curve(other);
+        let rest = (0..taus.len())
+            .map(|i| total[i] - slow[i] - other[i])
+            .collect();
         let mu = (0..taus.len())
             .map(|i| local_slope(&taus, &total, i))
             .collect();
@@ -152,27 +204,49 @@ impl GroupFit {
             ms,
             total,
             slow,
+            other,
             rest,
             mu,
         }
     }
 
-    /// ln m of one run of `n` samples with Allan variances `avar` (on the first `avar.len()` taus).
+    /// ln m of one run of `n` samples with Allan variances `avar` (on the first `avar.len()`
+    /// taus): the group's squared multiplier q fitted jointly with the other group's q' (both
+    /// held at `Q_MIN` or above, the other refitted with the first held where it is clamped).
     fn ln_multiplier(&self, avar: &[f64], n: usize) -> f64 {
-        let (mut num, mut den) = (0.0, 0.0);
+        // The weighted normal equations of a - rest = q slow + q' other.
+        let (mut s11, mut s12, mut s22, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0);
         for (i, &a) in avar.iter().enumerate() {
             if !(a.is_finite() && self.total[i] > 0.0) {
                 continue;
             }
             let w = edf_at(self.mu[i], self.ms[i], n) / (2.0 * self.total[i] * self.total[i]);
-            num += w * self.slow[i] * (a - self.rest[i]);
-            den += w * self.slow[i] * self.slow[i];
+            let (g, o, y) = (self.slow[i], self.other[i], a - self.rest[i]);
+            s11 += w * g * g;
+            s12 += w * g * o;
+            s22 += w * o * o;
+            b1 += w * g * y;
+            b2 += w * o * y;
         }
-        if den > 0.0 {
-            0.5 * (num / den).max(Q_MIN).ln()
+        if s11 <= 0.0 {
+            return f64::NAN;
+        }
+        let q = if s22 > 0.0 {
+            let det = s11 * s22 - s12 * s12;
+            let (q1, q2) = if det > 0.0 {
+                ((b1 * s22 - b2 * s12) / det, (b2 * s11 - b1 * s12) / det)
+            } else {
+                (b1 / s11, 1.0)
+            };
+            if q2 < Q_MIN {
+                (b1 - s12 * Q_MIN) / s11
+            } else {
+                q1
+            }
         } else {
-            f64::NAN
-        }
+            b1 / s11
+        };
+        0.5 * q.max(Q_MIN).ln()
     }
 }
 
@@ -183,32 +257,15 @@ fn sample_variance(x: &[f64]) -> f64 {
     x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)
 }
 
-/// The null's model: `model` without output filters and without tones the coarse interval
-/// cannot carry (a resonance or sinusoid above its Nyquist frequency).
+/// The null's model: `model` as the bootstrap simulates it at the coarse interval
+/// (`bootstrap::coarse_model`: without output filters and without tones the coarse interval cannot
+/// carry), with no spread.
 fn null_model(model: &SensorModel, dt_null: f64) -> SensorModel {
-    let mut m = model.clone();
+    let mut m = crate::bootstrap::coarse_model(model, dt_null).unwrap_or_else(|| model.clone());
     for ch in Channel::ALL {
         let axis = m.axis_mut(ch.sensor(), ch.axis());
         axis.remove(Effect::OutputFilter);
         axis.clear_run_to_run();
-        for e in [Effect::Sinusoidal, Effect::Resonance] {
-            let fast = axis.term(e).is_some_and(|t| {
-                t.as_error_term()
-                    .shape()
-                    .iter()
-                    .any(|(name, f)| *name == "frequency_hz" && *f >= 0.4 / dt_null)
-            });
-            if fast {
-                axis.remove(e);
-            }
-        }
-    }
-    if noise::ImuErrors::check_rate(&m, dt_null).is_err() {
-        for ch in Channel::ALL {
-            let axis = m.axis_mut(ch.sensor(), ch.axis());
-            axis.remove(Effect::Sinusoidal);
-            axis.remove(Effect::Resonance);
-        }
     }
     m
 }
@@ -251,12 +308,14 @@ pub fn estimate(
     }
     let fine: Vec<usize> = coarse.iter().map(|&m| m * decimation).collect();
     let nulls = null_model(model, dt_null);
-    let channels: Vec<(Channel, Vec<Effect>)> = Channel::ALL
+    let channels: Vec<(Channel, Vec<Effect>, &'static str)> = Channel::ALL
         .into_iter()
         .filter(|&c| logs.iter().all(|l| l.channels[c].is_some()))
-        .map(|c| (c, slow_group(model.axis(c.sensor(), c.axis()))))
-        .filter(|(c, g)| {
-            !g.is_empty() && slow_group(nulls.axis(c.sensor(), c.axis())).len() == g.len()
+        .flat_map(|c| {
+            ["long", "short"].map(|k| (c, group_of(model.axis(c.sensor(), c.axis()), k), k))
+        })
+        .filter(|(c, g, k)| {
+            !g.is_empty() && group_of(nulls.axis(c.sensor(), c.axis()), k).len() == g.len()
         })
         .collect();
     if channels.is_empty() {
@@ -266,8 +325,10 @@ pub fn estimate(
     // The measured runs.
     let measured: Vec<Vec<f64>> = channels
         .iter()
-        .map(|(c, g)| {
-            let fit = GroupFit::new(model.axis(c.sensor(), c.axis()), g, dt, fine.clone());
+        .map(|(c, g, k)| {
+            let axis = model.axis(c.sensor(), c.axis());
+            let other = group_of(axis, other_kind(k));
+            let fit = GroupFit::new(axis, g, &other, dt, fine.clone());
             logs.iter()
                 .zip(&samples)
                 .map(|(l, &n)| {
@@ -280,7 +341,7 @@ pub fn estimate(
         })
         .collect();
     // The null: NULL_REPLICATES sets of R runs at the coarse interval.
-    let active = ImuChannels::from_fn(|c| channels.iter().any(|(k, _)| *k == c));
+    let active = ImuChannels::from_fn(|c| channels.iter().any(|(k, _, _)| *k == c));
     let runs = logs.len();
     let jobs: Vec<LogJob> = (0..NULL_REPLICATES * runs)
         .map(|j| LogJob {
@@ -293,14 +354,18 @@ pub fn estimate(
         .collect();
     let null_fits: Vec<GroupFit> = channels
         .iter()
-        .map(|(c, g)| GroupFit::new(nulls.axis(c.sensor(), c.axis()), g, dt_null, coarse.clone()))
+        .map(|(c, g, k)| {
+            let axis = nulls.axis(c.sensor(), c.axis());
+            let other = group_of(axis, other_kind(k));
+            GroupFit::new(axis, g, &other, dt_null, coarse.clone())
+        })
         .collect();
     let per_job: Vec<Vec<f64>> = map_static_logs(&jobs, |j, log| {
         let n = samples[j % runs] / decimation;
         channels
             .iter()
             .zip(&null_fits)
-            .map(|((c, _), fit)| {
+            .map(|((c, _, _), fit)| {
                 let ms = &coarse[..held(n, &coarse)];
                 let avar: Vec<f64> = adev_at(&log[*c], dt_null, ms)
                     .iter()
@@ -314,7 +379,7 @@ pub fn estimate(
     let out = channels
         .iter()
         .enumerate()
-        .map(|(k, (c, g))| {
+        .map(|(k, (c, g, group))| {
             let v = sample_variance(&measured[k]);
             let null_v: Vec<f64> = (0..NULL_REPLICATES)
                 .map(|b| {
@@ -342,6 +407,7 @@ pub fn estimate(
             let floor = 1.0 / (NULL_REPLICATES + 1) as f64;
             RunSpread {
                 channel: *c,
+                group,
                 effects: g.iter().map(|e| e.name()).collect(),
                 ln_multipliers: measured[k].clone(),
                 variance: v,

@@ -175,9 +175,22 @@ impl AxisModel {
         self.run_to_run.values().any(|&s| s > 0.0)
     }
 
-    /// The axis as one power-on with draw `z` sees it: each listed term at level
-    /// `L exp(s z - s^2)` (docs/model.md §2.3), the spreads dropped; the others unchanged.
-    pub fn at_run_draw(&self, z: f64) -> AxisModel {
+    /// Which groups ([`crate::run_to_run::LONG`], [`crate::run_to_run::SHORT`]) have a listed
+    /// term with a spread above 0.
+    pub fn varying_groups(&self) -> [bool; 2] {
+        let mut out = [false; 2];
+        for (&effect, &s) in &self.run_to_run {
+            if s > 0.0 {
+                out[crate::run_to_run::group_of(effect)] = true;
+            }
+        }
+        out
+    }
+
+    /// The axis as one power-on with draws `z = [long, short]` sees it: each listed term at level
+    /// `L exp(s z - s^2)` with its group's z (docs/model.md §2.3), the spreads dropped; the
+    /// others unchanged.
+    pub fn at_run_draws(&self, z: [f64; 2]) -> AxisModel {
         let mut out = self.clone();
         out.run_to_run.clear();
         for (&effect, &s) in &self.run_to_run {
@@ -190,8 +203,9 @@ impl AxisModel {
             let Some((_, level)) = term.level() else {
                 continue;
             };
+            let zg = z[crate::run_to_run::group_of(effect)];
             let scaled = term
-                .with_level(level * crate::run_to_run::level_factor(s, z))
+                .with_level(level * crate::run_to_run::level_factor(s, zg))
                 .expect("a positive finite multiple of a valid level is valid");
             out.set_term(scaled);
         }
@@ -298,35 +312,43 @@ impl SensorModel {
     /// The run-to-run mixture of the model as a product Gauss-Hermite rule
     /// ([`crate::run_to_run::gauss_hermite_normal`]): (weight, the model at one node's draws,
     /// spreads dropped), the weights summing to 1, so that E f(levels of a run) = sum w f(model at
-    /// node) for any law f of the levels (docs/model.md §2.3). One dimension per axis with a
-    /// spread above 0 (its own z); n nodes per dimension with n^d <=
-    /// [`crate::run_to_run::QUADRATURE_BUDGET`] (20 at most, 2 at least). Empty when no axis
-    /// varies between runs.
+    /// node) for any law f of the levels (docs/model.md §2.3). One dimension per axis and group
+    /// (long-term, short-term) with a spread above 0 (its own z); n nodes per dimension with
+    /// n^d <= [`crate::run_to_run::QUADRATURE_BUDGET`] (20 at most, 2 at least). Empty when no
+    /// axis varies between runs.
     pub fn run_to_run_quadrature(&self) -> Vec<(f64, SensorModel)> {
         use crate::run_to_run::{gauss_hermite_normal, QUADRATURE_BUDGET};
-        let axes: Vec<(Sensor, usize)> = Sensor::ALL
+        let dims: Vec<(Sensor, usize, usize)> = Sensor::ALL
             .into_iter()
             .flat_map(|s| (0..3).map(move |a| (s, a)))
-            .filter(|&(s, a)| self.axis(s, a).varies_between_runs())
+            .flat_map(|(s, a)| {
+                let groups = self.axis(s, a).varying_groups();
+                (0..2).filter(move |&g| groups[g]).map(move |g| (s, a, g))
+            })
             .collect();
-        if axes.is_empty() {
+        if dims.is_empty() {
             return Vec::new();
         }
-        let d = axes.len() as u32;
+        let d = dims.len() as u32;
         let mut n = 20usize;
-        while n > 2 && n.pow(d) > QUADRATURE_BUDGET {
+        while n > 2 && n.checked_pow(d).is_none_or(|p| p > QUADRATURE_BUDGET) {
             n -= 1;
         }
         let rule = gauss_hermite_normal(n);
-        (0..n.pow(d))
+        let count = n.checked_pow(d).unwrap_or(usize::MAX);
+        (0..count)
             .map(|mut index| {
-                let mut m = self.clone();
                 let mut w = 1.0;
-                for &(s, a) in &axes {
-                    let (z, wi) = rule[index % n];
+                let mut z = [[[0.0f64; 2]; 3]; 2];
+                for &(s, a, g) in &dims {
+                    let (zi, wi) = rule[index % n];
                     index /= n;
                     w *= wi;
-                    *m.axis_mut(s, a) = self.axis(s, a).at_run_draw(z);
+                    z[s as usize][a][g] = zi;
+                }
+                let mut m = self.clone();
+                for &(s, a, _) in &dims {
+                    *m.axis_mut(s, a) = self.axis(s, a).at_run_draws(z[s as usize][a]);
                 }
                 (w, m)
             })

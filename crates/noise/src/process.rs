@@ -57,11 +57,12 @@ impl ChannelErrors {
     fn new(model: &SensorModel, channel: Channel, dt_s: f64, seed: u64, run: u64) -> ChannelErrors {
         let (sensor, axis_index) = (channel.sensor(), channel.axis());
         let axis = model.axis(sensor, axis_index);
-        // This power-on's levels (docs/model.md §2.3): one draw per run and axis from the
-        // channel's run-to-run stream, which no other draw uses; none without a spread.
+        // This power-on's levels (docs/model.md §2.3): per run and axis a long-term and a
+        // short-term draw from the channel's run-to-run stream, which no other draw uses; none
+        // without a spread.
         let drawn;
         let axis = if axis.varies_between_runs() {
-            drawn = axis.at_run_draw(crate::run_to_run::run_draw(seed, run, channel.index()));
+            drawn = axis.at_run_draws(crate::run_to_run::run_draws(seed, run, channel.index()));
             &drawn
         } else {
             axis

@@ -1,7 +1,9 @@
 //! Run-to-run variation of term levels (docs/model.md §2.3): an axis may state, per term with a
 //! level, the spread s of the natural log of that level between power-ons. The listed terms of
-//! one axis move together: one standard normal draw z per run and axis, from a stream of its own,
-//! scales each listed level L to `L exp(s z - s^2)`.
+//! one axis and one group move together: per run and axis two independent standard normal draws,
+//! from a stream of their own, one for the long-term terms (`Effect::is_long_term`: the slow
+//! wander) and one for the others (the short-term levels: white noise, quantisation, ...), scale
+//! each listed level L to `L exp(s z - s^2)` with its group's z.
 //!
 //! Convention: the level written in the model is the root-mean-square over power-ons,
 //! E[(L exp(s z - s^2))^2] = L^2 exp(-2 s^2) E[exp(2 s z)] = L^2 (the moment generating function
@@ -25,11 +27,34 @@ pub fn level_factor(spread: f64, z: f64) -> f64 {
     (spread * z - spread * spread).exp()
 }
 
-/// The standard normal draw of run `run`, channel index `channel` (0..6, `Channel::index`) of
-/// `seed`: the first normal of the channel's run-to-run stream, which no other draw uses.
+/// The standard normal draw of the long-term group of run `run`, channel index `channel` (0..6,
+/// `Channel::index`) of `seed`: the first normal of the channel's run-to-run stream, which no
+/// other draw uses.
 pub fn run_draw(seed: u64, run: u64, channel: usize) -> f64 {
+    run_draws(seed, run, channel)[LONG]
+}
+
+/// Index of the long-term group's draw in [`run_draws`].
+pub const LONG: usize = 0;
+/// Index of the short-term group's draw in [`run_draws`].
+pub const SHORT: usize = 1;
+
+/// Both draws of run `run`, channel index `channel` of `seed`: `[long, short]`, the first and the
+/// second normal of the channel's run-to-run stream (the long-term draw is the one a model of
+/// long-term spreads alone has always used, so its runs keep their bits).
+pub fn run_draws(seed: u64, run: u64, channel: usize) -> [f64; 2] {
     let mut rng: ImuRng = run_to_run_rng(seed, run, channel as u64);
-    normal(&mut rng)
+    let long = normal(&mut rng);
+    [long, normal(&mut rng)]
+}
+
+/// The group of a term's spread: [`LONG`] for a long-term term, [`SHORT`] otherwise.
+pub fn group_of(effect: crate::Effect) -> usize {
+    if effect.is_long_term() {
+        LONG
+    } else {
+        SHORT
+    }
 }
 
 /// Gauss-Hermite quadrature for the standard normal (probabilists' Hermite polynomials):
@@ -104,6 +129,30 @@ mod tests {
         assert_eq!(run_draw(7, 3, 2).to_bits(), run_draw(7, 3, 2).to_bits());
         assert_ne!(run_draw(7, 3, 2), run_draw(7, 3, 1));
         assert_ne!(run_draw(7, 3, 2), run_draw(7, 4, 2));
+        let [long, short] = run_draws(7, 3, 2);
+        assert_eq!(long.to_bits(), run_draw(7, 3, 2).to_bits());
+        assert_ne!(long, short);
+    }
+
+    /// The two groups' draws are independent standard normals: over 20 000 runs their
+    /// correlation is within 5 standard errors (1/sqrt(n)) of 0 and the short draw's mean and
+    /// variance are those of N(0, 1) (5 standard errors: mean 1/sqrt(n), variance sqrt(2/n)).
+    #[test]
+    fn the_two_groups_draw_independently() {
+        let n = 20_000usize;
+        let d: Vec<[f64; 2]> = (0..n as u64).map(|r| run_draws(5, r, 4)).collect();
+        let nf = n as f64;
+        let mean = |k: usize| d.iter().map(|x| x[k]).sum::<f64>() / nf;
+        let (m0, m1) = (mean(0), mean(1));
+        let var = |k: usize, m: f64| d.iter().map(|x| (x[k] - m).powi(2)).sum::<f64>() / nf;
+        let cov = d.iter().map(|x| (x[0] - m0) * (x[1] - m1)).sum::<f64>() / nf;
+        let corr = cov / (var(0, m0) * var(1, m1)).sqrt();
+        assert!(corr.abs() < 5.0 / nf.sqrt(), "correlation {corr}");
+        assert!(m1.abs() < 5.0 / nf.sqrt(), "mean {m1}");
+        assert!(
+            (var(1, m1) - 1.0).abs() < 5.0 * (2.0 / nf).sqrt(),
+            "variance"
+        );
     }
 
     /// The draws are standard normal: over 20 000 runs the mean of ln(factor) is -s^2 and its sd

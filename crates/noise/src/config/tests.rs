@@ -698,7 +698,7 @@ fn run_to_run_reads_writes_and_round_trips() {
     assert_eq!(no_rrw.run_to_run().len(), 1);
     // A draw scales the listed levels by exp(s z - s^2) and drops the spreads.
     let z = 1.3;
-    let drawn = gz.at_run_draw(z);
+    let drawn = gz.at_run_draws([z, z]);
     assert!(drawn.run_to_run().is_empty());
     let level = |a: &AxisModel, e: Effect| a.term(e).unwrap().level().unwrap().1;
     for (e, s) in [
@@ -712,6 +712,17 @@ fn run_to_run_reads_writes_and_round_trips() {
         level(&drawn, Effect::WhiteNoise),
         level(gz, Effect::WhiteNoise)
     );
+    // Two groups: a long-term term takes the first draw, a short-term one the second.
+    let mut both = gz.clone();
+    both.set_run_to_run(Effect::WhiteNoise, 0.2).unwrap();
+    assert_eq!(both.varying_groups(), [true, true]);
+    assert_eq!(gz.varying_groups(), [true, false]);
+    let (z_long, z_short) = (1.3, -0.7);
+    let drawn = both.at_run_draws([z_long, z_short]);
+    let rrw = level(gz, Effect::RateRandomWalk) * (0.4 * z_long - 0.16f64).exp();
+    let wn = level(gz, Effect::WhiteNoise) * (0.2 * z_short - 0.04f64).exp();
+    assert!((level(&drawn, Effect::RateRandomWalk) / rrw - 1.0).abs() < 1e-12);
+    assert!((level(&drawn, Effect::WhiteNoise) / wn - 1.0).abs() < 1e-12);
 }
 
 /// Bad spreads name the file, the line, the key and what was expected.
