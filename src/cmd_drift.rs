@@ -346,12 +346,29 @@ fn text(r: &DriftCheck, logs: &[String], model: &std::path::Path, elapsed_s: f64
     if !differ.is_empty() {
         let _ = writeln!(
             s,
-            "the logs differ among themselves beyond the model's randomness (a run-to-run variation \
-             one model cannot hold; docs/drift.md):"
+            "cells whose logs differ among themselves beyond the model's randomness, each tested \
+             at 5 % (docs/drift.md):"
         );
         for d in differ {
             let _ = writeln!(s, "  {d}");
         }
+    }
+    if let Some(b) = &r.between_logs_joint {
+        let _ = writeln!(
+            s,
+            "the logs among themselves, all {} cells together: {} flagged (the model's own \
+             experiments: {} or more in {} % of them); p = {}: {}",
+            b.cells,
+            b.flagged,
+            b.flagged,
+            crate::fmt::sig(100.0 * b.model_flagged_at_least, 2),
+            crate::fmt::sig(b.p_value, 2),
+            if b.runs_differ {
+                "the runs differ beyond the model's randomness (a run-to-run variation it does not hold)"
+            } else {
+                "as far apart as the runs of a right model"
+            }
+        );
     }
     if !causes.is_empty() {
         let _ = writeln!(s, "likely causes where the measurement leaves the band:");

@@ -34,7 +34,9 @@
 
 use crate::alternatives::{self, Alternative, Structure};
 use crate::bootstrap::{draw_models, draw_models_on, BootstrapError, ParameterSpread};
-use crate::drift_joint::{joint_check, Cell, JointCheck};
+use crate::drift_joint::{
+    between_logs_joint, joint_check, BetweenCell, BetweenLogsJoint, Cell, JointCheck,
+};
 use crate::fitted_on::FittedOn;
 use crate::input::LogInput;
 use crate::observer::Observer;
@@ -296,6 +298,10 @@ pub struct DriftCheck {
     /// Every informed cell judged together (`drift_joint`, docs/drift.md); absent without one.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub joint: Option<JointCheck>,
+    /// The between-log tests of every cell judged together (`drift_joint::between_logs_joint`,
+    /// docs/drift.md "Runs that differ among themselves"); absent for one log.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub between_logs_joint: Option<BetweenLogsJoint>,
 }
 
 /// One structure's share of the band: what it is, its weight and its simulated experiments.
@@ -463,14 +469,17 @@ pub fn check_drift_until(
             .ok_or(CheckError::Stopped)?,
     };
     let mut horizons = Vec::new();
+    let mut per_log_by_horizon = Vec::new();
     for (hi, &h) in p.horizons_s.iter().enumerate() {
         if stopped() {
             return Err(CheckError::Stopped);
         }
         let per_log: Vec<SegmentErrors> = by_log.iter().map(|l| l[hi].clone()).collect();
         horizons.push(experiment.check_horizon(hi, h, &per_log)?);
+        per_log_by_horizon.push(per_log);
     }
     let joint = experiment.joint(&horizons);
+    let between_logs_joint = experiment.between_joint(&horizons, &per_log_by_horizon);
     Ok(DriftCheck {
         protocol: p.clone(),
         protocol_text: p.describe(),
@@ -481,6 +490,7 @@ pub fn check_drift_until(
         structures: plan.shares(),
         horizons,
         joint,
+        between_logs_joint,
     })
 }
 
@@ -833,6 +843,38 @@ impl Experiment<'_> {
                 stats::rms(&v)
             })
             .collect()
+    }
+
+    /// The between-log tests of every cell of `horizons` that has one, judged together
+    /// (`drift_joint::between_logs_joint`); `per_log` the measured logs' segments per horizon.
+    fn between_joint(
+        &self,
+        horizons: &[HorizonCheck],
+        per_log: &[Vec<SegmentErrors>],
+    ) -> Option<BetweenLogsJoint> {
+        let mut cells = Vec::new();
+        for (hi, h) in horizons.iter().enumerate() {
+            for q in Quantity::ALL {
+                if h.channels[q.name()].between_logs.is_none() {
+                    continue;
+                }
+                let Some(measured) = ln_ms_variance(per_log[hi].iter().map(|s| s.values(q))) else {
+                    continue;
+                };
+                let simulated: Option<Vec<f64>> = self
+                    .simulated
+                    .chunks(self.logs.len())
+                    .map(|rep| ln_ms_variance(rep.iter().map(|s| s[hi].values(q))))
+                    .collect();
+                if let Some(simulated) = simulated {
+                    cells.push(BetweenCell {
+                        measured,
+                        simulated,
+                    });
+                }
+            }
+        }
+        between_logs_joint(&cells)
     }
 
     /// Every informed cell of `horizons` judged together (`drift_joint`).

@@ -188,6 +188,89 @@ pub fn joint_check(cells: &[Cell]) -> Option<JointCheck> {
     })
 }
 
+/// The between-log tests of every cell judged together (docs/drift.md, "Runs that differ among
+/// themselves"): does any cell's spread over the logs go beyond what the model's own experiments
+/// give, counting that a right model flags about one cell in twenty by chance?
+#[derive(Clone, Debug, Serialize)]
+pub struct BetweenLogsJoint {
+    /// Cells judged (informed in every experiment).
+    pub cells: usize,
+    /// Cells whose own between-log test flags (p < 0.05), and the share of the model's
+    /// experiments with at least as many against the others.
+    pub flagged: usize,
+    pub model_flagged_at_least: f64,
+    /// The measurement's rank on its largest standardised spread (max-T, `between_logs_joint`).
+    pub p_value: f64,
+    /// p < 0.05: the logs differ beyond the model's randomness, all cells counted.
+    pub runs_differ: bool,
+}
+
+/// One cell of [`between_logs_joint`]: D (the variance over the logs of ln mean square) of the
+/// measurement and of each simulated experiment, in experiment order.
+pub struct BetweenCell {
+    pub measured: f64,
+    pub simulated: Vec<f64>,
+}
+
+/// The max-T combination of the cells' between-log tests (Westfall & Young 1993, §2.6, as
+/// [`joint_check`]): the members are the measurement and the R experiments, exchangeable under
+/// the model. Member i's statistic in cell c is z_ic = (ln D_ic - mean_j ln D_jc) / sd_j ln D_jc
+/// over the other R members j (one-sided: a spread above the others' is the alarm); T_i = max_c
+/// z_ic, and the joint p-value is the measurement's rank on T, #{i : T_i >= T_0} / (R + 1): exact
+/// for exchangeable members whatever the cells' correlation (each member is standardised by the
+/// others alike). A rank per cell instead (min-p) ties: with twenty cells most members are the
+/// largest somewhere. None without a cell whose members are all positive and finite, or with
+/// fewer than 10 experiments. `flagged` counts the measurement's cells whose own test
+/// (`drift_check`'s, p = (1 + #{D_r >= D}) / (R + 1)) is below 0.05.
+pub fn between_logs_joint(cells: &[BetweenCell]) -> Option<BetweenLogsJoint> {
+    let cells: Vec<&BetweenCell> = cells
+        .iter()
+        .filter(|c| {
+            c.simulated.len() >= 10
+                && std::iter::once(c.measured)
+                    .chain(c.simulated.iter().copied())
+                    .all(|x| x.is_finite() && x > 0.0)
+        })
+        .collect();
+    let members = cells.first()?.simulated.len() + 1;
+    if cells.iter().any(|c| c.simulated.len() + 1 != members) {
+        return None;
+    }
+    let mut t = vec![f64::NEG_INFINITY; members];
+    let mut flags = vec![0usize; members];
+    for c in &cells {
+        let ln: Vec<f64> = std::iter::once(c.measured)
+            .chain(c.simulated.iter().copied())
+            .map(f64::ln)
+            .collect();
+        let centre = stats::mean(&ln);
+        let ln: Vec<f64> = ln.iter().map(|v| v - centre).collect();
+        let (sum, sum2) = ln.iter().fold((0.0, 0.0), |(a, b), v| (a + v, b + v * v));
+        let others = (members - 1) as f64;
+        for (i, &x) in ln.iter().enumerate() {
+            let mean = (sum - x) / others;
+            let var = ((sum2 - x * x) - others * mean * mean) / (others - 1.0);
+            let z = if var > 0.0 {
+                (x - mean) / var.sqrt()
+            } else {
+                0.0
+            };
+            t[i] = t[i].max(z);
+            let at_least = ln.iter().filter(|&&v| v >= x).count();
+            flags[i] += usize::from((at_least as f64) / (members as f64) < JOINT_LEVEL);
+        }
+    }
+    let p_value = t.iter().filter(|&&v| v >= t[0]).count() as f64 / members as f64;
+    let at_least = flags[1..].iter().filter(|&&f| f >= flags[0]).count() as f64;
+    Some(BetweenLogsJoint {
+        cells: cells.len(),
+        flagged: flags[0],
+        model_flagged_at_least: at_least / (members - 1) as f64,
+        p_value,
+        runs_differ: p_value < JOINT_LEVEL,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -238,6 +321,52 @@ mod tests {
         (0..trials)
             .filter(|_| hit(&joint_check(&cells(&mut rng, 40, 20, rho, shift)).unwrap()))
             .count()
+    }
+
+    /// The between-log cells of `cells` (the same draws read as D values).
+    fn between(c: &[Cell]) -> Vec<BetweenCell> {
+        c.iter()
+            .map(|c| BetweenCell {
+                measured: c.measured,
+                simulated: c.simulated.clone(),
+            })
+            .collect()
+    }
+
+    /// The joint between-log test under the model rejects at its level, whatever the cells'
+    /// correlation: 2000 trials each at rho = 0, 0.6 and 0.9, 20 cells, R = 40. The rank test is
+    /// exact: P(p <= 2/41) = 2/41 = 4.88 %; bounds 4.88 % + 3.1 sd of 2000 trials (6.4 %) and at
+    /// least 3 %. Meanwhile the per-cell tests flag one or more cells in most trials (20 cells at
+    /// 5 % each), which is why the joint verdict is the one to read.
+    #[test]
+    fn between_logs_joint_rejects_five_percent_under_the_model() {
+        for &rho in &[0.0, 0.6, 0.9] {
+            let mut rng = rand::rngs::StdRng::seed_from_u64(23);
+            let trials = 2000;
+            let (mut rejected, mut any_flag) = (0usize, 0usize);
+            for _ in 0..trials {
+                let j = between_logs_joint(&between(&cells(&mut rng, 40, 20, rho, &[0.0; 20])))
+                    .unwrap();
+                rejected += usize::from(j.runs_differ);
+                any_flag += usize::from(j.flagged > 0);
+            }
+            let rate = rejected as f64 / trials as f64;
+            println!("rho {rho}: joint rejected {rejected}/{trials}, some cell flagged {any_flag}");
+            assert!((0.030..=0.064).contains(&rate), "rho {rho}: rate {rate}");
+        }
+    }
+
+    /// A measurement whose D is 10 of its cell's standard deviations above the others' is found:
+    /// its cell flags and the joint p is at its floor (1/41) or next to it.
+    #[test]
+    fn between_logs_joint_finds_one_cell_far_out() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(5);
+        let mut shift = vec![0.0; 20];
+        shift[4] = 3.0;
+        let j = between_logs_joint(&between(&cells(&mut rng, 40, 20, 0.0, &shift))).unwrap();
+        assert_eq!(j.flagged.min(1), 1);
+        assert!(j.runs_differ && j.p_value <= 2.0 / 41.0, "{j:?}");
+        assert_eq!(j.cells, 20);
     }
 
     /// Under the model (the measurement one more experiment) the test rejects at most 5 % of the
