@@ -34,9 +34,7 @@
 
 use crate::alternatives::{self, Alternative, Structure};
 use crate::bootstrap::{draw_models, draw_models_on, BootstrapError, ParameterSpread};
-use crate::drift_joint::{
-    between_logs_joint, joint_check, BetweenCell, BetweenLogsJoint, Cell, JointCheck,
-};
+use crate::drift_joint::{between_logs_joint, joint_check, BetweenLogsJoint, Cell, JointCheck};
 use crate::fitted_on::FittedOn;
 use crate::input::LogInput;
 use crate::observer::Observer;
@@ -867,7 +865,9 @@ impl Experiment<'_> {
                     .map(|rep| ln_ms_variance(rep.iter().map(|s| s[hi].values(q))))
                     .collect();
                 if let Some(simulated) = simulated {
-                    cells.push(BetweenCell {
+                    cells.push(Cell {
+                        t_s: h.t_s,
+                        quantity: q.name(),
                         measured,
                         simulated,
                     });

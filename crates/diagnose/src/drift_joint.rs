@@ -99,9 +99,10 @@ fn band_without(sorted: &[f64], skip: usize) -> (f64, f64) {
     })
 }
 
-/// The joint test over `cells` (module doc); None without a cell whose members all have a
-/// positive finite RMS, or with fewer than 10 simulated experiments.
-pub fn joint_check(cells: &[Cell]) -> Option<JointCheck> {
+/// The cells whose members (the measurement and the simulated experiments) are all positive and
+/// finite, with at least 10 experiments, and the member count; None without one, or when the
+/// cells disagree on the count.
+fn usable(cells: &[Cell]) -> Option<(Vec<&Cell>, usize)> {
     let cells: Vec<&Cell> = cells
         .iter()
         .filter(|c| {
@@ -111,11 +112,17 @@ pub fn joint_check(cells: &[Cell]) -> Option<JointCheck> {
                     .all(|x| x.is_finite() && x > 0.0)
         })
         .collect();
-    let first = cells.first()?;
-    let members = first.simulated.len() + 1;
+    let members = cells.first()?.simulated.len() + 1;
     if cells.iter().any(|c| c.simulated.len() + 1 != members) {
         return None;
     }
+    Some((cells, members))
+}
+
+/// The joint test over `cells` (module doc); None without a cell whose members all have a
+/// positive finite RMS, or with fewer than 10 simulated experiments.
+pub fn joint_check(cells: &[Cell]) -> Option<JointCheck> {
+    let (cells, members) = usable(cells)?;
     // Per member (0 the measurement): its largest |z| (T), the cell of it, its cells outside (C).
     let mut t = vec![0.0f64; members];
     let mut worst = vec![0usize; members];
@@ -205,37 +212,19 @@ pub struct BetweenLogsJoint {
     pub runs_differ: bool,
 }
 
-/// One cell of [`between_logs_joint`]: D (the variance over the logs of ln mean square) of the
-/// measurement and of each simulated experiment, in experiment order.
-pub struct BetweenCell {
-    pub measured: f64,
-    pub simulated: Vec<f64>,
-}
-
 /// The max-T combination of the cells' between-log tests (Westfall & Young 1993, §2.6, as
 /// [`joint_check`]): the members are the measurement and the R experiments, exchangeable under
 /// the model. Member i's statistic in cell c is z_ic = (ln D_ic - mean_j ln D_jc) / sd_j ln D_jc
 /// over the other R members j (one-sided: a spread above the others' is the alarm); T_i = max_c
 /// z_ic, and the joint p-value is the measurement's rank on T, #{i : T_i >= T_0} / (R + 1): exact
 /// for exchangeable members whatever the cells' correlation (each member is standardised by the
-/// others alike). A rank per cell instead (min-p) ties: with twenty cells most members are the
+/// others alike). The cells' `measured` and `simulated` are D, the variance over the logs of
+/// ln mean square (`drift_check`). A rank per cell instead (min-p) ties: with twenty cells most members are the
 /// largest somewhere. None without a cell whose members are all positive and finite, or with
 /// fewer than 10 experiments. `flagged` counts the measurement's cells whose own test
 /// (`drift_check`'s, p = (1 + #{D_r >= D}) / (R + 1)) is below 0.05.
-pub fn between_logs_joint(cells: &[BetweenCell]) -> Option<BetweenLogsJoint> {
-    let cells: Vec<&BetweenCell> = cells
-        .iter()
-        .filter(|c| {
-            c.simulated.len() >= 10
-                && std::iter::once(c.measured)
-                    .chain(c.simulated.iter().copied())
-                    .all(|x| x.is_finite() && x > 0.0)
-        })
-        .collect();
-    let members = cells.first()?.simulated.len() + 1;
-    if cells.iter().any(|c| c.simulated.len() + 1 != members) {
-        return None;
-    }
+pub fn between_logs_joint(cells: &[Cell]) -> Option<BetweenLogsJoint> {
+    let (cells, members) = usable(cells)?;
     let mut t = vec![f64::NEG_INFINITY; members];
     let mut flags = vec![0usize; members];
     for c in &cells {
@@ -323,16 +312,6 @@ mod tests {
             .count()
     }
 
-    /// The between-log cells of `cells` (the same draws read as D values).
-    fn between(c: &[Cell]) -> Vec<BetweenCell> {
-        c.iter()
-            .map(|c| BetweenCell {
-                measured: c.measured,
-                simulated: c.simulated.clone(),
-            })
-            .collect()
-    }
-
     /// The joint between-log test under the model rejects at its level, whatever the cells'
     /// correlation: 2000 trials each at rho = 0, 0.6 and 0.9, 20 cells, R = 40. The rank test is
     /// exact: P(p <= 2/41) = 2/41 = 4.88 %; bounds 4.88 % + 3.1 sd of 2000 trials (6.4 %) and at
@@ -345,8 +324,7 @@ mod tests {
             let trials = 2000;
             let (mut rejected, mut any_flag) = (0usize, 0usize);
             for _ in 0..trials {
-                let j = between_logs_joint(&between(&cells(&mut rng, 40, 20, rho, &[0.0; 20])))
-                    .unwrap();
+                let j = between_logs_joint(&cells(&mut rng, 40, 20, rho, &[0.0; 20])).unwrap();
                 rejected += usize::from(j.runs_differ);
                 any_flag += usize::from(j.flagged > 0);
             }
@@ -363,7 +341,7 @@ mod tests {
         let mut rng = rand::rngs::StdRng::seed_from_u64(5);
         let mut shift = vec![0.0; 20];
         shift[4] = 3.0;
-        let j = between_logs_joint(&between(&cells(&mut rng, 40, 20, 0.0, &shift))).unwrap();
+        let j = between_logs_joint(&cells(&mut rng, 40, 20, 0.0, &shift)).unwrap();
         assert_eq!(j.flagged.min(1), 1);
         assert!(j.runs_differ && j.p_value <= 2.0 / 41.0, "{j:?}");
         assert_eq!(j.cells, 20);
