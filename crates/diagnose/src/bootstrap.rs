@@ -542,8 +542,8 @@ fn bootstrap_decimation(fitted: &FittedOn) -> Option<usize> {
 /// which comes from the long averaging times where a level has few degrees of freedom, and the
 /// draws are centred by their bootstrap mean (module doc), which absorbs what the dropped terms
 /// change in the Allan variances themselves; the basis columns and the simulated logs both come
-/// from this model, so they agree with each other. A dropped tone's level is not drawn (kept as
-/// fitted, reported as not informed). The drawn levels are then set on the full model
+/// from this model, so they agree with each other. A dropped tone's level is not drawn: it keeps
+/// its fitted value and is not among the listed draws. The drawn levels are then set on the full model
 /// (`drawn_model`). The end-to-end check is the calibration test (`tests/band_calibration.rs`).
 /// None when the model cannot run at the coarse interval even without its tones.
 pub(crate) fn coarse_model(model: &SensorModel, dt_coarse: f64) -> Option<SensorModel> {
