@@ -501,7 +501,7 @@ fn run_to_run_text(result: &Diagnosis) -> String {
     }
     let _ = writeln!(
         s,
-        "run-to-run variation (sd of ln level between power-ons of each channel's slow terms and of its white noise; named ones are written as `run_to_run`):"
+        "run-to-run variation (sd of ln level between power-ons of each channel's slow terms and of its white noise; every estimate above 0 is written as `run_to_run`, so a next run's band holds it; named: the runs differ by the naming rule):"
     );
     for r in &result.run_to_run {
         let runs: Vec<String> = r

@@ -37,13 +37,15 @@
 //!    with the within-run variance from the null), and the 95 % interval inverts the chi-square
 //!    test over s: s^2 in [(R-1) V / chi2_{0.975} - sigma_e^2, (R-1) V / chi2_{0.025} - sigma_e^2],
 //!    clamped at 0. p_chi2 = P(chi2_{R-1} >= (R-1) V / sigma_e^2) at s = 0.
-//! 5. **Naming.** The spread is named (and written into the corrected model as `run_to_run` on
-//!    the group) when p_chi2 <= `NAMING_ALPHA`, the naming rule's false-alarm rate per channel
+//! 5. **Naming.** The spread is named (the claim that the runs differ) when p_chi2 <= `NAMING_ALPHA`, the naming rule's false-alarm rate per channel
 //!    (about 1e-3 per clean 6-channel log, docs/diagnose.md step 4), and the measured V is above
 //!    every null replicate (p_mc at its floor): the same false-alarm rate as the other effects,
 //!    from this test's own null. The chi-square form's calibration against the null replicates is
 //!    reported (`null_over_chi2_90`: the share of null V beyond the scaled chi-square's 90 %
 //!    point, 0.10 when it holds).
+//! 6. **Into the model.** Every estimate above 0, named or not, is written into the corrected
+//!    model as `run_to_run` on its group ([`with_estimated_spreads`]): what a next run's band
+//!    needs is the best estimate of the spread, not the verdict of a test that it is not 0.
 
 use crate::bootstrap::{edf_at, local_slope};
 use crate::input::LogInput;
@@ -89,7 +91,7 @@ pub struct RunSpread {
     /// The estimated spread s (sd of ln level between power-ons) and its 95 % interval.
     pub spread: f64,
     pub interval: [f64; 2],
-    /// Passed the naming rule (and was written into the corrected model).
+    /// Passed the naming rule (every spread above 0 is written into the corrected model).
     pub named: bool,
 }
 
@@ -425,10 +427,15 @@ pub fn estimate(
     Some(out)
 }
 
-/// `model` with each named spread written on its group (`run_to_run`); the others unchanged.
-pub fn with_named_spreads(model: &SensorModel, spreads: &[RunSpread]) -> SensorModel {
+/// `model` with every spread estimated above 0 written on its group (`run_to_run`), named or
+/// not: the band of a next run holds the best estimate of how far it may stray (the
+/// random-effects prediction of Higgins, Thompson & Spiegelhalter 2009, J. R. Stat. Soc. A 172,
+/// 137-159, which takes the between-study variance's estimate whatever the heterogeneity test
+/// says). Naming is the separate claim that the runs differ (module doc, step 5). A spread of 0
+/// leaves the group as it was.
+pub fn with_estimated_spreads(model: &SensorModel, spreads: &[RunSpread]) -> SensorModel {
     let mut out = model.clone();
-    for s in spreads.iter().filter(|s| s.named) {
+    for s in spreads.iter().filter(|s| s.spread > 0.0) {
         let axis = out.axis_mut(s.channel.sensor(), s.channel.axis());
         for name in &s.effects {
             if let Some(e) = Effect::from_name(name) {

@@ -130,7 +130,7 @@ pub fn diagnose_until(
     let drift = drift_rounds::drift_rounds(&cx, &mut state, drift)?;
     cx.check_stop()?;
     // Several runs: the run-to-run variation of each channel's slow group (`run_spread`), the
-    // named spreads written into the corrected model.
+    // estimates above 0 written into the corrected model (named or not).
     let spreads = crate::run_spread::estimate(
         &state.models.out,
         &cx.logs,
@@ -139,7 +139,7 @@ pub fn diagnose_until(
         Some(stop),
     )
     .ok_or(DiagnoseError::Stopped)?;
-    state.models.out = crate::run_spread::with_named_spreads(&state.models.out, &spreads);
+    state.models.out = crate::run_spread::with_estimated_spreads(&state.models.out, &spreads);
     let mut diagnosis = report(cx, state, drift);
     diagnosis.run_to_run = spreads;
     Ok(diagnosis)

@@ -6,7 +6,7 @@
 mod common;
 
 use common::{run_inputs, GeneratedLog};
-use diagnose::run_spread::{estimate, with_named_spreads};
+use diagnose::run_spread::{estimate, with_estimated_spreads};
 use noise::{Channel, Effect, SensorModel};
 
 /// gz only: white noise, flicker and a rate random walk that dominates beyond ~8 s.
@@ -61,7 +61,7 @@ fn a_white_noise_spread_is_found_apart_from_the_wander() {
     let e = estimate_gz_white(0.1, 300);
     assert!(e.named, "{e:?}");
     assert!(e.interval[0] <= 0.1 && 0.1 <= e.interval[1], "{e:?}");
-    let written = with_named_spreads(&model(0.0), std::slice::from_ref(&e));
+    let written = with_estimated_spreads(&model(0.0), std::slice::from_ref(&e));
     let gz = written.axis(noise::Sensor::Gyro, 2);
     assert_eq!(gz.run_to_run().get(&Effect::WhiteNoise), Some(&e.spread));
     // The wander keeps the pooled model's spread of 0.
@@ -77,7 +77,7 @@ fn a_spread_is_found_and_none_is_not_named() {
     let big = estimate_gz(0.6, 100);
     assert!(big.named, "{big:?}");
     assert!(big.interval[0] <= 0.6 && 0.6 <= big.interval[1], "{big:?}");
-    let written = with_named_spreads(&model(0.0), std::slice::from_ref(&big));
+    let written = with_estimated_spreads(&model(0.0), std::slice::from_ref(&big));
     let gz = written.axis(noise::Sensor::Gyro, 2);
     assert_eq!(
         gz.run_to_run().get(&Effect::RateRandomWalk),
@@ -118,8 +118,8 @@ fn interval_coverage_over_seeds() {
 /// The held-out run end to end (`IMUDRIFT_SPREAD_SEEDS=40 cargo test --release -p
 /// imudrift-diagnose --test run_to_run -- --ignored --nocapture held_out`): per seed, six runs of
 /// the known model (gz's rate random walk with spread 0 or 0.3); each run in turn is held out, the
-/// spread is estimated on the other five (`estimate` against the pooled levels, the named spread
-/// written with `with_named_spreads`, as `diagnose` does) and the held-out run's heading is
+/// spread is estimated on the other five (`estimate` against the pooled levels, the estimated spread
+/// written with `with_estimated_spreads`, as `diagnose` does) and the held-out run's heading is
 /// checked against that model's 95 % band (39 simulated experiments, Wilks' band) at 1 min and
 /// 10 min. The pooled levels are the truth's (the bootstrap's part is `band_calibration.rs`), so
 /// what is checked is the spread's. The count inside is asserted against the binomial
@@ -150,7 +150,7 @@ fn held_out_run_inside_the_band_with_the_estimated_spread() {
                 let est = estimate(&model(0.0), &train, 0.01, 7 + first + held as u64, None)
                     .expect("not stopped");
                 named += est.iter().filter(|e| e.named && e.group == "long").count();
-                let fitted = with_named_spreads(&model(0.0), &est);
+                let fitted = with_estimated_spreads(&model(0.0), &est);
                 let check = CheckSettings {
                     protocol: Protocol {
                         horizons_s: horizons.to_vec(),
