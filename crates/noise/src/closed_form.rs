@@ -54,29 +54,10 @@ pub fn power_law_component_weight(alpha: f64, h: f64) -> f64 {
     h * (PI * beta / 2.0).cos() / (2.0 * PI * (2.0 * PI).powf(alpha))
 }
 
-/// Gamma(x) for 0 < x < 3 by the Lanczos approximation (Numerical Recipes 3rd ed. §6.1, g = 7,
-/// 9 coefficients; relative error below 1e-15 there), as `allan::chi2::ln_gamma` computes it.
+/// Gamma(x) for 0 < x < 3 (`stats::ln_gamma`, the Lanczos approximation of Numerical Recipes
+/// 3rd ed. §6.1; relative error below 1e-15 there).
 fn gamma_near_one(x: f64) -> f64 {
-    const G: f64 = 7.0;
-    const C: [f64; 9] = [
-        0.999_999_999_999_809_9,
-        676.520_368_121_885_1,
-        -1_259.139_216_722_402_8,
-        771.323_428_777_653_1,
-        -176.615_029_162_140_6,
-        12.507_343_278_686_905,
-        -0.138_571_095_265_720_12,
-        9.984_369_578_019_572e-6,
-        1.505_632_735_149_311_6e-7,
-    ];
-    let z = x - 1.0;
-    let t = z + G + 0.5;
-    let a = C
-        .iter()
-        .enumerate()
-        .skip(1)
-        .fold(C[0], |a, (i, &c)| a + c / (z + i as f64));
-    (2.0 * PI).sqrt() * t.powf(z + 0.5) * (-t).exp() * a
+    stats::ln_gamma(x).exp()
 }
 
 /// Quantisation noise Q: sigma^2 = 3 Q^2 / tau^2 (Hou 4.29). Exact for the sampled generator too,

@@ -1,7 +1,8 @@
 //! Statistics of a set of values shared by every crate of the workspace: [`mean`],
 //! [`mean_square`], [`rms`], [`sample_variance`] and [`sample_std`] (divisor n - 1),
 //! [`weighted_mean`] and [`weighted_mean_square`], [`quantile`] (of an ascending slice) and
-//! [`median`].
+//! [`median`]; and [`ln_gamma`], the one special function two crates need (the chi-squared
+//! distribution of `allan`, the power-law closed forms of `noise`).
 //!
 //! One rule on empty input: every function returns NaN (and so do the sample variance and
 //! standard deviation of a single value, which have no spread to estimate from). An empty set has
@@ -128,6 +129,35 @@ pub fn median(values: &mut [f64]) -> f64 {
     }
 }
 
+/// ln Gamma(x), x > 0, by the Lanczos approximation (Numerical Recipes 3rd ed. §6.1, g = 7, 9
+/// coefficients; relative error of Gamma below 1e-15 for x > 0), below 0.5 through the reflection
+/// Gamma(x) Gamma(1 - x) = pi / sin(pi x).
+pub fn ln_gamma(x: f64) -> f64 {
+    const G: f64 = 7.0;
+    const C: [f64; 9] = [
+        0.999_999_999_999_809_9,
+        676.520_368_121_885_1,
+        -1_259.139_216_722_402_8,
+        771.323_428_777_653_1,
+        -176.615_029_162_140_6,
+        12.507_343_278_686_905,
+        -0.138_571_095_265_720_12,
+        9.984_369_578_019_572e-6,
+        1.505_632_735_149_311_6e-7,
+    ];
+    if x < 0.5 {
+        let pi = std::f64::consts::PI;
+        return (pi / (pi * x).sin()).ln() - ln_gamma(1.0 - x);
+    }
+    let x = x - 1.0;
+    let mut a = C[0];
+    let t = x + G + 0.5;
+    for (i, &c) in C.iter().enumerate().skip(1) {
+        a += c / (x + i as f64);
+    }
+    0.5 * (2.0 * std::f64::consts::PI).ln() + (x + 0.5) * t.ln() - t + a.ln()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -218,5 +248,25 @@ mod tests {
         assert_eq!(weighted_mean(&v, &w).to_bits(), wm.to_bits());
         let wms = v.iter().zip(&w).map(|(x, w)| w * x * x).sum::<f64>() / sw;
         assert_eq!(weighted_mean_square(&v, &w).to_bits(), wms.to_bits());
+    }
+
+    /// Gamma at known values: Gamma(n) = (n - 1)!, Gamma(1/2) = sqrt(pi), Gamma(1/4) (Abramowitz
+    /// & Stegun 6.1.10 table value 3.625609908221908), within 1e-14 relative.
+    #[test]
+    fn ln_gamma_at_known_values() {
+        let pi = std::f64::consts::PI;
+        let cases = [
+            (1.0, 1.0),
+            (2.0, 1.0),
+            (5.0, 24.0),
+            (10.0, 362_880.0),
+            (0.5, pi.sqrt()),
+            (0.25, 3.625_609_908_221_908),
+            (1.5, pi.sqrt() / 2.0),
+        ];
+        for (x, g) in cases {
+            let got = ln_gamma(x).exp();
+            assert!(((got - g) / g).abs() < 1e-14, "Gamma({x}) = {got}, not {g}");
+        }
     }
 }
