@@ -317,6 +317,51 @@ pub fn fit_family(
     })
 }
 
+/// How much the errors' correlation across taus widens a searched shape's interval: the ratio
+/// kappa of the shape estimate's variance under correlated errors to the variance the profile
+/// chi2 (a sum of independent z^2) assumes, by the sandwich form of a least-squares estimate
+/// (Huber 1967; White 1980, Econometrica 48, 817-838): Var = H^-1 (J' R J) H^-1 with J the
+/// Jacobian of the predicted ln adev in (level, shape) divided by each tau's standard error,
+/// H = J' J, and R the errors' correlation across taus, here from the model's own simulated logs
+/// (`standardised`: per log, its deviation at each tau in units of the spread there; R = the
+/// mean of u u' over the K logs, divisor K - 1). kappa = [H^-1 J'RJ H^-1]_ss / [H^-1]_ss: 1 for
+/// independent errors, above 1 where neighbouring overlapping Allan deviations err together (the
+/// usual case: the profile interval is then too narrow). `j_level[i]` and `j_shape[i]` are the
+/// derivatives at tau i over its standard error. 1 where it cannot be estimated (fewer than 3
+/// logs, or a level and a shape the taus cannot tell apart).
+pub fn correlation_factor(standardised: &[Vec<f64>], j_level: &[f64], j_shape: &[f64]) -> f64 {
+    let k = standardised.len();
+    let m = j_level.len();
+    if k < 3 || j_shape.len() != m || standardised.iter().any(|u| u.len() != m) {
+        return 1.0;
+    }
+    let dot = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(a, b)| a * b).sum::<f64>();
+    let (a, b, d) = (
+        dot(j_level, j_level),
+        dot(j_level, j_shape),
+        dot(j_shape, j_shape),
+    );
+    let det = a * d - b * b;
+    if !(a > 0.0 && det > 1e-12 * a * d) {
+        return 1.0;
+    }
+    // Row "shape" of H^-1 is (-b, a) / det; its variance under R over [H^-1]_ss = a / det.
+    let spread: f64 = standardised
+        .iter()
+        .map(|u| {
+            let w = a * dot(j_shape, u) - b * dot(j_level, u);
+            w * w
+        })
+        .sum::<f64>()
+        / (k - 1) as f64;
+    let kappa = spread / (a * det);
+    if kappa.is_finite() && kappa > 0.0 {
+        kappa
+    } else {
+        1.0
+    }
+}
+
 /// Bayesian information criterion: chi2 + k ln M (Schwarz 1978), with chi2 = -2 ln L up to a constant
 /// for Gaussian z-scores.
 pub fn bic(chi2: f64, k: usize, m: usize) -> f64 {
@@ -352,6 +397,42 @@ pub fn linear_interval(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The sandwich factor is 1 when the logs' errors are uncorrelated across taus (here exactly:
+    /// the standardised rows are an orthogonal design, mean u u' = I), and for errors that move
+    /// together at every tau it is the closed form: with u_k = x_k (1, ..., 1) the shape's
+    /// variance is (1'(a j_s - b j_l))^2 var(x) / (a det).
+    #[test]
+    fn correlation_factor_is_one_for_independent_errors_and_exact_for_common_ones() {
+        let jl = [1.0, 0.8, 0.5];
+        let js = [-0.4, 0.1, 0.9];
+        // K = 4 rows, divisor 3: rows sqrt(3) e_i and a zero row give mean u u' = I.
+        let r3 = 3f64.sqrt();
+        let independent = vec![
+            vec![r3, 0.0, 0.0],
+            vec![0.0, r3, 0.0],
+            vec![0.0, 0.0, r3],
+            vec![0.0, 0.0, 0.0],
+        ];
+        let kappa = correlation_factor(&independent, &jl, &js);
+        assert!((kappa - 1.0).abs() < 1e-12, "{kappa}");
+        let xs = [1.0, -1.0, 0.5, -0.5];
+        let common: Vec<Vec<f64>> = xs.iter().map(|&x| vec![x; 3]).collect();
+        let var_x = xs.iter().map(|x| x * x).sum::<f64>() / 3.0;
+        let dot = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(a, b)| a * b).sum::<f64>();
+        let (a, b, d) = (dot(&jl, &jl), dot(&jl, &js), dot(&js, &js));
+        let det = a * d - b * b;
+        let one: f64 = (0..3).map(|i| a * js[i] - b * jl[i]).sum();
+        let expected = one * one * var_x / (a * det);
+        let kappa = correlation_factor(&common, &jl, &js);
+        assert!(
+            (kappa - expected).abs() < 1e-12 * expected,
+            "{kappa} vs {expected}"
+        );
+        // Too few logs, or a shape the level explains: no correction.
+        assert_eq!(correlation_factor(&common[..2], &jl, &js), 1.0);
+        assert_eq!(correlation_factor(&common, &jl, &jl), 1.0);
+    }
 
     /// A noise-free synthetic measurement: white noise in the model, the measurement has white noise plus
     /// rate random walk of known level. The fit must return the level exactly (no noise, so the tolerance

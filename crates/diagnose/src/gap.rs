@@ -37,6 +37,11 @@ pub struct Band {
     /// Independent simulated logs behind the centre: `seeds`, or fewer when each replicate pools
     /// several simulated logs that other replicates share (`simulate`, pooled runs).
     pub centre_logs: f64,
+    /// Per seed, its ln adev's deviation from the centre in units of the spread at each tau
+    /// ((ln a_si - ln_mean_i) / ln_sd_i; 0 where the spread is 0): how one realisation's errors
+    /// at different taus go together (`fit::correlation_factor`). Not serialised.
+    #[serde(skip)]
+    pub standardised: Vec<Vec<f64>>,
 }
 
 impl Band {
@@ -50,6 +55,7 @@ impl Band {
         let mut avar_mean = vec![0.0; m];
         let mut adev_lo = vec![0.0; m];
         let mut adev_hi = vec![0.0; m];
+        let mut standardised = vec![vec![0.0; m]; s_count];
         for i in 0..m {
             let mut col: Vec<f64> = per_seed.iter().map(|s| s[i]).collect();
             let lns: Vec<f64> = col.iter().map(|a| a.max(f64::MIN_POSITIVE).ln()).collect();
@@ -61,6 +67,13 @@ impl Band {
             };
             ln_mean[i] = mean;
             ln_sd[i] = var.sqrt();
+            for (row, l) in standardised.iter_mut().zip(&lns) {
+                row[i] = if ln_sd[i] > 0.0 {
+                    (l - mean) / ln_sd[i]
+                } else {
+                    0.0
+                };
+            }
             avar_mean[i] = stats::mean_square(&col);
             col.sort_by(f64::total_cmp);
             adev_lo[i] = quantile_sorted(&col, 0.025);
@@ -75,6 +88,7 @@ impl Band {
             adev_hi,
             seeds: s_count,
             centre_logs: s_count as f64,
+            standardised,
         }
     }
 

@@ -178,6 +178,7 @@ pub(crate) fn restrict(band: &Band, idx: &[usize]) -> Band {
         adev_hi: pick(&band.adev_hi),
         seeds: band.seeds,
         centre_logs: band.centre_logs,
+        standardised: band.standardised.iter().map(|row| pick(row)).collect(),
     }
 }
 

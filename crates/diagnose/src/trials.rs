@@ -7,8 +7,8 @@ use crate::candidates::{
 };
 use crate::fit::predicted_ln_adev;
 use crate::fit::{
-    aic, bic, birge_scale, fit_family, fit_linear, linear_interval, FamilyFit, FitData, LinearFit,
-    CHI2_1_95, CHI2_2_95,
+    aic, bic, birge_scale, correlation_factor, fit_family, fit_linear, linear_interval, FamilyFit,
+    FitData, LinearFit, CHI2_1_95, CHI2_2_95,
 };
 use crate::gap::{Band, Curve, Gap};
 use crate::model_terms::{
@@ -197,7 +197,17 @@ fn fit_shaped(
     let scale = birge_scale(ff.fit.chi2, effect.free_parameters(), m);
     let (shape_lo, shape_hi) = match (from_lines, input.line_frequency_resolution_hz) {
         (true, Some(df)) => (ff.shape - 0.5 * df, ff.shape + 0.5 * df),
-        _ => ff.shape_interval(CHI2_1_95 * scale * scale),
+        _ => {
+            let mu = |c: f64, k: usize| -> Vec<f64> {
+                (0..m)
+                    .map(|i| {
+                        predicted_ln_adev(data.ln_band[i], data.avar_band[i], (c - c0) * sigs[k][i])
+                    })
+                    .collect()
+            };
+            let threshold = shape_threshold(input.band, data.s, &mu, ff.fit.c, j, shapes.len());
+            ff.shape_interval(threshold * scale * scale)
+        }
     };
     Some(Fitted {
         fit: ff.fit,
@@ -206,6 +216,43 @@ fn fit_shaped(
         signature: sigs[j].clone(),
         penalty,
     })
+}
+
+/// The profile threshold of a searched shape's 95 % interval (before the Birge ratio): the
+/// chi-square's 3.84 assumes independent errors at the taus, while neighbouring overlapping Allan
+/// deviations err together and the shape is then known less well than the profile says. So the
+/// threshold is t_{K-1}(0.975)^2 kappa: kappa the sandwich factor of `fit::correlation_factor`
+/// with the errors' correlation from the band's K simulated logs (Student's t because kappa is
+/// estimated from them), the derivatives taken at the best fit (level `c`, grid shape `j` of `n`)
+/// of `mu(c, j)`, the predicted ln adev, by differences (central in the level at 1e-4 of it;
+/// between the neighbouring grid shapes, one-sided at the grid's ends), each over the tau's
+/// standard error `s`. 3.84 where the band has fewer than 3 logs or the grid one shape.
+/// Measured on hidden power laws: docs/diagnose.md, "The power-law candidate".
+fn shape_threshold(
+    band: &Band,
+    s: &[f64],
+    mu: &dyn Fn(f64, usize) -> Vec<f64>,
+    c: f64,
+    j: usize,
+    n: usize,
+) -> f64 {
+    let k = band.standardised.len();
+    if k < 3 || n < 2 || !(c > 0.0) {
+        return CHI2_1_95;
+    }
+    let (lo, hi) = (j.saturating_sub(1), (j + 1).min(n - 1));
+    let (a, b) = (mu(c, lo), mu(c, hi));
+    let j_shape: Vec<f64> = (0..s.len())
+        .map(|i| (b[i] - a[i]) / (hi - lo) as f64 / s[i])
+        .collect();
+    let h = 1e-4 * c;
+    let (up, down) = (mu(c + h, j), mu(c - h, j));
+    let j_level: Vec<f64> = (0..s.len())
+        .map(|i| (up[i] - down[i]) / (2.0 * h) / s[i])
+        .collect();
+    let kappa = correlation_factor(&band.standardised, &j_level, &j_shape);
+    let t = allan::chi2::t_ppf(0.975, (k - 1) as f64);
+    t * t * kappa
 }
 
 /// One slope's fit of [`refit_power_law`]: its signature f, the band's move c0 (f - f_old), the
@@ -287,7 +334,14 @@ fn refit_power_law(input: &ChannelFit, data: &FitData, own: &PowerLaw) -> Option
     };
     let (c_lo, c_hi) = linear_interval(&moved, f, c0, fit, CHI2_1_95 * scale * scale);
     let term: Term = power_law_at(Some(own), ff.shape, fit.c.sqrt()).ok()?.into();
-    let (s_lo, s_hi) = ff.shape_interval(CHI2_1_95 * scale * scale);
+    let mu = |c: f64, k: usize| -> Vec<f64> {
+        let p = &per_shape[k];
+        (0..m)
+            .map(|i| predicted_ln_adev(p.ln[i], p.avar[i], (c - c0) * p.f[i]))
+            .collect()
+    };
+    let threshold = shape_threshold(input.band, data.s, &mu, fit.c, jb, shapes.len());
+    let (s_lo, s_hi) = ff.shape_interval(threshold * scale * scale);
     let shape = ShapeInterval::Scalar(s_lo, s_hi);
     let (lo, hi) = bounds(&term.parameters(), (c_lo, c_hi), &shape);
     Some(Trial {
