@@ -237,7 +237,7 @@ fn shape_threshold(
     n: usize,
 ) -> f64 {
     let k = band.standardised.len();
-    if k < 3 || n < 2 || !(c > 0.0) {
+    if k < 3 || n < 2 || c.is_nan() || c <= 0.0 {
         return CHI2_1_95;
     }
     let (lo, hi) = (j.saturating_sub(1), (j + 1).min(n - 1));
