@@ -54,10 +54,10 @@ pub fn power_law_component_weight(alpha: f64, h: f64) -> f64 {
     h * (PI * beta / 2.0).cos() / (2.0 * PI * (2.0 * PI).powf(alpha))
 }
 
-/// Gamma(x) for 0 < x < 3 (`stats::ln_gamma`, the Lanczos approximation of Numerical Recipes
+/// Gamma(x) for 0 < x < 3 (`stats::gamma`, the Lanczos approximation of Numerical Recipes
 /// 3rd ed. §6.1; relative error below 1e-15 there).
 fn gamma_near_one(x: f64) -> f64 {
-    stats::ln_gamma(x).exp()
+    stats::gamma(x)
 }
 
 /// Quantisation noise Q: sigma^2 = 3 Q^2 / tau^2 (Hou 4.29). Exact for the sampled generator too,

@@ -129,10 +129,10 @@ pub fn median(values: &mut [f64]) -> f64 {
     }
 }
 
-/// ln Gamma(x), x > 0, by the Lanczos approximation (Numerical Recipes 3rd ed. §6.1, g = 7, 9
-/// coefficients; relative error of Gamma below 1e-15 for x > 0), below 0.5 through the reflection
-/// Gamma(x) Gamma(1 - x) = pi / sin(pi x).
-pub fn ln_gamma(x: f64) -> f64 {
+/// The Lanczos approximation's parts at z = x - 1 (Numerical Recipes 3rd ed. §6.1, g = 7, 9
+/// coefficients): t = z + g + 1/2 and the series a = c_0 + sum_i c_i / (z + i), so that
+/// Gamma(x) = sqrt(2 pi) t^(z + 1/2) e^-t a (relative error below 1e-15 for x >= 1/2).
+fn lanczos(z: f64) -> (f64, f64) {
     const G: f64 = 7.0;
     const C: [f64; 9] = [
         0.999_999_999_999_809_9,
@@ -145,17 +145,37 @@ pub fn ln_gamma(x: f64) -> f64 {
         9.984_369_578_019_572e-6,
         1.505_632_735_149_311_6e-7,
     ];
+    let t = z + G + 0.5;
+    let a = C
+        .iter()
+        .enumerate()
+        .skip(1)
+        .fold(C[0], |a, (i, &c)| a + c / (z + i as f64));
+    (t, a)
+}
+
+/// ln Gamma(x), x > 0, by the Lanczos approximation ([`lanczos`]), below 1/2 through the
+/// reflection Gamma(x) Gamma(1 - x) = pi / sin(pi x).
+pub fn ln_gamma(x: f64) -> f64 {
     if x < 0.5 {
         let pi = std::f64::consts::PI;
         return (pi / (pi * x).sin()).ln() - ln_gamma(1.0 - x);
     }
-    let x = x - 1.0;
-    let mut a = C[0];
-    let t = x + G + 0.5;
-    for (i, &c) in C.iter().enumerate().skip(1) {
-        a += c / (x + i as f64);
+    let z = x - 1.0;
+    let (t, a) = lanczos(z);
+    0.5 * (2.0 * std::f64::consts::PI).ln() + (z + 0.5) * t.ln() - t + a.ln()
+}
+
+/// Gamma(x) for 0 < x < 3 by the Lanczos approximation ([`lanczos`]) directly, without the
+/// logarithm or the reflection (the series holds for x > 0; larger x would overflow t^(z + 1/2)
+/// sooner than ln Gamma does). NaN for x <= 0.
+pub fn gamma(x: f64) -> f64 {
+    if x.is_nan() || x <= 0.0 {
+        return f64::NAN;
     }
-    0.5 * (2.0 * std::f64::consts::PI).ln() + (x + 0.5) * t.ln() - t + a.ln()
+    let z = x - 1.0;
+    let (t, a) = lanczos(z);
+    (2.0 * std::f64::consts::PI).sqrt() * t.powf(z + 0.5) * (-t).exp() * a
 }
 
 #[cfg(test)]
@@ -267,6 +287,10 @@ mod tests {
         for (x, g) in cases {
             let got = ln_gamma(x).exp();
             assert!(((got - g) / g).abs() < 1e-14, "Gamma({x}) = {got}, not {g}");
+            if x < 3.0 {
+                let direct = gamma(x);
+                assert!(((direct - g) / g).abs() < 1e-14, "gamma({x}) = {direct}");
+            }
         }
     }
 }
