@@ -226,7 +226,8 @@ fn fit_shaped(
 /// estimated from them), the derivatives taken at the best fit (level `c`, grid shape `j` of `n`)
 /// of `mu(c, j)`, the predicted ln adev, by differences (central in the level at 1e-4 of it;
 /// between the neighbouring grid shapes, one-sided at the grid's ends), each over the tau's
-/// standard error `s`. 3.84 where the band has fewer than 3 logs or the grid one shape.
+/// standard error `s`. 3.84 where the band has fewer than 3 logs or the grid one shape; where
+/// kappa cannot be estimated (a shape the level explains) it is 1 and the threshold t^2.
 /// Measured on hidden power laws: docs/diagnose.md, "The power-law candidate".
 fn shape_threshold(
     band: &Band,
