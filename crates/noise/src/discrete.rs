@@ -190,6 +190,32 @@ impl GaussMarkovBank {
         sum
     }
 
+    /// Remove the components, (phi, drive, state) each at one sample's step, for a generator that
+    /// runs them elsewhere (`crate::block`, exactly: a held component becomes a component advanced
+    /// every sample, phi^(1/m) with its stationary std); the offset stays, the bank's value is
+    /// then -offset.
+    pub(crate) fn take_components(&mut self) -> Vec<(f64, f64, f64)> {
+        let phi = std::mem::take(&mut self.phi);
+        let drive = std::mem::take(&mut self.drive);
+        let state = std::mem::take(&mut self.state);
+        let mut out: Vec<(f64, f64, f64)> = phi
+            .into_iter()
+            .zip(drive)
+            .zip(state)
+            .map(|((p, d), x)| (p, d, x))
+            .collect();
+        for h in std::mem::take(&mut self.held) {
+            // drive = sigma sqrt(1 - phi^2) for the hold's step (`with_holds`).
+            let sigma = h.drive / (-(2.0 * h.phi.ln()).exp_m1()).sqrt();
+            let ln1 = h.phi.ln() / f64::from(h.every);
+            out.push((ln1.exp(), sigma * (-(2.0 * ln1).exp_m1()).sqrt(), h.state));
+        }
+        self.held_sum = 0.0;
+        self.event_span = u32::MAX;
+        self.until_event = u32::MAX;
+        out
+    }
+
     /// Reference the process to its value at t = 0: from now on every value is b(t) - b(0), as seen
     /// by a user who estimates the bias perfectly at turn-on and subtracts it (Woodman TR-696
     /// §3.2.1). Call before the first sample (it takes the current value as b(0)); the draws do
@@ -237,8 +263,55 @@ impl GaussMarkovBank {
         out: &mut [f64],
         scratch: &mut Vec<f64>,
     ) {
-        if !self.add_block_with(rng, out, scratch, &mut NoFollower) {
+        if self.state.is_empty() {
+            let w = self.block_draws(rng, scratch, out.len());
+            let used = self.add_block_held(w, out);
+            debug_assert_eq!(used, w.len());
+        } else if !self.add_block_with(rng, out, scratch, &mut NoFollower) {
             self.add_block_stepwise(rng, out, scratch);
+        }
+    }
+
+    /// [`Self::add_block`] of a bank of held components only (all slow, or the every-sample ones
+    /// run elsewhere, `crate::block`): between updates its value is a constant. The values of
+    /// `step` (0 + held sum - offset); returns the draws used.
+    fn add_block_held(&mut self, w: &[f64], out: &mut [f64]) -> usize {
+        let (mut i, mut j) = (0, 0);
+        while i < out.len() {
+            let run = self.run_len(out.len() - i);
+            let v = 0.0 + self.held_sum - self.offset;
+            for o in &mut out[i..i + run] {
+                *o += v;
+            }
+            i += run;
+            self.count_down(run, w, &mut j);
+        }
+        j
+    }
+
+    /// Samples from now, at most `left`, before the next held update.
+    #[inline(always)]
+    fn run_len(&self, left: usize) -> usize {
+        if self.held.is_empty() {
+            left
+        } else {
+            left.min(self.until_event as usize)
+        }
+    }
+
+    /// `run` samples of the held components' countdown (at most to the next event); at the
+    /// event, the due updates with draws from `w` at `j` on.
+    #[inline(always)]
+    fn count_down(&mut self, run: usize, w: &[f64], j: &mut usize) {
+        if !self.held.is_empty() {
+            // `run` <= until_event, which fits in u32.
+            self.until_event -= run as u32;
+            if self.until_event == 0 {
+                self.sync_held_with(self.event_span, || {
+                    *j += 1;
+                    w[*j - 1]
+                });
+            }
         }
     }
 
@@ -355,12 +428,7 @@ impl GaussMarkovBank {
         let mut j = 0;
         let mut i = 0;
         while i < out.len() {
-            let left = out.len() - i;
-            let run = if self.held.is_empty() {
-                left
-            } else {
-                left.min(self.until_event as usize)
-            };
+            let run = self.run_len(out.len() - i);
             let (held_sum, offset) = (self.held_sum, self.offset);
             let draws = &w[j..j + run * N];
             for (r, (v, d)) in out[i..i + run]
@@ -380,16 +448,7 @@ impl GaussMarkovBank {
             }
             j += run * N;
             i += run;
-            if !self.held.is_empty() {
-                // `run` <= until_event, which fits in u32.
-                self.until_event -= run as u32;
-                if self.until_event == 0 {
-                    self.sync_held_with(self.event_span, || {
-                        j += 1;
-                        w[j - 1]
-                    });
-                }
-            }
+            self.count_down(run, w, &mut j);
         }
         self.state.copy_from_slice(&x);
         j
@@ -900,6 +959,11 @@ impl RandomWalk {
             state: 0.0,
         }
     }
+    /// (K sqrt(dt), the current state).
+    pub(crate) fn parts(&self) -> (f64, f64) {
+        (self.step, self.state)
+    }
+
     /// The current value, then advance one step.
     #[inline]
     pub fn next<R: Rng + ?Sized>(&mut self, rng: &mut R) -> f64 {

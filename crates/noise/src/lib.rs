@@ -48,6 +48,7 @@
 //! assert!(cols[5].iter().all(|&a| a == -STANDARD_GRAVITY_MPS2));
 //! ```
 
+mod block;
 mod channel;
 pub mod closed_form;
 mod config;
@@ -152,6 +153,23 @@ pub(crate) fn calibration_rng(seed: u64, run: u64, channel: u64, effect: Effect)
 /// No other stream is touched: a model without `run_to_run` gives the same values as before.
 pub(crate) fn run_to_run_rng(seed: u64, run: u64, channel: u64) -> ImuRng {
     stream_rng(stream_key(seed, run), (1u64 << 34) | channel)
+}
+
+/// The block stream `component` of one term of one channel of one run (`crate::block`: the
+/// draws of the term's component at the output rate behind a decimating FIR filter;
+/// `Effect::OutputFilter`'s stream 0: the channel's summed remainder): 2^35 + component 2^16 +
+/// the term stream's index, disjoint from the others above.
+pub(crate) fn block_rng(
+    seed: u64,
+    run: u64,
+    channel: u64,
+    effect: Effect,
+    component: usize,
+) -> ImuRng {
+    stream_rng(
+        stream_key(seed, run),
+        (1u64 << 35) | ((component as u64) << 16) | (channel << 8) | effect.stream_index(),
+    )
 }
 
 /// The sub-stream of one term of one channel of one run.

@@ -3,13 +3,14 @@
 //! order, behind the axis' output filter where it has one. One random sub-stream per (channel,
 //! term), so adding a term does not reshuffle others.
 
+use crate::block::{BlockTerms, Linear};
 use crate::channel::Channel;
 use crate::effect::Sensor;
 use crate::model::SensorModel;
 use crate::temperature::TemperatureProfile;
 use crate::terms::output_filter::{FilterState, OutputFilter};
 use crate::terms::{GenContext, Generate, Generator, RawClock, Stage, GENERATION_ORDER};
-use crate::{calibration_rng, term_rng};
+use crate::{block_rng, calibration_rng, term_rng, NormalStream};
 use nalgebra::Vector3;
 
 use crate::discrete::{fused4, FusedLane};
@@ -40,6 +41,11 @@ pub struct ChannelErrors {
     dt_raw: f64,
     /// The output filter's state (None: the raw samples are the output).
     filter: Option<FilterState>,
+    /// The linear Gaussian raw terms generated at the output rate behind a decimating FIR
+    /// filter (`crate::block`); made at the first sample, after the calibration.
+    block: Option<BlockTerms>,
+    /// (seed, run, channel) of a channel whose filter suits the block path, until it is made.
+    block_source: Option<(u64, u64, u64)>,
     /// A block's normal draws (reused; its contents never outlive a call).
     scratch: Vec<f64>,
     /// The second and third terms' draws when terms run in one pass ([`raw_terms`]).
@@ -94,6 +100,10 @@ impl ChannelErrors {
             }
         }
         let dt_raw = cx.dt_raw_s;
+        let block_source = filter
+            .as_ref()
+            .filter(|f| f.is_fir() && BlockTerms::suits(f.response(), f.decimation))
+            .map(|_| (seed, run, channel as u64));
         ChannelErrors {
             dt_s,
             dt_raw,
@@ -102,6 +112,8 @@ impl ChannelErrors {
             raw,
             output,
             filter,
+            block: None,
+            block_source,
             scratch: Vec::new(),
             scratch2: Vec::new(),
             scratch3: Vec::new(),
@@ -130,6 +142,76 @@ impl ChannelErrors {
                 calibration_rng(seed, run, channel as u64, effect)
             });
         }
+    }
+
+    /// Move the linear Gaussian raw terms (white noise, random walks, the components of
+    /// Gauss-Markov banks, resonances) to the block path where the channel's
+    /// filter suits it (`crate::block`); the rest stay raw. Once, at the first sample (after the
+    /// calibration, which references the banks' states).
+    fn prepare_block(&mut self) {
+        use crate::terms::bias_instability::BiasInstabilityGenerator::Flicker;
+        let Some((seed, run, channel)) = self.block_source.take() else {
+            return;
+        };
+        let Some(f) = self.filter.as_ref() else {
+            return;
+        };
+        let mut comps = Vec::new();
+        let mut kept = Vec::new();
+        for mut g in std::mem::take(&mut self.raw) {
+            let effect = g.effect();
+            // Component i of the term draws from the term's block stream i.
+            let stream = |i: usize| NormalStream::new(block_rng(seed, run, channel, effect, i));
+            let mut first = stream(0);
+            let lins = match &mut g {
+                Generator::WhiteNoise(w) => {
+                    let sd = w.sd();
+                    let x0 = sd * crate::discrete::draws(&mut first, &mut self.scratch, 1)[0];
+                    vec![Linear::scalar(0.0, sd, x0)]
+                }
+                Generator::RateRandomWalk(w) => {
+                    let (step, state) = w.walk.parts();
+                    vec![Linear::scalar(1.0, step, state)]
+                }
+                Generator::Resonance(r) => {
+                    let lane = r.parts().0.lane();
+                    let (l11, l21, l22) = lane.chol;
+                    vec![Linear {
+                        phi: lane.phi,
+                        q_chol: [[l11, 0.0], [l21, l22]],
+                        dim: 2,
+                        state: *lane.state,
+                    }]
+                }
+                Generator::BiasInstability(Flicker(b))
+                | Generator::GaussMarkov(b)
+                | Generator::SlowGaussMarkov(b)
+                | Generator::PowerLaw(b) => {
+                    let c = b.parts().0.take_components();
+                    kept.push(g);
+                    c.into_iter()
+                        .map(|(phi, drive, x)| Linear::scalar(phi, drive, x))
+                        .collect()
+                }
+                _ => {
+                    kept.push(g);
+                    continue;
+                }
+            };
+            let mut first = Some(first);
+            for (i, lin) in lins.into_iter().enumerate() {
+                comps.push((lin, first.take().unwrap_or_else(|| stream(i))));
+            }
+        }
+        self.raw = kept;
+        let rest = NormalStream::new(block_rng(
+            seed,
+            run,
+            channel,
+            crate::effect::Effect::OutputFilter,
+            0,
+        ));
+        self.block = Some(BlockTerms::new(f.response(), f.decimation, comps, rest));
     }
 
     /// The measured value of sample `k` (t = k·dt) given the ideal triad input. Calls must come with
@@ -192,6 +274,7 @@ impl ChannelErrors {
     fn lockstep_with(&self, other: &ChannelErrors) -> bool {
         self.dt_raw.to_bits() == other.dt_raw.to_bits()
             && self.raw.len() == other.raw.len()
+            && self.block.is_some() == other.block.is_some()
             && match (&self.filter, &other.filter) {
                 (None, None) => true,
                 (Some(a), Some(b)) => {
@@ -209,6 +292,7 @@ impl ChannelErrors {
         ideal: impl Fn(usize) -> &'a Vector3<f64>,
     ) {
         assert_eq!(lanes.len(), outs.len(), "one block per lane");
+        lanes.iter_mut().for_each(|l| l.prepare_block());
         let n = outs.first().map_or(0, |o| o.len());
         let lockstep =
             outs.iter().all(|o| o.len() == n) && lanes.iter().all(|l| l.lockstep_with(lanes[0]));
@@ -254,6 +338,7 @@ impl ChannelErrors {
             assert_eq!(k0, l.next_k, "samples must be drawn in order");
             l.next_k = k0 + n as u64;
         }
+        lanes.iter_mut().for_each(|l| l.prepare_block());
         let mut filters: Vec<FilterState> =
             lanes.iter_mut().filter_map(|l| l.filter.take()).collect();
         match filters.first() {
@@ -272,6 +357,11 @@ impl ChannelErrors {
                 }
                 for (l, f) in lanes.iter_mut().zip(filters) {
                     l.filter = Some(f);
+                }
+                for (l, out) in lanes.iter_mut().zip(outs.iter_mut()) {
+                    if let Some(b) = &mut l.block {
+                        b.add(out);
+                    }
                 }
             }
         }

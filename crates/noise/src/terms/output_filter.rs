@@ -541,7 +541,11 @@ impl FilterState {
         }
     }
 
-    /// Filter the raw samples `start ..` in `raw`, writing the output samples k0 .. into `out`.
+    /// A FIR kind (no recursion).
+    pub(crate) fn is_fir(&self) -> bool {
+        self.iir.is_none()
+    }
+
     /// The impulse response (internal samples, unit DC gain).
     pub(crate) fn response(&self) -> &[f64] {
         &self.h

@@ -130,6 +130,13 @@ pub struct WhiteNoiseGenerator {
     rng: NormalStream,
 }
 
+impl WhiteNoiseGenerator {
+    /// The raw samples' standard deviation.
+    pub(crate) fn sd(&self) -> f64 {
+        self.sampler.sd
+    }
+}
+
 impl Generate for WhiteNoiseGenerator {
     fn stage(&self) -> Stage {
         Stage::Raw
