@@ -283,7 +283,7 @@ struct Comp {
 }
 
 /// Scalar components side by side, [`WIDTH`] at a time (padded with zeros), for outputs after
-/// the first with one or two rows (the output's share, and one kept sample): their recursions
+/// the first: their recursions
 /// are independent chains, run in one loop so that they overlap (one at a time, each output
 /// waited for the last: the block path was a quarter of `imudrift drift`).
 #[derive(Clone, Debug, Default)]
@@ -292,10 +292,9 @@ struct Side {
     lanes: Vec<Option<usize>>,
     a: Vec<f64>,
     l: Vec<f64>,
-    m0: Vec<f64>,
-    k0: Vec<f64>,
-    m1: Vec<f64>,
-    k1: Vec<f64>,
+    /// Per row (the output's share, then the kept samples), the lanes' coefficients.
+    m: Vec<Vec<f64>>,
+    k: Vec<Vec<f64>>,
 }
 
 const WIDTH: usize = 4;
@@ -303,7 +302,7 @@ const WIDTH: usize = 4;
 /// Longest FIR response the block path takes ([`BlockTerms::suits`]).
 const MAX_TAPS: usize = 64;
 /// Most raw samples a window may reach back before the previous read-out.
-const MAX_CARRIED: usize = 4;
+const MAX_CARRIED: usize = 7;
 
 /// The channel's block-generated terms (see the module docs).
 #[derive(Clone, Debug)]
@@ -371,23 +370,25 @@ impl BlockTerms {
                 }
             })
             .collect();
-        let mut side = Side::default();
-        if rows <= 2 {
-            let scalar: Vec<usize> = (0..comps.len())
-                .filter(|&i| comps[i].lin.dim == 1)
-                .collect();
-            for chunk in scalar.chunks(WIDTH) {
-                for j in 0..WIDTH {
-                    let c = chunk.get(j).copied();
-                    side.lanes.push(c);
-                    let g = c.map(|c| &comps[c].coef[1]);
-                    let get = |f: &dyn Fn(&Coefficients) -> f64| g.map_or(0.0, f);
-                    side.a.push(get(&|g| g.a[0][0]));
-                    side.l.push(get(&|g| g.ls[0][0]));
-                    side.m0.push(get(&|g| g.m[0][0]));
-                    side.k0.push(get(&|g| g.k[0][0]));
-                    side.m1.push(get(&|g| g.m.get(1).map_or(0.0, |m| m[0])));
-                    side.k1.push(get(&|g| g.k.get(1).map_or(0.0, |k| k[0])));
+        let mut side = Side {
+            m: vec![Vec::new(); rows],
+            k: vec![Vec::new(); rows],
+            ..Side::default()
+        };
+        let scalar: Vec<usize> = (0..comps.len())
+            .filter(|&i| comps[i].lin.dim == 1)
+            .collect();
+        for chunk in scalar.chunks(WIDTH) {
+            for j in 0..WIDTH {
+                let c = chunk.get(j).copied();
+                side.lanes.push(c);
+                let g = c.map(|c| &comps[c].coef[1]);
+                let get = |f: &dyn Fn(&Coefficients) -> f64| g.map_or(0.0, f);
+                side.a.push(get(&|g| g.a[0][0]));
+                side.l.push(get(&|g| g.ls[0][0]));
+                for r in 0..rows {
+                    side.m[r].push(get(&|g| g.m[r][0]));
+                    side.k[r].push(get(&|g| g.k[r][0]));
                 }
             }
         }
@@ -441,14 +442,8 @@ impl BlockTerms {
             for g in (0..lanes).step_by(WIDTH) {
                 let side = &self.side;
                 let lane = |v: &[f64]| -> [f64; WIDTH] { std::array::from_fn(|j| v[g + j]) };
-                let (a, l, m0, k0, m1, k1) = (
-                    lane(&side.a),
-                    lane(&side.l),
-                    lane(&side.m0),
-                    lane(&side.k0),
-                    lane(&side.m1),
-                    lane(&side.k1),
-                );
+                let (a, l) = (lane(&side.a), lane(&side.l));
+                let (m0, k0) = (lane(&side.m[0]), lane(&side.k[0]));
                 let idx: [Option<usize>; WIDTH] = std::array::from_fn(|j| side.lanes[g + j]);
                 let mut x: [f64; WIDTH] =
                     std::array::from_fn(|j| idx[j].map_or(0.0, |c| self.comps[c].lin.state[0]));
@@ -461,10 +456,10 @@ impl BlockTerms {
                     let xn: [f64; WIDTH] = std::array::from_fn(|j| a[j] * x[j] + l[j] * zi[j]);
                     let t0: [f64; WIDTH] = std::array::from_fn(|j| m0[j] * x[j] + k0[j] * xn[j]);
                     v[0] += (t0[0] + t0[1]) + (t0[2] + t0[3]);
-                    if rows == 2 {
-                        let t1: [f64; WIDTH] =
-                            std::array::from_fn(|j| m1[j] * x[j] + k1[j] * xn[j]);
-                        v[1] += (t1[0] + t1[1]) + (t1[2] + t1[3]);
+                    for r in 1..rows {
+                        let (m, k) = (&side.m[r][g..g + WIDTH], &side.k[r][g..g + WIDTH]);
+                        let t: [f64; WIDTH] = std::array::from_fn(|j| m[j] * x[j] + k[j] * xn[j]);
+                        v[r] += (t[0] + t[1]) + (t[2] + t[3]);
                     }
                     x = xn;
                 }
