@@ -164,6 +164,9 @@ def test_the_gil_is_released_during_spec():
 
 CTRL_C_CHILD = r"""
 import sys, imudrift
+import signal
+# A parent started in the background passes SIGINT on as ignored: take Python's default back.
+signal.signal(signal.SIGINT, signal.default_int_handler)
 print("start", flush=True)
 try:
     imudrift.spec(sys.argv[1], times=[3600], runs=100000, threads=1)

@@ -19,6 +19,9 @@ EXIT_MARGIN_S = 1.5
 
 CHILD = r"""
 import sys, time, imudrift
+import signal
+# A parent started in the background passes SIGINT on as ignored: take Python's default back.
+signal.signal(signal.SIGINT, signal.default_int_handler)
 which, model = sys.argv[1], sys.argv[2]
 log = imudrift.generate(imudrift.Sensor(model), duration_s=3600, rate_hz=100, seed=3)
 log = log[["gx", "gy", "gz", "ax", "ay", "az"]].to_numpy()
@@ -43,7 +46,11 @@ def interrupted(which, after_s):
     time.sleep(after_s)
     t0 = time.monotonic()
     p.send_signal(signal.SIGINT)
-    out, _ = p.communicate(timeout=60)
+    try:
+        out, _ = p.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        raise
     exited = time.monotonic() - t0
     raised = None
     for line in out.splitlines():

@@ -225,6 +225,9 @@ def two_threads_ratio(n=384, reps=3):
 
 TWO_PROCESSES_CHILD = r"""
 import sys, time, imudrift
+import signal
+# A parent started in the background passes SIGINT on as ignored: take Python's default back.
+signal.signal(signal.SIGINT, signal.default_int_handler)
 t0 = time.perf_counter()
 imudrift.simulate(sys.argv[1], runs=int(sys.argv[2]), seed=1, threads=1, ablation=False)
 print(time.perf_counter() - t0)
@@ -259,6 +262,9 @@ def test_two_threads_run_at_once():
 
 CTRL_C_CHILD = r"""
 import sys, time, imudrift
+import signal
+# A parent started in the background passes SIGINT on as ignored: take Python's default back.
+signal.signal(signal.SIGINT, signal.default_int_handler)
 print("start", flush=True)
 t0 = time.perf_counter()
 try:
@@ -276,7 +282,11 @@ def interrupted_after(child, arg):
     time.sleep(1.0)
     t0 = time.perf_counter()
     p.send_signal(signal.SIGINT)
-    out, _ = p.communicate(timeout=30)
+    try:
+        out, _ = p.communicate(timeout=30)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        raise
     return out, time.perf_counter() - t0
 
 

@@ -143,6 +143,9 @@ def test_a_sample_of_1e200_is_refused_by_drift_and_diagnose(log):
 
 CHILD = r"""
 import sys, time, numpy as np, imudrift
+import signal
+# A parent started in the background passes SIGINT on as ignored: take Python's default back.
+signal.signal(signal.SIGINT, signal.default_int_handler)
 x = np.random.default_rng(1).normal(0.0, 0.01, 2_500_000)
 print("start", flush=True)
 try:
