@@ -16,7 +16,8 @@ const DT_S: f64 = 0.01;
 
 fn adis() -> SensorModel {
     imudrift::files::sensor_model(
-        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/sensors/adis16405.toml"),
+        &std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
+            .join("configs/sensors/adis16405.toml"),
     )
     .expect("adis16405.toml")
 }

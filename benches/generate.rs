@@ -14,7 +14,8 @@ const SAMPLES: u64 = 100_000;
 
 fn mtx() -> SensorModel {
     imudrift::files::sensor_model(
-        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/sensors/mtx.toml"),
+        &std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
+            .join("configs/sensors/mtx.toml"),
     )
     .expect("mtx.toml")
 }

@@ -9,7 +9,7 @@ use montecarlo::scenario::Scenario;
 use noise::{Effect, Sensor, TermSelector};
 
 fn experiment(only: Option<Vec<TermSelector>>) -> Experiment {
-    let root = env!("CARGO_MANIFEST_DIR");
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
     let text =
         std::fs::read_to_string(format!("{root}/configs/scenarios/mtx-static-60s.toml")).unwrap();
     let scenario = Scenario::from_toml_str(&text, "mtx-static-60s.toml").unwrap();

@@ -301,7 +301,13 @@ const WIDTH: usize = 4;
 
 /// Longest FIR response the block path takes ([`BlockTerms::suits`]).
 const MAX_TAPS: usize = 64;
-/// Most raw samples a window may reach back before the previous read-out.
+/// Most raw samples a window may reach back before the previous read-out. Each kept sample adds
+/// a row to every component's share, and with many the raw path is faster: MTx behind a
+/// Bartlett 16 / 8 (7 kept) takes 51-61 ms per 100 000 samples of 6 channels here against 22 ms
+/// on the raw path (criterion `generate_mtx_filtered/bartlett16_x8`, both builds in one
+/// session); with one kept the block path is faster (the fitted ADIS16405's moving average 5 / 4:
+/// `drift` of its six runs 72 -> 52 s of CPU). A choice by cost would change which draws a
+/// model's filtered channels get, and with them `diagnose`'s fits (docs/drift.md): not made yet.
 const MAX_CARRIED: usize = 7;
 
 /// The channel's block-generated terms (see the module docs).
