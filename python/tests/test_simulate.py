@@ -225,9 +225,6 @@ def two_threads_ratio(n=384, reps=3):
 
 TWO_PROCESSES_CHILD = r"""
 import sys, time, imudrift
-import signal
-# A parent started in the background passes SIGINT on as ignored: take Python's default back.
-signal.signal(signal.SIGINT, signal.default_int_handler)
 t0 = time.perf_counter()
 imudrift.simulate(sys.argv[1], runs=int(sys.argv[2]), seed=1, threads=1, ablation=False)
 print(time.perf_counter() - t0)
