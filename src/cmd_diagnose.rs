@@ -181,7 +181,7 @@ fn run_inner(args: &Args, settings: &Settings) -> Result<()> {
         .map_err(with_flags)
         .with_context(|| format!("diagnosing {sources} against {}", args.model.display()))?;
     let elapsed_s = started.elapsed().as_secs_f64();
-    let fitted_on = diagnose::fitted_on::FittedOn::from_logs(&inputs, settings.tau_min_s);
+    let fitted_on = result.fitted_on(&inputs);
     let corrected = corrected_model(&result, &model, &args.model, fitted_on.as_ref());
     let mut human = text_report(&result, &sources, &args.model, elapsed_s);
     let mut checks = Vec::new();

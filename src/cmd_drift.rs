@@ -65,8 +65,9 @@ pub struct Args {
     /// [default: 40]
     #[arg(long)]
     pub replicates: Option<usize>,
-    /// Take the model's levels as exact even when it records the data they were fitted on (its
-    /// [fitted_on] table, written by `diagnose`): no parametric bootstrap
+    /// Take the model's levels and run-to-run spreads as exact even when it records the data they
+    /// were fitted on (its [fitted_on] table, written by `diagnose`): no parametric bootstrap, no
+    /// draw of the spreads
     #[arg(long)]
     pub exact_parameters: bool,
     /// Take the model's structure as certain even when it lists others the fit could not tell
@@ -165,11 +166,7 @@ impl Structures<'_> {
             "logs",
             total,
         ));
-        let models = Models {
-            model: self.model,
-            alternatives: self.alternatives,
-            fitted_on: self.fitted,
-        };
+        let models = Models::fitted(self.model, self.alternatives, self.fitted);
         let result = check_drift_until(inputs, models, settings, &bar, &crate::output::STOP);
         bar.0.finish();
         result.map_err(with_flags)

@@ -277,8 +277,8 @@ def drift(logs, model, rate=None, gyro_unit=None, accel_unit=None, time_unit=Non
     ``logs`` and ``model`` as for :func:`diagnose`. The protocol: ``calibration`` (``"none"``,
     ``"log-mean"``, ``"window:60"``), ``init`` (``"perfect"``, ``"level:10"``), ``horizons``
     (s), ``overlap`` (half-overlapping segments); ``replicates`` simulated experiments for the
-    model's 95 % band; ``exact_parameters`` takes a diagnosed model's levels as exact (no
-    parametric bootstrap); ``one_structure`` takes its structure as certain (no averaging over
+    model's 95 % band; ``exact_parameters`` takes a diagnosed model's levels and
+    run-to-run spreads as exact (no parametric bootstrap, no draw of the spreads); ``one_structure`` takes its structure as certain (no averaging over
     the ``[[alternatives]]`` a diagnosed model lists); ``seed``; ``threads``; ``latitude`` (deg,
     or ``None`` for the flat Earth, as for :func:`diagnose`). The GIL is released while it works;
     Ctrl-C stops it within a second (``KeyboardInterrupt``).

@@ -347,7 +347,7 @@ pub fn diagnose_run<'py>(
         Some(Ok((result, checks)))
     })?
     .map_err(invalid)?;
-    let fitted_on = diagnose::fitted_on::FittedOn::from_logs(&inputs, s.tau_min_s);
+    let fitted_on = result.fitted_on(&inputs);
     let style = noise::UnitStyle::from_config_text(&model_text);
     let corrected = document::corrected_model_toml(&result, &m, &style, fitted_on.as_ref());
     let doc = document::diagnose_document(
@@ -427,11 +427,7 @@ pub fn drift_run<'py>(
     let logs = logs_of(py, logs, &reader)?;
     check_logs(&logs, protocol, &m, &model_name)?;
     let inputs: Vec<LogInput> = logs.iter().map(|l| l.input(false)).collect();
-    let models = Models {
-        model: &m,
-        alternatives: &alternatives,
-        fitted_on: fitted.as_ref(),
-    };
+    let models = Models::fitted(&m, &alternatives, fitted.as_ref());
     let result = run_until(py, settings.threads, |stop| {
         match check_drift_until(&inputs, models, &s, &(), stop) {
             Err(CheckError::Stopped) => None,

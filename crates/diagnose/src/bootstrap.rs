@@ -71,6 +71,22 @@ pub struct ParameterSpread {
     pub fitted_on: FittedOn,
     /// Per channel, each drawn level.
     pub levels: BTreeMap<&'static str, Vec<LevelSpread>>,
+    /// Each run-to-run spread the fit recorded, drawn per replicate from its confidence
+    /// distribution (`run_spread::draw_spreads`).
+    pub run_to_run: Vec<SpreadDraws>,
+}
+
+/// One group's run-to-run spread over the replicates: the model's value (its point estimate), the
+/// share of replicates drawn at 0 and the 2.5, 50 and 97.5 % quantiles (sd of ln level).
+#[derive(Clone, Debug, Serialize)]
+pub struct SpreadDraws {
+    pub channel: Channel,
+    pub effects: Vec<Effect>,
+    pub model: f64,
+    pub share_zero: f64,
+    pub p2_5: f64,
+    pub p50: f64,
+    pub p97_5: f64,
 }
 
 /// One drawn level: the model's value and the 2.5, 50 and 97.5 % quantiles of the draws (SI).
@@ -685,6 +701,7 @@ fn spread(
         method: "parametric_bootstrap",
         fitted_on: fitted.clone(),
         levels,
+        run_to_run: Vec::new(),
     }
 }
 
@@ -702,6 +719,7 @@ mod tests {
                 samples,
                 channels: ImuChannels([true; 6]),
                 tau_min_s: 0.0,
+                run_to_run: Vec::new(),
             })
         };
         assert_eq!(at(0.01, vec![1_000_000, 1_000_000]), Some(8));

@@ -35,7 +35,7 @@
 use crate::alternatives::{self, Alternative, Structure};
 use crate::bootstrap::{draw_models, draw_models_on, BootstrapError, ParameterSpread};
 use crate::drift_joint::{between_logs_joint, joint_check, BetweenLogsJoint, Cell, JointCheck};
-use crate::fitted_on::FittedOn;
+use crate::fitted_on::{FittedOn, SpreadFit};
 use crate::input::LogInput;
 use crate::observer::Observer;
 use crate::protocol::{all_segment_errors, Protocol, Quantity, SegmentErrors};
@@ -396,21 +396,37 @@ pub fn check_drift_averaged(
     observer: &dyn Observer,
 ) -> Result<DriftCheck, CheckError> {
     let never = AtomicBool::new(false);
-    let models = Models {
-        model: model_sensor,
-        alternatives,
-        fitted_on,
-    };
+    let models = Models::fitted(model_sensor, alternatives, fitted_on);
     check_drift_until(logs, models, settings, observer, &never)
 }
 
-/// The model a drift check takes: the sensor model, its `[[alternatives]]` structures and the
-/// data it was fitted on (None: its levels taken as exact).
+/// The model a drift check takes: the sensor model, its `[[alternatives]]` structures, the
+/// data it was fitted on (None: its levels taken as exact) and how its run-to-run spreads were
+/// estimated (each experiment draws its spreads from them, `run_spread::draw_spreads`; empty:
+/// the spreads taken as exact).
 #[derive(Clone, Copy)]
 pub struct Models<'a> {
     pub model: &'a SensorModel,
     pub alternatives: &'a [Alternative],
     pub fitted_on: Option<&'a FittedOn>,
+    pub run_spreads: &'a [SpreadFit],
+}
+
+impl<'a> Models<'a> {
+    /// A model with its structures and the data it was fitted on, the spreads as that data
+    /// records them (`FittedOn::run_to_run`).
+    pub fn fitted(
+        model: &'a SensorModel,
+        alternatives: &'a [Alternative],
+        fitted_on: Option<&'a FittedOn>,
+    ) -> Models<'a> {
+        Models {
+            model,
+            alternatives,
+            fitted_on,
+            run_spreads: fitted_on.map_or(&[], |f| &f.run_to_run),
+        }
+    }
 }
 
 /// [`check_drift_averaged`] that a front end can stop (Ctrl-C): once `stop` is set no further
@@ -427,6 +443,7 @@ pub fn check_drift_until(
         model: model_sensor,
         alternatives,
         fitted_on,
+        run_spreads,
     } = models;
     let stopped = || stop.load(Ordering::Relaxed);
     let dt_s = check_inputs(logs, settings)?;
@@ -452,12 +469,21 @@ pub fn check_drift_until(
         total: plan.simulated_logs(logs.len(), fitted_on),
         observer,
     };
-    let (models, parameters) = plan.draw(
+    let (mut models, mut parameters) = plan.draw(
         fitted_on,
         (settings.seed, (settings.replicates * logs.len()) as u64),
         &|| progress.tick(),
         stop,
     )?;
+    if !run_spreads.is_empty() {
+        if models.is_empty() {
+            models = vec![model_sensor.clone(); settings.replicates];
+        }
+        let drawn = crate::run_spread::draw_spreads(&mut models, run_spreads, settings.seed);
+        if let Some(p) = parameters.as_mut() {
+            p.run_to_run = spread_summaries(model_sensor, run_spreads, &drawn);
+        }
+    }
     let model_of = |r: usize| models.get(r).unwrap_or(model_sensor);
     let experiment = Experiment {
         logs,
@@ -619,6 +645,35 @@ impl StructurePlan {
             })
             .collect()
     }
+}
+
+/// How each spread's draws spread over the replicates (the JSON `parameters.run_to_run[]`).
+fn spread_summaries(
+    model: &SensorModel,
+    fits: &[SpreadFit],
+    drawn: &[Vec<f64>],
+) -> Vec<crate::bootstrap::SpreadDraws> {
+    fits.iter()
+        .zip(drawn)
+        .map(|(f, d)| {
+            let mut v = d.clone();
+            v.sort_by(f64::total_cmp);
+            let axis = model.axis(f.channel.sensor(), f.channel.axis());
+            crate::bootstrap::SpreadDraws {
+                channel: f.channel,
+                effects: f.effects.clone(),
+                model: f
+                    .effects
+                    .iter()
+                    .find_map(|e| axis.run_to_run().get(e).copied())
+                    .unwrap_or(0.0),
+                share_zero: v.iter().filter(|&&x| x == 0.0).count() as f64 / v.len().max(1) as f64,
+                p2_5: stats::quantile(&v, 0.025),
+                p50: stats::quantile(&v, 0.5),
+                p97_5: stats::quantile(&v, 0.975),
+            }
+        })
+        .collect()
 }
 
 /// The logs a drift check simulates: `replicates` experiments of `logs` logs, and with a fitted

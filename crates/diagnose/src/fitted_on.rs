@@ -13,13 +13,21 @@
 //! samples = [1000000]
 //! channels = ["gx", "gy", "gz", "ax", "ay", "az"]
 //! tau_min_s = 0.0
+//! run_to_run = [
+//!     { channel = "gy", effects = ["rate_random_walk"], runs = 6, variance = 0.106, null_variance = 0.123 },
+//! ]
 //! ```
+//!
+//! `run_to_run` (written when the logs are several runs) is how the run-to-run spreads the model
+//! states were estimated (`run_spread`): per channel and group, the runs, the variance V of their
+//! log-multipliers and the null's mean variance sigma_e^2. `drift` draws each experiment's spread
+//! from it (`run_spread::draw_spreads`).
 //!
 //! The table is read here, not in the noise crate (which only skips it): it describes data, not
 //! the error model.
 
 use crate::input::LogInput;
-use noise::{Channel, ImuChannels};
+use noise::{Channel, Effect, ImuChannels};
 use serde::{Deserialize, Serialize, Serializer};
 use std::fmt::Write as _;
 
@@ -35,6 +43,23 @@ pub struct FittedOn {
     pub channels: ImuChannels<bool>,
     /// Shortest averaging time the fit used, s.
     pub tau_min_s: f64,
+    /// How each run-to-run spread was estimated from the runs (none for one run).
+    pub run_to_run: Vec<SpreadFit>,
+}
+
+/// The estimate of one channel's group spread from the fitted runs (`run_spread::RunSpread`'s
+/// statistic and its null): what the spread's sampling distribution needs.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SpreadFit {
+    pub channel: Channel,
+    /// The group's terms (their levels move together between runs).
+    pub effects: Vec<Effect>,
+    /// Runs the spread was estimated from (2 or more).
+    pub runs: usize,
+    /// V: the sample variance of the runs' ln multipliers.
+    pub variance: f64,
+    /// sigma_e^2: the null's mean V (the runs' sampling part).
+    pub null_variance: f64,
 }
 
 fn channel_names<S: Serializer>(channels: &ImuChannels<bool>, s: S) -> Result<S::Ok, S::Error> {
@@ -49,6 +74,18 @@ struct RawFittedOn {
     samples: Vec<i64>,
     channels: Vec<String>,
     tau_min_s: f64,
+    #[serde(default)]
+    run_to_run: Vec<RawSpreadFit>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSpreadFit {
+    channel: String,
+    effects: Vec<String>,
+    runs: i64,
+    variance: f64,
+    null_variance: f64,
 }
 
 /// A `[fitted_on]` table that cannot be used; the message names the key and what was expected.
@@ -116,11 +153,48 @@ impl TryFrom<RawFittedOn> for FittedOn {
                 "a time in seconds, 0 or more",
             ));
         }
+        let run_to_run = raw
+            .run_to_run
+            .iter()
+            .map(|r| {
+                let text = || {
+                    format!(
+                        "{{ channel = {:?}, effects = {:?}, runs = {}, variance = {}, null_variance = {} }}",
+                        r.channel, r.effects, r.runs, r.variance, r.null_variance
+                    )
+                };
+                let expected = "{ channel = one of gx gy gz ax ay az, effects = [term names], \
+                                runs >= 2, variance >= 0, null_variance > 0 }";
+                let channel = Channel::from_name(&r.channel);
+                let effects: Option<Vec<Effect>> =
+                    r.effects.iter().map(|e| Effect::from_name(e)).collect();
+                match (channel, effects) {
+                    (Some(channel), Some(effects))
+                        if !effects.is_empty()
+                            && r.runs >= 2
+                            && r.variance >= 0.0
+                            && r.variance.is_finite()
+                            && r.null_variance > 0.0
+                            && r.null_variance.is_finite() =>
+                    {
+                        Ok(SpreadFit {
+                            channel,
+                            effects,
+                            runs: r.runs as usize,
+                            variance: r.variance,
+                            null_variance: r.null_variance,
+                        })
+                    }
+                    _ => Err(bad("run_to_run", text(), expected)),
+                }
+            })
+            .collect::<Result<Vec<SpreadFit>, FittedOnError>>()?;
         Ok(FittedOn {
             sample_interval_s: dt,
             samples: raw.samples.iter().map(|&n| n as usize).collect(),
             channels,
             tau_min_s: raw.tau_min_s,
+            run_to_run,
         })
     }
 }
@@ -144,7 +218,15 @@ impl FittedOn {
             samples,
             channels: ImuChannels::from_fn(|c| logs.iter().all(|l| l.channels[c].is_some())),
             tau_min_s,
+            run_to_run: Vec::new(),
         })
+    }
+
+    /// The table with how the run-to-run spreads were estimated from these logs
+    /// (`run_spread::RunSpread::fit`).
+    pub fn with_run_spreads(mut self, fits: impl IntoIterator<Item = SpreadFit>) -> FittedOn {
+        self.run_to_run = fits.into_iter().collect();
+        self
     }
 
     /// The `[fitted_on]` table of a model's TOML text, if it has one.
@@ -181,6 +263,31 @@ impl FittedOn {
             .collect();
         let _ = writeln!(s, "channels = [{}]", names.join(", "));
         let _ = writeln!(s, "tau_min_s = {:?}", self.tau_min_s);
+        if !self.run_to_run.is_empty() {
+            s.push_str(
+                "# How the run_to_run spreads were estimated from these runs (per channel and group: the\n\
+                 # variance of the runs' ln levels and its part from sampling alone): `drift` draws each\n\
+                 # experiment's spread from it.\n\
+                 run_to_run = [\n",
+            );
+            for f in &self.run_to_run {
+                let effects: Vec<String> = f
+                    .effects
+                    .iter()
+                    .map(|e| format!("\"{}\"", e.name()))
+                    .collect();
+                let _ = writeln!(
+                    s,
+                    "    {{ channel = \"{}\", effects = [{}], runs = {}, variance = {:?}, null_variance = {:?} }},",
+                    f.channel.name(),
+                    effects.join(", "),
+                    f.runs,
+                    f.variance,
+                    f.null_variance
+                );
+            }
+            s.push_str("]\n");
+        }
         s
     }
 
@@ -200,6 +307,13 @@ mod tests {
             samples: vec![1_000_000, 999_999],
             channels: ImuChannels([true, true, true, false, false, true]),
             tau_min_s: 0.04,
+            run_to_run: vec![SpreadFit {
+                channel: Channel::Gz,
+                effects: vec![Effect::RateRandomWalk, Effect::GaussMarkov],
+                runs: 6,
+                variance: 0.1058130509144893,
+                null_variance: 0.12332084171925294,
+            }],
         }
     }
 
@@ -232,6 +346,15 @@ mod tests {
             ("samples = [1000000, 999999]", "samples = [10]", "samples"),
             ("\"az\"", "\"bz\"", "channels"),
             ("tau_min_s = 0.04", "tau_min_s = -0.5", "tau_min_s"),
+            ("\"gz\", effects", "\"bz\", effects", "run_to_run"),
+            ("\"gauss_markov\"", "\"gauss_markof\"", "run_to_run"),
+            ("variance = 0.1058", "variance = -0.1058", "run_to_run"),
+            ("runs = 6", "runs = 1", "run_to_run"),
+            (
+                "null_variance = 0.12",
+                "null_variance = 0.0e0",
+                "run_to_run",
+            ),
         ] {
             let text = base.replace(from, to);
             let e = FittedOn::from_model_text(&text).unwrap_err().to_string();

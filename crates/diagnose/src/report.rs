@@ -231,6 +231,16 @@ pub struct Diagnosis {
     pub log_bands: Vec<LogBands>,
 }
 
+impl Diagnosis {
+    /// What the corrected model's levels and spreads were fitted on (`FittedOn`, its
+    /// `[fitted_on]` table): the diagnosed `logs` (as given to the diagnosis) and how each
+    /// run-to-run spread was estimated from them.
+    pub fn fitted_on(&self, logs: &[crate::input::LogInput]) -> Option<crate::fitted_on::FittedOn> {
+        crate::fitted_on::FittedOn::from_logs(logs, self.tau_min_s)
+            .map(|f| f.with_run_spreads(self.run_to_run.iter().filter_map(|s| s.fit())))
+    }
+}
+
 /// The drift check of diagnose: the protocol, and the drift gap of the original model and of the
 /// corrected one (`drift_gap`).
 #[derive(Clone, Debug, Serialize)]

@@ -48,6 +48,7 @@
 //!    needs is the best estimate of the spread, not the verdict of a test that it is not 0.
 
 use crate::bootstrap::{edf_at, local_slope};
+use crate::fitted_on::SpreadFit;
 use crate::input::LogInput;
 use crate::simulate::{adev_at, map_static_logs, LogJob, SimSetup};
 use noise::{AxisModel, Channel, Effect, ImuChannels, SensorModel};
@@ -93,6 +94,30 @@ pub struct RunSpread {
     pub interval: [f64; 2],
     /// Passed the naming rule (every spread above 0 is written into the corrected model).
     pub named: bool,
+}
+
+impl RunSpread {
+    /// How this spread was estimated, for the model's `[fitted_on]` (`FittedOn::run_to_run`):
+    /// None without a finite statistic, a null above 0 or a known term.
+    pub fn fit(&self) -> Option<SpreadFit> {
+        let effects: Vec<Effect> = self
+            .effects
+            .iter()
+            .filter_map(|e| Effect::from_name(e))
+            .collect();
+        (self.variance.is_finite()
+            && self.null_variance > 0.0
+            && self.null_variance.is_finite()
+            && !effects.is_empty()
+            && self.ln_multipliers.len() >= 2)
+            .then_some(SpreadFit {
+                channel: self.channel,
+                effects,
+                runs: self.ln_multipliers.len(),
+                variance: self.variance,
+                null_variance: self.null_variance,
+            })
+    }
 }
 
 /// The slow group of an axis: long-term terms a static log shows, with a level above 0; a
@@ -402,9 +427,8 @@ pub fn estimate(
             };
             let s2 = (v - sigma2).max(0.0);
             let bound = |p: f64| {
-                ((r - 1.0) * v / allan::chi2::chi2_ppf(p, r - 1.0) - sigma2)
-                    .max(0.0)
-                    .sqrt()
+                let x = allan::chi2::chi2_ppf(p, r - 1.0);
+                ((r - 1.0) * v / x - sigma2).max(0.0).sqrt()
             };
             let floor = 1.0 / (NULL_REPLICATES + 1) as f64;
             RunSpread {
@@ -444,4 +468,60 @@ pub fn with_estimated_spreads(model: &SensorModel, spreads: &[RunSpread]) -> Sen
         }
     }
     out
+}
+
+/// Index of the spread draws' stream among `noise::extra_rng`'s (per replicate; the channel and
+/// group are added in its low bits): apart from the alignment stream (0) of the drift runs.
+const SPREAD_STREAM: u32 = 0x5250_0000;
+
+/// One spread drawn from its confidence distribution (docs/drift.md, "A next run"): the interval of
+/// [`estimate`] inverts V ~ (s^2 + sigma_e^2) chi2_{R-1} / (R - 1) over s, so s^2 = max(0,
+/// (R - 1) V / X - sigma_e^2) with X ~ chi2_{R-1} has that interval's limits as its 2.5 and 97.5 %
+/// points (the fiducial distribution of s, Fisher 1935; for a variance component with the
+/// within-part known, as the null's sigma_e^2 is here). `x` is the chi-square draw; capped at
+/// `MAX_SPREAD`.
+pub fn spread_at(fit: &SpreadFit, x: f64) -> f64 {
+    let df = fit.runs.saturating_sub(1) as f64;
+    // Without a chi-square (one run, or a draw of 0): the point estimate, sqrt(max(0, V - s_e^2)).
+    let x = if df > 0.0 && x > 0.0 { x } else { df.max(1.0) };
+    ((df.max(1.0) * fit.variance / x - fit.null_variance).max(0.0))
+        .sqrt()
+        .min(noise::run_to_run::MAX_SPREAD)
+}
+
+/// Each replicate's run-to-run spreads drawn from their confidence distribution ([`spread_at`]),
+/// written on the replicate's model (replicate r is `models[r]`; its group's terms the axis has
+/// with a level; a draw of 0 leaves its runs at the pooled levels). Replicate r's draw for fit
+/// `f` comes from `noise::extra_rng(seed, r, SPREAD_STREAM + 2 channel + group)`: the same for any
+/// thread count and whatever the other fits. Returns the draws, [fit][replicate].
+///
+/// Why: a spread estimated from a handful of runs is far from exact (from six runs whose V is
+/// near its null, anything from 0 to about 0.7), and a band for a next run drawn with the point
+/// estimate alone is too narrow exactly where the runs say least; the random-effects prediction
+/// for a new study takes the between-study variance's uncertainty in (Higgins, Thompson &
+/// Spiegelhalter 2009, J. R. Stat. Soc. A 172, 137-159, §3.2: a t rather than a normal quantile).
+pub fn draw_spreads(models: &mut [SensorModel], fits: &[SpreadFit], seed: u64) -> Vec<Vec<f64>> {
+    fits.iter()
+        .map(|f| {
+            let group = f
+                .effects
+                .first()
+                .map_or(0, |&e| noise::run_to_run::group_of(e)) as u32;
+            let stream = SPREAD_STREAM + 2 * f.channel.index() as u32 + group;
+            models
+                .iter_mut()
+                .enumerate()
+                .map(|(r, m)| {
+                    let mut rng = noise::extra_rng(seed, r as u64, stream);
+                    let x = noise::run_to_run::chi_square(&mut rng, f.runs.saturating_sub(1));
+                    let s = spread_at(f, x);
+                    let axis = m.axis_mut(f.channel.sensor(), f.channel.axis());
+                    for &e in &f.effects {
+                        let _ = axis.set_run_to_run(e, s);
+                    }
+                    s
+                })
+                .collect()
+        })
+        .collect()
 }

@@ -62,8 +62,9 @@ fn band_is_bit_identical_for_1_2_and_3_threads() {
     assert_eq!(one, bits(&run(3)));
 }
 
-/// The drift check with the levels drawn by the parametric bootstrap: the JSON of the whole check
-/// (every band, every drawn level's spread) is the same text for 1, 2 and 3 threads; serde_json
+/// The drift check with the levels drawn by the parametric bootstrap and a run-to-run spread drawn
+/// per replicate: the JSON of the whole check (every band, every drawn level's and spread's
+/// quantiles) is the same text for 1, 2 and 3 threads; serde_json
 /// writes every f64 in its shortest exact form, so equal text is equal bits.
 #[test]
 fn bootstrapped_drift_check_is_identical_for_1_2_and_3_threads() {
@@ -101,6 +102,14 @@ bias_instability = "30 ug"
         samples: vec![4_000, 3_000],
         channels: noise::ImuChannels([true; 6]),
         tau_min_s: 0.0,
+        // A run-to-run spread estimated from the two runs: each replicate draws it too.
+        run_to_run: vec![diagnose::fitted_on::SpreadFit {
+            channel: noise::Channel::Gz,
+            effects: vec![noise::Effect::RateRandomWalk],
+            runs: 2,
+            variance: 0.3,
+            null_variance: 0.1,
+        }],
     };
     let settings = CheckSettings {
         protocol: Protocol {
@@ -117,7 +126,9 @@ bias_instability = "30 ug"
             .unwrap()
             .install(|| {
                 let c = check_drift_fitted(&inputs, &model, Some(&fitted), &settings, &()).unwrap();
-                assert!(c.parameters.is_some());
+                let p = c.parameters.as_ref().unwrap();
+                assert_eq!(p.run_to_run.len(), 1);
+                assert!(p.run_to_run[0].p97_5 > p.run_to_run[0].p2_5);
                 serde_json::to_string(&c).unwrap()
             })
     };

@@ -48,6 +48,12 @@ pub fn run_draws(seed: u64, run: u64, channel: usize) -> [f64; 2] {
     [long, normal(&mut rng)]
 }
 
+/// A chi-square draw of `df` (whole) degrees of freedom: the sum of `df` squared standard normals of
+/// `rng` (its definition, exact).
+pub fn chi_square<R: rand::Rng + ?Sized>(rng: &mut R, df: usize) -> f64 {
+    (0..df).map(|_| normal(rng).powi(2)).sum()
+}
+
 /// The group of a term's spread: [`LONG`] for a long-term term, [`SHORT`] otherwise.
 pub fn group_of(effect: crate::Effect) -> usize {
     if effect.is_long_term() {
