@@ -81,9 +81,10 @@ def check(a, model, runs, flags, timings):
 
 
 def spreads(toml_path):
-    """The `run_to_run` lines of a fitted model, as written."""
+    """The axes' `run_to_run` lines of a fitted model, as written (not [fitted_on]'s list of
+    how they were estimated)."""
     return [ln.strip() for ln in pathlib.Path(toml_path).read_text().splitlines()
-            if ln.strip().startswith("run_to_run") or ln.strip().startswith("[gyro.")
+            if ln.strip().startswith("run_to_run = {") or ln.strip().startswith("[gyro.")
             or ln.strip().startswith("[accel.")]
 
 

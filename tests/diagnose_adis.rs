@@ -171,6 +171,29 @@ fn adis16405_runs_pooled_name_the_accelerometer_tone() {
         assert_tone(ch, effects, "runs 1-6");
     }
     assert_no_zero_size(&doc, "runs 1-6");
+    // How each run-to-run spread was estimated goes into the model's [fitted_on], for `drift`
+    // to draw each experiment's spread from: one entry per channel and group, six runs each,
+    // with the JSON's statistic.
+    let toml = doc["corrected_model_toml"].as_str().expect("corrected model");
+    let spreads = doc["run_to_run"].as_array().expect("run_to_run[]");
+    assert_eq!(spreads.len(), 12, "a slow and a short group per channel");
+    let fitted = &toml[toml.find("[fitted_on]").expect("[fitted_on]")..];
+    for s in spreads {
+        let entry = format!(
+            "{{ channel = \"{}\", effects = [{}], runs = 6, variance = {:?}, null_variance = {:?} }}",
+            s["channel"].as_str().unwrap(),
+            s["effects"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|e| format!("{e}"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            s["variance"].as_f64().unwrap(),
+            s["null_variance"].as_f64().unwrap(),
+        );
+        assert!(fitted.contains(&entry), "{entry} not in\n{fitted}");
+    }
 }
 
 /// No named effect has size 0 and the corrected model carries no term of size 0 (issue 45 item
