@@ -449,6 +449,26 @@ fn parameters_text(r: &DriftCheck, exact_flag: bool) -> String {
             .collect();
         let _ = writeln!(s, "  {ch}: {}", parts.join("; "));
     }
+    if !p.run_to_run.is_empty() {
+        let _ = writeln!(
+            s,
+            "run-to-run spreads (sd of ln level between power-ons): drawn per simulated experiment from their estimate on the {} runs (docs/drift.md, \"The spread's own uncertainty\"); 95 % of the draws:",
+            f.samples.len()
+        );
+        for d in &p.run_to_run {
+            let effects: Vec<&str> = d.effects.iter().map(|e| e.name()).collect();
+            let _ = writeln!(
+                s,
+                "  {} {}: {} as fitted, drawn [{}, {}], 0 in {:.0} % of the experiments",
+                d.channel.name(),
+                effects.join(" + "),
+                crate::fmt::sig(d.model, 3),
+                crate::fmt::sig(d.p2_5, 3),
+                crate::fmt::sig(d.p97_5, 3),
+                100.0 * d.share_zero
+            );
+        }
+    }
     s
 }
 

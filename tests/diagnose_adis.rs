@@ -174,7 +174,9 @@ fn adis16405_runs_pooled_name_the_accelerometer_tone() {
     // How each run-to-run spread was estimated goes into the model's [fitted_on], for `drift`
     // to draw each experiment's spread from: one entry per channel and group, six runs each,
     // with the JSON's statistic.
-    let toml = doc["corrected_model_toml"].as_str().expect("corrected model");
+    let toml = doc["corrected_model_toml"]
+        .as_str()
+        .expect("corrected model");
     let spreads = doc["run_to_run"].as_array().expect("run_to_run[]");
     assert_eq!(spreads.len(), 12, "a slow and a short group per channel");
     let fitted = &toml[toml.find("[fitted_on]").expect("[fitted_on]")..];

@@ -278,7 +278,8 @@ fn alternatives_are_averaged_unless_one_structure_is_asked() {
 
 /// `drift --out` writes the table as drift.csv beside drift.json (issue 45 item 6), and the model
 /// levels a `[fitted_on]` model's band draws are printed in spec-sheet units, as `diagnose`
-/// writes them (they were bare SI numbers: "white_noise n 0.000145 [...]").
+/// writes them (they were bare SI numbers: "white_noise n 0.000145 [...]"); a run-to-run spread
+/// the table records is drawn per experiment and listed.
 #[test]
 fn out_writes_the_table_as_csv_and_levels_in_sheet_units() {
     let dir = tempfile::tempdir().unwrap();
@@ -287,7 +288,7 @@ fn out_writes_the_table_as_csv_and_levels_in_sheet_units() {
     std::fs::write(
         &model,
         format!(
-            "{MODEL}\n[fitted_on]\nsample_interval_s = 0.02\nsamples = [30000]\nchannels = [\"gx\", \"gy\", \"gz\", \"ax\", \"ay\", \"az\"]\ntau_min_s = 0.0\n"
+            "{MODEL}\n[fitted_on]\nsample_interval_s = 0.02\nsamples = [30000]\nchannels = [\"gx\", \"gy\", \"gz\", \"ax\", \"ay\", \"az\"]\ntau_min_s = 0.0\nrun_to_run = [\n    {{ channel = \"gy\", effects = [\"white_noise\"], runs = 4, variance = 0.02, null_variance = 0.01 }},\n]\n"
         ),
     )
     .unwrap();
@@ -333,6 +334,19 @@ fn out_writes_the_table_as_csv_and_levels_in_sheet_units() {
     let csv = std::fs::read_to_string(out.join("drift.csv")).expect("drift.csv");
     let doc: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("drift.json")).unwrap()).unwrap();
+    // The spread [fitted_on] records is drawn per experiment: listed in the text and the JSON.
+    let spread = text
+        .lines()
+        .skip_while(|l| !l.starts_with("run-to-run spreads"))
+        .nth(1)
+        .unwrap_or_else(|| panic!("no spread line in {text}"));
+    assert!(
+        spread.starts_with("  gy white_noise: 0 as fitted, drawn ["),
+        "{spread}"
+    );
+    let drawn = &doc["parameters"]["run_to_run"][0];
+    assert_eq!(drawn["channel"], "gy", "{drawn}");
+    assert!(drawn["p97_5"].as_f64().unwrap() > 0.0, "{drawn}");
     let head: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
     assert_eq!(&head[..3], &["t_s", "segments", "quantity"]);
     // 2 horizons x 5 quantities; each row's measured rms is the JSON's.
