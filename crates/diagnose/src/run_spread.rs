@@ -474,7 +474,8 @@ pub fn with_estimated_spreads(model: &SensorModel, spreads: &[RunSpread]) -> Sen
 /// group are added in its low bits): apart from the alignment stream (0) of the drift runs.
 const SPREAD_STREAM: u32 = 0x5250_0000;
 
-/// One spread drawn from its confidence distribution (docs/drift.md, "A next run"): the interval of
+/// One spread drawn from its confidence distribution (docs/drift.md, "The spread's own
+/// uncertainty"): the interval of
 /// [`estimate`] inverts V ~ (s^2 + sigma_e^2) chi2_{R-1} / (R - 1) over s, so s^2 = max(0,
 /// (R - 1) V / X - sigma_e^2) with X ~ chi2_{R-1} has that interval's limits as its 2.5 and 97.5 %
 /// points (the fiducial distribution of s, Fisher 1935; for a variance component with the
@@ -482,9 +483,14 @@ const SPREAD_STREAM: u32 = 0x5250_0000;
 /// `MAX_SPREAD`.
 pub fn spread_at(fit: &SpreadFit, x: f64) -> f64 {
     let df = fit.runs.saturating_sub(1) as f64;
-    // Without a chi-square (one run, or a draw of 0): the point estimate, sqrt(max(0, V - s_e^2)).
-    let x = if df > 0.0 && x > 0.0 { x } else { df.max(1.0) };
-    ((df.max(1.0) * fit.variance / x - fit.null_variance).max(0.0))
+    // (R - 1) V / X; without a chi-square (one run, or a draw of 0) V itself: the point estimate.
+    let total = if df > 0.0 && x > 0.0 {
+        df * fit.variance / x
+    } else {
+        fit.variance
+    };
+    (total - fit.null_variance)
+        .max(0.0)
         .sqrt()
         .min(noise::run_to_run::MAX_SPREAD)
 }
