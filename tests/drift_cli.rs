@@ -190,6 +190,46 @@ fn bad_protocols_are_refused_with_the_option_named() {
     }
 }
 
+/// A `[fitted_on]` spread entry that names a term the model lacks, or a value of the wrong type, is
+/// refused naming the file, the table and the term or the line; `--exact-parameters` skips it.
+#[test]
+fn bad_spread_entries_are_refused_with_the_file_and_place_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = generate(dir.path(), "a.csv", "31");
+    let head = "\n[fitted_on]\nsample_interval_s = 0.02\nsamples = [30000, 30000]\nchannels = [\"gx\", \"gy\", \"gz\", \"ax\", \"ay\", \"az\"]\ntau_min_s = 0.0\nrun_to_run = [\n";
+    for (entry, needle) in [
+        (
+            "    { channel = \"gy\", effects = [\"rate_random_walk\"], runs = 2, variance = 0.1, null_variance = 0.1 },\n",
+            "\"rate_random_walk\"",
+        ),
+        (
+            "    { channel = \"gy\", effects = [\"white_noise\"], runs = \"two\", variance = 0.1, null_variance = 0.1 },\n",
+            "line",
+        ),
+    ] {
+        let model = dir.path().join("spread.toml");
+        let text = format!("{MODEL}{head}{entry}]\n");
+        std::fs::write(&model, &text).unwrap();
+        let line = text.lines().position(|l| l.contains("\"two\"")).map(|i| i + 1);
+        let needle = match line {
+            Some(l) => format!("line {l}:"),
+            None => needle.to_string(),
+        };
+        let run = |extra: &[&str]| {
+            let mut args = vec!["drift", &a, "--model", model.to_str().unwrap()];
+            args.extend_from_slice(&["--horizons", "10", "--replicates", "10"]);
+            args.extend_from_slice(extra);
+            imudrift(&args)
+        };
+        let out = run(&[]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{err}");
+        assert!(err.contains("spread.toml") && err.contains("[fitted_on]"), "{err}");
+        assert!(err.contains(&needle), "{needle} in {err}");
+        common::ok(run(&["--exact-parameters"]));
+    }
+}
+
 /// A model with `[[alternatives]]` (as `diagnose` writes them): the band is averaged over its
 /// structures, the JSON says how (`structures[]`, the model's own first, replicates adding up),
 /// `--one-structure` takes the model's own alone (no `structures`), and a broken entry is refused

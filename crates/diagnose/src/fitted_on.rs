@@ -103,6 +103,9 @@ pub enum FittedOnError {
 
 /// Shortest log an Allan analysis accepts (as `LogInput::validate`).
 const MIN_SAMPLES: i64 = 64;
+/// Most runs a spread's estimate may record (each of `drift`'s experiments draws a chi-square of
+/// runs - 1 degrees of freedom as that many squared normals).
+const MAX_RUNS: i64 = 10_000;
 
 impl TryFrom<RawFittedOn> for FittedOn {
     type Error = FittedOnError;
@@ -164,14 +167,14 @@ impl TryFrom<RawFittedOn> for FittedOn {
                     )
                 };
                 let expected = "{ channel = one of gx gy gz ax ay az, effects = [term names], \
-                                runs >= 2, variance >= 0, null_variance > 0 }";
+                                runs from 2 to 10000, variance >= 0, null_variance > 0 }";
                 let channel = Channel::from_name(&r.channel);
                 let effects: Option<Vec<Effect>> =
                     r.effects.iter().map(|e| Effect::from_name(e)).collect();
                 match (channel, effects) {
                     (Some(channel), Some(effects))
                         if !effects.is_empty()
-                            && r.runs >= 2
+                            && (2..=MAX_RUNS).contains(&r.runs)
                             && r.variance >= 0.0
                             && r.variance.is_finite()
                             && r.null_variance > 0.0
@@ -202,7 +205,7 @@ impl TryFrom<RawFittedOn> for FittedOn {
 /// The whole model document, of which only `[fitted_on]` is read here.
 #[derive(Deserialize)]
 struct Document {
-    fitted_on: Option<toml::Value>,
+    fitted_on: Option<RawFittedOn>,
 }
 
 impl FittedOn {
@@ -231,15 +234,18 @@ impl FittedOn {
 
     /// The `[fitted_on]` table of a model's TOML text, if it has one.
     pub fn from_model_text(text: &str) -> Result<Option<FittedOn>, FittedOnError> {
-        let doc: Document =
-            toml::from_str(text).map_err(|e| FittedOnError::Syntax(e.message().to_string()))?;
-        let Some(table) = doc.fitted_on else {
-            return Ok(None);
-        };
-        let raw: RawFittedOn = table
-            .try_into()
-            .map_err(|e: toml::de::Error| FittedOnError::Syntax(e.message().to_string()))?;
-        FittedOn::try_from(raw).map(Some)
+        // Read in place (not through a `toml::Value`) so that an error keeps its span: the
+        // message names the line.
+        let doc: Document = toml::from_str(text).map_err(|e| {
+            let line = e
+                .span()
+                .map(|r| text[..r.start.min(text.len())].lines().count().max(1));
+            FittedOnError::Syntax(match line {
+                Some(l) => format!("line {l}: {}", e.message()),
+                None => e.message().to_string(),
+            })
+        })?;
+        doc.fitted_on.map(FittedOn::try_from).transpose()
     }
 
     /// The table as TOML, to append to a model's text: it starts with an empty line and the
@@ -291,6 +297,31 @@ impl FittedOn {
         s
     }
 
+    /// Every `run_to_run` entry names terms `model`'s axis has with a level (the terms whose
+    /// spread `drift` draws); the error names the entry and the term.
+    pub fn check_spreads(&self, model: &noise::SensorModel) -> Result<(), FittedOnError> {
+        for f in &self.run_to_run {
+            let axis = model.axis(f.channel.sensor(), f.channel.axis());
+            if let Some(e) = f
+                .effects
+                .iter()
+                .find(|&&e| axis.term(e).and_then(|t| t.level()).is_none())
+            {
+                return Err(FittedOnError::Value {
+                    key: "run_to_run",
+                    value: format!(
+                        "{{ channel = \"{}\", effects = [.. \"{}\" ..] }}",
+                        f.channel.name(),
+                        e.name()
+                    ),
+                    expected:
+                        "terms the model's axis has, with a level (as `diagnose` writes them)",
+                });
+            }
+        }
+        Ok(())
+    }
+
     /// Total duration of the logs, s.
     pub fn duration_s(&self) -> f64 {
         self.samples.iter().sum::<usize>() as f64 * self.sample_interval_s
@@ -333,6 +364,28 @@ mod tests {
         assert_eq!(FittedOn::from_model_text("name = \"x\"\n").unwrap(), None);
     }
 
+    /// A spread entry whose terms the model's axis lacks is an error naming the term.
+    #[test]
+    fn spreads_must_name_the_models_terms() {
+        let f = example();
+        let has = noise::SensorModel::from_toml_str(
+            "name = \"x\"\n[gyro.z]\nrate_random_walk = \"1 deg/h/sqrt(h)\"\ngauss_markov = { sigma = \"1 deg/h\", time_constant = \"10 s\" }\n",
+            "m",
+        )
+        .unwrap();
+        f.check_spreads(&has).unwrap();
+        let lacks = noise::SensorModel::from_toml_str(
+            "name = \"x\"\n[gyro.z]\nrate_random_walk = \"1 deg/h/sqrt(h)\"\n",
+            "m",
+        )
+        .unwrap();
+        let e = f.check_spreads(&lacks).unwrap_err().to_string();
+        assert!(
+            e.contains("run_to_run") && e.contains("gauss_markov"),
+            "{e}"
+        );
+    }
+
     /// A bad value is an error naming its key.
     #[test]
     fn bad_values_name_their_key() {
@@ -350,6 +403,7 @@ mod tests {
             ("\"gauss_markov\"", "\"gauss_markof\"", "run_to_run"),
             ("variance = 0.1058", "variance = -0.1058", "run_to_run"),
             ("runs = 6", "runs = 1", "run_to_run"),
+            ("runs = 6", "runs = 10001", "run_to_run"),
             (
                 "null_variance = 0.12",
                 "null_variance = 0.0e0",
@@ -364,5 +418,11 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("tau_minimum_s"), "{e}");
+        // A wrong type is named with its line.
+        let e = FittedOn::from_model_text(&base.replace("runs = 6", "runs = \"six\""))
+            .unwrap_err()
+            .to_string();
+        let line = base.lines().position(|l| l.contains("runs = 6")).unwrap() + 1;
+        assert!(e.contains(&format!("line {line}:")), "{e}");
     }
 }

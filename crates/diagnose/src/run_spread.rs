@@ -426,10 +426,8 @@ pub fn estimate(
                 f64::NAN
             };
             let s2 = (v - sigma2).max(0.0);
-            let bound = |p: f64| {
-                let x = allan::chi2::chi2_ppf(p, r - 1.0);
-                ((r - 1.0) * v / x - sigma2).max(0.0).sqrt()
-            };
+            let bound =
+                |p: f64| spread_given(v, sigma2, r - 1.0, allan::chi2::chi2_ppf(p, r - 1.0));
             let floor = 1.0 / (NULL_REPLICATES + 1) as f64;
             RunSpread {
                 channel: *c,
@@ -483,16 +481,19 @@ const SPREAD_STREAM: u32 = 0x5250_0000;
 /// `MAX_SPREAD`.
 pub fn spread_at(fit: &SpreadFit, x: f64) -> f64 {
     let df = fit.runs.saturating_sub(1) as f64;
-    // (R - 1) V / X; without a chi-square (one run, or a draw of 0) V itself: the point estimate.
-    let total = if df > 0.0 && x > 0.0 {
-        df * fit.variance / x
+    // Without a chi-square (one run, or a draw of 0): V itself, the point estimate.
+    let (df, x) = if df > 0.0 && x > 0.0 {
+        (df, x)
     } else {
-        fit.variance
+        (1.0, 1.0)
     };
-    (total - fit.null_variance)
-        .max(0.0)
-        .sqrt()
-        .min(noise::run_to_run::MAX_SPREAD)
+    spread_given(fit.variance, fit.null_variance, df, x).min(noise::run_to_run::MAX_SPREAD)
+}
+
+/// The spread s with (s^2 + sigma_e^2) = df V / x, clamped at 0: the interval's limits of
+/// [`estimate`] at chi-square quantiles x, a draw of [`spread_at`] at a chi-square draw.
+fn spread_given(variance: f64, null_variance: f64, df: f64, x: f64) -> f64 {
+    (df * variance / x - null_variance).max(0.0).sqrt()
 }
 
 /// Each replicate's run-to-run spreads drawn from their confidence distribution ([`spread_at`]),

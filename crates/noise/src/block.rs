@@ -14,8 +14,8 @@
 //! conditional law given the state (the Gaussian conditional, K = X S^-1, R = V - K X'), the
 //! conditional remainders of all the channel's terms summed into one draw. Per output sample a
 //! term costs its state's dimension in normal draws (and the channel 1 + L - 1 - d) instead of d
-//! per sample and state: the fitted ADIS16405 model's accelerometer runs at 8 times its output
-//! rate.
+//! per sample and state (behind the moving average of 5 taps at 4 times the output rate that
+//! `diagnose` fits on the ADIS16405's gx, gy and ax, d = 4).
 //!
 //! The joint law is the raw model's own: the block path and the raw path are the same process
 //! (tested below against the covariance of the raw samples filtered, computed exactly); only the

@@ -238,6 +238,12 @@ impl ModelUnderTest {
             message,
         };
         let fitted_on = diagnose::document::fitted_on_of(&file.text, &file.name, exact_parameters)
+            .and_then(|f| {
+                if let Some(f) = &f {
+                    f.check_spreads(&model)?;
+                }
+                Ok(f)
+            })
             .map_err(|e| tables(noise::text::error_chain(&e)))?;
         let alternatives =
             diagnose::document::alternatives_of(&file.text, &file.name, one_structure)
