@@ -176,7 +176,8 @@ fn interval_coverage_over_seeds() {
 }
 
 /// The held-out run end to end (`IMUDRIFT_SPREAD_SEEDS=40 cargo test --release -p
-/// imudrift-diagnose --test run_to_run -- --ignored --nocapture held_out`): per seed, six runs of
+/// imudrift-diagnose --test run_to_run -- --ignored --nocapture held_out`; seeds from
+/// `IMUDRIFT_SPREAD_SKIP` on, default 0, to run a longer series in parts): per seed, six runs of
 /// the known model (gz's rate random walk with spread 0 or 0.3); each run in turn is held out, the
 /// spread is estimated on the other five (`estimate` against the pooled levels, the estimated spread
 /// written with `with_estimated_spreads`, as `diagnose` does) and the held-out run's heading is
@@ -194,12 +195,17 @@ fn held_out_run_inside_the_band_with_the_estimated_spread() {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(40);
+    // Seeds `skip..skip + seeds` (`IMUDRIFT_SPREAD_SKIP`, default 0): a longer series in parts.
+    let skip: u64 = std::env::var("IMUDRIFT_SPREAD_SKIP")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0);
     let horizons = [60.0, 600.0];
     for s in [0.0, 0.3] {
         let truth = model(s);
         let mut inside = [0usize; 2];
         let (mut trials, mut named) = (0usize, 0usize);
-        for k in 0..seeds {
+        for k in skip..skip + seeds {
             let first = 5000 + 10 * k;
             let logs: Vec<GeneratedLog> = (0..6)
                 .map(|r| GeneratedLog::new(&truth, 1 << 18, first + r, false))
