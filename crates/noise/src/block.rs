@@ -283,18 +283,49 @@ struct Comp {
 }
 
 /// Scalar components side by side, [`WIDTH`] at a time (padded with zeros), for outputs after
-/// the first: their recursions
-/// are independent chains, run in one loop so that they overlap (one at a time, each output
-/// waited for the last: the block path was a quarter of `imudrift drift`).
-#[derive(Clone, Debug, Default)]
-struct Side {
+/// the first: their recursions are independent chains, run in one loop so that they overlap (one
+/// at a time, each output waited for the last: the block path was a quarter of `imudrift drift`).
+/// One output at a time over every group, its rows summed in a register array and written once;
+/// the coefficients lane by row in fixed-size arrays, so that the rows go side by side (the same
+/// sums in the same order as a row at a time: the same bits).
+#[derive(Clone, Debug)]
+struct Lanes {
     /// The indices in `comps` of each lane (None: padding).
-    lanes: Vec<Option<usize>>,
-    a: Vec<f64>,
-    l: Vec<f64>,
-    /// Per row (the output's share, then the kept samples), the lanes' coefficients.
-    m: Vec<Vec<f64>>,
-    k: Vec<Vec<f64>>,
+    idx: [Option<usize>; WIDTH],
+    a: [f64; WIDTH],
+    l: [f64; WIDTH],
+    /// Per lane, per row (the output's share, then the kept samples; rows past the last are 0).
+    m: [[f64; MAX_ROWS]; WIDTH],
+    k: [[f64; MAX_ROWS]; WIDTH],
+}
+
+/// The side-by-side lanes over the outputs of `v` (`rows` values each, `rows <= R`), from their
+/// states `x` and draws `z`. Per output and row the lanes' terms m x + k x' sum as
+/// (t0 + t1) + (t2 + t3), group after group; R rows at a time across the row index (the rows past
+/// `rows` have zero coefficients and are dropped).
+fn lanes_over_outputs<const R: usize>(
+    side: &[Lanes],
+    x: &mut [[f64; WIDTH]],
+    z: &[[&[f64]; WIDTH]],
+    v: &mut [f64],
+    rows: usize,
+) {
+    for (i, v) in v.chunks_exact_mut(rows).enumerate() {
+        // v is 0 here (the lanes add first): the sums start from it.
+        let mut acc = [0.0; R];
+        for ((g, xg), zg) in side.iter().zip(x.iter_mut()).zip(z) {
+            let zi: [f64; WIDTH] = std::array::from_fn(|j| zg[j][i]);
+            let xn: [f64; WIDTH] = std::array::from_fn(|j| g.a[j] * xg[j] + g.l[j] * zi[j]);
+            let t = |j: usize, r: usize| g.m[j][r] * xg[j] + g.k[j][r] * xn[j];
+            for (r, acc) in acc.iter_mut().enumerate() {
+                *acc += (t(0, r) + t(1, r)) + (t(2, r) + t(3, r));
+            }
+            *xg = xn;
+        }
+        for (v, a) in v.iter_mut().zip(acc) {
+            *v = a;
+        }
+    }
 }
 
 const WIDTH: usize = 4;
@@ -302,31 +333,34 @@ const WIDTH: usize = 4;
 /// Longest FIR response the block path takes ([`BlockTerms::suits`]).
 const MAX_TAPS: usize = 64;
 /// Most raw samples a window may reach back before the previous read-out. Each kept sample adds
-/// a row to every component's share, and with many the raw path is faster: MTx behind a
-/// Bartlett 16 / 8 (7 kept) takes 51-61 ms per 100 000 samples of 6 channels here against 22 ms
-/// on the raw path (criterion `generate_mtx_filtered/bartlett16_x8`, both builds in one
-/// session); with one kept the block path is faster (the fitted ADIS16405's moving average 5 / 4:
-/// `drift` of its six runs 72 -> 52 s of CPU). A choice by cost would change which draws a
-/// model's filtered channels get, and with them `diagnose`'s fits (docs/drift.md): not made yet.
+/// a row to every component's share and a draw to the remainder, and with many the raw path is
+/// faster: MTx behind a Bartlett 16 / 8 (7 kept) takes 44-50 ms per 100 000 samples of 6
+/// channels here against 22-24 ms on the raw path (criterion `generate_mtx_filtered/bartlett16_x8`,
+/// both paths in one session); with none kept the block path is faster (the fitted ADIS16405's
+/// moving average 5 / 4: `drift` of its six runs 72 -> 52 s of CPU). A choice by cost would
+/// change which draws a model's filtered channels get, and with them `diagnose`'s fits
+/// (docs/drift.md): not made yet.
 const MAX_CARRIED: usize = 7;
+/// Rows of an output's block: its share and the kept samples.
+const MAX_ROWS: usize = 1 + MAX_CARRIED;
 
 /// The channel's block-generated terms (see the module docs).
 #[derive(Clone, Debug)]
 pub(crate) struct BlockTerms {
     comps: Vec<Comp>,
-    side: Side,
+    side: Vec<Lanes>,
     /// Weights of the carried raw values (oldest first) in a later output.
     w_carried: Vec<f64>,
     /// The carried raw values, summed over the terms (nearest the last read-out last).
     carried: Vec<f64>,
     /// Cholesky factors of the summed conditional remainder, output 0's and the later ones'.
-    rest: [Mat; 2],
+    rest: [[[f64; MAX_ROWS]; MAX_ROWS]; 2],
     rng: NormalStream,
     scratch: Vec<f64>,
-    /// Per output of a block: the output's share, then the kept samples.
-    v: Vec<f64>,
     /// Draws of a padding lane (zeros).
     zeros: Vec<f64>,
+    /// Per output of a block: the output's share, then the kept samples.
+    v: Vec<f64>,
     started: bool,
 }
 
@@ -376,38 +410,49 @@ impl BlockTerms {
                 }
             })
             .collect();
-        let mut side = Side {
-            m: vec![Vec::new(); rows],
-            k: vec![Vec::new(); rows],
-            ..Side::default()
-        };
         let scalar: Vec<usize> = (0..comps.len())
             .filter(|&i| comps[i].lin.dim == 1)
             .collect();
-        for chunk in scalar.chunks(WIDTH) {
-            for j in 0..WIDTH {
-                let c = chunk.get(j).copied();
-                side.lanes.push(c);
-                let g = c.map(|c| &comps[c].coef[1]);
-                let get = |f: &dyn Fn(&Coefficients) -> f64| g.map_or(0.0, f);
-                side.a.push(get(&|g| g.a[0][0]));
-                side.l.push(get(&|g| g.ls[0][0]));
-                for r in 0..rows {
-                    side.m[r].push(get(&|g| g.m[r][0]));
-                    side.k[r].push(get(&|g| g.k[r][0]));
+        let side = scalar
+            .chunks(WIDTH)
+            .map(|chunk| {
+                let idx: [Option<usize>; WIDTH] = std::array::from_fn(|j| chunk.get(j).copied());
+                let get = |j: usize, f: &dyn Fn(&Coefficients) -> f64| {
+                    idx[j].map_or(0.0, |c| f(&comps[c].coef[1]))
+                };
+                let mut lanes = Lanes {
+                    idx,
+                    a: std::array::from_fn(|j| get(j, &|g| g.a[0][0])),
+                    l: std::array::from_fn(|j| get(j, &|g| g.ls[0][0])),
+                    m: [[0.0; MAX_ROWS]; WIDTH],
+                    k: [[0.0; MAX_ROWS]; WIDTH],
+                };
+                for j in 0..WIDTH {
+                    for r in 0..rows {
+                        lanes.m[j][r] = get(j, &|g| g.m[r][0]);
+                        lanes.k[j][r] = get(j, &|g| g.k[r][0]);
+                    }
                 }
-            }
-        }
+                lanes
+            })
+            .collect();
         BlockTerms {
             comps,
             side,
             w_carried: (1..=carried).rev().map(|i| h[d + i]).collect(),
             carried: vec![0.0; carried],
-            rest: rest.map(|r| cholesky(&r)),
+            rest: rest.map(|r| {
+                let c = cholesky(&r);
+                std::array::from_fn(|i| {
+                    std::array::from_fn(|j| {
+                        c.get(i).map_or(0.0, |c| c.get(j).copied().unwrap_or(0.0))
+                    })
+                })
+            }),
             rng,
             scratch: Vec::new(),
-            v: Vec::new(),
             zeros: Vec::new(),
+            v: Vec::new(),
             started: false,
         }
     }
@@ -439,45 +484,37 @@ impl BlockTerms {
             }
         }
         // The side-by-side scalar components, then the others one at a time.
-        let lanes = self.side.lanes.len();
-        if lanes > 0 && n > first {
+        if !self.side.is_empty() && n > first {
             if self.zeros.len() < n {
                 self.zeros.resize(n, 0.0);
             }
+            let side = &self.side;
+            let comps = &self.comps;
+            let zeros = &self.zeros[first..n];
+            let mut x: Vec<[f64; WIDTH]> = side
+                .iter()
+                .map(|g| std::array::from_fn(|j| g.idx[j].map_or(0.0, |c| comps[c].lin.state[0])))
+                .collect();
+            let z: Vec<[&[f64]; WIDTH]> = side
+                .iter()
+                .map(|g| std::array::from_fn(|j| g.idx[j].map_or(zeros, |c| &comps[c].z[first..n])))
+                .collect();
             let v = &mut self.v[first * rows..];
-            for g in (0..lanes).step_by(WIDTH) {
-                let side = &self.side;
-                let lane = |v: &[f64]| -> [f64; WIDTH] { std::array::from_fn(|j| v[g + j]) };
-                let (a, l) = (lane(&side.a), lane(&side.l));
-                let (m0, k0) = (lane(&side.m[0]), lane(&side.k[0]));
-                let idx: [Option<usize>; WIDTH] = std::array::from_fn(|j| side.lanes[g + j]);
-                let mut x: [f64; WIDTH] =
-                    std::array::from_fn(|j| idx[j].map_or(0.0, |c| self.comps[c].lin.state[0]));
-                let z: [&[f64]; WIDTH] = std::array::from_fn(|j| match idx[j] {
-                    Some(c) => &self.comps[c].z[first..n],
-                    None => &self.zeros[first..n],
-                });
-                for (i, v) in v.chunks_exact_mut(rows).enumerate() {
-                    let zi: [f64; WIDTH] = std::array::from_fn(|j| z[j][i]);
-                    let xn: [f64; WIDTH] = std::array::from_fn(|j| a[j] * x[j] + l[j] * zi[j]);
-                    let t0: [f64; WIDTH] = std::array::from_fn(|j| m0[j] * x[j] + k0[j] * xn[j]);
-                    v[0] += (t0[0] + t0[1]) + (t0[2] + t0[3]);
-                    for r in 1..rows {
-                        let (m, k) = (&side.m[r][g..g + WIDTH], &side.k[r][g..g + WIDTH]);
-                        let t: [f64; WIDTH] = std::array::from_fn(|j| m[j] * x[j] + k[j] * xn[j]);
-                        v[r] += (t[0] + t[1]) + (t[2] + t[3]);
-                    }
-                    x = xn;
-                }
-                for (j, c) in idx.iter().enumerate() {
+            match rows {
+                1 => lanes_over_outputs::<1>(side, &mut x, &z, v, rows),
+                2..=4 => lanes_over_outputs::<4>(side, &mut x, &z, v, rows),
+                _ => lanes_over_outputs::<MAX_ROWS>(side, &mut x, &z, v, rows),
+            }
+            for (g, xg) in side.iter().zip(&x) {
+                for (j, c) in g.idx.iter().enumerate() {
                     if let Some(c) = c {
-                        self.comps[*c].lin.state[0] = x[j];
+                        self.comps[*c].lin.state[0] = xg[j];
                     }
                 }
             }
         }
         for ci in 0..self.comps.len() {
-            if self.side.lanes.contains(&Some(ci)) {
+            if self.side.iter().any(|g| g.idx.contains(&Some(ci))) {
                 continue;
             }
             let c = &mut self.comps[ci];
