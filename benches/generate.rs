@@ -86,6 +86,12 @@ fn bench(c: &mut Criterion) {
     group.sample_size(10);
     for (name, kind, d) in [
         ("bartlett16_x8", noise::FilterKind::Bartlett { taps: 16 }, 8),
+        // The moving average `diagnose` fits on the ADIS16405 runs: no sample kept.
+        (
+            "moving_average5_x4",
+            noise::FilterKind::MovingAverage { taps: 5 },
+            4,
+        ),
         (
             "lowpass2_30hz_x1",
             noise::FilterKind::LowPass2 { cutoff_hz: 30.0 },

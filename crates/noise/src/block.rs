@@ -299,6 +299,40 @@ struct Lanes {
     k: [[f64; MAX_ROWS]; WIDTH],
 }
 
+/// A group's draws for outputs `first..first + zeros.len()` (a padding lane's: `zeros`).
+fn lane_draws<'a>(
+    comps: &'a [Comp],
+    g: &Lanes,
+    zeros: &'a [f64],
+    first: usize,
+) -> [&'a [f64]; WIDTH] {
+    let end = first + zeros.len();
+    std::array::from_fn(|j| g.idx[j].map_or(zeros, |c| &comps[c].z[first..end]))
+}
+
+/// One group of side-by-side lanes over the outputs of `v` when each output has one row (no
+/// kept samples), from the states `xs`, returning the last: called group after group, each over
+/// every output with its states in registers (the same sums in the same order as
+/// [`lanes_over_outputs`]; faster here, where there are no rows to share the loop with).
+fn lanes_one_row(
+    g: &Lanes,
+    mut xs: [f64; WIDTH],
+    zg: &[&[f64]; WIDTH],
+    v: &mut [f64],
+) -> [f64; WIDTH] {
+    let (a, l) = (g.a, g.l);
+    let m: [f64; WIDTH] = std::array::from_fn(|j| g.m[j][0]);
+    let k: [f64; WIDTH] = std::array::from_fn(|j| g.k[j][0]);
+    for (i, v) in v.iter_mut().enumerate() {
+        let zi: [f64; WIDTH] = std::array::from_fn(|j| zg[j][i]);
+        let xn: [f64; WIDTH] = std::array::from_fn(|j| a[j] * xs[j] + l[j] * zi[j]);
+        let t: [f64; WIDTH] = std::array::from_fn(|j| m[j] * xs[j] + k[j] * xn[j]);
+        *v += (t[0] + t[1]) + (t[2] + t[3]);
+        xs = xn;
+    }
+    xs
+}
+
 /// The side-by-side lanes over the outputs of `v` (`rows` values each, `rows <= R`), from their
 /// states `x` and draws `z`. Per output and row the lanes' terms m x + k x' sum as
 /// (t0 + t1) + (t2 + t3), group after group; R rows at a time across the row index (the rows past
@@ -334,10 +368,11 @@ const WIDTH: usize = 4;
 const MAX_TAPS: usize = 64;
 /// Most raw samples a window may reach back before the previous read-out. Each kept sample adds
 /// a row to every component's share and a draw to the remainder, and with many the raw path is
-/// faster: MTx behind a Bartlett 16 / 8 (7 kept) takes 44-50 ms per 100 000 samples of 6
+/// faster: MTx behind a Bartlett 16 / 8 (7 kept) takes 43-44 ms per 100 000 samples of 6
 /// channels here against 22-24 ms on the raw path (criterion `generate_mtx_filtered/bartlett16_x8`,
 /// both paths in one session); with none kept the block path is faster (the fitted ADIS16405's
-/// moving average 5 / 4: `drift` of its six runs 72 -> 52 s of CPU). A choice by cost would
+/// moving average 5 / 4, `generate_mtx_filtered/moving_average5_x4`: 11-12 ms; `drift` of its
+/// six runs 72 -> 52 s of CPU). A choice by cost would
 /// change which draws a model's filtered channels get, and with them `diagnose`'s fits
 /// (docs/drift.md): not made yet.
 const MAX_CARRIED: usize = 7;
@@ -488,24 +523,31 @@ impl BlockTerms {
             if self.zeros.len() < n {
                 self.zeros.resize(n, 0.0);
             }
-            let side = &self.side;
-            let comps = &self.comps;
             let zeros = &self.zeros[first..n];
-            let mut x: Vec<[f64; WIDTH]> = side
-                .iter()
-                .map(|g| std::array::from_fn(|j| g.idx[j].map_or(0.0, |c| comps[c].lin.state[0])))
-                .collect();
-            let z: Vec<[&[f64]; WIDTH]> = side
-                .iter()
-                .map(|g| std::array::from_fn(|j| g.idx[j].map_or(zeros, |c| &comps[c].z[first..n])))
-                .collect();
             let v = &mut self.v[first * rows..];
-            match rows {
-                1 => lanes_over_outputs::<1>(side, &mut x, &z, v, rows),
-                2..=4 => lanes_over_outputs::<4>(side, &mut x, &z, v, rows),
-                _ => lanes_over_outputs::<MAX_ROWS>(side, &mut x, &z, v, rows),
-            }
-            for (g, xg) in side.iter().zip(&x) {
+            let z_of = |comps, g| lane_draws(comps, g, zeros, first);
+            let x_of = |comps: &[Comp], g: &Lanes| -> [f64; WIDTH] {
+                std::array::from_fn(|j| g.idx[j].map_or(0.0, |c| comps[c].lin.state[0]))
+            };
+            let finals: Vec<[f64; WIDTH]> = if rows == 1 {
+                // Group after group (no allocation per call but the states' list).
+                self.side
+                    .iter()
+                    .map(|g| lanes_one_row(g, x_of(&self.comps, g), &z_of(&self.comps, g), v))
+                    .collect()
+            } else {
+                let mut x: Vec<[f64; WIDTH]> =
+                    self.side.iter().map(|g| x_of(&self.comps, g)).collect();
+                let z: Vec<[&[f64]; WIDTH]> =
+                    self.side.iter().map(|g| z_of(&self.comps, g)).collect();
+                if rows <= 4 {
+                    lanes_over_outputs::<4>(&self.side, &mut x, &z, v, rows);
+                } else {
+                    lanes_over_outputs::<MAX_ROWS>(&self.side, &mut x, &z, v, rows);
+                }
+                x
+            };
+            for (g, xg) in self.side.iter().zip(&finals) {
                 for (j, c) in g.idx.iter().enumerate() {
                     if let Some(c) = c {
                         self.comps[*c].lin.state[0] = xg[j];
