@@ -7,8 +7,8 @@ share"):
 
 1. **Correlation.** Per run and averaging time tau: the six channels' tau-averages (outliers
    beyond 8 robust sd replaced by the median), their first differences (the increments the Allan
-   variance squares), and the 15 pairwise correlations r_ij of those increments. Printed: their
-   mean, their smallest, and z = mean r / its sd under independent channels. The sd is Bartlett's
+   variance squares), and the 15 pairwise correlations r_ij of those increments. Printed per
+   group of pairs (below): their mean r and z = mean r / its sd under independent channels. The sd is Bartlett's
    (Box, Jenkins & Reinsel, *Time Series Analysis*, 4th ed., §11.1.3, eq. 11.1.7): for two
    independent series var(r_ij) = (1/n) sum_k rho_i(k) rho_j(k) over lags k (here |k| <= 20), each
    series' own autocorrelation rho estimated from the log; the 15 pairs' r are uncorrelated under
@@ -139,10 +139,22 @@ def main():
                     help="l_c of gx, gy, gz (default: the six-run fit's bias-instability "
                     "coefficients B, 33.92, 33.30, 23.57 deg/h, over gx's)")
     args = ap.parse_args()
+    try:
+        loading = np.array([float(v) for v in args.loadings.split(",")])
+    except ValueError:
+        loading = np.array([])
+    if loading.shape != (3,) or not np.all(np.isfinite(loading)):
+        sys.exit(f"--loadings: three finite numbers for gx, gy, gz (got {args.loadings!r})")
     data = os.environ.get("IMUDRIFT_DATA")
     if not data:
         sys.exit("set IMUDRIFT_DATA to the folder that holds adis16405_imudata/")
-    logs = [load(pathlib.Path(data) / r) for r in RUNS]
+    paths = [pathlib.Path(data) / r for r in RUNS]
+    missing = [str(p) for p in paths if not p.is_file()]
+    if missing:
+        sys.exit(f"IMUDRIFT_DATA: no ADIS16405 log at {', '.join(missing)}")
+    if (args.null or args.experiment) and not (args.model and pathlib.Path(args.model).is_file()):
+        sys.exit(f"--null and --experiment need --model, a sensor TOML (got {args.model!r})")
+    logs = [load(p) for p in paths]
     taus = (100, 1000, 10000)
     print("mean r of the pairs' increments (z against independent channels), per tau-average")
     print("| run | " + " | ".join(f"{m / RATE_HZ:g} s: " + ", ".join(GROUPS) for m in taus) + " |")
@@ -153,8 +165,6 @@ def main():
             ", ".join(f"{c[g][0]:.2f} ({c[g][1]:.1f})" for g in GROUPS) for c in cells) + " |")
     if args.null:
         import imudrift
-        if not args.model:
-            sys.exit("--null needs --model")
         zs = {(g, m): [] for g in GROUPS for m in taus}
         for k in range(args.null):
             df = imudrift.generate(args.model, duration_s=SAMPLES / RATE_HZ, rate_hz=RATE_HZ,
@@ -168,12 +178,9 @@ def main():
             print(f"  {m / RATE_HZ:g} s: " + ", ".join(
                 f"{g} {np.mean(zs[(g, m)]):+.2f} / {np.std(zs[(g, m)], ddof=1):.2f}" for g in GROUPS))
     if args.experiment:
-        if not args.model:
-            sys.exit("--experiment needs --model")
         from multiprocessing import Pool
         g = np.array([np.deg2rad(log[:, :3] - log[:, :3].mean(0)) for log in logs])
         measured = between_logs(hour_attitude(g))
-        loading = np.array([float(v) for v in args.loadings.split(",")])
         with Pool(os.cpu_count()) as pool:
             sims = pool.map(experiment, [(args.model, e, loading) for e in range(args.experiment)])
         print(f"\nhour's attitude between logs, D (roll, pitch, heading) measured: "

@@ -310,6 +310,15 @@ fn lane_draws<'a>(
     std::array::from_fn(|j| g.idx[j].map_or(zeros, |c| &comps[c].z[first..end]))
 }
 
+/// A group's lanes' last states back into their components.
+fn write_states(comps: &mut [Comp], g: &Lanes, xs: &[f64; WIDTH]) {
+    for (j, c) in g.idx.iter().enumerate() {
+        if let Some(c) = c {
+            comps[*c].lin.state[0] = xs[j];
+        }
+    }
+}
+
 /// One group of side-by-side lanes over the outputs of `v` when each output has one row (no
 /// kept samples), from the states `xs`, returning the last: called group after group, each over
 /// every output with its states in registers (the same sums in the same order as
@@ -369,7 +378,7 @@ const MAX_TAPS: usize = 64;
 /// Most raw samples a window may reach back before the previous read-out. Each kept sample adds
 /// a row to every component's share and a draw to the remainder, and with many the raw path is
 /// faster: MTx behind a Bartlett 16 / 8 (7 kept) takes 43-44 ms per 100 000 samples of 6
-/// channels here against 22-24 ms on the raw path (criterion `generate_mtx_filtered/bartlett16_x8`,
+/// channels here against 22.6-24.5 ms on the raw path (criterion `generate_mtx_filtered/bartlett16_x8`,
 /// both paths in one session); with none kept the block path is faster (the fitted ADIS16405's
 /// moving average 5 / 4, `generate_mtx_filtered/moving_average5_x4`: 11-12 ms; `drift` of its
 /// six runs 72 -> 52 s of CPU). A choice by cost would
@@ -419,6 +428,10 @@ impl BlockTerms {
     ) -> BlockTerms {
         let l = h.len();
         let carried = (l - 1).saturating_sub(d);
+        debug_assert!(
+            Self::suits(h, d),
+            "BlockTerms::new of a filter that does not suit"
+        );
         let geometries = [
             Geometry::new(h, l - 1, carried),
             Geometry::new(h, d, carried),
@@ -525,33 +538,35 @@ impl BlockTerms {
             }
             let zeros = &self.zeros[first..n];
             let v = &mut self.v[first * rows..];
-            let z_of = |comps, g| lane_draws(comps, g, zeros, first);
             let x_of = |comps: &[Comp], g: &Lanes| -> [f64; WIDTH] {
                 std::array::from_fn(|j| g.idx[j].map_or(0.0, |c| comps[c].lin.state[0]))
             };
-            let finals: Vec<[f64; WIDTH]> = if rows == 1 {
-                // Group after group (no allocation per call but the states' list).
-                self.side
-                    .iter()
-                    .map(|g| lanes_one_row(g, x_of(&self.comps, g), &z_of(&self.comps, g), v))
-                    .collect()
+            if rows == 1 {
+                // Group after group, each over every output: nothing allocated per call.
+                for g in &self.side {
+                    let xs = lanes_one_row(
+                        g,
+                        x_of(&self.comps, g),
+                        &lane_draws(&self.comps, g, zeros, first),
+                        v,
+                    );
+                    write_states(&mut self.comps, g, &xs);
+                }
             } else {
                 let mut x: Vec<[f64; WIDTH]> =
                     self.side.iter().map(|g| x_of(&self.comps, g)).collect();
-                let z: Vec<[&[f64]; WIDTH]> =
-                    self.side.iter().map(|g| z_of(&self.comps, g)).collect();
+                let z: Vec<[&[f64]; WIDTH]> = self
+                    .side
+                    .iter()
+                    .map(|g| lane_draws(&self.comps, g, zeros, first))
+                    .collect();
                 if rows <= 4 {
                     lanes_over_outputs::<4>(&self.side, &mut x, &z, v, rows);
                 } else {
                     lanes_over_outputs::<MAX_ROWS>(&self.side, &mut x, &z, v, rows);
                 }
-                x
-            };
-            for (g, xg) in self.side.iter().zip(&finals) {
-                for (j, c) in g.idx.iter().enumerate() {
-                    if let Some(c) = c {
-                        self.comps[*c].lin.state[0] = xg[j];
-                    }
+                for (g, xs) in self.side.iter().zip(&x) {
+                    write_states(&mut self.comps, g, xs);
                 }
             }
         }
@@ -708,68 +723,107 @@ mod tests {
             .collect()
     }
 
-    /// The block path's outputs 0..4 have the raw model's covariance: every entry of the 4 x 4
-    /// matrix within 4.42 standard errors (two-sided 1e-5 each, 10 entries, 5 sets of components
-    /// and 4 filters: a false alarm in about 2e-3 of runs), the standard error of a sample covariance of jointly
-    /// normal values sqrt((s_aa s_bb + s_ab^2) / N).
-    #[test]
-    fn outputs_have_the_raw_models_covariance() {
-        let bartlett = |l: usize| {
-            let w: Vec<f64> = (0..l).map(|i| (i + 1).min(l - i) as f64).collect();
-            let s: f64 = w.iter().sum();
-            w.into_iter().map(|v| v / s).collect::<Vec<f64>>()
-        };
-        let filters = [
+    /// Components and their initial states' covariances.
+    type Drawn = (Vec<Linear>, Vec<[[f64; 2]; 2]>);
+
+    /// The outputs 0..K of `BlockTerms::new(h, d, ...)` with the components `draw` gives (their
+    /// initial states' covariances beside them), over N runs, against the raw model's exact
+    /// covariance: every entry within 4.42 standard errors (two-sided 1e-5 each), the standard
+    /// error of a sample covariance of jointly normal values sqrt((s_aa s_bb + s_ab^2) / N).
+    fn check_covariance(h: &[f64], d: usize, draw: &dyn Fn(&mut ImuRng) -> Drawn, label: &str) {
+        const K: usize = 4;
+        const N: usize = 20_000;
+        assert!(BlockTerms::suits(h, d));
+        let mut rng = ImuRng::seed_from_u64(7);
+        let (_, p0) = draw(&mut rng);
+        let mut sum = vec![vec![0.0; K]; K];
+        for rep in 0..N {
+            let (comps, _) = draw(&mut rng);
+            let rest = NormalStream::new(ImuRng::seed_from_u64(1_000_000 + rep as u64));
+            let mut b = BlockTerms::new(h, d, terms(comps, rep as u64), rest);
+            let mut y = [0.0; K];
+            b.add(&mut y[..1]);
+            b.add(&mut y[1..]);
+            for a in 0..K {
+                for c in 0..K {
+                    sum[a][c] += y[a] * y[c];
+                }
+            }
+        }
+        let (comps, _) = draw(&mut rng);
+        let exact = exact_cov(&comps, &p0, h, d, K);
+        for a in 0..K {
+            for c in a..K {
+                let est = sum[a][c] / N as f64;
+                let se = ((exact[a][a] * exact[c][c] + exact[a][c].powi(2)) / N as f64).sqrt();
+                let z = (est - exact[a][c]) / se;
+                assert!(
+                    z.abs() < 4.42,
+                    "h {h:?} d {d} components {label}: cov(y{a}, y{c}) {est} against {} (z = {z:.2})",
+                    exact[a][c]
+                );
+            }
+        }
+    }
+
+    fn bartlett(l: usize) -> Vec<f64> {
+        let w: Vec<f64> = (0..l).map(|i| (i + 1).min(l - i) as f64).collect();
+        let s: f64 = w.iter().sum();
+        w.into_iter().map(|v| v / s).collect()
+    }
+
+    /// The filters of the covariance tests: 1, 0, 4 and 0 raw samples kept before the previous
+    /// read-out (rows 2, 1, 5, 1: each of the lanes' paths).
+    fn test_filters() -> [(Vec<f64>, usize); 4] {
+        [
             (vec![0.1; 10], 8),
             (vec![0.2; 5], 4),
             (bartlett(13), 8),
             (vec![0.5; 2], 4),
-        ];
-        const K: usize = 4;
-        const N: usize = 20_000;
+        ]
+    }
+
+    /// The block path's outputs 0..4 have the raw model's covariance (`check_covariance`; 10
+    /// entries, 5 sets of components and 4 filters: a false alarm in about 2e-3 of runs).
+    #[test]
+    fn outputs_have_the_raw_models_covariance() {
         // All four together, then each alone (a slow component's variance would hide a wrong
         // weight on white noise's samples).
         let sets: [&[usize]; 5] = [&[0, 1, 2, 3], &[0], &[1], &[2], &[3]];
-        for (h, d) in filters {
+        for (h, d) in test_filters() {
             for set in sets {
-                assert!(BlockTerms::suits(&h, d));
-                let pick = |(c, p): (Vec<Linear>, Vec<[[f64; 2]; 2]>)| {
+                let draw = |rng: &mut ImuRng| {
+                    let (c, p) = components(rng);
                     let c: Vec<Linear> = set.iter().map(|&i| c[i]).collect();
                     let p: Vec<[[f64; 2]; 2]> = set.iter().map(|&i| p[i]).collect();
                     (c, p)
                 };
-                let mut rng = ImuRng::seed_from_u64(7);
-                let (_, p0) = pick(components(&mut rng));
-                let mut sum = vec![vec![0.0; K]; K];
-                for rep in 0..N {
-                    let (comps, _) = pick(components(&mut rng));
-                    let rest = NormalStream::new(ImuRng::seed_from_u64(1_000_000 + rep as u64));
-                    let mut b = BlockTerms::new(&h, d, terms(comps, rep as u64), rest);
-                    let mut y = [0.0; K];
-                    b.add(&mut y[..1]);
-                    b.add(&mut y[1..]);
-                    for a in 0..K {
-                        for c in 0..K {
-                            sum[a][c] += y[a] * y[c];
-                        }
-                    }
-                }
-                let (comps, _) = pick(components(&mut rng));
-                let exact = exact_cov(&comps, &p0, &h, d, K);
-                for a in 0..K {
-                    for c in a..K {
-                        let est = sum[a][c] / N as f64;
-                        let se =
-                            ((exact[a][a] * exact[c][c] + exact[a][c].powi(2)) / N as f64).sqrt();
-                        let z = (est - exact[a][c]) / se;
-                        assert!(
-                        z.abs() < 4.42,
-                        "h {h:?} d {d} components {set:?}: cov(y{a}, y{c}) {est} against {} (z = {z:.2})",
-                        exact[a][c]
-                    );
-                    }
-                }
+                check_covariance(&h, d, &draw, &format!("{set:?}"));
             }
+        }
+    }
+
+    /// Nine scalar components (three groups of side-by-side lanes, the last with one) and a
+    /// resonance: each group keeps its own states and draws (a group reading another's, or its
+    /// states not carried to the next call, changes the covariance). 4 filters x 10 entries at
+    /// 1e-5 each.
+    #[test]
+    fn many_lanes_have_the_raw_models_covariance() {
+        for (h, d) in test_filters() {
+            let draw = |rng: &mut ImuRng| {
+                let mut c = Vec::new();
+                let mut p = Vec::new();
+                for _ in 0..3 {
+                    let (ci, pi) = components(rng);
+                    c.extend_from_slice(&ci[..3]);
+                    p.extend_from_slice(&pi[..3]);
+                }
+                let (ci, pi) = components(rng);
+                c.push(ci[3]);
+                p.push(pi[3]);
+                (c, p)
+            };
+            check_covariance(&h, d, &draw, "3 x [0, 1, 2] and 3");
         }
     }
 
